@@ -1,6 +1,15 @@
 // Subcommand registry. Each cmd_*.cpp registers one subcommand at static-initialisation time:
 //
-//   static specbake::cli::Registration reg{"texture", 20, &add_texture_command};
+//   namespace {
+//   void add_texture_command(CLI::App& app, std::function<int()>& run) {
+//       auto* sub = app.add_subcommand("texture", "Bake a normal map ...");
+//       auto opts = std::make_shared<TextureOptions>();
+//       sub->add_option("--normal", opts->normal, "...")->required();
+//       sub->footer("Examples:\n  specbake texture --normal n.png -o out/");
+//       sub->callback([&run, opts] { run = [opts] { return run_texture(*opts); }; });
+//   }
+//   const specbake::cli::Registration reg{"texture", 20, &add_texture_command};
+//   }  // namespace
 //
 // The order value sorts the subcommands in --help. A subcommand's callback returns the process exit code.
 #pragma once
