@@ -1,0 +1,47 @@
+// Atomic file output: everything specbake writes goes to a temporary file in the destination folder and
+// is renamed into place only when complete, so a failed run never leaves a half-written file.
+#pragma once
+
+#include "bake/result.h"
+
+#include <cstdint>
+#include <filesystem>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace specbake::io {
+
+// A temporary path next to `final_path`; commit() renames it onto `final_path`.
+// Destroying an uncommitted AtomicOutput removes the temporary file.
+class AtomicOutput {
+public:
+    explicit AtomicOutput(std::filesystem::path final_path);
+    ~AtomicOutput();
+    AtomicOutput(const AtomicOutput&) = delete;
+    AtomicOutput& operator=(const AtomicOutput&) = delete;
+
+    // Where to write. The extension of the final path is kept, so format-sniffing writers still work.
+    const std::filesystem::path& temp_path() const { return temp_; }
+    const std::filesystem::path& final_path() const { return final_; }
+    Result<void> commit();
+
+private:
+    std::filesystem::path final_;
+    std::filesystem::path temp_;
+    bool committed_ = false;
+};
+
+// Writes `bytes` to `path` atomically. Creates missing parent folders.
+Result<void> write_file_atomic(const std::filesystem::path& path, std::span<const uint8_t> bytes);
+Result<void> write_file_atomic(const std::filesystem::path& path, const std::string& text);
+
+// Reads a whole file; the error names the file.
+Result<std::vector<uint8_t>> read_file(const std::filesystem::path& path);
+
+// Fails when `output` is the same file as any of `inputs` (inputs are never overwritten), or when
+// `output_dir` is a folder that holds one of the inputs directly.
+Result<void> check_output_not_input(const std::filesystem::path& output_dir,
+                                    std::span<const std::filesystem::path> inputs);
+
+}  // namespace specbake::io

@@ -1,0 +1,53 @@
+// manifest.json (SPEC Sec. 7): written into every output folder. Records the tool version, the settings,
+// the plan with its reasons, and every input and output with content hashes. Paths are relative to the
+// manifest's folder and use '/'. Keys are written sorted, so equal content gives byte-identical files.
+#pragma once
+
+#include "bake/result.h"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace specbake::io {
+
+struct ManifestInput {
+    std::string path;    // as given on the command line, or relative to the manifest folder when inside it
+    std::string sha256;
+};
+
+struct ManifestOutput {
+    std::string kind;    // "roughness", "kernel", "lean", "normal", "mesh", "scene", ...
+    std::string path;    // relative to the manifest folder
+    std::string format;  // "ktx2", "dds", "exr", "png", "gltf", "glb", ...
+    int width = 0;
+    int height = 0;
+    int mips = 0;
+    int channels = 0;
+    std::string sha256;
+    nlohmann::json extra = nlohmann::json::object();  // kind-specific facts (vkFormat, vertex count, ...)
+};
+
+struct Manifest {
+    std::string tool = "specbake";
+    std::string version;
+    nlohmann::json settings = nlohmann::json::object();
+    nlohmann::json plan = nlohmann::json::array();
+    std::vector<ManifestInput> inputs;
+    std::vector<ManifestOutput> outputs;
+};
+
+nlohmann::json to_json(const Manifest& m);
+Result<Manifest> manifest_from_json(const nlohmann::json& j, const std::string& source_name);
+
+// Hashes every output file (path relative to `dir`) and fills its sha256, then writes
+// `dir/manifest.json` atomically.
+Result<void> write_manifest(const std::filesystem::path& dir, Manifest manifest);
+Result<Manifest> read_manifest(const std::filesystem::path& manifest_path);
+
+// Path of `file` relative to `dir`, with '/' separators.
+std::string relative_path(const std::filesystem::path& file, const std::filesystem::path& dir);
+
+}  // namespace specbake::io
