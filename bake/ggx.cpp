@@ -1,0 +1,62 @@
+// GGX / Beckmann NDFs with a roughness matrix and GGX masking-shadowing (TK21 Sec. 2.1, App. A).
+#include "bake/ggx.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+namespace specbake {
+namespace {
+
+// [h_x, h_y] A^-1 [h_x, h_y]^T with A^-1 = adj(A) / d, where d is the clamped determinant (App. A.4).
+template <class T>
+T inverse_quadratic_form(const Sym2<T>& A, T hx, T hy, T d) {
+    const Sym2<T> adj{A.yy, -A.xy, A.xx};
+    return quadratic_form(adj, Vec2<T>{hx, hy}) / d;
+}
+
+}  // namespace
+
+template <class T>
+T ggx_ndf(const Vec3<T>& h, const Sym2<T>& A, T tau) {
+    if (!(h.z > T(0))) return T(0);  // chi+(h_z)
+    const T d = std::max(det(A), tau);  // TK21 App. A.4
+    const T q = inverse_quadratic_form(A, h.x, h.y, d) + h.z * h.z;
+    return T(1) / (std::numbers::pi_v<T> * std::sqrt(d) * q * q);  // TK21 Eq. (1)
+}
+
+template <class T>
+T beckmann_ndf(const Vec3<T>& h, const Sym2<T>& A, T tau) {
+    if (!(h.z > T(0))) return T(0);
+    const T d = std::max(det(A), tau);
+    // TK21 Sec. 2.1: the exponent is the slope (h_x/h_z, h_y/h_z) in the quadratic form of A^-1.
+    const T e = inverse_quadratic_form(A, h.x / h.z, h.y / h.z, d);
+    const T hz2 = h.z * h.z;
+    return std::exp(-e) / (std::numbers::pi_v<T> * std::sqrt(d) * hz2 * hz2);
+}
+
+template <class T>
+T ggx_lambda(const Vec3<T>& o, const Sym2<T>& A) {
+    if (o.z == T(0)) return std::numeric_limits<T>::infinity();
+    // TK21 App. A.3.
+    return T(-0.5) + std::sqrt(quadratic_form(A, Vec2<T>{o.x, o.y}) + o.z * o.z) / (T(2) * std::abs(o.z));
+}
+
+template <class T>
+T ggx_g2(const Vec3<T>& i, const Vec3<T>& o, const Vec3<T>& h, const Sym2<T>& A) {
+    if (!(dot(i, h) > T(0)) || !(dot(o, h) > T(0))) return T(0);
+    // TK21 App. A.1; an infinite Lambda (grazing direction) gives G2 = 0.
+    return T(1) / (T(1) + ggx_lambda(i, A) + ggx_lambda(o, A));
+}
+
+#define SPECBAKE_INSTANTIATE(T)                                                 \
+    template T ggx_ndf<T>(const Vec3<T>&, const Sym2<T>&, T);                  \
+    template T beckmann_ndf<T>(const Vec3<T>&, const Sym2<T>&, T);             \
+    template T ggx_lambda<T>(const Vec3<T>&, const Sym2<T>&);                   \
+    template T ggx_g2<T>(const Vec3<T>&, const Vec3<T>&, const Vec3<T>&, const Sym2<T>&);
+SPECBAKE_INSTANTIATE(float)
+SPECBAKE_INSTANTIATE(double)
+#undef SPECBAKE_INSTANTIATE
+
+}  // namespace specbake
