@@ -1,0 +1,41 @@
+// validate_mesh: checks a TriMesh for everything that would break analysis, rejects what cannot be repaired
+// and repairs the rest in place, returning counts for messages and manifests.
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+#include "bake/result.h"
+#include "mesh/trimesh.h"
+
+namespace specbake {
+
+struct MeshReport {
+    size_t vertices = 0;
+    size_t triangles = 0;
+    size_t degenerate_triangles = 0;   // repeated index or zero area: kept in the index buffer, skipped by curvature
+    size_t duplicate_vertices = 0;     // vertices at the position of an earlier vertex (welded for topology)
+    size_t unreferenced_vertices = 0;  // no triangle uses them; their curvature is 0
+    size_t boundary_edges = 0;         // edges with one triangle, after welding by position
+    size_t nonmanifold_edges = 0;      // edges with three or more triangles, after welding by position
+    size_t nonmanifold_vertices = 0;   // vertices whose triangles form more than one fan (or a fan plus a gap)
+    size_t repaired_normals = 0;       // zero or non-finite normals replaced by the generated normal
+    size_t renormalized_normals = 0;   // finite normals with |n| off 1 by more than 1e-3, rescaled to unit length
+    size_t repaired_tangents = 0;      // non-finite, zero or normal-parallel tangents rebuilt; w forced to +-1
+    size_t repaired_uvs = 0;           // non-finite UVs set to 0
+    bool generated_normals = false;    // set by prepare_mesh_for_curvature
+    bool generated_tangents = false;   // set by prepare_mesh_for_curvature
+
+    // One line, e.g. "1200 vertices, 2000 triangles, 3 degenerate triangles, 12 normals repaired".
+    std::string summary() const;
+};
+
+// Rejects (Error naming mesh.name): no triangles, index count not a multiple of 3, an index >= vertex count,
+// a non-finite position, attribute arrays whose size does not match the vertex count.
+// Repairs (counted in the report): normals that are zero or non-finite get the angle-weighted normal of the
+// faces around their position (generate_normals.h), or +Z when all those faces are degenerate; other normals
+// are rescaled to unit length; tangents are Gram-Schmidt orthogonalised to the normal, rebuilt perpendicular
+// to it when that fails, and w is snapped to +-1; non-finite UVs become 0. Triangles are never removed.
+Result<MeshReport> validate_mesh(TriMesh& mesh);
+
+}  // namespace specbake
