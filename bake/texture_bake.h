@@ -1,0 +1,88 @@
+// Texture bake (SPEC Sec. 3): the distribution of normal-map normals inside every texel footprint of every
+// mip level, turned into filtered roughness, kernel, LEAN-moment and mean-normal mip chains.
+//
+// Footprints: level L of a W x H map is max(1, W >> L) x max(1, H >> L). Texel (i, j) of level L with size
+// w x h covers the base-texel rectangle [i W/w, (i+1) W/w) x [j H/h, (j+1) H/h); every base texel weighs by
+// the area it shares with that rectangle. For power-of-two sizes this is the usual 2^L x 2^L box with equal
+// weights; for other sizes the boundary texels are split by area. All levels are exact area-weighted means
+// over the base texels (moments are linear: a level whose footprints tile a finer level's footprints is
+// summed from it exactly, any other level from the base), accumulated in double in a fixed order, so the
+// output is byte-identical for any thread count. Pure computation: no file I/O.
+#pragma once
+
+#include "bake/image.h"
+#include "bake/isotropic_filter.h"
+#include "bake/result.h"
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace specbake {
+
+enum class RoughnessFilterMode { Projected, Approx };  // SPEC Sec. 3: TK21 Eq. (4)-(7) closed form | Eq. (9)
+enum class NormalGreen { PlusY, MinusY };               // +Y: OpenGL/glTF (default), -Y: DirectX
+enum class ReconstructZ { Auto, Always, Never };        // Auto: two channels or constant full-scale blue
+enum class WrapMode { Repeat, Clamp, Mirror };
+enum class LeanSpace { Projected, Slope };              // SPEC Sec. 3 LEAN texture: projected (default) | slope
+
+struct TextureOutputs {
+    bool roughness = true;
+    bool kernel = true;
+    bool lean = true;
+    bool normal = true;
+};
+
+struct TextureBakeSettings {
+    IsotropicReduction isotropic = IsotropicReduction::Mean;
+    RoughnessFilterMode filter = RoughnessFilterMode::Projected;
+    std::optional<double> max_kernel;     // clamp of the isotropic kernel t; none by default
+    NormalGreen normal_y = NormalGreen::PlusY;
+    ReconstructZ reconstruct_z = ReconstructZ::Auto;
+    // Texture addressing the map is sampled with. Box footprints lie inside the map, so it does not change
+    // the baked values; it is recorded with the outputs so the run time samples them the same way.
+    WrapMode wrap = WrapMode::Repeat;
+    bool anisotropic = false;             // kernel output = Sigma (xx, yy, xy) instead of t
+    LeanSpace lean_space = LeanSpace::Projected;
+    TextureOutputs outputs;
+    int threads = 0;                      // 0: all available (TBB default); the result does not depend on it
+};
+
+// What the bake noticed about its inputs, for the user and the manifest.
+struct TextureBakeNotes {
+    bool z_reconstructed = false;         // z rebuilt from x, y (two channels, constant blue, or asked for)
+    std::string z_reason;                 // "two-channel map", "constant full-scale blue channel", "requested"
+    bool looks_srgb = false;              // decoded vectors are far from unit length unless sRGB-decoded first
+    bool roughness_is_orm = false;        // roughness came from a 3+ channel map; R and B carried through
+    bool roughness_resampled = false;     // roughness map resolution differs from the normal map's
+    long long degenerate_normals = 0;     // texels whose decoded vector had zero length (treated as +Z)
+    std::vector<std::string> warnings;    // one line each, ready to print
+};
+
+// Mip chains, level 0 first, each as large as the normal map's chain. Empty when not requested.
+struct TextureBakeResult {
+    MipChain roughness;   // 1 channel r, or 3 channels (occlusion, r, metallic) for an ORM input
+    MipChain kernel;      // 1 channel t, or 3 channels (Sigma.xx, Sigma.yy, Sigma.xy) when anisotropic
+    MipChain lean;        // 5 channels (m.x, m.y, M.xx, M.yy, M.xy), projected or slope space
+    MipChain normal;      // 3 channels, the normalised mean normal re-encoded as (n + 1) / 2 (green as input)
+    TextureBakeNotes notes;
+    // max over all texels of all levels of |r_out - r_in|, r_in = (box-filtered alpha^2)^(1/4): how much the
+    // bake changes roughness beyond plain mipmapping of alpha^2 (for "would it differ visibly").
+    double max_roughness_change = 0.0;
+};
+
+// Bakes `normal` (2, 3 or 4 channels; 4th ignored) with roughness from channel `roughness_channel` of
+// `roughness` (any resolution; R and B carried through when it has 3+ channels and roughness_channel is 1)
+// or, when `roughness` is null, the constant perceptual roughness `roughness_value` in [0, 1].
+// Errors: empty maps, 1-channel normal map, non-finite values, channel out of range, roughness_value
+// outside [0, 1]. Messages say "normal map: ..." / "roughness map: ..."; callers prefix the file name.
+Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughness, int roughness_channel,
+                                       float roughness_value, const TextureBakeSettings& settings);
+
+// Number of mip levels of a W x H chain: 1 + floor(log2(max(W, H))).
+int mip_level_count(int width, int height);
+
+// The first texel (x, y) holding NaN or infinity, if any: for error messages naming the texel.
+std::optional<std::pair<int, int>> find_non_finite(const Image& image);
+
+}  // namespace specbake

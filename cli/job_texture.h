@@ -1,0 +1,79 @@
+// The texture job (`specbake texture`): read the normal and roughness maps, bake them (bake/texture_bake.h),
+// write the requested mip chains into one folder and record them in manifest.json. The lower-level
+// bake_texture_outputs() is the same pipeline for images already in memory (the scene bake uses it and
+// writes one combined manifest itself).
+#pragma once
+
+#include "bake/texture_bake.h"
+#include "io/manifest.h"
+#include "io/texture_writer.h"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace specbake {
+
+// Called with short progress lines ("reading ...", "baking 4096x4096 ...", "writing ..."); may be empty.
+using ProgressFn = std::function<void(const std::string&)>;
+
+struct TextureJob {
+    std::filesystem::path normal;                  // ignored when demo is set
+    std::optional<std::filesystem::path> roughness;
+    int roughness_channel = -1;                    // -1: G (index 1) for 3+ channel files, else channel 0
+    float roughness_value = 0.5f;                  // used when no roughness file is given
+    bool demo = false;                             // bake the built-in procedural normal + ORM maps instead
+    std::filesystem::path output_dir;
+    io::TextureContainer container = io::TextureContainer::Ktx2;
+    TextureBakeSettings settings;
+    ProgressFn progress;
+};
+
+struct TextureJobOutcome {
+    io::Manifest manifest;                         // as written to output_dir/manifest.json
+    TextureBakeNotes notes;                        // warnings to print, z reconstruction, ...
+    double max_roughness_change = 0.0;             // see TextureBakeResult
+};
+
+// Whole pipeline. Errors are one line naming the file: unreadable or invalid input, output folder equal
+// to (or holding) an input, write failure. Nothing is left half-written on failure.
+Result<TextureJobOutcome> run_texture_job(const TextureJob& job);
+
+// Already-decoded inputs for bake_texture_outputs().
+struct TextureInputs {
+    const Image* normal = nullptr;
+    std::string normal_name;                       // for error messages ("<name>: ...")
+    const Image* roughness = nullptr;              // null: constant roughness_value
+    std::string roughness_name;
+    int roughness_channel = -1;                    // as in TextureJob
+    float roughness_value = 0.5f;
+    int normal_bits = 8;                           // 8 or 16 (integer files), 16/32 float: output encodings
+    int roughness_bits = 8;
+};
+
+struct TextureOutputsWritten {
+    std::vector<io::ManifestOutput> outputs;       // paths relative to the output folder, hashes filled
+    TextureBakeNotes notes;
+    double max_roughness_change = 0.0;
+};
+
+// Bakes and writes `dir/<stem>_roughness.<ext>`, `_kernel`, `_lean` (KTX2/DDS/PNG: `_lean` RGBA =
+// (m.x, m.y, M.xx, M.yy) plus `_lean_xy` R = M.xy; EXR: one 5-channel file), `_normal`, as selected in
+// settings.outputs. Does not write a manifest.
+Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& inputs, const TextureBakeSettings& settings,
+                                                   io::TextureContainer container, const std::filesystem::path& dir,
+                                                   const std::string& stem, const ProgressFn& progress = {});
+
+// The settings as recorded in manifests.
+nlohmann::json texture_settings_json(const TextureBakeSettings& settings, io::TextureContainer container);
+
+// The built-in demo inputs: a 512x384 (deliberately non-power-of-two) RGB normal map of bumps, ribs
+// and a flat area, and a matching ORM map, both as 8-bit-quantised values.
+Image demo_normal_map();
+Image demo_orm_map();
+
+}  // namespace specbake

@@ -1,0 +1,41 @@
+// Image decoding for the texture bake (OpenImageIO): PNG 8/16, JPEG, TGA, TIFF, EXR, and anything else
+// OpenImageIO reads. Values come back exactly as stored, with no colour conversion and no alpha
+// premultiplication (normal and roughness maps are data); 8/16-bit integers are normalised to [0, 1].
+#pragma once
+
+#include "bake/image.h"
+#include "bake/result.h"
+
+#include <cstdint>
+#include <filesystem>
+#include <span>
+#include <string>
+
+namespace specbake::io {
+
+// What the file said about itself, beside the pixels.
+struct ImageInfo {
+    int bits_per_channel = 8;   // 8, 16 for integer files; 16 or 32 for half/float files
+    bool is_float = false;      // stored as half or float (EXR, float TIFF, HDR)
+    std::string format;         // OpenImageIO format name: "png", "jpeg", "openexr", ...
+    std::string color_space;    // the colour space the file claims ("sRGB", "Linear", or empty); never applied
+};
+
+struct DecodedImage {
+    Image image;
+    ImageInfo info;
+};
+
+// Reads the first subimage, level 0. Errors name the file ("<path>: <problem>"): missing, unreadable,
+// unknown format, truncated, 0x0, more than 2^15 texels per side. Non-finite values are returned as is
+// (callers validate; see has_non_finite()).
+Result<DecodedImage> decode_image(const std::filesystem::path& path);
+
+// Same, from bytes in memory (embedded GLB images); `name_for_errors` is used in place of a path.
+Result<DecodedImage> decode_image_memory(std::span<const uint8_t> bytes, const std::string& name_for_errors);
+
+// Convenience forms that drop the metadata.
+Result<Image> read_image(const std::filesystem::path& path);
+Result<Image> read_image_memory(std::span<const uint8_t> bytes, const std::string& name_for_errors);
+
+}  // namespace specbake::io
