@@ -1,0 +1,42 @@
+// Minimal forward-shading pixel shader using the specbake include (HLSL): GGX specular from one
+// directional light with the roughness filtered by the baked kernel mips (normal-map variance) and the
+// per-pixel curvature of the mesh (normal derivatives). Entry point: main.
+Texture2D gKernel : register(t0);        // baked kernel mips: R = t
+SamplerState gTrilinear : register(s0);
+#define SPECAA_KERNEL_TEXTURE gKernel
+#define SPECAA_SAMPLER gTrilinear
+#include "specaa.hlsl"
+
+cbuffer Material : register(b1) {
+    float3 lightDir;     // world-space unit direction to the light
+    float roughness;     // perceptual roughness r (glTF)
+    float3 lightColor;
+};
+
+struct PixelInput {
+    float4 position : SV_Position;
+    float3 normal : NORMAL;       // world-space vertex normal
+    float4 tangent : TANGENT;     // world-space TANGENT (xyz, w = handedness)
+    float2 uv : TEXCOORD0;
+    float3 viewDir : TEXCOORD1;   // world-space direction to the eye
+};
+
+float4 main(PixelInput input) : SV_Target {
+    float3 n = normalize(input.normal);
+    SpecaaSurface s = (SpecaaSurface)0;
+    s.roughness = roughness;
+    s.uv = input.uv;
+    s.normal = n;
+    s.tangent = input.tangent.xyz;
+    s.bitangent = cross(n, input.tangent.xyz) * input.tangent.w;
+    float a = specaa_filtered_alpha2(s);
+
+    float3 v = normalize(input.viewDir);
+    float3 h = normalize(v + lightDir);
+    float3 aIso = float3(a, a, 0.0);   // isotropic roughness matrix
+    float3 t = normalize(input.tangent.xyz - n * dot(n, input.tangent.xyz));
+    float3x3 toTangent = float3x3(t, cross(n, t), n);
+    float3 hT = mul(toTangent, h), lT = mul(toTangent, lightDir), vT = mul(toTangent, v);
+    float specular = specaa_ggx_D(hT, aIso, a * a) * specaa_ggx_G2(lT, vT, hT, aIso) / max(4.0 * vT.z, 1e-4);
+    return float4(lightColor * specular, 1.0);
+}

@@ -1,0 +1,483 @@
+// specaa.hlsl: specbake runtime include for specular anti-aliasing (HLSL, Shader Model 5 or later).
+// Generated from shaders/src/ by shaders/generate.cmake; edit the sources there, not this file.
+// The API is documented below the language macros; SPECAA_* macros map the shared body to HLSL.
+#ifndef SPECAA_INCLUDED
+#define SPECAA_INCLUDED
+
+#define SPECAA_FLOAT2 float2
+#define SPECAA_FLOAT3 float3
+#define SPECAA_FLOAT4 float4
+#define SPECAA_CONST static const
+#define SPECAA_SATURATE(x) saturate(x)
+#define SPECAA_DDX(x) ddx(x)
+#define SPECAA_DDY(x) ddy(x)
+// Texture parameters: HLSL passes a Texture2D and its SamplerState.
+#define SPECAA_TEXTURE_PARAMS(tex, smp) Texture2D tex, SamplerState smp
+#define SPECAA_TEXTURE_ARGS(tex, smp) tex, smp
+#define SPECAA_SAMPLE(tex, smp, uv) tex.Sample(smp, uv)
+
+// ===================================================================================================
+// specbake runtime include: specular anti-aliasing by NDF filtering (SPEC Sec. 5).
+//
+// Conventions (SPEC Sec. 2). Perceptual roughness r (glTF), alpha = r^2, squared roughness a = alpha^2.
+// A roughness matrix is a symmetric 2x2 matrix [[xx, xy], [xy, yy]] in the tangent frame, stored as
+// float3(xx, yy, xy), in squared-roughness units (A = diag(alpha_x^2, alpha_y^2) when axis-aligned;
+// A = 2 x slope covariance, TK21 Sec. 2.1). A "kernel matrix" K = 2 Sigma is what filtering adds to a
+// roughness matrix (TK21 Eq. 3 and 6); an isotropic kernel t is what it adds to a scalar a (TK21 Eq. 10,
+// 13, 14; SPEC Sec. 3: t = tr(Sigma) for the mean reduction). Tangent-space vectors: z along the normal.
+//
+// Configuration (define before including):
+//   SPECAA_SIGMA2   pixel-filter variance in pixels^2, default 1/(2 pi) (TK21 App. B).
+//   SPECAA_KAPPA    clamp of derivative-based kernels, default 0.18 (TK21 Eq. 10, K16).
+//   Baked data for the default entry point (at most one of the roughness texture and kernel/LEAN):
+//   SPECAA_ROUGHNESS_TEXTURE name   baked filtered roughness mips (perceptual r), channel
+//                                   SPECAA_ROUGHNESS_CHANNEL (default g: glTF metallicRoughness / ORM).
+//   SPECAA_KERNEL_TEXTURE name      baked projected-space kernel mips: R = t (isotropic mean) or,
+//                                   with SPECAA_KERNEL_ANISOTROPIC, RGB = Sigma (xx, yy, xy).
+//   SPECAA_LEAN_TEXTURE0 name       LEAN moments, projected space (SPEC Sec. 3), in two textures:
+//   SPECAA_LEAN_TEXTURE1 name         TEXTURE0 RGBA = (m.x, m.y, M.xx, M.yy), TEXTURE1 R = M.xy
+//                                     (at least 16-bit float, trilinear filtering).
+//   SPECAA_SAMPLER name             HLSL only: the SamplerState used with the textures above.
+//   SPECAA_USE_CURVATURE            per-pixel kernel from _SPECAA_CURVATURE (SPEC Sec. 4) and the
+//                                   position derivatives instead of normal derivatives.
+//   SPECAA_NO_PIXEL_KERNEL          baked data only (no per-pixel kernel).
+// Textures are sampled with implicit derivatives, so the hardware selects the mip: the baked mips are
+// the footprint filter of the normal map, the per-pixel kernel adds the geometric curvature.
+//
+// Domain: unit vectors, a in [0, 1], finite derivatives. NaN inputs propagate to the result.
+// ===================================================================================================
+
+#ifndef SPECAA_SIGMA2
+#define SPECAA_SIGMA2 0.15915494309189535
+#endif
+#ifndef SPECAA_KAPPA
+#define SPECAA_KAPPA 0.18
+#endif
+#ifndef SPECAA_ROUGHNESS_CHANNEL
+#define SPECAA_ROUGHNESS_CHANNEL g
+#endif
+#define SPECAA_PI 3.14159265358979
+
+// Kernel traces above this are treated as this: the filtered roughness is then 1 within float precision,
+// and the closed forms below stay finite.
+#define SPECAA_MAX_KERNEL 1.0e8
+
+// ---------------------------------------------------------------------------------------------------
+// Symmetric 2x2 matrices stored as float3(xx, yy, xy).
+// ---------------------------------------------------------------------------------------------------
+
+// Determinant xx yy - xy^2.
+float specaa_sym_det(SPECAA_FLOAT3 m) { return m.x * m.y - m.z * m.z; }
+
+// Largest eigenvalue of a symmetric 2x2 matrix (closed form of the 2x2 characteristic polynomial).
+float specaa_sym_max_eigenvalue(SPECAA_FLOAT3 m) {
+    float halfDiff = 0.5 * (m.x - m.y);
+    return 0.5 * (m.x + m.y) + sqrt(halfDiff * halfDiff + m.z * m.z);
+}
+
+// Nearest positive semi-definite matrix: negative eigenvalues set to 0 (Frobenius projection). Used on
+// covariances formed as a difference of moments, Sigma = M - m m^T (SPEC Sec. 3), which rounding can
+// push slightly indefinite. Uses the spectral projector (Sigma - lmin I) / (lmax - lmin).
+SPECAA_FLOAT3 specaa_sym_clamp_psd(SPECAA_FLOAT3 m) {
+    float halfTrace = 0.5 * (m.x + m.y);
+    float halfDiff = 0.5 * (m.x - m.y);
+    float radius = sqrt(halfDiff * halfDiff + m.z * m.z);
+    float lmax = halfTrace + radius;
+    float lmin = halfTrace - radius;
+    if (lmin >= 0.0) return m;
+    if (lmax <= 0.0) return SPECAA_FLOAT3(0.0, 0.0, 0.0);
+    return (lmax / (2.0 * radius)) * SPECAA_FLOAT3(m.x - lmin, m.y - lmin, m.z);
+}
+
+// Kernel matrix K = 2 Sigma = 2 sigma^2 [du; dv]^T [du; dv] from the screen-space derivatives of a 2D
+// quantity along x (du) and y (dv), TK21 Eq. (3) (K16: C = U U^T with the roughness factor 2).
+SPECAA_FLOAT3 specaa_kernel_matrix(SPECAA_FLOAT2 du, SPECAA_FLOAT2 dv) {
+    return (2.0 * SPECAA_SIGMA2) * SPECAA_FLOAT3(du.x * du.x + dv.x * dv.x,
+                                                 du.y * du.y + dv.y * dv.y,
+                                                 du.x * du.y + dv.x * dv.y);
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Half-vector projections (TK21 Sec. 3-4.1, T19 Listing 1).
+// ---------------------------------------------------------------------------------------------------
+
+// Slope-space half vector -h.xy / |h.z| (K16 "parallel plane", TK21 Listings 2-3 with the division).
+// Not finite at h.z = 0: the slope-space methods break down at grazing half vectors (TK21 Sec. 3).
+SPECAA_FLOAT2 specaa_slope_half_vector(SPECAA_FLOAT3 h) { return h.xy / -abs(h.z); }
+
+// Orthographically projected half vector (h.x, h.y), TK21 Sec. 4.1: derivatives shrink by det J = h_z.
+SPECAA_FLOAT2 specaa_projected_half_vector(SPECAA_FLOAT3 h) { return h.xy; }
+
+// ---------------------------------------------------------------------------------------------------
+// Filters from given derivatives (du, dv = value at the right/upper neighbour minus the fragment's).
+// alpha2 = (alpha_x^2, alpha_y^2) of the material.
+// ---------------------------------------------------------------------------------------------------
+
+// Non-axis-aligned filtering diag(alpha2) + K, no clamp. With slope-space derivatives this is K16's
+// R' = R + 2C (TK21 Eq. 2); with projected derivatives the practical approximation TK21 Eq. (9), Listing 2.
+SPECAA_FLOAT3 specaa_filter_non_axis_aligned(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT2 du, SPECAA_FLOAT2 dv) {
+    return SPECAA_FLOAT3(alpha2.x, alpha2.y, 0.0) + specaa_kernel_matrix(du, dv);
+}
+
+// Axis-aligned filtering over the bounding rectangle |du| + |dv| of the footprint with the kappa clamp,
+// TK21 Listing 3 (K16 "More Temporal Stability"): saturate(alpha2 + min(2 sigma^2 bounds^2, kappa)).
+SPECAA_FLOAT2 specaa_filter_axis_aligned(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT2 du, SPECAA_FLOAT2 dv) {
+    SPECAA_FLOAT2 bounds = abs(du) + abs(dv);
+    SPECAA_FLOAT2 kernel = min((2.0 * SPECAA_SIGMA2) * (bounds * bounds), SPECAA_FLOAT2(SPECAA_KAPPA, SPECAA_KAPPA));
+    return SPECAA_SATURATE(alpha2 + kernel);
+}
+
+// Full projected-space filtering of an axis-aligned material, TK21 Eq. (4)-(8):
+// A_bar = ((B + K)^-1 + I)^-1 with B = diag(a / (1 - a)). Here written with B_bar = B + K and
+// A_bar = (B_bar + det(B_bar) I) / (1 + tr(B_bar) + det(B_bar)) (App. D form), both multiplied by
+// c = (1 - a_x)(1 - a_y) so that a = 1 (B infinite) and a = 0 with K = 0 (singular) stay exact
+// (A_bar = 1 resp. 0). det(B_bar) is clamped below by det(B) as in Listing 1. K must be PSD.
+SPECAA_FLOAT3 specaa_filter_projected_matrix(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT3 K) {
+    float traceK = K.x + K.y;
+    if (traceK > SPECAA_MAX_KERNEL) K *= SPECAA_MAX_KERNEL / traceK;
+    float ax = SPECAA_SATURATE(alpha2.x);
+    float ay = SPECAA_SATURATE(alpha2.y);
+    float c = (1.0 - ax) * (1.0 - ay);
+    float px = ax + K.x * (1.0 - ax);                         // (1 - a_x) B_bar_xx
+    float py = ay + K.y * (1.0 - ay);                         // (1 - a_y) B_bar_yy
+    float cDet = max(px * py - c * K.z * K.z, ax * ay);       // c det(B_bar) >= c det(B)
+    float bx = ax * (1.0 - ay);                               // c B_xx
+    float by = ay * (1.0 - ax);                               // c B_yy
+    float denominator = c + bx + by + c * traceK + cDet;     // c (1 + tr(B_bar) + det(B_bar)) > 0
+    return SPECAA_FLOAT3(bx + c * K.x + cDet, by + c * K.y + cDet, c * K.z) / denominator;
+}
+
+// Full projected-space filtering from projected half-vector derivatives, TK21 Listing 1.
+SPECAA_FLOAT3 specaa_filter_projected(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT2 du, SPECAA_FLOAT2 dv) {
+    return specaa_filter_projected_matrix(alpha2, specaa_kernel_matrix(du, dv));
+}
+
+// Isotropic kernels from world-space normal derivatives dnU, dnV (TK21 Sec. 5; Eq. 12: their lengths
+// equal the projected derivatives of the pairwise averaged normal). Sigma = sigma^2 Gram(dnU, dnV).
+// Max: 2 lambda_max(Sigma), TK21 Eq. (10) (tightest conservative isotropic kernel).
+float specaa_iso_kernel_max(SPECAA_FLOAT3 dnU, SPECAA_FLOAT3 dnV) {
+    SPECAA_FLOAT3 gram = SPECAA_FLOAT3(dot(dnU, dnU), dot(dnV, dnV), dot(dnU, dnV));
+    return 2.0 * SPECAA_SIGMA2 * specaa_sym_max_eigenvalue(gram);
+}
+
+// Sum: 2 tr(Sigma) = 2 sigma^2 (|dnU|^2 + |dnV|^2), TK21 Eq. (13), Listing 5 (conservative).
+float specaa_iso_kernel_sum(SPECAA_FLOAT3 dnU, SPECAA_FLOAT3 dnV) {
+    return 2.0 * SPECAA_SIGMA2 * (dot(dnU, dnU) + dot(dnV, dnV));
+}
+
+// Mean: tr(Sigma) = sigma^2 (|dnU|^2 + |dnV|^2), TK21 Eq. (14) (less conservative, lowest error there).
+float specaa_iso_kernel_mean(SPECAA_FLOAT3 dnU, SPECAA_FLOAT3 dnV) {
+    return SPECAA_SIGMA2 * (dot(dnU, dnU) + dot(dnV, dnV));
+}
+
+// Clamped isotropic filtering, TK21 Eq. (10)/(13)/(14) as in Listing 5: saturate(a + min(t, kappa)).
+float specaa_filter_isotropic(float alpha2, float kernel) {
+    return SPECAA_SATURATE(alpha2 + min(kernel, SPECAA_KAPPA));
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Derivative-based methods: the filters above with derivatives from the 2x2 pixel quad (ddx/ddy).
+// hTS: unit tangent-space half vector; normal: unit world-space shading normal.
+// ---------------------------------------------------------------------------------------------------
+
+// "slope": K16 slope-space non-axis-aligned filtering, R' = R + 2C (TK21 Eq. 2).
+SPECAA_FLOAT3 specaa_slope(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT3 hTS) {
+    SPECAA_FLOAT2 hs = specaa_slope_half_vector(hTS);
+    return specaa_filter_non_axis_aligned(alpha2, SPECAA_DDX(hs), SPECAA_DDY(hs));
+}
+
+// "slope-aa": K16 axis-aligned rectangle in slope space with the kappa clamp (Listing 3 with division).
+SPECAA_FLOAT2 specaa_slope_aa(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT3 hTS) {
+    SPECAA_FLOAT2 hs = specaa_slope_half_vector(hTS);
+    return specaa_filter_axis_aligned(alpha2, SPECAA_DDX(hs), SPECAA_DDY(hs));
+}
+
+// "projected-approx": TK21 Listing 2, Eq. (9), non-axis-aligned, projected derivatives, no clamp.
+SPECAA_FLOAT3 specaa_projected_approx(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT3 hTS) {
+    SPECAA_FLOAT2 hp = specaa_projected_half_vector(hTS);
+    return specaa_filter_non_axis_aligned(alpha2, SPECAA_DDX(hp), SPECAA_DDY(hp));
+}
+
+// "projected-aa": TK21 Listing 3, axis-aligned, projected derivatives, kappa clamp.
+SPECAA_FLOAT2 specaa_projected_aa(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT3 hTS) {
+    SPECAA_FLOAT2 hp = specaa_projected_half_vector(hTS);
+    return specaa_filter_axis_aligned(alpha2, SPECAA_DDX(hp), SPECAA_DDY(hp));
+}
+
+// "projected": TK21 Listing 1, full projected-space filtering (Eq. 4-8).
+SPECAA_FLOAT3 specaa_projected(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT3 hTS) {
+    SPECAA_FLOAT2 hp = specaa_projected_half_vector(hTS);
+    return specaa_filter_projected(alpha2, SPECAA_DDX(hp), SPECAA_DDY(hp));
+}
+
+// "iso-max": TK21 Eq. (10) from normal derivatives; returns the filtered a.
+float specaa_iso_max(float alpha2, SPECAA_FLOAT3 normal) {
+    return specaa_filter_isotropic(alpha2, specaa_iso_kernel_max(SPECAA_DDX(normal), SPECAA_DDY(normal)));
+}
+
+// "iso-sum": TK21 Eq. (13), Listing 5 (T19 Listing 2); returns the filtered a.
+float specaa_iso_sum(float alpha2, SPECAA_FLOAT3 normal) {
+    return specaa_filter_isotropic(alpha2, specaa_iso_kernel_sum(SPECAA_DDX(normal), SPECAA_DDY(normal)));
+}
+
+// "iso-mean": TK21 Eq. (14); returns the filtered a.
+float specaa_iso_mean(float alpha2, SPECAA_FLOAT3 normal) {
+    return specaa_filter_isotropic(alpha2, specaa_iso_kernel_mean(SPECAA_DDX(normal), SPECAA_DDY(normal)));
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Isotropic projected-space filtering and kernel reductions (SPEC Sec. 3, the texture bake's formulas).
+// ---------------------------------------------------------------------------------------------------
+
+// Full projected-space filtering of a scalar a by an isotropic kernel t, TK21 Eq. (4)-(7) in closed form:
+// a' = (a + t (1 - a)) / (1 + t (1 - a)). t = 0 leaves a unchanged; a = 1 stays 1.
+float specaa_filter_projected_isotropic(float alpha2, float kernel) {
+    float k = min(kernel, SPECAA_MAX_KERNEL) * (1.0 - alpha2);
+    return (alpha2 + k) / (1.0 + k);
+}
+
+// Approximate filtering a' = min(1, a + t), TK21 Eq. (9) (the bake's --filter approx).
+float specaa_filter_approx_isotropic(float alpha2, float kernel) { return min(1.0, alpha2 + kernel); }
+
+// Reductions of a covariance Sigma to an isotropic kernel t (SPEC Sec. 3): mean tr(Sigma) (Eq. 14
+// analogue), sum 2 tr(Sigma) (Eq. 13), max 2 lambda_max(Sigma) (Eq. 10).
+float specaa_reduce_mean(SPECAA_FLOAT3 sigma) { return sigma.x + sigma.y; }
+float specaa_reduce_sum(SPECAA_FLOAT3 sigma) { return 2.0 * (sigma.x + sigma.y); }
+float specaa_reduce_max(SPECAA_FLOAT3 sigma) { return 2.0 * specaa_sym_max_eigenvalue(sigma); }
+
+// ---------------------------------------------------------------------------------------------------
+// Baked textures (SPEC Sec. 3), sampled at the hardware-selected mip.
+// ---------------------------------------------------------------------------------------------------
+
+// a = r^4 from perceptual roughness r (SPEC Sec. 2), and back.
+float specaa_alpha2_from_roughness(float r) { float alpha = r * r; return alpha * alpha; }
+float specaa_roughness_from_alpha2(float alpha2) { return sqrt(sqrt(max(alpha2, 0.0))); }
+
+// Baked filtered roughness mips: returns a of channel SPECAA_ROUGHNESS_CHANNEL (perceptual r).
+float specaa_sample_roughness(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
+    return specaa_alpha2_from_roughness(SPECAA_SAMPLE(tex, smp, uv).SPECAA_ROUGHNESS_CHANNEL);
+}
+
+// Baked isotropic kernel mips: t in channel R.
+float specaa_sample_kernel(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
+    return max(SPECAA_SAMPLE(tex, smp, uv).r, 0.0);
+}
+
+// Baked anisotropic kernel mips: Sigma = (xx, yy, xy) in RGB; clamped to PSD after filtering.
+SPECAA_FLOAT3 specaa_sample_kernel_covariance(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
+    return specaa_sym_clamp_psd(SPECAA_SAMPLE(tex, smp, uv).rgb);
+}
+
+// Covariance from LEAN moments, Sigma = M - m m^T clamped to PSD (SPEC Sec. 3; C21 Eq. 16).
+// lean0 = (m.x, m.y, M.xx, M.yy), lean1 = M.xy. Moments filter linearly, so any mip/trilinear mix of
+// them still yields the covariance of the normals in the filtered footprint.
+SPECAA_FLOAT3 specaa_lean_covariance(SPECAA_FLOAT4 lean0, float lean1) {
+    return specaa_sym_clamp_psd(SPECAA_FLOAT3(lean0.z - lean0.x * lean0.x,
+                                              lean0.w - lean0.y * lean0.y,
+                                              lean1 - lean0.x * lean0.y));
+}
+
+// LEAN lookup from the two moment textures (layout in the header comment).
+SPECAA_FLOAT3 specaa_sample_lean(SPECAA_TEXTURE_PARAMS(tex0, smp0), SPECAA_TEXTURE_PARAMS(tex1, smp1),
+                                 SPECAA_FLOAT2 uv) {
+    return specaa_lean_covariance(SPECAA_SAMPLE(tex0, smp0, uv), SPECAA_SAMPLE(tex1, smp1, uv).r);
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Curvature-based kernel from the _SPECAA_CURVATURE attribute (SPEC Sec. 4) and the pixel footprint.
+// ---------------------------------------------------------------------------------------------------
+
+// Shape operator S = k1 d d^T + k2 d' d'^T (d' = d rotated by 90 degrees) in the tangent frame from
+// curvature = (k1, k2, d.x, d.y). The normal moves by dp = -S dx for a tangent step dx (first order), so
+// S maps the footprint to projected-normal derivatives. A zero d (umbilic) uses k1 on both axes.
+SPECAA_FLOAT3 specaa_shape_operator(SPECAA_FLOAT4 curvature) {
+    float len = length(curvature.zw);
+    if (len < 1.0e-6) return SPECAA_FLOAT3(curvature.x, curvature.x, 0.0);
+    SPECAA_FLOAT2 d = curvature.zw / len;
+    float k1 = curvature.x;
+    float k2 = curvature.y;
+    return SPECAA_FLOAT3(k1 * d.x * d.x + k2 * d.y * d.y,
+                         k1 * d.y * d.y + k2 * d.x * d.x,
+                         (k1 - k2) * d.x * d.y);
+}
+
+// Pixel footprint in the tangent plane: the position derivatives along screen x and y expressed in the
+// (T, B) frame, returned as (u.x, u.y, v.x, v.y). Units of the positions (object space for the curvature).
+SPECAA_FLOAT4 specaa_footprint_tangent(SPECAA_FLOAT3 dPdx, SPECAA_FLOAT3 dPdy, SPECAA_FLOAT3 tangent,
+                                       SPECAA_FLOAT3 bitangent) {
+    SPECAA_FLOAT3 t = normalize(tangent);
+    SPECAA_FLOAT3 b = normalize(bitangent);
+    return SPECAA_FLOAT4(dot(dPdx, t), dot(dPdx, b), dot(dPdy, t), dot(dPdy, b));
+}
+
+// Pixel footprint from the quad derivatives of the interpolated position (same space as T, B).
+SPECAA_FLOAT4 specaa_footprint(SPECAA_FLOAT3 position, SPECAA_FLOAT3 tangent, SPECAA_FLOAT3 bitangent) {
+    return specaa_footprint_tangent(SPECAA_DDX(position), SPECAA_DDY(position), tangent, bitangent);
+}
+
+// Width of one pixel on a plane facing the camera at view depth z (perspective, vertical field of view
+// with tan(fovY/2), viewport height in pixels): 2 z tan(fovY/2) / height. Grazing elongation is ignored.
+float specaa_pixel_footprint_from_depth(float viewDepth, float tanHalfFovY, float viewportHeight) {
+    return 2.0 * viewDepth * tanHalfFovY / viewportHeight;
+}
+
+// Curvature kernel matrix K = 2 sigma^2 (S u u^T S + S v v^T S), TK21 Eq. (3) with the projected-normal
+// derivatives S u, S v of the curved shading-normal field (K16 "virtual quadric") instead of quad
+// differences. footprint = (u.x, u.y, v.x, v.y) from specaa_footprint*.
+SPECAA_FLOAT3 specaa_curvature_kernel(SPECAA_FLOAT4 curvature, SPECAA_FLOAT4 footprint) {
+    SPECAA_FLOAT3 S = specaa_shape_operator(curvature);
+    SPECAA_FLOAT2 du = SPECAA_FLOAT2(S.x * footprint.x + S.z * footprint.y, S.z * footprint.x + S.y * footprint.y);
+    SPECAA_FLOAT2 dv = SPECAA_FLOAT2(S.x * footprint.z + S.z * footprint.w, S.z * footprint.z + S.y * footprint.w);
+    return specaa_kernel_matrix(du, dv);
+}
+
+// Isotropic curvature kernel for a square footprint of width w: mean reduction tr(Sigma) =
+// sigma^2 w^2 (k1^2 + k2^2) (TK21 Eq. 14 with |dn| = |k| w per principal direction).
+float specaa_curvature_kernel_isotropic(SPECAA_FLOAT4 curvature, float footprintWidth) {
+    return SPECAA_SIGMA2 * footprintWidth * footprintWidth * (curvature.x * curvature.x + curvature.y * curvature.y);
+}
+
+// ---------------------------------------------------------------------------------------------------
+// GGX and Beckmann with a roughness matrix A (TK21 Sec. 2.1, App. A).
+// ---------------------------------------------------------------------------------------------------
+
+// Clamped determinant max(det(A), tau) of TK21 App. A.4 (tau = alpha_x^2 alpha_y^2 of the unfiltered
+// material), floored at 1e-30 so a mirror (A = 0, tau = 0) stays finite instead of a Dirac delta.
+float specaa_clamped_det(SPECAA_FLOAT3 A, float tau) { return max(max(specaa_sym_det(A), tau), 1.0e-30); }
+
+// [h.x, h.y] A^-1 [h.x, h.y]^T with A^-1 = adj(A) / detClamped (TK21 App. A.4).
+float specaa_inverse_quadratic_form(SPECAA_FLOAT3 A, SPECAA_FLOAT2 v, float detClamped) {
+    return (v.x * v.x * A.y - 2.0 * v.x * v.y * A.z + v.y * v.y * A.x) / detClamped;
+}
+
+// GGX NDF, TK21 Eq. (1) with the determinant clamp of App. A.4. 0 for h.z <= 0.
+float specaa_ggx_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float tau) {
+    if (h.z <= 0.0) return 0.0;
+    float detClamped = specaa_clamped_det(A, tau);
+    float q = specaa_inverse_quadratic_form(A, h.xy, detClamped) + h.z * h.z;
+    return 1.0 / (SPECAA_PI * sqrt(detClamped) * q * q);
+}
+
+// Beckmann NDF with a roughness matrix, TK21 Sec. 2.1, same clamp. 0 for h.z <= 0.
+float specaa_beckmann_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float tau) {
+    if (h.z <= 0.0) return 0.0;
+    float detClamped = specaa_clamped_det(A, tau);
+    float z2 = h.z * h.z;
+    return exp(-specaa_inverse_quadratic_form(A, h.xy, detClamped) / z2) /
+           (SPECAA_PI * sqrt(detClamped) * z2 * z2);
+}
+
+// GGX Smith Lambda, TK21 App. A.3: -1/2 + sqrt([o.x, o.y] A [o.x, o.y]^T + o.z^2) / (2 |o.z|).
+// +inf at o.z = 0.
+float specaa_ggx_lambda(SPECAA_FLOAT3 o, SPECAA_FLOAT3 A) {
+    float q = o.x * o.x * A.x + 2.0 * o.x * o.y * A.z + o.y * o.y * A.y + o.z * o.z;
+    return -0.5 + sqrt(q) / (2.0 * abs(o.z));
+}
+
+// Height-correlated G2 = chi+(i.h) chi+(o.h) / (1 + Lambda(i) + Lambda(o)), TK21 App. A.1, evaluated as
+// 2 |i.z| |o.z| / (|o.z| sqrt(q_i) + |i.z| sqrt(q_o)) (same expression times 2 |i.z| |o.z|), which is
+// finite at grazing i or o (G2 -> 0). In [0, 1].
+float specaa_ggx_G2(SPECAA_FLOAT3 i, SPECAA_FLOAT3 o, SPECAA_FLOAT3 h, SPECAA_FLOAT3 A) {
+    if (dot(i, h) <= 0.0 || dot(o, h) <= 0.0) return 0.0;
+    float qi = i.x * i.x * A.x + 2.0 * i.x * i.y * A.z + i.y * i.y * A.y + i.z * i.z;
+    float qo = o.x * o.x * A.x + 2.0 * o.x * o.y * A.z + o.y * o.y * A.y + o.z * o.z;
+    float denominator = abs(o.z) * sqrt(qi) + abs(i.z) * sqrt(qo);
+    return denominator > 0.0 ? 2.0 * abs(i.z) * abs(o.z) / denominator : 0.0;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Default entry point: filtered roughness from whatever baked data is bound plus a per-pixel kernel.
+// ---------------------------------------------------------------------------------------------------
+
+// Per-fragment inputs. Fill every field the configuration uses (see the header comment).
+struct SpecaaSurface {
+    float roughness;             // perceptual roughness r of the material (unused with a roughness texture)
+    SPECAA_FLOAT2 uv;            // texture coordinates of the baked textures
+    SPECAA_FLOAT3 normal;        // unit interpolated vertex normal (before normal mapping), any space
+    SPECAA_FLOAT3 position;      // position in the space of tangent/bitangent (SPECAA_USE_CURVATURE)
+    SPECAA_FLOAT3 tangent;       // T = TANGENT.xyz (matrix form, SPECAA_USE_CURVATURE)
+    SPECAA_FLOAT3 bitangent;     // B = cross(N, T) * TANGENT.w
+    SPECAA_FLOAT4 curvature;     // _SPECAA_CURVATURE (k1, k2, d.x, d.y) (SPECAA_USE_CURVATURE)
+};
+
+#if defined(SPECAA_ROUGHNESS_TEXTURE) && (defined(SPECAA_KERNEL_TEXTURE) || defined(SPECAA_LEAN_TEXTURE0))
+#error "specaa: the baked roughness already contains the kernel; bind either the roughness or the kernel/LEAN textures"
+#endif
+
+// Squared roughness a of the material: the baked filtered roughness texture if bound, else r^4.
+float specaa_base_alpha2(SpecaaSurface s) {
+#if defined(SPECAA_ROUGHNESS_TEXTURE)
+    return specaa_sample_roughness(SPECAA_TEXTURE_ARGS(SPECAA_ROUGHNESS_TEXTURE, SPECAA_SAMPLER), s.uv);
+#else
+    return specaa_alpha2_from_roughness(s.roughness);
+#endif
+}
+
+// Baked kernel matrix K = 2 Sigma of the normal map at this fragment's mip (0 without kernel/LEAN data);
+// an isotropic kernel texture gives K = t I.
+SPECAA_FLOAT3 specaa_baked_kernel_matrix(SpecaaSurface s) {
+#if defined(SPECAA_LEAN_TEXTURE0)
+    return 2.0 * specaa_sample_lean(SPECAA_TEXTURE_ARGS(SPECAA_LEAN_TEXTURE0, SPECAA_SAMPLER),
+                                    SPECAA_TEXTURE_ARGS(SPECAA_LEAN_TEXTURE1, SPECAA_SAMPLER), s.uv);
+#elif defined(SPECAA_KERNEL_TEXTURE) && defined(SPECAA_KERNEL_ANISOTROPIC)
+    return 2.0 * specaa_sample_kernel_covariance(SPECAA_TEXTURE_ARGS(SPECAA_KERNEL_TEXTURE, SPECAA_SAMPLER), s.uv);
+#elif defined(SPECAA_KERNEL_TEXTURE)
+    float t = specaa_sample_kernel(SPECAA_TEXTURE_ARGS(SPECAA_KERNEL_TEXTURE, SPECAA_SAMPLER), s.uv);
+    return SPECAA_FLOAT3(t, t, 0.0);
+#else
+    return SPECAA_FLOAT3(0.0, 0.0, 0.0);
+#endif
+}
+
+// Per-pixel kernel matrix of the curved geometry in the (T, B) frame: from _SPECAA_CURVATURE and the
+// position footprint, or from the quad derivatives of the vertex normal projected onto T and B
+// (TK21 Sec. 5.1). Scaled so that its largest eigenvalue is at most kappa (the clamp of TK21 Eq. 10).
+SPECAA_FLOAT3 specaa_pixel_kernel_matrix(SpecaaSurface s) {
+#if defined(SPECAA_NO_PIXEL_KERNEL)
+    return SPECAA_FLOAT3(0.0, 0.0, 0.0);
+#else
+#if defined(SPECAA_USE_CURVATURE)
+    SPECAA_FLOAT3 K = specaa_curvature_kernel(s.curvature, specaa_footprint(s.position, s.tangent, s.bitangent));
+#else
+    SPECAA_FLOAT3 dnU = SPECAA_DDX(s.normal);
+    SPECAA_FLOAT3 dnV = SPECAA_DDY(s.normal);
+    SPECAA_FLOAT3 t = normalize(s.tangent);
+    SPECAA_FLOAT3 b = normalize(s.bitangent);
+    SPECAA_FLOAT3 K = specaa_kernel_matrix(SPECAA_FLOAT2(dot(dnU, t), dot(dnU, b)), SPECAA_FLOAT2(dot(dnV, t), dot(dnV, b)));
+#endif
+    float lmax = specaa_sym_max_eigenvalue(K);
+    return lmax > SPECAA_KAPPA ? K * (SPECAA_KAPPA / lmax) : K;
+#endif
+}
+
+// Per-pixel isotropic kernel t (mean reduction, TK21 Eq. 14), clamped to kappa. Tangent-free on the
+// derivative path (world-space normal derivatives).
+float specaa_pixel_kernel(SpecaaSurface s) {
+#if defined(SPECAA_NO_PIXEL_KERNEL)
+    return 0.0;
+#elif defined(SPECAA_USE_CURVATURE)
+    SPECAA_FLOAT3 K = specaa_curvature_kernel(s.curvature, specaa_footprint(s.position, s.tangent, s.bitangent));
+    return min(0.5 * (K.x + K.y), SPECAA_KAPPA);
+#else
+    return min(specaa_iso_kernel_mean(SPECAA_DDX(s.normal), SPECAA_DDY(s.normal)), SPECAA_KAPPA);
+#endif
+}
+
+// Filtered squared roughness a (isotropic form). The baked and per-pixel kernels are variances of
+// independent footprints, so they add in projected space (TK21 Eq. 6) before mapping back (Eq. 7).
+float specaa_filtered_alpha2(SpecaaSurface s) {
+    SPECAA_FLOAT3 baked = specaa_baked_kernel_matrix(s);
+    return specaa_filter_projected_isotropic(specaa_base_alpha2(s), 0.5 * (baked.x + baked.y) + specaa_pixel_kernel(s));
+}
+
+// Filtered perceptual roughness r = a^(1/4): drop-in for the material's roughness.
+float specaa_filtered_roughness(SpecaaSurface s) { return specaa_roughness_from_alpha2(specaa_filtered_alpha2(s)); }
+
+// Filtered roughness matrix A_bar in the (T, B) frame (matrix form), for specaa_ggx_D / specaa_ggx_G2
+// with tau = a^2 of the unfiltered material. Same composition as specaa_filtered_alpha2.
+SPECAA_FLOAT3 specaa_filtered_alpha2_matrix(SpecaaSurface s) {
+    float a = specaa_base_alpha2(s);
+    return specaa_filter_projected_matrix(SPECAA_FLOAT2(a, a), specaa_baked_kernel_matrix(s) + specaa_pixel_kernel_matrix(s));
+}
+
+#endif  // SPECAA_INCLUDED
