@@ -1,0 +1,114 @@
+// glTF 2.0 scenes in and out (tinygltf). A scene is loaded without decoding its images, its triangle
+// primitives are read as TriMesh in their exact vertex order, baked data is added, and the scene is
+// written back with everything of the input kept: nodes, transforms, materials, textures, samplers,
+// animations, skins, cameras, extras and every extension. New vertex data goes into an appended buffer;
+// existing buffer bytes are never rewritten. The vendor extension is described in io/SPECBAKE_EXTENSION.md.
+#pragma once
+
+#include "bake/result.h"
+#include "mesh/trimesh.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace specbake::io {
+
+// Name of the material extension that references baked textures, and of the vertex attribute.
+inline constexpr const char* kSpecbakeExtension = "SPECBAKE_specular_aa";
+inline constexpr const char* kCurvatureAttribute = "_SPECAA_CURVATURE";
+
+// One primitive of one mesh, addressed as in the glTF file.
+struct PrimitiveRef {
+    int mesh = 0;
+    int primitive = 0;
+    friend bool operator==(const PrimitiveRef&, const PrimitiveRef&) = default;
+};
+
+// What the scene says about one primitive before its vertex data is read.
+struct PrimitiveInfo {
+    PrimitiveRef ref;
+    std::string label;       // "<file>: mesh 'Name' primitive 0", for messages
+    int mode = 4;            // glTF primitive mode (4 triangles, 5 strip, 6 fan, others are not surfaces)
+    int material = -1;
+    bool has_normal = false;
+    bool has_tangent = false;
+    bool has_curvature = false;  // the input already carries _SPECAA_CURVATURE
+    std::vector<int> texcoords;  // n of every TEXCOORD_n present
+    // Largest and smallest axis scale of the world transforms of the nodes that instance the mesh
+    // (1 when no node does); curvature is stored in object space and these say how far world space differs.
+    double min_instance_scale = 1.0;
+    double max_instance_scale = 1.0;
+    int instances = 0;
+};
+
+// A texture slot of a material: the image it samples and the texture coordinate set.
+struct TextureSlot {
+    int texture = -1;  // glTF texture index, -1 when the slot is empty
+    int image = -1;    // glTF image index, -1 when the texture has no (decodable) source
+    int texcoord = 0;
+    bool transformed = false;  // KHR_texture_transform on the slot
+};
+
+struct MaterialInfo {
+    std::string name;
+    TextureSlot normal;
+    double normal_scale = 1.0;
+    TextureSlot metallic_roughness;  // roughness in G, metallic in B (glTF)
+    double roughness_factor = 1.0;
+    double metallic_factor = 1.0;
+};
+
+class GltfScene {
+public:
+    GltfScene();
+    ~GltfScene();
+    GltfScene(GltfScene&&) noexcept;
+    GltfScene& operator=(GltfScene&&) noexcept;
+
+    // Loads a .gltf or .glb file. Images are not decoded; their bytes and URIs are kept as they are.
+    static Result<GltfScene> load(const std::filesystem::path& path);
+    // A new scene with one node and one mesh per TriMesh (positions, normals, tangents, uv0, indices as
+    // given), one default material per distinct TriMesh::material; for inputs imported through Assimp.
+    static Result<GltfScene> from_meshes(const std::vector<TriMesh>& meshes, const std::string& source_name);
+
+    const std::filesystem::path& source() const;
+    bool source_is_binary() const;
+
+    std::vector<PrimitiveInfo> primitives() const;
+    std::vector<MaterialInfo> materials() const;
+
+    // Reads a primitive as TriMesh: every accessor type, normalisation, stride and sparse substitution
+    // resolved to float/uint32, vertices in file order, strips and fans expanded to triangle lists.
+    // The error names the file, mesh and primitive and the problem (index out of range, bad accessor ...).
+    Result<TriMesh> primitive_mesh(PrimitiveRef ref) const;
+
+    // The encoded bytes of an image (external file, data URI or buffer view), as stored.
+    Result<std::vector<uint8_t>> image_bytes(int image) const;
+    std::string image_label(int image) const;  // URI or "<file>: image N", for messages
+
+    // Baked additions, applied by write(). Values are per vertex in the primitive's vertex order:
+    // curvature 4 floats (k1, k2, d.x, d.y), tangents 4 floats (xyz, w = handedness).
+    Result<void> set_curvature(PrimitiveRef ref, std::vector<float> values);
+    Result<void> set_generated_tangents(PrimitiveRef ref, std::vector<float> tangents);
+    // Sets the vendor extension object on a material (replacing an earlier one) and lists the extension
+    // in extensionsUsed (never extensionsRequired).
+    void set_material_extension(int material, const nlohmann::json& extension);
+    // Sets the vendor extension object at the root of the glTF (tool version, settings).
+    void set_root_extension(const nlohmann::json& extension);
+
+    // Writes the scene to `path` (.gltf: JSON + external buffers; .glb: binary container) and copies every
+    // external resource it references (buffers, images) into the output folder, so the folder is
+    // self-contained. Every file is written atomically. Returns the written files (the scene first).
+    Result<std::vector<std::filesystem::path>> write(const std::filesystem::path& path) const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace specbake::io
