@@ -1,0 +1,120 @@
+// GGX / Beckmann NDF, Lambda and G2 against closed forms in rotated frames and numerical integrals.
+#include "bake/ggx.h"
+#include "reference.h"
+
+#include <gtest/gtest.h>
+
+namespace specbake {
+namespace {
+
+using test::kPi;
+
+Sym2<double> sym(const Eigen::Matrix2d& m) { return {m(0, 0), m(0, 1), m(1, 1)}; }
+
+// Axis-aligned GGX of TK21 App. A.2 evaluated in the eigenframe of A.
+double ggx_axis_aligned(const Vec3<double>& h, double ax, double ay) {
+    const double q = h.x * h.x / (ax * ax) + h.y * h.y / (ay * ay) + h.z * h.z;
+    return h.z > 0 ? 1.0 / (kPi * ax * ay * q * q) : 0.0;
+}
+
+// Rotates h about z by -phi (into the eigenframe of a matrix rotated by phi).
+Vec3<double> unrotate(const Vec3<double>& h, double phi) {
+    return {std::cos(phi) * h.x + std::sin(phi) * h.y, -std::sin(phi) * h.x + std::cos(phi) * h.y, h.z};
+}
+
+TEST(Ggx, NonAxisAlignedMatchesRotatedAxisAlignedForm) {
+    std::mt19937_64 rng(1);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (int k = 0; k < 500; ++k) {
+        const double ax = 0.02 + 0.9 * u(rng), ay = 0.02 + 0.9 * u(rng), phi = kPi * u(rng);
+        const Sym2<double> A = sym(test::rotated_diag(ax * ax, ay * ay, phi));
+        const Vec3<double> h = test::spherical(0.5 * kPi * u(rng), 2 * kPi * u(rng));
+        const double expected = ggx_axis_aligned(unrotate(h, phi), ax, ay);
+        EXPECT_NEAR(ggx_ndf(h, A, 0.0), expected, 1e-9 * expected + 1e-12);
+        const Vec3<float> hf{float(h.x), float(h.y), float(h.z)};
+        const Sym2<float> Af{float(A.xx), float(A.xy), float(A.yy)};
+        EXPECT_NEAR(ggx_ndf(hf, Af, 0.0f), expected, 2e-4 * expected + 1e-6);
+    }
+}
+
+TEST(Ggx, ProjectedAreaIsOne) {
+    // The NDF integrates to 1 against cos(theta_m) (Heitz 2014 Eq. 4).
+    const Sym2<double> A = sym(test::rotated_diag(0.3 * 0.3, 0.6 * 0.6, 0.7));
+    const double area = test::integrate_hemisphere([&](const Vec3<double>& m) { return ggx_ndf(m, A, 0.0) * m.z; },
+                                                   2000, 400);
+    EXPECT_NEAR(area, 1.0, 2e-3);
+    const double beckmann = test::integrate_hemisphere(
+        [&](const Vec3<double>& m) { return beckmann_ndf(m, A, 0.0) * m.z; }, 2000, 400);
+    EXPECT_NEAR(beckmann, 1.0, 2e-3);
+}
+
+TEST(Beckmann, MatchesRotatedGaussianOfSlopes) {
+    std::mt19937_64 rng(2);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (int k = 0; k < 300; ++k) {
+        const double ax = 0.05 + 0.9 * u(rng), ay = 0.05 + 0.9 * u(rng), phi = kPi * u(rng);
+        const Sym2<double> A = sym(test::rotated_diag(ax * ax, ay * ay, phi));
+        const Vec3<double> h = test::spherical(0.45 * kPi * u(rng), 2 * kPi * u(rng));
+        const Vec3<double> r = unrotate(h, phi);
+        const double sx = r.x / r.z, sy = r.y / r.z;
+        const double expected =
+            std::exp(-(sx * sx / (ax * ax) + sy * sy / (ay * ay))) / (kPi * ax * ay * std::pow(h.z, 4));
+        EXPECT_NEAR(beckmann_ndf(h, A, 0.0), expected, 1e-9 * expected + 1e-12);
+    }
+}
+
+TEST(Ggx, DeterminantClampOfAppendixA4) {
+    // A rank-one filtered matrix (alpha = 0 plus a line kernel) is singular; the clamp tau keeps D finite and
+    // equals the formula with det(A) replaced by tau in both places.
+    const Sym2<double> A{0.04, 0.02, 0.01};  // det = 0
+    const double tau = 1e-6;
+    const Vec3<double> h = normalize(Vec3<double>{0.1, -0.05, 1.0});
+    const double q = (A.yy * h.x * h.x - 2 * A.xy * h.x * h.y + A.xx * h.y * h.y) / tau + h.z * h.z;
+    EXPECT_NEAR(ggx_ndf(h, A, tau), 1.0 / (kPi * std::sqrt(tau) * q * q), 1e-9);
+    EXPECT_TRUE(std::isfinite(ggx_ndf(h, A, tau)));
+    // Below the clamp the determinant is used unchanged.
+    const Sym2<double> B{0.04, 0.0, 0.09};
+    EXPECT_DOUBLE_EQ(ggx_ndf(h, B, 1e-9), ggx_ndf(h, B, 0.0));
+    EXPECT_EQ(ggx_ndf(Vec3<double>{1, 0, 0}, B, 0.0), 0.0);
+    EXPECT_EQ(ggx_ndf(Vec3<double>{0.6, 0, -0.8}, B, 0.0), 0.0);
+}
+
+TEST(Ggx, LambdaIsotropicClosedForm) {
+    for (double alpha : {0.01, 0.2, 0.7, 1.0}) {
+        for (double theta : {0.0, 0.3, 1.0, 1.4, 1.55}) {
+            const double t = std::tan(theta);
+            const double expected = 0.5 * (-1.0 + std::sqrt(1.0 + alpha * alpha * t * t));
+            const Vec3<double> o = test::spherical(theta, 0.4);
+            EXPECT_NEAR(ggx_lambda(o, Sym2<double>{alpha * alpha, 0, alpha * alpha}), expected, 1e-9 * (1 + expected));
+        }
+    }
+    EXPECT_TRUE(std::isinf(ggx_lambda(Vec3<double>{1, 0, 0}, Sym2<double>{0, 0, 0})));
+}
+
+TEST(Ggx, LambdaSatisfiesProjectedAreaIdentity) {
+    // Smith: integral of <o, m>+ D(m) dm = o_z (1 + Lambda(o)) (Heitz 2014 Eq. 16 with G1 = 1 / (1 + Lambda)).
+    const Sym2<double> A = sym(test::rotated_diag(0.35 * 0.35, 0.6 * 0.6, 0.9));
+    for (double theta : {0.3, 0.9, 1.3}) {
+        const Vec3<double> o = test::spherical(theta, 2.1);
+        const double lhs = test::integrate_hemisphere(
+            [&](const Vec3<double>& m) { return std::max(0.0, dot(o, m)) * ggx_ndf(m, A, 0.0); }, 1500, 600);
+        EXPECT_NEAR(lhs, o.z * (1.0 + ggx_lambda(o, A)), 3e-3) << "theta " << theta;
+    }
+}
+
+TEST(Ggx, HeightCorrelatedG2) {
+    const Sym2<double> A = sym(test::rotated_diag(0.09, 0.25, 0.3));
+    const Vec3<double> i = test::spherical(0.8, 0.2), o = test::spherical(1.1, 2.5);
+    const Vec3<double> h = normalize(i + o);
+    const double li = 0.5 * (-1 + std::sqrt(1 + quadratic_form(A, Vec2<double>{i.x, i.y}) / (i.z * i.z)));
+    const double lo = 0.5 * (-1 + std::sqrt(1 + quadratic_form(A, Vec2<double>{o.x, o.y}) / (o.z * o.z)));
+    EXPECT_NEAR(ggx_g2(i, o, h, A), 1.0 / (1.0 + li + lo), 1e-12);
+    // Back-facing microfacet: chi+ gives 0; grazing direction: Lambda = inf gives 0.
+    EXPECT_EQ(ggx_g2(i, o, Vec3<double>{-h.x, -h.y, -h.z}, A), 0.0);
+    EXPECT_EQ(ggx_g2(Vec3<double>{1, 0, 0}, Vec3<double>{0.6, 0, 0.8}, normalize(Vec3<double>{1.6, 0, 0.8}), A), 0.0);
+    // A smooth surface does not mask.
+    EXPECT_NEAR(ggx_g2(i, o, h, Sym2<double>{0, 0, 0}), 1.0, 1e-15);
+}
+
+}  // namespace
+}  // namespace specbake
