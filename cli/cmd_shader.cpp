@@ -1,0 +1,64 @@
+// specbake shader: writes the runtime shader include (GLSL or HLSL) that is embedded in the executable,
+// byte for byte identical to shaders/specaa.glsl and shaders/specaa.hlsl of the source tree.
+#include "cli/command.h"
+
+#include "io/atomic_file.h"
+
+#include <cstddef>
+#include <cstdio>
+#include <memory>
+#include <string>
+
+namespace specbake::cli {
+
+// Defined in the build-generated shader_embed.cpp (shaders/embed.cmake).
+extern const unsigned char kSpecaaGlsl[];
+extern const std::size_t kSpecaaGlslSize;
+extern const unsigned char kSpecaaHlsl[];
+extern const std::size_t kSpecaaHlslSize;
+
+namespace {
+
+struct ShaderOptions {
+    std::string lang;
+    std::string output;
+};
+
+int run_shader(const ShaderOptions& opts) {
+    const bool glsl = opts.lang == "glsl";
+    const std::string text(reinterpret_cast<const char*>(glsl ? kSpecaaGlsl : kSpecaaHlsl),
+                           glsl ? kSpecaaGlslSize : kSpecaaHlslSize);
+    if (opts.output.empty()) {
+        if (std::fwrite(text.data(), 1, text.size(), stdout) != text.size() || std::fflush(stdout) != 0) {
+            print_error("could not write the shader include to standard output");
+            return kExitFailed;
+        }
+        return kExitOk;
+    }
+    if (auto written = io::write_file_atomic(opts.output, text); !written) {
+        print_error(written.error().message);
+        return kExitFailed;
+    }
+    return kExitOk;
+}
+
+void add_shader_command(CLI::App& app, std::function<int()>& run) {
+    auto* sub = app.add_subcommand(
+        "shader", "Write the runtime shader include (GLSL or HLSL) for specular anti-aliasing in an engine.");
+    auto opts = std::make_shared<ShaderOptions>();
+    sub->add_option("--lang", opts->lang, "Shading language of the include")
+        ->required()
+        ->check(CLI::IsMember({"glsl", "hlsl"}));
+    sub->add_option("-o,--output", opts->output,
+                    "Write to FILE (atomically: a temporary file renamed into place) instead of standard output");
+    sub->footer(
+        "Examples:\n"
+        "  specbake shader --lang glsl -o shaders/specaa.glsl\n"
+        "  specbake shader --lang hlsl > specaa.hlsl");
+    sub->callback([&run, opts] { run = [opts] { return run_shader(*opts); }; });
+}
+
+const Registration reg{"shader", 70, &add_shader_command};
+
+}  // namespace
+}  // namespace specbake::cli
