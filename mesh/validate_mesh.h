@@ -32,10 +32,11 @@ struct MeshReport {
 
 // Rejects (Error naming mesh.name): no triangles, index count not a multiple of 3, an index >= vertex count,
 // a non-finite position, attribute arrays whose size does not match the vertex count.
-// Repairs (counted in the report): normals that are zero or non-finite get the angle-weighted normal of the
-// faces around their position (generate_normals.h), or +Z when all those faces are degenerate; other normals
-// are rescaled to unit length; tangents are Gram-Schmidt orthogonalised to the normal, rebuilt perpendicular
-// to it when that fails, and w is snapped to +-1; non-finite UVs become 0. Triangles are never removed.
+// Repairs (counted in the report), leaving every usable authored value bit-identical: normals that are zero
+// or non-finite get the angle-weighted normal of the triangles that use that vertex (+Z when all of them
+// are degenerate); normals whose length is off 1 by more than 1e-3 are rescaled; tangents that are
+// non-finite, zero or parallel to the normal are rebuilt perpendicular to it, and w is snapped to +-1;
+// non-finite UVs become 0. Triangles are never removed: degenerate ones are counted (curvature skips them).
 Result<MeshReport> validate_mesh(TriMesh& mesh);
 
 }  // namespace specbake

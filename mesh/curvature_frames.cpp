@@ -1,0 +1,116 @@
+#include "mesh/curvature_frames.h"
+
+#include <tbb/parallel_for.h>
+
+namespace specbake::detail {
+
+GroupFrames make_group_frames(const TriMesh& mesh, const WeldedTopology& topology) {
+    GroupFrames frames;
+    frames.n.assign(topology.group_count, Vec3d(0.0, 0.0, 1.0));
+    frames.u.resize(topology.group_count);
+    frames.v.resize(topology.group_count);
+    std::vector<char> seen(topology.group_count, 0);
+    for (size_t v = 0; v < mesh.vertex_count(); ++v) {
+        const uint32_t g = topology.group_id[v];
+        if (seen[g]) continue;
+        seen[g] = 1;
+        const Vec3d nv = normal(mesh, uint32_t(v));
+        const double len = nv.norm();
+        if (len > 0.0) frames.n[g] = nv / len;
+    }
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, topology.group_count, 4096), [&](const auto& r) {
+        for (size_t g = r.begin(); g != r.end(); ++g) orthonormal_basis(frames.n[g], frames.u[g], frames.v[g]);
+    });
+    return frames;
+}
+
+GroupCorners group_corners(const TriMesh& mesh, const WeldedTopology& topology) {
+    GroupCorners out;
+    out.start.assign(topology.group_count + 1, 0);
+    for (uint32_t v : mesh.indices) ++out.start[topology.group_id[v] + 1];
+    for (uint32_t g = 0; g < topology.group_count; ++g) out.start[g + 1] += out.start[g];
+    out.order.resize(mesh.indices.size());
+    std::vector<uint32_t> fill(out.start.begin(), out.start.end() - 1);
+    for (size_t k = 0; k < mesh.indices.size(); ++k) out.order[fill[topology.group_id[mesh.indices[k]]]++] = uint32_t(k);
+    return out;
+}
+
+bool skip_triangle(const TriMesh& mesh, const WeldedTopology& topology, size_t t) {
+    const uint32_t* f = &mesh.indices[3 * t];
+    const uint32_t a = topology.position_id[f[0]], b = topology.position_id[f[1]], c = topology.position_id[f[2]];
+    if (a == b || b == c || a == c) return true;
+    return is_degenerate_triangle(position(mesh, f[0]), position(mesh, f[1]), position(mesh, f[2]));
+}
+
+VertexCurvature vertex_curvature_from_groups(const TriMesh& mesh, const WeldedTopology& topology,
+                                             const GroupFrames& frames, const std::vector<Shape2>& shape) {
+    const size_t groups = topology.group_count;
+    std::vector<double> k1(groups), k2(groups);
+    std::vector<Vec3d> dir(groups);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, groups, 4096), [&](const auto& r) {
+        for (size_t g = r.begin(); g != r.end(); ++g) {
+            const Shape2& s = shape[g];
+            const double mean = 0.5 * (s.a + s.c);
+            const double half_diff = 0.5 * (s.a - s.c);
+            const double radius = std::hypot(half_diff, s.b);
+            const double hi = mean + radius, lo = mean - radius;
+            const bool hi_first = std::abs(hi) >= std::abs(lo);
+            k1[g] = hi_first ? hi : lo;
+            k2[g] = hi_first ? lo : hi;
+            // Eigenvector of k1 from whichever row of (S - k1 I) is better conditioned.
+            const double x1 = s.b, y1 = k1[g] - s.a;  // from row 1: (a - k1) x + b y = 0
+            const double x2 = k1[g] - s.c, y2 = s.b;  // from row 2: b x + (c - k1) y = 0
+            double x = x1, y = y1;
+            if (x2 * x2 + y2 * y2 > x1 * x1 + y1 * y1) {
+                x = x2;
+                y = y2;
+            }
+            const double len = std::hypot(x, y);
+            if (!(len > 1e-12 * std::max(std::abs(k1[g]), 1e-300))) {
+                x = 1.0;
+                y = 0.0;
+            } else {
+                x /= len;
+                y /= len;
+            }
+            dir[g] = x * frames.u[g] + y * frames.v[g];
+        }
+    });
+
+    VertexCurvature out;
+    out.values.resize(4 * mesh.vertex_count());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.vertex_count(), 4096), [&](const auto& r) {
+        for (size_t v = r.begin(); v != r.end(); ++v) {
+            const uint32_t g = topology.group_id[v];
+            Vec3d nv = normal(mesh, uint32_t(v));
+            nv = nv.norm() > 0.0 ? Vec3d(nv.normalized()) : frames.n[g];
+            Vec3d t = tangent(mesh, uint32_t(v));
+            t -= nv.dot(t) * nv;
+            const double tl = t.norm();
+            Vec3d b;
+            if (tl > 1e-12) {
+                t /= tl;
+            } else {
+                orthonormal_basis(nv, t, b);
+            }
+            b = tangent_sign(mesh, uint32_t(v)) * nv.cross(t);
+            double dx = dir[g].dot(t), dy = dir[g].dot(b);
+            const double dl = std::hypot(dx, dy);
+            if (dl > 1e-12) {
+                dx /= dl;
+                dy /= dl;
+            } else {
+                dx = 1.0;
+                dy = 0.0;
+            }
+            float* o = &out.values[4 * v];
+            o[0] = float(k1[g]);
+            o[1] = float(k2[g]);
+            o[2] = float(dx);
+            o[3] = float(dy);
+        }
+    });
+    return out;
+}
+
+}  // namespace specbake::detail

@@ -1,0 +1,39 @@
+// Shared by the curvature estimators (internal to specbake_mesh): one orthonormal frame per curvature
+// group, and the step from a per-group 2x2 shape operator to the per-vertex (k1, k2, d) of SPEC Sec. 4.
+#pragma once
+
+#include <vector>
+
+#include "mesh/mesh_math.h"
+#include "mesh/weld_by_position.h"
+
+namespace specbake::detail {
+
+// Frame of each curvature group: the unit normal of its first vertex and a fixed perpendicular basis.
+struct GroupFrames {
+    std::vector<Vec3d> n, u, v;
+};
+GroupFrames make_group_frames(const TriMesh& mesh, const WeldedTopology& topology);
+
+// Symmetric 2x2 shape operator [[a, b], [b, c]] in a group's (u, v) basis, 1/length.
+struct Shape2 {
+    double a = 0.0, b = 0.0, c = 0.0;
+};
+
+// Eigen-decomposes each group's operator (|k1| >= |k2|) and writes (k1, k2, d) for every vertex, d being the
+// k1 direction expressed in that vertex's own tangent frame (T orthogonalised against N, B = cross(N, T) * w).
+// An isotropic operator (umbilic, or no data) gets d = (1, 0).
+VertexCurvature vertex_curvature_from_groups(const TriMesh& mesh, const WeldedTopology& topology,
+                                             const GroupFrames& frames, const std::vector<Shape2>& shape);
+
+// Corners (3 * triangle + corner) of each curvature group, in increasing corner order (a counting sort), so
+// per-group sums are the same for any thread count: group g owns order[start[g] .. start[g + 1]).
+struct GroupCorners {
+    std::vector<uint32_t> start, order;
+};
+GroupCorners group_corners(const TriMesh& mesh, const WeldedTopology& topology);
+
+// True when the triangle's corners are not three distinct positions or it is numerically a line.
+bool skip_triangle(const TriMesh& mesh, const WeldedTopology& topology, size_t t);
+
+}  // namespace specbake::detail

@@ -1,0 +1,82 @@
+// Small geometry routines shared by the mesh/ algorithms (internal to specbake_mesh): vertex access as
+// Eigen vectors, corner angles, mixed-Voronoi corner areas and a branch-free orthonormal basis.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstdint>
+
+#include "mesh/trimesh.h"
+
+namespace specbake::detail {
+
+using Vec3d = Eigen::Vector3d;
+
+inline Vec3d position(const TriMesh& m, uint32_t v) {
+    return {m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]};
+}
+inline Vec3d normal(const TriMesh& m, uint32_t v) {
+    return {m.normals[3 * v], m.normals[3 * v + 1], m.normals[3 * v + 2]};
+}
+inline Vec3d tangent(const TriMesh& m, uint32_t v) {
+    return {m.tangents[4 * v], m.tangents[4 * v + 1], m.tangents[4 * v + 2]};
+}
+inline double tangent_sign(const TriMesh& m, uint32_t v) { return m.tangents[4 * v + 3] < 0.0f ? -1.0 : 1.0; }
+
+// Angle between two edge vectors, robust for small and near-pi angles (atan2 of |cross| and dot).
+inline double angle_between(const Vec3d& a, const Vec3d& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }
+
+// Orthonormal basis (t, b) with n = t x b for unit n (Duff et al., "Building an Orthonormal Basis,
+// Revisited", JCGT 2017): continuous except across n.z = 0, deterministic.
+inline void orthonormal_basis(const Vec3d& n, Vec3d& t, Vec3d& b) {
+    const double sign = std::copysign(1.0, n.z());
+    const double a = -1.0 / (sign + n.z());
+    const double bb = n.x() * n.y() * a;
+    t = Vec3d(1.0 + sign * n.x() * n.x() * a, sign * bb, -sign * n.x());
+    b = Vec3d(bb, sign + n.y() * n.y() * a, -n.y());
+}
+
+// Mixed-Voronoi areas of the three corners of triangle (p0, p1, p2) (Meyer, Desbrun, Schroder & Barr 2003,
+// Fig. 4): the Voronoi region when no angle is obtuse, else half the area at the obtuse corner and a
+// quarter at the two others. Sum = triangle area. Returns false for zero-area triangles.
+inline bool mixed_voronoi_areas(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2, double w[3]) {
+    const Vec3d e0 = p2 - p1, e1 = p0 - p2, e2 = p1 - p0;  // e_i opposite corner i
+    const double area = 0.5 * e0.cross(e1).norm();
+    if (!(area > 0.0)) return false;
+    const double l0 = e0.squaredNorm(), l1 = e1.squaredNorm(), l2 = e2.squaredNorm();
+    // Corner i is obtuse when the opposite squared edge exceeds the sum of the two others.
+    if (l0 > l1 + l2) {
+        w[0] = 0.5 * area; w[1] = w[2] = 0.25 * area;
+    } else if (l1 > l0 + l2) {
+        w[1] = 0.5 * area; w[0] = w[2] = 0.25 * area;
+    } else if (l2 > l0 + l1) {
+        w[2] = 0.5 * area; w[0] = w[1] = 0.25 * area;
+    } else {
+        // Voronoi area of corner i = (|e_j|^2 cot(angle k) + |e_k|^2 cot(angle j)) / 8, with
+        // cot(angle i) = (l_j + l_k - l_i) / (4 area).
+        const double c0 = (l1 + l2 - l0) / (4.0 * area);
+        const double c1 = (l0 + l2 - l1) / (4.0 * area);
+        const double c2 = (l0 + l1 - l2) / (4.0 * area);
+        w[0] = (l1 * c1 + l2 * c2) / 8.0;
+        w[1] = (l0 * c0 + l2 * c2) / 8.0;
+        w[2] = (l0 * c0 + l1 * c1) / 8.0;
+    }
+    return true;
+}
+
+}  // namespace specbake::detail
+
+namespace specbake::detail {
+
+// A triangle is degenerate when two corners share a position or it is (numerically) a line: twice its area
+// below 1e-10 of its summed squared edge lengths, i.e. its smallest angle under ~1e-10 rad. Such triangles
+// carry no usable normal or curvature information.
+inline bool is_degenerate_triangle(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2) {
+    const Vec3d e0 = p1 - p0, e1 = p2 - p0, e2 = p2 - p1;
+    const double twice_area = e0.cross(e1).norm();
+    const double scale = e0.squaredNorm() + e1.squaredNorm() + e2.squaredNorm();
+    return !(twice_area > 1e-10 * scale);
+}
+
+}  // namespace specbake::detail
