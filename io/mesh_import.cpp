@@ -1,0 +1,178 @@
+#include "io/mesh_import.h"
+
+#include <assimp/Importer.hpp>
+#include <assimp/material.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <functional>
+
+namespace specbake {
+namespace {
+
+bool is_gltf(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return ext == ".gltf" || ext == ".glb";
+}
+
+ImportedMaterial read_material(const aiMaterial& m) {
+    ImportedMaterial out;
+    aiString name;
+    if (m.Get(AI_MATKEY_NAME, name) == AI_SUCCESS) out.name = name.C_Str();
+    aiString tex;
+    if (m.GetTextureCount(aiTextureType_NORMALS) > 0 && m.GetTexture(aiTextureType_NORMALS, 0, &tex) == AI_SUCCESS) {
+        out.has_normal_texture = true;
+        out.normal_texture = tex.C_Str();
+    }
+    // glTF's metallicRoughness texture arrives as DIFFUSE_ROUGHNESS or, in older importers, as UNKNOWN.
+    for (aiTextureType type : {aiTextureType_DIFFUSE_ROUGHNESS, aiTextureType_UNKNOWN}) {
+        if (m.GetTextureCount(type) > 0 && m.GetTexture(type, 0, &tex) == AI_SUCCESS) {
+            out.has_roughness_texture = true;
+            out.roughness_texture = tex.C_Str();
+            break;
+        }
+    }
+    float value = 0.0f;
+    if (m.Get(AI_MATKEY_ROUGHNESS_FACTOR, value) == AI_SUCCESS && std::isfinite(value)) {
+        out.roughness_factor = std::clamp(value, 0.0f, 1.0f);
+        out.roughness_from_file = true;
+    } else if (m.Get(AI_MATKEY_SHININESS, value) == AI_SUCCESS && std::isfinite(value) && value > 0.0f) {
+        // Phong exponent to Beckmann: alpha^2 = 2 / (Ns + 2), and r = sqrt(alpha) (SPEC Sec. 2).
+        out.roughness_factor = float(std::pow(2.0 / (double(value) + 2.0), 0.25));
+    }
+    return out;
+}
+
+Result<TriMesh> read_mesh(const aiMesh& am, const std::string& path, size_t index) {
+    TriMesh m;
+    const std::string mesh_name = am.mName.length ? std::string(am.mName.C_Str()) : "#" + std::to_string(index);
+    m.name = path + ": mesh '" + mesh_name + "'";
+    m.material = int(am.mMaterialIndex);
+    const size_t n = am.mNumVertices;
+    if (n == 0 || !am.mVertices) return make_error(m.name + ": no vertices");
+    m.positions.resize(3 * n);
+    for (size_t v = 0; v < n; ++v) {
+        const aiVector3D& p = am.mVertices[v];
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+            return make_error(m.name + ": vertex " + std::to_string(v) + " has a non-finite position");
+        m.positions[3 * v] = p.x;
+        m.positions[3 * v + 1] = p.y;
+        m.positions[3 * v + 2] = p.z;
+    }
+    if (am.mNormals) {
+        m.normals.resize(3 * n);
+        for (size_t v = 0; v < n; ++v) {
+            m.normals[3 * v] = am.mNormals[v].x;
+            m.normals[3 * v + 1] = am.mNormals[v].y;
+            m.normals[3 * v + 2] = am.mNormals[v].z;
+        }
+    }
+    if (am.mNormals && am.mTangents && am.mBitangents) {
+        // Assimp stores the bitangent; glTF's w is its side of cross(N, T).
+        m.tangents.resize(4 * n);
+        for (size_t v = 0; v < n; ++v) {
+            const aiVector3D& t = am.mTangents[v];
+            const aiVector3D b = am.mBitangents[v];
+            const aiVector3D nb = am.mNormals[v] ^ t;
+            m.tangents[4 * v] = t.x;
+            m.tangents[4 * v + 1] = t.y;
+            m.tangents[4 * v + 2] = t.z;
+            m.tangents[4 * v + 3] = (nb * b) < 0.0f ? -1.0f : 1.0f;
+        }
+    }
+    if (am.mTextureCoords[0]) {
+        m.uv0.resize(2 * n);
+        for (size_t v = 0; v < n; ++v) {
+            m.uv0[2 * v] = am.mTextureCoords[0][v].x;
+            m.uv0[2 * v + 1] = 1.0f - am.mTextureCoords[0][v].y;  // Assimp's v up -> glTF's v down
+        }
+    }
+    m.indices.reserve(3 * size_t(am.mNumFaces));
+    for (size_t f = 0; f < am.mNumFaces; ++f) {
+        const aiFace& face = am.mFaces[f];
+        if (face.mNumIndices != 3) continue;  // points and lines left by the loader
+        for (int c = 0; c < 3; ++c) {
+            if (face.mIndices[c] >= n)
+                return make_error(m.name + ": face " + std::to_string(f) + " references vertex " +
+                                  std::to_string(face.mIndices[c]) + " but there are only " + std::to_string(n) +
+                                  " vertices");
+            m.indices.push_back(face.mIndices[c]);
+        }
+    }
+    return m;
+}
+
+}  // namespace
+
+Result<ImportedScene> import_mesh(const std::string& path, const MeshImportOptions& options) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) return make_error(path + ": no such file");
+
+    Assimp::Importer importer;
+    importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+    unsigned flags = aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_ValidateDataStructure;
+    const bool join = options.join == VertexJoin::Always || (options.join == VertexJoin::Auto && !is_gltf(path));
+    if (join) flags |= aiProcess_JoinIdenticalVertices;
+
+    const aiScene* scene = nullptr;
+    try {
+        scene = importer.ReadFile(path, flags);
+    } catch (const std::exception& e) {
+        return make_error(path + ": " + e.what());
+    }
+    if (!scene) {
+        std::string why = importer.GetErrorString();
+        if (why.empty()) why = "unreadable or unsupported mesh file";
+        return make_error(path + ": " + why);
+    }
+    if (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) return make_error(path + ": incomplete scene (no meshes)");
+
+    ImportedScene out;
+    out.path = path;
+    for (size_t i = 0; i < scene->mNumMaterials; ++i) out.materials.push_back(read_material(*scene->mMaterials[i]));
+
+    std::vector<int> mesh_slot(scene->mNumMeshes, -1);
+    for (size_t i = 0; i < scene->mNumMeshes; ++i) {
+        const aiMesh& am = *scene->mMeshes[i];
+        if (!(am.mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) {
+            out.notes.push_back("mesh '" + std::string(am.mName.C_Str()) + "' has no triangles (points or lines), skipped");
+            continue;
+        }
+        Result<TriMesh> m = read_mesh(am, path, i);
+        if (!m) return m.error();
+        if (m->indices.empty()) {
+            out.notes.push_back(m->name + ": no triangles, skipped");
+            continue;
+        }
+        if (m->material >= int(out.materials.size())) m->material = -1;
+        mesh_slot[i] = int(out.meshes.size());
+        out.meshes.push_back(std::move(m.value()));
+    }
+    if (out.meshes.empty()) return make_error(path + ": no triangles in the file");
+
+    std::function<void(const aiNode*, int)> visit = [&](const aiNode* node, int parent) {
+        ImportedNode n;
+        n.name = node->mName.C_Str();
+        n.parent = parent;
+        const aiMatrix4x4& t = node->mTransformation;  // row-major
+        const float rows[4][4] = {{t.a1, t.a2, t.a3, t.a4}, {t.b1, t.b2, t.b3, t.b4},
+                                  {t.c1, t.c2, t.c3, t.c4}, {t.d1, t.d2, t.d3, t.d4}};
+        for (int c = 0; c < 4; ++c)
+            for (int r = 0; r < 4; ++r) n.local_transform[4 * c + r] = rows[r][c];
+        for (unsigned k = 0; k < node->mNumMeshes; ++k) {
+            const unsigned mi = node->mMeshes[k];
+            if (mi < mesh_slot.size() && mesh_slot[mi] >= 0) n.meshes.push_back(mesh_slot[mi]);
+        }
+        const int self = int(out.nodes.size());
+        out.nodes.push_back(std::move(n));
+        for (unsigned k = 0; k < node->mNumChildren; ++k) visit(node->mChildren[k], self);
+    };
+    if (scene->mRootNode) visit(scene->mRootNode, -1);
+    return out;
+}
+
+}  // namespace specbake
