@@ -1,10 +1,20 @@
-// specbake: command-line entry point. Parses arguments and dispatches to one registered subcommand.
+// specbake: command-line entry point. Expands response files, reads --config, parses the global flags
+// and dispatches to one registered subcommand.
 #include "cli/command.h"
+#include "cli/job_config.h"
+#include "cli/job_pipeline.h"
 #include "cli/version.h"
+
+#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <exception>
+#include <iterator>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <unistd.h>
 #include <vector>
 
 namespace specbake::cli {
@@ -21,6 +31,39 @@ std::vector<Entry>& registry() {
     return entries;
 }
 
+// Reads --config files (TOML or JSON) into the parser's items. Top-level keys go to the command being
+// run, so one flat file configures it; [materials.NAME] tables become material_overrides().
+class ConfigFile : public CLI::Config {
+public:
+    ConfigFile(std::string command, std::vector<std::string> globals, std::vector<std::string> subcommands)
+        : command_(std::move(command)), globals_(std::move(globals)), subcommands_(std::move(subcommands)) {}
+
+    void set_option(const CLI::Option* option) { option_ = option; }
+
+    std::string to_config(const CLI::App* app, bool defaults, bool descriptions, std::string prefix) const override {
+        return CLI::ConfigTOML().to_config(app, defaults, descriptions, std::move(prefix));
+    }
+
+    std::vector<CLI::ConfigItem> from_config(std::istream& input) const override {
+        const std::string text{std::istreambuf_iterator<char>(input), std::istreambuf_iterator<char>()};
+        const std::string name = option_ && option_->count() ? option_->results().back() : "config file";
+        auto tree = parse_config_text(text, name);
+        if (!tree) throw CLI::ConfigError(tree.error().message, CLI::ExitCodes::ConfigError);
+        auto split = split_config(*tree, command_, globals_, subcommands_, name);
+        if (!split) throw CLI::ConfigError(split.error().message, CLI::ExitCodes::ConfigError);
+        material_overrides() = split->materials;
+        std::vector<CLI::ConfigItem> items;
+        for (ConfigEntry& e : split->entries) items.push_back({e.section, e.key, e.values});
+        return items;
+    }
+
+private:
+    std::string command_;
+    std::vector<std::string> globals_;
+    std::vector<std::string> subcommands_;
+    const CLI::Option* option_ = nullptr;
+};
+
 }  // namespace
 
 Registration::Registration(const char* name, int order, AddCommand add) {
@@ -34,20 +77,52 @@ void print_warning(const std::string& message) { std::fprintf(stderr, "specbake:
 
 int main(int argc, char** argv) {
     using namespace specbake::cli;
+    auto expanded = expand_response_files(std::vector<std::string>(argv + 1, argv + argc));
+    if (!expanded) {
+        print_error(expanded.error().message);
+        return kExitUsage;
+    }
+    std::vector<std::string> args = std::move(*expanded);
+
     CLI::App app{"specbake: bakes specular anti-aliasing data (filtered roughness, kernel and LEAN mips,\n"
                  "per-vertex curvature) and ships the runtime shader include that uses it.",
                  "specbake"};
     app.set_version_flag("--version", std::string("specbake ") + specbake::tool_version());
     app.require_subcommand(1);
-    app.footer("Run 'specbake <command> --help' for the options and examples of each command.");
+    app.fallthrough();  // global flags may follow the command name: specbake bake -j 4 scene.gltf
+
+    RunSettings& settings = run_settings();
+    bool quiet = false;
+    bool verbose = false;
+    app.add_option("-j,--jobs", settings.jobs, "Worker threads (default: all cores); outputs do not depend on it")
+        ->check(CLI::NonNegativeNumber);
+    app.add_flag("-q,--quiet", quiet, "Print errors only");
+    app.add_flag("-v,--verbose", verbose, "Print what is done and why (for example why an output is rebaked)");
+    CLI::Option* config_option =
+        app.set_config("--config", "", "Read options from a TOML or JSON file; options on the command line win");
+    app.footer("Arguments @FILE are replaced by the arguments listed in FILE (response file).\n"
+               "Exit codes: 0 success, 1 some inputs failed (the others completed), 2 usage error.\n"
+               "Run 'specbake <command> --help' for the options and examples of each command.");
 
     auto& entries = registry();
     std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) { return a.order < b.order; });
     std::function<int()> run;
     for (const Entry& e : entries) e.add(app, run);
 
+    std::vector<std::string> subcommands;
+    for (const Entry& e : entries) subcommands.emplace_back(e.name);
+    std::vector<std::string> globals;
+    for (const CLI::Option* opt : app.get_options())
+        for (const std::string& name : opt->get_lnames()) globals.push_back(name);
+    const auto command = std::find_first_of(args.begin(), args.end(), subcommands.begin(), subcommands.end());
+    auto formatter = std::make_shared<ConfigFile>(command == args.end() ? std::string() : *command, globals,
+                                                  subcommands);
+    formatter->set_option(config_option);
+    app.config_formatter(formatter);
+
     try {
-        app.parse(argc, argv);
+        std::vector<std::string> reversed(args.rbegin(), args.rend());
+        app.parse(reversed);
     } catch (const CLI::ParseError& e) {
         const int code = app.exit(e);
         return code == 0 ? kExitOk : kExitUsage;
@@ -56,6 +131,15 @@ int main(int argc, char** argv) {
         print_error("no command given; see 'specbake --help'");
         return kExitUsage;
     }
+    if (quiet && verbose) {
+        print_error("--quiet and --verbose exclude each other");
+        return kExitUsage;
+    }
+    settings.verbosity = quiet ? Verbosity::quiet : verbose ? Verbosity::verbose : Verbosity::normal;
+    settings.progress_bar = !quiet && isatty(fileno(stderr));
+    std::optional<tbb::global_control> thread_limit;
+    if (settings.jobs > 0) thread_limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(settings.jobs));
+
     try {
         return run();
     } catch (const std::exception& e) {

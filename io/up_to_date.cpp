@@ -1,0 +1,66 @@
+#include "io/up_to_date.h"
+
+#include "io/manifest.h"
+#include "io/sha256.h"
+
+#include <algorithm>
+
+namespace specbake::io {
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path resolve_recorded_input(const std::string& recorded, const fs::path& output_dir) {
+    const fs::path p(recorded);
+    std::error_code ec;
+    if (p.is_absolute() || fs::exists(p, ec)) return p;
+    return output_dir / p;
+}
+
+Freshness stale(std::string reason) {
+    Freshness f;
+    f.reason = std::move(reason);
+    return f;
+}
+
+}  // namespace
+
+Freshness check_up_to_date(const FreshnessQuery& query) {
+    const fs::path manifest_path = query.output_dir / "manifest.json";
+    std::error_code ec;
+    if (!fs::exists(manifest_path, ec)) return stale("no manifest in " + query.output_dir.string());
+    auto manifest = read_manifest(manifest_path);
+    if (!manifest) return stale(manifest.error().message);
+    if (manifest->version != query.tool_version)
+        return stale("made by specbake " + manifest->version + ", this is " + query.tool_version);
+    if (manifest->settings != query.settings) return stale("settings changed");
+
+    for (const std::string& given : query.inputs) {
+        const bool recorded = std::any_of(manifest->inputs.begin(), manifest->inputs.end(),
+                                          [&](const ManifestInput& in) { return in.path == given; });
+        if (!recorded) return stale("input " + given + " is not in the manifest");
+    }
+    if (manifest->inputs.empty()) return stale("the manifest lists no inputs");
+
+    Freshness fresh;
+    for (const ManifestInput& in : manifest->inputs) {
+        auto hash = sha256_file(resolve_recorded_input(in.path, query.output_dir));
+        if (!hash) return stale("input " + in.path + " is missing");
+        if (*hash != in.sha256) return stale("input " + in.path + " changed");
+        fresh.recorded_inputs.push_back(in.path);
+    }
+    for (const ManifestOutput& out : manifest->outputs) {
+        auto hash = sha256_file(query.output_dir / out.path);
+        if (!hash) return stale("output " + out.path + " is missing");
+        if (*hash != out.sha256) return stale("output " + out.path + " was modified");
+    }
+    fresh.up_to_date = true;
+    return fresh;
+}
+
+void mark_manifest_fresh(const fs::path& output_dir) {
+    std::error_code ec;
+    fs::last_write_time(output_dir / "manifest.json", fs::file_time_type::clock::now(), ec);
+}
+
+}  // namespace specbake::io
