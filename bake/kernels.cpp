@@ -74,9 +74,12 @@ Sym2<T> filter_projected(const Vec2<T>& roughness2, const Vec2<T>& du, const Vec
     const T bx = roughness2.x / (T(1) - roughness2.x);
     const T by = roughness2.y / (T(1) - roughness2.y);
     const Sym2<T> Bbar = diag(bx, by) + K;  // TK21 Eq. (6)
+    // det(Bbar) expanded as det(B) + b_x K_yy + b_y K_xx + det(K) with det(K) = (2 sigma^2 det[du; dv])^2:
+    // every term is non-negative, so a long thin kernel (rank one up to rounding) cannot cancel to garbage.
+    const T cross = T(2) * sigma2 * (du.x * dv.y - du.y * dv.x);
+    const T e = bx * by + bx * K.yy + by * K.xx + cross * cross;
     // TK21 Eq. (7) via App. D with Listing 1's clamps det >= det(B) and det(m) >= 1, where
     // m = Bbar/d + I and det(m) = e/d^2 + tr/d + 1; numerator and denominator are multiplied by d.
-    const T e = det(Bbar);
     const T d = std::max(e, bx * by);
     const T e_over_d = d > T(0) ? e / d : T(1);  // e = d = 0: singular Bbar, the ratio's limit is 1
     const T denom = std::max(e_over_d + trace(Bbar) + d, d);

@@ -36,7 +36,8 @@ Vec2<T> filter_axis_aligned(const Vec2<T>& roughness2, const Vec2<T>& du, const 
 // Full projected-space filtering, TK21 Eq. (4)-(8), Listing 1 with App. D and its determinant clamp
 // det(B_bar) >= det(B) and det(m) >= 1. Computed as (B_bar + d I) / max(det(B_bar)/d + tr(B_bar) + d, d)
 // with d the clamped determinant: Listing 1 multiplied through by d, so alpha = 0 with a zero kernel
-// (singular B_bar) gives A_bar = 0 instead of 0/0. roughness2 >= 1 on an axis (B infinite) gives the limit
+// (singular B_bar) gives A_bar = 0 instead of 0/0. det(B_bar) is expanded into non-negative terms so that
+// elongated kernels do not lose it to cancellation. roughness2 >= 1 on an axis (B infinite) gives the limit
 // A_bar = 1 on that axis (both axes: I). du, dv are derivatives of (h.x, h.y).
 template <class T>
 Sym2<T> filter_projected(const Vec2<T>& roughness2, const Vec2<T>& du, const Vec2<T>& dv, T sigma2);
