@@ -38,4 +38,8 @@ Result<DecodedImage> decode_image_memory(std::span<const uint8_t> bytes, const s
 Result<Image> read_image(const std::filesystem::path& path);
 Result<Image> read_image_memory(std::span<const uint8_t> bytes, const std::string& name_for_errors);
 
+// Writes `image` atomically as an 8- or 16-bit integer file (format from the extension: .png, .tif, ...),
+// values clamped to [0, 1], no colour conversion. The error names the file.
+Result<void> write_image(const std::filesystem::path& path, const Image& image, int bits);
+
 }  // namespace specbake::io

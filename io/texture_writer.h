@@ -6,6 +6,7 @@
 
 #include "bake/image.h"
 #include "bake/result.h"
+#include "bake/texture_bake.h"
 #include "io/manifest.h"
 
 #include <filesystem>
@@ -25,11 +26,14 @@ const char* encoding_name(TexelEncoding e);          // "unorm8", "unorm16", "fl
 std::optional<TextureContainer> parse_container(const std::string& name);
 
 // Writes `chain` (1-4 channels; EXR also more) as `dir/<stem>.<ext>` (per-mip: `dir/<stem>_mip<L>.<ext>`).
-// `channel_names` name the channels inside EXR files (defaults R, G, B, A). Returns one entry per file,
-// `path` relative to `dir`, kind `kind`, sha256 filled. Creates `dir` when missing; the error names the file.
+// `channel_names` name the channels inside EXR files (defaults R, G, B, A). `wrap` is recorded where the
+// container has a place for it (EXR "wrapmodes"). Returns one entry per file, `path` relative to `dir`,
+// kind `kind`, sha256 filled. Creates `dir` when missing; the error names the file. All files of the call
+// are written to temporary names first and renamed only when every one succeeded.
 Result<std::vector<ManifestOutput>> write_texture(const MipChain& chain, TexelEncoding encoding,
                                                   TextureContainer container, const std::filesystem::path& dir,
                                                   const std::string& stem, const std::string& kind,
-                                                  const std::vector<std::string>& channel_names = {});
+                                                  const std::vector<std::string>& channel_names = {},
+                                                  WrapMode wrap = WrapMode::Repeat);
 
 }  // namespace specbake::io

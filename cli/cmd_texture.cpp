@@ -1,0 +1,196 @@
+// specbake texture: bakes one normal map (+ roughness) into filtered roughness, kernel, LEAN and
+// mean-normal mip chains (SPEC Sec. 3, 7). Only argument parsing and printing live here; the pipeline
+// is cli/job_texture.h.
+#include "cli/command.h"
+#include "cli/job_texture.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <unistd.h>
+
+namespace specbake::cli {
+namespace {
+namespace fs = std::filesystem;
+
+struct TextureOptions {
+    std::string normal;
+    std::string roughness;
+    std::optional<float> roughness_value;
+    std::string output;
+    std::string format = "ktx2";
+    std::string isotropic = "mean";
+    std::string filter = "projected";
+    std::optional<double> max_kernel;
+    std::string normal_y = "+y";
+    std::string reconstruct_z = "auto";
+    std::string wrap = "repeat";
+    bool anisotropic = false;
+    std::string lean_space = "projected";
+    std::string outputs = "roughness,kernel,lean,normal";
+    int threads = 0;
+    bool demo = false;
+    bool quiet = false;
+};
+
+// "FILE[:channel]" with channel 0-3 or r/g/b/a. A path that exists as given is never split.
+bool parse_roughness(const std::string& arg, fs::path& file, int& channel) {
+    std::error_code ec;
+    channel = -1;
+    file = arg;
+    const size_t colon = arg.rfind(':');
+    if (colon == std::string::npos || fs::exists(arg, ec)) return true;
+    const std::string ch = arg.substr(colon + 1);
+    static const std::string letters = "rgba";
+    if (ch.size() == 1 && ch[0] >= '0' && ch[0] <= '3') channel = ch[0] - '0';
+    else if (ch.size() == 1 && letters.find(char(std::tolower(ch[0]))) != std::string::npos)
+        channel = int(letters.find(char(std::tolower(ch[0]))));
+    else return false;
+    file = arg.substr(0, colon);
+    return true;
+}
+
+bool parse_outputs(const std::string& list, TextureOutputs& out) {
+    out = TextureOutputs{false, false, false, false};
+    std::stringstream ss(list);
+    std::string item;
+    bool any = false;
+    while (std::getline(ss, item, ',')) {
+        if (item == "roughness") out.roughness = true;
+        else if (item == "kernel") out.kernel = true;
+        else if (item == "lean") out.lean = true;
+        else if (item == "normal") out.normal = true;
+        else return false;
+        any = true;
+    }
+    return any;
+}
+
+int run_texture(const TextureOptions& o) {
+    TextureJob job;
+    job.demo = o.demo;
+    if (!o.demo) {
+        if (o.normal.empty()) {
+            print_error("texture: --normal FILE (or --demo) is required");
+            return kExitUsage;
+        }
+        job.normal = o.normal;
+    }
+    if (!o.roughness.empty()) {
+        if (o.demo) {
+            print_error("texture: --demo brings its own roughness; do not combine it with --roughness");
+            return kExitUsage;
+        }
+        fs::path file;
+        int channel = -1;
+        if (!parse_roughness(o.roughness, file, channel)) {
+            print_error("texture: --roughness " + o.roughness + ": the channel after ':' must be 0-3 or r, g, b, a");
+            return kExitUsage;
+        }
+        job.roughness = file;
+        job.roughness_channel = channel;
+    }
+    if (o.roughness_value) job.roughness_value = *o.roughness_value;
+    job.output_dir = o.output;
+    job.container = *io::parse_container(o.format);
+    TextureBakeSettings& s = job.settings;
+    s.isotropic = o.isotropic == "sum" ? IsotropicReduction::Sum
+                  : o.isotropic == "max" ? IsotropicReduction::Max : IsotropicReduction::Mean;
+    s.filter = o.filter == "approx" ? RoughnessFilterMode::Approx : RoughnessFilterMode::Projected;
+    s.max_kernel = o.max_kernel;
+    s.normal_y = o.normal_y == "-y" ? NormalGreen::MinusY : NormalGreen::PlusY;
+    s.reconstruct_z = o.reconstruct_z == "always" ? ReconstructZ::Always
+                      : o.reconstruct_z == "never" ? ReconstructZ::Never : ReconstructZ::Auto;
+    s.wrap = o.wrap == "clamp" ? WrapMode::Clamp : o.wrap == "mirror" ? WrapMode::Mirror : WrapMode::Repeat;
+    s.anisotropic = o.anisotropic;
+    s.lean_space = o.lean_space == "slope" ? LeanSpace::Slope : LeanSpace::Projected;
+    s.threads = o.threads;
+    if (!parse_outputs(o.outputs, s.outputs)) {
+        print_error("texture: --outputs " + o.outputs + ": expected a comma list of roughness, kernel, lean, normal");
+        return kExitUsage;
+    }
+    if (!o.quiet && ::isatty(2)) job.progress = [](const std::string& line) { std::fprintf(stderr, "specbake: %s\n", line.c_str()); };
+
+    auto outcome = run_texture_job(job);
+    if (!outcome) {
+        print_error(outcome.error().message);
+        return kExitFailed;
+    }
+    for (const std::string& w : outcome->notes.warnings) print_warning(w);
+    if (outcome->notes.z_reconstructed)
+        std::fprintf(stderr, "specbake: note: z reconstructed from x and y (%s)\n", outcome->notes.z_reason.c_str());
+    if (!o.quiet) {
+        for (const io::ManifestOutput& out : outcome->manifest.outputs)
+            std::printf("%-9s %s  %dx%d, %d mips, %d channels\n", out.kind.c_str(),
+                        (fs::path(o.output) / out.path).string().c_str(), out.width, out.height, out.mips,
+                        out.channels);
+        std::printf("manifest  %s\n", (fs::path(o.output) / "manifest.json").string().c_str());
+        std::printf("max roughness change over plain mipmapping: %.5f\n", outcome->max_roughness_change);
+    }
+    return kExitOk;
+}
+
+void add_texture_command(CLI::App& app, std::function<int()>& run) {
+    auto* sub = app.add_subcommand(
+        "texture",
+        "Bake a normal map (and roughness) into filtered roughness, kernel, LEAN and mean-normal mips.");
+    auto o = std::make_shared<TextureOptions>();
+    sub->add_option("--normal", o->normal,
+                    "Tangent-space normal map: PNG (8/16-bit), JPEG, TGA, TIFF, EXR, ... 2, 3 or 4 channels");
+    sub->add_option("--roughness", o->roughness,
+                    "Roughness map FILE[:channel] (channel 0-3 or r/g/b/a). Default channel: G for 3+ channel "
+                    "files (glTF ORM: R and B are carried through), else the first. Any resolution.");
+    auto* value = sub->add_option("--roughness-value", o->roughness_value,
+                                  "Constant perceptual roughness in [0, 1] when there is no roughness map (default 0.5)")
+                      ->check(CLI::Range(0.0f, 1.0f));
+    sub->get_option("--roughness")->excludes(value);
+    sub->add_option("-o,--output", o->output, "Output folder (created; must not hold an input)")->required();
+    sub->add_option("--format", o->format, "Container: ktx2 (default), dds, exr (tiled, mipmapped) or png "
+                                           "(one file per mip; float data as EXR)")
+        ->check(CLI::IsMember({"ktx2", "dds", "exr", "png"}));
+    sub->add_option("--isotropic", o->isotropic,
+                    "Kernel from the footprint covariance Sigma: mean t = tr (default), sum t = 2 tr, "
+                    "max t = 2 lambda_max")
+        ->check(CLI::IsMember({"mean", "sum", "max"}));
+    sub->add_option("--filter", o->filter,
+                    "projected: a' = (a + t(1-a)) / (1 + t(1-a)) (default, exact for GGX); approx: a' = min(1, a + t)")
+        ->check(CLI::IsMember({"projected", "approx"}));
+    sub->add_option("--max-kernel", o->max_kernel, "Clamp of the kernel t (none by default)")
+        ->check(CLI::Range(0.0, 1e9));
+    sub->add_option("--normal-y", o->normal_y, "Green channel convention: +y (OpenGL/glTF, default) or -y (DirectX)")
+        ->check(CLI::IsMember({"+y", "-y"}));
+    sub->add_option("--reconstruct-z", o->reconstruct_z,
+                    "auto (default: for 2-channel maps and maps whose blue is constant at full scale), always, never")
+        ->check(CLI::IsMember({"auto", "always", "never"}));
+    sub->add_option("--wrap", o->wrap,
+                    "Addressing the textures are sampled with: repeat (default), clamp, mirror. Footprints lie "
+                    "inside the map, so it does not change values; it is recorded in the manifest and EXR files")
+        ->check(CLI::IsMember({"repeat", "clamp", "mirror"}));
+    sub->add_flag("--anisotropic", o->anisotropic, "Kernel output holds Sigma (xx, yy, xy) instead of t");
+    sub->add_option("--lean-space", o->lean_space,
+                    "LEAN moments in projected space (default) or slope space (Olano & Baker, base roughness folded in)")
+        ->check(CLI::IsMember({"projected", "slope"}));
+    sub->add_option("--outputs", o->outputs, "Comma list of roughness, kernel, lean, normal (default: all)");
+    sub->add_option("--threads", o->threads, "Worker threads (0: all cores); outputs are identical for any count")
+        ->check(CLI::Range(0, 1024));
+    sub->add_flag("--demo", o->demo,
+                  "Bake the built-in 512x384 procedural normal map (bumps, ribs, noise) and ORM map; they are "
+                  "written to the output folder as demo_normal.png and demo_orm.png");
+    sub->add_flag("-q,--quiet", o->quiet, "Print only warnings and errors");
+    sub->footer(
+        "Outputs (in the output folder): texture_roughness, texture_kernel, texture_lean (+ texture_lean_xy\n"
+        "for KTX2/DDS/PNG, which hold at most 4 channels), texture_normal, and manifest.json.\n"
+        "\nExamples:\n"
+        "  specbake texture --demo -o out/demo\n"
+        "  specbake texture --normal rock_n.png --roughness rock_orm.png -o out/rock\n"
+        "  specbake texture --normal n.tga --roughness-value 0.3 --format dds --normal-y -y -o out/n\n"
+        "  specbake texture --normal n.png --roughness r.png:0 --isotropic max --anisotropic --format exr -o out/n");
+    sub->callback([&run, o] { run = [o] { return run_texture(*o); }; });
+}
+
+const Registration reg{"texture", 20, &add_texture_command};
+
+}  // namespace
+}  // namespace specbake::cli

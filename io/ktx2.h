@@ -1,0 +1,50 @@
+// KTX 2.0 (Khronos Texture 2.0 specification) for uncompressed 2D textures with a full mip chain:
+// vkFormat R8/R16 UNORM, R16/R32 SFLOAT with 1-4 channels, a basic data format descriptor
+// (KHR_DF_MODEL_RGBSDA, BT.709 primaries, KHR_DF_TRANSFER_LINEAR), a KTXwriter key/value entry,
+// and level data stored smallest level first, each level aligned to lcm(texel size, 4).
+#pragma once
+
+#include "bake/image.h"
+#include "bake/result.h"
+#include "io/texture_writer.h"
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace specbake::io {
+
+// vkFormat of `channels` channels (1-4) stored as `encoding`.
+uint32_t ktx2_vk_format(TexelEncoding encoding, int channels);
+
+// The whole file.
+std::vector<uint8_t> encode_ktx2(const MipChain& chain, TexelEncoding encoding);
+
+// What a KTX2 file holds, as parsed and checked by read_ktx2.
+struct Ktx2Info {
+    uint32_t vk_format = 0;
+    uint32_t type_size = 0;
+    uint32_t level_count = 0;
+    uint32_t supercompression = 0;
+    // Data format descriptor, basic block.
+    uint32_t color_model = 0, color_primaries = 0, transfer = 0, flags = 0;
+    uint32_t bytes_plane0 = 0;
+    std::vector<uint32_t> sample_bit_lengths;  // bitLength + 1 of each sample
+    std::vector<uint32_t> sample_channel_ids;
+    std::vector<uint32_t> sample_qualifiers;   // high nibble of channelType (0x80 float, 0x40 signed, ...)
+    std::vector<uint64_t> level_offsets, level_lengths;
+    std::string writer;                        // KTXwriter value
+};
+
+struct Ktx2Texture {
+    Ktx2Info info;
+    TexelEncoding encoding = TexelEncoding::Unorm8;
+    MipChain chain;  // decoded to float
+};
+
+// Parses and validates a KTX2 file written by encode_ktx2 (uncompressed formats only): identifier,
+// header, index, level sizes and alignment, descriptor consistency with vkFormat. Errors name `name`.
+Result<Ktx2Texture> decode_ktx2(std::span<const uint8_t> bytes, const std::string& name);
+
+}  // namespace specbake::io
