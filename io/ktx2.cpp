@@ -135,7 +135,7 @@ std::vector<uint8_t> encode_ktx2(const MipChain& chain, TexelEncoding encoding) 
     return b;
 }
 
-Result<Ktx2Texture> decode_ktx2(std::span<const uint8_t> b, const std::string& name) {
+Result<Ktx2Texture> read_ktx2_texture(std::span<const uint8_t> b, const std::string& name) {
     auto fail = [&](const std::string& what) -> Result<Ktx2Texture> { return make_error(name + ": " + what); };
     if (b.size() < kHeaderBytes || std::memcmp(b.data(), kIdentifier, sizeof(kIdentifier)) != 0)
         return fail("not a KTX2 file");

@@ -21,7 +21,7 @@ uint32_t ktx2_vk_format(TexelEncoding encoding, int channels);
 // The whole file.
 std::vector<uint8_t> encode_ktx2(const MipChain& chain, TexelEncoding encoding);
 
-// What a KTX2 file holds, as parsed and checked by read_ktx2.
+// What a KTX2 file holds, as parsed and checked by read_ktx2_texture.
 struct Ktx2Info {
     uint32_t vk_format = 0;
     uint32_t type_size = 0;
@@ -45,6 +45,6 @@ struct Ktx2Texture {
 
 // Parses and validates a KTX2 file written by encode_ktx2 (uncompressed formats only): identifier,
 // header, index, level sizes and alignment, descriptor consistency with vkFormat. Errors name `name`.
-Result<Ktx2Texture> decode_ktx2(std::span<const uint8_t> bytes, const std::string& name);
+Result<Ktx2Texture> read_ktx2_texture(std::span<const uint8_t> bytes, const std::string& name);
 
 }  // namespace specbake::io
