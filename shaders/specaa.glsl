@@ -128,28 +128,40 @@ SPECAA_FLOAT2 specaa_filter_axis_aligned(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT2 du,
 }
 
 // Full projected-space filtering of an axis-aligned material, TK21 Eq. (4)-(8):
-// A_bar = ((B + K)^-1 + I)^-1 with B = diag(a / (1 - a)). Here written with B_bar = B + K and
-// A_bar = (B_bar + det(B_bar) I) / (1 + tr(B_bar) + det(B_bar)) (App. D form), both multiplied by
-// c = (1 - a_x)(1 - a_y) so that a = 1 (B infinite) and a = 0 with K = 0 (singular) stay exact
-// (A_bar = 1 resp. 0). det(B_bar) is clamped below by det(B) as in Listing 1. K must be PSD.
-SPECAA_FLOAT3 specaa_filter_projected_matrix(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT3 K) {
+// A_bar = ((B + K)^-1 + I)^-1 with B = diag(a / (1 - a)), B_bar = B + K. Written as
+// A_bar = (B_bar + det(B_bar) I) / (1 + tr(B_bar) + det(B_bar)) (the App. D form) and multiplied by
+// c = (1 - a_x)(1 - a_y), so a = 1 (B infinite) and a = 0 with K = 0 (singular) stay exact (A_bar = 1
+// resp. 0). c det(B_bar) = a_x a_y + c B_xx K_yy + c B_yy K_xx + c det(K) is a sum of non-negative terms,
+// so det(B_bar) >= det(B) (the clamp of Listing 1) holds by construction. detK = det(K) >= 0, K PSD.
+SPECAA_FLOAT3 specaa_filter_projected_matrix_det(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT3 K, float detK) {
     float traceK = K.x + K.y;
-    if (traceK > SPECAA_MAX_KERNEL) K *= SPECAA_MAX_KERNEL / traceK;
+    if (traceK > SPECAA_MAX_KERNEL) {
+        float scale = SPECAA_MAX_KERNEL / traceK;
+        K *= scale;
+        detK *= scale * scale;
+        traceK = SPECAA_MAX_KERNEL;
+    }
     float ax = SPECAA_SATURATE(alpha2.x);
     float ay = SPECAA_SATURATE(alpha2.y);
     float c = (1.0 - ax) * (1.0 - ay);
-    float px = ax + K.x * (1.0 - ax);                         // (1 - a_x) B_bar_xx
-    float py = ay + K.y * (1.0 - ay);                         // (1 - a_y) B_bar_yy
-    float cDet = max(px * py - c * K.z * K.z, ax * ay);       // c det(B_bar) >= c det(B)
-    float bx = ax * (1.0 - ay);                               // c B_xx
-    float by = ay * (1.0 - ax);                               // c B_yy
-    float denominator = c + bx + by + c * traceK + cDet;     // c (1 + tr(B_bar) + det(B_bar)) > 0
+    float bx = ax * (1.0 - ay);                                   // c B_xx
+    float by = ay * (1.0 - ax);                                   // c B_yy
+    float cDet = ax * ay + bx * K.y + by * K.x + c * max(detK, 0.0);  // c det(B_bar)
+    float denominator = c + bx + by + c * traceK + cDet;         // c (1 + tr(B_bar) + det(B_bar)) > 0
     return SPECAA_FLOAT3(bx + c * K.x + cDet, by + c * K.y + cDet, c * K.z) / denominator;
 }
 
-// Full projected-space filtering from projected half-vector derivatives, TK21 Listing 1.
+// Full projected-space filtering by a kernel matrix K (PSD), e.g. baked Sigma plus a curvature kernel.
+SPECAA_FLOAT3 specaa_filter_projected_matrix(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT3 K) {
+    return specaa_filter_projected_matrix_det(alpha2, K, specaa_sym_det(K));
+}
+
+// Full projected-space filtering from projected half-vector derivatives, TK21 Listing 1. det(K) comes
+// from Cauchy-Binet, (2 sigma^2)^2 (du x dv)^2, exact where K_xx K_yy - K_xy^2 would cancel (a footprint
+// stretched along one direction, e.g. at grazing angles).
 SPECAA_FLOAT3 specaa_filter_projected(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT2 du, SPECAA_FLOAT2 dv) {
-    return specaa_filter_projected_matrix(alpha2, specaa_kernel_matrix(du, dv));
+    float cross2 = (2.0 * SPECAA_SIGMA2) * (du.x * dv.y - du.y * dv.x);
+    return specaa_filter_projected_matrix_det(alpha2, specaa_kernel_matrix(du, dv), cross2 * cross2);
 }
 
 // Isotropic kernels from world-space normal derivatives dnU, dnV (TK21 Sec. 5; Eq. 12: their lengths
@@ -367,11 +379,13 @@ float specaa_beckmann_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float tau) {
            (SPECAA_PI * sqrt(detClamped) * z2 * z2);
 }
 
-// GGX Smith Lambda, TK21 App. A.3: -1/2 + sqrt([o.x, o.y] A [o.x, o.y]^T + o.z^2) / (2 |o.z|).
-// +inf at o.z = 0.
+// GGX Smith Lambda, TK21 App. A.3: -1/2 + sqrt(s + o.z^2) / (2 |o.z|), s = [o.x, o.y] A [o.x, o.y]^T,
+// evaluated as s / (2 |o.z| (sqrt(s + o.z^2) + |o.z|)) (same value, no cancellation for smooth A).
+// +inf at o.z = 0 with s > 0.
 float specaa_ggx_lambda(SPECAA_FLOAT3 o, SPECAA_FLOAT3 A) {
-    float q = o.x * o.x * A.x + 2.0 * o.x * o.y * A.z + o.y * o.y * A.y + o.z * o.z;
-    return -0.5 + sqrt(q) / (2.0 * abs(o.z));
+    float s = o.x * o.x * A.x + 2.0 * o.x * o.y * A.z + o.y * o.y * A.y;
+    float z = abs(o.z);
+    return s / (2.0 * z * (sqrt(s + z * z) + z));
 }
 
 // Height-correlated G2 = chi+(i.h) chi+(o.h) / (1 + Lambda(i) + Lambda(o)), TK21 App. A.1, evaluated as
