@@ -1,0 +1,240 @@
+// The default entry points (specaa_filtered_alpha2 / _roughness / _alpha2_matrix) on llvmpipe with each
+// kind of baked data bound as a real mipmapped texture: every mip level holds its own constant, the
+// texture coordinates are scaled so that the hardware selects level L, and the result must be the
+// SPEC Sec. 3 composition of level L's data with the per-pixel kernel of a known normal or curvature
+// field, computed in double with the C++ core (bake/isotropic_filter.h, bake/roughness_space.h).
+#include "gl/gl_harness.h"
+
+#include "bake/constants.h"
+#include "bake/isotropic_filter.h"
+#include "bake/roughness_space.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+namespace specbake::gltest {
+namespace {
+
+constexpr int kTexSize = 64;
+constexpr int kLevels = 7;
+constexpr int kView = 16;
+constexpr double kSigma2 = kDefaultSigma2;
+constexpr double kKappa = kDefaultKappa;
+constexpr double kRoughness = 0.3;    // material r when no roughness texture is bound
+constexpr double kNormalSlope = 0.02;  // n = normalize(kNormalSlope * x, 0, 1) at window x
+constexpr double kWorldPerPixel = 0.01;
+constexpr double kK1 = 3.0, kK2 = -1.0, kDirAngle = 0.4;  // _SPECAA_CURVATURE
+constexpr double kTol = 4e-5;  // single-precision evaluation of a few closed forms (see grid_cases.h)
+
+// Per-level baked data.
+Sym2<double> level_sigma(int L) { return {0.002 * (L + 1), 0.0005 * (L + 1), 0.001 * (L + 1) * (L + 1)}; }
+double level_kernel(int L) { return 0.003 * (L + 1) * (L + 1); }
+double level_roughness(int L) { return 0.1 + 0.1 * L; }
+Vec2<double> level_mean(int L) { return {0.1 * L, -0.05 * L}; }
+
+enum class Baked { None, Kernel, KernelAnisotropic, Lean, Roughness };
+
+struct Config {
+    const char* name;
+    Baked baked;
+    bool curvature;
+    bool pixel_kernel;
+};
+
+GLuint make_texture(int channels, const std::function<std::array<float, 4>(int)>& level_value) {
+    GLuint tex = 0;
+    glGenTextures(1, &tex);
+    glBindTexture(GL_TEXTURE_2D, tex);
+    glTexStorage2D(GL_TEXTURE_2D, kLevels, channels == 1 ? GL_R32F : GL_RGBA32F, kTexSize, kTexSize);
+    for (int L = 0; L < kLevels; ++L) {
+        const int size = kTexSize >> L;
+        const auto v = level_value(L);
+        std::vector<float> texels;
+        for (int i = 0; i < size * size; ++i) texels.insert(texels.end(), v.begin(), v.begin() + channels);
+        glTexSubImage2D(GL_TEXTURE_2D, L, 0, 0, size, size, channels == 1 ? GL_RED : GL_RGBA, GL_FLOAT, texels.data());
+    }
+    // Nearest level, nearest texel: the expected value is exactly level L's constant.
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST_MIPMAP_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    return tex;
+}
+
+std::string fragment_source(const Config& c) {
+    std::string defines = "#version 450\nlayout(binding = 0) uniform sampler2D uTex0;\nlayout(binding = 1) uniform sampler2D uTex1;\n";
+    switch (c.baked) {
+        case Baked::None: break;
+        case Baked::Kernel: defines += "#define SPECAA_KERNEL_TEXTURE uTex0\n"; break;
+        case Baked::KernelAnisotropic: defines += "#define SPECAA_KERNEL_TEXTURE uTex0\n#define SPECAA_KERNEL_ANISOTROPIC\n"; break;
+        case Baked::Lean: defines += "#define SPECAA_LEAN_TEXTURE0 uTex0\n#define SPECAA_LEAN_TEXTURE1 uTex1\n"; break;
+        case Baked::Roughness: defines += "#define SPECAA_ROUGHNESS_TEXTURE uTex0\n"; break;
+    }
+    if (c.curvature) defines += "#define SPECAA_USE_CURVATURE\n";
+    if (!c.pixel_kernel) defines += "#define SPECAA_NO_PIXEL_KERNEL\n";
+    return defines + read_source_file("shaders/specaa.glsl") + R"(
+uniform float uUvPerPixel;
+uniform float uNormalSlope;
+uniform float uWorldPerPixel;
+uniform vec4 uCurvature;
+uniform float uRoughness;
+layout(location = 0) out vec4 o0;
+layout(location = 1) out vec4 o1;
+void main() {
+    SpecaaSurface s;
+    s.roughness = uRoughness;
+    s.uv = gl_FragCoord.xy * uUvPerPixel;
+    s.normal = normalize(vec3(uNormalSlope * gl_FragCoord.x, 0.0, 1.0));
+    s.position = vec3(gl_FragCoord.xy * uWorldPerPixel, 0.0);
+    s.tangent = vec3(1.0, 0.0, 0.0);
+    s.bitangent = vec3(0.0, 1.0, 0.0);
+    s.curvature = uCurvature;
+    o0 = vec4(specaa_filtered_alpha2(s), specaa_filtered_roughness(s), 0.0, 0.0);
+    o1 = vec4(specaa_filtered_alpha2_matrix(s), 0.0);
+}
+)";
+}
+
+// Largest eigenvalue scaled to at most kappa (the per-pixel clamp of the matrix form).
+Sym2<double> clamp_kernel(Sym2<double> k) {
+    const double lmax = 0.5 * (k.xx + k.yy) + std::hypot(0.5 * (k.xx - k.yy), k.xy);
+    return lmax > kKappa ? (kKappa / lmax) * k : k;
+}
+
+void run_config(const Config& c) {
+    SPECBAKE_REQUIRE_GL(gl);
+    std::string log;
+    const std::string vertex = "#version 450\nvoid main() { vec2 q = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2);"
+                               " gl_Position = vec4(q * 2.0 - 1.0, 0.0, 1.0); }\n";
+    GLuint program = build_program_glsl(vertex, fragment_source(c), log);
+    ASSERT_NE(program, 0u) << log;
+
+    GLuint tex0 = 0, tex1 = 0;
+    switch (c.baked) {
+        case Baked::None: break;
+        case Baked::Kernel: tex0 = make_texture(1, [](int L) { return std::array<float, 4>{float(level_kernel(L))}; }); break;
+        case Baked::KernelAnisotropic:
+            tex0 = make_texture(4, [](int L) {
+                const auto s = level_sigma(L);
+                return std::array<float, 4>{float(s.xx), float(s.yy), float(s.xy), 0.0f};
+            });
+            break;
+        case Baked::Lean:
+            tex0 = make_texture(4, [](int L) {
+                const auto s = level_sigma(L);
+                const auto m = level_mean(L);
+                return std::array<float, 4>{float(m.x), float(m.y), float(s.xx + m.x * m.x), float(s.yy + m.y * m.y)};
+            });
+            tex1 = make_texture(1, [](int L) {
+                const auto s = level_sigma(L);
+                const auto m = level_mean(L);
+                return std::array<float, 4>{float(s.xy + m.x * m.y)};
+            });
+            break;
+        case Baked::Roughness:
+            tex0 = make_texture(4, [](int L) { return std::array<float, 4>{0.7f, float(level_roughness(L)), 0.3f, 1.0f}; });
+            break;
+    }
+    GLuint vao = 0, fbo = 0, targets[2] = {};
+    glGenVertexArrays(1, &vao);
+    glBindVertexArray(vao);
+    glGenFramebuffers(1, &fbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+    glGenTextures(2, targets);
+    const GLenum attachments[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+    for (int i = 0; i < 2; ++i) {
+        glBindTexture(GL_TEXTURE_2D, targets[i]);
+        glTexStorage2D(GL_TEXTURE_2D, 1, GL_RGBA32F, kView, kView);
+        glFramebufferTexture2D(GL_FRAMEBUFFER, attachments[i], GL_TEXTURE_2D, targets[i], 0);
+    }
+    glDrawBuffers(2, attachments);
+    ASSERT_EQ(glCheckFramebufferStatus(GL_FRAMEBUFFER), static_cast<GLenum>(GL_FRAMEBUFFER_COMPLETE));
+    // Bound after the render targets: creating them rebinds GL_TEXTURE_2D on the active unit.
+    glBindTextureUnit(0, tex0);
+    glBindTextureUnit(1, tex1);
+    glViewport(0, 0, kView, kView);
+    glUseProgram(program);
+    const double dir = kDirAngle;
+    glUniform1f(glGetUniformLocation(program, "uNormalSlope"), float(kNormalSlope));
+    glUniform1f(glGetUniformLocation(program, "uWorldPerPixel"), float(kWorldPerPixel));
+    glUniform4f(glGetUniformLocation(program, "uCurvature"), float(kK1), float(kK2), float(2 * std::cos(dir)), float(2 * std::sin(dir)));
+    glUniform1f(glGetUniformLocation(program, "uRoughness"), float(kRoughness));
+
+    int failures = 0;
+    for (int L = 0; L < (c.baked == Baked::None ? 1 : kLevels - 1); ++L) {
+        // One pixel spans 2^L texels: the hardware's level of detail is L.
+        glUniform1f(glGetUniformLocation(program, "uUvPerPixel"), float(std::ldexp(1.0, L) / kTexSize));
+        glDrawArrays(GL_TRIANGLES, 0, 3);
+        std::vector<float> out0(kView * kView * 4), out1(kView * kView * 4);
+        glReadBuffer(attachments[0]);
+        glReadPixels(0, 0, kView, kView, GL_RGBA, GL_FLOAT, out0.data());
+        glReadBuffer(attachments[1]);
+        glReadPixels(0, 0, kView, kView, GL_RGBA, GL_FLOAT, out1.data());
+        ASSERT_EQ(glGetError(), static_cast<GLenum>(GL_NO_ERROR));
+
+        for (int y = 0; y < kView; ++y)
+            for (int x = 0; x < kView; ++x) {
+                // Baked data of level L as the kernel matrix K = 2 Sigma (isotropic t: K = t I).
+                double a0 = std::pow(kRoughness, 4);
+                Sym2<double> k_tex{};
+                switch (c.baked) {
+                    case Baked::None: break;
+                    case Baked::Kernel: k_tex = diag(level_kernel(L), level_kernel(L)); break;
+                    case Baked::KernelAnisotropic:
+                    case Baked::Lean: k_tex = 2.0 * level_sigma(L); break;
+                    case Baked::Roughness: a0 = std::pow(double(float(level_roughness(L))), 4); break;
+                }
+                // Per-pixel kernel: normal differences across the quad (x&~1 -> x|1), or the curvature
+                // kernel of the footprint (w, 0), (0, w) in the (T, B) frame.
+                Sym2<double> k_px{};
+                if (c.pixel_kernel && c.curvature) {
+                    const double cx = std::cos(dir), cy = std::sin(dir);
+                    const Sym2<double> S{kK1 * cx * cx + kK2 * cy * cy, (kK1 - kK2) * cx * cy, kK1 * cy * cy + kK2 * cx * cx};
+                    const double w2 = kWorldPerPixel * kWorldPerPixel;
+                    k_px = (2 * kSigma2 * w2) * Sym2<double>{S.xx * S.xx + S.xy * S.xy, S.xy * (S.xx + S.yy), S.yy * S.yy + S.xy * S.xy};
+                } else if (c.pixel_kernel) {
+                    auto normal_x = [](int px) { const double t = double(float(kNormalSlope)) * (px + 0.5); return Vec3<double>{t / std::hypot(t, 1.0), 0.0, 1.0 / std::hypot(t, 1.0)}; };
+                    const auto dn = normal_x(x | 1) - normal_x(x & ~1);
+                    // Isotropic path: sigma^2 |dn|^2 (TK21 Eq. 14); matrix path: projected onto T = x.
+                    k_px = {2 * kSigma2 * dn.x * dn.x, 0.0, 0.0};
+                    const double t_iso = std::min(kSigma2 * dot(dn, dn), kKappa);
+                    const double t = 0.5 * (k_tex.xx + k_tex.yy) + t_iso;
+                    const double want = filter_projected_isotropic(a0, t);
+                    const size_t i = static_cast<size_t>(y * kView + x) * 4;
+                    if (std::abs(out0[i] - want) > kTol * want && ++failures <= 5)
+                        ADD_FAILURE() << c.name << " level " << L << " pixel " << x << "," << y << ": a " << out0[i] << " want " << want;
+                }
+                const size_t i = static_cast<size_t>(y * kView + x) * 4;
+                if (!(c.pixel_kernel && !c.curvature)) {
+                    const double t = 0.5 * (k_tex.xx + k_tex.yy) + std::min(0.5 * (k_px.xx + k_px.yy), kKappa);
+                    const double want = filter_projected_isotropic(a0, t);
+                    if (std::abs(out0[i] - want) > kTol * want && ++failures <= 5)
+                        ADD_FAILURE() << c.name << " level " << L << " pixel " << x << "," << y << ": a " << out0[i] << " want " << want;
+                }
+                if (std::abs(out0[i + 1] - std::pow(double(out0[i]), 0.25)) > kTol && ++failures <= 5)
+                    ADD_FAILURE() << c.name << ": r != a^(1/4)";
+                const Sym2<double> A = projected_to_slope_roughness(slope_to_projected_roughness(diag(a0, a0)) + k_tex + clamp_kernel(k_px));
+                const double scale = A.xx + A.yy;
+                if ((std::abs(out1[i] - A.xx) > kTol * scale || std::abs(out1[i + 1] - A.yy) > kTol * scale ||
+                     std::abs(out1[i + 2] - A.xy) > kTol * scale) && ++failures <= 5)
+                    ADD_FAILURE() << c.name << " level " << L << " pixel " << x << "," << y << ": matrix " << out1[i] << " "
+                                  << out1[i + 1] << " " << out1[i + 2] << " want " << A.xx << " " << A.yy << " " << A.xy;
+            }
+    }
+    EXPECT_EQ(failures, 0) << c.name;
+    glDeleteTextures(2, targets);
+    glDeleteTextures(1, &tex0);
+    glDeleteTextures(1, &tex1);
+    glDeleteFramebuffers(1, &fbo);
+    glDeleteVertexArrays(1, &vao);
+    glDeleteProgram(program);
+}
+
+TEST(ShaderEntry, DerivativesOnly) { run_config({"derivatives", Baked::None, false, true}); }
+TEST(ShaderEntry, KernelTexturePlusDerivatives) { run_config({"kernel+derivatives", Baked::Kernel, false, true}); }
+TEST(ShaderEntry, AnisotropicKernelTextureOnly) { run_config({"anisotropic kernel", Baked::KernelAnisotropic, false, false}); }
+TEST(ShaderEntry, LeanPlusCurvature) { run_config({"LEAN+curvature", Baked::Lean, true, true}); }
+TEST(ShaderEntry, RoughnessTexturePlusDerivatives) { run_config({"roughness+derivatives", Baked::Roughness, false, true}); }
+
+}  // namespace
+}  // namespace specbake::gltest
