@@ -1,0 +1,371 @@
+#include "io/container_inspect.h"
+
+#include "io/atomic_file.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <numeric>
+#include <optional>
+
+namespace specbake::io {
+namespace {
+
+enum class Numeric { unorm, srgb, sfloat };
+
+// Uncompressed formats a bake can produce, by the KTX2 vkFormat (Vulkan) and DDS DXGI_FORMAT values.
+struct FormatInfo {
+    uint32_t vk;
+    uint32_t dxgi;  // 0: no DXGI equivalent
+    const char* name;
+    int channels;
+    int bytes;  // per channel
+    Numeric numeric;
+};
+
+constexpr std::array<FormatInfo, 18> kFormats{{
+    {9, 61, "R8_UNORM", 1, 1, Numeric::unorm},
+    {16, 49, "R8G8_UNORM", 2, 1, Numeric::unorm},
+    {23, 0, "R8G8B8_UNORM", 3, 1, Numeric::unorm},
+    {37, 28, "R8G8B8A8_UNORM", 4, 1, Numeric::unorm},
+    {43, 29, "R8G8B8A8_SRGB", 4, 1, Numeric::srgb},
+    {70, 56, "R16_UNORM", 1, 2, Numeric::unorm},
+    {77, 35, "R16G16_UNORM", 2, 2, Numeric::unorm},
+    {84, 0, "R16G16B16_UNORM", 3, 2, Numeric::unorm},
+    {91, 11, "R16G16B16A16_UNORM", 4, 2, Numeric::unorm},
+    {76, 54, "R16_SFLOAT", 1, 2, Numeric::sfloat},
+    {83, 34, "R16G16_SFLOAT", 2, 2, Numeric::sfloat},
+    {90, 0, "R16G16B16_SFLOAT", 3, 2, Numeric::sfloat},
+    {97, 10, "R16G16B16A16_SFLOAT", 4, 2, Numeric::sfloat},
+    {100, 41, "R32_SFLOAT", 1, 4, Numeric::sfloat},
+    {103, 16, "R32G32_SFLOAT", 2, 4, Numeric::sfloat},
+    {106, 6, "R32G32B32_SFLOAT", 3, 4, Numeric::sfloat},
+    {109, 2, "R32G32B32A32_SFLOAT", 4, 4, Numeric::sfloat},
+    {0, 0, "", 0, 0, Numeric::unorm},
+}};
+
+const FormatInfo* format_by_vk(uint32_t vk) {
+    for (const FormatInfo& f : kFormats)
+        if (f.channels && f.vk == vk) return &f;
+    return nullptr;
+}
+
+const FormatInfo* format_by_dxgi(uint32_t dxgi) {
+    for (const FormatInfo& f : kFormats)
+        if (f.channels && f.dxgi && f.dxgi == dxgi) return &f;
+    return nullptr;
+}
+
+uint32_t u32(std::span<const uint8_t> b, size_t at) {
+    return uint32_t(b[at]) | uint32_t(b[at + 1]) << 8 | uint32_t(b[at + 2]) << 16 | uint32_t(b[at + 3]) << 24;
+}
+uint64_t u64(std::span<const uint8_t> b, size_t at) { return uint64_t(u32(b, at)) | uint64_t(u32(b, at + 4)) << 32; }
+
+float half_to_float(uint16_t h) {
+    const int sign = h >> 15;
+    const int exponent = (h >> 10) & 0x1f;
+    const int mantissa = h & 0x3ff;
+    float v;
+    if (exponent == 0) {
+        v = std::ldexp(float(mantissa), -24);  // subnormal
+    } else if (exponent == 31) {
+        v = mantissa ? std::nanf("") : INFINITY;
+    } else {
+        v = std::ldexp(float(mantissa + 1024), exponent - 25);
+    }
+    return sign ? -v : v;
+}
+
+float decode_channel(const uint8_t* p, const FormatInfo& f) {
+    if (f.numeric == Numeric::sfloat) {
+        if (f.bytes == 2) return half_to_float(uint16_t(p[0] | p[1] << 8));
+        float v;
+        std::memcpy(&v, p, 4);  // little-endian hosts only, as every target of specbake
+        return v;
+    }
+    if (f.bytes == 1) return float(p[0]) / 255.0f;
+    return float(p[0] | p[1] << 8) / 65535.0f;
+}
+
+int full_chain_levels(uint32_t w, uint32_t h) {
+    int n = 1;
+    for (uint32_t m = std::max(w, h); m > 1; m >>= 1) ++n;
+    return n;
+}
+
+uint64_t level_bytes(uint32_t w, uint32_t h, int level, const FormatInfo& f) {
+    const uint64_t lw = std::max<uint32_t>(1, w >> level);
+    const uint64_t lh = std::max<uint32_t>(1, h >> level);
+    return lw * lh * uint64_t(f.channels * f.bytes);
+}
+
+Image decode_level(const uint8_t* data, int w, int h, const FormatInfo& f) {
+    Image img(w, h, f.channels);
+    const size_t texel = size_t(f.channels * f.bytes);
+    for (size_t i = 0; i < img.texel_count(); ++i)
+        for (int c = 0; c < f.channels; ++c)
+            img.pixels[i * f.channels + c] = decode_channel(data + i * texel + size_t(c) * f.bytes, f);
+    return img;
+}
+
+constexpr uint8_t kKtx2Magic[12] = {0xAB, 'K', 'T', 'X', ' ', '2', '0', 0xBB, '\r', '\n', 0x1A, '\n'};
+constexpr size_t kKtx2HeaderBytes = 80;
+constexpr size_t kKtx2LevelEntryBytes = 24;
+
+struct Ktx2Layout {
+    const FormatInfo* format = nullptr;
+    uint32_t width = 0, height = 0, levels = 0;
+    std::vector<uint64_t> offsets;
+    uint32_t transfer = 0;
+};
+
+Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& name) {
+    auto fail = [&](const std::string& what) { return make_error(name + ": KTX2: " + what); };
+    if (b.size() < kKtx2HeaderBytes) return fail("truncated header (" + std::to_string(b.size()) + " bytes)");
+    if (std::memcmp(b.data(), kKtx2Magic, 12) != 0) return fail("bad identifier");
+    Ktx2Layout L;
+    const uint32_t vk = u32(b, 12), type_size = u32(b, 16);
+    L.width = u32(b, 20);
+    L.height = u32(b, 24);
+    const uint32_t depth = u32(b, 28), layers = u32(b, 32), faces = u32(b, 36);
+    L.levels = std::max<uint32_t>(1, u32(b, 40));
+    const uint32_t supercompression = u32(b, 44);
+    L.format = format_by_vk(vk);
+    if (!L.format) return fail("vkFormat " + std::to_string(vk) + " is not an uncompressed format specbake reads");
+    const FormatInfo& f = *L.format;
+    if (type_size != uint32_t(f.bytes))
+        return fail("typeSize " + std::to_string(type_size) + " does not match " + f.name);
+    if (L.width == 0 || L.height == 0) return fail("zero width or height");
+    if (depth != 0 || layers != 0 || faces != 1) return fail("only single 2D images are supported");
+    if (supercompression != 0) return fail("supercompression scheme " + std::to_string(supercompression));
+    if (int(L.levels) > full_chain_levels(L.width, L.height))
+        return fail("levelCount " + std::to_string(L.levels) + " exceeds the full chain of " +
+                    std::to_string(full_chain_levels(L.width, L.height)));
+
+    const uint64_t index_end = kKtx2HeaderBytes + kKtx2LevelEntryBytes * uint64_t(L.levels);
+    if (b.size() < index_end) return fail("truncated level index");
+    const uint32_t dfd_offset = u32(b, 48), dfd_length = u32(b, 52);
+    const uint32_t kvd_offset = u32(b, 56), kvd_length = u32(b, 60);
+    const uint64_t sgd_offset = u64(b, 64), sgd_length = u64(b, 72);
+    if (dfd_length == 0) return fail("no data format descriptor");
+    if (dfd_offset < index_end || uint64_t(dfd_offset) + dfd_length > b.size())
+        return fail("data format descriptor at " + std::to_string(dfd_offset) + "+" + std::to_string(dfd_length) +
+                    " lies outside the file");
+    if (dfd_offset % 4) return fail("data format descriptor is not 4-byte aligned");
+    if (kvd_length && (kvd_offset < index_end || uint64_t(kvd_offset) + kvd_length > b.size()))
+        return fail("key/value data lies outside the file");
+    if (sgd_offset != 0 || sgd_length != 0) return fail("supercompression global data without supercompression");
+
+    // Data format descriptor: the basic block (Khronos Data Format Specification 1.3, Sec. 5).
+    if (dfd_length < 4 + 24) return fail("data format descriptor too short");
+    if (u32(b, dfd_offset) != dfd_length) return fail("dfdTotalSize does not match dfdByteLength");
+    const size_t blk = dfd_offset + 4;
+    const uint32_t w0 = u32(b, blk), w1 = u32(b, blk + 4);
+    const uint32_t vendor = w0 & 0x1ffff, type = w0 >> 17, version = w1 & 0xffff, block_size = w1 >> 16;
+    if (vendor != 0 || type != 0) return fail("first descriptor block is not the Khronos basic block");
+    if (version != 2) return fail("descriptor version " + std::to_string(version) + " (expected 2)");
+    const uint32_t samples = (block_size - 24) / 16;
+    if (block_size < 24 || (block_size - 24) % 16 || 4 + block_size > dfd_length)
+        return fail("descriptor block size " + std::to_string(block_size) + " is inconsistent");
+    const uint8_t color_model = b[blk + 8];
+    L.transfer = b[blk + 10];
+    if (color_model != 1) return fail("colour model " + std::to_string(color_model) + " (expected RGBSDA)");
+    if (b[blk + 12] | b[blk + 13] | b[blk + 14] | b[blk + 15])
+        return fail("texel block dimensions are not 1x1x1x1");
+    if (b[blk + 16] != uint32_t(f.channels * f.bytes))
+        return fail("bytesPlane0 " + std::to_string(b[blk + 16]) + " does not match " + f.name);
+    const uint32_t expected_transfer = f.numeric == Numeric::srgb ? 2 : 1;
+    if (L.transfer != expected_transfer)
+        return fail("transfer function " + std::to_string(L.transfer) + " does not match " + f.name);
+    if (samples != uint32_t(f.channels))
+        return fail(std::to_string(samples) + " DFD samples for " + std::to_string(f.channels) + " channels");
+    for (uint32_t s = 0; s < samples; ++s) {
+        const size_t at = blk + 24 + 16 * s;
+        const uint32_t bit_offset = b[at] | b[at + 1] << 8;
+        const uint32_t bit_length = b[at + 2] + 1u;
+        const uint8_t channel_type = b[at + 3];
+        const uint32_t channel_id = channel_type & 0x0f;
+        const uint32_t expected_id = s == 3 ? 15 : s;  // R, G, B, then A = 15
+        const bool is_float = channel_type & 0x80;
+        if (bit_offset != s * 8u * f.bytes || bit_length != 8u * f.bytes || channel_id != expected_id ||
+            is_float != (f.numeric == Numeric::sfloat))
+            return fail("DFD sample " + std::to_string(s) + " does not describe channel " + std::to_string(s) +
+                        " of " + f.name);
+    }
+
+    // Level index: sizes exact, aligned, inside the file, clear of the metadata, smallest level first.
+    const uint64_t alignment = std::lcm(uint64_t(f.channels * f.bytes), uint64_t(4));
+    const uint64_t metadata_end =
+        std::max<uint64_t>(uint64_t(dfd_offset) + dfd_length, kvd_length ? uint64_t(kvd_offset) + kvd_length : 0);
+    for (uint32_t level = 0; level < L.levels; ++level) {
+        const size_t at = kKtx2HeaderBytes + kKtx2LevelEntryBytes * level;
+        const uint64_t offset = u64(b, at), length = u64(b, at + 8), uncompressed = u64(b, at + 16);
+        const std::string lv = "level " + std::to_string(level);
+        const uint64_t expected = level_bytes(L.width, L.height, int(level), f);
+        if (length != expected || uncompressed != expected)
+            return fail(lv + " holds " + std::to_string(length) + " bytes, expected " + std::to_string(expected));
+        if (offset % alignment) return fail(lv + " offset " + std::to_string(offset) + " is not aligned");
+        if (offset < metadata_end) return fail(lv + " offset " + std::to_string(offset) + " overlaps the metadata");
+        if (offset > b.size() || length > b.size() - offset)
+            return fail(lv + " at " + std::to_string(offset) + "+" + std::to_string(length) +
+                        " runs past the end of the file (" + std::to_string(b.size()) + " bytes)");
+        if (level > 0 && offset + length > L.offsets.back())
+            return fail(lv + " is not stored before level " + std::to_string(level - 1) +
+                        " (levels are stored smallest first, without overlap)");
+        L.offsets.push_back(offset);
+    }
+    return L;
+}
+
+constexpr size_t kDdsHeaderBytes = 4 + 124;
+constexpr size_t kDx10HeaderBytes = 20;
+
+struct DdsLayout {
+    const FormatInfo* format = nullptr;
+    uint32_t width = 0, height = 0, levels = 0;
+};
+
+Result<DdsLayout> parse_dds(std::span<const uint8_t> b, const std::string& name) {
+    auto fail = [&](const std::string& what) { return make_error(name + ": DDS: " + what); };
+    if (b.size() < kDdsHeaderBytes + kDx10HeaderBytes) return fail("truncated header");
+    if (std::memcmp(b.data(), "DDS ", 4) != 0) return fail("bad magic");
+    if (u32(b, 4) != 124) return fail("header size is not 124");
+    const uint32_t flags = u32(b, 8);
+    constexpr uint32_t kRequired = 0x1 | 0x2 | 0x4 | 0x1000;  // CAPS, HEIGHT, WIDTH, PIXELFORMAT
+    if ((flags & kRequired) != kRequired) return fail("header flags lack CAPS/HEIGHT/WIDTH/PIXELFORMAT");
+    DdsLayout L;
+    L.height = u32(b, 12);
+    L.width = u32(b, 16);
+    const uint32_t depth = u32(b, 24);
+    L.levels = (flags & 0x20000) ? std::max<uint32_t>(1, u32(b, 28)) : 1;  // DDSD_MIPMAPCOUNT
+    if (L.width == 0 || L.height == 0) return fail("zero width or height");
+    if ((flags & 0x800000) && depth > 1) return fail("volume textures are not supported");
+    if (int(L.levels) > full_chain_levels(L.width, L.height))
+        return fail("mip count " + std::to_string(L.levels) + " exceeds the full chain");
+    if (u32(b, 76) != 32) return fail("pixel format size is not 32");
+    const uint32_t pf_flags = u32(b, 80);
+    if (!(pf_flags & 0x4) || std::memcmp(b.data() + 84, "DX10", 4) != 0) return fail("no DX10 header");
+    const uint32_t dxgi = u32(b, 128), dimension = u32(b, 132), misc = u32(b, 136), array = u32(b, 140);
+    L.format = format_by_dxgi(dxgi);
+    if (!L.format) return fail("DXGI format " + std::to_string(dxgi) + " is not an uncompressed format specbake reads");
+    if (dimension != 3) return fail("resource dimension " + std::to_string(dimension) + " is not TEXTURE2D");
+    if (misc & 0x4) return fail("cube maps are not supported");
+    if (array != 1) return fail("array size " + std::to_string(array) + " (expected 1)");
+    uint64_t expected = kDdsHeaderBytes + kDx10HeaderBytes;
+    for (uint32_t level = 0; level < L.levels; ++level) expected += level_bytes(L.width, L.height, int(level), *L.format);
+    if (b.size() != expected)
+        return fail("file holds " + std::to_string(b.size()) + " bytes, header implies " + std::to_string(expected));
+    return L;
+}
+
+bool has_prefix(std::span<const uint8_t> b, const void* magic, size_t n) {
+    return b.size() >= n && std::memcmp(b.data(), magic, n) == 0;
+}
+
+Result<InspectedTexture> read_with_oiio(const std::filesystem::path& path) {
+    const std::string name = path.string();
+    auto in = OIIO::ImageInput::open(name);
+    if (!in) return make_error(name + ": cannot read image: " + OIIO::geterror());
+    InspectedTexture t;
+    std::string fmt = in->format_name();
+    t.format = fmt == "openexr" ? "exr" : fmt;
+    OIIO::ImageSpec spec = in->spec();
+    t.pixel_format = spec.format.c_str();
+    t.transfer = spec.get_string_attribute("oiio:ColorSpace", "linear");
+    t.channel_names = spec.channelnames;
+    for (int level = 0; in->seek_subimage(0, level); ++level) {
+        spec = in->spec();
+        Image img(spec.width, spec.height, spec.nchannels);
+        if (!in->read_image(0, level, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, img.pixels.data()))
+            return make_error(name + ": mip " + std::to_string(level) + ": " + in->geterror());
+        t.mips.levels.push_back(std::move(img));
+    }
+    if (t.mips.levels.empty()) return make_error(name + ": no image data");
+    return t;
+}
+
+}  // namespace
+
+Result<void> check_ktx2_structure(std::span<const uint8_t> bytes, const std::string& name) {
+    auto r = parse_ktx2(bytes, name);
+    if (!r) return r.error();
+    return {};
+}
+
+Result<void> check_dds_structure(std::span<const uint8_t> bytes, const std::string& name) {
+    auto r = parse_dds(bytes, name);
+    if (!r) return r.error();
+    return {};
+}
+
+Result<InspectedTexture> decode_ktx2_for_inspection(std::span<const uint8_t> bytes, const std::string& name) {
+    auto layout = parse_ktx2(bytes, name);
+    if (!layout) return layout.error();
+    InspectedTexture t;
+    t.format = "ktx2";
+    t.pixel_format = layout->format->name;
+    t.transfer = layout->transfer == 2 ? "sRGB" : "linear";
+    t.channel_names.assign({"R", "G", "B", "A"});
+    t.channel_names.resize(size_t(layout->format->channels));
+    for (uint32_t level = 0; level < layout->levels; ++level)
+        t.mips.levels.push_back(decode_level(bytes.data() + layout->offsets[level],
+                                             int(std::max<uint32_t>(1, layout->width >> level)),
+                                             int(std::max<uint32_t>(1, layout->height >> level)), *layout->format));
+    return t;
+}
+
+Result<InspectedTexture> decode_dds_for_inspection(std::span<const uint8_t> bytes, const std::string& name) {
+    auto layout = parse_dds(bytes, name);
+    if (!layout) return layout.error();
+    InspectedTexture t;
+    t.format = "dds";
+    t.pixel_format = layout->format->name;
+    t.transfer = layout->format->numeric == Numeric::srgb ? "sRGB" : "linear";
+    t.channel_names.assign({"R", "G", "B", "A"});
+    t.channel_names.resize(size_t(layout->format->channels));
+    size_t at = kDdsHeaderBytes + kDx10HeaderBytes;
+    for (uint32_t level = 0; level < layout->levels; ++level) {
+        const int w = int(std::max<uint32_t>(1, layout->width >> level));
+        const int h = int(std::max<uint32_t>(1, layout->height >> level));
+        t.mips.levels.push_back(decode_level(bytes.data() + at, w, h, *layout->format));
+        at += level_bytes(layout->width, layout->height, int(level), *layout->format);
+    }
+    return t;
+}
+
+Result<InspectedTexture> read_texture_for_inspection(const std::filesystem::path& path) {
+    auto bytes = read_file(path);
+    if (!bytes) return bytes.error();
+    if (has_prefix(*bytes, kKtx2Magic, 12)) return decode_ktx2_for_inspection(*bytes, path.string());
+    if (has_prefix(*bytes, "DDS ", 4)) return decode_dds_for_inspection(*bytes, path.string());
+    return read_with_oiio(path);
+}
+
+Result<void> check_texture_file(const std::filesystem::path& path) {
+    auto bytes = read_file(path);
+    if (!bytes) return bytes.error();
+    if (has_prefix(*bytes, kKtx2Magic, 12)) return check_ktx2_structure(*bytes, path.string());
+    if (has_prefix(*bytes, "DDS ", 4)) return check_dds_structure(*bytes, path.string());
+    auto t = read_with_oiio(path);
+    if (!t) return t.error();
+    return {};
+}
+
+Result<void> write_png_rgb8(const std::filesystem::path& path, int width, int height, std::span<const uint8_t> rgb) {
+    if (rgb.size() != size_t(width) * height * 3) return make_error(path.string() + ": image size mismatch");
+    AtomicOutput out(path);
+    std::error_code ec;
+    if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path(), ec);
+    auto file = OIIO::ImageOutput::create(out.temp_path().string());
+    if (!file) return make_error(path.string() + ": cannot write PNG: " + OIIO::geterror());
+    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+    if (!file->open(out.temp_path().string(), spec) || !file->write_image(OIIO::TypeDesc::UINT8, rgb.data()) ||
+        !file->close())
+        return make_error(path.string() + ": cannot write PNG: " + file->geterror());
+    return out.commit();
+}
+
+}  // namespace specbake::io

@@ -1,0 +1,46 @@
+// Reading baked textures back for inspection, independently of the writers (io/ktx2.h, io/dds.h): KTX2
+// and DDS are parsed here from the specifications (KTX 2.0, Khronos Data Format 1.3, DDS with the DX10
+// header), so reading a written file is a cross-check of the writer. EXR and PNG go through OpenImageIO.
+// The structural check validates a container without trusting any of its offsets.
+#pragma once
+
+#include "bake/image.h"
+#include "bake/result.h"
+
+#include <cstdint>
+#include <filesystem>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace specbake::io {
+
+struct InspectedTexture {
+    std::string format;        // "ktx2", "dds", "exr", "png"
+    std::string pixel_format;  // "R16G16B16A16_SFLOAT" (KTX2 vkFormat / DDS DXGI format name), "half", "uint8", ...
+    std::string transfer;      // "linear" or "sRGB" (as the container states)
+    std::vector<std::string> channel_names;  // from the file where it has them (EXR), else R, G, B, A
+    MipChain mips;             // values as stored: unorm normalised to [0, 1], floats as they are, no conversion
+};
+
+// Structure of a KTX2 or DDS file held in memory: everything a reader relies on, checked against the
+// file size and against itself (KTX2: header, level index offsets/lengths/alignment and order, DFD block
+// against the vkFormat; DDS: magic, header sizes and flags, DX10 format and dimension, data size).
+// The error names `name` and the first problem found.
+Result<void> check_ktx2_structure(std::span<const uint8_t> bytes, const std::string& name);
+Result<void> check_dds_structure(std::span<const uint8_t> bytes, const std::string& name);
+
+// Decodes an (already checked) container in memory.
+Result<InspectedTexture> decode_ktx2_for_inspection(std::span<const uint8_t> bytes, const std::string& name);
+Result<InspectedTexture> decode_dds_for_inspection(std::span<const uint8_t> bytes, const std::string& name);
+
+// Reads any of KTX2, DDS (by their magic), EXR (all mip levels) and PNG; KTX2 and DDS are checked first.
+Result<InspectedTexture> read_texture_for_inspection(const std::filesystem::path& path);
+
+// Checks a KTX2 or DDS file's structure; EXR and PNG are checked by opening every mip level.
+Result<void> check_texture_file(const std::filesystem::path& path);
+
+// Writes an 8-bit RGB image as PNG, atomically.
+Result<void> write_png_rgb8(const std::filesystem::path& path, int width, int height, std::span<const uint8_t> rgb);
+
+}  // namespace specbake::io
