@@ -3,6 +3,7 @@
 // methods run on the 2x2 quads, and the results are compared with the kernels built in double from the
 // closed-form surface at the pixel centres of the same quad (llvmpipe: ddx = f(x|1, y) - f(x&~1, y),
 // coarse equals fine), including pixels at grazing view and half-vector angles near the silhouettes.
+// Runs the GLSL include and, through glslangValidator -D and GL_ARB_gl_spirv, the HLSL include.
 #include "gl/gl_harness.h"
 
 #include "bake/constants.h"
@@ -10,6 +11,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <optional>
 #include <string>
 
@@ -75,51 +78,38 @@ std::optional<Sample> trace(int surface, int x, int y) {
     return s;
 }
 
-const char* kFragment = R"(
-uniform int uSurface;
+// The surface shader (tests/gl/shaders/surface_eval.inc) wrapped for GLSL and for HLSL. HLSL's
+// SV_Position has y down (Vulkan origin), so its wrapper flips y back to the GL window convention.
+std::string surface_glsl(int surface) {
+    return "#version 450\n#define SPECAA_TEST_SURFACE " + std::to_string(surface) + "\n" +
+           read_source_file("shaders/specaa.glsl") + read_source_file("tests/gl/shaders/surface_eval.inc") + R"(
 layout(location = 0) out vec4 o0;
 layout(location = 1) out vec4 o1;
 layout(location = 2) out vec4 o2;
 layout(location = 3) out vec4 o3;
-const float kSize = 128.0;
-const float kTanHalfFov = 0.45;
-const vec3 kCenter = vec3(0.0, 0.0, -4.0);
-void main() {
-    vec3 d = normalize(vec3((gl_FragCoord.xy / kSize * 2.0 - 1.0) * kTanHalfFov, -1.0));
-    float hit = 1.0;
-    vec3 p, n, t, b;
-    vec4 curvature;
-    if (uSurface == 0) {
-        float R = 1.5;
-        float bq = dot(d, kCenter), disc = bq * bq - (dot(kCenter, kCenter) - R * R);
-        if (disc < 0.0) { hit = 0.0; disc = 0.0; }
-        p = (bq - sqrt(disc)) * d;
-        n = (p - kCenter) / R;
-        t = normalize(cross(vec3(0.0, 1.0, 0.0), n));
-        b = cross(n, t);
-        curvature = vec4(1.0 / R, 1.0 / R, 1.0, 0.0);
-    } else {
-        float R = 1.0;
-        float a = d.x * d.x + d.z * d.z, bq = d.x * kCenter.x + d.z * kCenter.z;
-        float disc = bq * bq - a * (kCenter.x * kCenter.x + kCenter.z * kCenter.z - R * R);
-        if (disc < 0.0) { hit = 0.0; disc = 0.0; }
-        p = ((bq - sqrt(disc)) / a) * d;
-        n = vec3(p.x - kCenter.x, 0.0, p.z - kCenter.z) / R;
-        b = vec3(0.0, 1.0, 0.0);
-        t = cross(b, n);
-        curvature = vec4(1.0 / R, 0.0, 1.0, 0.0);   // k1 around the circumference (T), 0 along the axis
-    }
-    vec3 v = -d;
-    vec3 hw = normalize(v + normalize(vec3(0.8, 0.3, 0.6)));
-    vec3 hTS = vec3(dot(hw, t), dot(hw, b), dot(hw, n));
-    vec2 zero = vec2(0.0);
-    vec2 paa = specaa_projected_aa(zero, hTS);
-    o0 = vec4(specaa_iso_mean(0.0, n), specaa_iso_sum(0.0, n), specaa_iso_max(0.0, n), hit);
-    o1 = vec4(specaa_projected_approx(zero, hTS), paa.x);
-    o2 = vec4(specaa_slope(zero, hTS), paa.y);
-    o3 = vec4(specaa_curvature_kernel(curvature, specaa_footprint(p, t, b)), dot(n, v));
+void main() { specaa_test_surface(gl_FragCoord.xy, o0, o1, o2, o3); }
+)";
+}
+
+std::string surface_hlsl(int surface) {
+    return "#define SPECAA_TEST_SURFACE " + std::to_string(surface) + "\n" + read_source_file("shaders/specaa.hlsl") +
+           read_source_file("tests/gl/shaders/surface_eval.inc") + R"(
+struct SurfaceOutput {
+    float4 o0 : SV_Target0;
+    float4 o1 : SV_Target1;
+    float4 o2 : SV_Target2;
+    float4 o3 : SV_Target3;
+};
+SurfaceOutput main(float4 position : SV_Position) {
+    SurfaceOutput r;
+    specaa_test_surface(float2(position.x, 128.0 - position.y), r.o0, r.o1, r.o2, r.o3);
+    return r;
 }
 )";
+}
+
+const char* kFullscreenVertex = "#version 450\nvoid main() { vec2 q = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2);"
+                                " gl_Position = vec4(q * 2.0 - 1.0, 0.0, 1.0); }\n";
 
 struct Kernel2 {
     double xx, yy, xy;
@@ -134,14 +124,8 @@ bool near_sym(const float* gpu, const Kernel2& k) {
     return near(gpu[0], k.xx, s) && near(gpu[1], k.yy, s) && near(gpu[2], k.xy, s);
 }
 
-void render_and_compare(int surface, const char* name) {
-    SPECBAKE_REQUIRE_GL(gl);
-    std::string log;
-    const std::string fragment = "#version 450\n" + read_source_file("shaders/specaa.glsl") + kFragment;
-    const std::string vertex = "#version 450\nvoid main() { vec2 q = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2);"
-                               " gl_Position = vec4(q * 2.0 - 1.0, 0.0, 1.0); }\n";
-    GLuint program = build_program_glsl(vertex, fragment, log);
-    ASSERT_NE(program, 0u) << log;
+// Renders `surface` with `program` (already linked) and compares every pixel with the closed form.
+void render_and_compare(GLuint program, int surface, const char* name) {
     GLuint vao = 0, fbo = 0, targets[4] = {};
     glGenVertexArrays(1, &vao);
     glBindVertexArray(vao);
@@ -158,7 +142,6 @@ void render_and_compare(int surface, const char* name) {
     ASSERT_EQ(glCheckFramebufferStatus(GL_FRAMEBUFFER), static_cast<GLenum>(GL_FRAMEBUFFER_COMPLETE));
     glViewport(0, 0, kSize, kSize);
     glUseProgram(program);
-    glUniform1i(glGetUniformLocation(program, "uSurface"), surface);
     glDrawArrays(GL_TRIANGLES, 0, 3);  // one triangle covering the viewport
     std::vector<float> out[4];
     for (int i = 0; i < 4; ++i) {
@@ -250,8 +233,41 @@ void render_and_compare(int surface, const char* name) {
     glDeleteProgram(program);
 }
 
-TEST(ShaderDerivatives, SphereMatchesClosedForm) { render_and_compare(0, "sphere"); }
-TEST(ShaderDerivatives, CylinderAtGrazingAnglesMatchesClosedForm) { render_and_compare(1, "cylinder"); }
+void run_glsl(int surface, const char* name) {
+    SPECBAKE_REQUIRE_GL(gl);
+    std::string log;
+    const GLuint program = build_program_glsl(kFullscreenVertex, surface_glsl(surface), log);
+    ASSERT_NE(program, 0u) << log;
+    render_and_compare(program, surface, name);
+}
+
+// (c) The same through HLSL -> SPIR-V -> GL_ARB_gl_spirv: the HLSL derivative paths (ddx/ddy).
+void run_hlsl(int surface, const char* name) {
+    SPECBAKE_REQUIRE_GL(gl);
+    if (!gl->has_extension("GL_ARB_gl_spirv"))
+        GTEST_SKIP() << gl->renderer() << " lacks GL_ARB_gl_spirv: HLSL is only compile-tested (ShaderCompile)";
+    TempDir dir;
+    const auto vs = dir.path() / "v.vert", fs = dir.path() / "f.hlsl";
+    std::ofstream(vs) << kFullscreenVertex;
+    std::ofstream(fs) << surface_hlsl(surface);
+    std::string out;
+    ASSERT_EQ(run_command("glslangValidator -G -S vert '" + vs.string() + "' -o '" + vs.string() + ".spv' && "
+                          "glslangValidator -V -D -e main -S frag '" + fs.string() + "' -o '" + fs.string() + ".spv' && "
+                          "spirv-val '" + fs.string() + ".spv'", out), 0) << out;
+    auto read = [](const std::filesystem::path& p) {
+        std::ifstream in(p, std::ios::binary);
+        return std::vector<char>{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    };
+    std::string log;
+    const GLuint program = build_program_spirv(read(vs.string() + ".spv"), read(fs.string() + ".spv"), log);
+    ASSERT_NE(program, 0u) << log;
+    render_and_compare(program, surface, name);
+}
+
+TEST(ShaderDerivatives, SphereMatchesClosedForm) { run_glsl(0, "sphere"); }
+TEST(ShaderDerivatives, CylinderAtGrazingAnglesMatchesClosedForm) { run_glsl(1, "cylinder"); }
+TEST(ShaderDerivatives, HlslSphereThroughGlSpirvMatchesClosedForm) { run_hlsl(0, "HLSL sphere"); }
+TEST(ShaderDerivatives, HlslCylinderThroughGlSpirvMatchesClosedForm) { run_hlsl(1, "HLSL cylinder"); }
 
 }  // namespace
 }  // namespace specbake::gltest
