@@ -7,7 +7,6 @@
 #define SPECAA_FLOAT2 vec2
 #define SPECAA_FLOAT3 vec3
 #define SPECAA_FLOAT4 vec4
-#define SPECAA_CONST const
 #define SPECAA_SATURATE(x) clamp((x), 0.0, 1.0)
 #define SPECAA_DDX(x) dFdx(x)
 #define SPECAA_DDY(x) dFdy(x)

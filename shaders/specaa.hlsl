@@ -7,7 +7,6 @@
 #define SPECAA_FLOAT2 float2
 #define SPECAA_FLOAT3 float3
 #define SPECAA_FLOAT4 float4
-#define SPECAA_CONST static const
 #define SPECAA_SATURATE(x) saturate(x)
 #define SPECAA_DDX(x) ddx(x)
 #define SPECAA_DDY(x) ddy(x)
