@@ -70,8 +70,10 @@ Result<DecodedImage> decode_image(const fs::path& path) {
 Result<DecodedImage> decode_image_memory(std::span<const uint8_t> bytes, const std::string& name_for_errors) {
     if (bytes.empty()) return make_error(name_for_errors + ": no image data");
     // OpenImageIO picks the decoder from the name's extension; take it from the leading bytes instead.
-    std::string probe = "image.png";
-    if (bytes.size() >= 2 && bytes[0] == 0xFF && bytes[1] == 0xD8) probe = "image.jpg";
+    std::string probe = "image.tga";  // the one common format without a signature
+    if (bytes.size() >= 4 && bytes[0] == 0x89 && bytes[1] == 'P' && bytes[2] == 'N' && bytes[3] == 'G')
+        probe = "image.png";
+    else if (bytes.size() >= 2 && bytes[0] == 0xFF && bytes[1] == 0xD8) probe = "image.jpg";
     else if (bytes.size() >= 4 && bytes[0] == 0x76 && bytes[1] == 0x2F && bytes[2] == 0x31 && bytes[3] == 0x01)
         probe = "image.exr";
     else if (bytes.size() >= 4 && ((bytes[0] == 'I' && bytes[1] == 'I') || (bytes[0] == 'M' && bytes[1] == 'M')))
@@ -80,11 +82,10 @@ Result<DecodedImage> decode_image_memory(std::span<const uint8_t> bytes, const s
         probe = "image.webp";
     OIIO::Filesystem::IOMemReader reader(const_cast<uint8_t*>(bytes.data()), bytes.size());
     OIIO::ImageSpec config = reader_config();
-    auto in = OIIO::ImageInput::create(probe, false, &config, &reader);
+    void* proxy = &reader;
+    config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
+    auto in = OIIO::ImageInput::open(probe, &config, &reader);
     if (!in) return make_error(name_for_errors + ": cannot read as an image: " + one_line(OIIO::geterror()));
-    OIIO::ImageSpec spec;
-    if (!in->open(probe, spec, config))
-        return make_error(name_for_errors + ": cannot read as an image: " + one_line(in->geterror()));
     auto result = decode(*in, name_for_errors);
     in->close();
     return result;
@@ -113,6 +114,7 @@ Result<void> write_image(const fs::path& path, const Image& image, int bits) {
     if (!out) return make_error(name + ": no writer for this extension: " + one_line(OIIO::geterror()));
     OIIO::ImageSpec spec(image.width, image.height, image.channels,
                          bits <= 8 ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::UINT16);
+    spec.attribute("oiio:UnassociatedAlpha", 1);  // data, not premultiplied colour: store as given
     if (!out->open(file.temp_path().string(), spec) ||
         !out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data()) || !out->close())
         return make_error(name + ": cannot write: " + one_line(out->geterror()));

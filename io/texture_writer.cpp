@@ -98,6 +98,7 @@ Result<void> write_oiio(const fs::path& temp, const fs::path& final_path, const 
         const Image& level = *levels[i];
         OIIO::ImageSpec spec(level.width, level.height, level.channels, type);
         spec.channelnames = names;
+        spec.attribute("oiio:UnassociatedAlpha", 1);  // data, not premultiplied colour: store as given
         if (mipmapped) {
             spec.tile_width = 64;
             spec.tile_height = 64;
