@@ -1,0 +1,111 @@
+// specbake verify: scores every specular anti-aliasing candidate against the ground truth on one scene.
+#include "cli/command.h"
+#include "cli/gl_context.h"
+#include "cli/job_verify.h"
+#include "cli/sim_strips.h"
+
+#include <cstddef>
+#include <cstdio>
+#include <memory>
+#include <string>
+
+namespace specbake::cli {
+
+// Defined in the build-generated shader_embed.cpp (shaders/embed.cmake).
+extern const unsigned char kSpecaaGlsl[];
+extern const std::size_t kSpecaaGlslSize;
+
+namespace {
+
+struct VerifyCommandOptions {
+    std::string builtin;
+    float roughness = 0.05f;
+    std::string size = "128x128";
+    int spp = 256;
+    int frames = 8;
+    int repeats = 7;
+    bool no_variants = false;
+    std::vector<std::string> only;
+    std::string strip;
+};
+
+int run_verify_command(const VerifyCommandOptions& o) {
+    VerifyOptions options;
+    if (std::sscanf(o.size.c_str(), "%dx%d", &options.width, &options.height) != 2 || options.width < 2 ||
+        options.height < 2 || options.width > 8192 || options.height > 8192) {
+        print_error("--size: expected WxH between 2x2 and 8192x8192, got '" + o.size + "'");
+        return kExitUsage;
+    }
+    options.include_glsl.assign(reinterpret_cast<const char*>(kSpecaaGlsl), kSpecaaGlslSize);
+    options.spp = o.spp;
+    options.frames = o.frames;
+    options.timing_repeats = o.repeats;
+    options.variants = !o.no_variants;
+    options.only = o.only;
+    auto scene = make_builtin_scene(o.builtin, o.roughness);
+    if (!scene) {
+        print_error(scene.error().message);
+        return kExitUsage;
+    }
+    auto context = GlContext::create();
+    if (!context) {
+        print_error(context.error().message);
+        return kExitFailed;
+    }
+    auto report = run_verify(*scene, options);
+    if (!report) {
+        print_error(report.error().message);
+        return kExitFailed;
+    }
+    std::printf("Scene %s, roughness %.3g (alpha %.3g), %dx%d, ground truth %d spp (%.1f s), %d frames; %s\n\n",
+                report->scene.c_str(), double(report->roughness), double(report->roughness * report->roughness),
+                report->width, report->height, report->spp, report->ground_truth_ms / 1000.0, report->frames,
+                (*context)->description().c_str());
+    std::fputs(markdown_table(*report).c_str(), stdout);
+    for (const std::string& note : report->notes) print_warning(note);
+    if (!o.strip.empty()) {
+        std::vector<StripTile> tiles;
+        for (const CandidateReport& c : report->candidates) tiles.push_back({c.name, &c.image});
+        if (auto written = write_strip_png(make_strip(report->ground_truth, tiles), o.strip); !written) {
+            print_error(written.error().message);
+            return kExitFailed;
+        }
+    }
+    return kExitOk;
+}
+
+void add_verify_command(CLI::App& app, std::function<int()>& run) {
+    auto* sub = app.add_subcommand("verify",
+                                   "Render a scene's ground truth and every anti-aliasing candidate on headless "
+                                   "OpenGL and print accuracy and cost");
+    auto o = std::make_shared<VerifyCommandOptions>();
+    sub->add_option("--builtin", o->builtin, "Built-in analytic scene: sphere, cylinder, torus, bumpy-sphere")
+        ->required();
+    sub->add_option("--roughness", o->roughness, "Perceptual roughness r of the scene's material (alpha = r^2)")
+        ->capture_default_str()
+        ->check(CLI::Range(0.0f, 1.0f));
+    sub->add_option("--size", o->size, "Image size WxH")->capture_default_str();
+    sub->add_option("--spp", o->spp, "Ground-truth samples per pixel (rounded to a square)")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 65536));
+    sub->add_option("--frames", o->frames, "Frames of slow sub-pixel camera motion (temporal instability)")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 1024));
+    sub->add_option("--repeats", o->repeats, "Renders per candidate for the median frame time (0: no timing)")
+        ->capture_default_str()
+        ->check(CLI::Range(0, 1000));
+    sub->add_flag("--no-variants", o->no_variants, "Leave out the bake variants");
+    sub->add_option("--only", o->only, "Only these candidates (plus 'none'), e.g. --only projected,default")
+        ->delimiter(',');
+    sub->add_option("--strip", o->strip, "Also write the image strip (frame 0) to this PNG file");
+    sub->footer("Examples:\n"
+                "  specbake verify --builtin torus --roughness 0.2\n"
+                "  specbake verify --builtin cylinder --roughness 0.1 --spp 1024 --frames 16 --size 256x256\n"
+                "  specbake verify --builtin bumpy-sphere --only baked-texture,default");
+    sub->callback([&run, o] { run = [o] { return run_verify_command(*o); }; });
+}
+
+const Registration reg{"verify", 80, &add_verify_command};
+
+}  // namespace
+}  // namespace specbake::cli

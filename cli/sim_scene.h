@@ -1,0 +1,70 @@
+// Scenes of the ground-truth simulator: triangle meshes with shading normals, tangents, UVs and curvature,
+// one material each (GGX roughness, optional normal map), directional lights and an orbiting camera.
+// The built-in scenes are analytic surfaces tessellated finely and shaded with interpolated normals, so
+// the ground truth and the candidates see exactly the same shading-normal field (SPEC Sec. 8).
+#pragma once
+
+#include "bake/image.h"
+#include "bake/result.h"
+#include "mesh/trimesh.h"
+
+#include <array>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace specbake::cli {
+
+using Float3 = std::array<float, 3>;
+
+struct SimMaterial {
+    float roughness = 0.5f;  // perceptual roughness r (SPEC Sec. 2); alpha = r^2
+    int normal_map = -1;     // index into SimScene::normal_maps, -1 for none
+    float uv_scale = 1.0f;   // the normal map repeats this many times over the UV square
+};
+
+struct SimObject {
+    TriMesh mesh;                      // world space; normals, tangents (w = handedness) and UVs present
+    VertexCurvature exact_curvature;   // analytic (k1, k2, d) of the shading-normal field, SPEC Sec. 4
+    SimMaterial material;
+};
+
+struct SimLight {
+    Float3 direction{0, 1, 0};  // unit vector from the surface towards the light
+    float radiance = 1.0f;      // irradiance on a surface facing the light
+};
+
+struct SimCamera {
+    Float3 position{0, 0, 4};
+    Float3 target{0, 0, 0};
+    Float3 up{0, 1, 0};
+    float fov_y_degrees = 40.0f;
+};
+
+struct SimScene {
+    std::string name;
+    std::vector<SimObject> objects;
+    std::vector<Image> normal_maps;  // 3 channels, encoded (n + 1) / 2, +Y green, power-of-two sides
+    std::vector<SimLight> lights;
+    SimCamera camera;
+    // Camera motion for temporal metrics: each frame orbits the camera about the target around `up` by
+    // this many pixels' worth of view angle, scaled to move the object's silhouette by about
+    // `motion_pixels` pixels per frame.
+    float motion_pixels = 0.35f;
+    float object_radius = 1.0f;  // for the motion scale and the automatic framing
+};
+
+// Names of the built-in analytic scenes: "sphere", "cylinder" (grazing view), "torus", "bumpy-sphere"
+// (normal-mapped).
+std::span<const std::string_view> builtin_scene_names();
+
+// The built-in scene `name` with every material at perceptual roughness `roughness`. `tessellation`
+// scales the mesh resolution (1 = default: a few pixels per triangle at 128 x 128).
+Result<SimScene> make_builtin_scene(std::string_view name, float roughness, float tessellation = 1.0f);
+
+// The camera of frame `frame` of `height` pixels: the scene camera orbited about its target (see
+// SimScene::motion_pixels). Frame 0 is the scene camera itself.
+SimCamera camera_at_frame(const SimScene& scene, int frame, int height);
+
+}  // namespace specbake::cli
