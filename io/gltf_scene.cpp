@@ -2,6 +2,14 @@
 
 #include "io/atomic_file.h"
 
+// The tinygltf implementation is compiled here, from the installed header, instead of being taken from
+// Debian's libtinygltf.so: that library's TinyGLTF class does not match the layout its header declares
+// (the loader sees the filesystem callbacks as null, and destroying a TinyGLTF frees a bad pointer).
+// specbake decodes images itself (io/image_io.h) and never lets tinygltf read image files.
+#define TINYGLTF_IMPLEMENTATION
+#define TINYGLTF_NO_STB_IMAGE
+#define TINYGLTF_NO_STB_IMAGE_WRITE
+#define TINYGLTF_NO_EXTERNAL_IMAGE
 #include <tiny_gltf.h>
 
 #include <algorithm>
@@ -115,6 +123,30 @@ bool keep_image_encoded(tinygltf::Image* image, const int, std::string*, std::st
         image->uri = "data:" + mime + ";base64," + base64_encode(bytes, size_t(size));
     }
     return true;
+}
+
+// File access for tinygltf through std::filesystem (external buffers and images relative to the scene).
+bool fs_file_exists(const std::string& path, void*) {
+    std::error_code ec;
+    return fs::is_regular_file(path, ec);
+}
+std::string fs_expand_path(const std::string& path, void*) { return path; }
+bool fs_read_whole_file(std::vector<unsigned char>* out, std::string* err, const std::string& path, void*) {
+    auto bytes = read_file(path);
+    if (!bytes) {
+        if (err) *err += bytes.error().message + "\n";
+        return false;
+    }
+    out->assign(bytes->begin(), bytes->end());
+    return true;
+}
+bool fs_refuse_write(std::string* err, const std::string& path, const std::vector<unsigned char>&, void*) {
+    if (err) *err += path + ": specbake writes glTF files itself\n";
+    return false;
+}
+
+tinygltf::FsCallbacks fs_callbacks() {
+    return tinygltf::FsCallbacks{&fs_file_exists, &fs_expand_path, &fs_read_whole_file, &fs_refuse_write, nullptr};
 }
 
 bool keep_image_uri(const std::string*, const std::string*, const tinygltf::Image*, bool, std::string*, void*) {
@@ -346,7 +378,8 @@ struct GltfScene::Impl {
     struct Added {
         PrimitiveRef ref;
         std::string attribute;
-        std::vector<float> values;  // 4 per vertex
+        std::vector<float> values;
+        int components = 4;
     };
     std::vector<Added> added;
 };
@@ -368,6 +401,7 @@ Result<GltfScene> GltfScene::load(const fs::path& path) {
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(&keep_image_encoded, nullptr);
     loader.SetImageWriter(&keep_image_uri, nullptr);
+    loader.SetFsCallbacks(fs_callbacks());
     std::string err, warn;
     std::string base_dir = path.parent_path().string();
     if (base_dir.empty()) base_dir = ".";
@@ -393,15 +427,14 @@ Result<GltfScene> GltfScene::load(const fs::path& path) {
     return scene;
 }
 
-Result<GltfScene> GltfScene::from_meshes(const std::vector<TriMesh>& meshes, const std::string& source_name) {
+Result<GltfScene> GltfScene::from_imported(const ImportedScene& imported) {
     GltfScene scene;
-    scene.impl_->source = source_name;
+    scene.impl_->source = imported.path;
     tinygltf::Model& m = scene.impl_->model;
     m.asset.version = "2.0";
-    m.asset.generator = "specbake";
+    m.asset.generator = "specbake (imported through Assimp)";
     m.buffers.emplace_back();
     std::vector<unsigned char>& data = m.buffers[0].data;
-    tinygltf::Scene root;
 
     auto add_view = [&](const void* src, size_t bytes, int target) {
         while (data.size() % 4) data.push_back(0);
@@ -421,7 +454,7 @@ Result<GltfScene> GltfScene::from_meshes(const std::vector<TriMesh>& meshes, con
         a.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
         a.count = v.size() / size_t(nc);
         a.type = type;
-        if (bounds) {  // POSITION requires min and max (glTF 2.0 Sec. 3.7.2.1)
+        if (bounds) {  // POSITION requires min and max (glTF 2.0 Sec. 5.1.1)
             a.minValues.assign(size_t(nc), std::numeric_limits<double>::infinity());
             a.maxValues.assign(size_t(nc), -std::numeric_limits<double>::infinity());
             for (size_t i = 0; i < v.size(); ++i) {
@@ -433,34 +466,85 @@ Result<GltfScene> GltfScene::from_meshes(const std::vector<TriMesh>& meshes, con
         return int(m.accessors.size() - 1);
     };
 
-    for (size_t i = 0; i < meshes.size(); ++i) {
-        const TriMesh& t = meshes[i];
-        if (t.vertex_count() == 0 || t.triangle_count() == 0) continue;
+    for (const ImportedMaterial& im : imported.materials) {
+        tinygltf::Material mat;
+        mat.name = im.name;
+        mat.pbrMetallicRoughness.metallicFactor = 0.0;
+        mat.pbrMetallicRoughness.roughnessFactor = im.roughness_factor;
+        m.materials.push_back(mat);
+    }
+    for (size_t i = 0; i < imported.meshes.size(); ++i) {
+        const TriMesh& t = imported.meshes[i];
+        tinygltf::Mesh mesh;
+        mesh.name = t.name;
+        if (t.vertex_count() == 0 || t.triangle_count() == 0) return make_error(t.name + ": has no triangles");
         tinygltf::Primitive prim;
         prim.mode = kModeTriangles;
-        prim.attributes["POSITION"] = add_accessor(t.positions, 3, TINYGLTF_TYPE_VEC3, true);
-        if (t.has_normals()) prim.attributes["NORMAL"] = add_accessor(t.normals, 3, TINYGLTF_TYPE_VEC3, false);
-        if (t.has_tangents()) prim.attributes["TANGENT"] = add_accessor(t.tangents, 4, TINYGLTF_TYPE_VEC4, false);
-        if (t.has_uv0()) prim.attributes["TEXCOORD_0"] = add_accessor(t.uv0, 2, TINYGLTF_TYPE_VEC2, false);
-        tinygltf::Accessor idx;
-        idx.bufferView = add_view(t.indices.data(), t.indices.size() * sizeof(uint32_t),
-                                  TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
-        idx.componentType = TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
-        idx.count = t.indices.size();
-        idx.type = TINYGLTF_TYPE_SCALAR;
-        m.accessors.push_back(idx);
-        prim.indices = int(m.accessors.size() - 1);
-        tinygltf::Mesh mesh;
-        mesh.name = t.name.empty() ? "mesh_" + std::to_string(i) : t.name;
+        if (t.material >= 0 && size_t(t.material) < m.materials.size()) prim.material = t.material;
+        {
+            prim.attributes["POSITION"] = add_accessor(t.positions, 3, TINYGLTF_TYPE_VEC3, true);
+            if (t.has_normals()) prim.attributes["NORMAL"] = add_accessor(t.normals, 3, TINYGLTF_TYPE_VEC3, false);
+            if (t.has_tangents()) prim.attributes["TANGENT"] = add_accessor(t.tangents, 4, TINYGLTF_TYPE_VEC4, false);
+            if (t.has_uv0()) prim.attributes["TEXCOORD_0"] = add_accessor(t.uv0, 2, TINYGLTF_TYPE_VEC2, false);
+            tinygltf::Accessor idx;
+            idx.bufferView = add_view(t.indices.data(), t.indices.size() * sizeof(uint32_t),
+                                      TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
+            idx.componentType = TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+            idx.count = t.indices.size();
+            idx.type = TINYGLTF_TYPE_SCALAR;
+            m.accessors.push_back(idx);
+            prim.indices = int(m.accessors.size() - 1);
+        }
         mesh.primitives.push_back(prim);
         m.meshes.push_back(mesh);
+    }
+    if (m.meshes.empty()) return make_error(imported.path + ": contains no triangle meshes");
+
+    // Node hierarchy: one glTF node per imported node; a node with several meshes gets one child per mesh
+    // (a glTF node holds at most one mesh).
+    const std::array<float, 16> identity{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    tinygltf::Scene root;
+    std::vector<int> node_index(imported.nodes.size(), -1);
+    for (size_t i = 0; i < imported.nodes.size(); ++i) {
+        const ImportedNode& in = imported.nodes[i];
         tinygltf::Node node;
-        node.name = mesh.name;
-        node.mesh = int(m.meshes.size() - 1);
+        node.name = in.name;
+        if (in.local_transform != identity) node.matrix.assign(in.local_transform.begin(), in.local_transform.end());
+        m.nodes.push_back(node);
+        node_index[i] = int(m.nodes.size() - 1);
+    }
+    std::vector<bool> placed(imported.meshes.size(), false);
+    for (size_t i = 0; i < imported.nodes.size(); ++i) {
+        const ImportedNode& in = imported.nodes[i];
+        const int self = node_index[i];
+        std::vector<int> meshes;
+        for (int mi : in.meshes)
+            if (mi >= 0 && size_t(mi) < imported.meshes.size()) meshes.push_back(mi);
+        if (meshes.size() == 1) {
+            m.nodes[size_t(self)].mesh = meshes[0];
+        } else {
+            for (int mi : meshes) {
+                tinygltf::Node child;
+                child.name = m.meshes[size_t(mi)].name;
+                child.mesh = mi;
+                m.nodes.push_back(child);
+                m.nodes[size_t(self)].children.push_back(int(m.nodes.size() - 1));
+            }
+        }
+        for (int mi : meshes) placed[size_t(mi)] = true;
+        if (in.parent >= 0 && size_t(in.parent) < imported.nodes.size() && size_t(in.parent) != i)
+            m.nodes[size_t(node_index[size_t(in.parent)])].children.push_back(self);
+        else
+            root.nodes.push_back(self);
+    }
+    for (size_t mi = 0; mi < placed.size(); ++mi) {
+        if (placed[mi]) continue;
+        tinygltf::Node node;
+        node.name = m.meshes[mi].name;
+        node.mesh = int(mi);
         m.nodes.push_back(node);
         root.nodes.push_back(int(m.nodes.size() - 1));
     }
-    if (m.meshes.empty()) return make_error(source_name + ": contains no triangles");
     m.scenes.push_back(root);
     m.defaultScene = 0;
     return scene;
@@ -536,7 +620,10 @@ std::vector<MaterialInfo> GltfScene::materials() const {
         s.texcoord = texcoord;
         auto it = ext.find("KHR_texture_transform");
         s.transformed = it != ext.end();
-        if (s.transformed && it->second.Has("texCoord")) s.texcoord = it->second.Get("texCoord").GetNumberAsInt();
+        if (s.transformed) {
+            s.transform = from_value(it->second);
+            if (it->second.Has("texCoord")) s.texcoord = it->second.Get("texCoord").GetNumberAsInt();
+        }
         return s;
     };
     std::vector<MaterialInfo> out;
@@ -642,6 +729,14 @@ std::string GltfScene::image_label(int image) const {
     return file + ": image " + std::to_string(image) + (img.name.empty() ? "" : " '" + img.name + "'");
 }
 
+fs::path GltfScene::image_file(int image) const {
+    const tinygltf::Model& m = impl_->model;
+    if (image < 0 || size_t(image) >= m.images.size()) return {};
+    const tinygltf::Image& img = m.images[size_t(image)];
+    if (img.bufferView >= 0 || img.uri.empty() || is_data_uri(img.uri) || is_remote_uri(img.uri)) return {};
+    return impl_->source.parent_path() / percent_decode(img.uri);
+}
+
 Result<std::vector<uint8_t>> GltfScene::image_bytes(int image) const {
     const tinygltf::Model& m = impl_->model;
     if (image < 0 || size_t(image) >= m.images.size()) return make_error(image_label(image) + ": does not exist");
@@ -662,24 +757,37 @@ Result<std::vector<uint8_t>> GltfScene::image_bytes(int image) const {
     return read_file(impl_->source.parent_path() / percent_decode(img.uri));
 }
 
-Result<void> GltfScene::set_curvature(PrimitiveRef ref, std::vector<float> values) {
+Result<void> GltfScene::set_vertex_attribute(PrimitiveRef ref, const std::string& attribute,
+                                            std::vector<float> values, int components) {
+    if (components < 1 || components > 4) return make_error(attribute + ": 1 to 4 components per vertex");
     auto t = primitive_mesh(ref);
     if (!t) return t.error();
-    if (values.size() != t->vertex_count() * 4)
-        return make_error(t->name + ": curvature has " + std::to_string(values.size() / 4) + " entries for " +
-                          std::to_string(t->vertex_count()) + " vertices");
-    impl_->added.push_back({ref, kCurvatureAttribute, std::move(values)});
+    if (values.size() != t->vertex_count() * size_t(components))
+        return make_error(t->name + ": " + attribute + " has " + std::to_string(values.size() / size_t(components)) +
+                          " entries for " + std::to_string(t->vertex_count()) + " vertices");
+    for (Impl::Added& a : impl_->added) {
+        if (a.ref == ref && a.attribute == attribute) {
+            a.values = std::move(values);
+            a.components = components;
+            return {};
+        }
+    }
+    impl_->added.push_back({ref, attribute, std::move(values), components});
     return {};
 }
 
-Result<void> GltfScene::set_generated_tangents(PrimitiveRef ref, std::vector<float> tangents) {
-    auto t = primitive_mesh(ref);
-    if (!t) return t.error();
-    if (tangents.size() != t->vertex_count() * 4)
-        return make_error(t->name + ": tangents have " + std::to_string(tangents.size() / 4) + " entries for " +
-                          std::to_string(t->vertex_count()) + " vertices");
-    impl_->added.push_back({ref, "TANGENT", std::move(tangents)});
-    return {};
+std::vector<fs::path> GltfScene::resource_files() const {
+    std::vector<fs::path> out;
+    const fs::path dir = impl_->source.parent_path();
+    auto add = [&](const std::string& uri) {
+        if (uri.empty() || is_data_uri(uri) || is_remote_uri(uri)) return;
+        const fs::path p = dir / percent_decode(uri);
+        std::error_code ec;
+        if (fs::is_regular_file(p, ec) && std::find(out.begin(), out.end(), p) == out.end()) out.push_back(p);
+    };
+    for (const tinygltf::Buffer& b : impl_->model.buffers) add(b.uri);
+    for (const tinygltf::Image& i : impl_->model.images) add(i.uri);
+    return out;
 }
 
 namespace {
@@ -738,8 +846,11 @@ Result<std::vector<fs::path>> GltfScene::write(const fs::path& path) const {
         tinygltf::Accessor acc;
         acc.bufferView = int(m.bufferViews.size() - 1);
         acc.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
-        acc.type = TINYGLTF_TYPE_VEC4;
-        acc.count = a.values.size() / 4;
+        acc.type = a.components == 1   ? TINYGLTF_TYPE_SCALAR
+                   : a.components == 2 ? TINYGLTF_TYPE_VEC2
+                   : a.components == 3 ? TINYGLTF_TYPE_VEC3
+                                       : TINYGLTF_TYPE_VEC4;
+        acc.count = a.values.size() / size_t(a.components);
         m.accessors.push_back(acc);
         m.meshes[size_t(a.ref.mesh)].primitives[size_t(a.ref.primitive)].attributes[a.attribute] =
             int(m.accessors.size() - 1);
@@ -768,7 +879,8 @@ Result<std::vector<fs::path>> GltfScene::write(const fs::path& path) const {
             rel = inside ? decoded.generic_string() : decoded.filename().string();
         }
         if (rel.empty() || used_names.count(rel)) {
-            const std::string base = stem + (i == 0 ? "" : "_" + std::to_string(i));
+            const bool appended = int(i) == target_buffer && !bin_target;
+            const std::string base = stem + (appended ? "_specaa" : i == 0 ? "" : "_" + std::to_string(i));
             rel = base + ".bin";
             for (int k = 1; used_names.count(rel); ++k) rel = base + "_" + std::to_string(k) + ".bin";
         }
@@ -779,6 +891,7 @@ Result<std::vector<fs::path>> GltfScene::write(const fs::path& path) const {
     try {
         tinygltf::TinyGLTF writer;
         writer.SetImageWriter(&keep_image_uri, nullptr);
+        writer.SetFsCallbacks(fs_callbacks());
         std::ostringstream os;
         if (!writer.WriteGltfSceneToStream(&m, os, false, false))
             return make_error(path.string() + ": could not serialise the glTF");

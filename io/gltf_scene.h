@@ -6,6 +6,7 @@
 #pragma once
 
 #include "bake/result.h"
+#include "io/mesh_import.h"
 #include "mesh/trimesh.h"
 
 #include <nlohmann/json.hpp>
@@ -52,6 +53,7 @@ struct TextureSlot {
     int image = -1;    // glTF image index, -1 when the texture has no (decodable) source
     int texcoord = 0;
     bool transformed = false;  // KHR_texture_transform on the slot
+    nlohmann::json transform;  // that extension object, null when absent
 };
 
 struct MaterialInfo {
@@ -72,12 +74,16 @@ public:
 
     // Loads a .gltf or .glb file. Images are not decoded; their bytes and URIs are kept as they are.
     static Result<GltfScene> load(const std::filesystem::path& path);
-    // A new scene with one node and one mesh per TriMesh (positions, normals, tangents, uv0, indices as
-    // given), one default material per distinct TriMesh::material; for inputs imported through Assimp.
-    static Result<GltfScene> from_meshes(const std::vector<TriMesh>& meshes, const std::string& source_name);
+    // A new scene from an Assimp import (io/mesh_import.h): one glTF mesh with one triangle primitive per
+    // imported mesh (positions, normals, tangents, TEXCOORD_0, indices as given), the node hierarchy with
+    // its matrices, and one material per imported material: its name and, when the file states one, its
+    // roughness (metallicFactor 0: these formats describe dielectrics unless they say otherwise).
+    static Result<GltfScene> from_imported(const ImportedScene& imported);
 
     const std::filesystem::path& source() const;
     bool source_is_binary() const;
+    // The files the scene reads besides itself: external buffers and images that exist on disk.
+    std::vector<std::filesystem::path> resource_files() const;
 
     std::vector<PrimitiveInfo> primitives() const;
     std::vector<MaterialInfo> materials() const;
@@ -90,11 +96,14 @@ public:
     // The encoded bytes of an image (external file, data URI or buffer view), as stored.
     Result<std::vector<uint8_t>> image_bytes(int image) const;
     std::string image_label(int image) const;  // URI or "<file>: image N", for messages
+    // The file of an image stored as an external file, empty for embedded images.
+    std::filesystem::path image_file(int image) const;
 
-    // Baked additions, applied by write(). Values are per vertex in the primitive's vertex order:
-    // curvature 4 floats (k1, k2, d.x, d.y), tangents 4 floats (xyz, w = handedness).
-    Result<void> set_curvature(PrimitiveRef ref, std::vector<float> values);
-    Result<void> set_generated_tangents(PrimitiveRef ref, std::vector<float> tangents);
+    // Baked additions, applied by write(): a float attribute with `components` values per vertex in the
+    // primitive's vertex order (_SPECAA_CURVATURE: 4, TANGENT: 4, NORMAL: 3). The primitive then refers to
+    // a new accessor in the appended buffer; the accessor it referred to before keeps its bytes.
+    Result<void> set_vertex_attribute(PrimitiveRef ref, const std::string& attribute, std::vector<float> values,
+                                      int components);
     // Sets the vendor extension object on a material (replacing an earlier one) and lists the extension
     // in extensionsUsed (never extensionsRequired).
     void set_material_extension(int material, const nlohmann::json& extension);
