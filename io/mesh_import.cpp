@@ -6,6 +6,7 @@
 #include <assimp/scene.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <functional>
@@ -126,6 +127,7 @@ Result<ImportedScene> import_mesh(const std::string& path, const MeshImportOptio
     }
     if (!scene) {
         std::string why = importer.GetErrorString();
+        while (!why.empty() && std::isspace(static_cast<unsigned char>(why.back()))) why.pop_back();
         if (why.empty()) why = "unreadable or unsupported mesh file";
         return make_error(path + ": " + why);
     }
@@ -134,6 +136,10 @@ Result<ImportedScene> import_mesh(const std::string& path, const MeshImportOptio
     ImportedScene out;
     out.path = path;
     for (size_t i = 0; i < scene->mNumMaterials; ++i) out.materials.push_back(read_material(*scene->mMaterials[i]));
+    // Assimp appends a default material: always for glTF (unnamed), for other formats when some mesh has
+    // none (named AI_DEFAULT_MATERIAL_NAME). It is not in the file, so primitives using it get material -1.
+    if (!out.materials.empty() && (is_gltf(path) || out.materials.back().name == AI_DEFAULT_MATERIAL_NAME))
+        out.materials.pop_back();
 
     std::vector<int> mesh_slot(scene->mNumMeshes, -1);
     for (size_t i = 0; i < scene->mNumMeshes; ++i) {

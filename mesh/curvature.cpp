@@ -48,8 +48,8 @@ Result<VertexCurvature> estimate_curvature(const TriMesh& mesh, CurvatureEstimat
         if (i >= n) return make_error(name + ": index " + std::to_string(i) + " out of range");
     if (!all_finite(mesh.positions) || !all_finite(mesh.normals) || !all_finite(mesh.tangents))
         return make_error(name + ": non-finite position, normal or tangent (run validate_mesh first)");
-    if (options.jet_degree < 1 || options.jet_degree > 4)
-        return make_error(name + ": jet fitting degree must be 1..4, got " + std::to_string(options.jet_degree));
+    if (options.jet_degree < 2 || options.jet_degree > 4)
+        return make_error(name + ": jet fitting degree must be 2..4, got " + std::to_string(options.jet_degree));
 
     const int threads = options.max_threads > 0 ? options.max_threads : tbb::this_task_arena::max_concurrency();
     tbb::task_arena arena(threads);

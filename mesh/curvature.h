@@ -22,7 +22,7 @@ enum class CurvatureEstimator {
 struct CurvatureOptions {
     WeldOptions weld;
     int max_threads = 0;       // 0: all available; the output is identical for any thread count
-    int jet_degree = 2;        // JetFitting: degree of the fitted polynomial (2..4)
+    int jet_degree = 3;        // JetFitting: degree of the fitted polynomial (2..4); 3 measured best
     int jet_min_points = 16;   // JetFitting: grow the k-ring around a vertex until it holds this many positions
 };
 

@@ -1,0 +1,278 @@
+// Curvature estimators against closed forms (SPEC Sec. 4): spheres, cylinders, tori and ellipsoids at
+// several tessellations and scales, seams, hard edges, sign, direction, degenerate triangles, determinism.
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include "mesh/curvature.h"
+#include "mesh/prepare_mesh.h"
+#include "mesh/procedural_shapes.h"
+#include "tests/mesh/analytic_curvature.h"
+
+namespace specbake {
+namespace {
+
+using testing::CurvatureErrors;
+using testing::Principal;
+
+VertexCurvature estimate(const TriMesh& m, CurvatureEstimator e = CurvatureEstimator::ShapeOperator,
+                         int threads = 0) {
+    CurvatureOptions o;
+    o.max_threads = threads;
+    Result<VertexCurvature> r = estimate_curvature(m, e, o);
+    EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.error().message);
+    return r.ok() ? r.value() : VertexCurvature{std::vector<float>(4 * m.vertex_count(), 0.0f)};
+}
+
+TEST(Curvature, SphereIsOneOverRadius) {
+    for (float radius : {0.01f, 1.0f, 250.0f}) {
+        const TriMesh m = make_uv_sphere(radius, 64, 32);
+        const CurvatureErrors e = testing::compare(m, estimate(m), [&](const float* x) {
+            return testing::sphere_curvature(radius, x);
+        });
+        EXPECT_LT(e.max_k1, 1e-3) << "R = " << radius;
+        EXPECT_LT(e.max_k2, 1e-3) << "R = " << radius;
+        EXPECT_EQ(e.scored, m.vertex_count());
+    }
+    const TriMesh ico = make_icosphere(2.0f, 4);
+    const CurvatureErrors e = testing::compare(ico, estimate(ico), [](const float* x) {
+        return testing::sphere_curvature(2.0, x);
+    });
+    EXPECT_LT(e.max_k1, 1e-3);
+}
+
+TEST(Curvature, DefaultWithinOnePercentAt64Segments) {
+    const float R = 3.0f, r = 1.0f, H = 4.0f;
+    struct Case {
+        const char* name;
+        TriMesh mesh;
+        std::function<Principal(const float*)> truth;
+    };
+    std::vector<Case> cases;
+    cases.push_back({"cylinder", make_cylinder(R, H, 64, 24), [=](const float* x) {
+                         return testing::cylinder_curvature(R, H, x);
+                     }});
+    cases.push_back({"torus", make_torus(R, r, 64, 64), [=](const float* x) {
+                         return testing::torus_curvature(R, r, x);
+                     }});
+    cases.push_back({"ellipsoid", make_ellipsoid(3.0f, 2.0f, 1.5f, 64, 32), [](const float* x) {
+                         return testing::ellipsoid_curvature(3.0, 2.0, 1.5, x);
+                     }});
+    cases.push_back({"jittered torus", make_torus(R, r, 64, 64, 0.3f, 7), [=](const float* x) {
+                         return testing::torus_curvature(R, r, x);
+                     }});
+    for (const Case& c : cases) {
+        const CurvatureErrors e = testing::compare(c.mesh, estimate(c.mesh), c.truth);
+        EXPECT_LT(e.rms_k1, 0.01) << c.name;
+        EXPECT_LT(e.rms_k2, 0.01) << c.name;
+        EXPECT_GT(e.scored, c.mesh.vertex_count() / 2) << c.name;
+        if (e.scored_directions) EXPECT_LT(e.rms_angle_deg, 2.0) << c.name;
+    }
+}
+
+TEST(Curvature, DirectionFollowsThePrincipalAxes) {
+    // Cylinder: k1 = 1/R around the axis, i.e. along the tangent T (dP/du) of this parametrisation.
+    const TriMesh cyl = make_cylinder(1.0f, 2.0f, 64, 16);
+    const VertexCurvature c = estimate(cyl);
+    for (size_t v = 0; v < cyl.vertex_count(); ++v) {
+        EXPECT_NEAR(std::abs(c.values[4 * v + 2]), 1.0, 1e-3) << v;
+        EXPECT_NEAR(c.values[4 * v + 3], 0.0, 0.05) << v;
+    }
+    // Torus: k1 = 1/r along the meridian, which is the bitangent direction here.
+    const TriMesh torus = make_torus(3.0f, 1.0f, 64, 64);
+    const VertexCurvature t = estimate(torus);
+    const CurvatureErrors e = testing::compare(torus, t, [](const float* x) {
+        return testing::torus_curvature(3.0, 1.0, x);
+    });
+    EXPECT_GT(e.scored_directions, torus.vertex_count() / 2);
+    EXPECT_LT(e.rms_angle_deg, 1.0);
+    for (size_t v = 0; v < torus.vertex_count(); ++v) EXPECT_NEAR(std::abs(t.values[4 * v + 3]), 1.0, 1e-3) << v;
+}
+
+TEST(Curvature, ErrorsShrinkWithRefinement) {
+    const float R = 3.0f, r = 1.0f;
+    double previous_k1 = 1e9, previous_k2 = 1e9;
+    for (int n : {16, 32, 64, 128}) {
+        const TriMesh m = make_torus(R, r, n, n, 0.3f, 11);
+        const CurvatureErrors e = testing::compare(m, estimate(m), [=](const float* x) {
+            return testing::torus_curvature(R, r, x);
+        });
+        EXPECT_LT(e.rms_k1, previous_k1) << n;
+        EXPECT_LT(e.rms_k2, previous_k2) << n;
+        previous_k1 = e.rms_k1;
+        previous_k2 = e.rms_k2;
+    }
+    EXPECT_LT(previous_k1, 0.005);
+}
+
+TEST(Curvature, ScalingByS_DividesCurvatureByS) {
+    const TriMesh base = make_torus(3.0f, 1.0f, 48, 32, 0.25f, 3);
+    const VertexCurvature c0 = estimate(base);
+    for (float s : {0.001f, 3.7f, 1000.0f}) {
+        TriMesh scaled = base;
+        scale_mesh(scaled, s);
+        const VertexCurvature c1 = estimate(scaled);
+        for (size_t v = 0; v < base.vertex_count(); ++v) {
+            const double scale = std::max(std::abs(c0.values[4 * v]), std::abs(c0.values[4 * v + 1]));
+            EXPECT_NEAR(double(c1.values[4 * v]) * s, c0.values[4 * v], 1e-5 * scale) << "s " << s << " v " << v;
+            EXPECT_NEAR(double(c1.values[4 * v + 1]) * s, c0.values[4 * v + 1], 1e-5 * scale) << "s " << s << " v " << v;
+        }
+    }
+}
+
+TEST(Curvature, ConcaveSideIsNegative) {
+    // The inside of a sphere: normals pointing at the centre, winding flipped to match.
+    TriMesh m = make_uv_sphere(2.0f, 48, 24);
+    for (float& x : m.normals) x = -x;
+    for (size_t t = 0; t < m.triangle_count(); ++t) std::swap(m.indices[3 * t + 1], m.indices[3 * t + 2]);
+    const VertexCurvature c = estimate(m);
+    for (size_t v = 0; v < m.vertex_count(); ++v) {
+        EXPECT_NEAR(c.values[4 * v], -0.5, 1e-3);
+        EXPECT_NEAR(c.values[4 * v + 1], -0.5, 1e-3);
+    }
+    // The torus' inner equator is a saddle: the parallel curvature is -1/(R - r).
+    const TriMesh torus = make_torus(3.0f, 1.0f, 64, 64);
+    const VertexCurvature t = estimate(torus);
+    bool saw_inner = false;
+    for (size_t v = 0; v < torus.vertex_count(); ++v) {
+        const float* x = &torus.positions[3 * v];
+        if (std::hypot(x[0], x[1]) < 2.0001 && std::abs(x[2]) < 1e-4) {
+            EXPECT_NEAR(t.values[4 * v + 1], -0.5, 0.005);
+            EXPECT_NEAR(t.values[4 * v], 1.0, 0.005);
+            saw_inner = true;
+        }
+    }
+    EXPECT_TRUE(saw_inner);
+}
+
+TEST(Curvature, SeamVerticesShareCurvature) {
+    // Welding the seam by hand must not change anything: split vertices see the same one-ring.
+    const TriMesh seamed = make_torus(3.0f, 1.0f, 40, 24, 0.2f, 5);
+    TriMesh welded = seamed;
+    std::vector<uint32_t> first(seamed.vertex_count());
+    for (size_t v = 0; v < seamed.vertex_count(); ++v) {
+        first[v] = uint32_t(v);
+        for (size_t w = 0; w < v; ++w)
+            if (std::memcmp(&seamed.positions[3 * v], &seamed.positions[3 * w], 12) == 0) {
+                first[v] = uint32_t(w);
+                break;
+            }
+    }
+    size_t seam_vertices = 0;
+    for (size_t v = 0; v < seamed.vertex_count(); ++v) seam_vertices += first[v] != v;
+    EXPECT_GT(seam_vertices, 60u);
+    for (uint32_t& i : welded.indices) i = first[i];
+    const VertexCurvature a = estimate(seamed), b = estimate(welded);
+    for (size_t v = 0; v < seamed.vertex_count(); ++v) {
+        const float* ca = &a.values[4 * v];
+        const float* cb = &b.values[4 * first[v]];
+        EXPECT_NEAR(ca[0], cb[0], 1e-5 * std::abs(cb[0]) + 1e-6) << v;
+        EXPECT_NEAR(ca[1], cb[1], 1e-5 * std::abs(cb[0]) + 1e-6) << v;
+        // Same tangent frames here, so the same direction (up to sign).
+        EXPECT_NEAR(std::abs(ca[2] * cb[2] + ca[3] * cb[3]), 1.0, 1e-4) << v;
+    }
+}
+
+TEST(Curvature, HardEdgesKeepFlatSidesFlat) {
+    const TriMesh cube = make_flat_cube(1.5f);
+    for (CurvatureEstimator e : {CurvatureEstimator::ShapeOperator, CurvatureEstimator::NormalCone}) {
+        const VertexCurvature c = estimate(cube, e);
+        for (size_t v = 0; v < cube.vertex_count(); ++v) {
+            EXPECT_NEAR(c.values[4 * v], 0.0, 1e-6) << to_string(e);
+            EXPECT_NEAR(c.values[4 * v + 1], 0.0, 1e-6) << to_string(e);
+        }
+    }
+    // A faceted sphere: every triangle its own flat normal -> zero curvature, whatever the geometry.
+    const TriMesh smooth = make_icosphere(1.0f, 2);
+    TriMesh facets;
+    for (size_t t = 0; t < smooth.triangle_count(); ++t) {
+        const float* p[3];
+        for (int c = 0; c < 3; ++c) p[c] = &smooth.positions[3 * smooth.indices[3 * t + c]];
+        const double e1[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+        const double e2[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
+        double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+        const double l = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        for (int c = 0; c < 3; ++c) {
+            facets.indices.push_back(uint32_t(facets.vertex_count()));
+            facets.positions.insert(facets.positions.end(), p[c], p[c] + 3);
+            for (int k = 0; k < 3; ++k) facets.normals.push_back(float(n[k] / l));
+        }
+    }
+    ASSERT_TRUE(prepare_mesh_for_curvature(facets).ok());
+    const VertexCurvature c = estimate(facets);
+    for (float x : c.values) EXPECT_TRUE(std::isfinite(x));
+    for (size_t v = 0; v < facets.vertex_count(); ++v) EXPECT_NEAR(c.values[4 * v], 0.0, 1e-5);
+}
+
+TEST(Curvature, DegenerateTrianglesAreSkipped) {
+    TriMesh m = make_uv_sphere(1.0f, 32, 16);
+    const VertexCurvature before = estimate(m);
+    const size_t n = m.vertex_count();
+    // Repeated index, three coincident positions, and a collinear sliver through existing vertices.
+    m.indices.insert(m.indices.end(), {0, 0, 1, 5, 5, 5, 40, 41, 40});
+    const float mid[3] = {0.5f * (m.positions[3 * 40] + m.positions[3 * 41]),
+                          0.5f * (m.positions[3 * 40 + 1] + m.positions[3 * 41 + 1]),
+                          0.5f * (m.positions[3 * 40 + 2] + m.positions[3 * 41 + 2])};
+    m.positions.insert(m.positions.end(), mid, mid + 3);
+    m.normals.insert(m.normals.end(), {0.0f, 0.0f, 1.0f});
+    m.tangents.insert(m.tangents.end(), {1.0f, 0.0f, 0.0f, 1.0f});
+    m.uv0.insert(m.uv0.end(), {0.0f, 0.0f});
+    m.indices.insert(m.indices.end(), {40, uint32_t(n), 41});
+    Result<MeshReport> report = prepare_mesh_for_curvature(m);
+    ASSERT_TRUE(report.ok());
+    EXPECT_GE(report->degenerate_triangles, 3u);
+    for (CurvatureEstimator e :
+         {CurvatureEstimator::ShapeOperator, CurvatureEstimator::JetFitting, CurvatureEstimator::NormalCone}) {
+        const VertexCurvature after = estimate(m, e);
+        for (float x : after.values) ASSERT_TRUE(std::isfinite(x)) << to_string(e);
+        if (e == CurvatureEstimator::ShapeOperator)
+            for (size_t v = 0; v < n; ++v) EXPECT_EQ(after.values[4 * v], before.values[4 * v]) << v;
+    }
+}
+
+TEST(Curvature, SameOutputForAnyThreadCount) {
+    const TriMesh m = make_torus(3.0f, 1.0f, 200, 100, 0.3f, 9);
+    for (CurvatureEstimator e :
+         {CurvatureEstimator::ShapeOperator, CurvatureEstimator::JetFitting, CurvatureEstimator::NormalCone}) {
+        const VertexCurvature one = estimate(m, e, 1), two = estimate(m, e, 2), many = estimate(m, e, 7);
+        EXPECT_EQ(one.values, two.values) << to_string(e);
+        EXPECT_EQ(one.values, many.values) << to_string(e);
+    }
+}
+
+TEST(Curvature, OtherEstimatorsApproximateTheClosedForms) {
+    const TriMesh torus = make_torus(3.0f, 1.0f, 64, 64);
+    auto truth = [](const float* x) { return testing::torus_curvature(3.0, 1.0, x); };
+    const CurvatureErrors jet = testing::compare(torus, estimate(torus, CurvatureEstimator::JetFitting), truth);
+    EXPECT_LT(jet.rms_k1, 0.02);
+    EXPECT_LT(jet.rms_k2, 0.02);
+    EXPECT_LT(jet.rms_angle_deg, 3.0);
+    const CurvatureErrors cone = testing::compare(torus, estimate(torus, CurvatureEstimator::NormalCone), truth);
+    EXPECT_LT(cone.rms_k1, 0.05);
+    // Jet fitting is geometric: the sign comes from the shading normal, so a sphere is +1/R.
+    const TriMesh sphere = make_icosphere(2.0f, 4);
+    const CurvatureErrors s = testing::compare(sphere, estimate(sphere, CurvatureEstimator::JetFitting),
+                                               [](const float* x) { return testing::sphere_curvature(2.0, x); });
+    EXPECT_LT(s.max_k1, 0.01);
+}
+
+TEST(Curvature, RejectsMeshesItCannotMeasure) {
+    TriMesh m = make_plane(1.0f, 4);
+    m.name = "plane.obj: mesh 'quad'";
+    m.tangents.clear();
+    Result<VertexCurvature> r = estimate_curvature(m, CurvatureEstimator::ShapeOperator);
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(r.error().message.find("plane.obj"), std::string::npos);
+    m = make_plane(1.0f, 4);
+    m.indices.push_back(999);
+    m.indices.push_back(0);
+    m.indices.push_back(1);
+    EXPECT_FALSE(estimate_curvature(m, CurvatureEstimator::ShapeOperator).ok());
+    EXPECT_EQ(parse_curvature_estimator("jet-fitting"), CurvatureEstimator::JetFitting);
+    EXPECT_FALSE(parse_curvature_estimator("magic").has_value());
+    const VertexCurvature flat = estimate(make_plane(2.0f, 8));
+    for (size_t v = 0; v < flat.values.size() / 4; ++v) EXPECT_EQ(flat.values[4 * v], 0.0f);
+}
+
+}  // namespace
+}  // namespace specbake

@@ -1,0 +1,161 @@
+// Assimp import (issue 4 item 1): glTF primitives arrive with the file's vertex order, positions, UVs
+// (back in glTF's v-down convention), indices and tangent handedness bit for bit, checked against the raw
+// accessors read straight from the .gltf/.bin; errors name the file.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "io/mesh_import.h"
+#include "mesh/procedural_shapes.h"
+
+namespace specbake {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+// Raw accessor values of a non-sparse accessor, converted to uint32 (indices) or float.
+struct Gltf {
+    json doc;
+    std::vector<std::vector<char>> buffers;
+
+    bool load(const fs::path& file) {
+        std::ifstream in(file);
+        doc = json::parse(in, nullptr, false);
+        if (doc.is_discarded()) return false;
+        for (const json& b : doc.value("buffers", json::array())) {
+            const std::string uri = b.value("uri", "");
+            if (uri.empty() || uri.rfind("data:", 0) == 0) return false;
+            std::ifstream bin(file.parent_path() / uri, std::ios::binary);
+            buffers.emplace_back(std::istreambuf_iterator<char>(bin), std::istreambuf_iterator<char>());
+        }
+        return true;
+    }
+    template <class T>
+    std::vector<T> read(int accessor_index, int components) const {
+        const json& a = doc["accessors"][accessor_index];
+        const json& view = doc["bufferViews"][a["bufferView"].get<int>()];
+        const int type = a["componentType"];
+        const size_t size = type == 5126 || type == 5125 ? 4 : type == 5123 ? 2 : 1;
+        const size_t stride = view.value("byteStride", size_t(0)) ? view.value("byteStride", size_t(0)) : size * components;
+        const char* base = buffers[view["buffer"].get<int>()].data() + view.value("byteOffset", size_t(0)) +
+                           a.value("byteOffset", size_t(0));
+        std::vector<T> out;
+        for (size_t i = 0; i < a["count"].get<size_t>(); ++i)
+            for (int c = 0; c < components; ++c) {
+                const char* p = base + i * stride + c * size;
+                if (type == 5126) {
+                    float f;
+                    std::memcpy(&f, p, 4);
+                    out.push_back(T(f));
+                } else if (type == 5125) {
+                    uint32_t u;
+                    std::memcpy(&u, p, 4);
+                    out.push_back(T(u));
+                } else if (type == 5123) {
+                    uint16_t u;
+                    std::memcpy(&u, p, 2);
+                    out.push_back(T(u));
+                } else {
+                    out.push_back(T(static_cast<unsigned char>(*p)));
+                }
+            }
+        return out;
+    }
+};
+
+std::vector<fs::path> shared_gltf_files() {
+    std::vector<fs::path> files;
+    for (const char* folder : {"gltf", "meshes"}) {
+        const fs::path dir = fs::path(SPECBAKE_ASSETS_DIR) / folder;
+        if (!fs::is_directory(dir)) continue;
+        for (const auto& e : fs::recursive_directory_iterator(dir))
+            if (e.path().extension() == ".gltf") files.push_back(e.path());
+    }
+    std::sort(files.begin(), files.end());
+    return files;
+}
+
+TEST(MeshImport, GltfPrimitivesKeepTheFilesVertexData) {
+    const std::vector<fs::path> files = shared_gltf_files();
+    if (files.empty()) GTEST_SKIP() << "shared assets not found at " << SPECBAKE_ASSETS_DIR;
+    for (const fs::path& file : files) {
+        Gltf g;
+        ASSERT_TRUE(g.load(file)) << file;
+        Result<ImportedScene> scene = import_mesh(file.string());
+        ASSERT_TRUE(scene.ok()) << scene.error().message;
+        size_t k = 0;
+        for (const json& mesh : g.doc["meshes"])
+            for (const json& prim : mesh["primitives"]) {
+                if (prim.value("mode", 4) != 4) continue;
+                ASSERT_LT(k, scene->meshes.size()) << file;
+                const TriMesh& m = scene->meshes[k++];
+                const json& attr = prim["attributes"];
+                EXPECT_EQ(m.positions, g.read<float>(attr["POSITION"], 3)) << file;
+                if (attr.contains("NORMAL")) EXPECT_EQ(m.normals, g.read<float>(attr["NORMAL"], 3)) << file;
+                if (attr.contains("TEXCOORD_0") && g.doc["accessors"][attr["TEXCOORD_0"].get<int>()]["componentType"] == 5126) {
+                    const std::vector<float> uv = g.read<float>(attr["TEXCOORD_0"], 2);
+                    ASSERT_EQ(m.uv0.size(), uv.size()) << file;
+                    // v goes through 1 - (1 - v) in float: equal to rounding.
+                    for (size_t i = 0; i < uv.size(); ++i) EXPECT_NEAR(m.uv0[i], uv[i], 1e-6) << file << " " << i;
+                }
+                if (attr.contains("TANGENT")) {
+                    const std::vector<float> t = g.read<float>(attr["TANGENT"], 4);
+                    ASSERT_EQ(m.tangents.size(), t.size()) << file;
+                    for (size_t i = 3; i < t.size(); i += 4) EXPECT_EQ(m.tangents[i], t[i] < 0 ? -1.0f : 1.0f) << file;
+                }
+                if (prim.contains("indices")) EXPECT_EQ(m.indices, g.read<uint32_t>(prim["indices"], 1)) << file;
+                if (prim.contains("material")) EXPECT_EQ(m.material, prim["material"].get<int>()) << file;
+            }
+        EXPECT_EQ(k, scene->meshes.size()) << file;
+        EXPECT_EQ(scene->materials.size(), g.doc.value("materials", json::array()).size()) << file;
+        for (size_t i = 0; i < scene->materials.size(); ++i) {
+            const json& mat = g.doc["materials"][i];
+            EXPECT_EQ(scene->materials[i].has_normal_texture, mat.contains("normalTexture")) << file << " material " << i;
+            const float roughness = mat.value("pbrMetallicRoughness", json::object()).value("roughnessFactor", 1.0f);
+            EXPECT_FLOAT_EQ(scene->materials[i].roughness_factor, roughness) << file << " material " << i;
+        }
+    }
+}
+
+TEST(MeshImport, ObjSoupIsJoinedAndUvsAreGltfOriented) {
+    const fs::path path = fs::temp_directory_path() / "specbake_import_quad.obj";
+    {
+        std::ofstream f(path);
+        f << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\n"
+             "f 1/1/1 2/2/1 3/3/1 4/4/1\n";
+    }
+    Result<ImportedScene> scene = import_mesh(path.string());
+    fs::remove(path);
+    ASSERT_TRUE(scene.ok()) << scene.error().message;
+    ASSERT_EQ(scene->meshes.size(), 1u);
+    const TriMesh& m = scene->meshes[0];
+    EXPECT_EQ(m.triangle_count(), 2u);
+    EXPECT_EQ(m.vertex_count(), 4u);  // joined: the quad's two triangles share two corners
+    for (size_t v = 0; v < m.vertex_count(); ++v) {
+        // OBJ's vt has v up (y = 1 at the top); glTF's v is 0 at the top.
+        EXPECT_FLOAT_EQ(m.uv0[2 * v + 1], 1.0f - m.positions[3 * v + 1]);
+    }
+}
+
+TEST(MeshImport, ErrorsNameTheFile) {
+    Result<ImportedScene> missing = import_mesh("/nonexistent/folder/model.fbx");
+    ASSERT_FALSE(missing.ok());
+    EXPECT_NE(missing.error().message.find("model.fbx"), std::string::npos);
+    const fs::path garbage = fs::temp_directory_path() / "specbake_import_garbage.ply";
+    {
+        std::ofstream f(garbage);
+        f << "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nend_header\n1\n";
+    }
+    Result<ImportedScene> bad = import_mesh(garbage.string());
+    fs::remove(garbage);
+    ASSERT_FALSE(bad.ok());
+    EXPECT_NE(bad.error().message.find("specbake_import_garbage.ply"), std::string::npos);
+    EXPECT_EQ(bad.error().message.find('\n'), std::string::npos);
+}
+
+}  // namespace
+}  // namespace specbake

@@ -1,0 +1,215 @@
+// Welding, validation and repair, normal and tangent generation (SPEC Sec. 4, issue 4 item 1).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "mesh/generate_normals.h"
+#include "mesh/generate_tangents.h"
+#include "mesh/prepare_mesh.h"
+#include "mesh/procedural_shapes.h"
+#include "mesh/validate_mesh.h"
+#include "mesh/weld_by_position.h"
+
+namespace specbake {
+namespace {
+
+double angle_deg(const float* a, const float* b) {
+    const double d = a[0] * double(b[0]) + a[1] * double(b[1]) + a[2] * double(b[2]);
+    const double la = std::sqrt(a[0] * double(a[0]) + a[1] * double(a[1]) + a[2] * double(a[2]));
+    const double lb = std::sqrt(b[0] * double(b[0]) + b[1] * double(b[1]) + b[2] * double(b[2]));
+    return std::acos(std::clamp(d / (la * lb), -1.0, 1.0)) * 180.0 / M_PI;
+}
+
+TEST(Weld, SeamsShareAGroupHardEdgesDoNot) {
+    // UV sphere 8 x 4: the seam column (8 + 1 columns, 3 interior rings) and 2 x 8 pole vertices.
+    const TriMesh sphere = make_uv_sphere(1.0f, 8, 4);
+    const WeldedTopology t = weld_by_position(sphere);
+    EXPECT_EQ(sphere.vertex_count(), 9u * 3u + 16u);
+    EXPECT_EQ(t.position_count, 8u * 3u + 2u);
+    EXPECT_EQ(t.group_count, t.position_count);  // normals agree at every seam and pole
+    // Cube with split normals: 8 positions, 24 groups (each corner has three different normals).
+    const TriMesh cube = make_flat_cube(1.0f);
+    const WeldedTopology c = weld_by_position(cube);
+    EXPECT_EQ(c.position_count, 8u);
+    EXPECT_EQ(c.group_count, 24u);
+    // -0 and +0 are one position.
+    TriMesh zeros;
+    zeros.positions = {0.0f, 1.0f, 2.0f, -0.0f, 1.0f, 2.0f, 0.0f, 1.0f, 2.5f};
+    const WeldedTopology z = weld_by_position(zeros);
+    EXPECT_EQ(z.position_count, 2u);
+    EXPECT_EQ(z.position_id[0], z.position_id[1]);
+}
+
+TEST(Validate, RejectsWhatCannotBeRepaired) {
+    TriMesh m = make_plane(1.0f, 2);
+    m.name = "bad.gltf: mesh 'Plane'";
+    TriMesh out_of_range = m;
+    out_of_range.indices[4] = 1000;
+    Result<MeshReport> r = validate_mesh(out_of_range);
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(r.error().message.find("bad.gltf"), std::string::npos);
+    EXPECT_NE(r.error().message.find("1000"), std::string::npos);
+
+    TriMesh nan_position = m;
+    nan_position.positions[4] = std::nanf("");
+    EXPECT_FALSE(validate_mesh(nan_position).ok());
+    TriMesh inf_position = m;
+    inf_position.positions[0] = INFINITY;
+    EXPECT_FALSE(validate_mesh(inf_position).ok());
+
+    TriMesh no_triangles = m;
+    no_triangles.indices.clear();
+    EXPECT_FALSE(validate_mesh(no_triangles).ok());
+    TriMesh ragged = m;
+    ragged.indices.pop_back();
+    EXPECT_FALSE(validate_mesh(ragged).ok());
+    TriMesh short_normals = m;
+    short_normals.normals.resize(3);
+    EXPECT_FALSE(validate_mesh(short_normals).ok());
+}
+
+TEST(Validate, RepairsNormalsTangentsAndUvs) {
+    TriMesh m = make_flat_cube(1.0f);
+    m.normals[0] = m.normals[1] = m.normals[2] = 0.0f;   // vertex 0: zero
+    m.normals[3] = std::nanf("");                         // vertex 1: non-finite
+    for (int k = 0; k < 3; ++k) m.normals[6 + k] *= 0.1f;  // vertex 2: length 0.1
+    for (int k = 0; k < 3; ++k) m.tangents[4 * 3 + k] = m.normals[3 * 3 + k];  // vertex 3: tangent parallel to N
+    m.tangents[4 * 4 + 3] = 0.3f;                                               // vertex 4: w not +-1
+    m.uv0[2 * 5] = INFINITY;                                                    // vertex 5: non-finite u
+    const TriMesh original = make_flat_cube(1.0f);
+    Result<MeshReport> r = validate_mesh(m);
+    ASSERT_TRUE(r.ok());
+    EXPECT_EQ(r->repaired_normals, 2u);
+    EXPECT_EQ(r->renormalized_normals, 1u);
+    EXPECT_EQ(r->repaired_tangents, 2u);
+    EXPECT_EQ(r->repaired_uvs, 1u);
+    // Repaired normals are the flat face normal (that vertex's own triangles), not a corner average.
+    for (int v : {0, 1, 2}) EXPECT_LT(angle_deg(&m.normals[3 * v], &original.normals[3 * v]), 1e-4) << v;
+    const float* t3 = &m.tangents[12];
+    const double dot = t3[0] * m.normals[9] + t3[1] * m.normals[10] + t3[2] * m.normals[11];
+    EXPECT_NEAR(dot, 0.0, 1e-6);
+    EXPECT_EQ(m.tangents[19], 1.0f);
+    EXPECT_EQ(m.uv0[10], 0.0f);
+    // Untouched values stay bit-identical.
+    for (size_t i = 9 * 3; i < m.normals.size(); ++i) EXPECT_EQ(m.normals[i], original.normals[i]);
+    EXPECT_NE(r->summary().find("zero or non-finite normals regenerated"), std::string::npos);
+}
+
+TEST(Validate, CountsTopologyDefects) {
+    // Three triangles on edge (0, 1): a non-manifold edge, and both its ends non-manifold vertices.
+    // Vertex 5 is unreferenced; vertex 6 duplicates vertex 1, so triangle (6, 1, 2) is degenerate.
+    TriMesh m;
+    m.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1, 5, 5, 5, 1, 0, 0};
+    m.indices = {0, 1, 2, 1, 0, 3, 0, 1, 4, 6, 1, 2};
+    Result<MeshReport> r = validate_mesh(m);
+    ASSERT_TRUE(r.ok());
+    EXPECT_EQ(r->nonmanifold_edges, 1u);
+    EXPECT_EQ(r->nonmanifold_vertices, 2u);
+    EXPECT_EQ(r->boundary_edges, 6u);
+    EXPECT_EQ(r->unreferenced_vertices, 1u);
+    EXPECT_EQ(r->duplicate_vertices, 1u);
+    EXPECT_EQ(r->degenerate_triangles, 1u);
+}
+
+TEST(Validate, ClosedMeshHasNoBoundaryAndHourglassVertexIsFound) {
+    TriMesh ico = make_icosphere(1.0f, 1);
+    Result<MeshReport> r = validate_mesh(ico);
+    ASSERT_TRUE(r.ok());
+    EXPECT_EQ(r->boundary_edges, 0u);
+    EXPECT_EQ(r->nonmanifold_edges, 0u);
+    EXPECT_EQ(r->nonmanifold_vertices, 0u);
+    // Two cones sharing their apex only.
+    TriMesh hourglass;
+    hourglass.positions = {0, 0, 0};
+    for (int cone = 0; cone < 2; ++cone)
+        for (int i = 0; i < 6; ++i) {
+            const double a = i * M_PI / 3.0;
+            hourglass.positions.insert(hourglass.positions.end(),
+                                       {float(std::cos(a)), float(std::sin(a)), cone ? 1.0f : -1.0f});
+        }
+    for (int cone = 0; cone < 2; ++cone)
+        for (uint32_t i = 0; i < 6; ++i)
+            hourglass.indices.insert(hourglass.indices.end(), {0, 1 + 6 * cone + i, 1 + 6 * cone + (i + 1) % 6});
+    r = validate_mesh(hourglass);
+    ASSERT_TRUE(r.ok());
+    EXPECT_EQ(r->nonmanifold_vertices, 1u);
+    EXPECT_EQ(r->boundary_edges, 12u);
+}
+
+TEST(Normals, AngleWeightedMatchesTheSphere) {
+    TriMesh m = make_uv_sphere(2.0f, 64, 32);
+    const std::vector<float> analytic = m.normals;
+    m.normals.clear();
+    generate_normals(m);
+    double worst = 0.0;
+    for (size_t v = 0; v < m.vertex_count(); ++v) worst = std::max(worst, angle_deg(&m.normals[3 * v], &analytic[3 * v]));
+    EXPECT_LT(worst, 0.5);
+    // Unindexed soup: every triangle its own vertices; welding by position still gives smooth normals.
+    TriMesh soup;
+    for (uint32_t i : m.indices) {
+        soup.indices.push_back(uint32_t(soup.vertex_count()));
+        soup.positions.insert(soup.positions.end(), &m.positions[3 * i], &m.positions[3 * i + 3]);
+    }
+    generate_normals(soup, NormalWeighting::Area);
+    for (size_t k = 0; k < soup.indices.size(); ++k) {
+        const uint32_t i = m.indices[k];
+        const float* x = &m.positions[3 * i];
+        const float radial[3] = {x[0], x[1], x[2]};
+        EXPECT_LT(angle_deg(&soup.normals[3 * k], radial), 1.0);
+    }
+}
+
+TEST(Tangents, FollowUAndTheGltfBitangentConvention) {
+    TriMesh m = make_torus(3.0f, 1.0f, 64, 32);
+    const std::vector<float> analytic = m.tangents;
+    m.tangents.clear();
+    generate_tangents(m);
+    for (size_t v = 0; v < m.vertex_count(); ++v) {
+        // On the u seam a vertex sees the triangles of one side only (as in MikkTSpace, whose vertices differ
+        // in UV there), so T is the one-sided secant: off by half a segment, 360 / 64 / 2 degrees.
+        const bool seam = m.uv0[2 * v] == 0.0f || m.uv0[2 * v] == 1.0f;
+        EXPECT_LT(angle_deg(&m.tangents[4 * v], &analytic[4 * v]), seam ? 2.9 : 0.1) << v;
+        EXPECT_EQ(m.tangents[4 * v + 3], analytic[4 * v + 3]) << v;
+        const float* n = &m.normals[3 * v];
+        EXPECT_NEAR(n[0] * m.tangents[4 * v] + n[1] * m.tangents[4 * v + 1] + n[2] * m.tangents[4 * v + 2], 0.0, 1e-6);
+    }
+    // Flipping v flips the handedness.
+    TriMesh flipped = make_torus(3.0f, 1.0f, 64, 32);
+    for (size_t v = 0; v < flipped.vertex_count(); ++v) flipped.uv0[2 * v + 1] = 1.0f - flipped.uv0[2 * v + 1];
+    generate_tangents(flipped);
+    for (size_t v = 0; v < flipped.vertex_count(); ++v) EXPECT_EQ(flipped.tangents[4 * v + 3], -analytic[4 * v + 3]);
+    // Plane with glTF UVs (v down the image while y goes up): T = +x, w = +1 (B = +y).
+    TriMesh plane = make_plane(1.0f, 3);
+    plane.tangents.clear();
+    generate_tangents(plane);
+    for (size_t v = 0; v < plane.vertex_count(); ++v) {
+        EXPECT_NEAR(plane.tangents[4 * v], 1.0f, 1e-6);
+        EXPECT_EQ(plane.tangents[4 * v + 3], 1.0f);
+    }
+    // No UVs: still a unit tangent perpendicular to the normal.
+    TriMesh ico = make_icosphere(1.0f, 2);
+    ico.tangents.clear();
+    generate_tangents(ico);
+    for (size_t v = 0; v < ico.vertex_count(); ++v) {
+        const float* t = &ico.tangents[4 * v];
+        const float* n = &ico.normals[3 * v];
+        EXPECT_NEAR(t[0] * t[0] + t[1] * t[1] + t[2] * t[2], 1.0, 1e-5);
+        EXPECT_NEAR(t[0] * n[0] + t[1] * n[1] + t[2] * n[2], 0.0, 1e-5);
+    }
+}
+
+TEST(Prepare, GeneratesWhatIsMissingAndSaysSo) {
+    TriMesh m = make_uv_sphere(1.0f, 16, 8);
+    m.normals.clear();
+    m.tangents.clear();
+    Result<MeshReport> r = prepare_mesh_for_curvature(m);
+    ASSERT_TRUE(r.ok());
+    EXPECT_TRUE(r->generated_normals);
+    EXPECT_TRUE(r->generated_tangents);
+    EXPECT_TRUE(m.has_normals());
+    EXPECT_TRUE(m.has_tangents());
+    EXPECT_NE(r->summary().find("normals generated"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace specbake
