@@ -209,6 +209,7 @@ Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& optio
     }
 
     // Curvature decisions, one per primitive.
+    std::map<std::string, size_t> measured_geometry;  // geometry key -> first primitive measured
     for (size_t i = 0; i < infos.size(); ++i) {
         const io::PrimitiveInfo& p = infos[i];
         CurvatureDecision d;
@@ -239,7 +240,19 @@ Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& optio
         } else if (options.check_material && known && *d.roughness_gain < options.min_roughness_gain) {
             d.reason = "material too rough to alias: the largest geometric kernel raises roughness " +
                        format_number(*d.min_roughness) + " by less than the threshold";
+        } else if (auto same = measured_geometry.find(p.geometry_key); same != measured_geometry.end()) {
+            // Same vertex data as an earlier primitive: same measurement, same curvature.
+            const CurvatureDecision& first = plan.primitives[same->second];
+            d.relative_curvature = first.relative_curvature;
+            d.mesh_report = first.mesh_report;
+            d.bake = first.bake;
+            d.generates_tangents = first.generates_tangents;
+            d.repairs_normals = first.repairs_normals;
+            d.reason = first.reason + " (same vertex data as mesh " + std::to_string(first.ref.mesh) + " primitive " +
+                       std::to_string(first.ref.primitive) + ")";
+            if (d.bake) plan.work[i] = plan.work.at(same->second);
         } else {
+            measured_geometry[p.geometry_key] = i;
             auto report = prepare_mesh_for_curvature(*mesh);
             if (!report) return report.error();
             CurvatureOptions copts;

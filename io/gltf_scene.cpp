@@ -595,8 +595,12 @@ std::vector<PrimitiveInfo> GltfScene::primitives() const {
             info.has_normal = p.attributes.count("NORMAL") > 0;
             info.has_tangent = p.attributes.count("TANGENT") > 0;
             info.has_curvature = p.attributes.count(kCurvatureAttribute) > 0;
-            for (const auto& [name, acc] : p.attributes)
+            info.geometry_key = "mode " + std::to_string(info.mode) + " indices " + std::to_string(p.indices);
+            for (const auto& [name, acc] : p.attributes) {
                 if (name.rfind("TEXCOORD_", 0) == 0) info.texcoords.push_back(std::atoi(name.c_str() + 9));
+                if (name == "POSITION" || name == "NORMAL" || name == "TANGENT" || name == "TEXCOORD_0")
+                    info.geometry_key += " " + name + " " + std::to_string(acc);
+            }
             std::sort(info.texcoords.begin(), info.texcoords.end());
             info.instances = instances[mi];
             if (instances[mi] > 0) {
@@ -831,7 +835,17 @@ Result<std::vector<fs::path>> GltfScene::write(const fs::path& path) const {
         m.buffers.back().name = "specbake";
         target_buffer = int(m.buffers.size() - 1);
     }
+    // Primitives that share vertex data get equal values; they share one accessor too.
+    std::vector<std::pair<const Impl::Added*, int>> accessor_of_values;
     for (const Impl::Added& a : impl_->added) {
+        int shared = -1;
+        for (const auto& [previous, accessor] : accessor_of_values)
+            if (previous->attribute == a.attribute && previous->components == a.components && previous->values == a.values)
+                shared = accessor;
+        if (shared >= 0) {
+            m.meshes[size_t(a.ref.mesh)].primitives[size_t(a.ref.primitive)].attributes[a.attribute] = shared;
+            continue;
+        }
         std::vector<unsigned char>& data = m.buffers[size_t(target_buffer)].data;
         while (data.size() % 4) data.push_back(0);
         tinygltf::BufferView bv;
@@ -854,6 +868,7 @@ Result<std::vector<fs::path>> GltfScene::write(const fs::path& path) const {
         m.accessors.push_back(acc);
         m.meshes[size_t(a.ref.mesh)].primitives[size_t(a.ref.primitive)].attributes[a.attribute] =
             int(m.accessors.size() - 1);
+        accessor_of_values.push_back({&a, int(m.accessors.size() - 1)});
     }
 
     // Decide where each buffer goes, then serialise the JSON without buffer payloads.

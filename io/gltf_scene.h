@@ -40,6 +40,9 @@ struct PrimitiveInfo {
     bool has_tangent = false;
     bool has_curvature = false;  // the input already carries _SPECAA_CURVATURE
     std::vector<int> texcoords;  // n of every TEXCOORD_n present
+    // Equal for primitives that read the same vertex and index data (same accessors and mode), which
+    // then share one curvature and one appended accessor.
+    std::string geometry_key;
     // Largest and smallest axis scale of the world transforms of the nodes that instance the mesh
     // (1 when no node does); curvature is stored in object space and these say how far world space differs.
     double min_instance_scale = 1.0;
