@@ -53,6 +53,9 @@ struct MeshImportOptions {
 // normals, tangents and TEXCOORD_0, generates nothing (see mesh/prepare_mesh.h). UVs come out in the glTF
 // convention (origin top-left; Assimp's loaders deliver v up, so v is flipped). Fails with one line naming
 // the file for: unreadable file, empty scene, no triangles, out-of-range indices, inf/NaN positions.
+// Assimp's own loaders may drop broken faces first (its glTF loader skips a triangle whose index is out of
+// range), so a glTF read with another library must still go through validate_mesh. The default material
+// Assimp appends (for glTF always) is removed: primitives without a material in the file get -1.
 Result<ImportedScene> import_mesh(const std::string& path, const MeshImportOptions& options = {});
 
 }  // namespace specbake
