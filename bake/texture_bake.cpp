@@ -162,13 +162,6 @@ std::vector<double> resample_roughness(const Image& rough, int channel, bool orm
     return out;
 }
 
-struct LevelOutputs {
-    Image* roughness = nullptr;
-    Image* kernel = nullptr;
-    Image* lean = nullptr;
-    Image* normal = nullptr;
-};
-
 // Turns the means of one texel into its output values (SPEC Sec. 3); returns |r_out - r_in|.
 double finalize_texel(const double* v, const Layout& layout, const TextureBakeSettings& s, bool flip_y,
                       float* rough, float* kern, float* lean, float* nrm) {
@@ -387,23 +380,76 @@ Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughne
     };
 
     std::vector<double> previous, current;  // means of the previous / current level, C per texel
-    std::vector<double> row_change;
+    std::vector<double> level_change(size_t(levels), 0.0);
     long long degenerate = 0;
 
+    // Writes the outputs of row j of level L from its means (C per texel); returns the row's max change.
+    auto finalize_row = [&](int L, int j, const double* means) {
+        const int w = level_w(L);
+        Image* R = want.roughness ? &result.roughness.levels[size_t(L)] : nullptr;
+        Image* K = want.kernel ? &result.kernel.levels[size_t(L)] : nullptr;
+        Image* E = want.lean ? &result.lean.levels[size_t(L)] : nullptr;
+        Image* N = want.normal ? &result.normal.levels[size_t(L)] : nullptr;
+        double change = 0.0;
+        for (int i = 0; i < w; ++i) {
+            change = std::max(change, finalize_texel(means + size_t(i) * C, layout, settings, dec.flip_y,
+                                                     R ? R->texel(i, j) : nullptr, K ? K->texel(i, j) : nullptr,
+                                                     E ? E->texel(i, j) : nullptr, N ? N->texel(i, j) : nullptr));
+        }
+        return change;
+    };
+    auto reduce_changes = [](const std::vector<double>& rows) {
+        double m = 0.0;
+        for (double c : rows) m = std::max(m, c);
+        return m;
+    };
+
+    // Levels 0 and 1 in one pass when level 1's footprints are whole blocks of base texels (all even
+    // sizes): every base row is decoded once, written as level 0 and summed into its level-1 row.
+    const bool fused = levels >= 2 && W % level_w(1) == 0 && H % level_h(1) == 0;
+    auto run_fused = [&] {
+        const int w1 = level_w(1), h1 = level_h(1), fx = W / w1, fy = H / h1;
+        const bool keep = levels > 2 && tiles_previous(2);
+        current.assign(keep ? size_t(w1) * h1 * C : 0, 0.0);
+        std::vector<double> change0(size_t(H), 0.0), change1(size_t(h1), 0.0);
+        std::vector<long long> row_degenerate(size_t(h1), 0);
+        tbb::parallel_for(tbb::blocked_range<int>(0, h1), [&](const tbb::blocked_range<int>& rows) {
+            std::vector<double> base_row(size_t(W) * C), means(size_t(w1) * C);
+            for (int j = rows.begin(); j < rows.end(); ++j) {
+                std::fill(means.begin(), means.end(), 0.0);
+                for (int dy = 0; dy < fy; ++dy) {
+                    const int y = j * fy + dy;
+                    row_degenerate[size_t(j)] += dec.decode_row(y, base_row.data());
+                    change0[size_t(y)] = finalize_row(0, y, base_row.data());
+                    for (int i = 0; i < w1; ++i) {
+                        double* m = means.data() + size_t(i) * C;
+                        for (int dx = 0; dx < fx; ++dx) {
+                            const double* v = base_row.data() + size_t(i * fx + dx) * C;
+                            for (int c = 0; c < C; ++c) m[c] += v[c];
+                        }
+                    }
+                }
+                const double inv = 1.0 / double(fx * fy);
+                for (double& m : means) m *= inv;
+                change1[size_t(j)] = finalize_row(1, j, means.data());
+                if (keep) std::copy(means.begin(), means.end(), current.begin() + ptrdiff_t(size_t(j) * w1 * C));
+            }
+        });
+        level_change[0] = reduce_changes(change0);
+        level_change[1] = reduce_changes(change1);
+        for (long long d : row_degenerate) degenerate += d;
+        previous.swap(current);
+    };
+
     auto run = [&] {
-        for (int L = 0; L < levels; ++L) {
+        if (fused) run_fused();
+        for (int L = fused ? 2 : 0; L < levels; ++L) {
             const int w = level_w(L), h = level_h(L);
             const bool from_previous = tiles_previous(L);
             const bool keep = L >= 1 && L + 1 < levels && tiles_previous(L + 1);
             current.assign(keep ? size_t(w) * h * C : 0, 0.0);
-            row_change.assign(size_t(h), 0.0);
+            std::vector<double> row_change(size_t(h), 0.0);
             std::vector<long long> row_degenerate(size_t(h), 0);
-            LevelOutputs out;
-            if (want.roughness) out.roughness = &result.roughness.levels[size_t(L)];
-            if (want.kernel) out.kernel = &result.kernel.levels[size_t(L)];
-            if (want.lean) out.lean = &result.lean.levels[size_t(L)];
-            if (want.normal) out.normal = &result.normal.levels[size_t(L)];
-
             const std::vector<Span1D> spans_x = from_previous ? std::vector<Span1D>{} : footprint_spans(W, w);
             const std::vector<Span1D> spans_y = from_previous ? std::vector<Span1D>{} : footprint_spans(H, h);
             const double area = (double(W) / w) * (double(H) / h);
@@ -447,24 +493,16 @@ Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughne
                         const double inv = 1.0 / area;
                         for (double& m : means) m *= inv;
                     }
-                    double change = 0.0;
-                    for (int i = 0; i < w; ++i) {
-                        const double* m = means.data() + size_t(i) * C;
-                        float* r = out.roughness ? out.roughness->texel(i, j) : nullptr;
-                        float* k = out.kernel ? out.kernel->texel(i, j) : nullptr;
-                        float* l = out.lean ? out.lean->texel(i, j) : nullptr;
-                        float* n = out.normal ? out.normal->texel(i, j) : nullptr;
-                        change = std::max(change, finalize_texel(m, layout, settings, dec.flip_y, r, k, l, n));
-                    }
-                    row_change[size_t(j)] = change;
+                    row_change[size_t(j)] = finalize_row(L, j, means.data());
                     if (keep) std::copy(means.begin(), means.end(), current.begin() + ptrdiff_t(size_t(j) * w * C));
                 }
             });
-            for (double c : row_change) result.max_roughness_change = std::max(result.max_roughness_change, c);
+            level_change[size_t(L)] = reduce_changes(row_change);
             if (L == 0)
                 for (long long d : row_degenerate) degenerate += d;
             previous.swap(current);
         }
+        result.max_roughness_change = reduce_changes(level_change);
     };
     if (settings.threads > 0) {
         tbb::task_arena arena(settings.threads);

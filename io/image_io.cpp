@@ -6,6 +6,7 @@
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
+#include <fstream>
 #include <memory>
 #include <system_error>
 
@@ -52,6 +53,33 @@ Result<DecodedImage> decode(OIIO::ImageInput& in, const std::string& name) {
     return out;
 }
 
+uint32_t be32(const uint8_t* p) { return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3]; }
+
+// Walks the chunks of a PNG before libpng sees it: libpng reports truncation and empty headers on
+// stderr by itself, and the error should be one line from specbake instead.
+Result<void> check_png_structure(std::span<const uint8_t> b, const std::string& name) {
+    static const uint8_t signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+    if (b.size() < 8 || !std::equal(signature, signature + 8, b.begin())) return {};
+    size_t at = 8;
+    bool first = true;
+    while (true) {
+        if (at + 12 > b.size()) return make_error(name + ": truncated PNG (ends before the IEND chunk)");
+        const uint32_t length = be32(b.data() + at);
+        const std::string type(reinterpret_cast<const char*>(b.data() + at + 4), 4);
+        if (size_t(length) + 12 > b.size() - at)
+            return make_error(name + ": truncated PNG (ends inside the " + type + " chunk)");
+        if (first) {
+            if (type != "IHDR" || length < 8) return make_error(name + ": invalid PNG (no IHDR chunk)");
+            const uint32_t w = be32(b.data() + at + 8), h = be32(b.data() + at + 12);
+            if (w == 0 || h == 0)
+                return make_error(name + ": empty image (" + std::to_string(w) + "x" + std::to_string(h) + ")");
+            first = false;
+        }
+        at += size_t(length) + 12;
+        if (type == "IEND") return {};
+    }
+}
+
 }  // namespace
 
 Result<DecodedImage> decode_image(const fs::path& path) {
@@ -59,6 +87,16 @@ Result<DecodedImage> decode_image(const fs::path& path) {
     std::error_code ec;
     if (!fs::exists(path, ec)) return make_error(name + ": no such file");
     if (fs::is_directory(path, ec)) return make_error(name + ": is a folder, not an image");
+    {
+        std::ifstream f(path, std::ios::binary);
+        char head[8] = {};
+        if (f.read(head, 8) && static_cast<uint8_t>(head[0]) == 0x89 && head[1] == 'P') {
+            f.close();
+            auto bytes = read_file(path);
+            if (!bytes) return bytes.error();
+            return decode_image_memory(*bytes, name);  // checks the chunk structure first
+        }
+    }
     const OIIO::ImageSpec config = reader_config();
     auto in = OIIO::ImageInput::open(name, &config);
     if (!in) return make_error(name + ": cannot read as an image: " + one_line(OIIO::geterror()));
@@ -69,6 +107,7 @@ Result<DecodedImage> decode_image(const fs::path& path) {
 
 Result<DecodedImage> decode_image_memory(std::span<const uint8_t> bytes, const std::string& name_for_errors) {
     if (bytes.empty()) return make_error(name_for_errors + ": no image data");
+    if (auto ok = check_png_structure(bytes, name_for_errors); !ok) return ok.error();
     // OpenImageIO picks the decoder from the name's extension; take it from the leading bytes instead.
     std::string probe = "image.tga";  // the one common format without a signature
     if (bytes.size() >= 4 && bytes[0] == 0x89 && bytes[1] == 'P' && bytes[2] == 'N' && bytes[3] == 'G')

@@ -1,0 +1,171 @@
+// Speed of the texture bake (issue 3, item 8) on a 4096 x 4096 RGB8 normal map plus an RGB8 ORM map,
+// all default outputs:
+//  (a) compute-only throughput (bake_texture) in Mtexel/s of the base map on 1 and 2 threads;
+//  (b) end-to-end wall time of the texture job (PNG decode, bake, KTX2 writes, hashes, manifest) in a
+//      child process, against the I/O floor: oiiotool decoding and re-encoding the same two PNGs;
+//  (c) peak resident memory of that child (getrusage), next to the decoded input and output sizes.
+//
+// Run: build/bench/bench_texture [--size N] [google-benchmark flags]
+#include "cli/job_texture.h"
+#include "io/image_io.h"
+
+#include <benchmark/benchmark.h>
+
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <string>
+
+namespace {
+using namespace specbake;
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+float q8(double v) { return float(std::lround(std::clamp(v, 0.0, 1.0) * 255.0)) / 255.0f; }
+
+uint32_t hash(uint32_t x, uint32_t y) {
+    uint32_t h = x * 0x8da6b343u ^ y * 0xd8163841u;
+    h ^= h >> 15;
+    h *= 0x2c1b3c6du;
+    h ^= h >> 12;
+    return h;
+}
+
+// Bumps at three scales plus per-texel noise, quantised to 8 bits.
+Image make_normal(int size) {
+    Image n(size, size, 3);
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+            double gx = 0, gy = 0;
+            for (double period : {256.0, 37.0, 7.0}) {
+                const double k = 2 * M_PI / period, a = 0.4;
+                gx += a * std::cos(k * x) * std::sin(k * y);
+                gy += a * std::sin(k * x) * std::cos(k * y);
+            }
+            gx += 0.2 * (double(hash(uint32_t(x), uint32_t(y)) & 1023) / 1023.0 - 0.5);
+            const double len = std::sqrt(gx * gx + gy * gy + 1);
+            float* t = n.texel(x, y);
+            t[0] = q8(0.5 - 0.5 * gx / len), t[1] = q8(0.5 - 0.5 * gy / len), t[2] = q8(0.5 + 0.5 / len);
+        }
+    return n;
+}
+
+Image make_orm(int size) {
+    Image m(size, size, 3);
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+            float* t = m.texel(x, y);
+            t[0] = q8(1.0 - 0.25 * y / size), t[1] = q8(0.1 + 0.6 * x / size), t[2] = ((x / 64 + y / 64) % 2) ? 1.0f : 0.0f;
+        }
+    return m;
+}
+
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// Child mode: run the texture job once, print "<wall seconds> <peak RSS KiB>".
+int end_to_end_child(const char* normal, const char* orm, const char* out) {
+    TextureJob job;
+    job.normal = normal;
+    job.roughness = fs::path(orm);
+    job.output_dir = out;
+    const auto t0 = Clock::now();
+    auto r = run_texture_job(job);
+    const double wall = seconds_since(t0);
+    if (!r) {
+        std::fprintf(stderr, "%s\n", r.error().message.c_str());
+        return 1;
+    }
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    std::printf("%.3f %ld\n", wall, long(u.ru_maxrss));
+    return 0;
+}
+
+double time_command(const std::string& cmd) {
+    const auto t0 = Clock::now();
+    if (std::system(cmd.c_str()) != 0) return -1.0;
+    return seconds_since(t0);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    if (argc == 5 && std::strcmp(argv[1], "--end-to-end-child") == 0) return end_to_end_child(argv[2], argv[3], argv[4]);
+    int size = 4096;
+    for (int i = 1; i + 1 < argc; ++i)
+        if (std::strcmp(argv[i], "--size") == 0) size = std::atoi(argv[i + 1]);
+
+    // (b), (c) first, before this process holds large images.
+    const fs::path dir = fs::temp_directory_path() / ("specbake_bench_texture_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const fs::path normal_png = dir / "normal.png", orm_png = dir / "orm.png";
+    {
+        const Image n = make_normal(size), m = make_orm(size);
+        if (!io::write_image(normal_png, n, 8) || !io::write_image(orm_png, m, 8)) {
+            std::fprintf(stderr, "cannot write the benchmark inputs to %s\n", dir.string().c_str());
+            return 1;
+        }
+    }
+    const std::string self = fs::read_symlink("/proc/self/exe").string();
+    const fs::path out = dir / "out";
+    const std::string child = "'" + self + "' --end-to-end-child '" + normal_png.string() + "' '" + orm_png.string() +
+                              "' '" + out.string() + "' > '" + (dir / "child.txt").string() + "'";
+    double e2e = -1, floor_png = -1, floor_tif = -1;
+    long rss_kib = 0;
+    if (std::system(child.c_str()) == 0) {
+        FILE* f = std::fopen((dir / "child.txt").string().c_str(), "r");
+        if (f && std::fscanf(f, "%lf %ld", &e2e, &rss_kib) != 2) e2e = -1;
+        if (f) std::fclose(f);
+    }
+    floor_png = time_command("oiiotool '" + normal_png.string() + "' -o '" + (dir / "n2.png").string() + "' && oiiotool '" +
+                             orm_png.string() + "' -o '" + (dir / "o2.png").string() + "'");
+    floor_tif = time_command("oiiotool '" + normal_png.string() + "' --compression none -o '" + (dir / "n2.tif").string() +
+                             "' && oiiotool '" + orm_png.string() + "' --compression none -o '" +
+                             (dir / "o2.tif").string() + "'");
+    uintmax_t output_bytes = 0;
+    for (const auto& e : fs::directory_iterator(out))
+        if (e.path().extension() == ".ktx2") output_bytes += e.file_size();
+
+    // (a) compute only.
+    const Image normal = make_normal(size), orm = make_orm(size);
+    for (int threads : {1, 2}) {
+        benchmark::RegisterBenchmark(("bake_texture/" + std::to_string(size) + "/threads:" + std::to_string(threads)).c_str(),
+                                     [&, threads](benchmark::State& state) {
+                                         TextureBakeSettings s;
+                                         s.threads = threads;
+                                         for (auto _ : state) {
+                                             auto r = bake_texture(normal, &orm, 1, 0.0f, s);
+                                             benchmark::DoNotOptimize(r);
+                                         }
+                                         state.counters["Mtexel/s"] = benchmark::Counter(
+                                             double(size) * size * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
+                                     })
+            ->Unit(benchmark::kMillisecond)
+            ->UseRealTime()
+            ->MinTime(2.0);
+    }
+    benchmark::Initialize(&argc, argv);
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+
+    const double mib = 1024.0 * 1024.0;
+    const double decoded_u8 = 2.0 * size * size * 3;  // both inputs, 8-bit RGB
+    const double decoded_f32 = decoded_u8 * 4;        // as the float images specbake holds
+    std::printf("\nend to end (texture job, %dx%d RGB8 normal + ORM, all default outputs, KTX2):\n", size, size);
+    std::printf("  specbake texture:                 %8.2f s\n", e2e);
+    std::printf("  oiiotool decode+encode, PNG->PNG:  %8.2f s  (ratio %.2fx)\n", floor_png, e2e / floor_png);
+    std::printf("  oiiotool decode+encode, PNG->TIFF: %8.2f s  (ratio %.2fx)\n", floor_tif, e2e / floor_tif);
+    std::printf("peak memory (max RSS of the job):   %8.1f MiB\n", rss_kib / 1024.0);
+    std::printf("  decoded inputs: %.1f MiB as 8-bit, %.1f MiB as float; outputs written: %.1f MiB\n", decoded_u8 / mib,
+                decoded_f32 / mib, double(output_bytes) / mib);
+    std::printf("  ratio to (decoded 8-bit inputs + outputs): %.2fx\n", rss_kib * 1024.0 / (decoded_u8 + double(output_bytes)));
+    fs::remove_all(dir);
+    return 0;
+}
