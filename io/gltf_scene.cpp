@@ -300,9 +300,24 @@ Result<std::vector<double>> read_accessor(const tinygltf::Model& m, int index, c
         auto view = view_of(m, a.bufferView, a.byteOffset, a.count, cs * size_t(nc), cs * size_t(nc), what);
         if (!view) return view.error();
         if (view->stride % cs != 0) return make_error(what + ": byteStride is not a multiple of the component size");
-        for (size_t i = 0; i < a.count; ++i) {
-            const uint8_t* p = view->base + i * view->stride;
-            for (int c = 0; c < nc; ++c) out[i * nc + c] = decode_component(p + c * cs, a.componentType, a.normalized);
+        if (a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT) {  // the common case, without per-component dispatch
+            float f[4];
+            for (size_t i = 0; i < a.count; ++i) {
+                std::memcpy(f, view->base + i * view->stride, 4 * size_t(nc));
+                for (int c = 0; c < nc; ++c) out[i * nc + c] = f[c];
+            }
+        } else if (a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT && nc == 1) {
+            for (size_t i = 0; i < a.count; ++i) {
+                uint32_t v;
+                std::memcpy(&v, view->base + i * view->stride, 4);
+                out[i] = a.normalized ? v / 4294967295.0 : double(v);
+            }
+        } else {
+            for (size_t i = 0; i < a.count; ++i) {
+                const uint8_t* p = view->base + i * view->stride;
+                for (int c = 0; c < nc; ++c)
+                    out[i * nc + c] = decode_component(p + c * cs, a.componentType, a.normalized);
+            }
         }
     }
     if (a.sparse.isSparse) {
@@ -764,11 +779,20 @@ Result<std::vector<uint8_t>> GltfScene::image_bytes(int image) const {
 Result<void> GltfScene::set_vertex_attribute(PrimitiveRef ref, const std::string& attribute,
                                             std::vector<float> values, int components) {
     if (components < 1 || components > 4) return make_error(attribute + ": 1 to 4 components per vertex");
-    auto t = primitive_mesh(ref);
-    if (!t) return t.error();
-    if (values.size() != t->vertex_count() * size_t(components))
-        return make_error(t->name + ": " + attribute + " has " + std::to_string(values.size() / size_t(components)) +
-                          " entries for " + std::to_string(t->vertex_count()) + " vertices");
+    const tinygltf::Model& m = impl_->model;
+    const std::string label = impl_->source.string() + ": mesh " + std::to_string(ref.mesh) + " primitive " +
+                              std::to_string(ref.primitive);
+    if (ref.mesh < 0 || size_t(ref.mesh) >= m.meshes.size() || ref.primitive < 0 ||
+        size_t(ref.primitive) >= m.meshes[size_t(ref.mesh)].primitives.size())
+        return make_error(label + ": does not exist");
+    const auto& attributes = m.meshes[size_t(ref.mesh)].primitives[size_t(ref.primitive)].attributes;
+    auto pos = attributes.find("POSITION");
+    if (pos == attributes.end() || pos->second < 0 || size_t(pos->second) >= m.accessors.size())
+        return make_error(label + ": has no POSITION attribute");
+    const size_t vertices = m.accessors[size_t(pos->second)].count;
+    if (values.size() != vertices * size_t(components))
+        return make_error(label + ": " + attribute + " has " + std::to_string(values.size() / size_t(components)) +
+                          " entries for " + std::to_string(vertices) + " vertices");
     for (Impl::Added& a : impl_->added) {
         if (a.ref == ref && a.attribute == attribute) {
             a.values = std::move(values);

@@ -1,0 +1,229 @@
+// End-to-end scene bake speed on a generated 1M-triangle mesh (a UV sphere, 500 x 1000 quads, as GLB):
+// the whole `bake` (read, plan, curvature, tangents, write, manifest) against the floor of what any
+// pipeline has to do with the same data, Assimp import plus tinygltf write, and the stages of the bake
+// (import, curvature, write), at 1 and 2 threads. Goal: whole bake within 2x of import + write.
+//
+//   cmake --build build --target bench_scene && build/bench/bench_scene --benchmark_min_time=1x
+#include "cli/job_scene.h"
+#include "io/gltf_scene.h"
+#include "mesh/curvature.h"
+#include "mesh/prepare_mesh.h"
+
+#include <assimp/Importer.hpp>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <benchmark/benchmark.h>
+#include <tiny_gltf.h>
+
+#include <cmath>
+#include <filesystem>
+
+namespace fs = std::filesystem;
+using namespace specbake;
+
+namespace {
+
+constexpr int kRings = 500, kSegments = 1000;  // 2 * 500 * 1000 = 1M triangles
+
+const fs::path& bench_dir() {
+    static const fs::path dir = [] {
+        fs::path d = fs::temp_directory_path() / "specbake_bench_scene";
+        fs::create_directories(d / "in");
+        return d;
+    }();
+    return dir;
+}
+
+bool no_decode(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
+    return true;
+}
+
+// Writes the sphere once (tinygltf), glossy material, no tangents (the bake generates them).
+const fs::path& sphere_glb() {
+    static const fs::path path = [] {
+        const fs::path p = bench_dir() / "in" / "sphere1m.glb";
+        if (fs::exists(p)) return p;
+        std::vector<float> data;
+        std::vector<uint32_t> idx;
+        std::vector<float> pos, nrm, uv;
+        for (int r = 0; r <= kRings; ++r)
+            for (int s = 0; s <= kSegments; ++s) {
+                const double th = M_PI * r / kRings, ph = 2 * M_PI * s / kSegments;
+                const float n[3] = {float(std::sin(th) * std::cos(ph)), float(std::cos(th)),
+                                    float(std::sin(th) * std::sin(ph))};
+                pos.insert(pos.end(), {n[0], n[1], n[2]});
+                nrm.insert(nrm.end(), {n[0], n[1], n[2]});
+                uv.insert(uv.end(), {float(s) / kSegments, float(r) / kRings});
+            }
+        for (int r = 0; r < kRings; ++r)
+            for (int s = 0; s < kSegments; ++s) {
+                const uint32_t a = uint32_t(r * (kSegments + 1) + s), b = a + 1, c = a + kSegments + 1, d = c + 1;
+                idx.insert(idx.end(), {a, c, b, b, c, d});
+            }
+        tinygltf::Model m;
+        m.asset.version = "2.0";
+        m.buffers.emplace_back();
+        auto add = [&](const void* src, size_t bytes, int type, int ctype, size_t count) {
+            tinygltf::BufferView bv;
+            bv.buffer = 0;
+            bv.byteOffset = m.buffers[0].data.size();
+            bv.byteLength = bytes;
+            const auto* b = static_cast<const uint8_t*>(src);
+            m.buffers[0].data.insert(m.buffers[0].data.end(), b, b + bytes);
+            m.bufferViews.push_back(bv);
+            tinygltf::Accessor a;
+            a.bufferView = int(m.bufferViews.size() - 1);
+            a.componentType = ctype;
+            a.type = type;
+            a.count = count;
+            m.accessors.push_back(a);
+            return int(m.accessors.size() - 1);
+        };
+        const size_t nv = pos.size() / 3;
+        tinygltf::Primitive prim;
+        prim.mode = TINYGLTF_MODE_TRIANGLES;
+        prim.attributes["POSITION"] = add(pos.data(), pos.size() * 4, TINYGLTF_TYPE_VEC3, TINYGLTF_COMPONENT_TYPE_FLOAT, nv);
+        m.accessors.back().minValues = {-1, -1, -1};
+        m.accessors.back().maxValues = {1, 1, 1};
+        prim.attributes["NORMAL"] = add(nrm.data(), nrm.size() * 4, TINYGLTF_TYPE_VEC3, TINYGLTF_COMPONENT_TYPE_FLOAT, nv);
+        prim.attributes["TEXCOORD_0"] = add(uv.data(), uv.size() * 4, TINYGLTF_TYPE_VEC2, TINYGLTF_COMPONENT_TYPE_FLOAT, nv);
+        prim.indices = add(idx.data(), idx.size() * 4, TINYGLTF_TYPE_SCALAR, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, idx.size());
+        prim.material = 0;
+        tinygltf::Material mat;
+        mat.pbrMetallicRoughness.roughnessFactor = 0.3;
+        m.materials.push_back(mat);
+        tinygltf::Mesh mesh;
+        mesh.primitives.push_back(prim);
+        m.meshes.push_back(mesh);
+        tinygltf::Node node;
+        node.mesh = 0;
+        m.nodes.push_back(node);
+        tinygltf::Scene scene;
+        scene.nodes = {0};
+        m.scenes.push_back(scene);
+        tinygltf::TinyGLTF writer;
+        writer.WriteGltfSceneToFile(&m, p.string(), true, true, false, true);
+        return p;
+    }();
+    return path;
+}
+
+void BM_WholeBake(benchmark::State& state) {
+    SceneJob job;
+    job.scenes = {sphere_glb()};
+    job.output_dir = bench_dir() / "out_bake";
+    job.plan.threads = int(state.range(0));
+    for (auto _ : state) {
+        auto outcome = run_scene_job(job);
+        if (!outcome || !outcome->errors.empty() || outcome->plans[0].work.empty()) {
+            state.SkipWithError("bake failed");
+            return;
+        }
+    }
+    state.counters["faces/s"] = benchmark::Counter(2.0 * kRings * kSegments, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_WholeBake)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The reference: Assimp reads the same GLB, tinygltf writes its vertex data (positions, normals, uvs,
+// indices) as a GLB. No analysis at all.
+void BM_AssimpImportTinygltfWrite(benchmark::State& state) {
+    const fs::path out = bench_dir() / "out_ref" / "sphere1m.glb";
+    fs::create_directories(out.parent_path());
+    for (auto _ : state) {
+        Assimp::Importer importer;
+        const aiScene* ai = importer.ReadFile(sphere_glb().string(), aiProcess_Triangulate);
+        if (!ai || ai->mNumMeshes == 0) {
+            state.SkipWithError("assimp failed");
+            return;
+        }
+        const aiMesh* am = ai->mMeshes[0];
+        tinygltf::Model m;
+        m.asset.version = "2.0";
+        m.buffers.emplace_back();
+        auto& data = m.buffers[0].data;
+        auto add = [&](const void* src, size_t bytes, int type, int ctype, size_t count) {
+            tinygltf::BufferView bv;
+            bv.buffer = 0;
+            bv.byteOffset = data.size();
+            bv.byteLength = bytes;
+            const auto* b = static_cast<const uint8_t*>(src);
+            data.insert(data.end(), b, b + bytes);
+            m.bufferViews.push_back(bv);
+            tinygltf::Accessor a;
+            a.bufferView = int(m.bufferViews.size() - 1);
+            a.componentType = ctype;
+            a.type = type;
+            a.count = count;
+            m.accessors.push_back(a);
+            return int(m.accessors.size() - 1);
+        };
+        std::vector<float> uv(size_t(am->mNumVertices) * 2);
+        for (unsigned v = 0; v < am->mNumVertices; ++v) uv[2 * v] = am->mTextureCoords[0][v].x, uv[2 * v + 1] = am->mTextureCoords[0][v].y;
+        std::vector<uint32_t> idx(size_t(am->mNumFaces) * 3);
+        for (unsigned f = 0; f < am->mNumFaces; ++f)
+            for (int k = 0; k < 3; ++k) idx[3 * f + k] = am->mFaces[f].mIndices[k];
+        tinygltf::Primitive prim;
+        prim.attributes["POSITION"] = add(am->mVertices, am->mNumVertices * 12, TINYGLTF_TYPE_VEC3,
+                                          TINYGLTF_COMPONENT_TYPE_FLOAT, am->mNumVertices);
+        prim.attributes["NORMAL"] = add(am->mNormals, am->mNumVertices * 12, TINYGLTF_TYPE_VEC3,
+                                        TINYGLTF_COMPONENT_TYPE_FLOAT, am->mNumVertices);
+        prim.attributes["TEXCOORD_0"] = add(uv.data(), uv.size() * 4, TINYGLTF_TYPE_VEC2, TINYGLTF_COMPONENT_TYPE_FLOAT,
+                                            am->mNumVertices);
+        prim.indices = add(idx.data(), idx.size() * 4, TINYGLTF_TYPE_SCALAR, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, idx.size());
+        tinygltf::Mesh mesh;
+        mesh.primitives.push_back(prim);
+        m.meshes.push_back(mesh);
+        tinygltf::TinyGLTF writer;
+        if (!writer.WriteGltfSceneToFile(&m, out.string(), true, true, false, true)) {
+            state.SkipWithError("tinygltf write failed");
+            return;
+        }
+    }
+}
+BENCHMARK(BM_AssimpImportTinygltfWrite)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Stages of the bake.
+void BM_StageImport(benchmark::State& state) {
+    for (auto _ : state) {
+        auto scene = io::GltfScene::load(sphere_glb());
+        auto mesh = scene->primitive_mesh({0, 0});
+        benchmark::DoNotOptimize(mesh->positions.data());
+    }
+}
+BENCHMARK(BM_StageImport)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_StageCurvature(benchmark::State& state) {
+    auto scene = io::GltfScene::load(sphere_glb());
+    TriMesh mesh = std::move(*scene->primitive_mesh({0, 0}));
+    if (!prepare_mesh_for_curvature(mesh)) {
+        state.SkipWithError("prepare failed");
+        return;
+    }
+    CurvatureOptions options;
+    options.max_threads = int(state.range(0));
+    for (auto _ : state) {
+        auto k = estimate_curvature(mesh, CurvatureEstimator::ShapeOperator, options);
+        benchmark::DoNotOptimize(k->values.data());
+    }
+    state.counters["faces/s"] = benchmark::Counter(double(mesh.triangle_count()), benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_StageCurvature)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_StageWrite(benchmark::State& state) {
+    auto scene = io::GltfScene::load(sphere_glb());
+    const size_t n = scene->primitive_mesh({0, 0})->vertex_count();
+    (void)scene->set_vertex_attribute({0, 0}, io::kCurvatureAttribute, std::vector<float>(4 * n, 1.0f), 4);
+    (void)scene->set_vertex_attribute({0, 0}, "TANGENT", std::vector<float>(4 * n, 1.0f), 4);
+    for (auto _ : state) {
+        auto written = scene->write(bench_dir() / "out_write" / "sphere1m.glb");
+        if (!written) {
+            state.SkipWithError(written.error().message.c_str());
+            return;
+        }
+    }
+}
+BENCHMARK(BM_StageWrite)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
+
+BENCHMARK_MAIN();
