@@ -10,7 +10,7 @@ struct CurvatureSummary {
     float max_abs_k1 = 0.0f;       // 1/object length
     float p95_abs_k1 = 0.0f;       // 95th percentile of |k1| over referenced vertices
     float bbox_diagonal = 0.0f;    // object length
-    // p95_abs_k1 * bbox_diagonal: ~2 for a sphere, 0 for flat or hard-edged faceted meshes.
+    // p95_abs_k1 * bbox_diagonal: 2 sqrt(3) for a sphere, 0 for flat or hard-edged faceted meshes.
     float relative_p95() const { return p95_abs_k1 * bbox_diagonal; }
 };
 

@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "mesh/curvature.h"
+#include "mesh/curvature_summary.h"
 #include "mesh/prepare_mesh.h"
 #include "mesh/procedural_shapes.h"
 #include "tests/mesh/analytic_curvature.h"
@@ -272,6 +273,27 @@ TEST(Curvature, RejectsMeshesItCannotMeasure) {
     EXPECT_FALSE(parse_curvature_estimator("magic").has_value());
     const VertexCurvature flat = estimate(make_plane(2.0f, 8));
     for (size_t v = 0; v < flat.values.size() / 4; ++v) EXPECT_EQ(flat.values[4 * v], 0.0f);
+}
+
+}  // namespace
+}  // namespace specbake
+
+namespace specbake {
+namespace {
+
+TEST(CurvatureSummary, SphereAndPlane) {
+    const TriMesh sphere = make_icosphere(2.0f, 3);
+    const CurvatureSummary s = summarize_curvature(sphere, estimate(sphere));
+    EXPECT_NEAR(s.max_abs_k1, 0.5, 1e-3);
+    EXPECT_NEAR(s.p95_abs_k1, 0.5, 1e-3);
+    // Bounding box of the icosphere: its extreme vertices lie on the sphere, so the diagonal is at most 4 sqrt(3).
+    EXPECT_LE(s.bbox_diagonal, 4.0 * std::sqrt(3.0) + 1e-5);
+    EXPECT_GT(s.bbox_diagonal, 4.0 * std::sqrt(3.0) * 0.9);
+    const TriMesh plane = make_plane(3.0f, 6);
+    const CurvatureSummary p = summarize_curvature(plane, estimate(plane));
+    EXPECT_EQ(p.max_abs_k1, 0.0f);
+    EXPECT_EQ(p.relative_p95(), 0.0f);
+    EXPECT_NEAR(p.bbox_diagonal, 3.0 * std::sqrt(2.0), 1e-5);
 }
 
 }  // namespace
