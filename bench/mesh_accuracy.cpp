@@ -11,6 +11,8 @@
 #include <string>
 
 #include "mesh/curvature.h"
+#include "mesh/generate_normals.h"
+#include "mesh/generate_tangents.h"
 #include "mesh/procedural_shapes.h"
 #include "tests/mesh/analytic_curvature.h"
 
@@ -54,6 +56,20 @@ std::vector<Shape> shapes() {
     for (int n : {32, 64, 128}) {
         s.push_back({"ellipsoid jitter .3 " + std::to_string(n) + "x" + std::to_string(n / 2),
                      make_ellipsoid(3.0f, 2.0f, 1.5f, n, n / 2, 0.3f, 23),
+                     [](const float* x) { return testing::ellipsoid_curvature(3.0, 2.0, 1.5, x); }});
+    }
+    // Normals generated from the triangles (angle-weighted), as for a file without normals: the estimate then
+    // measures the curvature of the generated normal field.
+    for (int n : {32, 64, 128}) {
+        TriMesh t = make_torus(3.0f, 1.0f, n, n, 0.3f, 17);
+        generate_normals(t);
+        generate_tangents(t);
+        s.push_back({"torus jitter .3 " + std::to_string(n) + "x" + std::to_string(n) + " gen. normals", t,
+                     [](const float* x) { return testing::torus_curvature(3.0, 1.0, x); }});
+        TriMesh e = make_ellipsoid(3.0f, 2.0f, 1.5f, n, n / 2);
+        generate_normals(e);
+        generate_tangents(e);
+        s.push_back({"ellipsoid " + std::to_string(n) + "x" + std::to_string(n / 2) + " gen. normals", e,
                      [](const float* x) { return testing::ellipsoid_curvature(3.0, 2.0, 1.5, x); }});
     }
     for (float scale : {0.001f, 1000.0f}) {
