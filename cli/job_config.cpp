@@ -41,7 +41,8 @@ Result<void> split_response_text(const std::string& text, const std::string& fil
     return {};
 }
 
-Result<void> expand_into(const std::vector<std::string>& args, int depth, std::vector<std::string>& out) {
+Result<void> expand_into(const std::vector<std::string>& args, int depth, std::vector<std::string>& out,
+                         std::vector<std::string>* files_read) {
     for (const std::string& arg : args) {
         if (arg.size() < 2 || arg[0] != '@') {
             out.push_back(arg);
@@ -53,10 +54,11 @@ Result<void> expand_into(const std::vector<std::string>& args, int depth, std::v
                               " (a file that includes itself?)");
         auto bytes = io::read_file(file);
         if (!bytes) return make_error(file + ": cannot read response file");
+        if (files_read) files_read->push_back(file);
         std::vector<std::string> words;
         auto split = split_response_text(std::string(bytes->begin(), bytes->end()), file, words);
         if (!split) return split.error();
-        auto nested = expand_into(words, depth + 1, out);
+        auto nested = expand_into(words, depth + 1, out, files_read);
         if (!nested) return nested.error();
     }
     return {};
@@ -93,9 +95,10 @@ Result<void> add_materials(const nlohmann::json& table, const std::string& sourc
 
 }  // namespace
 
-Result<std::vector<std::string>> expand_response_files(const std::vector<std::string>& args) {
+Result<std::vector<std::string>> expand_response_files(const std::vector<std::string>& args,
+                                                       std::vector<std::string>* files_read) {
     std::vector<std::string> out;
-    auto r = expand_into(args, 0, out);
+    auto r = expand_into(args, 0, out, files_read);
     if (!r) return r.error();
     return out;
 }

@@ -16,8 +16,10 @@ namespace specbake::cli {
 
 // Replaces every argument "@FILE" by the arguments FILE holds: separated by white space, grouped by
 // "double" or 'single' quotes, '#' at the start of a word comments out the rest of the line, nested
-// @FILE allowed (paths relative to the working folder, as compilers do). Errors name the file.
-Result<std::vector<std::string>> expand_response_files(const std::vector<std::string>& args);
+// @FILE allowed (paths relative to the working folder, as compilers do). Errors name the file. The files
+// read are appended to `files_read` when given (they belong in a depfile).
+Result<std::vector<std::string>> expand_response_files(const std::vector<std::string>& args,
+                                                       std::vector<std::string>* files_read = nullptr);
 
 // Parses a config file's text into a JSON tree: JSON when it starts with '{', TOML otherwise (values of
 // TOML files stay strings; the argument parser converts them).

@@ -1,5 +1,7 @@
 #include "cli/job_pipeline.h"
 
+#include "io/depfile.h"
+
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -8,6 +10,7 @@
 #include <chrono>
 #include <cstdio>
 #include <exception>
+#include <mutex>
 
 namespace specbake::cli {
 
@@ -127,33 +130,29 @@ BatchSummary run_batch(std::span<const std::string> inputs, const std::function<
     return summary;
 }
 
-void DependencyLog::add(const std::string& path) {
-    std::lock_guard lock(mutex_);
-    files_.push_back(path);
+Result<void> write_manifest_depfile(const PipelineFlags& flags, const std::filesystem::path& output_dir,
+                                    const std::vector<std::string>& recorded_inputs) {
+    if (flags.depfile.empty()) return {};
+    std::vector<std::string> deps = run_settings().option_files;
+    for (const std::string& in : recorded_inputs)
+        deps.push_back(io::resolve_recorded_input(in, output_dir).lexically_normal().generic_string());
+    const std::vector<std::string> targets{(output_dir / "manifest.json").lexically_normal().generic_string()};
+    return io::write_depfile(flags.depfile, targets, deps);
 }
 
-void DependencyLog::add(std::span<const std::string> paths) {
-    std::lock_guard lock(mutex_);
-    files_.insert(files_.end(), paths.begin(), paths.end());
-}
-
-std::vector<std::string> DependencyLog::files() const {
-    std::lock_guard lock(mutex_);
-    std::vector<std::string> sorted = files_;
-    std::sort(sorted.begin(), sorted.end());
-    sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
-    return sorted;
-}
-
-bool skip_if_up_to_date(const io::FreshnessQuery& query, bool force, DependencyLog* deps) {
-    if (force) return false;
+bool skip_if_up_to_date(const io::FreshnessQuery& query, const PipelineFlags& flags) {
+    if (flags.force) return false;
     const io::Freshness f = io::check_up_to_date(query);
     if (!f.up_to_date) {
         print_info(query.output_dir.string() + ": baking (" + f.reason + ")", true);
         return false;
     }
+    if (auto written = write_manifest_depfile(flags, query.output_dir, f.recorded_inputs); !written) {
+        std::lock_guard lock(output_mutex());
+        std::fprintf(stderr, "specbake: error: %s\n", written.error().message.c_str());
+        return false;
+    }
     io::mark_manifest_fresh(query.output_dir);
-    if (deps) deps->add(f.recorded_inputs);
     if (run_settings().verbosity != Verbosity::quiet) {
         std::lock_guard lock(output_mutex());
         std::printf("%s: up to date\n", query.output_dir.string().c_str());

@@ -1,12 +1,14 @@
 // What every bake-type command shares when it runs inside a build: the run settings from the global
 // flags (--jobs, --quiet, --verbose), a batch runner with progress, a summary and exit codes, the
-// content-hash skip of up-to-date outputs, and the dependency list behind --depfile.
+// content-hash skip of up-to-date outputs, and --depfile.
 #pragma once
 
+#include "bake/result.h"
 #include "io/up_to_date.h"
 
+#include <filesystem>
+
 #include <functional>
-#include <mutex>
 #include <span>
 #include <string>
 #include <vector>
@@ -19,6 +21,7 @@ struct RunSettings {
     int jobs = 0;  // worker threads; 0 uses every core. Outputs do not depend on it.
     Verbosity verbosity = Verbosity::normal;
     bool progress_bar = false;  // redraw one line instead of printing one line per input
+    std::vector<std::string> option_files;  // response and config files the command line was read from
 };
 
 // The process-wide settings, filled by main() from the global flags before a command runs.
@@ -48,21 +51,22 @@ struct BatchSummary {
 BatchSummary run_batch(std::span<const std::string> inputs, const std::function<ItemOutcome(size_t)>& work,
                        const RunSettings& settings = run_settings());
 
-// Collects, from any thread, every file read, for --depfile.
-class DependencyLog {
-public:
-    void add(const std::string& path);
-    void add(std::span<const std::string> paths);
-    std::vector<std::string> files() const;  // sorted, without duplicates
-
-private:
-    mutable std::mutex mutex_;
-    std::vector<std::string> files_;
+// The flags of a command whose outputs go into one folder with one manifest.json (see
+// cli/pipeline_options.h for the command-line side).
+struct PipelineFlags {
+    std::string depfile;  // write a Make/Ninja dependency file here
+    bool force = false;   // bake even when the manifest shows the outputs are up to date
 };
 
-// The skip of --force's absence: when `query` finds the outputs up to date, prints
-// "<output_dir>: up to date", refreshes the manifest's time stamp, logs the recorded inputs in `deps`
-// and returns true. With `force`, or when stale (the reason goes to --verbose), returns false.
-bool skip_if_up_to_date(const io::FreshnessQuery& query, bool force, DependencyLog* deps = nullptr);
+// When `query` finds the outputs up to date (and not flags.force): prints "<output_dir>: up to date",
+// refreshes the manifest's time stamp, writes the depfile from the manifest's inputs and returns true.
+// Otherwise returns false (the reason is printed with --verbose). A depfile write error is printed and
+// counts as not up to date, so the bake runs and reports normally.
+bool skip_if_up_to_date(const io::FreshnessQuery& query, const PipelineFlags& flags);
+
+// Writes flags.depfile (when set) after a bake: target `output_dir/manifest.json`, dependencies every input
+// the manifest records (textures a scene references included) plus the response and config files read.
+Result<void> write_manifest_depfile(const PipelineFlags& flags, const std::filesystem::path& output_dir,
+                                    const std::vector<std::string>& recorded_inputs);
 
 }  // namespace specbake::cli

@@ -77,7 +77,8 @@ void print_warning(const std::string& message) { std::fprintf(stderr, "specbake:
 
 int main(int argc, char** argv) {
     using namespace specbake::cli;
-    auto expanded = expand_response_files(std::vector<std::string>(argv + 1, argv + argc));
+    RunSettings& settings = run_settings();
+    auto expanded = expand_response_files(std::vector<std::string>(argv + 1, argv + argc), &settings.option_files);
     if (!expanded) {
         print_error(expanded.error().message);
         return kExitUsage;
@@ -91,7 +92,6 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
     app.fallthrough();  // global flags may follow the command name: specbake bake -j 4 scene.gltf
 
-    RunSettings& settings = run_settings();
     bool quiet = false;
     bool verbose = false;
     app.add_option("-j,--jobs", settings.jobs, "Worker threads (default: all cores); outputs do not depend on it")
@@ -135,6 +135,7 @@ int main(int argc, char** argv) {
         print_error("--quiet and --verbose exclude each other");
         return kExitUsage;
     }
+    for (const std::string& file : config_option->results()) settings.option_files.push_back(file);
     settings.verbosity = quiet ? Verbosity::quiet : verbose ? Verbosity::verbose : Verbosity::normal;
     settings.progress_bar = !quiet && isatty(fileno(stderr));
     std::optional<tbb::global_control> thread_limit;

@@ -10,20 +10,26 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path resolve_recorded_input(const std::string& recorded, const fs::path& output_dir) {
-    const fs::path p(recorded);
-    std::error_code ec;
-    if (p.is_absolute() || fs::exists(p, ec)) return p;
-    return output_dir / p;
-}
-
 Freshness stale(std::string reason) {
     Freshness f;
     f.reason = std::move(reason);
     return f;
 }
 
+nlohmann::json without_keys(nlohmann::json settings, const std::vector<std::string>& keys) {
+    if (settings.is_object())
+        for (const std::string& k : keys) settings.erase(k);
+    return settings;
+}
+
 }  // namespace
+
+fs::path resolve_recorded_input(const std::string& recorded, const fs::path& output_dir) {
+    const fs::path p(recorded);
+    std::error_code ec;
+    if (p.is_absolute() || fs::exists(p, ec)) return p;
+    return output_dir / p;
+}
 
 Freshness check_up_to_date(const FreshnessQuery& query) {
     const fs::path manifest_path = query.output_dir / "manifest.json";
@@ -33,7 +39,9 @@ Freshness check_up_to_date(const FreshnessQuery& query) {
     if (!manifest) return stale(manifest.error().message);
     if (manifest->version != query.tool_version)
         return stale("made by specbake " + manifest->version + ", this is " + query.tool_version);
-    if (manifest->settings != query.settings) return stale("settings changed");
+    if (without_keys(manifest->settings, query.derived_setting_keys) !=
+        without_keys(query.settings, query.derived_setting_keys))
+        return stale("settings changed");
 
     for (const std::string& given : query.inputs) {
         const bool recorded = std::any_of(manifest->inputs.begin(), manifest->inputs.end(),

@@ -17,6 +17,9 @@ struct FreshnessQuery {
     std::vector<std::string> inputs;   // the inputs the command was given, spelled as the manifest records them
     nlohmann::json settings;           // exactly what the command would write as the manifest's "settings"
     std::string tool_version;
+    // Settings keys the command derives from the inputs while baking (facts about the input files); they
+    // are left out of the comparison because the input hashes already cover them.
+    std::vector<std::string> derived_setting_keys;
 };
 
 struct Freshness {
@@ -29,6 +32,10 @@ struct Freshness {
 // working folder, then from the manifest folder. Inputs the manifest adds to the given ones (textures a
 // scene references) must still hash the same.
 Freshness check_up_to_date(const FreshnessQuery& query);
+
+// Where a path recorded in a manifest of `output_dir` is found: as given when absolute or present from the
+// working folder, else relative to the manifest folder.
+std::filesystem::path resolve_recorded_input(const std::string& recorded, const std::filesystem::path& output_dir);
 
 // Sets the manifest's modification time to now, so timestamp-based tools (Make, Ninja) see the skipped
 // action as done; file contents are untouched.
