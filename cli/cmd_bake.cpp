@@ -1,15 +1,19 @@
 // specbake bake: glTF/GLB (or any Assimp format) in, glTF/GLB out with per-vertex curvature and baked
 // material textures, exactly as the plan says; manifest.json records outputs, inputs, settings and plan.
 #include "cli/command.h"
+#include "cli/pipeline_options.h"
 #include "cli/scene_options.h"
+#include "cli/version.h"
 
 #include <cstdio>
 
 namespace specbake::cli {
 namespace {
 
-int run_bake(const SceneCliOptions& o) {
+int run_bake(const SceneCliOptions& o, const PipelineFlags& pipe) {
     SceneJob job = make_scene_job(o);
+    std::vector<std::string> scenes(job.scenes.begin(), job.scenes.end());
+    if (skip_if_up_to_date({job.output_dir, scenes, scene_settings_json(job), tool_version()}, pipe)) return kExitOk;
     if (!o.quiet) job.progress = [](const std::string& s) { std::fprintf(stderr, "specbake: %s\n", s.c_str()); };
     auto outcome = run_scene_job(job);
     if (!outcome) {
@@ -18,6 +22,11 @@ int run_bake(const SceneCliOptions& o) {
     }
     for (const std::string& w : outcome->warnings) print_warning(w);
     for (const std::string& e : outcome->errors) print_error(e);
+    for (const io::ManifestInput& in : outcome->manifest.inputs) scenes.push_back(in.path);
+    if (auto d = write_manifest_depfile(pipe, job.output_dir, scenes); !d) {
+        print_error(d.error().message);
+        return kExitFailed;
+    }
     if (!o.quiet) {
         for (const ScenePlan& plan : outcome->plans) {
             size_t textures = 0, curvature = 0;
@@ -53,6 +62,8 @@ void add_bake_command(CLI::App& app, std::function<int()>& run) {
     add_curvature_options(sub, *o);
     add_material_options(sub, *o);
     sub->add_flag("-q,--quiet", o->quiet, "Print errors and warnings only");
+    auto pipe = std::make_shared<PipelineFlags>();
+    add_pipeline_options(*sub, *pipe);
     sub->footer(
         "Curvature is stored in object space (1/object-space length); a node scale s divides it by s in world\n"
         "space. Baked textures are referenced from each material through the SPECBAKE_specular_aa extension\n"
@@ -63,7 +74,7 @@ void add_bake_command(CLI::App& app, std::function<int()>& run) {
         "  specbake bake scene.glb --format gltf --container png -o out/\n"
         "  specbake bake chair.fbx table.obj --estimator jet-fitting -o baked/\n"
         "  specbake bake cloth.gltf --kernel max --outputs roughness,kernel -o out/");
-    sub->callback([&run, o] { run = [o] { return run_bake(*o); }; });
+    sub->callback([&run, o, pipe] { run = [o, pipe] { return run_bake(*o, *pipe); }; });
 }
 
 const Registration reg{"bake", 10, &add_bake_command};
