@@ -106,4 +106,12 @@ BENCHMARK(BM_CurvatureJetFitting100k)->Arg(1)->Arg(2)->Unit(benchmark::kMillisec
 
 }  // namespace
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+    benchmark::Initialize(&argc, argv);
+    if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    std::error_code ec;
+    std::filesystem::remove(std::filesystem::temp_directory_path() / "specbake_bench_mesh_1M.ply", ec);
+    return 0;
+}
