@@ -119,6 +119,7 @@ int main(int argc, char** argv) {
                                                   subcommands);
     formatter->set_option(config_option);
     app.config_formatter(formatter);
+    app.allow_config_extras(CLI::config_extras_mode::error);  // a misspelt key is an error, not ignored
 
     try {
         std::vector<std::string> reversed(args.rbegin(), args.rend());
