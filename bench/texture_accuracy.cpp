@@ -127,6 +127,7 @@ int main(int argc, char** argv) {
             std::string lower = name;
             std::transform(lower.begin(), lower.end(), lower.begin(), ::tolower);
             if (lower.find("normal") == std::string::npos) continue;
+            if (lower.find("basecolor") != std::string::npos || lower.find("occlusion") != std::string::npos) continue;
             if (!(lower.ends_with(".png") || lower.ends_with(".jpg"))) continue;
             if (e.path().parent_path().filename() == "NormalTangentMirrorTest") continue;  // same file as NormalTangentTest
             maps.push_back(e.path());

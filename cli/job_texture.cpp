@@ -179,6 +179,7 @@ Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& in, cons
                                                                names, wrap));
             !ok)
             return ok.error();
+        baked->roughness = MipChain{};  // written: release it before the next chain is encoded
     }
     if (settings.outputs.kernel) {
         say(stem + "_kernel");
@@ -188,6 +189,16 @@ Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& in, cons
                                                                dir, stem + "_kernel", "kernel", names, wrap));
             !ok)
             return ok.error();
+        baked->kernel = MipChain{};
+    }
+    if (settings.outputs.normal) {
+        say(stem + "_normal");
+        if (auto ok = append(result.outputs, io::write_texture(baked->normal, unorm_for_bits(in.normal_bits),
+                                                               container, dir, stem + "_normal", "normal",
+                                                               {"R", "G", "B"}, wrap));
+            !ok)
+            return ok.error();
+        baked->normal = MipChain{};
     }
     if (settings.outputs.lean) {
         say(stem + "_lean");
@@ -211,14 +222,6 @@ Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& in, cons
                 !ok)
                 return ok.error();
         }
-    }
-    if (settings.outputs.normal) {
-        say(stem + "_normal");
-        if (auto ok = append(result.outputs, io::write_texture(baked->normal, unorm_for_bits(in.normal_bits),
-                                                               container, dir, stem + "_normal", "normal",
-                                                               {"R", "G", "B"}, wrap));
-            !ok)
-            return ok.error();
     }
     return result;
 }
