@@ -221,6 +221,41 @@ double finalize_texel(const double* v, const Layout& layout, const TextureBakeSe
     return std::abs(r - r_in);
 }
 
+// Mip 0: every footprint is one base texel, so Sigma = 0, t = 0 and a = a_base exactly (SPEC Sec. 3:
+// the input roughness passes through). Same outputs as finalize_texel without its divisions and roots;
+// the decoded normal is already unit length.
+void finalize_base_texel(const double* v, const Layout& layout, const TextureBakeSettings& s, bool flip_y,
+                         float* rough, float* kern, float* lean, float* nrm) {
+    if (rough) {
+        const float r = float(std::sqrt(std::sqrt(std::clamp(v[kA], 0.0, 1.0))));
+        if (layout.occlusion >= 0) {
+            rough[0] = float(v[layout.occlusion]), rough[1] = r, rough[2] = float(v[layout.metallic]);
+        } else {
+            rough[0] = r;
+        }
+    }
+    if (kern) {
+        kern[0] = 0.0f;
+        if (s.anisotropic) kern[1] = 0.0f, kern[2] = 0.0f;
+    }
+    if (lean) {
+        if (layout.slope >= 0) {
+            const double* sl = v + layout.slope;
+            lean[0] = float(sl[0]), lean[1] = float(sl[1]);
+            lean[2] = float(sl[2] + 0.5 * v[kA]), lean[3] = float(sl[3] + 0.5 * v[kA]);
+            lean[4] = float(sl[4]);
+        } else {
+            lean[0] = float(v[kPx]), lean[1] = float(v[kPy]);
+            lean[2] = float(v[kPxx]), lean[3] = float(v[kPyy]), lean[4] = float(v[kPxy]);
+        }
+    }
+    if (nrm) {
+        nrm[0] = float(0.5 * v[kPx] + 0.5);
+        nrm[1] = float(0.5 * (flip_y ? -v[kPy] : v[kPy]) + 0.5);
+        nrm[2] = float(0.5 * v[kPz] + 0.5);
+    }
+}
+
 bool blue_is_constant_full_scale(const Image& n) {
     if (n.channels < 3) return false;
     const float first = n.pixels[2];
@@ -390,6 +425,13 @@ Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughne
         Image* K = want.kernel ? &result.kernel.levels[size_t(L)] : nullptr;
         Image* E = want.lean ? &result.lean.levels[size_t(L)] : nullptr;
         Image* N = want.normal ? &result.normal.levels[size_t(L)] : nullptr;
+        if (L == 0) {
+            for (int i = 0; i < w; ++i)
+                finalize_base_texel(means + size_t(i) * C, layout, settings, dec.flip_y, R ? R->texel(i, j) : nullptr,
+                                    K ? K->texel(i, j) : nullptr, E ? E->texel(i, j) : nullptr,
+                                    N ? N->texel(i, j) : nullptr);
+            return 0.0;
+        }
         double change = 0.0;
         for (int i = 0; i < w; ++i) {
             change = std::max(change, finalize_texel(means + size_t(i) * C, layout, settings, dec.flip_y,
