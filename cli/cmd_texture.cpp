@@ -3,6 +3,8 @@
 // is cli/job_texture.h.
 #include "cli/command.h"
 #include "cli/job_texture.h"
+#include "cli/pipeline_options.h"
+#include "cli/version.h"
 
 #include <cstdio>
 #include <filesystem>
@@ -68,7 +70,7 @@ bool parse_outputs(const std::string& list, TextureOutputs& out) {
     return any;
 }
 
-int run_texture(const TextureOptions& o) {
+int run_texture(const TextureOptions& o, const PipelineFlags& pipe) {
     TextureJob job;
     job.demo = o.demo;
     if (!o.demo) {
@@ -111,6 +113,20 @@ int run_texture(const TextureOptions& o) {
         print_error("texture: --outputs " + o.outputs + ": expected a comma list of roughness, kernel, lean, normal");
         return kExitUsage;
     }
+    // The settings and inputs exactly as run_texture_job records them in the manifest ("input_facts" is
+    // derived from the inputs, which their hashes cover).
+    nlohmann::json recorded = texture_settings_json(job.settings, job.container);
+    std::vector<std::string> inputs;
+    if (job.demo) {
+        recorded["demo"] = true;
+        inputs = {"demo_normal.png", "demo_orm.png"};
+    } else {
+        inputs.push_back(job.normal.string());
+        if (job.roughness) inputs.push_back(job.roughness->string());
+    }
+    if (job.demo || job.roughness) recorded["roughness_channel"] = job.roughness_channel;
+    else recorded["roughness_value"] = job.roughness_value;
+    if (skip_if_up_to_date({job.output_dir, inputs, recorded, tool_version(), {"input_facts"}}, pipe)) return kExitOk;
     if (!o.quiet && ::isatty(2)) job.progress = [](const std::string& line) { std::fprintf(stderr, "specbake: %s\n", line.c_str()); };
 
     auto outcome = run_texture_job(job);
@@ -119,6 +135,11 @@ int run_texture(const TextureOptions& o) {
         return kExitFailed;
     }
     for (const std::string& w : outcome->notes.warnings) print_warning(w);
+    for (const io::ManifestInput& in : outcome->manifest.inputs) inputs.push_back(in.path);
+    if (auto d = write_manifest_depfile(pipe, job.output_dir, inputs); !d) {
+        print_error(d.error().message);
+        return kExitFailed;
+    }
     if (outcome->notes.z_reconstructed)
         std::fprintf(stderr, "specbake: note: z reconstructed from x and y (%s)\n", outcome->notes.z_reason.c_str());
     if (!o.quiet) {
@@ -187,7 +208,9 @@ void add_texture_command(CLI::App& app, std::function<int()>& run) {
         "  specbake texture --normal rock_n.png --roughness rock_orm.png -o out/rock\n"
         "  specbake texture --normal n.tga --roughness-value 0.3 --format dds --normal-y -y -o out/n\n"
         "  specbake texture --normal n.png --roughness r.png:0 --isotropic max --anisotropic --format exr -o out/n");
-    sub->callback([&run, o] { run = [o] { return run_texture(*o); }; });
+    auto pipe = std::make_shared<PipelineFlags>();
+    add_pipeline_options(*sub, *pipe);
+    sub->callback([&run, o, pipe] { run = [o, pipe] { return run_texture(*o, *pipe); }; });
 }
 
 const Registration reg{"texture", 20, &add_texture_command};

@@ -213,3 +213,18 @@ TEST_F(PipelineCli, InspectCheckExitCodes) {
     std::ofstream(t / "texture_kernel.ktx2", std::ios::app) << 'x';
     EXPECT_EQ(run({"inspect", "--check", t.string()}).code, 1);
 }
+
+TEST_F(PipelineCli, TextureSecondRunIsSkippedAndSettingRebakes) {
+    const std::string o = out("tex").string();
+    const std::string d = out("tex.d").string();
+    ASSERT_EQ(run({"texture", "--normal", texture(), "--roughness-value", "0.3", "-q", "-o", o, "--depfile", d}).code, 0);
+    EXPECT_NE(read_text(d).find("demo_normal.png"), std::string::npos) << read_text(d);
+    const auto first = tree(o);
+    CommandResult again = run({"texture", "--normal", texture(), "--roughness-value", "0.3", "-o", o});
+    EXPECT_NE(again.out.find("up to date"), std::string::npos) << again.out << again.err;
+    EXPECT_TRUE(tree(o) == first);
+    CommandResult changed = run({"texture", "--normal", texture(), "--roughness-value", "0.4", "-q", "-o", o});
+    EXPECT_EQ(changed.code, 0);
+    EXPECT_EQ(changed.out.find("up to date"), std::string::npos);
+    EXPECT_FALSE(tree(o) == first);
+}

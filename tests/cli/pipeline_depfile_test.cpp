@@ -52,7 +52,7 @@ TEST(Depfile, SortsAndDeduplicatesDependencies) {
 }
 
 TEST(Depfile, WritesAtomically) {
-    const fs::path dir = fs::temp_directory_path() / "specbake_depfile_test";
+    const fs::path dir = fs::temp_directory_path() / ("specbake_depfile_" + std::to_string(::getpid()));
     fs::remove_all(dir);
     const std::vector<std::string> targets{"t"};
     const std::vector<std::string> deps{"d"};
