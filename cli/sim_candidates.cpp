@@ -60,6 +60,8 @@ std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool varia
                  "", ""});
     c.push_back({"baked-curvature", "baked", "SPEC Sec. 4-5: _SPECAA_CURVATURE kernel, TK21 Eq. (3)",
                  {"#define SPECAA_USE_CURVATURE\n", kIsotropicDefault, "exact", ""}, "", "exact"});
+    c.push_back({"baked-curvature-matrix", "baked", "SPEC Sec. 4-5: anisotropic _SPECAA_CURVATURE kernel, TK21 Eq. (3)",
+                 {"#define SPECAA_USE_CURVATURE\n", "A = specaa_filtered_alpha2_matrix(s);", "exact", ""}, "", "exact"});
     if (normal_mapped) {
         c.push_back({"baked-texture", "baked", "SPEC Sec. 3 filtered roughness mips",
                      {std::string(kBakedRoughnessDefines) + "#define SPECAA_NO_PIXEL_KERNEL\n", kIsotropicDefault,

@@ -615,17 +615,12 @@ SimImage SimRenderer::render_candidate(int id, int frame) {
     return impl_->read_back();
 }
 
-double SimRenderer::time_candidate(int id, int repeats) {
-    std::vector<double> ms;
-    for (int k = 0; k < std::max(1, repeats); ++k) {
-        glFinish();
-        const auto start = std::chrono::steady_clock::now();
-        draw_candidate(id, 0);
-        glFinish();
-        ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
-    }
-    std::nth_element(ms.begin(), ms.begin() + long(ms.size() / 2), ms.end());
-    return ms[ms.size() / 2];
+double SimRenderer::time_candidate(int id, int draws) {
+    glFinish();
+    const auto start = std::chrono::steady_clock::now();
+    for (int k = 0; k < std::max(1, draws); ++k) draw_candidate(id, 0);
+    glFinish();
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
 }  // namespace specbake::cli

@@ -69,8 +69,9 @@ public:
     Result<int> compile_candidate(const SimShaderSpec& spec);
     // Renders compiled candidate `id` at one sample per pixel centre.
     SimImage render_candidate(int id, int frame);
-    // Median GPU-side wall time in milliseconds of `repeats` renders of candidate `id` (glFinish-bounded).
-    double time_candidate(int id, int repeats);
+    // Wall time in milliseconds of `draws` back-to-back renders of candidate `id` at frame 0, bounded by
+    // glFinish (the renderer is llvmpipe's CPU rasteriser on machines without a GPU).
+    double time_candidate(int id, int draws);
 
     // The full fragment shader text of a candidate (for SPIR-V instruction counts).
     std::string candidate_source(const SimShaderSpec& spec) const;

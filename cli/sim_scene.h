@@ -48,9 +48,9 @@ struct SimScene {
     std::vector<Image> normal_maps;  // 3 channels, encoded (n + 1) / 2, +Y green, power-of-two sides
     std::vector<SimLight> lights;
     SimCamera camera;
-    // Camera motion for temporal metrics: each frame orbits the camera about the target around `up` by
-    // this many pixels' worth of view angle, scaled to move the object's silhouette by about
-    // `motion_pixels` pixels per frame.
+    // Camera motion for temporal metrics: each frame orbits the camera about the target around `up` by the
+    // angle that moves a point object_radius in front of the target by about motion_pixels pixels
+    // (measured at the target's depth; slightly more on the near side).
     float motion_pixels = 0.35f;
     float object_radius = 1.0f;  // for the motion scale and the automatic framing
 };

@@ -4,6 +4,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <mutex>
 #include <random>
 #include <sstream>
 #include <unistd.h>
@@ -42,6 +44,8 @@ struct ScratchDir {
     }
 };
 
+Result<int> count_uncached(const std::string& source);
+
 }  // namespace
 
 bool spirv_tools_available() {
@@ -49,6 +53,24 @@ bool spirv_tools_available() {
 }
 
 Result<int> spirv_instruction_count(const std::string& source) {
+    // Candidates repeat across scenes with identical text; the count depends on the text only.
+    static std::mutex mutex;
+    static std::map<std::string, int> counted;
+    {
+        std::lock_guard lock(mutex);
+        if (auto it = counted.find(source); it != counted.end()) return it->second;
+    }
+    auto count = count_uncached(source);
+    if (count) {
+        std::lock_guard lock(mutex);
+        counted[source] = *count;
+    }
+    return count;
+}
+
+namespace {
+
+Result<int> count_uncached(const std::string& source) {
     std::error_code ec;
     std::random_device rd;
     ScratchDir dir{std::filesystem::temp_directory_path(ec) / ("specbake-spirv-" + std::to_string(rd()))};
@@ -79,5 +101,7 @@ Result<int> spirv_instruction_count(const std::string& source) {
     }
     return count;
 }
+
+}  // namespace
 
 }  // namespace specbake::cli

@@ -1,0 +1,116 @@
+// specbake bench: the accuracy/cost table of every candidate on the built-in scenes (SPEC Sec. 8).
+#include "cli/command.h"
+#include "cli/gl_context.h"
+#include "cli/job_bench.h"
+
+#include <cstddef>
+#include <cstdio>
+#include <memory>
+#include <string>
+
+namespace specbake::cli {
+
+// Defined in the build-generated shader_embed.cpp (shaders/embed.cmake).
+extern const unsigned char kSpecaaGlsl[];
+extern const std::size_t kSpecaaGlslSize;
+
+namespace {
+
+struct BenchCommandOptions {
+    std::vector<std::string> scenes;
+    std::vector<float> alpha{0.01f, 0.05f, 0.2f};
+    std::string size = "128x128";
+    int spp = 256;
+    int frames = 8;
+    int repeats = 7;
+    bool no_variants = false;
+    std::string output;
+    std::string command_line;
+};
+
+int run_bench_command(const BenchCommandOptions& o) {
+    BenchOptions options;
+    VerifyOptions& v = options.verify;
+    if (std::sscanf(o.size.c_str(), "%dx%d", &v.width, &v.height) != 2 || v.width < 2 || v.height < 2 ||
+        v.width > 8192 || v.height > 8192) {
+        print_error("--size: expected WxH between 2x2 and 8192x8192, got '" + o.size + "'");
+        return kExitUsage;
+    }
+    for (const std::string& name : o.scenes) {
+        if (auto scene = make_builtin_scene(name, 0.5f); !scene) {
+            print_error(scene.error().message);
+            return kExitUsage;
+        }
+    }
+    v.include_glsl.assign(reinterpret_cast<const char*>(kSpecaaGlsl), kSpecaaGlslSize);
+    v.spp = o.spp;
+    v.frames = o.frames;
+    v.timing_repeats = o.repeats;
+    v.variants = !o.no_variants;
+    v.keep_images = !o.output.empty();
+    options.scenes = o.scenes;
+    options.alpha = o.alpha;
+    options.command_line = o.command_line;
+    auto context = GlContext::create();
+    if (!context) {
+        print_error(context.error().message);
+        return kExitFailed;
+    }
+    options.renderer = (*context)->description();
+    auto report = run_bench(options, [](const std::string& line) { std::fprintf(stderr, "specbake: %s\n", line.c_str()); });
+    if (!report) {
+        print_error(report.error().message);
+        return kExitFailed;
+    }
+    std::fputs(bench_summary_markdown(*report).c_str(), stdout);
+    if (!o.output.empty()) {
+        if (auto written = write_bench_outputs(*report, o.output); !written) {
+            print_error(written.error().message);
+            return kExitFailed;
+        }
+        std::printf("\nWrote %s/bench.md, bench.csv, bench.svg and strips/*.png\n", o.output.c_str());
+    }
+    return kExitOk;
+}
+
+void add_bench_command(CLI::App& app, std::function<int()>& run) {
+    auto* sub = app.add_subcommand("bench",
+                                   "Accuracy against cost of every anti-aliasing candidate on the built-in scenes: "
+                                   "Markdown table, CSV, SVG plot, PNG image strips");
+    auto o = std::make_shared<BenchCommandOptions>();
+    sub->add_option("--scenes", o->scenes, "Built-in scenes (default: sphere,cylinder,torus,bumpy-sphere)")
+        ->delimiter(',');
+    sub->add_option("--alpha", o->alpha, "GGX alpha (= r^2) values of the materials")
+        ->delimiter(',')
+        ->capture_default_str()
+        ->check(CLI::Range(0.0001f, 1.0f));
+    sub->add_option("--size", o->size, "Image size WxH")->capture_default_str();
+    sub->add_option("--spp", o->spp, "Ground-truth samples per pixel")->capture_default_str()->check(CLI::Range(1, 65536));
+    sub->add_option("--frames", o->frames, "Frames of slow camera motion")->capture_default_str()->check(CLI::Range(1, 1024));
+    sub->add_option("--repeats", o->repeats, "Timing samples per candidate (0: no timing)")
+        ->capture_default_str()
+        ->check(CLI::Range(0, 1000));
+    sub->add_flag("--no-variants", o->no_variants, "Leave out the bake variants");
+    sub->add_option("-o,--output", o->output, "Folder for bench.md, bench.csv, bench.svg and strips/");
+    sub->footer("Examples:\n"
+                "  specbake bench -o bench-out\n"
+                "  specbake bench --scenes torus,cylinder --alpha 0.01 --size 256x256 --spp 1024 --frames 16 -o big\n");
+    sub->callback([&run, o, sub] {
+        o->command_line = "specbake bench";
+        for (CLI::Option* opt : sub->get_options()) {
+            if (opt->count() == 0 || opt->get_name() == "--help") continue;
+            o->command_line += " " + opt->get_name();
+            if (opt->get_type_size() != 0) {
+                std::string joined;
+                for (const std::string& r : opt->results()) joined += (joined.empty() ? "" : ",") + r;
+                o->command_line += " " + joined;
+            }
+        }
+        run = [o] { return run_bench_command(*o); };
+    });
+}
+
+const Registration reg{"bench", 90, &add_bench_command};
+
+}  // namespace
+}  // namespace specbake::cli

@@ -1,0 +1,128 @@
+// Simulator building blocks against independent computations: metrics on synthetic images, the ground
+// truth's sample layout, the camera motion, and the built-in scenes' analytic geometry.
+#include "cli/sim_metrics.h"
+#include "cli/sim_renderer.h"
+#include "cli/sim_scene.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+namespace specbake::cli {
+namespace {
+
+SimImage constant_image(int w, int h, float value, float coverage) {
+    SimImage im(w, h, 2);
+    for (size_t i = 0; i < im.texel_count(); ++i) {
+        im.pixels[2 * i] = value;
+        im.pixels[2 * i + 1] = coverage;
+    }
+    return im;
+}
+
+TEST(VerifyMetrics, ConstantOffsetGivesClosedFormErrors) {
+    // Ground truth 1 everywhere, candidate 1.5: linear RMSE = MAE = 0.5 / mean(1); tone-mapped error
+    // 1.5/2.5 - 1/2 = 0.1; no temporal change, so no flicker; energy ratio 1.5.
+    SimMetricsAccumulator acc;
+    for (int f = 0; f < 3; ++f) acc.add_frame(constant_image(4, 3, 1.0f, 1.0f), constant_image(4, 3, 1.5f, 1.0f));
+    const SimMetrics m = acc.finish();
+    EXPECT_NEAR(m.rmse, 0.5, 1e-9);
+    EXPECT_NEAR(m.mae, 0.5, 1e-9);
+    EXPECT_NEAR(m.rmse_tonemapped, 0.1, 1e-7);
+    EXPECT_NEAR(m.mae_tonemapped, 0.1, 1e-7);
+    EXPECT_NEAR(m.flicker, 0.0, 1e-9);
+    EXPECT_NEAR(m.energy_ratio, 1.5, 1e-9);
+    EXPECT_NEAR(m.peak_ratio, 1.5, 1e-6);
+    EXPECT_EQ(m.pixels, 36);
+}
+
+TEST(VerifyMetrics, FlickerIsTheTemporalStandardDeviation) {
+    // Candidate alternates between 0 and 1 over a ground truth of 0: tone-mapped error alternates 0 and 1/2,
+    // population std over 4 frames = 1/4 at every pixel.
+    SimMetricsAccumulator acc;
+    for (int f = 0; f < 4; ++f)
+        acc.add_frame(constant_image(2, 2, 0.0f, 1.0f), constant_image(2, 2, f % 2 ? 1.0f : 0.0f, 1.0f));
+    EXPECT_NEAR(acc.finish().flicker, 0.25, 1e-9);
+}
+
+TEST(VerifyMetrics, PartiallyCoveredPixelsAreNotScored) {
+    SimImage gt = constant_image(2, 1, 1.0f, 1.0f);
+    SimImage c = constant_image(2, 1, 1.0f, 1.0f);
+    gt.texel(1, 0)[1] = 0.5f;  // silhouette pixel in the ground truth
+    c.texel(1, 0)[0] = 100.0f;
+    SimMetricsAccumulator acc;
+    acc.add_frame(gt, c);
+    const SimMetrics m = acc.finish();
+    EXPECT_EQ(m.pixels, 1);
+    EXPECT_NEAR(m.rmse, 0.0, 1e-12);
+}
+
+TEST(VerifyMetrics, EmptyMaskGivesZeroPixels) {
+    SimMetricsAccumulator acc;
+    acc.add_frame(constant_image(2, 2, 1.0f, 0.0f), constant_image(2, 2, 1.0f, 1.0f));
+    EXPECT_EQ(acc.finish().pixels, 0);
+}
+
+TEST(VerifyGroundTruth, SampleLayoutCoversTheRequestedCount) {
+    EXPECT_EQ(ground_truth_layout(256, 128, 128).samples(), 256);
+    EXPECT_EQ(ground_truth_layout(256, 128, 128).scale, 4);
+    EXPECT_EQ(ground_truth_layout(1, 64, 64).samples(), 1);
+    EXPECT_EQ(ground_truth_layout(9, 64, 64).samples(), 9);   // 3 per axis: scale 3, one pass
+    EXPECT_EQ(ground_truth_layout(25, 64, 64).samples(), 25);  // 5 per axis: scale 1, 5 passes per axis
+    // Large images keep the supersampled target within 8192 texels.
+    EXPECT_LE(ground_truth_layout(256, 4096, 4096).scale * 4096, 8192);
+    EXPECT_EQ(ground_truth_layout(256, 4096, 4096).samples(), 256);
+}
+
+TEST(VerifyScenes, CameraOrbitMovesAboutTheRequestedPixels) {
+    auto scene = make_builtin_scene("sphere", 0.3f);
+    ASSERT_TRUE(scene.ok());
+    const int height = 128;
+    const SimCamera a = camera_at_frame(*scene, 0, height), b = camera_at_frame(*scene, 1, height);
+    // Orbiting by an angle moves the sphere's front point (radius 1 from the target) sideways by angle * 1
+    // world units relative to the view axis; in pixels at its distance d - 1, whose pixel size is
+    // 2 (d - 1) tan(fov/2) / height.
+    const double d = std::hypot(a.position[0], a.position[1], a.position[2]);
+    const double cosang = (a.position[0] * b.position[0] + a.position[1] * b.position[1] + a.position[2] * b.position[2]) /
+                          (d * d);
+    const double angle = std::acos(std::min(1.0, cosang));
+    const double pixel = 2.0 * (d - 1.0) * std::tan(20.0 * std::numbers::pi / 180.0) / height;
+    const double moved = angle * 1.0 / pixel;
+    EXPECT_GT(moved, 0.1);
+    EXPECT_LT(moved, 1.0);  // sub-pixel motion
+    EXPECT_EQ(camera_at_frame(*scene, 0, height).position, scene->camera.position);
+}
+
+TEST(VerifyScenes, AnalyticGeometryIsConsistent) {
+    for (auto name : builtin_scene_names()) {
+        auto scene = make_builtin_scene(name, 0.3f);
+        ASSERT_TRUE(scene.ok()) << name;
+        for (const SimObject& o : scene->objects) {
+            const TriMesh& m = o.mesh;
+            ASSERT_TRUE(m.has_normals() && m.has_tangents() && m.has_uv0()) << name;
+            ASSERT_EQ(o.exact_curvature.values.size(), 4 * m.vertex_count());
+            for (size_t v = 0; v < m.vertex_count(); v += 97) {
+                const float* n = &m.normals[3 * v];
+                const float* t = &m.tangents[4 * v];
+                EXPECT_NEAR(n[0] * n[0] + n[1] * n[1] + n[2] * n[2], 1.0, 1e-5) << name;
+                EXPECT_NEAR(n[0] * t[0] + n[1] * t[1] + n[2] * t[2], 0.0, 1e-5) << name;
+                const float* k = &o.exact_curvature.values[4 * v];
+                EXPECT_GE(std::abs(k[0]), std::abs(k[1]) - 1e-6f) << name;  // |k1| >= |k2|
+            }
+        }
+    }
+    // Sphere of radius 1: every vertex at distance 1 with curvature +1 (SPEC Sec. 4 sign convention).
+    auto sphere = make_builtin_scene("sphere", 0.3f);
+    const SimObject& s = sphere->objects[0];
+    for (size_t v = 0; v < s.mesh.vertex_count(); v += 31) {
+        const float* p = &s.mesh.positions[3 * v];
+        EXPECT_NEAR(std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]), 1.0, 1e-5);
+        EXPECT_FLOAT_EQ(s.exact_curvature.values[4 * v], 1.0f);
+    }
+    EXPECT_FALSE(make_builtin_scene("teapot", 0.3f).ok());
+    EXPECT_FALSE(make_builtin_scene("sphere", 1.5f).ok());
+}
+
+}  // namespace
+}  // namespace specbake::cli
