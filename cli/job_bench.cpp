@@ -31,11 +31,12 @@ const CandidateReport* find_row(const SceneReport& s, const std::string& name) {
 // Per candidate, aggregated over the scenes it ran on.
 struct Aggregate {
     std::string name, family;
-    double log_error = 0, log_flicker = 0, energy = 0, peak = 0;
+    double log_error = 0, log_error_linear = 0, log_flicker = 0, energy = 0, peak = 0;
     int n = 0, n_flicker = 0;
     std::optional<int> spirv;
     std::vector<double> frame_rel, bake_ms;
     double rel_error() const { return n ? std::exp(log_error / n) : 1.0; }
+    double rel_error_linear() const { return n ? std::exp(log_error_linear / n) : 1.0; }
     double rel_flicker() const { return n_flicker ? std::exp(log_flicker / n_flicker) : 1.0; }
 };
 
@@ -58,8 +59,9 @@ std::vector<Aggregate> aggregate(const BenchReport& r) {
             Aggregate& a = out[it->second];
             a.log_error += std::log(std::max(c.metrics.rmse_tonemapped, kFloor) /
                                     std::max(none->metrics.rmse_tonemapped, kFloor));
-            if (none->metrics.flicker > kFloor) {
-                a.log_flicker += std::log(std::max(c.metrics.flicker, kFloor) / none->metrics.flicker);
+            a.log_error_linear += std::log(std::max(c.metrics.rmse, kFloor) / std::max(none->metrics.rmse, kFloor));
+            if (none->metrics.flicker_linear > kFloor) {
+                a.log_flicker += std::log(std::max(c.metrics.flicker_linear, kFloor) / none->metrics.flicker_linear);
                 ++a.n_flicker;
             }
             a.energy += c.metrics.energy_ratio;
@@ -106,30 +108,32 @@ Result<BenchReport> run_bench(const BenchOptions& options, const std::function<v
 
 std::string bench_summary_markdown(const BenchReport& r) {
     std::string out;
-    out += "| candidate | family | RMSE (tm) vs none | flicker vs none | energy | p99 | SPIR-V | frame x | bake ms |\n";
-    out += "|---|---|---:|---:|---:|---:|---:|---:|---:|\n";
+    out += "| candidate | family | RMSE vs none | RMSE (tm) vs none | flicker vs none | energy | p99 | SPIR-V | frame x "
+           "| bake ms |\n";
+    out += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const Aggregate& a : aggregate(r)) {
         const double frame = median(a.frame_rel), bake = median(a.bake_ms);
-        out += "| " + a.name + " | " + a.family + " | " + fmt("%.3f", a.rel_error()) + " | " +
+        out += "| " + a.name + " | " + a.family + " | " + fmt("%.3f", a.rel_error_linear()) + " | " +
+               fmt("%.3f", a.rel_error()) + " | " +
                fmt("%.3f", a.rel_flicker()) + " | " + fmt("%.2f", a.energy / a.n) + " | " +
                fmt("%.2f", a.peak / a.n) + " | " + (a.spirv ? std::to_string(*a.spirv) : "-") + " | " +
                (std::isnan(frame) ? "-" : fmt("%.2f", frame)) + " | " +
                (std::isnan(bake) ? "-" : fmt("%.1f", bake)) + " |\n";
     }
-    out += "\nBest per scene (lowest tone-mapped RMSE / lowest flicker among filtering candidates):\n\n";
-    out += "| scene | none RMSE (tm) | best RMSE (tm) | none flicker | best flicker |\n|---|---:|---|---:|---|\n";
+    out += "\nBest per scene (lowest linear RMSE / lowest flicker among filtering candidates):\n\n";
+    out += "| scene | none RMSE | best RMSE | none flicker | best flicker |\n|---|---:|---|---:|---|\n";
     for (const SceneReport& s : r.scenes) {
         const CandidateReport* none = find_row(s, "none");
         const CandidateReport *best_e = nullptr, *best_f = nullptr;
         for (const CandidateReport& c : s.candidates) {
             if (c.name == "none") continue;
-            if (!best_e || c.metrics.rmse_tonemapped < best_e->metrics.rmse_tonemapped) best_e = &c;
-            if (!best_f || c.metrics.flicker < best_f->metrics.flicker) best_f = &c;
+            if (!best_e || c.metrics.rmse < best_e->metrics.rmse) best_e = &c;
+            if (!best_f || c.metrics.flicker_linear < best_f->metrics.flicker_linear) best_f = &c;
         }
         if (!none || !best_e) continue;
-        out += "| " + scene_label(s) + " | " + fmt("%.4f", none->metrics.rmse_tonemapped) + " | " + best_e->name +
-               " " + fmt("%.4f", best_e->metrics.rmse_tonemapped) + " | " + fmt("%.4f", none->metrics.flicker) +
-               " | " + best_f->name + " " + fmt("%.4f", best_f->metrics.flicker) + " |\n";
+        out += "| " + scene_label(s) + " | " + fmt("%.3f", none->metrics.rmse) + " | " + best_e->name + " " +
+               fmt("%.3f", best_e->metrics.rmse) + " | " + fmt("%.3f", none->metrics.flicker_linear) + " | " +
+               best_f->name + " " + fmt("%.3f", best_f->metrics.flicker_linear) + " |\n";
     }
     return out;
 }
@@ -141,7 +145,8 @@ std::string bench_full_markdown(const BenchReport& r) {
         out += "Images " + std::to_string(r.scenes[0].width) + "x" + std::to_string(r.scenes[0].height) +
                ", ground truth " + std::to_string(r.scenes[0].spp) + " spp (Gaussian pixel filter, sigma^2 = 1/(2 pi)), " +
                std::to_string(r.scenes[0].frames) + " frames of camera motion.\n\n";
-    out += "## Summary (geometric mean over scenes of the ratio to no filtering; lower is better)\n\n";
+    out += "## Summary (geometric mean over scenes of the ratio to no filtering; lower is better; linear "
+           "radiance unless marked tm)\n\n";
     out += bench_summary_markdown(r);
     for (const SceneReport& s : r.scenes) {
         out += "\n## " + scene_label(s) + " (r = " + fmt("%.3g", s.roughness) + ")\n\n";
@@ -150,7 +155,8 @@ std::string bench_full_markdown(const BenchReport& r) {
         if (!s.notes.empty()) out += "\n";
     }
     out += "\nColumns: RMSE and MAE of linear radiance divided by the ground truth's mean; (tm) on x/(1+x); "
-           "flicker = mean over pixels of the temporal standard deviation of the tone-mapped error; energy and "
+           "flicker = mean over pixels of the temporal standard deviation of the error, divided by the ground "
+           "truth's mean; (tm) the same on x/(1+x); energy and "
            "p99 = candidate/ground-truth ratios of total radiance and of the 99th percentile (< 1: over-blur); "
            "SPIR-V = instructions in functions after spirv-opt -O; frame x = median frame time relative to no "
            "filtering on this renderer; bake ms = texture bake or curvature estimate.\n";
@@ -205,13 +211,12 @@ std::string bench_svg(const BenchReport& r) {
     for (int panel = 0; panel < 2; ++panel) {
         const int ox = panel * (panel_w + 40) + margin, oy = 40, pw = panel_w - margin, ph = panel_h - 40;
         double y_max = 1.2;
-        for (const Aggregate& a : rows) y_max = std::max(y_max, panel ? a.rel_flicker() : a.rel_error());
+        for (const Aggregate& a : rows) y_max = std::max(y_max, panel ? a.rel_flicker() : a.rel_error_linear());
         y_max = std::min(y_max * 1.05, 20.0);
         const auto px = [&](double x) { return ox + (x - x_min) / double(x_max - x_min) * pw; };
         const auto py = [&](double y) { return oy + ph - std::min(y, y_max) / y_max * ph; };
         svg += "<text x=\"" + std::to_string(ox) + "\" y=\"24\" font-size=\"13\">" +
-               std::string(panel ? "flicker (tone-mapped) relative to no filtering"
-                                 : "RMSE (tone-mapped) relative to no filtering") +
+               std::string(panel ? "flicker relative to no filtering" : "RMSE relative to no filtering") +
                "</text>\n";
         svg += "<rect x=\"" + std::to_string(ox) + "\" y=\"" + std::to_string(oy) + "\" width=\"" +
                std::to_string(pw) + "\" height=\"" + std::to_string(ph) + "\" fill=\"none\" stroke=\"#888\"/>\n";
@@ -233,7 +238,7 @@ std::string bench_svg(const BenchReport& r) {
         for (size_t i = 0; i < rows.size(); ++i) {
             const Aggregate& a = rows[i];
             const double x = have_x ? (a.spirv ? double(*a.spirv) : double(x_min)) : double(i);
-            const double y = panel ? a.rel_flicker() : a.rel_error();
+            const double y = panel ? a.rel_flicker() : a.rel_error_linear();
             auto colour = colours.count(a.family) ? colours.at(a.family) : "#555";
             svg += "<circle cx=\"" + fmt("%.1f", px(x)) + "\" cy=\"" + fmt("%.1f", py(y)) + "\" r=\"3.5\" fill=\"" +
                    colour + "\"/>\n";

@@ -33,13 +33,13 @@ struct BenchReport {
 // Runs every scene x roughness; `progress` receives one line per finished scene.
 Result<BenchReport> run_bench(const BenchOptions& options, const std::function<void(const std::string&)>& progress);
 
-// Summary over all scenes: per candidate the geometric means (over scenes) of its tone-mapped RMSE and
-// flicker relative to no filtering, the mean energy and peak ratios, and its costs.
+// Summary over all scenes: per candidate the geometric means (over scenes) of its RMSE (linear and
+// tone-mapped) and linear flicker relative to no filtering, the mean energy and peak ratios, and its costs.
 std::string bench_summary_markdown(const BenchReport& report);
 // One table per scene (markdown_table) with a heading, plus the summary and the command line.
 std::string bench_full_markdown(const BenchReport& report);
 std::string bench_csv(const BenchReport& report);
-// Two panels: relative error and relative flicker against SPIR-V instructions, one point per candidate.
+// Two panels: relative linear RMSE and relative flicker against SPIR-V instructions, one point per candidate.
 std::string bench_svg(const BenchReport& report);
 
 // Writes bench.md, bench.csv, bench.svg and strips/*.png into `dir` (created when missing).
