@@ -4,6 +4,7 @@
 #include "cli/job_verify.h"
 #include "cli/sim_strips.h"
 
+#include <cmath>
 #include <cstddef>
 #include <cstdio>
 #include <memory>
@@ -19,7 +20,7 @@ namespace {
 
 struct VerifyCommandOptions {
     std::string builtin;
-    float roughness = 0.05f;
+    float alpha = 0.05f;
     std::string size = "128x128";
     int spp = 256;
     int frames = 8;
@@ -42,7 +43,7 @@ int run_verify_command(const VerifyCommandOptions& o) {
     options.timing_repeats = o.repeats;
     options.variants = !o.no_variants;
     options.only = o.only;
-    auto scene = make_builtin_scene(o.builtin, o.roughness);
+    auto scene = make_builtin_scene(o.builtin, std::sqrt(o.alpha));
     if (!scene) {
         print_error(scene.error().message);
         return kExitUsage;
@@ -81,9 +82,9 @@ void add_verify_command(CLI::App& app, std::function<int()>& run) {
     auto o = std::make_shared<VerifyCommandOptions>();
     sub->add_option("--builtin", o->builtin, "Built-in analytic scene: sphere, cylinder, torus, bumpy-sphere")
         ->required();
-    sub->add_option("--roughness", o->roughness, "Perceptual roughness r of the scene's material (alpha = r^2)")
+    sub->add_option("--alpha", o->alpha, "GGX alpha of the scene's material (the papers' roughness; glTF r = sqrt(alpha))")
         ->capture_default_str()
-        ->check(CLI::Range(0.0f, 1.0f));
+        ->check(CLI::Range(0.0001f, 1.0f));
     sub->add_option("--size", o->size, "Image size WxH")->capture_default_str();
     sub->add_option("--spp", o->spp, "Ground-truth samples per pixel (rounded to a square)")
         ->capture_default_str()
@@ -99,8 +100,8 @@ void add_verify_command(CLI::App& app, std::function<int()>& run) {
         ->delimiter(',');
     sub->add_option("--strip", o->strip, "Also write the image strip (frame 0) to this PNG file");
     sub->footer("Examples:\n"
-                "  specbake verify --builtin torus --roughness 0.2\n"
-                "  specbake verify --builtin cylinder --roughness 0.1 --spp 1024 --frames 16 --size 256x256\n"
+                "  specbake verify --builtin torus --alpha 0.01 --strip torus.png\n"
+                "  specbake verify --builtin cylinder --alpha 0.01 --spp 1024 --frames 16 --size 256x256\n"
                 "  specbake verify --builtin bumpy-sphere --only baked-texture,default");
     sub->callback([&run, o] { run = [o] { return run_verify_command(*o); }; });
 }
