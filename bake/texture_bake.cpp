@@ -15,6 +15,10 @@
 #include <cmath>
 #include <limits>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace specbake {
 namespace {
 
@@ -26,6 +30,9 @@ struct Layout {
     int occlusion = -1, metallic = -1;  // ORM R and B
     int slope = -1;                     // s.x, s.y, s.x^2, s.y^2, s.x s.y
 };
+
+// Largest number of per-texel quantities: the core group, ORM R and B, and five slope moments.
+constexpr int kMaxChannels = kCore + 2 + 5;
 
 // Smallest |n.z| used for slope space s = -(n.x, n.y) / n.z: keeps grazing normals finite (|s| <= 1e4).
 constexpr double kMinSlopeZ = 1e-4;
@@ -65,6 +72,7 @@ struct Decoder {
     bool orm = false;
     std::vector<double> resampled;  // a, R, B per normal-map texel when the sizes differ
     double constant_a = 0.0;
+    float constant_r = 0.0f;  // (constant_a)^(1/4) as written at mip 0
     Layout layout;
 
     // Unit normal of base texel (x, y) in the +Y tangent frame; zero-length vectors decode to +Z.
@@ -89,45 +97,100 @@ struct Decoder {
         n[0] = nx * inv, n[1] = ny * inv, n[2] = nz * inv;
     }
 
-    // Fills the layout.count quantities of base row y into row[x * count + c]; returns degenerate count.
-    long long decode_row(int y, double* row) const {
+    // Unit normals of base row y into nx, ny, nz (same arithmetic as decode_normal, two texels per SSE2
+    // instruction: packed sqrt and division round exactly like the scalar ones); returns the degenerate count.
+    long long decode_normal_row(int y, double* nx, double* ny, double* nz) const {
         long long degenerate_count = 0;
-        const int C = layout.count;
-        for (int x = 0; x < normal.width; ++x) {
-            double* v = row + size_t(x) * C;
+        int x = 0;
+#if defined(__SSE2__)
+        const int ch = normal.channels;
+        const float* row = normal.texel(0, y);
+        const __m128d one = _mm_set1_pd(1.0), two = _mm_set1_pd(2.0), zero = _mm_setzero_pd();
+        const __m128d tiny = _mm_set1_pd(1e-20);
+        for (; x + 2 <= normal.width; x += 2) {
+            const float* c0 = row + size_t(x) * ch;
+            const float* c1 = c0 + ch;
+            const __m128d vx = _mm_sub_pd(_mm_mul_pd(two, _mm_set_pd(c1[0], c0[0])), one);
+            __m128d vy = _mm_sub_pd(_mm_mul_pd(two, _mm_set_pd(c1[1], c0[1])), one);
+            if (flip_y) vy = _mm_xor_pd(vy, _mm_set1_pd(-0.0));
+            const __m128d xx = _mm_mul_pd(vx, vx), yy = _mm_mul_pd(vy, vy);
+            const __m128d vz = reconstruct ? _mm_sqrt_pd(_mm_max_pd(_mm_sub_pd(_mm_sub_pd(one, xx), yy), zero))
+                                           : _mm_sub_pd(_mm_mul_pd(two, _mm_set_pd(c1[2], c0[2])), one);
+            const __m128d len2 = _mm_add_pd(_mm_add_pd(xx, yy), _mm_mul_pd(vz, vz));
+            const __m128d inv = _mm_div_pd(one, _mm_sqrt_pd(len2));
+            const __m128d ok = _mm_cmpgt_pd(len2, tiny);
+            const int ok_bits = _mm_movemask_pd(ok);
+            degenerate_count += 2 - ((ok_bits & 1) + (ok_bits >> 1));
+            _mm_storeu_pd(nx + x, _mm_and_pd(ok, _mm_mul_pd(vx, inv)));
+            _mm_storeu_pd(ny + x, _mm_and_pd(ok, _mm_mul_pd(vy, inv)));
+            _mm_storeu_pd(nz + x, _mm_or_pd(_mm_and_pd(ok, _mm_mul_pd(vz, inv)), _mm_andnot_pd(ok, one)));
+        }
+#endif
+        for (; x < normal.width; ++x) {
             double n[3];
             bool degenerate = false;
             decode_normal(x, y, n, degenerate);
             degenerate_count += degenerate;
-            v[kPx] = n[0];
-            v[kPy] = n[1];
-            v[kPz] = n[2];
-            v[kPxx] = n[0] * n[0];
-            v[kPyy] = n[1] * n[1];
-            v[kPxy] = n[0] * n[1];
-            double occlusion = 0.0, metallic = 0.0;
-            if (!resampled.empty()) {
-                const double* r = resampled.data() + (size_t(y) * normal.width + x) * 3;
-                v[kA] = r[0];
-                occlusion = r[1];
-                metallic = r[2];
-            } else if (roughness) {
-                const float* t = roughness->texel(x, y);
-                const double r = std::clamp(double(t[roughness_channel]), 0.0, 1.0);
-                const double r2 = r * r;
-                v[kA] = r2 * r2;  // a = alpha^2 = r^4 (SPEC Sec. 2)
-                if (orm) occlusion = t[0], metallic = t[2];
-            } else {
-                v[kA] = constant_a;
-            }
-            if (layout.occlusion >= 0) v[layout.occlusion] = occlusion, v[layout.metallic] = metallic;
-            if (layout.slope >= 0) {
-                const double z = std::max(n[2], kMinSlopeZ);
-                const double sx = -n[0] / z, sy = -n[1] / z;  // slope space (SPEC Sec. 2)
-                double* s = v + layout.slope;
-                s[0] = sx, s[1] = sy, s[2] = sx * sx, s[3] = sy * sy, s[4] = sx * sy;
-            }
+            nx[x] = n[0], ny[x] = n[1], nz[x] = n[2];
         }
+        return degenerate_count;
+    }
+
+    // Output roughness of base texel (x, y) whose mean alpha^2 is a: (a)^(1/4). For a same-size map that is
+    // the clamped input value itself (the double round trip r -> r^4 -> r rounds back to the same float),
+    // so the two roots are taken only for resampled maps.
+    float base_roughness(int x, int y, double a) const {
+        if (!resampled.empty()) return float(std::sqrt(std::sqrt(std::clamp(a, 0.0, 1.0))));
+        if (roughness) return std::clamp(roughness->texel(x, y)[roughness_channel], 0.0f, 1.0f);
+        return constant_r;
+    }
+
+    // Fills the layout.count quantities of base texel (x, y) into v; returns whether it was degenerate.
+    bool texel_values(int x, int y, double* v) const {
+        double n[3];
+        bool degenerate = false;
+        decode_normal(x, y, n, degenerate);
+        texel_values_from_normal(x, y, n, v);
+        return degenerate;
+    }
+
+    // The layout.count quantities of base texel (x, y) whose unit normal is n.
+    void texel_values_from_normal(int x, int y, const double n[3], double* v) const {
+        v[kPx] = n[0];
+        v[kPy] = n[1];
+        v[kPz] = n[2];
+        v[kPxx] = n[0] * n[0];
+        v[kPyy] = n[1] * n[1];
+        v[kPxy] = n[0] * n[1];
+        double occlusion = 0.0, metallic = 0.0;
+        if (!resampled.empty()) {
+            const double* r = resampled.data() + (size_t(y) * normal.width + x) * 3;
+            v[kA] = r[0];
+            occlusion = r[1];
+            metallic = r[2];
+        } else if (roughness) {
+            const float* t = roughness->texel(x, y);
+            const double r = std::clamp(double(t[roughness_channel]), 0.0, 1.0);
+            const double r2 = r * r;
+            v[kA] = r2 * r2;  // a = alpha^2 = r^4 (SPEC Sec. 2)
+            if (orm) occlusion = t[0], metallic = t[2];
+        } else {
+            v[kA] = constant_a;
+        }
+        if (layout.occlusion >= 0) v[layout.occlusion] = occlusion, v[layout.metallic] = metallic;
+        if (layout.slope >= 0) {
+            const double z = std::max(n[2], kMinSlopeZ);
+            const double sx = -n[0] / z, sy = -n[1] / z;  // slope space (SPEC Sec. 2)
+            double* s = v + layout.slope;
+            s[0] = sx, s[1] = sy, s[2] = sx * sx, s[3] = sy * sy, s[4] = sx * sy;
+        }
+    }
+
+    // Fills the layout.count quantities of base row y into row[x * count + c]; returns degenerate count.
+    long long decode_row(int y, double* row) const {
+        long long degenerate_count = 0;
+        const int C = layout.count;
+        for (int x = 0; x < normal.width; ++x) degenerate_count += texel_values(x, y, row + size_t(x) * C);
         return degenerate_count;
     }
 };
@@ -222,12 +285,12 @@ double finalize_texel(const double* v, const Layout& layout, const TextureBakeSe
 }
 
 // Mip 0: every footprint is one base texel, so Sigma = 0, t = 0 and a = a_base exactly (SPEC Sec. 3:
-// the input roughness passes through). Same outputs as finalize_texel without its divisions and roots;
+// the input roughness passes through). Same outputs as finalize_texel without its divisions and roots (r is
+// the base roughness, Decoder::base_roughness);
 // the decoded normal is already unit length.
-void finalize_base_texel(const double* v, const Layout& layout, const TextureBakeSettings& s, bool flip_y,
-                         float* rough, float* kern, float* lean, float* nrm) {
+inline void finalize_base_texel(const double* v, float r, const Layout& layout, const TextureBakeSettings& s,
+                                bool flip_y, float* rough, float* kern, float* lean, float* nrm) {
     if (rough) {
-        const float r = float(std::sqrt(std::sqrt(std::clamp(v[kA], 0.0, 1.0))));
         if (layout.occlusion >= 0) {
             rough[0] = float(v[layout.occlusion]), rough[1] = r, rough[2] = float(v[layout.metallic]);
         } else {
@@ -392,6 +455,7 @@ Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughne
     } else {
         const double r = roughness_value;
         dec.constant_a = r * r * r * r;
+        dec.constant_r = float(std::sqrt(std::sqrt(std::clamp(dec.constant_a, 0.0, 1.0))));
     }
     const bool slope = settings.outputs.lean && settings.lean_space == LeanSpace::Slope;
     if (slope) {
@@ -427,7 +491,8 @@ Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughne
         Image* N = want.normal ? &result.normal.levels[size_t(L)] : nullptr;
         if (L == 0) {
             for (int i = 0; i < w; ++i)
-                finalize_base_texel(means + size_t(i) * C, layout, settings, dec.flip_y, R ? R->texel(i, j) : nullptr,
+                finalize_base_texel(means + size_t(i) * C, dec.base_roughness(i, j, means[size_t(i) * C + kA]), layout,
+                                    settings, dec.flip_y, R ? R->texel(i, j) : nullptr,
                                     K ? K->texel(i, j) : nullptr, E ? E->texel(i, j) : nullptr,
                                     N ? N->texel(i, j) : nullptr);
             return 0.0;
@@ -453,31 +518,50 @@ Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughne
         const int w1 = level_w(1), h1 = level_h(1), fx = W / w1, fy = H / h1;
         const bool keep = levels > 2 && tiles_previous(2);
         current.assign(keep ? size_t(w1) * h1 * C : 0, 0.0);
-        std::vector<double> change0(size_t(H), 0.0), change1(size_t(h1), 0.0);
+        std::vector<double> change1(size_t(h1), 0.0);
         std::vector<long long> row_degenerate(size_t(h1), 0);
-        tbb::parallel_for(tbb::blocked_range<int>(0, h1), [&](const tbb::blocked_range<int>& rows) {
-            std::vector<double> base_row(size_t(W) * C), means(size_t(w1) * C);
+        Image* R0 = want.roughness ? &result.roughness.levels[0] : nullptr;
+        Image* K0 = want.kernel ? &result.kernel.levels[0] : nullptr;
+        Image* E0 = want.lean ? &result.lean.levels[0] : nullptr;
+        Image* N0 = want.normal ? &result.normal.levels[0] : nullptr;
+        const double inv = 1.0 / double(fx * fy);
+        // Each base texel is decoded once, written as level 0 and added to its level-1 block mean in the
+        // fixed order (dy, dx), so no decoded base row is stored.
+        tbb::parallel_for(tbb::blocked_range<int>(0, h1, 4), [&](const tbb::blocked_range<int>& rows) {
+            std::vector<double> means(size_t(w1) * C);
+            std::vector<double> normals(size_t(W) * 3 * size_t(fy));  // rows of nx, ny, nz per dy
             for (int j = rows.begin(); j < rows.end(); ++j) {
-                std::fill(means.begin(), means.end(), 0.0);
+                long long row_deg = 0;
                 for (int dy = 0; dy < fy; ++dy) {
-                    const int y = j * fy + dy;
-                    row_degenerate[size_t(j)] += dec.decode_row(y, base_row.data());
-                    change0[size_t(y)] = finalize_row(0, y, base_row.data());
-                    for (int i = 0; i < w1; ++i) {
-                        double* m = means.data() + size_t(i) * C;
+                    double* nx = normals.data() + size_t(dy) * 3 * W;
+                    row_deg += dec.decode_normal_row(j * fy + dy, nx, nx + W, nx + 2 * size_t(W));
+                }
+                for (int i = 0; i < w1; ++i) {
+                    double m[kMaxChannels] = {};
+                    for (int dy = 0; dy < fy; ++dy) {
+                        const int y = j * fy + dy;
+                        const double* nx = normals.data() + size_t(dy) * 3 * W;
                         for (int dx = 0; dx < fx; ++dx) {
-                            const double* v = base_row.data() + size_t(i * fx + dx) * C;
+                            const int x = i * fx + dx;
+                            const double n[3] = {nx[x], nx[W + x], nx[2 * size_t(W) + x]};
+                            double v[kMaxChannels];
+                            dec.texel_values_from_normal(x, y, n, v);
+                            finalize_base_texel(v, dec.base_roughness(x, y, v[kA]), layout, settings, dec.flip_y,
+                                                R0 ? R0->texel(x, y) : nullptr,
+                                                K0 ? K0->texel(x, y) : nullptr, E0 ? E0->texel(x, y) : nullptr,
+                                                N0 ? N0->texel(x, y) : nullptr);
                             for (int c = 0; c < C; ++c) m[c] += v[c];
                         }
                     }
+                    double* out = means.data() + size_t(i) * C;
+                    for (int c = 0; c < C; ++c) out[c] = m[c] * inv;
                 }
-                const double inv = 1.0 / double(fx * fy);
-                for (double& m : means) m *= inv;
+                row_degenerate[size_t(j)] = row_deg;
                 change1[size_t(j)] = finalize_row(1, j, means.data());
                 if (keep) std::copy(means.begin(), means.end(), current.begin() + ptrdiff_t(size_t(j) * w1 * C));
             }
         });
-        level_change[0] = reduce_changes(change0);
+        level_change[0] = 0.0;  // mip 0 passes the input roughness through
         level_change[1] = reduce_changes(change1);
         for (long long d : row_degenerate) degenerate += d;
         previous.swap(current);
