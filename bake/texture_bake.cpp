@@ -13,10 +13,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
+#endif
+#if defined(__linux__)
+#include <sys/mman.h>
 #endif
 
 namespace specbake {
@@ -384,9 +389,28 @@ Result<void> validate(const Image& normal, const Image* roughness, int channel, 
     return {};
 }
 
+// A zero-filled w x h image. Large buffers are reserved first and marked for transparent huge pages before
+// they are touched: a 4096^2 bake writes about 1 GiB of fresh outputs, and faulting it in 4 KiB pages costs
+// more CPU time than the arithmetic.
+Image make_output_image(int w, int h, int channels) {
+    Image image;
+    image.width = w, image.height = h, image.channels = channels;
+    const size_t n = size_t(w) * size_t(h) * size_t(channels);
+    image.pixels.reserve(n);
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    constexpr uintptr_t kHuge = uintptr_t(2) << 20;
+    const uintptr_t begin = (reinterpret_cast<uintptr_t>(image.pixels.data()) + kHuge - 1) & ~(kHuge - 1);
+    const uintptr_t end = (reinterpret_cast<uintptr_t>(image.pixels.data() + n)) & ~(kHuge - 1);
+    if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);  // a hint; failure is harmless
+#endif
+    image.pixels.resize(n);
+    return image;
+}
+
 void allocate_chain(MipChain& chain, int W, int H, int levels, int channels) {
     chain.levels.clear();
-    for (int L = 0; L < levels; ++L) chain.levels.emplace_back(std::max(1, W >> L), std::max(1, H >> L), channels);
+    for (int L = 0; L < levels; ++L)
+        chain.levels.push_back(make_output_image(std::max(1, W >> L), std::max(1, H >> L), channels));
 }
 
 }  // namespace
@@ -399,7 +423,21 @@ int mip_level_count(int width, int height) {
 
 std::optional<std::pair<int, int>> find_non_finite(const Image& image) {
     const size_t n = image.pixels.size();
-    for (size_t i = 0; i < n; ++i) {
+    // Blocks are screened branch-free on the exponent bits (all ones: NaN or infinity), which vectorises;
+    // only a block that holds one is searched element by element.
+    constexpr size_t kBlock = 4096;
+    size_t first = 0;
+    for (; first < n; first += kBlock) {
+        const size_t end = std::min(n, first + kBlock);
+        uint32_t bad = 0;
+        for (size_t i = first; i < end; ++i) {
+            uint32_t bits;
+            std::memcpy(&bits, &image.pixels[i], sizeof bits);
+            bad |= uint32_t((bits & 0x7f800000u) == 0x7f800000u);
+        }
+        if (bad) break;
+    }
+    for (size_t i = first; i < n; ++i) {
         if (!std::isfinite(image.pixels[i])) {
             const size_t texel = i / size_t(std::max(1, image.channels));
             return std::pair<int, int>(int(texel % size_t(image.width)), int(texel / size_t(image.width)));
@@ -537,7 +575,8 @@ Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughne
                     row_deg += dec.decode_normal_row(j * fy + dy, nx, nx + W, nx + 2 * size_t(W));
                 }
                 for (int i = 0; i < w1; ++i) {
-                    double m[kMaxChannels] = {};
+                    double m[kMaxChannels];
+                    for (int c = 0; c < C; ++c) m[c] = 0.0;
                     for (int dy = 0; dy < fy; ++dy) {
                         const int y = j * fy + dy;
                         const double* nx = normals.data() + size_t(dy) * 3 * W;
