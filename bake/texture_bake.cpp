@@ -552,63 +552,92 @@ Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughne
     // Levels 0 and 1 in one pass when level 1's footprints are whole blocks of base texels (all even
     // sizes): every base row is decoded once, written as level 0 and summed into its level-1 row.
     const bool fused = levels >= 2 && W % level_w(1) == 0 && H % level_h(1) == 0;
+    // When level 2 tiles level 1 as well, each task also owns whole level-2 rows: the level-1 rows of one
+    // level-2 row stay in the task, and only level-2 means (a sixteenth of the base) are kept for level 3.
     auto run_fused = [&] {
         const int w1 = level_w(1), h1 = level_h(1), fx = W / w1, fy = H / h1;
-        const bool keep = levels > 2 && tiles_previous(2);
-        current.assign(keep ? size_t(w1) * h1 * C : 0, 0.0);
-        std::vector<double> change1(size_t(h1), 0.0);
-        std::vector<long long> row_degenerate(size_t(h1), 0);
+        const bool with2 = levels > 2 && tiles_previous(2);
+        const int w2 = with2 ? level_w(2) : w1, h2 = with2 ? level_h(2) : h1;
+        const int fx2 = w1 / w2, fy2 = h1 / h2;  // 1 x 1 when level 2 is not part of this pass
+        const int next = with2 ? 3 : 2;
+        const bool keep = next < levels && tiles_previous(next);
+        current.assign(keep ? size_t(w2) * h2 * C : 0, 0.0);
+        std::vector<double> change1(size_t(h1), 0.0), change2(size_t(h2), 0.0);
+        std::vector<long long> row_degenerate(size_t(h2), 0);
         Image* R0 = want.roughness ? &result.roughness.levels[0] : nullptr;
         Image* K0 = want.kernel ? &result.kernel.levels[0] : nullptr;
         Image* E0 = want.lean ? &result.lean.levels[0] : nullptr;
         Image* N0 = want.normal ? &result.normal.levels[0] : nullptr;
         const double inv = 1.0 / double(fx * fy);
+        const double inv2 = 1.0 / double(fx2 * fy2);
         // Each base texel is decoded once, written as level 0 and added to its level-1 block mean in the
-        // fixed order (dy, dx), so no decoded base row is stored.
-        tbb::parallel_for(tbb::blocked_range<int>(0, h1, 4), [&](const tbb::blocked_range<int>& rows) {
-            std::vector<double> means(size_t(w1) * C);
+        // fixed order (dy, dx), so no decoded base row is stored; level 2 sums level-1 means in the same
+        // order as the level loop below would.
+        tbb::parallel_for(tbb::blocked_range<int>(0, h2, with2 ? 1 : 4), [&](const tbb::blocked_range<int>& rows) {
+            std::vector<double> means1(size_t(w1) * C * size_t(fy2)), means2(size_t(w2) * C);
             std::vector<double> normals(size_t(W) * 3 * size_t(fy));  // rows of nx, ny, nz per dy
-            for (int j = rows.begin(); j < rows.end(); ++j) {
+            for (int j2 = rows.begin(); j2 < rows.end(); ++j2) {
                 long long row_deg = 0;
-                for (int dy = 0; dy < fy; ++dy) {
-                    double* nx = normals.data() + size_t(dy) * 3 * W;
-                    row_deg += dec.decode_normal_row(j * fy + dy, nx, nx + W, nx + 2 * size_t(W));
-                }
-                for (int i = 0; i < w1; ++i) {
-                    double m[kMaxChannels];
-                    for (int c = 0; c < C; ++c) m[c] = 0.0;
+                for (int dy2 = 0; dy2 < fy2; ++dy2) {
+                    const int j = j2 * fy2 + dy2;
+                    double* means = means1.data() + size_t(dy2) * w1 * C;
                     for (int dy = 0; dy < fy; ++dy) {
-                        const int y = j * fy + dy;
-                        const double* nx = normals.data() + size_t(dy) * 3 * W;
-                        for (int dx = 0; dx < fx; ++dx) {
-                            const int x = i * fx + dx;
-                            const double n[3] = {nx[x], nx[W + x], nx[2 * size_t(W) + x]};
-                            double v[kMaxChannels];
-                            dec.texel_values_from_normal(x, y, n, v);
-                            finalize_base_texel(v, dec.base_roughness(x, y, v[kA]), layout, settings, dec.flip_y,
-                                                R0 ? R0->texel(x, y) : nullptr,
-                                                K0 ? K0->texel(x, y) : nullptr, E0 ? E0->texel(x, y) : nullptr,
-                                                N0 ? N0->texel(x, y) : nullptr);
-                            for (int c = 0; c < C; ++c) m[c] += v[c];
-                        }
+                        double* nx = normals.data() + size_t(dy) * 3 * W;
+                        row_deg += dec.decode_normal_row(j * fy + dy, nx, nx + W, nx + 2 * size_t(W));
                     }
-                    double* out = means.data() + size_t(i) * C;
-                    for (int c = 0; c < C; ++c) out[c] = m[c] * inv;
+                    for (int i = 0; i < w1; ++i) {
+                        double m[kMaxChannels];
+                        for (int c = 0; c < C; ++c) m[c] = 0.0;
+                        for (int dy = 0; dy < fy; ++dy) {
+                            const int y = j * fy + dy;
+                            const double* nx = normals.data() + size_t(dy) * 3 * W;
+                            for (int dx = 0; dx < fx; ++dx) {
+                                const int x = i * fx + dx;
+                                const double n[3] = {nx[x], nx[W + x], nx[2 * size_t(W) + x]};
+                                double v[kMaxChannels];
+                                dec.texel_values_from_normal(x, y, n, v);
+                                finalize_base_texel(v, dec.base_roughness(x, y, v[kA]), layout, settings, dec.flip_y,
+                                                    R0 ? R0->texel(x, y) : nullptr,
+                                                    K0 ? K0->texel(x, y) : nullptr, E0 ? E0->texel(x, y) : nullptr,
+                                                    N0 ? N0->texel(x, y) : nullptr);
+                                for (int c = 0; c < C; ++c) m[c] += v[c];
+                            }
+                        }
+                        double* out = means + size_t(i) * C;
+                        for (int c = 0; c < C; ++c) out[c] = m[c] * inv;
+                    }
+                    change1[size_t(j)] = finalize_row(1, j, means);
                 }
-                row_degenerate[size_t(j)] = row_deg;
-                change1[size_t(j)] = finalize_row(1, j, means.data());
-                if (keep) std::copy(means.begin(), means.end(), current.begin() + ptrdiff_t(size_t(j) * w1 * C));
+                row_degenerate[size_t(j2)] = row_deg;
+                const double* kept = means1.data();
+                if (with2) {
+                    for (int i = 0; i < w2; ++i) {
+                        double* m = means2.data() + size_t(i) * C;
+                        for (int c = 0; c < C; ++c) m[c] = 0.0;
+                        for (int dy = 0; dy < fy2; ++dy) {
+                            const double* src = means1.data() + (size_t(dy) * w1 + size_t(i) * fx2) * C;
+                            for (int dx = 0; dx < fx2; ++dx)
+                                for (int c = 0; c < C; ++c) m[c] += src[size_t(dx) * C + c];
+                        }
+                        for (int c = 0; c < C; ++c) m[c] *= inv2;
+                    }
+                    change2[size_t(j2)] = finalize_row(2, j2, means2.data());
+                    kept = means2.data();
+                }
+                if (keep) std::copy(kept, kept + size_t(w2) * C, current.begin() + ptrdiff_t(size_t(j2) * w2 * C));
             }
         });
         level_change[0] = 0.0;  // mip 0 passes the input roughness through
         level_change[1] = reduce_changes(change1);
+        if (with2) level_change[2] = reduce_changes(change2);
         for (long long d : row_degenerate) degenerate += d;
         previous.swap(current);
+        return next;
     };
 
     auto run = [&] {
-        if (fused) run_fused();
-        for (int L = fused ? 2 : 0; L < levels; ++L) {
+        const int first_level = fused ? run_fused() : 0;
+        for (int L = first_level; L < levels; ++L) {
             const int w = level_w(L), h = level_h(L);
             const bool from_previous = tiles_previous(L);
             const bool keep = L >= 1 && L + 1 < levels && tiles_previous(L + 1);
