@@ -9,6 +9,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -504,10 +505,19 @@ Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughne
 
     const int levels = mip_level_count(W, H);
     const TextureOutputs& want = settings.outputs;
-    if (want.roughness) allocate_chain(result.roughness, W, H, levels, dec.orm ? 3 : 1);
-    if (want.kernel) allocate_chain(result.kernel, W, H, levels, settings.anisotropic ? 3 : 1);
-    if (want.lean) allocate_chain(result.lean, W, H, levels, 5);
-    if (want.normal) allocate_chain(result.normal, W, H, levels, 3);
+    // Zero-filling the outputs is a large part of the bake's memory traffic: the chains are allocated on
+    // two threads (LEAN, the widest, against the other three).
+    auto allocate_outputs = [&] {
+        tbb::parallel_invoke(
+            [&] {
+                if (want.lean) allocate_chain(result.lean, W, H, levels, 5);
+            },
+            [&] {
+                if (want.roughness) allocate_chain(result.roughness, W, H, levels, dec.orm ? 3 : 1);
+                if (want.kernel) allocate_chain(result.kernel, W, H, levels, settings.anisotropic ? 3 : 1);
+                if (want.normal) allocate_chain(result.normal, W, H, levels, 3);
+            });
+    };
 
     auto level_w = [&](int L) { return std::max(1, W >> L); };
     auto level_h = [&](int L) { return std::max(1, H >> L); };
@@ -636,6 +646,7 @@ Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughne
     };
 
     auto run = [&] {
+        allocate_outputs();
         const int first_level = fused ? run_fused() : 0;
         for (int L = first_level; L < levels; ++L) {
             const int w = level_w(L), h = level_h(L);
