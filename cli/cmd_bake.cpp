@@ -6,15 +6,22 @@
 #include "cli/version.h"
 
 #include <cstdio>
+#include <utility>
 
 namespace specbake::cli {
 namespace {
 
 int run_bake(const SceneCliOptions& o, const PipelineFlags& pipe) {
-    SceneJob job = make_scene_job(o);
+    auto made = make_scene_job(o);
+    if (!made) {
+        print_error(made.error().message);
+        return kExitUsage;
+    }
+    SceneJob job = std::move(*made);
     std::vector<std::string> scenes(job.scenes.begin(), job.scenes.end());
     if (skip_if_up_to_date({job.output_dir, scenes, scene_settings_json(job), tool_version()}, pipe)) return kExitOk;
-    if (!o.quiet) job.progress = [](const std::string& s) { std::fprintf(stderr, "specbake: %s\n", s.c_str()); };
+    const bool quiet = run_settings().verbosity == Verbosity::quiet;
+    if (!quiet) job.progress = [](const std::string& s) { std::fprintf(stderr, "specbake: %s\n", s.c_str()); };
     auto outcome = run_scene_job(job);
     if (!outcome) {
         print_error(outcome.error().message);
@@ -27,7 +34,7 @@ int run_bake(const SceneCliOptions& o, const PipelineFlags& pipe) {
         print_error(d.error().message);
         return kExitFailed;
     }
-    if (!o.quiet) {
+    if (!quiet) {
         for (const ScenePlan& plan : outcome->plans) {
             size_t textures = 0, curvature = 0;
             for (const TextureDecision& d : plan.textures) textures += d.bake && d.same_as < 0;
@@ -61,7 +68,6 @@ void add_bake_command(CLI::App& app, std::function<int()>& run) {
         ->capture_default_str();
     add_curvature_options(sub, *o);
     add_material_options(sub, *o);
-    sub->add_flag("-q,--quiet", o->quiet, "Print errors and warnings only");
     auto pipe = std::make_shared<PipelineFlags>();
     add_pipeline_options(*sub, *pipe);
     sub->footer(
@@ -73,7 +79,9 @@ void add_bake_command(CLI::App& app, std::function<int()>& run) {
         "  specbake bake Helmet.gltf -o out/\n"
         "  specbake bake scene.glb --format gltf --container png -o out/\n"
         "  specbake bake chair.fbx table.obj --estimator jet-fitting -o baked/\n"
-        "  specbake bake cloth.gltf --kernel max --outputs roughness,kernel -o out/");
+        "  specbake bake brick.glb --normal-y -y --container dds -o out/\n"
+        "  specbake bake scene.gltf --config materials.toml -o out/   ([materials.NAME] tables: per material)\n"
+        "  specbake bake cloth.gltf --isotropic max --outputs roughness,kernel -o out/");
     sub->callback([&run, o, pipe] { run = [o, pipe] { return run_bake(*o, *pipe); }; });
 }
 

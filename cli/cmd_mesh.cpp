@@ -1,17 +1,28 @@
 // specbake mesh: per-vertex curvature attributes alone (no texture bake, no material check), glTF out.
 #include "cli/command.h"
+#include "cli/pipeline_options.h"
 #include "cli/scene_options.h"
+#include "cli/version.h"
 
 #include <cstdio>
+#include <utility>
 
 namespace specbake::cli {
 namespace {
 
-int run_mesh(const SceneCliOptions& o) {
-    SceneJob job = make_scene_job(o);
+int run_mesh(const SceneCliOptions& o, const PipelineFlags& pipe) {
+    auto made = make_scene_job(o);
+    if (!made) {
+        print_error(made.error().message);
+        return kExitUsage;
+    }
+    SceneJob job = std::move(*made);
     job.plan.textures = false;
     job.plan.check_material = false;
-    if (!o.quiet) job.progress = [](const std::string& s) { std::fprintf(stderr, "specbake: %s\n", s.c_str()); };
+    std::vector<std::string> scenes(job.scenes.begin(), job.scenes.end());
+    if (skip_if_up_to_date({job.output_dir, scenes, scene_settings_json(job), tool_version()}, pipe)) return kExitOk;
+    const bool quiet = run_settings().verbosity == Verbosity::quiet;
+    if (!quiet) job.progress = [](const std::string& s) { std::fprintf(stderr, "specbake: %s\n", s.c_str()); };
     auto outcome = run_scene_job(job);
     if (!outcome) {
         print_error(outcome.error().message);
@@ -19,7 +30,12 @@ int run_mesh(const SceneCliOptions& o) {
     }
     for (const std::string& w : outcome->warnings) print_warning(w);
     for (const std::string& e : outcome->errors) print_error(e);
-    if (!o.quiet) {
+    for (const io::ManifestInput& in : outcome->manifest.inputs) scenes.push_back(in.path);
+    if (auto d = write_manifest_depfile(pipe, job.output_dir, scenes); !d) {
+        print_error(d.error().message);
+        return kExitFailed;
+    }
+    if (!quiet) {
         for (const ScenePlan& plan : outcome->plans) {
             size_t curvature = 0;
             for (const CurvatureDecision& d : plan.primitives) curvature += d.bake;
@@ -39,15 +55,17 @@ void add_mesh_command(CLI::App& app, std::function<int()>& run) {
         ->check(CLI::IsMember({"same", "gltf", "glb"}))
         ->capture_default_str();
     add_curvature_options(sub, *o);
-    sub->add_flag("-q,--quiet", o->quiet, "Print errors and warnings only");
+    auto pipe = std::make_shared<PipelineFlags>();
+    add_pipeline_options(*sub, *pipe);
     sub->footer(
         "Every triangle primitive with curved shading normals gets the attribute, whatever its material.\n"
         "Curvature is in object space (1/object-space length).\n"
         "\n"
         "Examples:\n"
         "  specbake mesh bunny.ply -o out/\n"
-        "  specbake mesh Suzanne.gltf --estimator normal-cone --format glb -o out/");
-    sub->callback([&run, o] { run = [o] { return run_mesh(*o); }; });
+        "  specbake mesh Suzanne.gltf --estimator normal-cone --format glb -o out/\n"
+        "  specbake mesh bunny.ply -o out/ --depfile out/bunny.d");
+    sub->callback([&run, o, pipe] { run = [o, pipe] { return run_mesh(*o, *pipe); }; });
 }
 
 const Registration reg{"mesh", 30, &add_mesh_command};

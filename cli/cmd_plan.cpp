@@ -8,7 +8,12 @@ namespace specbake::cli {
 namespace {
 
 int run_plan(const SceneCliOptions& o) {
-    const SceneJob job = make_scene_job(o);
+    const auto made = make_scene_job(o);
+    if (!made) {
+        print_error(made.error().message);
+        return kExitUsage;
+    }
+    const SceneJob& job = *made;
     nlohmann::json all = nlohmann::json::array();
     int status = kExitOk;
     for (const auto& scene : job.scenes) {

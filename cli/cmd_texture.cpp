@@ -32,9 +32,7 @@ struct TextureOptions {
     bool anisotropic = false;
     std::string lean_space = "projected";
     std::string outputs = "roughness,kernel,lean,normal";
-    int threads = 0;
     bool demo = false;
-    bool quiet = false;
 };
 
 // "FILE[:channel]" with channel 0-3 or r/g/b/a. A path that exists as given is never split.
@@ -108,7 +106,7 @@ int run_texture(const TextureOptions& o, const PipelineFlags& pipe) {
     s.wrap = o.wrap == "clamp" ? WrapMode::Clamp : o.wrap == "mirror" ? WrapMode::Mirror : WrapMode::Repeat;
     s.anisotropic = o.anisotropic;
     s.lean_space = o.lean_space == "slope" ? LeanSpace::Slope : LeanSpace::Projected;
-    s.threads = o.threads;
+    s.threads = run_settings().jobs;
     if (!parse_outputs(o.outputs, s.outputs)) {
         print_error("texture: --outputs " + o.outputs + ": expected a comma list of roughness, kernel, lean, normal");
         return kExitUsage;
@@ -127,7 +125,8 @@ int run_texture(const TextureOptions& o, const PipelineFlags& pipe) {
     if (job.demo || job.roughness) recorded["roughness_channel"] = job.roughness_channel;
     else recorded["roughness_value"] = job.roughness_value;
     if (skip_if_up_to_date({job.output_dir, inputs, recorded, tool_version(), {"input_facts"}}, pipe)) return kExitOk;
-    if (!o.quiet && ::isatty(2)) job.progress = [](const std::string& line) { std::fprintf(stderr, "specbake: %s\n", line.c_str()); };
+    const bool quiet = run_settings().verbosity == Verbosity::quiet;
+    if (!quiet && ::isatty(2)) job.progress = [](const std::string& line) { std::fprintf(stderr, "specbake: %s\n", line.c_str()); };
 
     auto outcome = run_texture_job(job);
     if (!outcome) {
@@ -142,7 +141,7 @@ int run_texture(const TextureOptions& o, const PipelineFlags& pipe) {
     }
     if (outcome->notes.z_reconstructed)
         std::fprintf(stderr, "specbake: note: z reconstructed from x and y (%s)\n", outcome->notes.z_reason.c_str());
-    if (!o.quiet) {
+    if (!quiet) {
         for (const io::ManifestOutput& out : outcome->manifest.outputs)
             std::printf("%-9s %s  %dx%d, %d mips, %d channels\n", out.kind.c_str(),
                         (fs::path(o.output) / out.path).string().c_str(), out.width, out.height, out.mips,
@@ -194,12 +193,9 @@ void add_texture_command(CLI::App& app, std::function<int()>& run) {
                     "LEAN moments in projected space (default) or slope space (Olano & Baker, base roughness folded in)")
         ->check(CLI::IsMember({"projected", "slope"}));
     sub->add_option("--outputs", o->outputs, "Comma list of roughness, kernel, lean, normal (default: all)");
-    sub->add_option("--threads", o->threads, "Worker threads (0: all cores); outputs are identical for any count")
-        ->check(CLI::Range(0, 1024));
     sub->add_flag("--demo", o->demo,
                   "Bake the built-in 512x384 procedural normal map (bumps, ribs, noise) and ORM map; they are "
                   "written to the output folder as demo_normal.png and demo_orm.png");
-    sub->add_flag("-q,--quiet", o->quiet, "Print only warnings and errors");
     sub->footer(
         "Outputs (in the output folder): texture_roughness, texture_kernel, texture_lean (+ texture_lean_xy\n"
         "for KTX2/DDS/PNG, which hold at most 4 channels), texture_normal, and manifest.json.\n"

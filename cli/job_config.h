@@ -27,7 +27,7 @@ Result<nlohmann::json> parse_config_text(const std::string& text, const std::str
 
 // Per-material overrides by material name: the [materials.NAME] tables of a config file, for example
 //   [materials.BrushedSteel]
-//   kernel = "max"
+//   isotropic = "max"
 // Values are kept as the strings an option would receive.
 class MaterialOverrides {
 public:

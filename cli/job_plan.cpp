@@ -107,7 +107,8 @@ Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& optio
     }
 
     // Texture decisions, one per material.
-    std::map<std::tuple<int, int, float, float, double>, int> bakes_by_inputs;
+    // Materials with their own settings share a bake only with themselves (the name is part of the key).
+    std::map<std::tuple<int, int, float, float, double, std::string>, int> bakes_by_inputs;
     for (size_t m = 0; m < materials.size() && options.textures; ++m) {
         const io::MaterialInfo& mat = materials[m];
         TextureDecision d;
@@ -153,7 +154,9 @@ Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& optio
             d.threshold = half_quantisation_step(plan.image_bits[bits_image], image_is_float[bits_image]);
             const auto key = std::make_tuple(d.normal_image, d.roughness_image,
                                              d.roughness_texture_used ? d.roughness_factor : d.roughness_value,
-                                             d.roughness_texture_used ? 1.0f : 0.0f, mat.normal_scale);
+                                             d.roughness_texture_used ? 1.0f : 0.0f, mat.normal_scale,
+                                             options.material_texture_settings.count(mat.name) ? mat.name
+                                                                                               : std::string());
             if (auto it = bakes_by_inputs.find(key); it != bakes_by_inputs.end()) {
                 const TextureDecision& first = plan.textures[size_t(it->second)];
                 d.same_as = first.material;
@@ -186,7 +189,7 @@ Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& optio
                         r.pixels[t * size_t(r.channels) + size_t(w.roughness_channel)] *= d.roughness_factor;
                     w.roughness = &w.roughness_storage;
                 }
-                TextureBakeSettings s = options.texture_settings;
+                TextureBakeSettings s = options.texture_settings_for(mat.name);
                 s.outputs = TextureOutputs{true, false, false, false};
                 auto baked = bake_texture(*w.normal, w.roughness, w.roughness_channel, d.roughness_value, s);
                 if (!baked) {

@@ -50,6 +50,15 @@ struct PlanOptions {
     CurvatureEstimator estimator = CurvatureEstimator::ShapeOperator;
     int threads = 0;
     TextureBakeSettings texture_settings;  // the statistic is measured with the settings the bake uses
+    // Settings of the materials named here (config [materials.NAME]); every other material uses
+    // texture_settings.
+    std::map<std::string, TextureBakeSettings> material_texture_settings;
+
+    // The texture-bake settings of the material called `material`.
+    const TextureBakeSettings& texture_settings_for(const std::string& material) const {
+        auto it = material_texture_settings.find(material);
+        return it == material_texture_settings.end() ? texture_settings : it->second;
+    }
 };
 
 struct TextureDecision {

@@ -111,7 +111,9 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
             in.roughness_value = d.roughness_value;
             in.normal_bits = w.normal_bits;
             in.roughness_bits = w.roughness_bits;
-            auto baked = bake_texture_outputs(in, job.plan.texture_settings, job.container, out_dir, d.stem, job.progress);
+            const TextureBakeSettings& settings =
+                job.plan.texture_settings_for(plan->textures[size_t(owner)].material_name);
+            auto baked = bake_texture_outputs(in, settings, job.container, out_dir, d.stem, job.progress);
             if (!baked) return baked.error();
             for (const io::ManifestOutput& o : baked->outputs) written.push_back(out_dir / o.path);
             files_by_material[owner] = baked->outputs;
@@ -124,6 +126,9 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         if (d.roughness_texture_used) ext["source"]["metallicRoughnessTexture"] = mat.metallic_roughness.texture;
         else ext["source"]["roughness"] = d.roughness_value;
         if (!mat.normal.transform.is_null()) ext["KHR_texture_transform"] = mat.normal.transform;
+        const std::string& owner_name = plan->textures[size_t(owner)].material_name;
+        if (job.plan.material_texture_settings.count(owner_name))  // differs from the root's "textures"
+            ext["settings"] = texture_settings_json(job.plan.texture_settings_for(owner_name), job.container);
         ext["outputs"] = json::array();
         for (const io::ManifestOutput& o : files_by_material[owner])
             ext["outputs"].push_back({{"kind", o.kind}, {"uri", o.path}, {"format", o.format}, {"width", o.width},
@@ -217,7 +222,16 @@ json scene_settings_json(const SceneJob& job) {
               {"min_roughness_gain", job.plan.min_roughness_gain},
               {"min_relative_curvature", job.plan.min_relative_curvature},
               {"curvature_space", "object (1/object-space length; node scale s divides it by s in world space)"}};
-    if (job.plan.textures) s["texture"] = texture_settings_json(job.plan.texture_settings, job.container);
+    if (job.plan.textures) {
+        s["texture"] = texture_settings_json(job.plan.texture_settings, job.container);
+        // Per-material settings as applied, so the up-to-date check sees a changed override.
+        if (!job.plan.material_texture_settings.empty()) {
+            json materials = json::object();
+            for (const auto& [name, settings] : job.plan.material_texture_settings)
+                materials[name] = texture_settings_json(settings, job.container);
+            s["materials"] = materials;
+        }
+    }
     return s;
 }
 

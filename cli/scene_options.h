@@ -2,11 +2,18 @@
 // plan thresholds and the texture-bake settings passed through to the texture bake.
 #pragma once
 
+#include "cli/job_config.h"
+#include "cli/job_pipeline.h"
 #include "cli/job_scene.h"
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
+#include <cstdlib>
+#include <initializer_list>
 #include <memory>
+#include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -18,10 +25,10 @@ struct SceneCliOptions {
     std::string estimator = "shape-operator";
     std::string format = "same";
     std::string container = "ktx2";
-    std::string kernel = "mean";
+    std::string isotropic = "mean";
     std::string filter = "projected";
     double max_kernel = 0.0;
-    std::string green = "+y";
+    std::string normal_y = "+y";
     std::string reconstruct_z = "auto";
     bool anisotropic = false;
     std::string lean_space = "projected";
@@ -29,9 +36,7 @@ struct SceneCliOptions {
     double min_roughness_gain = 0.05;
     double min_relative_curvature = 0.05;
     double kappa = 0.18;
-    int threads = 0;
     bool json = false;
-    bool quiet = false;
 };
 
 // Curvature options (all scene subcommands).
@@ -43,7 +48,6 @@ inline void add_curvature_options(CLI::App* sub, SceneCliOptions& o) {
                     "Bake curvature only where p95(|k1|) x bounding-box diagonal reaches this (radians of normal turn)")
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
-    sub->add_option("--threads", o.threads, "Worker threads (0: all cores)")->check(CLI::NonNegativeNumber);
 }
 
 // Material / texture options (bake and plan).
@@ -55,14 +59,15 @@ inline void add_material_options(CLI::App* sub, SceneCliOptions& o) {
     sub->add_option("--kappa", o.kappa, "Kernel clamp of the run time (SPEC Sec. 2)")
         ->check(CLI::PositiveNumber)
         ->capture_default_str();
-    sub->add_option("--kernel", o.kernel, "Isotropic kernel of the texture bake (TK21 Eq. 14, 13, 10)")
+    sub->add_option("--isotropic", o.isotropic,
+                    "Kernel from the footprint covariance Sigma: mean t = tr, sum t = 2 tr, max t = 2 lambda_max")
         ->check(CLI::IsMember({"mean", "sum", "max"}))
         ->capture_default_str();
     sub->add_option("--filter", o.filter, "Roughness filter: projected (TK21 Eq. 4-7) or approx (Eq. 9)")
         ->check(CLI::IsMember({"projected", "approx"}))
         ->capture_default_str();
     sub->add_option("--max-kernel", o.max_kernel, "Clamp of the baked kernel (0: none)")->check(CLI::NonNegativeNumber);
-    sub->add_option("--green", o.green, "Normal-map green convention: +y (OpenGL/glTF) or -y (DirectX)")
+    sub->add_option("--normal-y", o.normal_y, "Normal-map green convention: +y (OpenGL/glTF) or -y (DirectX)")
         ->check(CLI::IsMember({"+y", "-y"}))
         ->capture_default_str();
     sub->add_option("--reconstruct-z", o.reconstruct_z, "Rebuild normal z from x, y")
@@ -78,7 +83,60 @@ inline void add_material_options(CLI::App* sub, SceneCliOptions& o) {
         ->capture_default_str();
 }
 
-inline SceneJob make_scene_job(const SceneCliOptions& o) {
+// Sets one texture setting from the text an option (or a [materials.NAME] key of a config file) gives:
+// isotropic, filter, max-kernel (0: none), normal-y, reconstruct-z, anisotropic, lean-space, outputs.
+// Returns the problem, or an empty string when `value` was applied.
+inline std::string set_texture_setting(TextureBakeSettings& t, const std::string& key, const std::string& value) {
+    auto one_of = [&](std::initializer_list<const char*> allowed) {
+        for (const char* a : allowed)
+            if (value == a) return true;
+        return false;
+    };
+    if (key == "isotropic" && one_of({"mean", "sum", "max"})) {
+        t.isotropic = value == "sum" ? IsotropicReduction::Sum : value == "max" ? IsotropicReduction::Max
+                                                                                : IsotropicReduction::Mean;
+    } else if (key == "filter" && one_of({"projected", "approx"})) {
+        t.filter = value == "approx" ? RoughnessFilterMode::Approx : RoughnessFilterMode::Projected;
+    } else if (key == "normal-y" && one_of({"+y", "-y"})) {
+        t.normal_y = value == "-y" ? NormalGreen::MinusY : NormalGreen::PlusY;
+    } else if (key == "reconstruct-z" && one_of({"auto", "always", "never"})) {
+        t.reconstruct_z = value == "always" ? ReconstructZ::Always
+                          : value == "never" ? ReconstructZ::Never
+                                             : ReconstructZ::Auto;
+    } else if (key == "anisotropic" && one_of({"true", "false", "1", "0"})) {
+        t.anisotropic = value == "true" || value == "1";
+    } else if (key == "lean-space" && one_of({"projected", "slope"})) {
+        t.lean_space = value == "slope" ? LeanSpace::Slope : LeanSpace::Projected;
+    } else if (key == "max-kernel") {
+        char* end = nullptr;
+        const double v = std::strtod(value.c_str(), &end);
+        if (value.empty() || *end != '\0' || !(v >= 0)) return "'" + value + "' is not a number >= 0";
+        t.max_kernel = v > 0 ? std::optional<double>(v) : std::nullopt;
+    } else if (key == "outputs") {
+        TextureOutputs out{false, false, false, false};
+        std::stringstream list(value);
+        std::string item;
+        while (std::getline(list, item, ',')) {
+            if (item == "roughness") out.roughness = true;
+            else if (item == "kernel") out.kernel = true;
+            else if (item == "lean") out.lean = true;
+            else if (item == "normal") out.normal = true;
+            else return "'" + item + "' is not one of roughness, kernel, lean, normal";
+        }
+        t.outputs = out;
+    } else if (key == "isotropic" || key == "filter" || key == "normal-y" || key == "reconstruct-z" ||
+               key == "anisotropic" || key == "lean-space") {
+        return "'" + value + "' is not a valid value";
+    } else {
+        return "unknown key (per-material keys: isotropic, filter, max-kernel, normal-y, reconstruct-z, "
+               "anisotropic, lean-space, outputs)";
+    }
+    return {};
+}
+
+// The job the options describe. The [materials.NAME] tables of --config give per-material texture
+// settings on top of the command-line ones; a bad key or value there is an error naming it.
+inline Result<SceneJob> make_scene_job(const SceneCliOptions& o) {
     SceneJob job;
     for (const std::string& s : o.scenes) job.scenes.emplace_back(s);
     job.output_dir = o.output_dir;
@@ -89,13 +147,13 @@ inline SceneJob make_scene_job(const SceneCliOptions& o) {
     p.min_roughness_gain = o.min_roughness_gain;
     p.min_relative_curvature = o.min_relative_curvature;
     p.kappa = o.kappa;
-    p.threads = o.threads;
+    p.threads = run_settings().jobs;
     TextureBakeSettings& t = p.texture_settings;
-    t.isotropic = o.kernel == "sum" ? IsotropicReduction::Sum : o.kernel == "max" ? IsotropicReduction::Max
-                                                                                  : IsotropicReduction::Mean;
+    t.isotropic = o.isotropic == "sum" ? IsotropicReduction::Sum : o.isotropic == "max" ? IsotropicReduction::Max
+                                                                                        : IsotropicReduction::Mean;
     t.filter = o.filter == "approx" ? RoughnessFilterMode::Approx : RoughnessFilterMode::Projected;
     if (o.max_kernel > 0) t.max_kernel = o.max_kernel;
-    t.normal_y = o.green == "-y" ? NormalGreen::MinusY : NormalGreen::PlusY;
+    t.normal_y = o.normal_y == "-y" ? NormalGreen::MinusY : NormalGreen::PlusY;
     t.reconstruct_z = o.reconstruct_z == "always" ? ReconstructZ::Always
                       : o.reconstruct_z == "never" ? ReconstructZ::Never
                                                    : ReconstructZ::Auto;
@@ -103,7 +161,19 @@ inline SceneJob make_scene_job(const SceneCliOptions& o) {
     t.lean_space = o.lean_space == "slope" ? LeanSpace::Slope : LeanSpace::Projected;
     auto has = [&](const char* k) { return std::find(o.outputs.begin(), o.outputs.end(), k) != o.outputs.end(); };
     t.outputs = TextureOutputs{has("roughness"), has("kernel"), has("lean"), has("normal")};
-    t.threads = o.threads;
+    t.threads = run_settings().jobs;
+    const nlohmann::json overrides = material_overrides().to_json();
+    for (const auto& [material, keys] : overrides.items()) {
+        TextureBakeSettings m = t;
+        for (auto [key, value] : keys.items()) {
+            std::string name = key;
+            std::replace(name.begin(), name.end(), '_', '-');  // max_kernel and max-kernel alike
+            const std::string text = value.is_string() ? value.get<std::string>() : value.dump();
+            if (std::string problem = set_texture_setting(m, name, text); !problem.empty())
+                return make_error("config: materials." + material + "." + key + ": " + problem);
+        }
+        p.material_texture_settings[material] = m;
+    }
     return job;
 }
 

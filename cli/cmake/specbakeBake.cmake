@@ -10,7 +10,7 @@
 #
 #   find_package(specbake REQUIRED)
 #   specbake_bake(game_assets ALL SCENES assets/Helmet.gltf assets/Rock.glb OUTPUT_DIR baked
-#                 OPTIONS --container ktx2 --kernel max)
+#                 OPTIONS --container ktx2 --isotropic max)
 function(specbake_bake target)
   cmake_parse_arguments(PARSE_ARGV 1 SB "ALL" "OUTPUT_DIR" "SCENES;OPTIONS")
   if(NOT SB_SCENES)

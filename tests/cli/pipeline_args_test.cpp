@@ -68,16 +68,16 @@ TEST(ResponseFile, ErrorsNameTheFile) {
 
 TEST(ConfigFile, TomlAndJsonGiveTheSameTree) {
     const std::string toml =
-        "jobs = 2\nkernel = \"max\"\n[bake]\nformat = \"glb\"\n[materials.Steel]\nkernel = \"sum\"\n";
+        "jobs = 2\nisotropic = \"max\"\n[bake]\nformat = \"glb\"\n[materials.Steel]\nisotropic = \"sum\"\n";
     const std::string json =
-        R"({"jobs": 2, "kernel": "max", "bake": {"format": "glb"}, "materials": {"Steel": {"kernel": "sum"}}})";
+        R"({"jobs": 2, "isotropic": "max", "bake": {"format": "glb"}, "materials": {"Steel": {"isotropic": "sum"}}})";
     auto t = parse_config_text(toml, "c.toml");
     auto j = parse_config_text(json, "c.json");
     ASSERT_TRUE(t.ok()) << t.error().message;
     ASSERT_TRUE(j.ok()) << j.error().message;
     EXPECT_EQ((*t)["bake"]["format"], "glb");
-    EXPECT_EQ((*t)["materials"]["Steel"]["kernel"], "sum");
-    EXPECT_EQ((*j)["materials"]["Steel"]["kernel"], "sum");
+    EXPECT_EQ((*t)["materials"]["Steel"]["isotropic"], "sum");
+    EXPECT_EQ((*j)["materials"]["Steel"]["isotropic"], "sum");
     EXPECT_EQ((*t)["jobs"], "2");  // TOML values stay text for the argument parser
     EXPECT_EQ((*j)["jobs"], 2);
 }
@@ -90,9 +90,9 @@ TEST(ConfigFile, InvalidJsonNamesTheFile) {
 
 TEST(ConfigFile, SplitsGlobalCommandAndMaterialEntries) {
     const nlohmann::json tree = {{"jobs", 3},
-                                 {"kernel", "max"},
+                                 {"isotropic", "max"},
                                  {"sizes", {1, 2}},
-                                 {"bake", {{"format", "glb"}, {"materials", {{"Cloth", {{"kernel", "mean"}}}}}}},
+                                 {"bake", {{"format", "glb"}, {"materials", {{"Cloth", {{"isotropic", "mean"}}}}}}},
                                  {"texture", {{"container", "dds"}}},
                                  {"materials", {{"Steel", {{"roughness-value", 0.25}}}}}};
     const std::vector<std::string> globals{"jobs", "quiet"};
@@ -102,18 +102,18 @@ TEST(ConfigFile, SplitsGlobalCommandAndMaterialEntries) {
     bool saw_jobs = false, saw_kernel = false, saw_format = false, saw_sizes = false;
     for (const ConfigEntry& e : split->entries) {
         if (e.key == "jobs") saw_jobs = e.section.empty() && e.values == std::vector<std::string>{"3"};
-        if (e.key == "kernel") saw_kernel = e.section == std::vector<std::string>{"bake"};
+        if (e.key == "isotropic") saw_kernel = e.section == std::vector<std::string>{"bake"};
         if (e.key == "format") saw_format = e.section == std::vector<std::string>{"bake"};
         if (e.key == "sizes") saw_sizes = e.values == std::vector<std::string>{"1", "2"};
         EXPECT_NE(e.key, "container") << "tables of other commands are skipped";
     }
     EXPECT_TRUE(saw_jobs && saw_kernel && saw_format && saw_sizes);
-    EXPECT_EQ(split->materials.find("Cloth", "kernel"), "mean");
+    EXPECT_EQ(split->materials.find("Cloth", "isotropic"), "mean");
     auto r = split->materials.number("Steel", "roughness-value");
     ASSERT_TRUE(r.ok());
     EXPECT_DOUBLE_EQ(r->value(), 0.25);
-    EXPECT_FALSE(split->materials.find("Steel", "kernel").has_value());
-    EXPECT_FALSE(split->materials.find("Nobody", "kernel").has_value());
+    EXPECT_FALSE(split->materials.find("Steel", "isotropic").has_value());
+    EXPECT_FALSE(split->materials.find("Nobody", "isotropic").has_value());
 }
 
 TEST(ConfigFile, UnknownTablesAndBadNumbersAreErrors) {

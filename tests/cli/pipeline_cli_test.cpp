@@ -106,18 +106,18 @@ TEST_F(PipelineCli, SecondRunIsSkippedAndChangesRebake) {
     EXPECT_EQ(forced.out.find("up to date"), std::string::npos);
     EXPECT_TRUE(tree(o) == first) << "a forced rebake of the same inputs gives the same bytes";
 
-    CommandResult setting = run({"bake", scene(), "--kernel", "max", "-o", o});
+    CommandResult setting = run({"bake", scene(), "--isotropic", "max", "-o", o});
     EXPECT_EQ(setting.code, 0);
     EXPECT_EQ(setting.out.find("up to date"), std::string::npos);
     EXPECT_NE(read_text(out("baked") / "manifest.json").find("\"max\""), std::string::npos);
 
-    CommandResult same_again = run({"bake", scene(), "--kernel", "max", "-o", o});
+    CommandResult same_again = run({"bake", scene(), "--isotropic", "max", "-o", o});
     EXPECT_NE(same_again.out.find("up to date"), std::string::npos);
 
     // The referenced texture changes (the scene file does not): rebake.
     ASSERT_EQ(run({"texture", "--demo", "-q", "--roughness-value", "0.2", "-o", (dir_ / "other").string()}).code, 0);
     std::ofstream(texture(), std::ios::app) << '\n';
-    CommandResult changed = run({"-v", "bake", scene(), "--kernel", "max", "-o", o});
+    CommandResult changed = run({"-v", "bake", scene(), "--isotropic", "max", "-o", o});
     EXPECT_EQ(changed.code, 0);
     EXPECT_EQ(changed.out.find("up to date"), std::string::npos);
     EXPECT_NE(changed.err.find("demo_normal.png changed"), std::string::npos) << changed.err;
@@ -170,9 +170,9 @@ TEST_F(PipelineCli, ResponseFileGivesTheArguments) {
 }
 
 TEST_F(PipelineCli, ConfigFileAndCommandLinePrecedence) {
-    std::ofstream(dir_ / "c.toml") << "# flat keys go to the command being run\nkernel = \"max\"\n"
+    std::ofstream(dir_ / "c.toml") << "# flat keys go to the command being run\nisotropic = \"max\"\n"
                                    << "[texture]\nformat = \"dds\"\n";
-    std::ofstream(dir_ / "c.json") << R"({"bake": {"kernel": "sum", "container": "dds"}})";
+    std::ofstream(dir_ / "c.json") << R"({"bake": {"isotropic": "sum", "container": "dds"}})";
     auto kernel_of = [&](const fs::path& o) {
         const std::string m = read_text(o / "manifest.json");
         for (const char* k : {"mean", "sum", "max"})
@@ -181,7 +181,7 @@ TEST_F(PipelineCli, ConfigFileAndCommandLinePrecedence) {
     };
     ASSERT_EQ(run({"--config", (dir_ / "c.toml").string(), "bake", scene(), "-q", "-o", out("c1").string()}).code, 0);
     EXPECT_EQ(kernel_of(out("c1")), "max");
-    ASSERT_EQ(run({"bake", "--config", (dir_ / "c.toml").string(), scene(), "--kernel", "mean", "-q", "-o",
+    ASSERT_EQ(run({"bake", "--config", (dir_ / "c.toml").string(), scene(), "--isotropic", "mean", "-q", "-o",
                    out("c2").string()})
                   .code,
               0);

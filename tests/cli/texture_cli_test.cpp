@@ -79,9 +79,9 @@ TEST_F(TextureCli, HelpHasExamples) {
 
 TEST_F(TextureCli, DemoWritesContainersAndManifestDeterministically) {
     const fs::path a = root_ / "a", b = root_ / "b";
-    const RunResult r1 = run("texture --demo -q --threads 1 -o '" + a.string() + "'", root_ / "scratch");
+    const RunResult r1 = run("texture --demo -q -j 1 -o '" + a.string() + "'", root_ / "scratch");
     ASSERT_EQ(r1.code, 0) << r1.err;
-    const RunResult r2 = run("texture --demo -q --threads 2 -o '" + b.string() + "'", root_ / "scratch");
+    const RunResult r2 = run("texture --demo -q -j 2 -o '" + b.string() + "'", root_ / "scratch");
     ASSERT_EQ(r2.code, 0) << r2.err;
     auto m = io::read_manifest(a / "manifest.json");
     ASSERT_TRUE(m.ok()) << m.error().message;
