@@ -1,7 +1,6 @@
 #include "gl/gl_harness.h"
 
 #include <EGL/egl.h>
-#include <EGL/eglext.h>
 
 #include <sys/wait.h>
 
@@ -20,12 +19,6 @@ namespace specbake::gltest {
 namespace {
 
 constexpr int kGridWidth = 256;
-
-std::string egl_error(const char* what) {
-    char buf[128];
-    std::snprintf(buf, sizeof buf, "%s failed (EGL error 0x%04x)", what, static_cast<unsigned>(eglGetError()));
-    return buf;
-}
 
 // Mesa's shader cache goes to a folder of this process, removed at exit, so tests never touch $HOME.
 void private_shader_cache() {
@@ -107,50 +100,17 @@ bool gl_disabled() {
 
 std::unique_ptr<GlContext> GlContext::open(std::string& reason) {
     private_shader_cache();
-    const char* client = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
-    if (!client || !std::strstr(client, "EGL_MESA_platform_surfaceless")) {
-        reason = "EGL_MESA_platform_surfaceless is missing (Debian packages libegl-mesa0, libgl1-mesa-dri)";
-        return nullptr;
-    }
-    auto get_display = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(eglGetProcAddress("eglGetPlatformDisplayEXT"));
-    if (!get_display) {
-        reason = "eglGetPlatformDisplayEXT is missing";
-        return nullptr;
-    }
-    EGLDisplay display = get_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
-    EGLint major = 0, minor = 0;
-    if (display == EGL_NO_DISPLAY || !eglInitialize(display, &major, &minor)) {
-        reason = egl_error("eglInitialize (surfaceless)");
-        return nullptr;
-    }
-    const EGLint attributes[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 5,
-                                 EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
-    EGLContext context = EGL_NO_CONTEXT;
-    if (eglBindAPI(EGL_OPENGL_API))
-        context = eglCreateContext(display, EGL_NO_CONFIG_KHR, EGL_NO_CONTEXT, attributes);
-    if (context == EGL_NO_CONTEXT) {
-        reason = egl_error("eglCreateContext (OpenGL 4.5 core)");
-        eglTerminate(display);
-        return nullptr;
-    }
-    if (!eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context)) {
-        reason = egl_error("eglMakeCurrent without a surface");
-        eglDestroyContext(display, context);
-        eglTerminate(display);
+    auto context = cli::GlContext::create();
+    if (!context) {
+        reason = context.error().message;
         return nullptr;
     }
     std::unique_ptr<GlContext> result(new GlContext());
-    result->display_ = display;
-    result->context_ = context;
+    result->context_ = std::move(context.value());
     return result;
 }
 
-GlContext::~GlContext() {
-    auto display = static_cast<EGLDisplay>(display_);
-    eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
-    eglDestroyContext(display, static_cast<EGLContext>(context_));
-    eglTerminate(display);
-}
+GlContext::~GlContext() = default;
 
 bool GlContext::has_extension(const char* name) const {
     GLint count = 0;

@@ -6,6 +6,8 @@
 #define GL_GLEXT_PROTOTYPES 1
 #include <GL/glcorearb.h>
 
+#include "cli/gl_context.h"
+
 #include <array>
 #include <filesystem>
 #include <memory>
@@ -28,8 +30,7 @@ public:
 
 private:
     GlContext() = default;
-    void* display_ = nullptr;
-    void* context_ = nullptr;
+    std::unique_ptr<cli::GlContext> context_;
 };
 
 // True when SPECBAKE_NO_GL=1 (GL tests skip instead of failing).
