@@ -190,7 +190,7 @@ Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& optio
                     w.roughness = &w.roughness_storage;
                 }
                 TextureBakeSettings s = options.texture_settings_for(mat.name);
-                s.outputs = TextureOutputs{true, false, false, false};
+                if (!options.texture_sink) s.outputs = TextureOutputs{true, false, false, false};
                 auto baked = bake_texture(*w.normal, w.roughness, w.roughness_channel, d.roughness_value, s);
                 if (!baked) {
                     d.reason = scene.image_label(d.normal_image) + ": " + baked.error().message;
@@ -203,8 +203,12 @@ Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& optio
                     for (const std::string& warning : baked->notes.warnings)
                         plan.notes.push_back(scene.image_label(d.normal_image) + ": " + warning);
                 }
-                if (!d.bake) plan.texture_work.erase(int(m));
                 d.reason += mapping_note;
+                if (!d.bake) {
+                    plan.texture_work.erase(int(m));
+                } else if (options.texture_sink) {
+                    if (auto ok = options.texture_sink(d, w, std::move(*baked)); !ok) return ok.error();
+                }
                 bakes_by_inputs[key] = int(plan.textures.size());
             }
         }

@@ -33,6 +33,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -40,6 +41,12 @@
 #include <vector>
 
 namespace specbake {
+
+struct TextureDecision;
+struct TextureWork;
+
+// Receives a texture bake the plan decided to keep, with its decision and inputs (see PlanOptions).
+using TextureBakeSink = std::function<Result<void>(const TextureDecision&, const TextureWork&, TextureBakeResult&&)>;
 
 struct PlanOptions {
     bool textures = true;                 // false: curvature only (`specbake mesh`)
@@ -59,6 +66,12 @@ struct PlanOptions {
         auto it = material_texture_settings.find(material);
         return it == material_texture_settings.end() ? texture_settings : it->second;
     }
+
+    // Set by `specbake bake`: the plan bakes each material with all its outputs and passes every bake it
+    // keeps to this function right after the decision (which writes it), so each texture is baked once and
+    // only one material's chains are held at a time. Empty (`specbake plan`): roughness only, nothing kept.
+    // An error from it ends the plan.
+    TextureBakeSink texture_sink;
 };
 
 struct TextureDecision {

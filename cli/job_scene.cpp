@@ -74,8 +74,32 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
     for (const fs::path& r : scene.resource_files()) result.inputs.push_back(r);
     if (auto r = io::check_output_not_input(out_dir, result.inputs); !r) return r.error();
 
+    // Material textures: the plan measures its statistic on the full bake and this writes each kept bake
+    // right away. Materials with identical inputs share one set of files (the first material's).
+    std::map<int, std::vector<io::ManifestOutput>> files_by_material;
+    PlanOptions options = job.plan;
+    options.texture_sink = [&](const TextureDecision& d, const TextureWork& w,
+                               TextureBakeResult&& baked) -> Result<void> {
+        say("writing textures of material " + std::to_string(d.material) + " of " + input.string());
+        TextureInputs in;
+        in.normal = w.normal;
+        in.normal_name = scene.image_label(d.normal_image);
+        in.roughness = w.roughness;
+        in.roughness_name = w.roughness ? scene.image_label(d.roughness_image) : std::string();
+        in.roughness_channel = w.roughness ? w.roughness_channel : -1;
+        in.roughness_value = d.roughness_value;
+        in.normal_bits = w.normal_bits;
+        in.roughness_bits = w.roughness_bits;
+        auto out = write_texture_outputs(std::move(baked), in, job.plan.texture_settings_for(d.material_name),
+                                         job.container, out_dir, d.stem, job.progress);
+        if (!out) return out.error();
+        for (const io::ManifestOutput& o : out->outputs) written.push_back(out_dir / o.path);
+        result.outputs.insert(result.outputs.end(), out->outputs.begin(), out->outputs.end());
+        files_by_material[d.material] = std::move(out->outputs);
+        return {};
+    };
     say("planning " + input.string());
-    auto plan = make_plan(scene, job.plan, loaded->roughness_known);
+    auto plan = make_plan(scene, options, loaded->roughness_known);
     if (!plan) return plan.error();
     for (const std::string& n : plan->notes) warnings.push_back(n);
 
@@ -92,33 +116,12 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         ++baked_primitives;
     }
 
-    // Material textures. Materials with identical inputs share one set of files.
+    // Material extensions pointing at the files written during planning.
     const std::vector<io::MaterialInfo> materials = scene.materials();
-    std::map<int, std::vector<io::ManifestOutput>> files_by_material;
     bool any_texture = false;
     for (const TextureDecision& d : plan->textures) {
         if (!d.bake) continue;
         const int owner = d.same_as >= 0 ? d.same_as : d.material;
-        if (!files_by_material.count(owner)) {
-            const TextureWork& w = plan->texture_work.at(owner);
-            say("baking textures of material " + std::to_string(owner) + " of " + input.string());
-            TextureInputs in;
-            in.normal = w.normal;
-            in.normal_name = scene.image_label(d.normal_image);
-            in.roughness = w.roughness;
-            in.roughness_name = w.roughness ? scene.image_label(d.roughness_image) : std::string();
-            in.roughness_channel = w.roughness ? w.roughness_channel : -1;
-            in.roughness_value = d.roughness_value;
-            in.normal_bits = w.normal_bits;
-            in.roughness_bits = w.roughness_bits;
-            const TextureBakeSettings& settings =
-                job.plan.texture_settings_for(plan->textures[size_t(owner)].material_name);
-            auto baked = bake_texture_outputs(in, settings, job.container, out_dir, d.stem, job.progress);
-            if (!baked) return baked.error();
-            for (const io::ManifestOutput& o : baked->outputs) written.push_back(out_dir / o.path);
-            files_by_material[owner] = baked->outputs;
-            result.outputs.insert(result.outputs.end(), baked->outputs.begin(), baked->outputs.end());
-        }
         const io::MaterialInfo& mat = materials[size_t(d.material)];
         json ext = {{"texCoord", d.texcoord},
                     {"roughnessChannel", d.roughness_texture_used ? 1 : 0},
@@ -130,7 +133,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         if (job.plan.material_texture_settings.count(owner_name))  // differs from the root's "textures"
             ext["settings"] = texture_settings_json(job.plan.texture_settings_for(owner_name), job.container);
         ext["outputs"] = json::array();
-        for (const io::ManifestOutput& o : files_by_material[owner])
+        for (const io::ManifestOutput& o : files_by_material.at(owner))
             ext["outputs"].push_back({{"kind", o.kind}, {"uri", o.path}, {"format", o.format}, {"width", o.width},
                                       {"height", o.height}, {"mips", o.mips}, {"channels", o.channels}});
         scene.set_material_extension(d.material, ext);

@@ -150,9 +150,8 @@ nlohmann::json texture_settings_json(const TextureBakeSettings& s, io::TextureCo
     return j;
 }
 
-Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& in, const TextureBakeSettings& settings,
-                                                   io::TextureContainer container, const fs::path& dir,
-                                                   const std::string& stem, const ProgressFn& progress) {
+Result<TextureBakeResult> bake_texture_inputs(const TextureInputs& in, const TextureBakeSettings& settings,
+                                              const ProgressFn& progress) {
     if (!in.normal) return make_error(in.normal_name + ": no normal map given");
     int channel = in.roughness_channel;
     if (in.roughness && channel < 0) channel = in.roughness->channels >= 3 ? 1 : 0;
@@ -161,10 +160,24 @@ Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& in, cons
                  in.normal_name);
     auto baked = bake_texture(*in.normal, in.roughness, channel, in.roughness_value, settings);
     if (!baked) return name_error(baked.error(), in.normal_name, in.roughness_name);
+    return baked;
+}
 
+Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& in, const TextureBakeSettings& settings,
+                                                   io::TextureContainer container, const fs::path& dir,
+                                                   const std::string& stem, const ProgressFn& progress) {
+    auto baked = bake_texture_inputs(in, settings, progress);
+    if (!baked) return baked.error();
+    return write_texture_outputs(std::move(*baked), in, settings, container, dir, stem, progress);
+}
+
+Result<TextureOutputsWritten> write_texture_outputs(TextureBakeResult&& baked, const TextureInputs& in,
+                                                    const TextureBakeSettings& settings,
+                                                    io::TextureContainer container, const fs::path& dir,
+                                                    const std::string& stem, const ProgressFn& progress) {
     TextureOutputsWritten result;
-    result.notes = baked->notes;
-    result.max_roughness_change = baked->max_roughness_change;
+    result.notes = baked.notes;
+    result.max_roughness_change = baked.max_roughness_change;
     const WrapMode wrap = settings.wrap;
     const int roughness_bits = in.roughness ? in.roughness_bits : in.normal_bits;
     auto say = [&](const std::string& what) {
@@ -173,32 +186,32 @@ Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& in, cons
     if (settings.outputs.roughness) {
         say(stem + "_roughness");
         const std::vector<std::string> names =
-            baked->roughness.channels() == 3 ? std::vector<std::string>{"R", "G", "B"} : std::vector<std::string>{"Y"};
-        if (auto ok = append(result.outputs, io::write_texture(baked->roughness, unorm_for_bits(roughness_bits),
+            baked.roughness.channels() == 3 ? std::vector<std::string>{"R", "G", "B"} : std::vector<std::string>{"Y"};
+        if (auto ok = append(result.outputs, io::write_texture(baked.roughness, unorm_for_bits(roughness_bits),
                                                                container, dir, stem + "_roughness", "roughness",
                                                                names, wrap));
             !ok)
             return ok.error();
-        baked->roughness = MipChain{};  // written: release it before the next chain is encoded
+        baked.roughness = MipChain{};  // written: release it before the next chain is encoded
     }
     if (settings.outputs.kernel) {
         say(stem + "_kernel");
         const std::vector<std::string> names = settings.anisotropic ? std::vector<std::string>{"xx", "yy", "xy"}
                                                                     : std::vector<std::string>{"t"};
-        if (auto ok = append(result.outputs, io::write_texture(baked->kernel, io::TexelEncoding::Float16, container,
+        if (auto ok = append(result.outputs, io::write_texture(baked.kernel, io::TexelEncoding::Float16, container,
                                                                dir, stem + "_kernel", "kernel", names, wrap));
             !ok)
             return ok.error();
-        baked->kernel = MipChain{};
+        baked.kernel = MipChain{};
     }
     if (settings.outputs.normal) {
         say(stem + "_normal");
-        if (auto ok = append(result.outputs, io::write_texture(baked->normal, unorm_for_bits(in.normal_bits),
+        if (auto ok = append(result.outputs, io::write_texture(baked.normal, unorm_for_bits(in.normal_bits),
                                                                container, dir, stem + "_normal", "normal",
                                                                {"R", "G", "B"}, wrap));
             !ok)
             return ok.error();
-        baked->normal = MipChain{};
+        baked.normal = MipChain{};
     }
     if (settings.outputs.lean) {
         say(stem + "_lean");
@@ -208,16 +221,16 @@ Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& in, cons
         const std::vector<std::string> names{"m.x", "m.y", "M.xx", "M.yy", "M.xy"};
         if (container == io::TextureContainer::Exr) {
             if (auto ok = append(result.outputs,
-                                 io::write_texture(baked->lean, enc, container, dir, stem + "_lean", "lean", names, wrap));
+                                 io::write_texture(baked.lean, enc, container, dir, stem + "_lean", "lean", names, wrap));
                 !ok)
                 return ok.error();
         } else {
-            if (auto ok = append(result.outputs, io::write_texture(channel_subset(baked->lean, 0, 4), enc, container,
+            if (auto ok = append(result.outputs, io::write_texture(channel_subset(baked.lean, 0, 4), enc, container,
                                                                    dir, stem + "_lean", "lean",
                                                                    {names.begin(), names.begin() + 4}, wrap));
                 !ok)
                 return ok.error();
-            if (auto ok = append(result.outputs, io::write_texture(channel_subset(baked->lean, 4, 1), enc, container,
+            if (auto ok = append(result.outputs, io::write_texture(channel_subset(baked.lean, 4, 1), enc, container,
                                                                    dir, stem + "_lean_xy", "lean", {"M.xy"}, wrap));
                 !ok)
                 return ok.error();

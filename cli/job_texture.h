@@ -1,7 +1,7 @@
 // The texture job (`specbake texture`): read the normal and roughness maps, bake them (bake/texture_bake.h),
 // write the requested mip chains into one folder and record them in manifest.json. The lower-level
-// bake_texture_outputs() is the same pipeline for images already in memory (the scene bake uses it and
-// writes one combined manifest itself).
+// bake_texture_outputs() is the same pipeline for images already in memory; the scene bake runs its two
+// steps apart (the plan bakes, then write_texture_outputs()) and writes one combined manifest itself.
 #pragma once
 
 #include "bake/texture_bake.h"
@@ -67,6 +67,18 @@ struct TextureOutputsWritten {
 Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& inputs, const TextureBakeSettings& settings,
                                                    io::TextureContainer container, const std::filesystem::path& dir,
                                                    const std::string& stem, const ProgressFn& progress = {});
+
+// The two steps of bake_texture_outputs(), for a caller that needs the bake before deciding to write it
+// (`specbake bake` measures the plan's statistic on the bake it writes). Errors name the input files.
+Result<TextureBakeResult> bake_texture_inputs(const TextureInputs& inputs, const TextureBakeSettings& settings,
+                                              const ProgressFn& progress = {});
+
+// Writes the chains of `baked` selected in settings.outputs, as bake_texture_outputs() does; `inputs`
+// gives the output encodings. Each chain is released once written, so peak memory stays one encoding.
+Result<TextureOutputsWritten> write_texture_outputs(TextureBakeResult&& baked, const TextureInputs& inputs,
+                                                    const TextureBakeSettings& settings,
+                                                    io::TextureContainer container, const std::filesystem::path& dir,
+                                                    const std::string& stem, const ProgressFn& progress = {});
 
 // The settings as recorded in manifests.
 nlohmann::json texture_settings_json(const TextureBakeSettings& settings, io::TextureContainer container);
