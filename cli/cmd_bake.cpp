@@ -19,7 +19,7 @@ int run_bake(const SceneCliOptions& o, const PipelineFlags& pipe) {
     }
     SceneJob job = std::move(*made);
     std::vector<std::string> scenes(job.scenes.begin(), job.scenes.end());
-    if (skip_if_up_to_date({job.output_dir, scenes, scene_settings_json(job), tool_version()}, pipe)) return kExitOk;
+    if (skip_if_up_to_date({job.output_dir, scenes, scene_settings_json(job), tool_version(), {}}, pipe)) return kExitOk;
     const bool quiet = run_settings().verbosity == Verbosity::quiet;
     if (!quiet) job.progress = [](const std::string& s) { std::fprintf(stderr, "specbake: %s\n", s.c_str()); };
     auto outcome = run_scene_job(job);

@@ -20,7 +20,7 @@ int run_mesh(const SceneCliOptions& o, const PipelineFlags& pipe) {
     job.plan.textures = false;
     job.plan.check_material = false;
     std::vector<std::string> scenes(job.scenes.begin(), job.scenes.end());
-    if (skip_if_up_to_date({job.output_dir, scenes, scene_settings_json(job), tool_version()}, pipe)) return kExitOk;
+    if (skip_if_up_to_date({job.output_dir, scenes, scene_settings_json(job), tool_version(), {}}, pipe)) return kExitOk;
     const bool quiet = run_settings().verbosity == Verbosity::quiet;
     if (!quiet) job.progress = [](const std::string& s) { std::fprintf(stderr, "specbake: %s\n", s.c_str()); };
     auto outcome = run_scene_job(job);

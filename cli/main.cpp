@@ -108,6 +108,10 @@ int main(int argc, char** argv) {
     std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) { return a.order < b.order; });
     std::function<int()> run;
     for (const Entry& e : entries) e.add(app, run);
+    for (CLI::App* sub : app.get_subcommands({}))
+        sub->footer(sub->get_footer() +
+                    "\n\nGlobal options (before or after the command): -j/--jobs N, -q/--quiet, -v/--verbose,\n"
+                    "--config FILE, and @FILE response files. See 'specbake --help'.");
 
     std::vector<std::string> subcommands;
     for (const Entry& e : entries) subcommands.emplace_back(e.name);
