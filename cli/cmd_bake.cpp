@@ -9,15 +9,18 @@
 #include <utility>
 
 namespace specbake::cli {
-namespace {
 
-int run_bake(const SceneCliOptions& o, const PipelineFlags& pipe) {
+int run_scene_command(const SceneCliOptions& o, const PipelineFlags& pipe, bool curvature_only) {
     auto made = make_scene_job(o);
     if (!made) {
         print_error(made.error().message);
         return kExitUsage;
     }
     SceneJob job = std::move(*made);
+    if (curvature_only) {
+        job.plan.textures = false;
+        job.plan.check_material = false;
+    }
     std::vector<std::string> scenes(job.scenes.begin(), job.scenes.end());
     if (skip_if_up_to_date({job.output_dir, scenes, scene_settings_json(job), tool_version(), {}}, pipe)) return kExitOk;
     const bool quiet = run_settings().verbosity == Verbosity::quiet;
@@ -39,8 +42,12 @@ int run_bake(const SceneCliOptions& o, const PipelineFlags& pipe) {
             size_t textures = 0, curvature = 0;
             for (const TextureDecision& d : plan.textures) textures += d.bake && d.same_as < 0;
             for (const CurvatureDecision& d : plan.primitives) curvature += d.bake;
-            std::printf("%s: curvature on %zu of %zu primitives, %zu texture bake(s)\n", plan.scene.c_str(), curvature,
-                        plan.primitives.size(), textures);
+            if (curvature_only)
+                std::printf("%s: curvature on %zu of %zu primitives\n", plan.scene.c_str(), curvature,
+                            plan.primitives.size());
+            else
+                std::printf("%s: curvature on %zu of %zu primitives, %zu texture bake(s)\n", plan.scene.c_str(),
+                            curvature, plan.primitives.size(), textures);
         }
         if (!outcome->plans.empty())
             std::printf("wrote %zu files and manifest.json to %s\n", outcome->manifest.outputs.size(),
@@ -48,6 +55,10 @@ int run_bake(const SceneCliOptions& o, const PipelineFlags& pipe) {
     }
     return outcome->errors.empty() ? kExitOk : kExitFailed;
 }
+
+namespace {
+
+int run_bake(const SceneCliOptions& o, const PipelineFlags& pipe) { return run_scene_command(o, pipe, false); }
 
 void add_bake_command(CLI::App& app, std::function<int()>& run) {
     auto* sub = app.add_subcommand(

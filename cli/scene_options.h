@@ -177,4 +177,9 @@ inline Result<SceneJob> make_scene_job(const SceneCliOptions& o) {
     return job;
 }
 
+// Runs `bake` (curvature_only = false: textures and curvature, as planned) or `mesh` (curvature only) for
+// parsed options: up-to-date check, the scene job, messages, depfile. Returns the process exit code.
+// Defined in cmd_bake.cpp.
+int run_scene_command(const SceneCliOptions& options, const PipelineFlags& pipe, bool curvature_only);
+
 }  // namespace specbake::cli
