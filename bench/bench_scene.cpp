@@ -38,12 +38,31 @@ bool no_decode(tinygltf::Image*, const int, std::string*, std::string*, int, int
     return true;
 }
 
+// Appends `bytes` from `src` to buffer 0 of `m` as a new buffer view with an accessor over it;
+// returns the accessor's index.
+int append_accessor(tinygltf::Model& m, const void* src, size_t bytes, int type, int component_type, size_t count) {
+    std::vector<unsigned char>& data = m.buffers[0].data;
+    tinygltf::BufferView bv;
+    bv.buffer = 0;
+    bv.byteOffset = data.size();
+    bv.byteLength = bytes;
+    const auto* b = static_cast<const uint8_t*>(src);
+    data.insert(data.end(), b, b + bytes);
+    m.bufferViews.push_back(bv);
+    tinygltf::Accessor a;
+    a.bufferView = int(m.bufferViews.size() - 1);
+    a.componentType = component_type;
+    a.type = type;
+    a.count = count;
+    m.accessors.push_back(a);
+    return int(m.accessors.size() - 1);
+}
+
 // Writes the sphere once (tinygltf), glossy material, no tangents (the bake generates them).
 const fs::path& sphere_glb() {
     static const fs::path path = [] {
         const fs::path p = bench_dir() / "in" / "sphere1m.glb";
         if (fs::exists(p)) return p;
-        std::vector<float> data;
         std::vector<uint32_t> idx;
         std::vector<float> pos, nrm, uv;
         for (int r = 0; r <= kRings; ++r)
@@ -63,31 +82,15 @@ const fs::path& sphere_glb() {
         tinygltf::Model m;
         m.asset.version = "2.0";
         m.buffers.emplace_back();
-        auto add = [&](const void* src, size_t bytes, int type, int ctype, size_t count) {
-            tinygltf::BufferView bv;
-            bv.buffer = 0;
-            bv.byteOffset = m.buffers[0].data.size();
-            bv.byteLength = bytes;
-            const auto* b = static_cast<const uint8_t*>(src);
-            m.buffers[0].data.insert(m.buffers[0].data.end(), b, b + bytes);
-            m.bufferViews.push_back(bv);
-            tinygltf::Accessor a;
-            a.bufferView = int(m.bufferViews.size() - 1);
-            a.componentType = ctype;
-            a.type = type;
-            a.count = count;
-            m.accessors.push_back(a);
-            return int(m.accessors.size() - 1);
-        };
         const size_t nv = pos.size() / 3;
         tinygltf::Primitive prim;
         prim.mode = TINYGLTF_MODE_TRIANGLES;
-        prim.attributes["POSITION"] = add(pos.data(), pos.size() * 4, TINYGLTF_TYPE_VEC3, TINYGLTF_COMPONENT_TYPE_FLOAT, nv);
+        prim.attributes["POSITION"] = append_accessor(m, pos.data(), pos.size() * 4, TINYGLTF_TYPE_VEC3, TINYGLTF_COMPONENT_TYPE_FLOAT, nv);
         m.accessors.back().minValues = {-1, -1, -1};
         m.accessors.back().maxValues = {1, 1, 1};
-        prim.attributes["NORMAL"] = add(nrm.data(), nrm.size() * 4, TINYGLTF_TYPE_VEC3, TINYGLTF_COMPONENT_TYPE_FLOAT, nv);
-        prim.attributes["TEXCOORD_0"] = add(uv.data(), uv.size() * 4, TINYGLTF_TYPE_VEC2, TINYGLTF_COMPONENT_TYPE_FLOAT, nv);
-        prim.indices = add(idx.data(), idx.size() * 4, TINYGLTF_TYPE_SCALAR, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, idx.size());
+        prim.attributes["NORMAL"] = append_accessor(m, nrm.data(), nrm.size() * 4, TINYGLTF_TYPE_VEC3, TINYGLTF_COMPONENT_TYPE_FLOAT, nv);
+        prim.attributes["TEXCOORD_0"] = append_accessor(m, uv.data(), uv.size() * 4, TINYGLTF_TYPE_VEC2, TINYGLTF_COMPONENT_TYPE_FLOAT, nv);
+        prim.indices = append_accessor(m, idx.data(), idx.size() * 4, TINYGLTF_TYPE_SCALAR, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, idx.size());
         prim.material = 0;
         tinygltf::Material mat;
         mat.pbrMetallicRoughness.roughnessFactor = 0.3;
@@ -140,36 +143,19 @@ void BM_AssimpImportTinygltfWrite(benchmark::State& state) {
         tinygltf::Model m;
         m.asset.version = "2.0";
         m.buffers.emplace_back();
-        auto& data = m.buffers[0].data;
-        auto add = [&](const void* src, size_t bytes, int type, int ctype, size_t count) {
-            tinygltf::BufferView bv;
-            bv.buffer = 0;
-            bv.byteOffset = data.size();
-            bv.byteLength = bytes;
-            const auto* b = static_cast<const uint8_t*>(src);
-            data.insert(data.end(), b, b + bytes);
-            m.bufferViews.push_back(bv);
-            tinygltf::Accessor a;
-            a.bufferView = int(m.bufferViews.size() - 1);
-            a.componentType = ctype;
-            a.type = type;
-            a.count = count;
-            m.accessors.push_back(a);
-            return int(m.accessors.size() - 1);
-        };
         std::vector<float> uv(size_t(am->mNumVertices) * 2);
         for (unsigned v = 0; v < am->mNumVertices; ++v) uv[2 * v] = am->mTextureCoords[0][v].x, uv[2 * v + 1] = am->mTextureCoords[0][v].y;
         std::vector<uint32_t> idx(size_t(am->mNumFaces) * 3);
         for (unsigned f = 0; f < am->mNumFaces; ++f)
             for (int k = 0; k < 3; ++k) idx[3 * f + k] = am->mFaces[f].mIndices[k];
         tinygltf::Primitive prim;
-        prim.attributes["POSITION"] = add(am->mVertices, am->mNumVertices * 12, TINYGLTF_TYPE_VEC3,
+        prim.attributes["POSITION"] = append_accessor(m, am->mVertices, am->mNumVertices * 12, TINYGLTF_TYPE_VEC3,
                                           TINYGLTF_COMPONENT_TYPE_FLOAT, am->mNumVertices);
-        prim.attributes["NORMAL"] = add(am->mNormals, am->mNumVertices * 12, TINYGLTF_TYPE_VEC3,
+        prim.attributes["NORMAL"] = append_accessor(m, am->mNormals, am->mNumVertices * 12, TINYGLTF_TYPE_VEC3,
                                         TINYGLTF_COMPONENT_TYPE_FLOAT, am->mNumVertices);
-        prim.attributes["TEXCOORD_0"] = add(uv.data(), uv.size() * 4, TINYGLTF_TYPE_VEC2, TINYGLTF_COMPONENT_TYPE_FLOAT,
+        prim.attributes["TEXCOORD_0"] = append_accessor(m, uv.data(), uv.size() * 4, TINYGLTF_TYPE_VEC2, TINYGLTF_COMPONENT_TYPE_FLOAT,
                                             am->mNumVertices);
-        prim.indices = add(idx.data(), idx.size() * 4, TINYGLTF_TYPE_SCALAR, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, idx.size());
+        prim.indices = append_accessor(m, idx.data(), idx.size() * 4, TINYGLTF_TYPE_SCALAR, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, idx.size());
         tinygltf::Mesh mesh;
         mesh.primitives.push_back(prim);
         m.meshes.push_back(mesh);
