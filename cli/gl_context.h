@@ -31,4 +31,11 @@ private:
     void* context_ = nullptr;
 };
 
+// Compiles one GLSL stage (GL_VERTEX_SHADER, GL_FRAGMENT_SHADER, ...) in the current context; the error
+// carries the driver's info log.
+Result<GLuint> compile_glsl_shader(GLenum stage, const std::string& source);
+
+// Links a program from two compiled stages and deletes the stages; the error carries the link log.
+Result<GLuint> link_program(GLuint vertex, GLuint fragment);
+
 }  // namespace specbake::cli

@@ -183,47 +183,14 @@ constexpr const char* kCandidateMainTail = R"(
 )";
 
 Result<GLuint> compile_program(const std::string& vertex, const std::string& fragment) {
-    auto compile = [](GLenum type, const std::string& text) -> Result<GLuint> {
-        GLuint shader = glCreateShader(type);
-        const char* src = text.c_str();
-        glShaderSource(shader, 1, &src, nullptr);
-        glCompileShader(shader);
-        GLint ok = 0;
-        glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-        if (!ok) {
-            GLint len = 0;
-            glGetShaderiv(shader, GL_INFO_LOG_LENGTH, &len);
-            std::string log(size_t(std::max(len, 1)), '\0');
-            glGetShaderInfoLog(shader, len, nullptr, log.data());
-            glDeleteShader(shader);
-            return make_error("shader compilation failed: " + log);
-        }
-        return shader;
-    };
-    auto vs = compile(GL_VERTEX_SHADER, vertex);
+    auto vs = compile_glsl_shader(GL_VERTEX_SHADER, vertex);
     if (!vs) return vs.error();
-    auto fs = compile(GL_FRAGMENT_SHADER, fragment);
+    auto fs = compile_glsl_shader(GL_FRAGMENT_SHADER, fragment);
     if (!fs) {
         glDeleteShader(*vs);
         return fs.error();
     }
-    GLuint program = glCreateProgram();
-    glAttachShader(program, *vs);
-    glAttachShader(program, *fs);
-    glLinkProgram(program);
-    glDeleteShader(*vs);
-    glDeleteShader(*fs);
-    GLint ok = 0;
-    glGetProgramiv(program, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        GLint len = 0;
-        glGetProgramiv(program, GL_INFO_LOG_LENGTH, &len);
-        std::string log(size_t(std::max(len, 1)), '\0');
-        glGetProgramInfoLog(program, len, nullptr, log.data());
-        glDeleteProgram(program);
-        return make_error("shader link failed: " + log);
-    }
-    return program;
+    return link_program(*vs, *fs);
 }
 
 GLuint upload_mips(const MipChain& chain, int first_channel, int channel_count) {

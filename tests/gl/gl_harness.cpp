@@ -35,39 +35,21 @@ std::string shader_log(GLuint shader) {
 }
 
 GLuint link(GLuint vs, GLuint fs, std::string& log) {
-    GLuint program = glCreateProgram();
-    glAttachShader(program, vs);
-    glAttachShader(program, fs);
-    glLinkProgram(program);
-    glDeleteShader(vs);
-    glDeleteShader(fs);
-    GLint ok = 0;
-    glGetProgramiv(program, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        GLint length = 0;
-        glGetProgramiv(program, GL_INFO_LOG_LENGTH, &length);
-        std::string text(static_cast<size_t>(std::max(length, 1)), '\0');
-        glGetProgramInfoLog(program, length, nullptr, text.data());
-        log += "link: " + text;
-        glDeleteProgram(program);
+    auto program = cli::link_program(vs, fs);
+    if (!program) {
+        log += program.error().message;
         return 0;
     }
-    return program;
+    return *program;
 }
 
 GLuint compile_glsl(GLenum stage, const std::string& source, std::string& log) {
-    GLuint shader = glCreateShader(stage);
-    const char* text = source.c_str();
-    glShaderSource(shader, 1, &text, nullptr);
-    glCompileShader(shader);
-    GLint ok = 0;
-    glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        log += (stage == GL_VERTEX_SHADER ? "vertex: " : "fragment: ") + shader_log(shader);
-        glDeleteShader(shader);
+    auto shader = cli::compile_glsl_shader(stage, source);
+    if (!shader) {
+        log += shader.error().message;
         return 0;
     }
-    return shader;
+    return *shader;
 }
 
 GLuint load_spirv(GLenum stage, const std::vector<char>& binary, std::string& log) {
