@@ -6,20 +6,16 @@ namespace specbake::detail {
 
 GroupFrames make_group_frames(const TriMesh& mesh, const WeldedTopology& topology) {
     GroupFrames frames;
-    frames.n.assign(topology.group_count, Vec3d(0.0, 0.0, 1.0));
+    frames.n.resize(topology.group_count);
     frames.u.resize(topology.group_count);
     frames.v.resize(topology.group_count);
-    std::vector<char> seen(topology.group_count, 0);
-    for (size_t v = 0; v < mesh.vertex_count(); ++v) {
-        const uint32_t g = topology.group_id[v];
-        if (seen[g]) continue;
-        seen[g] = 1;
-        const Vec3d nv = normal(mesh, uint32_t(v));
-        const double len = nv.norm();
-        if (len > 0.0) frames.n[g] = nv / len;
-    }
     tbb::parallel_for(tbb::blocked_range<size_t>(0, topology.group_count, 4096), [&](const auto& r) {
-        for (size_t g = r.begin(); g != r.end(); ++g) orthonormal_basis(frames.n[g], frames.u[g], frames.v[g]);
+        for (size_t g = r.begin(); g != r.end(); ++g) {
+            const Vec3d nv = normal(mesh, topology.group_vertex[g]);
+            const double len = nv.norm();
+            frames.n[g] = len > 0.0 ? Vec3d(nv / len) : Vec3d(0.0, 0.0, 1.0);
+            orthonormal_basis(frames.n[g], frames.u[g], frames.v[g]);
+        }
     });
     return frames;
 }

@@ -2,12 +2,16 @@
 // 3DPVT 2004. Per face, the 2x2 shape operator S (second fundamental form) is the least-squares solution of
 // S * e_i = dn_i for the three edges e_i and the differences dn_i of the vertex normals along them, both in
 // the face's (u, v) frame (Sec. 3, Eq. 2-3). S is symmetric, so the unknowns are (a, b, c) of [[a, b], [b, c]]
-// and the normal equations form a full 3x3 system that is solved as such. Each face's S is rotated into the
-// frame of each corner's curvature group and accumulated with the corner's mixed-Voronoi area (Sec. 4-5),
-// then normalised by the summed area.
+// and the normal equations form a full 3x3 system that is solved as such (in closed form, below). Each
+// face's S is rotated into the frame of each corner's curvature group and accumulated with the corner's
+// mixed-Voronoi area (Sec. 4-5), then normalised by the summed area.
+//
+// Layout for speed: one pass over the faces (parallel, no allocation) writes a weighted operator per corner
+// as four floats; a second pass sums each group's corners in corner order, so the result does not depend
+// on the thread count.
 #include <tbb/parallel_for.h>
 
-#include <Eigen/Cholesky>
+#include <memory>
 
 #include "mesh/curvature.h"
 #include "mesh/curvature_frames.h"
@@ -18,86 +22,149 @@ namespace {
 using detail::Shape2;
 using detail::Vec3d;
 
-// Rotates the frame (u, v) of a plane with normal n_from about n_from x n_to so that it lies in the plane of
-// n_to (Rusinkiewicz 2004 Sec. 4; both normals unit length).
-void rotate_frame(Vec3d& u, Vec3d& v, const Vec3d& n_from, const Vec3d& n_to) {
-    const double ndot = n_from.dot(n_to);
-    if (ndot <= -1.0) {
-        u = -u;
-        v = -v;
-        return;
-    }
-    const Vec3d perp_from = n_to - ndot * n_from;
-    const Vec3d dperp = (n_from + n_to) / (1.0 + ndot);
-    u -= dperp * u.dot(perp_from);
-    v -= dperp * v.dot(perp_from);
+// Weighted operator of one corner in its group's (u, v) frame, and the weight (mixed-Voronoi area).
+struct CornerShape {
+    float a, b, c, weight;
+};
+
+inline void load3(const float* x, double out[3]) {
+    out[0] = x[0];
+    out[1] = x[1];
+    out[2] = x[2];
+}
+inline double dot3(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+inline void cross3(const double* a, const double* b, double* out) {
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
 }
 
-// Weighted operator of one corner, expressed in its group's (u, v) frame.
-struct CornerShape {
-    double a = 0.0, b = 0.0, c = 0.0, weight = 0.0;
-};
+// The three weighted corner operators of triangle t; zero weights when it carries no information.
+void face_shape(const TriMesh& mesh, const WeldedTopology& topology, const detail::GroupFrames& frames, size_t t,
+                CornerShape out[3]) {
+    const uint32_t* f = &mesh.indices[3 * t];
+    for (int i = 0; i < 3; ++i) out[i] = {0.0f, 0.0f, 0.0f, 0.0f};
+    const uint32_t* pid = topology.position_id.data();
+    if (pid[f[0]] == pid[f[1]] || pid[f[1]] == pid[f[2]] || pid[f[0]] == pid[f[2]]) return;
+
+    double p[3][3], e[3][3];
+    for (int i = 0; i < 3; ++i) load3(&mesh.positions[3 * size_t(f[i])], p[i]);
+    for (int k = 0; k < 3; ++k) {
+        e[0][k] = p[2][k] - p[1][k];  // e_i opposite corner i
+        e[1][k] = p[0][k] - p[2][k];
+        e[2][k] = p[1][k] - p[0][k];
+    }
+    double cr[3];
+    cross3(e[0], e[1], cr);  // twice the area along the face normal (winding order)
+    const double cr2 = dot3(cr, cr);
+    const double l[3] = {dot3(e[0], e[0]), dot3(e[1], e[1]), dot3(e[2], e[2])};
+    const double lsum = l[0] + l[1] + l[2];
+    const double twice_area = std::sqrt(cr2);
+    // Same test as detail::is_degenerate_triangle: smallest angle under ~1e-10 rad.
+    if (!(twice_area > 1e-10 * lsum)) return;
+
+    // Mixed-Voronoi corner areas (Meyer et al. 2003, Fig. 4), as detail::mixed_voronoi_areas.
+    const double area = 0.5 * twice_area;
+    double w[3];
+    if (l[0] > l[1] + l[2]) {
+        w[0] = 0.5 * area; w[1] = w[2] = 0.25 * area;
+    } else if (l[1] > l[0] + l[2]) {
+        w[1] = 0.5 * area; w[0] = w[2] = 0.25 * area;
+    } else if (l[2] > l[0] + l[1]) {
+        w[2] = 0.5 * area; w[0] = w[1] = 0.25 * area;
+    } else {
+        const double inv = 1.0 / (4.0 * area);
+        const double c0 = (l[1] + l[2] - l[0]) * inv, c1 = (l[0] + l[2] - l[1]) * inv, c2 = (l[0] + l[1] - l[2]) * inv;
+        w[0] = (l[1] * c1 + l[2] * c2) / 8.0;
+        w[1] = (l[0] * c0 + l[2] * c2) / 8.0;
+        w[2] = (l[0] * c0 + l[1] * c1) / 8.0;
+    }
+
+    double n[3][3];
+    for (int i = 0; i < 3; ++i) {
+        load3(&mesh.normals[3 * size_t(f[i])], n[i]);
+        const double inv = 1.0 / std::sqrt(dot3(n[i], n[i]));
+        for (double& x : n[i]) x *= inv;
+    }
+
+    // Face frame: u along e_0, normal from the winding, v = n x u.
+    double fn[3], fu[3], fv[3];
+    const double inv_cr = 1.0 / twice_area, inv_l0 = 1.0 / std::sqrt(l[0]);
+    for (int k = 0; k < 3; ++k) {
+        fn[k] = cr[k] * inv_cr;
+        fu[k] = e[0][k] * inv_l0;
+    }
+    cross3(fn, fu, fv);
+
+    // Normal equations of the six equations [eu ev 0; 0 eu ev] (a b c)^T = (dn.u, dn.v):
+    // M = [[A, B, 0], [B, A + C, B], [0, B, C]] with A = sum eu^2, B = sum eu ev, C = sum ev^2.
+    double A = 0.0, B = 0.0, C = 0.0, r0 = 0.0, r1 = 0.0, r2 = 0.0;
+    for (int i = 0; i < 3; ++i) {
+        const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
+        const double dn[3] = {n[i2][0] - n[i1][0], n[i2][1] - n[i1][1], n[i2][2] - n[i1][2]};
+        const double eu = dot3(e[i], fu), ev = dot3(e[i], fv);
+        const double dnu = dot3(dn, fu), dnv = dot3(dn, fv);
+        A += eu * eu;
+        B += eu * ev;
+        C += ev * ev;
+        r0 += dnu * eu;
+        r1 += dnu * ev + dnv * eu;
+        r2 += dnv * ev;
+    }
+    // det M = (A + C)(AC - B^2), and AC - B^2 = sum over edge pairs of (e_i x e_j)^2 (Cauchy-Binet) = 3 |cr|^2,
+    // which keeps the solve accurate on thin triangles; A + C is the summed squared edge length.
+    const double G = 3.0 * cr2;
+    const double inv_det = 1.0 / (lsum * G);
+    const double c00 = G + C * C, c11 = A * C, c22 = G + A * A, c01 = -B * C, c02 = B * B, c12 = -A * B;
+    const double sa = (c00 * r0 + c01 * r1 + c02 * r2) * inv_det;
+    const double sb = (c01 * r0 + c11 * r1 + c12 * r2) * inv_det;
+    const double sc = (c02 * r0 + c12 * r1 + c22 * r2) * inv_det;
+    if (!std::isfinite(sa) || !std::isfinite(sb) || !std::isfinite(sc)) return;
+
+    for (int i = 0; i < 3; ++i) {
+        const uint32_t g = topology.group_id[f[i]];
+        const double* ng = frames.n[g].data();
+        // Rotate the face frame about fn x ng into the group's tangent plane (Rusinkiewicz 2004 Sec. 4).
+        double ru[3] = {fu[0], fu[1], fu[2]}, rv[3] = {fv[0], fv[1], fv[2]};
+        const double ndot = dot3(fn, ng);
+        if (ndot <= -1.0) {
+            for (int k = 0; k < 3; ++k) {
+                ru[k] = -ru[k];
+                rv[k] = -rv[k];
+            }
+        } else {
+            double perp[3], dperp[3];
+            const double inv = 1.0 / (1.0 + ndot);
+            for (int k = 0; k < 3; ++k) {
+                perp[k] = ng[k] - ndot * fn[k];
+                dperp[k] = (fn[k] + ng[k]) * inv;
+            }
+            const double su = dot3(fu, perp), sv = dot3(fv, perp);
+            for (int k = 0; k < 3; ++k) {
+                ru[k] -= dperp[k] * su;
+                rv[k] -= dperp[k] * sv;
+            }
+        }
+        // Coordinates of the group basis vectors in the rotated face frame: S_group = P^T S_face P.
+        const double* ug = frames.u[g].data();
+        const double* vg = frames.v[g].data();
+        const double p00 = dot3(ug, ru), p10 = dot3(ug, rv), p01 = dot3(vg, ru), p11 = dot3(vg, rv);
+        const double s0 = sa * p00 + sb * p10, s1 = sb * p00 + sc * p10;  // S (p00, p10)
+        const double t0 = sa * p01 + sb * p11, t1 = sb * p01 + sc * p11;  // S (p01, p11)
+        out[i] = {float(w[i] * (p00 * s0 + p10 * s1)), float(w[i] * (p00 * t0 + p10 * t1)),
+                  float(w[i] * (p01 * t0 + p11 * t1)), float(w[i])};
+    }
+}
 
 }  // namespace
 
 VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopology& topology) {
     const detail::GroupFrames frames = detail::make_group_frames(mesh, topology);
     const size_t tris = mesh.triangle_count();
-    std::vector<CornerShape> corner(3 * tris);
+    const std::unique_ptr<CornerShape[]> corner(new CornerShape[3 * tris]);
 
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, tris, 2048), [&](const auto& range) {
-        for (size_t t = range.begin(); t != range.end(); ++t) {
-            if (detail::skip_triangle(mesh, topology, t)) continue;
-            const uint32_t* f = &mesh.indices[3 * t];
-            const Vec3d p[3] = {detail::position(mesh, f[0]), detail::position(mesh, f[1]),
-                                detail::position(mesh, f[2])};
-            double area_weight[3];
-            if (!detail::mixed_voronoi_areas(p[0], p[1], p[2], area_weight)) continue;
-            Vec3d n[3];
-            for (int i = 0; i < 3; ++i) n[i] = detail::normal(mesh, f[i]).normalized();
-
-            // Face frame: u along edge 0, face normal from the winding.
-            const Vec3d e[3] = {p[2] - p[1], p[0] - p[2], p[1] - p[0]};
-            const Vec3d fn = e[0].cross(e[1]).normalized();
-            const Vec3d fu = e[0].normalized();
-            const Vec3d fv = fn.cross(fu);
-
-            // Normal equations of the 6 equations [eu ev 0; 0 eu ev] (a b c)^T = (dn.u, dn.v).
-            Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
-            Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
-            for (int i = 0; i < 3; ++i) {
-                const Vec3d dn = n[(i + 2) % 3] - n[(i + 1) % 3];
-                const double eu = e[i].dot(fu), ev = e[i].dot(fv);
-                const double dnu = dn.dot(fu), dnv = dn.dot(fv);
-                m(0, 0) += eu * eu;
-                m(0, 1) += eu * ev;
-                m(1, 1) += eu * eu + ev * ev;
-                m(1, 2) += eu * ev;
-                m(2, 2) += ev * ev;
-                rhs(0) += dnu * eu;
-                rhs(1) += dnu * ev + dnv * eu;
-                rhs(2) += dnv * ev;
-            }
-            m(1, 0) = m(0, 1);
-            m(2, 1) = m(1, 2);
-            const Eigen::Vector3d abc = m.ldlt().solve(rhs);
-            if (!abc.allFinite()) continue;
-
-            for (int i = 0; i < 3; ++i) {
-                const uint32_t g = topology.group_id[f[i]];
-                Vec3d ru = fu, rv = fv;
-                rotate_frame(ru, rv, fn, frames.n[g]);
-                // Coordinates of the group basis vectors in the rotated face frame: S_group = P^T S_face P.
-                const double p00 = frames.u[g].dot(ru), p10 = frames.u[g].dot(rv);
-                const double p01 = frames.v[g].dot(ru), p11 = frames.v[g].dot(rv);
-                auto form = [&](double x0, double x1, double y0, double y1) {
-                    return x0 * (abc(0) * y0 + abc(1) * y1) + x1 * (abc(1) * y0 + abc(2) * y1);
-                };
-                const double w = area_weight[i];
-                corner[3 * t + i] = {w * form(p00, p10, p00, p10), w * form(p00, p10, p01, p11),
-                                     w * form(p01, p11, p01, p11), w};
-            }
-        }
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, tris, 4096), [&](const auto& range) {
+        for (size_t t = range.begin(); t != range.end(); ++t) face_shape(mesh, topology, frames, t, &corner[3 * t]);
     });
 
     // Gather corners per group in corner order, so sums do not depend on scheduling.

@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 #include <sstream>
 
+#include "mesh/halfedge_mesh.h"
 #include "mesh/mesh_math.h"
 #include "mesh/weld_by_position.h"
 
@@ -31,56 +31,6 @@ std::vector<Vec3d> corner_normals(const TriMesh& mesh, const std::vector<char>& 
             sum[f[c]] += detail::angle_between(p[(c + 1) % 3] - p[c], p[(c + 2) % 3] - p[c]) * n;
     }
     return sum;
-}
-
-// Counts vertices whose incident triangles do not form one fan: the link (the edges opposite the vertex)
-// must be a single path or cycle.
-size_t count_nonmanifold_vertices(const std::vector<uint32_t>& tri_pos, uint32_t position_count) {
-    const size_t tris = tri_pos.size() / 3;
-    std::vector<uint32_t> start(position_count + 1, 0);
-    for (uint32_t p : tri_pos) ++start[p + 1];
-    std::partial_sum(start.begin(), start.end(), start.begin());
-    std::vector<uint32_t> fill(start.begin(), start.end() - 1);
-    std::vector<uint32_t> incident(tri_pos.size());
-    for (size_t t = 0; t < tris; ++t)
-        for (int c = 0; c < 3; ++c) incident[fill[tri_pos[3 * t + c]]++] = uint32_t(3 * t + c);
-
-    size_t bad = 0;
-    std::vector<uint32_t> local, parent, degree;
-    for (uint32_t v = 0; v < position_count; ++v) {
-        const uint32_t b = start[v], e = start[v + 1];
-        if (e - b < 2) continue;
-        local.clear();
-        for (uint32_t k = b; k < e; ++k) {
-            const uint32_t corner = incident[k], t = corner / 3, c = corner % 3;
-            local.push_back(tri_pos[3 * t + (c + 1) % 3]);
-            local.push_back(tri_pos[3 * t + (c + 2) % 3]);
-        }
-        std::vector<uint32_t> ids(local);
-        std::sort(ids.begin(), ids.end());
-        ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
-        parent.resize(ids.size());
-        std::iota(parent.begin(), parent.end(), 0u);
-        degree.assign(ids.size(), 0);
-        auto find = [&](uint32_t x) {
-            while (parent[x] != x) x = parent[x] = parent[parent[x]];
-            return x;
-        };
-        size_t components = ids.size();
-        bool branching = false;
-        for (size_t k = 0; k < local.size(); k += 2) {
-            const uint32_t a = uint32_t(std::lower_bound(ids.begin(), ids.end(), local[k]) - ids.begin());
-            const uint32_t c = uint32_t(std::lower_bound(ids.begin(), ids.end(), local[k + 1]) - ids.begin());
-            if (++degree[a] > 2 || ++degree[c] > 2) branching = true;
-            const uint32_t ra = find(a), rc = find(c);
-            if (ra != rc) {
-                parent[ra] = rc;
-                --components;
-            }
-        }
-        if (branching || components > 1) ++bad;
-    }
-    return bad;
 }
 
 }  // namespace
@@ -118,46 +68,22 @@ Result<MeshReport> validate_mesh(TriMesh& mesh) {
     report.vertices = n;
     report.triangles = mesh.triangle_count();
 
-    TriMesh positions_only;
-    positions_only.positions = mesh.positions;
-    const WeldedTopology topo = weld_by_position(positions_only);
+    WeldOptions by_position;
+    by_position.split_by_normals = false;
+    const WeldedTopology topo = weld_by_position(mesh, by_position);
     report.duplicate_vertices = n - topo.position_count;
 
     std::vector<char> used(n, 0);
     for (uint32_t i : mesh.indices) used[i] = 1;
     report.unreferenced_vertices = size_t(std::count(used.begin(), used.end(), 0));
 
-    // Topology on welded positions, over the non-degenerate triangles.
-    std::vector<uint32_t> tri_pos;
-    tri_pos.reserve(mesh.indices.size());
-    for (size_t t = 0; t < report.triangles; ++t) {
-        const uint32_t* f = &mesh.indices[3 * t];
-        const uint32_t a = topo.position_id[f[0]], b = topo.position_id[f[1]], c = topo.position_id[f[2]];
-        if (a == b || b == c || a == c ||
-            detail::is_degenerate_triangle(detail::position(mesh, f[0]), detail::position(mesh, f[1]),
-                                           detail::position(mesh, f[2]))) {
-            ++report.degenerate_triangles;
-            continue;
-        }
-        tri_pos.insert(tri_pos.end(), {a, b, c});
-    }
-    std::vector<uint64_t> edges;
-    edges.reserve(tri_pos.size());
-    for (size_t k = 0; k < tri_pos.size(); k += 3) {
-        for (int c = 0; c < 3; ++c) {
-            const uint64_t a = tri_pos[k + c], b = tri_pos[k + (c + 1) % 3];
-            edges.push_back(std::min(a, b) << 32 | std::max(a, b));
-        }
-    }
-    std::sort(edges.begin(), edges.end());
-    for (size_t i = 0; i < edges.size();) {
-        size_t j = i;
-        while (j < edges.size() && edges[j] == edges[i]) ++j;
-        if (j - i == 1) ++report.boundary_edges;
-        if (j - i >= 3) ++report.nonmanifold_edges;
-        i = j;
-    }
-    report.nonmanifold_vertices = count_nonmanifold_vertices(tri_pos, topo.position_count);
+    const HalfEdgeTopology halfedge = build_halfedge_mesh(mesh, topo);
+    report.degenerate_triangles = halfedge.degenerate_triangles;
+    report.boundary_edges = halfedge.boundary_edges;
+    report.nonmanifold_edges = halfedge.nonmanifold_edges;
+    report.nonmanifold_vertices = halfedge.nonmanifold_vertices;
+    report.detached_faces = halfedge.detached_faces;
+    report.split_vertices = halfedge.split_vertices;
 
     if (mesh.has_normals()) {
         std::vector<char> broken(n, 0);
@@ -231,6 +157,8 @@ std::string MeshReport::summary() const {
     item(boundary_edges, "boundary edges");
     item(nonmanifold_edges, "non-manifold edges");
     item(nonmanifold_vertices, "non-manifold vertices");
+    item(detached_faces, "faces detached from a non-manifold or misoriented edge");
+    item(split_vertices, "vertices split into separate fans");
     item(repaired_normals, "zero or non-finite normals regenerated");
     item(renormalized_normals, "non-unit normals renormalised");
     item(repaired_tangents, "tangents repaired");

@@ -19,6 +19,9 @@ struct MeshReport {
     size_t boundary_edges = 0;         // edges with one triangle, after welding by position
     size_t nonmanifold_edges = 0;      // edges with three or more triangles, after welding by position
     size_t nonmanifold_vertices = 0;   // vertices whose triangles form more than one fan (or a fan plus a gap)
+    size_t detached_faces = 0;         // triangles the half-edge mesh holds on their own vertices (third sheet on
+                                       // an edge, or against a neighbour's orientation; see halfedge_mesh.h)
+    size_t split_vertices = 0;         // extra half-edge vertices for the further fans of non-manifold vertices
     size_t repaired_normals = 0;       // zero or non-finite normals replaced by the generated normal
     size_t renormalized_normals = 0;   // finite normals with |n| off 1 by more than 1e-3, rescaled to unit length
     size_t repaired_tangents = 0;      // non-finite, zero or normal-parallel tangents rebuilt; w forced to +-1
@@ -37,6 +40,7 @@ struct MeshReport {
 // are degenerate); normals whose length is off 1 by more than 1e-3 are rescaled; tangents that are
 // non-finite, zero or parallel to the normal are rebuilt perpendicular to it, and w is snapped to +-1;
 // non-finite UVs become 0. Triangles are never removed: degenerate ones are counted (curvature skips them).
+// The topology counts come from the OpenMesh half-edge mesh of the welded positions (build_halfedge_mesh).
 Result<MeshReport> validate_mesh(TriMesh& mesh);
 
 }  // namespace specbake

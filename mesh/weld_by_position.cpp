@@ -40,8 +40,8 @@ WeldedTopology weld_by_position(const TriMesh& mesh, const WeldOptions& options)
     // Curvature groups of one position form a singly linked list: first group per position, next group.
     std::vector<uint32_t> first_group;
     std::vector<uint32_t> next_group;
-    std::vector<uint32_t> group_vertex;  // a vertex of each group, whose normal represents it
-    const bool with_normals = mesh.has_normals();
+    std::vector<uint32_t>& group_vertex = out.group_vertex;
+    const bool with_normals = options.split_by_normals && mesh.has_normals();
     const double cos_limit = std::cos(double(options.normal_angle_degrees) * M_PI / 180.0);
 
     for (size_t v = 0; v < n; ++v) {

@@ -14,6 +14,7 @@ namespace specbake {
 struct WeldedTopology {
     std::vector<uint32_t> position_id;  // per vertex: index of its topological vertex (bitwise-equal position)
     std::vector<uint32_t> group_id;     // per vertex: index of its curvature group (same position and normal)
+    std::vector<uint32_t> group_vertex; // per group: its first vertex, whose normal represents the group
     uint32_t position_count = 0;
     uint32_t group_count = 0;
 };
@@ -22,6 +23,8 @@ struct WeldOptions {
     // Normals at one position within this angle (degrees) share curvature. Authored seams duplicate the
     // normal exactly; hard edges differ by far more.
     float normal_angle_degrees = 1.0f;
+    // false: one group per position whatever the normals (the topology alone, as validation needs it).
+    bool split_by_normals = true;
 };
 
 // Positions are compared exactly (after mapping -0 to +0): exporters duplicate seam vertices bit for bit.

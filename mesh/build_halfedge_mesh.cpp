@@ -1,0 +1,314 @@
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <numeric>
+#include <unordered_map>
+
+#include "mesh/halfedge_mesh.h"
+#include "mesh/mesh_math.h"
+
+namespace specbake {
+namespace {
+
+constexpr uint32_t kNone = 0xffffffffu;
+
+// Corners are 3 * face + c; the halfedge of corner k runs from k to next_corner(k) inside its face.
+inline uint32_t next_corner(uint32_t k) { return k % 3 == 2 ? k - 2 : k + 1; }
+inline uint32_t prev_corner(uint32_t k) { return k % 3 == 0 ? k + 2 : k - 1; }
+
+// True when the link of a position (the edges opposite it in its triangles, `corners` its corners) is one
+// path or one cycle, i.e. its triangles form a single fan.
+bool link_is_single_fan(const std::vector<uint32_t>& pos, const uint32_t* corners, uint32_t count) {
+    std::vector<uint32_t> ends, ids, parent, degree;
+    for (uint32_t i = 0; i < count; ++i) {
+        ends.push_back(pos[next_corner(corners[i])]);
+        ends.push_back(pos[prev_corner(corners[i])]);
+    }
+    ids = ends;
+    std::sort(ids.begin(), ids.end());
+    ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+    parent.resize(ids.size());
+    std::iota(parent.begin(), parent.end(), 0u);
+    degree.assign(ids.size(), 0);
+    auto find = [&](uint32_t x) {
+        while (parent[x] != x) x = parent[x] = parent[parent[x]];
+        return x;
+    };
+    size_t components = ids.size();
+    for (size_t k = 0; k < ends.size(); k += 2) {
+        const uint32_t a = uint32_t(std::lower_bound(ids.begin(), ids.end(), ends[k]) - ids.begin());
+        const uint32_t c = uint32_t(std::lower_bound(ids.begin(), ids.end(), ends[k + 1]) - ids.begin());
+        if (++degree[a] > 2 || ++degree[c] > 2) return false;
+        const uint32_t ra = find(a), rc = find(c);
+        if (ra != rc) {
+            parent[ra] = rc;
+            --components;
+        }
+    }
+    return components == 1;
+}
+
+}  // namespace
+
+HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& positions) {
+    using OpenMesh::FaceHandle;
+    using OpenMesh::HalfedgeHandle;
+    using OpenMesh::VertexHandle;
+    HalfEdgeTopology out;
+    const size_t tris = mesh.triangle_count();
+    const uint32_t position_count = positions.position_count;
+    const std::vector<uint32_t>& pid = positions.position_id;
+
+    // Usable triangles, in order: three distinct positions and a non-zero area.
+    std::vector<uint8_t> usable(tris);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, tris, 8192), [&](const auto& r) {
+        for (size_t t = r.begin(); t != r.end(); ++t) {
+            const uint32_t* f = &mesh.indices[3 * t];
+            const uint32_t a = pid[f[0]], b = pid[f[1]], c = pid[f[2]];
+            usable[t] = a != b && b != c && a != c &&
+                        !detail::is_degenerate_triangle(detail::position(mesh, f[0]), detail::position(mesh, f[1]),
+                                                        detail::position(mesh, f[2]));
+        }
+    });
+    std::vector<uint32_t> kept;
+    kept.reserve(tris);
+    for (size_t t = 0; t < tris; ++t)
+        if (usable[t]) kept.push_back(uint32_t(t));
+    out.degenerate_triangles = tris - kept.size();
+    const uint32_t faces = uint32_t(kept.size());
+    const uint32_t corners = 3 * faces;
+    std::vector<uint32_t> pos(corners);
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, faces, 8192), [&](const auto& r) {
+        for (uint32_t f = r.begin(); f != r.end(); ++f)
+            for (int c = 0; c < 3; ++c) pos[3 * f + c] = pid[mesh.indices[3 * size_t(kept[f]) + c]];
+    });
+
+    // Corners of each position, in corner order (a counting sort).
+    std::vector<uint32_t> start(position_count + 1, 0);
+    for (uint32_t p : pos) ++start[p + 1];
+    std::partial_sum(start.begin(), start.end(), start.begin());
+    std::vector<uint32_t> by_position(corners);
+    {
+        std::vector<uint32_t> fill(start.begin(), start.end() - 1);
+        for (uint32_t k = 0; k < corners; ++k) by_position[fill[pos[k]]++] = k;
+    }
+
+    // Edge pairing. The halfedges on the position pair {a, b} of halfedge k (a -> b) are found among the
+    // corners of a: a corner j there runs a -> b when its next corner is at b, and the halfedge of its previous
+    // corner runs b -> a when that corner is at b. An edge is simple when it has one halfedge, or two running
+    // opposite ways; those pair up (mate) without further ado.
+    std::vector<uint32_t> mate(corners, kNone);
+    std::vector<uint8_t> simple(corners), edge_kind(corners, 0);  // edge_kind: 1 boundary, 2 non-manifold
+    auto scan_edge = [&](uint32_t k, uint32_t& total, uint32_t& opposite, uint32_t& partner, uint32_t& lowest) {
+        const uint32_t a = pos[k], b = pos[next_corner(k)];
+        total = opposite = 0;
+        partner = kNone;
+        lowest = k;
+        for (uint32_t i = start[a]; i < start[a + 1]; ++i) {
+            const uint32_t j = by_position[i];
+            if (pos[next_corner(j)] == b) {
+                ++total;
+                lowest = std::min(lowest, j);
+            } else if (pos[prev_corner(j)] == b) {
+                ++total;
+                ++opposite;
+                partner = prev_corner(j);
+                lowest = std::min(lowest, partner);
+            }
+        }
+    };
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, corners, 8192), [&](const auto& r) {
+        for (uint32_t k = r.begin(); k != r.end(); ++k) {
+            uint32_t total, opposite, partner, lowest;
+            scan_edge(k, total, opposite, partner, lowest);
+            const bool paired = total == 2 && opposite == 1;
+            simple[k] = total == 1 || paired;
+            if (paired) mate[k] = partner;
+            if (lowest == k) edge_kind[k] = total == 1 ? 1 : total >= 3 ? 2 : 0;
+        }
+    });
+    for (uint32_t k = 0; k < corners; ++k) {
+        out.boundary_edges += edge_kind[k] == 1;
+        out.nonmanifold_edges += edge_kind[k] == 2;
+    }
+
+    // Faces on a non-simple edge, in triangle order: attached while the edge has no halfedge running their
+    // way and fewer than two triangles; otherwise detached.
+    std::vector<uint8_t> attached(faces, 1);
+    struct EdgeState {
+        uint32_t first = kNone;
+        bool full = false;
+    };
+    std::unordered_map<uint32_t, EdgeState> state;
+    for (uint32_t f = 0; f < faces; ++f) {
+        if (simple[3 * f] && simple[3 * f + 1] && simple[3 * f + 2]) continue;
+        uint32_t edge[3] = {kNone, kNone, kNone};
+        bool fits = true;
+        for (uint32_t c = 0; c < 3 && fits; ++c) {
+            const uint32_t k = 3 * f + c;
+            if (simple[k]) continue;
+            uint32_t total, opposite, partner;
+            scan_edge(k, total, opposite, partner, edge[c]);
+            const auto it = state.find(edge[c]);
+            if (it != state.end() && (it->second.full || pos[it->second.first] != pos[next_corner(k)])) fits = false;
+        }
+        if (!fits) {
+            attached[f] = 0;
+            continue;
+        }
+        for (uint32_t c = 0; c < 3; ++c) {
+            const uint32_t k = 3 * f + c;
+            if (simple[k]) continue;
+            EdgeState& s = state[edge[c]];
+            if (s.first == kNone) {
+                s.first = k;
+            } else {
+                mate[k] = s.first;
+                mate[s.first] = k;
+                s.full = true;
+            }
+        }
+    }
+    std::vector<uint32_t> detached;
+    for (uint32_t f = 0; f < faces; ++f) {
+        if (attached[f]) continue;
+        detached.push_back(f);
+        for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
+            if (mate[k] != kNone) mate[mate[k]] = kNone;
+            mate[k] = kNone;
+        }
+    }
+    out.detached_faces = detached.size();
+
+    // Fans: around a position, corner k's successor is the corner at the same position in the triangle across
+    // its outgoing halfedge, next_corner(mate[k]); its predecessor is mate[prev_corner(k)]. Each chain or
+    // cycle of attached corners is one fan and becomes one OpenMesh vertex.
+    std::vector<uint32_t> fan(corners, kNone);
+    std::vector<uint8_t> fan_head(corners, 0);
+    std::vector<uint32_t> fan_count(position_count, 0);
+    std::vector<uint8_t> suspect(position_count, 0);
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, position_count, 4096), [&](const auto& r) {
+        for (uint32_t p = r.begin(); p != r.end(); ++p) {
+            uint32_t fans = 0;
+            bool has_detached = false;
+            for (uint32_t i = start[p]; i < start[p + 1]; ++i) {
+                const uint32_t k = by_position[i];
+                if (!attached[k / 3]) {
+                    has_detached = true;
+                    continue;
+                }
+                if (fan[k] != kNone) continue;
+                uint32_t head = k;
+                for (uint32_t back = mate[prev_corner(head)]; back != kNone && back != k; back = mate[prev_corner(head)])
+                    head = back;
+                uint32_t x = head;
+                do {
+                    fan[x] = fans;
+                    x = mate[x] == kNone ? kNone : next_corner(mate[x]);
+                } while (x != kNone && x != head);
+                fan_head[head] = 1;
+                ++fans;
+            }
+            fan_count[p] = fans;
+            suspect[p] = has_detached || fans > 1;
+        }
+    });
+    for (uint32_t p = 0; p < position_count; ++p) {
+        if (!suspect[p]) continue;
+        out.nonmanifold_vertices += !link_is_single_fan(pos, &by_position[start[p]], start[p + 1] - start[p]);
+        if (fan_count[p] > 1) out.split_vertices += fan_count[p] - 1;
+    }
+
+    // Numbering: vertices per (position, fan), then three per detached face; an edge per mate pair or
+    // unpaired halfedge (its twin is a boundary halfedge), then three per detached face.
+    std::vector<uint32_t> vertex_base(position_count + 1, 0);
+    for (uint32_t p = 0; p < position_count; ++p) vertex_base[p + 1] = vertex_base[p] + fan_count[p];
+    const uint32_t attached_vertices = vertex_base[position_count];
+    const uint32_t detached_count = uint32_t(detached.size());
+    const uint32_t vertices = attached_vertices + 3 * detached_count;
+    auto vertex_of = [&](uint32_t k) { return vertex_base[pos[k]] + fan[k]; };
+
+    std::vector<uint32_t> halfedge(corners, kNone);
+    std::vector<uint32_t> face_index(faces, kNone);
+    uint32_t edges = 0, attached_faces = 0;
+    for (uint32_t f = 0; f < faces; ++f) {
+        if (!attached[f]) continue;
+        face_index[f] = attached_faces++;
+        for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
+            if (mate[k] != kNone && mate[k] < k) continue;
+            halfedge[k] = 2 * edges;
+            if (mate[k] != kNone) halfedge[mate[k]] = 2 * edges + 1;
+            ++edges;
+        }
+    }
+    const uint32_t attached_edges = edges;
+    edges += 3 * detached_count;
+
+    HalfEdgeMesh& m = out.mesh;
+    m.resize(vertices, edges, attached_faces + detached_count);
+    out.vertex_position.resize(vertices);
+    out.face_triangle.resize(attached_faces + detached_count);
+    std::vector<uint32_t> boundary_out(attached_vertices, kNone);
+    auto point = [&](uint32_t f, uint32_t c) {
+        const float* x = &mesh.positions[3 * size_t(mesh.indices[3 * size_t(kept[f]) + c])];
+        return HalfEdgeMesh::Point(x[0], x[1], x[2]);
+    };
+
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, faces, 8192), [&](const auto& r) {
+        for (uint32_t f = r.begin(); f != r.end(); ++f) {
+            if (!attached[f]) continue;
+            const FaceHandle fh(static_cast<int>(face_index[f]));
+            out.face_triangle[face_index[f]] = kept[f];
+            for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
+                const HalfedgeHandle h(static_cast<int>(halfedge[k]));
+                const uint32_t to = vertex_of(next_corner(k));
+                m.set_vertex_handle(h, VertexHandle(static_cast<int>(to)));
+                m.set_face_handle(h, fh);
+                m.set_next_halfedge_handle(h, HalfedgeHandle(static_cast<int>(halfedge[next_corner(k)])));
+                if (mate[k] == kNone) {
+                    const HalfedgeHandle b(static_cast<int>(halfedge[k] ^ 1u));
+                    m.set_vertex_handle(b, VertexHandle(static_cast<int>(vertex_of(k))));
+                    boundary_out[to] = uint32_t(b.idx());  // one open fan per vertex: one outgoing boundary halfedge
+                }
+            }
+            m.set_halfedge_handle(fh, HalfedgeHandle(static_cast<int>(halfedge[3 * f])));
+        }
+    });
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, faces, 8192), [&](const auto& r) {
+        for (uint32_t f = r.begin(); f != r.end(); ++f) {
+            if (!attached[f]) continue;
+            for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
+                const uint32_t v = vertex_of(k);
+                if (mate[k] == kNone)
+                    m.set_next_halfedge_handle(HalfedgeHandle(static_cast<int>(halfedge[k] ^ 1u)), HalfedgeHandle(static_cast<int>(boundary_out[v])));
+                if (!fan_head[k]) continue;
+                // OpenMesh keeps a boundary vertex's halfedge on the boundary.
+                const uint32_t h = boundary_out[v] != kNone ? boundary_out[v] : halfedge[k];
+                m.set_halfedge_handle(VertexHandle(static_cast<int>(v)), HalfedgeHandle(static_cast<int>(h)));
+                m.set_point(VertexHandle(static_cast<int>(v)), point(f, k % 3));
+                out.vertex_position[v] = pos[k];
+            }
+        }
+    });
+    for (uint32_t d = 0; d < detached_count; ++d) {
+        const uint32_t f = detached[d];
+        const uint32_t v0 = attached_vertices + 3 * d, e0 = attached_edges + 3 * d;
+        const FaceHandle fh(static_cast<int>(attached_faces + d));
+        out.face_triangle[attached_faces + d] = kept[f];
+        for (uint32_t c = 0; c < 3; ++c) {
+            const HalfedgeHandle h(static_cast<int>(2 * (e0 + c))), b(static_cast<int>(2 * (e0 + c) + 1));
+            m.set_vertex_handle(h, VertexHandle(static_cast<int>(v0 + (c + 1) % 3)));
+            m.set_vertex_handle(b, VertexHandle(static_cast<int>(v0 + c)));
+            m.set_face_handle(h, fh);
+            m.set_next_halfedge_handle(h, HalfedgeHandle(static_cast<int>(2 * (e0 + (c + 1) % 3))));
+            m.set_next_halfedge_handle(b, HalfedgeHandle(static_cast<int>(2 * (e0 + (c + 2) % 3) + 1)));
+            m.set_halfedge_handle(VertexHandle(static_cast<int>(v0 + c)), HalfedgeHandle(static_cast<int>(2 * (e0 + (c + 2) % 3) + 1)));
+            m.set_point(VertexHandle(static_cast<int>(v0 + c)), point(f, c));
+            out.vertex_position[v0 + c] = pos[3 * f + c];
+        }
+        m.set_halfedge_handle(fh, HalfedgeHandle(static_cast<int>(2 * e0)));
+    }
+    return out;
+}
+
+}  // namespace specbake
