@@ -6,6 +6,7 @@
 
 #include "mesh/halfedge_mesh.h"
 #include "mesh/mesh_math.h"
+#include "mesh/scratch_array.h"
 
 namespace specbake {
 namespace {
@@ -18,7 +19,7 @@ inline uint32_t prev_corner(uint32_t k) { return k % 3 == 0 ? k + 2 : k - 1; }
 
 // True when the link of a position (the edges opposite it in its triangles, `corners` its corners) is one
 // path or one cycle, i.e. its triangles form a single fan.
-bool link_is_single_fan(const std::vector<uint32_t>& pos, const uint32_t* corners, uint32_t count) {
+bool link_is_single_fan(const detail::ScratchArray<uint32_t>& pos, const uint32_t* corners, uint32_t count) {
     std::vector<uint32_t> ends, ids, parent, degree;
     for (uint32_t i = 0; i < count; ++i) {
         ends.push_back(pos[next_corner(corners[i])]);
@@ -77,7 +78,7 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     out.degenerate_triangles = tris - kept.size();
     const uint32_t faces = uint32_t(kept.size());
     const uint32_t corners = 3 * faces;
-    std::vector<uint32_t> pos(corners);
+    detail::ScratchArray<uint32_t> pos(corners);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, faces, 8192), [&](const auto& r) {
         for (uint32_t f = r.begin(); f != r.end(); ++f)
             for (int c = 0; c < 3; ++c) pos[3 * f + c] = pid[mesh.indices[3 * size_t(kept[f]) + c]];
@@ -85,9 +86,9 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
 
     // Corners of each position, in corner order (a counting sort).
     std::vector<uint32_t> start(position_count + 1, 0);
-    for (uint32_t p : pos) ++start[p + 1];
+    for (uint32_t k = 0; k < corners; ++k) ++start[pos[k] + 1];
     std::partial_sum(start.begin(), start.end(), start.begin());
-    std::vector<uint32_t> by_position(corners);
+    detail::ScratchArray<uint32_t> by_position(corners);
     {
         std::vector<uint32_t> fill(start.begin(), start.end() - 1);
         for (uint32_t k = 0; k < corners; ++k) by_position[fill[pos[k]]++] = k;
@@ -97,8 +98,8 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     // corners of a: a corner j there runs a -> b when its next corner is at b, and the halfedge of its previous
     // corner runs b -> a when that corner is at b. An edge is simple when it has one halfedge, or two running
     // opposite ways; those pair up (mate) without further ado.
-    std::vector<uint32_t> mate(corners, kNone);
-    std::vector<uint8_t> simple(corners), edge_kind(corners, 0);  // edge_kind: 1 boundary, 2 non-manifold
+    detail::ScratchArray<uint32_t> mate(corners);
+    detail::ScratchArray<uint8_t> simple(corners), edge_kind(corners);  // edge_kind: 1 boundary, 2 non-manifold
     auto scan_edge = [&](uint32_t k, uint32_t& total, uint32_t& opposite, uint32_t& partner, uint32_t& lowest) {
         const uint32_t a = pos[k], b = pos[next_corner(k)];
         total = opposite = 0;
@@ -123,8 +124,8 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
             scan_edge(k, total, opposite, partner, lowest);
             const bool paired = total == 2 && opposite == 1;
             simple[k] = total == 1 || paired;
-            if (paired) mate[k] = partner;
-            if (lowest == k) edge_kind[k] = total == 1 ? 1 : total >= 3 ? 2 : 0;
+            mate[k] = paired ? partner : kNone;
+            edge_kind[k] = lowest != k ? 0 : total == 1 ? 1 : total >= 3 ? 2 : 0;
         }
     });
     for (uint32_t k = 0; k < corners; ++k) {
@@ -183,14 +184,18 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     // Fans: around a position, corner k's successor is the corner at the same position in the triangle across
     // its outgoing halfedge, next_corner(mate[k]); its predecessor is mate[prev_corner(k)]. Each chain or
     // cycle of attached corners is one fan and becomes one OpenMesh vertex.
-    std::vector<uint32_t> fan(corners, kNone);
-    std::vector<uint8_t> fan_head(corners, 0);
+    detail::ScratchArray<uint32_t> fan(corners);
+    detail::ScratchArray<uint8_t> fan_head(corners);
     std::vector<uint32_t> fan_count(position_count, 0);
     std::vector<uint8_t> suspect(position_count, 0);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, position_count, 4096), [&](const auto& r) {
         for (uint32_t p = r.begin(); p != r.end(); ++p) {
             uint32_t fans = 0;
             bool has_detached = false;
+            for (uint32_t i = start[p]; i < start[p + 1]; ++i) {
+                fan[by_position[i]] = kNone;
+                fan_head[by_position[i]] = 0;
+            }
             for (uint32_t i = start[p]; i < start[p + 1]; ++i) {
                 const uint32_t k = by_position[i];
                 if (!attached[k / 3]) {
@@ -228,7 +233,7 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     const uint32_t vertices = attached_vertices + 3 * detached_count;
     auto vertex_of = [&](uint32_t k) { return vertex_base[pos[k]] + fan[k]; };
 
-    std::vector<uint32_t> halfedge(corners, kNone);
+    detail::ScratchArray<uint32_t> halfedge(corners);  // OpenMesh halfedge of each attached corner
     std::vector<uint32_t> face_index(faces, kNone);
     uint32_t edges = 0, attached_faces = 0;
     for (uint32_t f = 0; f < faces; ++f) {

@@ -48,7 +48,7 @@ VertexCurvature vertex_curvature_from_groups(const TriMesh& mesh, const WeldedTo
             const Shape2& s = shape[g];
             const double mean = 0.5 * (s.a + s.c);
             const double half_diff = 0.5 * (s.a - s.c);
-            const double radius = std::hypot(half_diff, s.b);
+            const double radius = std::sqrt(half_diff * half_diff + s.b * s.b);
             const double hi = mean + radius, lo = mean - radius;
             const bool hi_first = std::abs(hi) >= std::abs(lo);
             k1[g] = hi_first ? hi : lo;
@@ -61,7 +61,7 @@ VertexCurvature vertex_curvature_from_groups(const TriMesh& mesh, const WeldedTo
                 x = x2;
                 y = y2;
             }
-            const double len = std::hypot(x, y);
+            const double len = std::sqrt(x * x + y * y);
             if (!(len > 1e-12 * std::max(std::abs(k1[g]), 1e-300))) {
                 x = 1.0;
                 y = 0.0;
@@ -91,7 +91,7 @@ VertexCurvature vertex_curvature_from_groups(const TriMesh& mesh, const WeldedTo
             }
             b = tangent_sign(mesh, uint32_t(v)) * nv.cross(t);
             double dx = dir[g].dot(t), dy = dir[g].dot(b);
-            const double dl = std::hypot(dx, dy);
+            const double dl = std::sqrt(dx * dx + dy * dy);
             if (dl > 1e-12) {
                 dx /= dl;
                 dy /= dl;

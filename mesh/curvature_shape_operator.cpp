@@ -11,10 +11,9 @@
 // on the thread count.
 #include <tbb/parallel_for.h>
 
-#include <memory>
-
 #include "mesh/curvature.h"
 #include "mesh/curvature_frames.h"
+#include "mesh/scratch_array.h"
 
 namespace specbake {
 namespace {
@@ -161,7 +160,7 @@ void face_shape(const TriMesh& mesh, const WeldedTopology& topology, const detai
 VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopology& topology) {
     const detail::GroupFrames frames = detail::make_group_frames(mesh, topology);
     const size_t tris = mesh.triangle_count();
-    const std::unique_ptr<CornerShape[]> corner(new CornerShape[3 * tris]);
+    detail::ScratchArray<CornerShape> corner(3 * tris);
 
     tbb::parallel_for(tbb::blocked_range<size_t>(0, tris, 4096), [&](const auto& range) {
         for (size_t t = range.begin(); t != range.end(); ++t) face_shape(mesh, topology, frames, t, &corner[3 * t]);
