@@ -9,6 +9,7 @@
 #include <cstring>
 #include <functional>
 #include <string>
+#include <utility>
 
 #include "mesh/curvature.h"
 #include "mesh/generate_normals.h"
@@ -60,17 +61,27 @@ std::vector<Shape> shapes() {
     }
     // Normals generated from the triangles (angle-weighted), as for a file without normals: the estimate then
     // measures the curvature of the generated normal field.
-    for (int n : {32, 64, 128}) {
-        TriMesh t = make_torus(3.0f, 1.0f, n, n, 0.3f, 17);
-        generate_normals(t);
-        generate_tangents(t);
-        s.push_back({"torus jitter .3 " + std::to_string(n) + "x" + std::to_string(n) + " gen. normals", t,
-                     [](const float* x) { return testing::torus_curvature(3.0, 1.0, x); }});
-        TriMesh e = make_ellipsoid(3.0f, 2.0f, 1.5f, n, n / 2);
-        generate_normals(e);
-        generate_tangents(e);
-        s.push_back({"ellipsoid " + std::to_string(n) + "x" + std::to_string(n / 2) + " gen. normals", e,
-                     [](const float* x) { return testing::ellipsoid_curvature(3.0, 2.0, 1.5, x); }});
+    const std::pair<NormalWeighting, const char*> weightings[] = {{NormalWeighting::Angle, "angle"},
+                                                                  {NormalWeighting::Max, "Max"}};
+    for (const auto& [weighting, label] : weightings) {
+        for (int n : {32, 64, 128}) {
+            const std::string suffix = std::string(" gen. normals (") + label + ")";
+            TriMesh t = make_torus(3.0f, 1.0f, n, n, 0.3f, 17);
+            generate_normals(t, weighting);
+            generate_tangents(t);
+            s.push_back({"torus jitter .3 " + std::to_string(n) + "x" + std::to_string(n) + suffix, t,
+                         [](const float* x) { return testing::torus_curvature(3.0, 1.0, x); }});
+            TriMesh e = make_ellipsoid(3.0f, 2.0f, 1.5f, n, n / 2);
+            generate_normals(e, weighting);
+            generate_tangents(e);
+            s.push_back({"ellipsoid " + std::to_string(n) + "x" + std::to_string(n / 2) + suffix, e,
+                         [](const float* x) { return testing::ellipsoid_curvature(3.0, 2.0, 1.5, x); }});
+            TriMesh j = make_ellipsoid(3.0f, 2.0f, 1.5f, n, n / 2, 0.3f, 23);
+            generate_normals(j, weighting);
+            generate_tangents(j);
+            s.push_back({"ellipsoid jitter .3 " + std::to_string(n) + "x" + std::to_string(n / 2) + suffix, j,
+                         [](const float* x) { return testing::ellipsoid_curvature(3.0, 2.0, 1.5, x); }});
+        }
     }
     for (float scale : {0.001f, 1000.0f}) {
         TriMesh m = make_torus(3.0f, 1.0f, 64, 64, 0.3f, 17);

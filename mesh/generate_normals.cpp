@@ -7,9 +7,9 @@ namespace specbake {
 
 void generate_normals(TriMesh& mesh, NormalWeighting weighting) {
     using detail::Vec3d;
-    TriMesh positions_only;
-    positions_only.positions = mesh.positions;  // weld by position alone, whatever normals are present
-    const WeldedTopology topo = weld_by_position(positions_only);
+    WeldOptions by_position;  // weld by position alone, whatever normals are present
+    by_position.split_by_normals = false;
+    const WeldedTopology topo = weld_by_position(mesh, by_position);
 
     std::vector<Vec3d> sum(topo.position_count, Vec3d::Zero());
     const size_t tris = mesh.triangle_count();
@@ -20,11 +20,11 @@ void generate_normals(TriMesh& mesh, NormalWeighting weighting) {
         const double len = cross.norm();
         if (!(len > 0.0) || !std::isfinite(len)) continue;
         for (int c = 0; c < 3; ++c) {
+            const Vec3d e1 = p[(c + 1) % 3] - p[c], e2 = p[(c + 2) % 3] - p[c];
             double w = 1.0;
-            if (weighting == NormalWeighting::Angle) {
-                w = detail::angle_between(p[(c + 1) % 3] - p[c], p[(c + 2) % 3] - p[c]) / len;
-            }
-            sum[topo.position_id[f[c]]] += w * cross;
+            if (weighting == NormalWeighting::Angle) w = detail::angle_between(e1, e2) / len;
+            if (weighting == NormalWeighting::Max) w = 1.0 / (e1.squaredNorm() * e2.squaredNorm());
+            if (std::isfinite(w)) sum[topo.position_id[f[c]]] += w * cross;
         }
     }
 

@@ -10,7 +10,7 @@
 namespace specbake {
 
 struct PrepareOptions {
-    NormalWeighting normal_weighting = NormalWeighting::Angle;
+    NormalWeighting normal_weighting = NormalWeighting::Max;
 };
 
 // validate_mesh, then generate_normals when the mesh has none (report.generated_normals) and

@@ -140,7 +140,7 @@ TEST(Normals, AngleWeightedMatchesTheSphere) {
     TriMesh m = make_uv_sphere(2.0f, 64, 32);
     const std::vector<float> analytic = m.normals;
     m.normals.clear();
-    generate_normals(m);
+    generate_normals(m, NormalWeighting::Angle);
     double worst = 0.0;
     for (size_t v = 0; v < m.vertex_count(); ++v) worst = std::max(worst, angle_deg(&m.normals[3 * v], &analytic[3 * v]));
     EXPECT_LT(worst, 0.5);
@@ -157,6 +157,29 @@ TEST(Normals, AngleWeightedMatchesTheSphere) {
         const float radial[3] = {x[0], x[1], x[2]};
         EXPECT_LT(angle_deg(&soup.normals[3 * k], radial), 1.0);
     }
+}
+
+TEST(Normals, MaxWeightsAreExactOnAnIrregularSphere) {
+    // Max 1999: for vertices on a sphere the weighted sum is exactly radial, however irregular the
+    // triangulation; angle weights are not (independent check: the radial direction of each position).
+    TriMesh m = make_uv_sphere(2.0f, 32, 16, 0.4f, 5);
+    m.normals.clear();
+    generate_normals(m, NormalWeighting::Max);
+    TriMesh angle = m;
+    generate_normals(angle, NormalWeighting::Angle);
+    double worst_max = 0.0, worst_angle = 0.0;
+    for (size_t v = 0; v < m.vertex_count(); ++v) {
+        const float* radial = &m.positions[3 * v];
+        worst_max = std::max(worst_max, angle_deg(&m.normals[3 * v], radial));
+        worst_angle = std::max(worst_angle, angle_deg(&angle.normals[3 * v], radial));
+    }
+    EXPECT_LT(worst_max, 1e-3);
+    EXPECT_GT(worst_angle, 10.0 * worst_max);
+    // The default is Max.
+    TriMesh by_default = m;
+    by_default.normals.clear();
+    generate_normals(by_default);
+    EXPECT_EQ(by_default.normals, m.normals);
 }
 
 TEST(Tangents, FollowUAndTheGltfBitangentConvention) {
