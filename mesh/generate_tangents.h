@@ -1,18 +1,21 @@
-// generate_tangents: glTF TANGENT (xyzw) for meshes that have none, in the MikkTSpace convention glTF
-// specifies: T along increasing u, bitangent B = cross(N, T) * w along decreasing glTF v (increasing v of
-// the bottom-left-origin convention MikkTSpace tools use), per-corner contributions weighted by the corner
-// angle and orthogonalised to the vertex normal before they are summed.
+// generate_tangents: glTF TANGENT (xyzw) for meshes that have none, following MikkTSpace (the algorithm glTF
+// names): per triangle dP/du from the UV derivatives; per vertex the corners' dP/du projected into the
+// vertex's tangent plane, normalised and summed with the corner angle (measured in that plane) as weight;
+// the sum normalised. T points along increasing u; B = cross(N, T) * w along decreasing glTF v (increasing v
+// of the bottom-left-origin convention MikkTSpace tools use).
 #pragma once
 
 #include "mesh/trimesh.h"
 
 namespace specbake {
 
-// Fills mesh.tangents (unit xyz orthogonal to the normal, w = +-1). Requires normals. Differences from an
-// exact MikkTSpace port: vertices are not re-split where corners disagree in handedness (the majority of
-// angle weight decides w), and vertices are not merged by (position, normal, uv) first, so exact index-level
-// duplicates accumulate separately. Without UVs, or where the UV mapping is degenerate at a vertex, T is a
-// fixed perpendicular of N (Frisvad's orthonormal basis) with w = +1, so every vertex still has a frame.
+// Fills mesh.tangents (unit xyz orthogonal to the normal, w = +-1). Requires normals. Differences from
+// MikkTSpace itself: corners are gathered per vertex index (MikkTSpace first merges vertices with equal
+// position, normal and UV, so exact index-level duplicates accumulate separately here), and a vertex whose
+// corners disagree in handedness keeps one tangent with the angle-weighted majority's w instead of being
+// split. Without UVs, or where every UV triangle at a vertex is degenerate, T is a fixed perpendicular of N
+// (Frisvad's orthonormal basis) with w = +1, so every vertex still has a frame. Linear time, parallel, the
+// same result for any thread count.
 void generate_tangents(TriMesh& mesh);
 
 }  // namespace specbake

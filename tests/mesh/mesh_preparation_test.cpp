@@ -221,6 +221,28 @@ TEST(Tangents, FollowUAndTheGltfBitangentConvention) {
     }
 }
 
+TEST(Tangents, UvSphereMatchesTheAnalyticDPdu) {
+    // u = longitude / 2 pi, so dP/du is along (-y, x, 0) wherever the latitude circle is defined; glTF v runs
+    // from the north pole down, so B = cross(N, T) * w must point north: w = +1 everywhere.
+    TriMesh m = make_uv_sphere(1.3f, 64, 32);
+    m.tangents.clear();
+    generate_tangents(m);
+    double worst_inside = 0.0, worst_seam = 0.0;
+    for (size_t v = 0; v < m.vertex_count(); ++v) {
+        const float* x = &m.positions[3 * v];
+        if (std::hypot(x[0], x[1]) < 1e-3) continue;  // pole vertices: dP/du vanishes
+        const float analytic[3] = {-x[1], x[0], 0.0f};
+        const double angle = angle_deg(&m.tangents[4 * v], analytic);
+        const bool seam = m.uv0[2 * v] == 0.0f || m.uv0[2 * v] == 1.0f;
+        (seam ? worst_seam : worst_inside) = std::max(seam ? worst_seam : worst_inside, angle);
+        EXPECT_EQ(m.tangents[4 * v + 3], 1.0f) << v;
+    }
+    EXPECT_LT(worst_inside, 0.05);
+    // Seam vertices see one side only (their UVs differ from the other side's): half a segment, 2.8 degrees.
+    EXPECT_LT(worst_seam, 360.0 / 64.0 / 2.0 + 0.05);
+    std::printf("UV sphere tangents: worst %.4f deg inside, %.4f deg on the seam\n", worst_inside, worst_seam);
+}
+
 TEST(Prepare, GeneratesWhatIsMissingAndSaysSo) {
     TriMesh m = make_uv_sphere(1.0f, 16, 8);
     m.normals.clear();
