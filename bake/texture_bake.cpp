@@ -1,10 +1,13 @@
 // Texture bake (SPEC Sec. 3). See texture_bake.h for the footprint convention.
 //
 // Every level is a set of area-weighted means over base texels of the linear per-texel quantities
-// (normal, p p^T, alpha^2, occlusion, metallic, slope moments). A level whose footprints tile the previous
-// level's footprints exactly (both sizes divide) is the plain mean of the previous level's blocks, kept in
-// double; every other level is reduced from the base texels directly. Each output texel is summed by one
-// thread in a fixed order, so results do not depend on the thread count.
+// (normal, p p^T, alpha^2, occlusion, metallic, slope moments), accumulated in double. Rows are held
+// structure-of-arrays (one plane of doubles per quantity), so decoding, block sums and the mip-0 outputs
+// are plain loops over contiguous arrays. A level whose footprints tile the previous level's footprints
+// exactly (both sizes divide) is the plain mean of the previous level's blocks; every other level is
+// reduced from the base texels directly. Levels 0, 1 and, when it tiles, 2 come out of one pass over the
+// base rows. Each output texel is summed by one thread in a fixed order, so results do not depend on the
+// thread count. Finished rows go to a sink (bake_texture_rows) or into float chains (bake_texture).
 #include "bake/texture_bake.h"
 
 #include <tbb/blocked_range.h>
@@ -13,6 +16,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -66,6 +70,10 @@ std::vector<Span1D> footprint_spans(int src, int n) {
     }
     return spans;
 }
+
+// Plane c of a row of `width` texels stored as consecutive planes.
+inline double* plane(double* row, int c, int width) { return row + size_t(c) * size_t(width); }
+inline const double* plane(const double* row, int c, int width) { return row + size_t(c) * size_t(width); }
 
 struct Decoder {
     explicit Decoder(const Image& n) : normal(n) {}
@@ -142,62 +150,56 @@ struct Decoder {
         return degenerate_count;
     }
 
-    // Output roughness of base texel (x, y) whose mean alpha^2 is a: (a)^(1/4). For a same-size map that is
-    // the clamped input value itself (the double round trip r -> r^4 -> r rounds back to the same float),
-    // so the two roots are taken only for resampled maps.
-    float base_roughness(int x, int y, double a) const {
-        if (!resampled.empty()) return float(std::sqrt(std::sqrt(std::clamp(a, 0.0, 1.0))));
-        if (roughness) return std::clamp(roughness->texel(x, y)[roughness_channel], 0.0f, 1.0f);
-        return constant_r;
-    }
-
-    // Fills the layout.count quantities of base texel (x, y) into v; returns whether it was degenerate.
-    bool texel_values(int x, int y, double* v) const {
-        double n[3];
-        bool degenerate = false;
-        decode_normal(x, y, n, degenerate);
-        texel_values_from_normal(x, y, n, v);
-        return degenerate;
-    }
-
-    // The layout.count quantities of base texel (x, y) whose unit normal is n.
-    void texel_values_from_normal(int x, int y, const double n[3], double* v) const {
-        v[kPx] = n[0];
-        v[kPy] = n[1];
-        v[kPz] = n[2];
-        v[kPxx] = n[0] * n[0];
-        v[kPyy] = n[1] * n[1];
-        v[kPxy] = n[0] * n[1];
-        double occlusion = 0.0, metallic = 0.0;
+    // The layout.count quantities of base row y as planes of W doubles in `v`, and the mip-0 output
+    // roughness of every texel in `r0`; returns the number of degenerate normals. The mip-0 roughness is
+    // (a)^(1/4); for a same-size map that is the clamped input value itself (the double round trip
+    // r -> r^4 -> r rounds back to the same float), so the roots are taken only for resampled maps.
+    long long decode_row(int y, double* v, float* r0) const {
+        const int W = normal.width;
+        double* nx = plane(v, kPx, W);
+        double* ny = plane(v, kPy, W);
+        double* nz = plane(v, kPz, W);
+        const long long degenerate = decode_normal_row(y, nx, ny, nz);
+        double* xx = plane(v, kPxx, W);
+        double* yy = plane(v, kPyy, W);
+        double* xy = plane(v, kPxy, W);
+        for (int x = 0; x < W; ++x) xx[x] = nx[x] * nx[x], yy[x] = ny[x] * ny[x], xy[x] = nx[x] * ny[x];
+        double* a = plane(v, kA, W);
+        double* occlusion = layout.occlusion >= 0 ? plane(v, layout.occlusion, W) : nullptr;
+        double* metallic = layout.occlusion >= 0 ? plane(v, layout.metallic, W) : nullptr;
         if (!resampled.empty()) {
-            const double* r = resampled.data() + (size_t(y) * normal.width + x) * 3;
-            v[kA] = r[0];
-            occlusion = r[1];
-            metallic = r[2];
+            const double* r = resampled.data() + size_t(y) * size_t(W) * 3;
+            for (int x = 0; x < W; ++x) {
+                a[x] = r[3 * size_t(x)];
+                r0[x] = float(std::sqrt(std::sqrt(std::clamp(a[x], 0.0, 1.0))));
+            }
+            if (occlusion)
+                for (int x = 0; x < W; ++x) occlusion[x] = r[3 * size_t(x) + 1], metallic[x] = r[3 * size_t(x) + 2];
         } else if (roughness) {
-            const float* t = roughness->texel(x, y);
-            const double r = std::clamp(double(t[roughness_channel]), 0.0, 1.0);
-            const double r2 = r * r;
-            v[kA] = r2 * r2;  // a = alpha^2 = r^4 (SPEC Sec. 2)
-            if (orm) occlusion = t[0], metallic = t[2];
+            const int ch = roughness->channels;
+            const float* t = roughness->texel(0, y);
+            for (int x = 0; x < W; ++x) {
+                const float r = std::clamp(t[size_t(x) * ch + roughness_channel], 0.0f, 1.0f);
+                const double r2 = double(r) * double(r);
+                a[x] = r2 * r2;  // a = alpha^2 = r^4 (SPEC Sec. 2)
+                r0[x] = r;
+            }
+            if (occlusion)
+                for (int x = 0; x < W; ++x) occlusion[x] = t[size_t(x) * ch], metallic[x] = t[size_t(x) * ch + 2];
         } else {
-            v[kA] = constant_a;
+            std::fill(a, a + W, constant_a);
+            std::fill(r0, r0 + W, constant_r);
         }
-        if (layout.occlusion >= 0) v[layout.occlusion] = occlusion, v[layout.metallic] = metallic;
         if (layout.slope >= 0) {
-            const double z = std::max(n[2], kMinSlopeZ);
-            const double sx = -n[0] / z, sy = -n[1] / z;  // slope space (SPEC Sec. 2)
-            double* s = v + layout.slope;
-            s[0] = sx, s[1] = sy, s[2] = sx * sx, s[3] = sy * sy, s[4] = sx * sy;
+            double* s[5];
+            for (int k = 0; k < 5; ++k) s[k] = plane(v, layout.slope + k, W);
+            for (int x = 0; x < W; ++x) {
+                const double z = std::max(nz[x], kMinSlopeZ);
+                const double sx = -nx[x] / z, sy = -ny[x] / z;  // slope space (SPEC Sec. 2)
+                s[0][x] = sx, s[1][x] = sy, s[2][x] = sx * sx, s[3][x] = sy * sy, s[4][x] = sx * sy;
+            }
         }
-    }
-
-    // Fills the layout.count quantities of base row y into row[x * count + c]; returns degenerate count.
-    long long decode_row(int y, double* row) const {
-        long long degenerate_count = 0;
-        const int C = layout.count;
-        for (int x = 0; x < normal.width; ++x) degenerate_count += texel_values(x, y, row + size_t(x) * C);
-        return degenerate_count;
+        return degenerate;
     }
 };
 
@@ -231,97 +233,199 @@ std::vector<double> resample_roughness(const Image& rough, int channel, bool orm
     return out;
 }
 
-// Turns the means of one texel into its output values (SPEC Sec. 3); returns |r_out - r_in|.
-double finalize_texel(const double* v, const Layout& layout, const TextureBakeSettings& s, bool flip_y,
-                      float* rough, float* kern, float* lean, float* nrm) {
-    const double mx = v[kPx], my = v[kPy];
-    // Sigma = M - m m^T, clamped to positive semi-definite.
-    double sxx = std::max(0.0, v[kPxx] - mx * mx);
-    double syy = std::max(0.0, v[kPyy] - my * my);
-    const double bound = std::sqrt(sxx * syy);
-    double sxy = std::clamp(v[kPxy] - mx * my, -bound, bound);
-    double t = reduce_covariance(s.isotropic, sxx, syy, sxy);
-    if (s.max_kernel) t = std::min(t, *s.max_kernel);
-    const double a_base = std::clamp(v[kA], 0.0, 1.0);
-    const double a = s.filter == RoughnessFilterMode::Projected ? filter_projected_isotropic(a_base, t)
-                                                                : filter_approx_isotropic(a_base, t);
-    const double r = std::sqrt(std::sqrt(a));  // r = a^(1/4)
-    const double r_in = std::sqrt(std::sqrt(a_base));
+// Float output rows of one block of rows of one level, interleaved as the chains; an empty vector for an
+// output that was not requested.
+struct RowBlock {
+    int width = 0;
+    int rough_ch = 0, kern_ch = 0, lean_ch = 0, nrm_ch = 0;
+    std::vector<float> rough, kern, lean, nrm;
+
+    RowBlock(const TextureBakeShape& shape, int w, int rows)
+        : width(w),
+          rough_ch(shape.roughness_channels),
+          kern_ch(shape.kernel_channels),
+          lean_ch(shape.lean_channels),
+          nrm_ch(shape.normal_channels),
+          rough(size_t(w) * rows * size_t(rough_ch)),
+          kern(size_t(w) * rows * size_t(kern_ch)),
+          lean(size_t(w) * rows * size_t(lean_ch)),
+          nrm(size_t(w) * rows * size_t(nrm_ch)) {}
+
+    static float* row(std::vector<float>& v, int ch, int width, int k) {
+        return v.empty() ? nullptr : v.data() + size_t(k) * size_t(width) * size_t(ch);
+    }
+    float* rough_row(int k) { return row(rough, rough_ch, width, k); }
+    float* kern_row(int k) { return row(kern, kern_ch, width, k); }
+    float* lean_row(int k) { return row(lean, lean_ch, width, k); }
+    float* nrm_row(int k) { return row(nrm, nrm_ch, width, k); }
+
+    void emit(const TextureBakeRowSink& sink, int level, int y0, int rows) const {
+        TextureBakeRows r;
+        r.level = level, r.y0 = y0, r.rows = rows, r.width = width;
+        r.roughness = rough.empty() ? nullptr : rough.data();
+        r.kernel = kern.empty() ? nullptr : kern.data();
+        r.lean = lean.empty() ? nullptr : lean.data();
+        r.normal = nrm.empty() ? nullptr : nrm.data();
+        sink(r);
+    }
+};
+
+// Mip-0 outputs of one base row from its planes `v` and output roughness `r0`. Every footprint is one
+// base texel, so Sigma = 0, t = 0 and a = a_base exactly (SPEC Sec. 3: the input roughness passes
+// through), and the decoded normal is already unit length: no divisions or roots.
+void write_base_row(const double* v, const float* r0, int W, const Layout& layout, const TextureBakeSettings& s,
+                    bool flip_y, float* rough, float* kern, int kern_ch, float* lean, float* nrm) {
+    const double* px = plane(v, kPx, W);
+    const double* py = plane(v, kPy, W);
+    const double* pz = plane(v, kPz, W);
     if (rough) {
         if (layout.occlusion >= 0) {
-            rough[0] = float(v[layout.occlusion]);
-            rough[1] = float(r);
-            rough[2] = float(v[layout.metallic]);
+            const double* o = plane(v, layout.occlusion, W);
+            const double* m = plane(v, layout.metallic, W);
+            for (int x = 0; x < W; ++x)
+                rough[3 * size_t(x)] = float(o[x]), rough[3 * size_t(x) + 1] = r0[x], rough[3 * size_t(x) + 2] = float(m[x]);
         } else {
-            rough[0] = float(r);
+            std::memcpy(rough, r0, size_t(W) * sizeof(float));
         }
     }
-    if (kern) {
-        if (s.anisotropic) {
-            kern[0] = float(sxx), kern[1] = float(syy), kern[2] = float(sxy);
-        } else {
-            kern[0] = float(t);
-        }
-    }
+    if (kern) std::fill(kern, kern + size_t(W) * size_t(kern_ch), 0.0f);
     if (lean) {
         if (layout.slope >= 0) {
-            // Olano & Baker LEAN: first and second slope moments with the base lobe's slope covariance
-            // A / 2 = (alpha^2 / 2) I folded into the second moments (A = 2 x slope covariance, TK21 Sec. 2.1).
-            const double* sl = v + layout.slope;
-            lean[0] = float(sl[0]), lean[1] = float(sl[1]);
-            lean[2] = float(sl[2] + 0.5 * v[kA]), lean[3] = float(sl[3] + 0.5 * v[kA]);
-            lean[4] = float(sl[4]);
+            // Olano & Baker LEAN: the base lobe's slope covariance alpha^2 / 2 folded into the second moments.
+            const double* a = plane(v, kA, W);
+            const double* sl[5];
+            for (int k = 0; k < 5; ++k) sl[k] = plane(v, layout.slope + k, W);
+            for (int x = 0; x < W; ++x) {
+                float* l = lean + 5 * size_t(x);
+                l[0] = float(sl[0][x]), l[1] = float(sl[1][x]);
+                l[2] = float(sl[2][x] + 0.5 * a[x]), l[3] = float(sl[3][x] + 0.5 * a[x]);
+                l[4] = float(sl[4][x]);
+            }
         } else {
-            lean[0] = float(mx), lean[1] = float(my);
-            lean[2] = float(v[kPxx]), lean[3] = float(v[kPyy]), lean[4] = float(v[kPxy]);
+            const double* xx = plane(v, kPxx, W);
+            const double* yy = plane(v, kPyy, W);
+            const double* xy = plane(v, kPxy, W);
+            for (int x = 0; x < W; ++x) {
+                float* l = lean + 5 * size_t(x);
+                l[0] = float(px[x]), l[1] = float(py[x]), l[2] = float(xx[x]), l[3] = float(yy[x]), l[4] = float(xy[x]);
+            }
         }
     }
     if (nrm) {
-        double nx = v[kPx], ny = v[kPy], nz = v[kPz];
-        const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
-        if (len > 1e-12) {
-            nx /= len, ny /= len, nz /= len;
-        } else {
-            nx = 0.0, ny = 0.0, nz = 1.0;
+        const double sign = flip_y ? -1.0 : 1.0;
+        for (int x = 0; x < W; ++x) {
+            float* n = nrm + 3 * size_t(x);
+            n[0] = float(0.5 * px[x] + 0.5), n[1] = float(0.5 * (sign * py[x]) + 0.5), n[2] = float(0.5 * pz[x] + 0.5);
         }
-        if (flip_y) ny = -ny;
-        nrm[0] = float(0.5 * nx + 0.5), nrm[1] = float(0.5 * ny + 0.5), nrm[2] = float(0.5 * nz + 0.5);
     }
-    return std::abs(r - r_in);
 }
 
-// Mip 0: every footprint is one base texel, so Sigma = 0, t = 0 and a = a_base exactly (SPEC Sec. 3:
-// the input roughness passes through). Same outputs as finalize_texel without its divisions and roots (r is
-// the base roughness, Decoder::base_roughness);
-// the decoded normal is already unit length.
-inline void finalize_base_texel(const double* v, float r, const Layout& layout, const TextureBakeSettings& s,
-                                bool flip_y, float* rough, float* kern, float* lean, float* nrm) {
-    if (rough) {
-        if (layout.occlusion >= 0) {
-            rough[0] = float(v[layout.occlusion]), rough[1] = r, rough[2] = float(v[layout.metallic]);
-        } else {
-            rough[0] = r;
+// Outputs of one row of a level >= 1 from its means `m` (planes of w doubles), SPEC Sec. 3; returns the
+// row's largest |r_out - r_in|, r_in = (mean alpha^2)^(1/4).
+double finalize_row(const double* m, int w, const Layout& layout, const TextureBakeSettings& s, bool flip_y,
+                    float* rough, float* kern, float* lean, float* nrm) {
+    const double* pmx = plane(m, kPx, w);
+    const double* pmy = plane(m, kPy, w);
+    const double* pmz = plane(m, kPz, w);
+    const double* pxx = plane(m, kPxx, w);
+    const double* pyy = plane(m, kPyy, w);
+    const double* pxy = plane(m, kPxy, w);
+    const double* pa = plane(m, kA, w);
+    const bool projected = s.filter == RoughnessFilterMode::Projected;
+    double change = 0.0;
+    for (int i = 0; i < w; ++i) {
+        const double mx = pmx[i], my = pmy[i];
+        // Sigma = M - m m^T, clamped to positive semi-definite.
+        const double sxx = std::max(0.0, pxx[i] - mx * mx);
+        const double syy = std::max(0.0, pyy[i] - my * my);
+        const double bound = std::sqrt(sxx * syy);
+        const double sxy = std::clamp(pxy[i] - mx * my, -bound, bound);
+        double t = reduce_covariance(s.isotropic, sxx, syy, sxy);
+        if (s.max_kernel) t = std::min(t, *s.max_kernel);
+        const double a_base = std::clamp(pa[i], 0.0, 1.0);
+        const double a = projected ? filter_projected_isotropic(a_base, t) : filter_approx_isotropic(a_base, t);
+        const double r = std::sqrt(std::sqrt(a));  // r = a^(1/4)
+        change = std::max(change, std::abs(r - std::sqrt(std::sqrt(a_base))));
+        if (rough) {
+            if (layout.occlusion >= 0) {
+                float* o = rough + 3 * size_t(i);
+                o[0] = float(plane(m, layout.occlusion, w)[i]);
+                o[1] = float(r);
+                o[2] = float(plane(m, layout.metallic, w)[i]);
+            } else {
+                rough[i] = float(r);
+            }
+        }
+        if (kern) {
+            if (s.anisotropic) {
+                float* k = kern + 3 * size_t(i);
+                k[0] = float(sxx), k[1] = float(syy), k[2] = float(sxy);
+            } else {
+                kern[i] = float(t);
+            }
+        }
+        if (lean) {
+            float* l = lean + 5 * size_t(i);
+            if (layout.slope >= 0) {
+                // Olano & Baker LEAN: first and second slope moments with the base lobe's slope covariance
+                // A / 2 = (alpha^2 / 2) I folded into the second moments (A = 2 x slope covariance, TK21 Sec. 2.1).
+                const double* sl = m + size_t(layout.slope) * w + i;
+                l[0] = float(sl[0]), l[1] = float(sl[size_t(w)]);
+                l[2] = float(sl[2 * size_t(w)] + 0.5 * pa[i]), l[3] = float(sl[3 * size_t(w)] + 0.5 * pa[i]);
+                l[4] = float(sl[4 * size_t(w)]);
+            } else {
+                l[0] = float(mx), l[1] = float(my), l[2] = float(pxx[i]), l[3] = float(pyy[i]), l[4] = float(pxy[i]);
+            }
+        }
+        if (nrm) {
+            double nx = mx, ny = my, nz = pmz[i];
+            const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
+            if (len > 1e-12) {
+                nx /= len, ny /= len, nz /= len;
+            } else {
+                nx = 0.0, ny = 0.0, nz = 1.0;
+            }
+            if (flip_y) ny = -ny;
+            float* n = nrm + 3 * size_t(i);
+            n[0] = float(0.5 * nx + 0.5), n[1] = float(0.5 * ny + 0.5), n[2] = float(0.5 * nz + 0.5);
         }
     }
-    if (kern) {
-        kern[0] = 0.0f;
-        if (s.anisotropic) kern[1] = 0.0f, kern[2] = 0.0f;
-    }
-    if (lean) {
-        if (layout.slope >= 0) {
-            const double* sl = v + layout.slope;
-            lean[0] = float(sl[0]), lean[1] = float(sl[1]);
-            lean[2] = float(sl[2] + 0.5 * v[kA]), lean[3] = float(sl[3] + 0.5 * v[kA]);
-            lean[4] = float(sl[4]);
-        } else {
-            lean[0] = float(v[kPx]), lean[1] = float(v[kPy]);
-            lean[2] = float(v[kPxx]), lean[3] = float(v[kPyy]), lean[4] = float(v[kPxy]);
+    return change;
+}
+
+// Means of one row of a level whose footprints are fx x fy blocks of the finer level: `fine` holds the
+// fy finer rows (each C planes of pw doubles), `out` receives C planes of w means. Each mean sums its
+// block in the order (dy, dx), starting from zero.
+void block_means(const double* fine, int pw, int fx, int fy, int C, int w, double* out) {
+    const double inv = 1.0 / double(fx * fy);
+    for (int c = 0; c < C; ++c) {
+        double* o = plane(out, c, w);
+        std::fill(o, o + w, 0.0);
+        for (int dy = 0; dy < fy; ++dy) {
+            const double* src = plane(fine + size_t(dy) * size_t(C) * size_t(pw), c, pw);
+            if (fx == 2) {
+                int i = 0;
+#if defined(__SSE2__)
+                // Two means per instruction: the even and odd source texels of two blocks, added in the same
+                // order as the scalar loop.
+                for (; i + 2 <= w; i += 2) {
+                    const __m128d a = _mm_loadu_pd(src + 2 * size_t(i)), b = _mm_loadu_pd(src + 2 * size_t(i) + 2);
+                    __m128d acc = _mm_loadu_pd(o + i);
+                    acc = _mm_add_pd(acc, _mm_unpacklo_pd(a, b));
+                    acc = _mm_add_pd(acc, _mm_unpackhi_pd(a, b));
+                    _mm_storeu_pd(o + i, acc);
+                }
+#endif
+                for (; i < w; ++i) {
+                    o[i] += src[2 * size_t(i)];
+                    o[i] += src[2 * size_t(i) + 1];
+                }
+            } else {
+                for (int i = 0; i < w; ++i)
+                    for (int dx = 0; dx < fx; ++dx) o[i] += src[size_t(i) * fx + dx];
+            }
         }
-    }
-    if (nrm) {
-        nrm[0] = float(0.5 * v[kPx] + 0.5);
-        nrm[1] = float(0.5 * (flip_y ? -v[kPy] : v[kPy]) + 0.5);
-        nrm[2] = float(0.5 * v[kPz] + 0.5);
+        for (int i = 0; i < w; ++i) o[i] *= inv;
     }
 }
 
@@ -408,8 +512,10 @@ Image make_output_image(int w, int h, int channels) {
     return image;
 }
 
+// Levels 0 .. levels-1 of a W x H chain; none when channels is 0 (output not requested).
 void allocate_chain(MipChain& chain, int W, int H, int levels, int channels) {
     chain.levels.clear();
+    if (channels <= 0) return;
     for (int L = 0; L < levels; ++L)
         chain.levels.push_back(make_output_image(std::max(1, W >> L), std::max(1, H >> L), channels));
 }
@@ -424,22 +530,33 @@ int mip_level_count(int width, int height) {
 
 std::optional<std::pair<int, int>> find_non_finite(const Image& image) {
     const size_t n = image.pixels.size();
-    // Blocks are screened branch-free on the exponent bits (all ones: NaN or infinity), which vectorises;
-    // only a block that holds one is searched element by element.
+    const float* p = image.pixels.data();
+    // Blocks are screened on the exponent bits (all ones: NaN or infinity), four floats per SSE2
+    // instruction; only a block that holds one is searched element by element.
     constexpr size_t kBlock = 4096;
     size_t first = 0;
     for (; first < n; first += kBlock) {
         const size_t end = std::min(n, first + kBlock);
+        size_t i = first;
         uint32_t bad = 0;
-        for (size_t i = first; i < end; ++i) {
+#if defined(__SSE2__)
+        const __m128i exponent = _mm_set1_epi32(0x7f800000);
+        __m128i any = _mm_setzero_si128();
+        for (; i + 4 <= end; i += 4) {
+            const __m128i bits = _mm_and_si128(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p + i)), exponent);
+            any = _mm_or_si128(any, _mm_cmpeq_epi32(bits, exponent));
+        }
+        bad = uint32_t(_mm_movemask_epi8(any));
+#endif
+        for (; i < end; ++i) {
             uint32_t bits;
-            std::memcpy(&bits, &image.pixels[i], sizeof bits);
+            std::memcpy(&bits, p + i, sizeof bits);
             bad |= uint32_t((bits & 0x7f800000u) == 0x7f800000u);
         }
         if (bad) break;
     }
     for (size_t i = first; i < n; ++i) {
-        if (!std::isfinite(image.pixels[i])) {
+        if (!std::isfinite(p[i])) {
             const size_t texel = i / size_t(std::max(1, image.channels));
             return std::pair<int, int>(int(texel % size_t(image.width)), int(texel / size_t(image.width)));
         }
@@ -447,10 +564,37 @@ std::optional<std::pair<int, int>> find_non_finite(const Image& image) {
     return std::nullopt;
 }
 
-Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughness, int roughness_channel,
-                                       float roughness_value, const TextureBakeSettings& settings) {
-    if (auto ok = validate(normal, roughness, roughness_channel, roughness_value); !ok) return ok.error();
+TextureBakeShape texture_bake_shape(const Image& normal, const Image* roughness, int roughness_channel,
+                                    const TextureBakeSettings& settings) {
+    TextureBakeShape shape;
+    shape.width = normal.width, shape.height = normal.height;
+    shape.levels = normal.empty() ? 0 : mip_level_count(normal.width, normal.height);
+    const bool orm = roughness && roughness->channels >= 3 && roughness_channel == 1;
+    const TextureOutputs& want = settings.outputs;
+    shape.roughness_channels = want.roughness ? (orm ? 3 : 1) : 0;
+    shape.kernel_channels = want.kernel ? (settings.anisotropic ? 3 : 1) : 0;
+    shape.lean_channels = want.lean ? 5 : 0;
+    shape.normal_channels = want.normal ? 3 : 0;
+    return shape;
+}
 
+namespace {
+
+// Runs `fn` on `threads` threads (0: the calling arena, all available).
+template <class Fn>
+void run_with_threads(int threads, Fn&& fn) {
+    if (threads > 0) {
+        tbb::task_arena arena(threads);
+        arena.execute(fn);
+    } else {
+        fn();
+    }
+}
+
+// The bake proper, on validated inputs.
+Result<TextureBakeResult> bake_validated(const Image& normal, const Image* roughness, int roughness_channel,
+                                         float roughness_value, const TextureBakeSettings& settings,
+                                         const TextureBakeRowSink& sink) {
     TextureBakeResult result;
     TextureBakeNotes& notes = result.notes;
     const int W = normal.width, H = normal.height;
@@ -503,22 +647,9 @@ Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughne
     }
     const int C = layout.count;
 
-    const int levels = mip_level_count(W, H);
-    const TextureOutputs& want = settings.outputs;
-    // Zero-filling the outputs is a large part of the bake's memory traffic: the chains are allocated on
-    // two threads (LEAN, the widest, against the other three).
-    auto allocate_outputs = [&] {
-        tbb::parallel_invoke(
-            [&] {
-                if (want.lean) allocate_chain(result.lean, W, H, levels, 5);
-            },
-            [&] {
-                if (want.roughness) allocate_chain(result.roughness, W, H, levels, dec.orm ? 3 : 1);
-                if (want.kernel) allocate_chain(result.kernel, W, H, levels, settings.anisotropic ? 3 : 1);
-                if (want.normal) allocate_chain(result.normal, W, H, levels, 3);
-            });
-    };
 
+    const TextureBakeShape shape = texture_bake_shape(normal, roughness, roughness_channel, settings);
+    const int levels = shape.levels;
     auto level_w = [&](int L) { return std::max(1, W >> L); };
     auto level_h = [&](int L) { return std::max(1, H >> L); };
     // Level L is the mean of blocks of level L-1 when both of its sizes divide level L-1's.
@@ -526,32 +657,20 @@ Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughne
         return L >= 2 && level_w(L - 1) % level_w(L) == 0 && level_h(L - 1) % level_h(L) == 0;
     };
 
-    std::vector<double> previous, current;  // means of the previous / current level, C per texel
+    // Means of the previous / current level, kept when the next level tiles it: row j is C planes of w.
+    std::vector<double> previous, current;
     std::vector<double> level_change(size_t(levels), 0.0);
-    long long degenerate = 0;
+    std::atomic<long long> degenerate{0};
+    const size_t row_doubles = size_t(C) * size_t(W);
 
-    // Writes the outputs of row j of level L from its means (C per texel); returns the row's max change.
-    auto finalize_row = [&](int L, int j, const double* means) {
-        const int w = level_w(L);
-        Image* R = want.roughness ? &result.roughness.levels[size_t(L)] : nullptr;
-        Image* K = want.kernel ? &result.kernel.levels[size_t(L)] : nullptr;
-        Image* E = want.lean ? &result.lean.levels[size_t(L)] : nullptr;
-        Image* N = want.normal ? &result.normal.levels[size_t(L)] : nullptr;
-        if (L == 0) {
-            for (int i = 0; i < w; ++i)
-                finalize_base_texel(means + size_t(i) * C, dec.base_roughness(i, j, means[size_t(i) * C + kA]), layout,
-                                    settings, dec.flip_y, R ? R->texel(i, j) : nullptr,
-                                    K ? K->texel(i, j) : nullptr, E ? E->texel(i, j) : nullptr,
-                                    N ? N->texel(i, j) : nullptr);
-            return 0.0;
-        }
-        double change = 0.0;
-        for (int i = 0; i < w; ++i) {
-            change = std::max(change, finalize_texel(means + size_t(i) * C, layout, settings, dec.flip_y,
-                                                     R ? R->texel(i, j) : nullptr, K ? K->texel(i, j) : nullptr,
-                                                     E ? E->texel(i, j) : nullptr, N ? N->texel(i, j) : nullptr));
-        }
-        return change;
+    // Writes the outputs of rows of level L into `block` row k from their means.
+    auto finalize_into = [&](RowBlock& block, int k, const double* means, int w) {
+        return finalize_row(means, w, layout, settings, dec.flip_y, block.rough_row(k), block.kern_row(k),
+                            block.lean_row(k), block.nrm_row(k));
+    };
+    auto base_into = [&](RowBlock& block, int k, const double* v, const float* r0) {
+        write_base_row(v, r0, W, layout, settings, dec.flip_y, block.rough_row(k), block.kern_row(k),
+                       block.kern_ch, block.lean_row(k), block.nrm_row(k));
     };
     auto reduce_changes = [](const std::vector<double>& rows) {
         double m = 0.0;
@@ -560,10 +679,10 @@ Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughne
     };
 
     // Levels 0 and 1 in one pass when level 1's footprints are whole blocks of base texels (all even
-    // sizes): every base row is decoded once, written as level 0 and summed into its level-1 row.
+    // sizes): every base row is decoded once, written as level 0 and summed into its level-1 row. When
+    // level 2 tiles level 1 as well, each task owns whole level-2 rows: the level-1 rows of one level-2
+    // row stay in the task, and only level-2 means (a sixteenth of the base) are kept for level 3.
     const bool fused = levels >= 2 && W % level_w(1) == 0 && H % level_h(1) == 0;
-    // When level 2 tiles level 1 as well, each task also owns whole level-2 rows: the level-1 rows of one
-    // level-2 row stay in the task, and only level-2 means (a sixteenth of the base) are kept for level 3.
     auto run_fused = [&] {
         const int w1 = level_w(1), h1 = level_h(1), fx = W / w1, fy = H / h1;
         const bool with2 = levels > 2 && tiles_previous(2);
@@ -573,80 +692,44 @@ Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughne
         const bool keep = next < levels && tiles_previous(next);
         current.assign(keep ? size_t(w2) * h2 * C : 0, 0.0);
         std::vector<double> change1(size_t(h1), 0.0), change2(size_t(h2), 0.0);
-        std::vector<long long> row_degenerate(size_t(h2), 0);
-        Image* R0 = want.roughness ? &result.roughness.levels[0] : nullptr;
-        Image* K0 = want.kernel ? &result.kernel.levels[0] : nullptr;
-        Image* E0 = want.lean ? &result.lean.levels[0] : nullptr;
-        Image* N0 = want.normal ? &result.normal.levels[0] : nullptr;
-        const double inv = 1.0 / double(fx * fy);
-        const double inv2 = 1.0 / double(fx2 * fy2);
-        // Each base texel is decoded once, written as level 0 and added to its level-1 block mean in the
-        // fixed order (dy, dx), so no decoded base row is stored; level 2 sums level-1 means in the same
-        // order as the level loop below would.
         tbb::parallel_for(tbb::blocked_range<int>(0, h2, with2 ? 1 : 4), [&](const tbb::blocked_range<int>& rows) {
-            std::vector<double> means1(size_t(w1) * C * size_t(fy2)), means2(size_t(w2) * C);
-            std::vector<double> normals(size_t(W) * 3 * size_t(fy));  // rows of nx, ny, nz per dy
+            std::vector<double> base(row_doubles * size_t(fy));
+            std::vector<float> r0(static_cast<size_t>(W));
+            std::vector<double> means1(size_t(C) * w1 * size_t(fy2)), means2(size_t(C) * w2);
+            RowBlock out0(shape, W, fy * fy2), out1(shape, w1, fy2), out2(shape, w2, 1);
+            long long task_degenerate = 0;
             for (int j2 = rows.begin(); j2 < rows.end(); ++j2) {
-                long long row_deg = 0;
                 for (int dy2 = 0; dy2 < fy2; ++dy2) {
                     const int j = j2 * fy2 + dy2;
-                    double* means = means1.data() + size_t(dy2) * w1 * C;
                     for (int dy = 0; dy < fy; ++dy) {
-                        double* nx = normals.data() + size_t(dy) * 3 * W;
-                        row_deg += dec.decode_normal_row(j * fy + dy, nx, nx + W, nx + 2 * size_t(W));
+                        double* v = base.data() + size_t(dy) * row_doubles;
+                        task_degenerate += dec.decode_row(j * fy + dy, v, r0.data());
+                        base_into(out0, dy2 * fy + dy, v, r0.data());
                     }
-                    for (int i = 0; i < w1; ++i) {
-                        double m[kMaxChannels];
-                        for (int c = 0; c < C; ++c) m[c] = 0.0;
-                        for (int dy = 0; dy < fy; ++dy) {
-                            const int y = j * fy + dy;
-                            const double* nx = normals.data() + size_t(dy) * 3 * W;
-                            for (int dx = 0; dx < fx; ++dx) {
-                                const int x = i * fx + dx;
-                                const double n[3] = {nx[x], nx[W + x], nx[2 * size_t(W) + x]};
-                                double v[kMaxChannels];
-                                dec.texel_values_from_normal(x, y, n, v);
-                                finalize_base_texel(v, dec.base_roughness(x, y, v[kA]), layout, settings, dec.flip_y,
-                                                    R0 ? R0->texel(x, y) : nullptr,
-                                                    K0 ? K0->texel(x, y) : nullptr, E0 ? E0->texel(x, y) : nullptr,
-                                                    N0 ? N0->texel(x, y) : nullptr);
-                                for (int c = 0; c < C; ++c) m[c] += v[c];
-                            }
-                        }
-                        double* out = means + size_t(i) * C;
-                        for (int c = 0; c < C; ++c) out[c] = m[c] * inv;
-                    }
-                    change1[size_t(j)] = finalize_row(1, j, means);
+                    double* means = means1.data() + size_t(dy2) * C * w1;
+                    block_means(base.data(), W, fx, fy, C, w1, means);
+                    change1[size_t(j)] = finalize_into(out1, dy2, means, w1);
                 }
-                row_degenerate[size_t(j2)] = row_deg;
+                out0.emit(sink, 0, j2 * fy2 * fy, fy2 * fy);
+                out1.emit(sink, 1, j2 * fy2, fy2);
                 const double* kept = means1.data();
                 if (with2) {
-                    for (int i = 0; i < w2; ++i) {
-                        double* m = means2.data() + size_t(i) * C;
-                        for (int c = 0; c < C; ++c) m[c] = 0.0;
-                        for (int dy = 0; dy < fy2; ++dy) {
-                            const double* src = means1.data() + (size_t(dy) * w1 + size_t(i) * fx2) * C;
-                            for (int dx = 0; dx < fx2; ++dx)
-                                for (int c = 0; c < C; ++c) m[c] += src[size_t(dx) * C + c];
-                        }
-                        for (int c = 0; c < C; ++c) m[c] *= inv2;
-                    }
-                    change2[size_t(j2)] = finalize_row(2, j2, means2.data());
+                    block_means(means1.data(), w1, fx2, fy2, C, w2, means2.data());
+                    change2[size_t(j2)] = finalize_into(out2, 0, means2.data(), w2);
+                    out2.emit(sink, 2, j2, 1);
                     kept = means2.data();
                 }
                 if (keep) std::copy(kept, kept + size_t(w2) * C, current.begin() + ptrdiff_t(size_t(j2) * w2 * C));
             }
+            degenerate += task_degenerate;
         });
-        level_change[0] = 0.0;  // mip 0 passes the input roughness through
         level_change[1] = reduce_changes(change1);
         if (with2) level_change[2] = reduce_changes(change2);
-        for (long long d : row_degenerate) degenerate += d;
         previous.swap(current);
         return next;
     };
 
     auto run = [&] {
-        allocate_outputs();
         const int first_level = fused ? run_fused() : 0;
         for (int L = first_level; L < levels; ++L) {
             const int w = level_w(L), h = level_h(L);
@@ -654,71 +737,64 @@ Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughne
             const bool keep = L >= 1 && L + 1 < levels && tiles_previous(L + 1);
             current.assign(keep ? size_t(w) * h * C : 0, 0.0);
             std::vector<double> row_change(size_t(h), 0.0);
-            std::vector<long long> row_degenerate(size_t(h), 0);
-            const std::vector<Span1D> spans_x = from_previous ? std::vector<Span1D>{} : footprint_spans(W, w);
-            const std::vector<Span1D> spans_y = from_previous ? std::vector<Span1D>{} : footprint_spans(H, h);
+            const std::vector<Span1D> spans_x = from_previous || L == 0 ? std::vector<Span1D>{} : footprint_spans(W, w);
+            const std::vector<Span1D> spans_y = from_previous || L == 0 ? std::vector<Span1D>{} : footprint_spans(H, h);
             const double area = (double(W) / w) * (double(H) / h);
             const int pw = L >= 1 ? level_w(L - 1) : 0;
             const int fx = from_previous ? pw / w : 0;
             const int fy = from_previous ? level_h(L - 1) / h : 0;
 
             tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
-                std::vector<double> base_row(from_previous ? 0 : size_t(W) * C);
-                std::vector<double> means(size_t(w) * C);
+                std::vector<double> base(from_previous ? 0 : row_doubles);
+                std::vector<float> r0(from_previous ? 0 : size_t(W));
+                std::vector<double> means(size_t(C) * w);
+                RowBlock out(shape, w, 1);
+                long long task_degenerate = 0;
                 for (int j = rows.begin(); j < rows.end(); ++j) {
-                    std::fill(means.begin(), means.end(), 0.0);
+                    if (L == 0) {
+                        task_degenerate += dec.decode_row(j, base.data(), r0.data());
+                        base_into(out, 0, base.data(), r0.data());
+                        out.emit(sink, 0, j, 1);
+                        continue;
+                    }
                     if (from_previous) {
-                        const double inv = 1.0 / double(fx * fy);
-                        for (int i = 0; i < w; ++i) {
-                            double* m = means.data() + size_t(i) * C;
-                            for (int dy = 0; dy < fy; ++dy) {
-                                const double* src =
-                                    previous.data() + (size_t(j * fy + dy) * pw + size_t(i) * fx) * C;
-                                for (int dx = 0; dx < fx; ++dx)
-                                    for (int c = 0; c < C; ++c) m[c] += src[size_t(dx) * C + c];
-                            }
-                            for (int c = 0; c < C; ++c) m[c] *= inv;
-                        }
+                        block_means(previous.data() + size_t(j) * fy * C * pw, pw, fx, fy, C, w, means.data());
                     } else {
+                        std::fill(means.begin(), means.end(), 0.0);
                         const Span1D& sy = spans_y[size_t(j)];
                         for (size_t k = 0; k < sy.weight.size(); ++k) {
                             const double wy = sy.weight[k];
                             if (wy <= 0.0) continue;
-                            row_degenerate[size_t(j)] += dec.decode_row(sy.first + int(k), base_row.data());
-                            for (int i = 0; i < w; ++i) {
-                                const Span1D& sx = spans_x[size_t(i)];
-                                double* m = means.data() + size_t(i) * C;
-                                for (size_t q = 0; q < sx.weight.size(); ++q) {
-                                    const double wxy = wy * sx.weight[q];
-                                    const double* v = base_row.data() + size_t(sx.first + int(q)) * C;
-                                    for (int c = 0; c < C; ++c) m[c] += wxy * v[c];
+                            dec.decode_row(sy.first + int(k), base.data(), r0.data());
+                            for (int c = 0; c < C; ++c) {
+                                double* m = plane(means.data(), c, w);
+                                const double* v = plane(base.data(), c, W);
+                                for (int i = 0; i < w; ++i) {
+                                    const Span1D& sx = spans_x[size_t(i)];
+                                    for (size_t q = 0; q < sx.weight.size(); ++q)
+                                        m[i] += wy * sx.weight[q] * v[sx.first + int(q)];
                                 }
                             }
                         }
                         const double inv = 1.0 / area;
                         for (double& m : means) m *= inv;
                     }
-                    row_change[size_t(j)] = finalize_row(L, j, means.data());
+                    row_change[size_t(j)] = finalize_into(out, 0, means.data(), w);
+                    out.emit(sink, L, j, 1);
                     if (keep) std::copy(means.begin(), means.end(), current.begin() + ptrdiff_t(size_t(j) * w * C));
                 }
+                degenerate += task_degenerate;
             });
             level_change[size_t(L)] = reduce_changes(row_change);
-            if (L == 0)
-                for (long long d : row_degenerate) degenerate += d;
             previous.swap(current);
         }
         result.max_roughness_change = reduce_changes(level_change);
     };
-    if (settings.threads > 0) {
-        tbb::task_arena arena(settings.threads);
-        arena.execute(run);
-    } else {
-        run();
-    }
+    run_with_threads(settings.threads, run);
 
     notes.degenerate_normals = degenerate;
-    if (degenerate > 0)
-        notes.warnings.push_back("normal map: " + std::to_string(degenerate) +
+    if (notes.degenerate_normals > 0)
+        notes.warnings.push_back("normal map: " + std::to_string(notes.degenerate_normals) +
                                  " texels decode to a zero-length vector; treated as +Z");
     if (notes.roughness_resampled)
         notes.warnings.push_back("roughness map is " + std::to_string(roughness->width) + "x" +
@@ -726,6 +802,50 @@ Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughne
                                  std::to_string(H) +
                                  "; outputs have the normal map's size, each texel reading the roughness it covers");
     return result;
+}
+
+}  // namespace
+
+Result<TextureBakeResult> bake_texture_rows(const Image& normal, const Image* roughness, int roughness_channel,
+                                            float roughness_value, const TextureBakeSettings& settings,
+                                            const TextureBakeRowSink& sink) {
+    if (auto ok = validate(normal, roughness, roughness_channel, roughness_value); !ok) return ok.error();
+    return bake_validated(normal, roughness, roughness_channel, roughness_value, settings, sink);
+}
+
+Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughness, int roughness_channel,
+                                       float roughness_value, const TextureBakeSettings& settings) {
+    if (auto ok = validate(normal, roughness, roughness_channel, roughness_value); !ok) return ok.error();
+    const TextureBakeShape shape = texture_bake_shape(normal, roughness, roughness_channel, settings);
+    MipChain rough, kern, lean, nrm;
+    // The chains are allocated (and zero-filled) on two threads: LEAN, the widest, against the other three.
+    run_with_threads(settings.threads, [&] {
+        tbb::parallel_invoke(
+            [&] { allocate_chain(lean, shape.width, shape.height, shape.levels, shape.lean_channels); },
+            [&] {
+                allocate_chain(rough, shape.width, shape.height, shape.levels, shape.roughness_channels);
+                allocate_chain(kern, shape.width, shape.height, shape.levels, shape.kernel_channels);
+                allocate_chain(nrm, shape.width, shape.height, shape.levels, shape.normal_channels);
+            });
+    });
+    auto copy_rows = [](MipChain& chain, const TextureBakeRows& r, const float* src) {
+        if (!src) return;
+        Image& level = chain.levels[size_t(r.level)];
+        std::memcpy(level.texel(0, r.y0), src, size_t(r.rows) * size_t(r.width) * size_t(level.channels) * sizeof(float));
+    };
+    auto baked = bake_validated(normal, roughness, roughness_channel, roughness_value, settings,
+                                [&](const TextureBakeRows& r) {
+                                    copy_rows(rough, r, r.roughness);
+                                    copy_rows(kern, r, r.kernel);
+                                    copy_rows(lean, r, r.lean);
+                                    copy_rows(nrm, r, r.normal);
+                                });
+    if (!baked) return baked;
+    baked->roughness = std::move(rough);
+    baked->kernel = std::move(kern);
+    baked->lean = std::move(lean);
+    baked->normal = std::move(nrm);
+    return baked;
 }
 
 }  // namespace specbake

@@ -14,6 +14,7 @@
 #include "bake/isotropic_filter.h"
 #include "bake/result.h"
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -78,6 +79,37 @@ struct TextureBakeResult {
 // outside [0, 1]. Messages say "normal map: ..." / "roughness map: ..."; callers prefix the file name.
 Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughness, int roughness_channel,
                                        float roughness_value, const TextureBakeSettings& settings);
+
+// Rows [y0, y0 + rows) of mip level `level` (`width` texels each), interleaved with the channels of the
+// matching TextureBakeResult chain; null for an output that was not requested. Valid during the call only.
+struct TextureBakeRows {
+    int level = 0;
+    int y0 = 0;
+    int rows = 0;
+    int width = 0;
+    const float* roughness = nullptr;
+    const float* kernel = nullptr;
+    const float* lean = nullptr;
+    const float* normal = nullptr;
+};
+
+// Receives every row of every level exactly once, from several threads at once (disjoint rows), in no
+// particular order. The values do not depend on the thread count.
+using TextureBakeRowSink = std::function<void(const TextureBakeRows&)>;
+
+// Channel counts of the chains bake_texture() would return for these inputs (0: output not requested).
+struct TextureBakeShape {
+    int width = 0, height = 0, levels = 0;
+    int roughness_channels = 0, kernel_channels = 0, lean_channels = 0, normal_channels = 0;
+};
+TextureBakeShape texture_bake_shape(const Image& normal, const Image* roughness, int roughness_channel,
+                                    const TextureBakeSettings& settings);
+
+// bake_texture() without materialising the chains: every finished block of rows goes to `sink`, so a
+// caller can encode outputs straight into their containers. The returned result has empty chains.
+Result<TextureBakeResult> bake_texture_rows(const Image& normal, const Image* roughness, int roughness_channel,
+                                            float roughness_value, const TextureBakeSettings& settings,
+                                            const TextureBakeRowSink& sink);
 
 // Number of mip levels of a W x H chain: 1 + floor(log2(max(W, H))).
 int mip_level_count(int width, int height);

@@ -5,9 +5,12 @@
 #include "io/image_io.h"
 #include "io/sha256.h"
 
+#include <tbb/parallel_invoke.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 
 namespace specbake {
 namespace fs = std::filesystem;
@@ -55,6 +58,89 @@ MipChain channel_subset(const MipChain& chain, int first, int count) {
         out.levels.push_back(std::move(sub));
     }
     return out;
+}
+
+enum class Chain { Roughness, Kernel, Normal, Lean };
+
+// One output file: channels [first, first + channels) of one baked chain, stored as `encoding`.
+struct OutputFile {
+    Chain chain;
+    std::string kind, stem;
+    io::TexelEncoding encoding;
+    int first = 0, channels = 0;
+    std::vector<std::string> names;
+};
+
+// The files of settings.outputs, in the order they are written: `<stem>_roughness`, `_kernel`, `_normal`,
+// `_lean` (EXR: all five moments; containers of at most four channels: RGBA plus `_lean_xy`).
+std::vector<OutputFile> output_files(const TextureBakeShape& shape, const TextureInputs& in,
+                                     const TextureBakeSettings& settings, io::TextureContainer container,
+                                     const std::string& stem) {
+    std::vector<OutputFile> files;
+    const int roughness_bits = in.roughness ? in.roughness_bits : in.normal_bits;
+    if (settings.outputs.roughness) {
+        files.push_back({Chain::Roughness, "roughness", stem + "_roughness", unorm_for_bits(roughness_bits), 0,
+                         shape.roughness_channels,
+                         shape.roughness_channels == 3 ? std::vector<std::string>{"R", "G", "B"}
+                                                       : std::vector<std::string>{"Y"}});
+    }
+    if (settings.outputs.kernel) {
+        files.push_back({Chain::Kernel, "kernel", stem + "_kernel", io::TexelEncoding::Float16, 0, shape.kernel_channels,
+                         settings.anisotropic ? std::vector<std::string>{"xx", "yy", "xy"}
+                                              : std::vector<std::string>{"t"}});
+    }
+    if (settings.outputs.normal) {
+        files.push_back({Chain::Normal, "normal", stem + "_normal", unorm_for_bits(in.normal_bits), 0, 3,
+                         {"R", "G", "B"}});
+    }
+    if (settings.outputs.lean) {
+        // Slope-space moments are unbounded (|s| grows as 1/n.z), so they get full float precision.
+        const io::TexelEncoding enc =
+            settings.lean_space == LeanSpace::Slope ? io::TexelEncoding::Float32 : io::TexelEncoding::Float16;
+        const std::vector<std::string> names{"m.x", "m.y", "M.xx", "M.yy", "M.xy"};
+        if (container == io::TextureContainer::Exr) {
+            files.push_back({Chain::Lean, "lean", stem + "_lean", enc, 0, 5, names});
+        } else {
+            files.push_back({Chain::Lean, "lean", stem + "_lean", enc, 0, 4, {names.begin(), names.begin() + 4}});
+            files.push_back({Chain::Lean, "lean", stem + "_lean_xy", enc, 4, 1, {"M.xy"}});
+        }
+    }
+    return files;
+}
+
+MipChain& chain_of(TextureBakeResult& baked, Chain c) {
+    switch (c) {
+        case Chain::Roughness: return baked.roughness;
+        case Chain::Kernel: return baked.kernel;
+        case Chain::Normal: return baked.normal;
+        case Chain::Lean: return baked.lean;
+    }
+    return baked.roughness;
+}
+
+const float* rows_of(const TextureBakeRows& r, Chain c) {
+    switch (c) {
+        case Chain::Roughness: return r.roughness;
+        case Chain::Kernel: return r.kernel;
+        case Chain::Normal: return r.normal;
+        case Chain::Lean: return r.lean;
+    }
+    return r.roughness;
+}
+
+int chain_channels(const TextureBakeShape& shape, Chain c) {
+    switch (c) {
+        case Chain::Roughness: return shape.roughness_channels;
+        case Chain::Kernel: return shape.kernel_channels;
+        case Chain::Normal: return shape.normal_channels;
+        case Chain::Lean: return shape.lean_channels;
+    }
+    return 0;
+}
+
+int roughness_channel_of(const TextureInputs& in) {
+    if (in.roughness && in.roughness_channel < 0) return in.roughness->channels >= 3 ? 1 : 0;
+    return in.roughness_channel;
 }
 
 Result<void> append(std::vector<io::ManifestOutput>& all, Result<std::vector<io::ManifestOutput>> written) {
@@ -153,12 +239,10 @@ nlohmann::json texture_settings_json(const TextureBakeSettings& s, io::TextureCo
 Result<TextureBakeResult> bake_texture_inputs(const TextureInputs& in, const TextureBakeSettings& settings,
                                               const ProgressFn& progress) {
     if (!in.normal) return make_error(in.normal_name + ": no normal map given");
-    int channel = in.roughness_channel;
-    if (in.roughness && channel < 0) channel = in.roughness->channels >= 3 ? 1 : 0;
     if (progress)
         progress("baking " + std::to_string(in.normal->width) + "x" + std::to_string(in.normal->height) + " " +
                  in.normal_name);
-    auto baked = bake_texture(*in.normal, in.roughness, channel, in.roughness_value, settings);
+    auto baked = bake_texture(*in.normal, in.roughness, roughness_channel_of(in), in.roughness_value, settings);
     if (!baked) return name_error(baked.error(), in.normal_name, in.roughness_name);
     return baked;
 }
@@ -166,9 +250,53 @@ Result<TextureBakeResult> bake_texture_inputs(const TextureInputs& in, const Tex
 Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& in, const TextureBakeSettings& settings,
                                                    io::TextureContainer container, const fs::path& dir,
                                                    const std::string& stem, const ProgressFn& progress) {
-    auto baked = bake_texture_inputs(in, settings, progress);
-    if (!baked) return baked.error();
-    return write_texture_outputs(std::move(*baked), in, settings, container, dir, stem, progress);
+    if (!io::EncodedTexture::supports(container)) {
+        auto baked = bake_texture_inputs(in, settings, progress);
+        if (!baked) return baked.error();
+        return write_texture_outputs(std::move(*baked), in, settings, container, dir, stem, progress);
+    }
+    auto encoded = bake_texture_encoded(in, settings, container, stem, progress);
+    if (!encoded) return encoded.error();
+    TextureOutputsWritten result;
+    result.notes = encoded->notes;
+    result.max_roughness_change = encoded->max_roughness_change;
+    if (progress)
+        for (const io::EncodedFile& f : encoded->files) progress("writing " + f.stem);
+    auto written = io::write_encoded_textures(encoded->files, dir);
+    if (!written) return written.error();
+    result.outputs = std::move(*written);
+    return result;
+}
+
+Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, const TextureBakeSettings& settings,
+                                                   io::TextureContainer container, const std::string& stem,
+                                                   const ProgressFn& progress) {
+    if (!in.normal) return make_error(in.normal_name + ": no normal map given");
+    if (!io::EncodedTexture::supports(container))
+        return make_error(std::string("cannot encode ") + io::container_name(container) + " in memory");
+    const int channel = roughness_channel_of(in);
+    const TextureBakeShape shape = texture_bake_shape(*in.normal, in.roughness, channel, settings);
+    const std::vector<OutputFile> files = output_files(shape, in, settings, container, stem);
+    EncodedTextureOutputs out;
+    for (const OutputFile& f : files) {
+        out.textures.push_back(std::make_unique<io::EncodedTexture>(container, f.encoding, shape.width, shape.height,
+                                                                    shape.levels, f.channels));
+        out.files.push_back({out.textures.back().get(), f.stem, f.kind});
+    }
+    if (progress)
+        progress("baking " + std::to_string(in.normal->width) + "x" + std::to_string(in.normal->height) + " " +
+                 in.normal_name);
+    auto baked = bake_texture_rows(*in.normal, in.roughness, channel, in.roughness_value, settings,
+                                   [&](const TextureBakeRows& r) {
+                                       for (size_t i = 0; i < files.size(); ++i)
+                                           out.textures[i]->put_rows(r.level, r.y0, r.rows, rows_of(r, files[i].chain),
+                                                                     chain_channels(shape, files[i].chain),
+                                                                     files[i].first);
+                                   });
+    if (!baked) return name_error(baked.error(), in.normal_name, in.roughness_name);
+    out.notes = baked->notes;
+    out.max_roughness_change = baked->max_roughness_change;
+    return out;
 }
 
 Result<TextureOutputsWritten> write_texture_outputs(TextureBakeResult&& baked, const TextureInputs& in,
@@ -178,63 +306,24 @@ Result<TextureOutputsWritten> write_texture_outputs(TextureBakeResult&& baked, c
     TextureOutputsWritten result;
     result.notes = baked.notes;
     result.max_roughness_change = baked.max_roughness_change;
-    const WrapMode wrap = settings.wrap;
-    const int roughness_bits = in.roughness ? in.roughness_bits : in.normal_bits;
-    auto say = [&](const std::string& what) {
-        if (progress) progress("writing " + what);
-    };
-    if (settings.outputs.roughness) {
-        say(stem + "_roughness");
-        const std::vector<std::string> names =
-            baked.roughness.channels() == 3 ? std::vector<std::string>{"R", "G", "B"} : std::vector<std::string>{"Y"};
-        if (auto ok = append(result.outputs, io::write_texture(baked.roughness, unorm_for_bits(roughness_bits),
-                                                               container, dir, stem + "_roughness", "roughness",
-                                                               names, wrap));
+    TextureBakeShape shape;
+    shape.roughness_channels = baked.roughness.channels();
+    shape.kernel_channels = baked.kernel.channels();
+    shape.lean_channels = baked.lean.channels();
+    shape.normal_channels = baked.normal.channels();
+    const std::vector<OutputFile> files = output_files(shape, in, settings, container, stem);
+    for (size_t i = 0; i < files.size(); ++i) {
+        const OutputFile& f = files[i];
+        if (progress) progress("writing " + f.stem);
+        MipChain& chain = chain_of(baked, f.chain);
+        const bool whole = f.first == 0 && f.channels == chain.channels();
+        if (auto ok = append(result.outputs,
+                             io::write_texture(whole ? chain : channel_subset(chain, f.first, f.channels), f.encoding,
+                                               container, dir, f.stem, f.kind, f.names, settings.wrap));
             !ok)
             return ok.error();
-        baked.roughness = MipChain{};  // written: release it before the next chain is encoded
-    }
-    if (settings.outputs.kernel) {
-        say(stem + "_kernel");
-        const std::vector<std::string> names = settings.anisotropic ? std::vector<std::string>{"xx", "yy", "xy"}
-                                                                    : std::vector<std::string>{"t"};
-        if (auto ok = append(result.outputs, io::write_texture(baked.kernel, io::TexelEncoding::Float16, container,
-                                                               dir, stem + "_kernel", "kernel", names, wrap));
-            !ok)
-            return ok.error();
-        baked.kernel = MipChain{};
-    }
-    if (settings.outputs.normal) {
-        say(stem + "_normal");
-        if (auto ok = append(result.outputs, io::write_texture(baked.normal, unorm_for_bits(in.normal_bits),
-                                                               container, dir, stem + "_normal", "normal",
-                                                               {"R", "G", "B"}, wrap));
-            !ok)
-            return ok.error();
-        baked.normal = MipChain{};
-    }
-    if (settings.outputs.lean) {
-        say(stem + "_lean");
-        // Slope-space moments are unbounded (|s| grows as 1/n.z), so they get full float precision.
-        const io::TexelEncoding enc =
-            settings.lean_space == LeanSpace::Slope ? io::TexelEncoding::Float32 : io::TexelEncoding::Float16;
-        const std::vector<std::string> names{"m.x", "m.y", "M.xx", "M.yy", "M.xy"};
-        if (container == io::TextureContainer::Exr) {
-            if (auto ok = append(result.outputs,
-                                 io::write_texture(baked.lean, enc, container, dir, stem + "_lean", "lean", names, wrap));
-                !ok)
-                return ok.error();
-        } else {
-            if (auto ok = append(result.outputs, io::write_texture(channel_subset(baked.lean, 0, 4), enc, container,
-                                                                   dir, stem + "_lean", "lean",
-                                                                   {names.begin(), names.begin() + 4}, wrap));
-                !ok)
-                return ok.error();
-            if (auto ok = append(result.outputs, io::write_texture(channel_subset(baked.lean, 4, 1), enc, container,
-                                                                   dir, stem + "_lean_xy", "lean", {"M.xy"}, wrap));
-                !ok)
-                return ok.error();
-        }
+        // Written: release the chain before the next one is encoded, unless a later file reads it too.
+        if (i + 1 == files.size() || files[i + 1].chain != f.chain) chain = MipChain{};
     }
     return result;
 }
@@ -273,32 +362,35 @@ Result<TextureJobOutcome> run_texture_job(const TextureJob& job) {
         if (job.roughness) inputs.push_back(*job.roughness);
         if (auto ok = io::check_output_not_input(job.output_dir, inputs); !ok) return ok.error();
         if (progress) progress("reading " + job.normal.string());
-        auto n = io::decode_image(job.normal);
+        if (job.roughness && progress) progress("reading " + job.roughness->string());
+        // The two maps are decoded and hashed side by side, each file by one task.
+        Result<io::DecodedImage> n = make_error(""), r = make_error("");
+        Result<std::string> n_hash = make_error(""), r_hash = make_error("");
+        tbb::parallel_invoke(
+            [&] {
+                n = io::decode_image(job.normal);
+                if (n) n_hash = io::sha256_file(job.normal);
+            },
+            [&] {
+                if (!job.roughness) return;
+                r = io::decode_image(*job.roughness);
+                if (r) r_hash = io::sha256_file(*job.roughness);
+            });
         if (!n) return n.error();
+        if (!n_hash) return n_hash.error();
         normal = std::move(*n);
         in.normal_name = job.normal.string();
+        manifest.inputs.push_back({job.normal.string(), *n_hash});
         if (job.roughness) {
-            if (progress) progress("reading " + job.roughness->string());
-            auto r = io::decode_image(*job.roughness);
             if (!r) return r.error();
+            if (!r_hash) return r_hash.error();
             roughness = std::move(*r);
             in.roughness_name = job.roughness->string();
-        }
-        for (const fs::path& p : inputs) {
-            auto hash = io::sha256_file(p);
-            if (!hash) return hash.error();
-            manifest.inputs.push_back({p.string(), *hash});
+            manifest.inputs.push_back({job.roughness->string(), *r_hash});
         }
     }
     const bool have_roughness = job.demo || job.roughness.has_value();
-    if (auto bad = find_non_finite(normal.image))
-        return make_error(in.normal_name + ": NaN or infinite value at texel (" + std::to_string(bad->first) + ", " +
-                          std::to_string(bad->second) + ")");
-    if (have_roughness) {
-        if (auto bad = find_non_finite(roughness.image))
-            return make_error(in.roughness_name + ": NaN or infinite value at texel (" + std::to_string(bad->first) +
-                              ", " + std::to_string(bad->second) + ")");
-    }
+    // Non-finite texels are reported by the bake's validation, with the file's name.
     in.normal = &normal.image;
     in.normal_bits = normal.info.is_float ? 16 : normal.info.bits_per_channel;
     if (have_roughness) {

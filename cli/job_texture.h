@@ -12,6 +12,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -67,6 +68,18 @@ struct TextureOutputsWritten {
 Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& inputs, const TextureBakeSettings& settings,
                                                    io::TextureContainer container, const std::filesystem::path& dir,
                                                    const std::string& stem, const ProgressFn& progress = {});
+
+// bake_texture_outputs() for KTX2 and DDS up to the write: the bake encodes every finished row straight
+// into the files' bytes (no float chain of the whole map is held). files[i] refers to textures[i].
+struct EncodedTextureOutputs {
+    std::vector<std::unique_ptr<io::EncodedTexture>> textures;
+    std::vector<io::EncodedFile> files;
+    TextureBakeNotes notes;
+    double max_roughness_change = 0.0;
+};
+Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& inputs, const TextureBakeSettings& settings,
+                                                   io::TextureContainer container, const std::string& stem,
+                                                   const ProgressFn& progress = {});
 
 // The two steps of bake_texture_outputs(), for a caller that needs the bake before deciding to write it
 // (`specbake bake` measures the plan's statistic on the bake it writes). Errors name the input files.

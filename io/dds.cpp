@@ -2,6 +2,7 @@
 
 #include "io/texel_encoding.h"
 
+#include <algorithm>
 #include <cstring>
 
 namespace specbake::io {
@@ -15,6 +16,8 @@ constexpr uint32_t kFourCCDx10 = 0x30315844;  // "DX10"
 constexpr uint32_t kCapsTexture = 0x1000, kCapsComplex = 0x8, kCapsMipmap = 0x400000;
 constexpr uint32_t kDimensionTexture2D = 3;
 constexpr uint32_t kAlphaModeUnknown = 0, kAlphaModeOpaque = 3;
+
+constexpr size_t kHeaderBytes = 4 + 124 + 20;  // magic, DDS_HEADER, DDS_HEADER_DXT10
 
 void put32(std::vector<uint8_t>& b, size_t at, uint32_t v) { std::memcpy(b.data() + at, &v, 4); }
 
@@ -30,23 +33,33 @@ uint32_t dds_dxgi_format(TexelEncoding e, int channels, int* stored_channels) {
     return table[row][stored - 1];
 }
 
-std::vector<uint8_t> encode_dds(const MipChain& chain, TexelEncoding encoding) {
-    int stored = 0;
-    const uint32_t format = dds_dxgi_format(encoding, chain.channels(), &stored);
-    const size_t texel_bytes = size_t(stored) * size_t(encoding_bytes(encoding));
-    constexpr size_t header = 4 + 124 + 20;
-    size_t total = header;
-    for (const Image& level : chain.levels) total += level.texel_count() * texel_bytes;
+ContainerLayout dds_layout(int width, int height, int levels, TexelEncoding encoding, int channels) {
+    ContainerLayout layout;
+    dds_dxgi_format(encoding, channels, &layout.stored_channels);
+    const size_t texel_bytes = size_t(layout.stored_channels) * size_t(encoding_bytes(encoding));
+    size_t at = kHeaderBytes;
+    for (int L = 0; L < levels; ++L) {
+        layout.level_offset.push_back(at);
+        at += size_t(std::max(1, width >> L)) * size_t(std::max(1, height >> L)) * texel_bytes;
+    }
+    layout.total = at;
+    return layout;
+}
 
-    std::vector<uint8_t> b(total, 0);
+void dds_write_header(uint8_t* file, const ContainerLayout& layout, int width, int height, TexelEncoding encoding,
+                      int channels) {
+    int stored = 0;
+    const uint32_t format = dds_dxgi_format(encoding, channels, &stored);
+    const size_t texel_bytes = size_t(stored) * size_t(encoding_bytes(encoding));
+    std::vector<uint8_t> b(kHeaderBytes, 0);
     put32(b, 0, kMagic);
     const size_t h = 4;  // DDS_HEADER
     put32(b, h + 0, 124);
     put32(b, h + 4, kFlagsRequired | kFlagPitch | kFlagMipCount);
-    put32(b, h + 8, uint32_t(chain.height()));
-    put32(b, h + 12, uint32_t(chain.width()));
-    put32(b, h + 16, uint32_t(size_t(chain.width()) * texel_bytes));  // pitch of the top level
-    put32(b, h + 24, uint32_t(chain.levels.size()));
+    put32(b, h + 8, uint32_t(height));
+    put32(b, h + 12, uint32_t(width));
+    put32(b, h + 16, uint32_t(size_t(width) * texel_bytes));  // pitch of the top level
+    put32(b, h + 24, uint32_t(layout.level_offset.size()));
     put32(b, h + 72, 32);  // DDS_PIXELFORMAT
     put32(b, h + 76, kPixelFormatFourCC);
     put32(b, h + 80, kFourCCDx10);
@@ -56,13 +69,20 @@ std::vector<uint8_t> encode_dds(const MipChain& chain, TexelEncoding encoding) {
     put32(b, x + 4, kDimensionTexture2D);
     put32(b, x + 8, 0);
     put32(b, x + 12, 1);  // arraySize
-    put32(b, x + 16, stored != chain.channels() ? kAlphaModeOpaque : kAlphaModeUnknown);
+    put32(b, x + 16, stored != channels ? kAlphaModeOpaque : kAlphaModeUnknown);
+    std::memcpy(file, b.data(), b.size());
+}
 
-    size_t at = header;
-    for (const Image& level : chain.levels) {
-        const std::vector<uint8_t> texels = encode_texels(level, encoding, stored, 1.0f);
-        std::memcpy(b.data() + at, texels.data(), texels.size());
-        at += texels.size();
+std::vector<uint8_t> encode_dds(const MipChain& chain, TexelEncoding encoding) {
+    const int channels = chain.channels();
+    const int levels = int(chain.levels.size());
+    const ContainerLayout layout = dds_layout(chain.width(), chain.height(), levels, encoding, channels);
+    std::vector<uint8_t> b(layout.total);
+    dds_write_header(b.data(), layout, chain.width(), chain.height(), encoding, channels);
+    for (int L = 0; L < levels; ++L) {
+        const Image& level = chain.levels[size_t(L)];
+        encode_texels_into(level.pixels.data(), level.texel_count(), channels, 0, channels, encoding,
+                           layout.stored_channels, 1.0f, b.data() + layout.level_offset[size_t(L)]);
     }
     return b;
 }

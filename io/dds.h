@@ -4,6 +4,7 @@
 #pragma once
 
 #include "bake/image.h"
+#include "io/texel_encoding.h"
 #include "io/texture_writer.h"
 
 #include <cstdint>
@@ -16,5 +17,12 @@ uint32_t dds_dxgi_format(TexelEncoding encoding, int channels, int* stored_chann
 
 // The whole file.
 std::vector<uint8_t> encode_dds(const MipChain& chain, TexelEncoding encoding);
+
+// Layout of the file encode_dds writes for a width x height chain of `levels` levels of `channels`.
+ContainerLayout dds_layout(int width, int height, int levels, TexelEncoding encoding, int channels);
+
+// Writes the DDS and DX10 headers of that file into `file` (layout.total bytes); level data untouched.
+void dds_write_header(uint8_t* file, const ContainerLayout& layout, int width, int height, TexelEncoding encoding,
+                      int channels);
 
 }  // namespace specbake::io

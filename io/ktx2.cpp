@@ -84,54 +84,95 @@ uint32_t ktx2_vk_format(TexelEncoding e, int channels) {
     return table[row][std::clamp(channels, 1, 4) - 1];
 }
 
-std::vector<uint8_t> encode_ktx2(const MipChain& chain, TexelEncoding encoding) {
-    const int channels = chain.channels();
-    const uint32_t levels = uint32_t(chain.levels.size());
+namespace {
+
+// Byte offsets of the parts before the level data.
+struct Ktx2Parts {
+    size_t dfd_offset = 0, kvd_offset = 0, data_start = 0;
+};
+
+Ktx2Parts ktx2_parts(int levels, const std::vector<uint8_t>& dfd, const std::vector<uint8_t>& kvd) {
+    Ktx2Parts p;
+    p.dfd_offset = kHeaderBytes + kLevelIndexEntry * size_t(levels);
+    p.kvd_offset = p.dfd_offset + dfd.size();
+    p.data_start = p.kvd_offset + kvd.size();
+    return p;
+}
+
+}  // namespace
+
+ContainerLayout ktx2_layout(int width, int height, int levels, TexelEncoding encoding, int channels) {
     const size_t texel_bytes = size_t(channels) * size_t(encoding_bytes(encoding));
     const size_t alignment = std::lcm(texel_bytes, size_t(4));
+    const Ktx2Parts parts = ktx2_parts(levels, make_dfd(encoding, channels), make_kvd());
+    ContainerLayout layout;
+    layout.stored_channels = channels;
+    layout.level_offset.resize(size_t(levels));
+    // Level data: smallest level first, each aligned.
+    size_t offset = parts.data_start;
+    for (int i = levels; i-- > 0;) {
+        offset = align_up(offset, alignment);
+        layout.level_offset[size_t(i)] = offset;
+        offset += size_t(std::max(1, width >> i)) * size_t(std::max(1, height >> i)) * texel_bytes;
+    }
+    layout.total = offset;
+    return layout;
+}
 
+void ktx2_write_header(uint8_t* file, const ContainerLayout& layout, int width, int height, TexelEncoding encoding,
+                       int channels) {
+    const uint32_t levels = uint32_t(layout.level_offset.size());
+    const size_t texel_bytes = size_t(channels) * size_t(encoding_bytes(encoding));
     const std::vector<uint8_t> dfd = make_dfd(encoding, channels);
     const std::vector<uint8_t> kvd = make_kvd();
-    const size_t dfd_offset = kHeaderBytes + kLevelIndexEntry * levels;
-    const size_t kvd_offset = dfd_offset + dfd.size();
-    size_t offset = kvd_offset + kvd.size();
+    const Ktx2Parts parts = ktx2_parts(int(levels), dfd, kvd);
 
-    // Level data: smallest level first, each aligned.
-    std::vector<size_t> level_offset(levels), level_length(levels);
-    for (uint32_t i = levels; i-- > 0;) {
-        offset = align_up(offset, alignment);
-        level_offset[i] = offset;
-        level_length[i] = chain.levels[i].texel_count() * texel_bytes;
-        offset += level_length[i];
-    }
-
-    std::vector<uint8_t> b(offset, 0);
+    std::vector<uint8_t> b(parts.data_start, 0);
     std::memcpy(b.data(), kIdentifier, sizeof(kIdentifier));
     put32(b, 12, ktx2_vk_format(encoding, channels));
     put32(b, 16, uint32_t(encoding_bytes(encoding)));  // typeSize
-    put32(b, 20, uint32_t(chain.width()));
-    put32(b, 24, uint32_t(chain.height()));
+    put32(b, 20, uint32_t(width));
+    put32(b, 24, uint32_t(height));
     put32(b, 28, 0);       // pixelDepth: 2D
     put32(b, 32, 0);       // layerCount: not an array
     put32(b, 36, 1);       // faceCount
     put32(b, 40, levels);  // levelCount
     put32(b, 44, 0);       // supercompressionScheme: none
-    put32(b, 48, uint32_t(dfd_offset));
+    put32(b, 48, uint32_t(parts.dfd_offset));
     put32(b, 52, uint32_t(dfd.size()));
-    put32(b, 56, uint32_t(kvd_offset));
+    put32(b, 56, uint32_t(parts.kvd_offset));
     put32(b, 60, uint32_t(kvd.size()));
     put64(b, 64, 0);       // no supercompression global data
     put64(b, 72, 0);
     for (uint32_t i = 0; i < levels; ++i) {
         const size_t at = kHeaderBytes + kLevelIndexEntry * i;
-        put64(b, at, level_offset[i]);
-        put64(b, at + 8, level_length[i]);
-        put64(b, at + 16, level_length[i]);
-        const std::vector<uint8_t> texels = encode_texels(chain.levels[i], encoding, channels);
-        std::memcpy(b.data() + level_offset[i], texels.data(), texels.size());
+        const size_t length = size_t(std::max(1, width >> i)) * size_t(std::max(1, height >> i)) * texel_bytes;
+        put64(b, at, layout.level_offset[i]);
+        put64(b, at + 8, length);
+        put64(b, at + 16, length);
     }
-    std::memcpy(b.data() + dfd_offset, dfd.data(), dfd.size());
-    std::memcpy(b.data() + kvd_offset, kvd.data(), kvd.size());
+    std::memcpy(b.data() + parts.dfd_offset, dfd.data(), dfd.size());
+    std::memcpy(b.data() + parts.kvd_offset, kvd.data(), kvd.size());
+    std::memcpy(file, b.data(), b.size());
+    // Alignment padding before each level (levels are stored smallest first).
+    size_t end = b.size();
+    for (uint32_t i = levels; i-- > 0;) {
+        std::memset(file + end, 0, layout.level_offset[i] - end);
+        end = layout.level_offset[i] + size_t(std::max(1, width >> i)) * size_t(std::max(1, height >> i)) * texel_bytes;
+    }
+}
+
+std::vector<uint8_t> encode_ktx2(const MipChain& chain, TexelEncoding encoding) {
+    const int channels = chain.channels();
+    const int levels = int(chain.levels.size());
+    const ContainerLayout layout = ktx2_layout(chain.width(), chain.height(), levels, encoding, channels);
+    std::vector<uint8_t> b(layout.total);
+    ktx2_write_header(b.data(), layout, chain.width(), chain.height(), encoding, channels);
+    for (int i = 0; i < levels; ++i) {
+        const Image& level = chain.levels[size_t(i)];
+        encode_texels_into(level.pixels.data(), level.texel_count(), channels, 0, channels, encoding, channels, 1.0f,
+                           b.data() + layout.level_offset[size_t(i)]);
+    }
     return b;
 }
 

@@ -6,6 +6,7 @@
 
 #include "bake/image.h"
 #include "bake/result.h"
+#include "io/texel_encoding.h"
 #include "io/texture_writer.h"
 
 #include <cstdint>
@@ -20,6 +21,14 @@ uint32_t ktx2_vk_format(TexelEncoding encoding, int channels);
 
 // The whole file.
 std::vector<uint8_t> encode_ktx2(const MipChain& chain, TexelEncoding encoding);
+
+// Layout of the file encode_ktx2 writes for a width x height chain of `levels` levels.
+ContainerLayout ktx2_layout(int width, int height, int levels, TexelEncoding encoding, int channels);
+
+// Writes everything of that file except the level data into `file` (layout.total bytes): header, level
+// index, data format descriptor, key/value data, and zeroes for the alignment padding.
+void ktx2_write_header(uint8_t* file, const ContainerLayout& layout, int width, int height, TexelEncoding encoding,
+                       int channels);
 
 // What a KTX2 file holds, as parsed and checked by read_ktx2_texture.
 struct Ktx2Info {

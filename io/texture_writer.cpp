@@ -4,8 +4,10 @@
 #include "io/dds.h"
 #include "io/ktx2.h"
 #include "io/sha256.h"
+#include "io/texel_encoding.h"
 
 #include <OpenImageIO/imageio.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <fstream>
@@ -58,7 +60,7 @@ const char* wrap_name(WrapMode w) {
     return "periodic";
 }
 
-Result<void> write_bytes(const fs::path& path, const std::vector<uint8_t>& bytes) {
+Result<void> write_bytes(const fs::path& path, std::span<const uint8_t> bytes) {
     std::ofstream f(path, std::ios::binary | std::ios::trunc);
     if (!f) return make_error(path.string() + ": cannot open for writing");
     f.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
@@ -154,20 +156,15 @@ Result<std::vector<ManifestOutput>> write_texture(const MipChain& chain, TexelEn
     const int mips = int(chain.levels.size());
 
     switch (container) {
-        case TextureContainer::Ktx2: {
-            Pending& p = add(stem + ".ktx2", chain.width(), chain.height(), mips);
-            const std::vector<uint8_t> bytes = encode_ktx2(chain, encoding);
-            p.entry.extra["vkFormat"] = ktx2_vk_format(encoding, chain.channels());
-            if (auto ok = write_bytes(p.file->temp_path(), bytes); !ok) return ok.error();
-            break;
-        }
+        case TextureContainer::Ktx2:
         case TextureContainer::Dds: {
-            Pending& p = add(stem + ".dds", chain.width(), chain.height(), mips);
-            int stored = 0;
-            p.entry.extra["dxgiFormat"] = dds_dxgi_format(encoding, chain.channels(), &stored);
-            p.entry.extra["stored_channels"] = stored;
-            if (auto ok = write_bytes(p.file->temp_path(), encode_dds(chain, encoding)); !ok) return ok.error();
-            break;
+            EncodedTexture t(container, encoding, chain.width(), chain.height(), mips, chain.channels());
+            for (int L = 0; L < mips; ++L) {
+                const Image& level = chain.levels[size_t(L)];
+                t.put_rows(L, 0, level.height, level.pixels.data(), level.channels, 0);
+            }
+            const EncodedFile file{&t, stem, kind};
+            return write_encoded_textures({&file, 1}, dir);
         }
         case TextureContainer::Exr: {
             Pending& p = add(stem + ".exr", chain.width(), chain.height(), mips);
@@ -209,6 +206,72 @@ Result<std::vector<ManifestOutput>> write_texture(const MipChain& chain, TexelEn
         if (auto ok = p.file->commit(); !ok) return ok.error();
         entries.push_back(p.entry);
     }
+    return entries;
+}
+
+bool EncodedTexture::supports(TextureContainer container) {
+    return container == TextureContainer::Ktx2 || container == TextureContainer::Dds;
+}
+
+EncodedTexture::EncodedTexture(TextureContainer container, TexelEncoding encoding, int width, int height, int levels,
+                               int channels)
+    : container_(container), encoding_(encoding), width_(width), height_(height), channels_(channels) {
+    layout_ = container == TextureContainer::Ktx2 ? ktx2_layout(width, height, levels, encoding, channels)
+                                                  : dds_layout(width, height, levels, encoding, channels);
+    data_.reset(new uint8_t[layout_.total]);
+    if (container == TextureContainer::Ktx2) ktx2_write_header(data_.get(), layout_, width, height, encoding, channels);
+    else dds_write_header(data_.get(), layout_, width, height, encoding, channels);
+}
+
+void EncodedTexture::put_rows(int level, int y0, int rows, const float* src, int src_channels, int first) {
+    const size_t w = size_t(std::max(1, width_ >> level));
+    const size_t texel_bytes = size_t(layout_.stored_channels) * size_t(encoding_bytes(encoding_));
+    uint8_t* dst = data_.get() + layout_.level_offset[size_t(level)] + size_t(y0) * w * texel_bytes;
+    encode_texels_into(src, w * size_t(rows), src_channels, first, channels_, encoding_, layout_.stored_channels,
+                       1.0f, dst);
+}
+
+ManifestOutput EncodedTexture::entry(const std::string& filename, const std::string& kind) const {
+    ManifestOutput e;
+    e.kind = kind;
+    e.path = filename;
+    e.format = container_name(container_);
+    e.width = width_;
+    e.height = height_;
+    e.mips = int(layout_.level_offset.size());
+    e.channels = channels_;
+    e.extra["encoding"] = encoding_name(encoding_);
+    if (container_ == TextureContainer::Ktx2) {
+        e.extra["vkFormat"] = ktx2_vk_format(encoding_, channels_);
+    } else {
+        int stored = 0;
+        e.extra["dxgiFormat"] = dds_dxgi_format(encoding_, channels_, &stored);
+        e.extra["stored_channels"] = stored;
+    }
+    return e;
+}
+
+Result<std::vector<ManifestOutput>> write_encoded_textures(std::span<const EncodedFile> files, const fs::path& dir) {
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec) return make_error(dir.string() + ": cannot create folder: " + ec.message());
+    std::vector<std::unique_ptr<AtomicOutput>> outputs;
+    std::vector<ManifestOutput> entries;
+    for (const EncodedFile& f : files) {
+        const std::string filename = f.stem + '.' + container_name(f.texture->container());
+        outputs.push_back(std::make_unique<AtomicOutput>(dir / filename));
+        entries.push_back(f.texture->entry(filename, f.kind));
+    }
+    // Each file is hashed from memory and written by one task; the first error in file order is reported.
+    std::vector<std::optional<Error>> errors(files.size());
+    tbb::parallel_for(size_t(0), files.size(), [&](size_t i) {
+        entries[i].sha256 = sha256_hex(files[i].texture->bytes());
+        if (auto ok = write_bytes(outputs[i]->temp_path(), files[i].texture->bytes()); !ok) errors[i] = ok.error();
+    });
+    for (const std::optional<Error>& e : errors)
+        if (e) return *e;
+    for (const auto& out : outputs)
+        if (auto ok = out->commit(); !ok) return ok.error();
     return entries;
 }
 

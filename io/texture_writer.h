@@ -9,8 +9,11 @@
 #include "bake/texture_bake.h"
 #include "io/manifest.h"
 
+#include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -20,6 +23,14 @@ enum class TextureContainer { Ktx2, Dds, Exr, PngPerMip };
 
 // How texel values are stored. Unorm: round(clamp(v, 0, 1) * (2^bits - 1)); Float16: IEEE half.
 enum class TexelEncoding { Unorm8, Unorm16, Float16, Float32 };
+
+// Where the level data of a container file lies: total file size and the byte offset of every level's
+// texels (level 0 first), each level tightly packed with `stored_channels` channels per texel.
+struct ContainerLayout {
+    size_t total = 0;
+    std::vector<size_t> level_offset;
+    int stored_channels = 0;
+};
 
 const char* container_name(TextureContainer c);      // "ktx2", "dds", "exr", "png"
 const char* encoding_name(TexelEncoding e);          // "unorm8", "unorm16", "float16", "float32"
@@ -35,5 +46,42 @@ Result<std::vector<ManifestOutput>> write_texture(const MipChain& chain, TexelEn
                                                   const std::string& stem, const std::string& kind,
                                                   const std::vector<std::string>& channel_names = {},
                                                   WrapMode wrap = WrapMode::Repeat);
+
+// A KTX2 or DDS file assembled in memory, level by level and row by row, so a producer can encode rows
+// as it finishes them instead of holding float chains. put_rows() may run on several threads at once
+// for disjoint rows; the file is complete once every row of every level was put.
+class EncodedTexture {
+public:
+    static bool supports(TextureContainer container);  // KTX2 and DDS
+    EncodedTexture(TextureContainer container, TexelEncoding encoding, int width, int height, int levels,
+                   int channels);
+
+    // Encodes rows [y0, y0 + rows) of `level` from interleaved floats with `src_channels` per texel,
+    // taking channels [first, first + channels()).
+    void put_rows(int level, int y0, int rows, const float* src, int src_channels, int first);
+
+    std::span<const uint8_t> bytes() const { return {data_.get(), layout_.total}; }
+    int channels() const { return channels_; }
+    TextureContainer container() const { return container_; }
+    // The manifest entry of this file as `filename` (sha256 left empty; the writer fills it).
+    ManifestOutput entry(const std::string& filename, const std::string& kind) const;
+
+private:
+    TextureContainer container_;
+    TexelEncoding encoding_;
+    int width_, height_, channels_;
+    ContainerLayout layout_;
+    std::unique_ptr<uint8_t[]> data_;  // not zero-filled: every byte is written by the header or a row
+};
+
+// Writes `files` (each `dir/<stem>.<ext>`, `kind` as given) atomically: all are hashed and written to
+// temporary names in parallel, and renamed only when every one succeeded. Returns their manifest entries.
+struct EncodedFile {
+    const EncodedTexture* texture = nullptr;
+    std::string stem;
+    std::string kind;
+};
+Result<std::vector<ManifestOutput>> write_encoded_textures(std::span<const EncodedFile> files,
+                                                           const std::filesystem::path& dir);
 
 }  // namespace specbake::io

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <mutex>
 #include <random>
 
 namespace specbake {
@@ -305,6 +306,47 @@ TEST(TextureBake, OutputsAreIdenticalForAnyThreadCount) {
             ASSERT_EQ(x.size(), y.size());
             EXPECT_EQ(std::memcmp(x.data(), y.data(), x.size() * sizeof(float)), 0) << "level " << L;
         }
+    }
+}
+
+// The streamed bake hands every row of every level over exactly once, with the values bake_texture()
+// returns, for fused (even), odd and non-square sizes.
+TEST(TextureBake, RowsStreamEveryRowOnceWithTheChainValues) {
+    for (const auto& [W, H] : {std::pair{64, 32}, std::pair{37, 23}, std::pair{16, 1}, std::pair{6, 12}}) {
+        SCOPED_TRACE(std::to_string(W) + "x" + std::to_string(H));
+        const Image nm = random_normal_map(W, H, 16, 0.3);
+        const Image orm = random_orm(W, H, 17);
+        TextureBakeSettings s;
+        s.threads = 2;
+        auto chains = bake_texture(nm, &orm, 1, 0, s);
+        ASSERT_TRUE(chains.ok());
+        const TextureBakeShape shape = texture_bake_shape(nm, &orm, 1, s);
+        ASSERT_EQ(shape.levels, mip_level_count(W, H));
+        EXPECT_EQ(shape.roughness_channels, 3);
+        EXPECT_EQ(shape.lean_channels, 5);
+        std::vector<std::vector<int>> seen(size_t(shape.levels));
+        std::mutex m;
+        bool equal = true;
+        auto same = [](const float* rows, const Image& level, int y0, int count) {
+            return std::memcmp(rows, level.texel(0, y0), size_t(count) * level.width * level.channels * sizeof(float)) == 0;
+        };
+        auto streamed = bake_texture_rows(nm, &orm, 1, 0, s, [&](const TextureBakeRows& r) {
+            std::lock_guard<std::mutex> lock(m);
+            const size_t L = size_t(r.level);
+            if (seen[L].empty()) seen[L].assign(size_t(chains->roughness.levels[L].height), 0);
+            for (int y = r.y0; y < r.y0 + r.rows; ++y) ++seen[L][size_t(y)];
+            equal = equal && r.width == chains->roughness.levels[L].width &&
+                    same(r.roughness, chains->roughness.levels[L], r.y0, r.rows) &&
+                    same(r.kernel, chains->kernel.levels[L], r.y0, r.rows) &&
+                    same(r.lean, chains->lean.levels[L], r.y0, r.rows) &&
+                    same(r.normal, chains->normal.levels[L], r.y0, r.rows);
+        });
+        ASSERT_TRUE(streamed.ok());
+        EXPECT_TRUE(equal);
+        for (size_t L = 0; L < seen.size(); ++L)
+            EXPECT_EQ(seen[L], std::vector<int>(size_t(chains->roughness.levels[L].height), 1)) << "level " << L;
+        EXPECT_EQ(streamed->max_roughness_change, chains->max_roughness_change);
+        EXPECT_TRUE(streamed->roughness.levels.empty());
     }
 }
 

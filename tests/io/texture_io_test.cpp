@@ -1,12 +1,16 @@
 // Image decoding and texture containers: round trips through independent readers (OpenImageIO for
 // EXR/PNG, a DDS parse written here from the DDS/DX10 layout, byte-level KTX2 structure checks).
 #include "io/image_io.h"
+#include "io/dds.h"
 #include "io/ktx2.h"
+#include "io/texel_encoding.h"
 #include "io/texture_writer.h"
 
+#include <Imath/half.h>
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -180,6 +184,75 @@ ParsedDds parse_dds(const std::vector<uint8_t>& b) {
     p.array_size = u32(b, 140);
     p.data_offset = 148;
     return p;
+}
+
+// Float16 encoding (hardware conversion where the CPU has it) rounds exactly as Imath's portable
+// conversion: ties to even, subnormals, the largest half and overflow to infinity.
+TEST(TexelEncoding, HalfMatchesImathBitForBit) {
+    std::vector<float> values{0.0f, -0.0f, 1.0f, -2.5f, 65504.0f, 65519.0f, 65520.0f, 1e6f, 5.96e-8f, 2.98e-8f,
+                              1e-10f, 6.1e-5f, 1.0f + 1.0f / 2048.0f, 1.0f + 3.0f / 2048.0f, 0.1f, 1.0f / 3.0f};
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(-4.0f, 4.0f);
+    std::uniform_int_distribution<int> e(-30, 16);
+    while (values.size() < 4099) values.push_back(std::ldexp(u(rng), e(rng)));
+    Image im(int(values.size()), 1, 1);
+    im.pixels = values;
+    const std::vector<uint8_t> h = encode_texels(im, TexelEncoding::Float16, 1);
+    for (size_t i = 0; i < values.size(); ++i)
+        ASSERT_EQ(uint16_t(h[2 * i] | h[2 * i + 1] << 8), Imath::half(values[i]).bits()) << values[i];
+}
+
+// Unorm rounding is round-half-away-from-zero of clamp(v, 0, 1) * (2^bits - 1), as std::lround computes
+// it, including values right at and next to the halfway points.
+TEST(TexelEncoding, UnormRoundingMatchesLround) {
+    Image im(64, 1, 1);
+    std::vector<float> values{-1.0f, 0.0f, 1.0f, 2.0f, 0.5f / 255.0f, 0.49999997f / 255.0f, 127.5f / 255.0f,
+                              254.5f / 255.0f, 0.5f / 65535.0f, 32767.5f / 65535.0f};
+    for (float v : std::vector<float>(values)) {
+        values.push_back(std::nextafter(v, 2.0f));
+        values.push_back(std::nextafter(v, -2.0f));
+    }
+    values.resize(64, 0.25f);
+    im.pixels = values;
+    const std::vector<uint8_t> u8 = encode_texels(im, TexelEncoding::Unorm8, 1);
+    const std::vector<uint8_t> u16 = encode_texels(im, TexelEncoding::Unorm16, 1);
+    for (size_t i = 0; i < values.size(); ++i) {
+        const float c = std::clamp(values[i], 0.0f, 1.0f);
+        EXPECT_EQ(u8[i], uint8_t(std::lround(c * 255.0f))) << values[i];
+        EXPECT_EQ(uint32_t(u16[2 * i] | u16[2 * i + 1] << 8), uint32_t(std::lround(c * 65535.0f))) << values[i];
+    }
+}
+
+// A container filled row block by row block, in scrambled order and with channels taken from a wider
+// interleaved source, is byte for byte the file encode_ktx2 / encode_dds make from the whole chain.
+TEST(EncodedTexture, RowsInAnyOrderGiveTheWholeChainFile) {
+    const MipChain wide = random_chain(13, 6, 5, 21);
+    for (TextureContainer container : {TextureContainer::Ktx2, TextureContainer::Dds}) {
+        for (TexelEncoding e : {TexelEncoding::Unorm8, TexelEncoding::Unorm16, TexelEncoding::Float16,
+                                TexelEncoding::Float32}) {
+            SCOPED_TRACE(std::string(container_name(container)) + " " + encoding_name(e));
+            const int first = 1, channels = 3;
+            MipChain sub;
+            for (const Image& l : wide.levels) {
+                Image s(l.width, l.height, channels);
+                for (size_t i = 0; i < l.texel_count(); ++i)
+                    for (int c = 0; c < channels; ++c) s.pixels[i * channels + c] = l.pixels[i * 5 + first + c];
+                sub.levels.push_back(std::move(s));
+            }
+            EncodedTexture t(container, e, 13, 6, int(wide.levels.size()), channels);
+            for (int L = int(wide.levels.size()) - 1; L >= 0; --L) {
+                const Image& l = wide.levels[size_t(L)];
+                for (int y = l.height - 1; y >= 0; y -= 2) {
+                    const int y0 = std::max(0, y - 1);
+                    t.put_rows(L, y0, y - y0 + 1, l.texel(0, y0), 5, first);
+                }
+            }
+            const std::vector<uint8_t> whole =
+                container == TextureContainer::Ktx2 ? encode_ktx2(sub, e) : encode_dds(sub, e);
+            ASSERT_EQ(t.bytes().size(), whole.size());
+            EXPECT_TRUE(std::equal(whole.begin(), whole.end(), t.bytes().begin()));
+        }
+    }
 }
 
 TEST(Dds, Dx10HeaderAndLevels) {
