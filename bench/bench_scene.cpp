@@ -1,11 +1,12 @@
 // End-to-end scene bake speed on a generated 1M-triangle mesh (a UV sphere, 500 x 1000 quads, as GLB):
 // the whole `bake` (read, plan, curvature, tangents, write, manifest) against the floor of what any
 // pipeline has to do with the same data, Assimp import plus tinygltf write, and the stages of the bake
-// (import, curvature, write), at 1 and 2 threads. Goal: whole bake within 2x of import + write.
+// (import, curvature, write, hashing), at 1 and 2 threads. Goal: whole bake within 2x of import + write.
 //
 //   cmake --build build --target bench_scene && build/bench/bench_scene --benchmark_min_time=1x
 #include "cli/job_scene.h"
 #include "io/gltf_scene.h"
+#include "io/sha256.h"
 #include "mesh/curvature.h"
 #include "mesh/prepare_mesh.h"
 
@@ -13,6 +14,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <benchmark/benchmark.h>
+#include <tbb/global_control.h>
 #include <tiny_gltf.h>
 
 #include <cmath>
@@ -116,6 +118,8 @@ void BM_WholeBake(benchmark::State& state) {
     job.scenes = {sphere_glb()};
     job.output_dir = bench_dir() / "out_bake";
     job.plan.threads = int(state.range(0));
+    // As `specbake -j N` does: every TBB task (curvature, hashing beside the parse and the write) on N threads.
+    tbb::global_control threads(tbb::global_control::max_allowed_parallelism, size_t(state.range(0)));
     for (auto _ : state) {
         auto outcome = run_scene_job(job);
         if (!outcome || !outcome->errors.empty() || outcome->plans[0].work.empty()) {
@@ -209,6 +213,23 @@ void BM_StageWrite(benchmark::State& state) {
     }
 }
 BENCHMARK(BM_StageWrite)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The content hashes the manifest needs, of the input GLB and the written output, on their own.
+void BM_StageHash(benchmark::State& state) {
+    const fs::path written = bench_dir() / "out_bake" / "sphere1m.glb";
+    if (!fs::exists(written)) {
+        state.SkipWithError("run BM_WholeBake first");
+        return;
+    }
+    const std::vector<fs::path> files{sphere_glb(), written};
+    for (auto _ : state) {
+        auto hashes = io::sha256_files(files);
+        benchmark::DoNotOptimize(hashes->data());
+    }
+    state.counters["bytes/s"] = benchmark::Counter(double(fs::file_size(files[0]) + fs::file_size(files[1])),
+                                                   benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_StageHash)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 

@@ -83,136 +83,172 @@ Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& optio
         return &plan.decoded_images.emplace(image, std::move(decoded->image)).first->second;
     };
 
-    // Lowest perceptual roughness of every material: roughnessFactor times the smallest G texel.
-    std::vector<std::optional<double>> min_roughness(materials.size());
-    std::vector<std::string> roughness_source(materials.size());
-    for (size_t m = 0; m < materials.size(); ++m) {
-        const io::MaterialInfo& mat = materials[m];
-        double r = mat.roughness_factor;
-        roughness_source[m] = "roughnessFactor " + format_number(mat.roughness_factor);
-        if (mat.metallic_roughness.image >= 0) {
-            if (const Image* img = decode(mat.metallic_roughness.image)) {
+    // The layers whose normals a texture bake can filter: the base (normalTexture, roughness from
+    // metallicRoughness G) and, with KHR_materials_clearcoat, the coat (clearcoatNormalTexture, roughness
+    // from clearcoatRoughnessTexture G), each with its own roughness factor and normal scale.
+    struct Layer {
+        const char* name;
+        const io::TextureSlot* normal;
+        double normal_scale;
+        const io::TextureSlot* roughness;
+        double roughness_factor;
+    };
+    auto layers_of = [](const io::MaterialInfo& mat) {
+        std::vector<Layer> layers{{"base", &mat.normal, mat.normal_scale, &mat.metallic_roughness, mat.roughness_factor}};
+        if (mat.clearcoat.present)
+            layers.push_back({"clearcoat", &mat.clearcoat.normal, mat.clearcoat.normal_scale, &mat.clearcoat.roughness,
+                              mat.clearcoat.roughness_factor});
+        return layers;
+    };
+
+    // Lowest perceptual roughness of a layer: its roughness factor times its smallest G texel.
+    auto lowest_roughness = [&](const Layer& layer) {
+        double r = layer.roughness_factor;
+        if (layer.roughness->image >= 0) {
+            if (const Image* img = decode(layer.roughness->image)) {
                 const int ch = img->channels >= 2 ? 1 : 0;
                 float lo = 1.0f;
                 for (size_t i = 0; i < img->texel_count(); ++i)
                     lo = std::min(lo, img->pixels[i * size_t(img->channels) + size_t(ch)]);
                 r *= std::clamp(double(lo), 0.0, 1.0);
-                roughness_source[m] += " x smallest roughness texel " + format_number(lo);
             } else {
-                plan.notes.push_back(decode_errors[mat.metallic_roughness.image] +
-                                     " (roughness texture not read; roughnessFactor used alone)");
+                plan.notes.push_back(decode_errors[layer.roughness->image] + " (" + layer.name +
+                                     " roughness texture not read; its roughness factor used alone)");
             }
         }
+        return r;
+    };
+    // A material's lowest roughness is that of its glossiest layer: a clear coat over a rough base aliases
+    // as much as a glossy base.
+    std::vector<std::vector<double>> layer_min_roughness(materials.size());
+    std::vector<std::optional<double>> min_roughness(materials.size());
+    for (size_t m = 0; m < materials.size(); ++m) {
+        for (const Layer& layer : layers_of(materials[m])) layer_min_roughness[m].push_back(lowest_roughness(layer));
+        double r = layer_min_roughness[m][0];
+        if (materials[m].clearcoat.active()) r = std::min(r, layer_min_roughness[m][1]);
         min_roughness[m] = r;
     }
 
-    // Texture decisions, one per material.
+    // Texture decisions, one per material and layer.
     // Materials with their own settings share a bake only with themselves (the name is part of the key).
     std::map<std::tuple<int, int, float, float, double, std::string>, int> bakes_by_inputs;
     for (size_t m = 0; m < materials.size() && options.textures; ++m) {
         const io::MaterialInfo& mat = materials[m];
-        TextureDecision d;
-        d.material = int(m);
-        d.material_name = mat.name;
-        d.roughness_factor = float(mat.roughness_factor);
-        d.stem = stem + "_mat" + std::to_string(m) + (mat.name.empty() ? "" : "_" + sanitize(mat.name));
-        d.texcoord = mat.normal.texcoord;
-        bool used_with_uv = false, used = false;
-        for (const io::PrimitiveInfo& p : infos) {
-            if (p.material != int(m)) continue;
-            used = true;
-            used_with_uv |= std::find(p.texcoords.begin(), p.texcoords.end(), mat.normal.texcoord) != p.texcoords.end();
-        }
-        if (mat.normal.texture < 0) {
-            d.reason = "no normal texture";
-        } else if (mat.normal.image < 0) {
-            d.reason = "normal texture has no image source specbake can read";
-        } else if (!used) {
-            d.reason = "no primitive uses the material";
-        } else if (!used_with_uv) {
-            d.reason = "no primitive using the material has TEXCOORD_" + std::to_string(mat.normal.texcoord);
-        } else if (const Image* normal = decode(mat.normal.image); !normal) {
-            d.reason = "normal texture cannot be decoded: " + decode_errors[mat.normal.image];
-            plan.notes.push_back(decode_errors[mat.normal.image]);
-        } else {
-            d.normal_image = mat.normal.image;
-            const Image* rough = nullptr;
-            std::string mapping_note;
-            if (mat.metallic_roughness.image >= 0) {
-                const bool same_mapping = mat.metallic_roughness.texcoord == mat.normal.texcoord &&
-                                          !mat.metallic_roughness.transformed && !mat.normal.transformed;
-                if (!same_mapping) {
-                    mapping_note = "; roughness texture is mapped differently from the normal texture, so the "
-                                   "material's lowest roughness is used as a constant";
-                } else if ((rough = decode(mat.metallic_roughness.image)) != nullptr) {
-                    d.roughness_image = mat.metallic_roughness.image;
-                    d.roughness_texture_used = true;
-                }
+        const std::vector<Layer> layers = layers_of(mat);
+        for (size_t l = 0; l < layers.size(); ++l) {
+            const Layer& layer = layers[l];
+            const bool coat = l > 0;
+            TextureDecision d;
+            d.material = int(m);
+            d.material_name = mat.name;
+            d.layer = layer.name;
+            d.roughness_factor = float(layer.roughness_factor);
+            d.stem = stem + "_mat" + std::to_string(m) + (mat.name.empty() ? "" : "_" + sanitize(mat.name)) +
+                     (coat ? "_clearcoat" : "");
+            d.texcoord = layer.normal->texcoord;
+            bool used_with_uv = false, used = false;
+            for (const io::PrimitiveInfo& p : infos) {
+                if (p.material != int(m)) continue;
+                used = true;
+                used_with_uv |=
+                    std::find(p.texcoords.begin(), p.texcoords.end(), layer.normal->texcoord) != p.texcoords.end();
             }
-            d.roughness_value = float(std::clamp(min_roughness[m].value_or(mat.roughness_factor), 0.0, 1.0));
-            const int bits_image = d.roughness_texture_used ? d.roughness_image : d.normal_image;
-            d.threshold = half_quantisation_step(plan.image_bits[bits_image], image_is_float[bits_image]);
-            const auto key = std::make_tuple(d.normal_image, d.roughness_image,
-                                             d.roughness_texture_used ? d.roughness_factor : d.roughness_value,
-                                             d.roughness_texture_used ? 1.0f : 0.0f, mat.normal_scale,
-                                             options.material_texture_settings.count(mat.name) ? mat.name
-                                                                                               : std::string());
-            if (auto it = bakes_by_inputs.find(key); it != bakes_by_inputs.end()) {
-                const TextureDecision& first = plan.textures[size_t(it->second)];
-                d.same_as = first.material;
-                d.bake = first.bake;
-                d.max_roughness_change = first.max_roughness_change;
-                d.stem = first.stem;
-                d.reason = "same inputs as material " + std::to_string(first.material) + ": " + first.reason;
+            const std::string normal_name = coat ? "clearcoat normal texture" : "normal texture";
+            if (coat && !mat.clearcoat.active()) {
+                d.reason = "clearcoatFactor is 0: the material has no coat";
+            } else if (layer.normal->texture < 0) {
+                d.reason = coat ? "no clearcoat normal texture (the coat uses the geometry normal)" : "no normal texture";
+            } else if (layer.normal->image < 0) {
+                d.reason = normal_name + " has no image source specbake can read";
+            } else if (!used) {
+                d.reason = "no primitive uses the material";
+            } else if (!used_with_uv) {
+                d.reason = "no primitive using the material has TEXCOORD_" + std::to_string(layer.normal->texcoord);
+            } else if (const Image* normal = decode(layer.normal->image); !normal) {
+                d.reason = normal_name + " cannot be decoded: " + decode_errors[layer.normal->image];
+                plan.notes.push_back(decode_errors[layer.normal->image]);
             } else {
-                // The statistic comes from the bake itself, with the settings the bake will use.
-                TextureWork& w = plan.texture_work[int(m)];
-                w.normal = normal;
-                w.roughness = rough;
-                w.normal_bits = plan.image_bits[d.normal_image];
-                w.roughness_bits = rough ? plan.image_bits[d.roughness_image] : w.normal_bits;
-                if (mat.normal_scale != 1.0) {  // glTF: n = normalize((2c - 1) * (scale, scale, 1))
-                    w.normal_storage = *normal;
-                    Image& n = w.normal_storage;
-                    for (size_t t = 0; t < n.texel_count(); ++t)
-                        for (int c = 0; c < std::min(2, n.channels); ++c) {
-                            float& v = n.pixels[t * size_t(n.channels) + size_t(c)];
-                            v = float(((2.0 * v - 1.0) * mat.normal_scale + 1.0) * 0.5);
-                        }
-                    w.normal = &w.normal_storage;
+                d.normal_image = layer.normal->image;
+                const Image* rough = nullptr;
+                std::string mapping_note;
+                if (layer.roughness->image >= 0) {
+                    const bool same_mapping = layer.roughness->texcoord == layer.normal->texcoord &&
+                                              !layer.roughness->transformed && !layer.normal->transformed;
+                    if (!same_mapping) {
+                        mapping_note = "; roughness texture is mapped differently from the " + normal_name +
+                                       ", so the layer's lowest roughness is used as a constant";
+                    } else if ((rough = decode(layer.roughness->image)) != nullptr) {
+                        d.roughness_image = layer.roughness->image;
+                        d.roughness_texture_used = true;
+                    }
                 }
-                w.roughness_channel = rough && rough->channels >= 2 ? 1 : 0;
-                if (rough && d.roughness_factor != 1.0f) {  // glTF: r = roughnessFactor * G
-                    w.roughness_storage = *rough;
-                    Image& r = w.roughness_storage;
-                    for (size_t t = 0; t < r.texel_count(); ++t)
-                        r.pixels[t * size_t(r.channels) + size_t(w.roughness_channel)] *= d.roughness_factor;
-                    w.roughness = &w.roughness_storage;
-                }
-                TextureBakeSettings s = options.texture_settings_for(mat.name);
-                if (!options.texture_sink) s.outputs = TextureOutputs{true, false, false, false};
-                auto baked = bake_texture(*w.normal, w.roughness, w.roughness_channel, d.roughness_value, s);
-                if (!baked) {
-                    d.reason = scene.image_label(d.normal_image) + ": " + baked.error().message;
-                    plan.notes.push_back(d.reason);
+                d.roughness_value = float(std::clamp(layer_min_roughness[m][l], 0.0, 1.0));
+                const int bits_image = d.roughness_texture_used ? d.roughness_image : d.normal_image;
+                d.threshold = half_quantisation_step(plan.image_bits[bits_image], image_is_float[bits_image]);
+                const auto key = std::make_tuple(d.normal_image, d.roughness_image,
+                                                 d.roughness_texture_used ? d.roughness_factor : d.roughness_value,
+                                                 d.roughness_texture_used ? 1.0f : 0.0f, layer.normal_scale,
+                                                 options.material_texture_settings.count(mat.name) ? mat.name
+                                                                                                   : std::string());
+                if (auto it = bakes_by_inputs.find(key); it != bakes_by_inputs.end()) {
+                    const TextureDecision& first = plan.textures[size_t(it->second)];
+                    d.same_as = it->second;
+                    d.bake = first.bake;
+                    d.max_roughness_change = first.max_roughness_change;
+                    d.stem = first.stem;
+                    d.reason = "same inputs as material " + std::to_string(first.material) +
+                               (first.layer == "base" ? "" : " (" + first.layer + ")") + ": " + first.reason;
                 } else {
-                    d.max_roughness_change = baked->max_roughness_change;
-                    d.bake = baked->max_roughness_change >= d.threshold;
-                    d.reason = d.bake ? "the bake changes roughness by at least half a quantisation step"
-                                      : "the bake changes no texel of any mip by half a quantisation step";
-                    for (const std::string& warning : baked->notes.warnings)
-                        plan.notes.push_back(scene.image_label(d.normal_image) + ": " + warning);
+                    // The statistic comes from the bake itself, with the settings the bake will use.
+                    const int index = int(plan.textures.size());
+                    TextureWork& w = plan.texture_work[index];
+                    w.normal = normal;
+                    w.roughness = rough;
+                    w.normal_bits = plan.image_bits[d.normal_image];
+                    w.roughness_bits = rough ? plan.image_bits[d.roughness_image] : w.normal_bits;
+                    if (layer.normal_scale != 1.0) {  // glTF: n = normalize((2c - 1) * (scale, scale, 1))
+                        w.normal_storage = *normal;
+                        Image& n = w.normal_storage;
+                        for (size_t t = 0; t < n.texel_count(); ++t)
+                            for (int c = 0; c < std::min(2, n.channels); ++c) {
+                                float& v = n.pixels[t * size_t(n.channels) + size_t(c)];
+                                v = float(((2.0 * v - 1.0) * layer.normal_scale + 1.0) * 0.5);
+                            }
+                        w.normal = &w.normal_storage;
+                    }
+                    w.roughness_channel = rough && rough->channels >= 2 ? 1 : 0;
+                    if (rough && d.roughness_factor != 1.0f) {  // glTF: r = roughness factor * G
+                        w.roughness_storage = *rough;
+                        Image& r = w.roughness_storage;
+                        for (size_t t = 0; t < r.texel_count(); ++t)
+                            r.pixels[t * size_t(r.channels) + size_t(w.roughness_channel)] *= d.roughness_factor;
+                        w.roughness = &w.roughness_storage;
+                    }
+                    TextureBakeSettings s = options.texture_settings_for(mat.name);
+                    if (!options.texture_sink) s.outputs = TextureOutputs{true, false, false, false};
+                    auto baked = bake_texture(*w.normal, w.roughness, w.roughness_channel, d.roughness_value, s);
+                    if (!baked) {
+                        d.reason = scene.image_label(d.normal_image) + ": " + baked.error().message;
+                        plan.notes.push_back(d.reason);
+                    } else {
+                        d.max_roughness_change = baked->max_roughness_change;
+                        d.bake = baked->max_roughness_change >= d.threshold;
+                        d.reason = d.bake ? "the bake changes roughness by at least half a quantisation step"
+                                          : "the bake changes no texel of any mip by half a quantisation step";
+                        for (const std::string& warning : baked->notes.warnings)
+                            plan.notes.push_back(scene.image_label(d.normal_image) + ": " + warning);
+                    }
+                    d.reason += mapping_note;
+                    if (!d.bake) {
+                        plan.texture_work.erase(index);
+                    } else if (options.texture_sink) {
+                        if (auto ok = options.texture_sink(d, w, std::move(*baked)); !ok) return ok.error();
+                    }
+                    bakes_by_inputs[key] = index;
                 }
-                d.reason += mapping_note;
-                if (!d.bake) {
-                    plan.texture_work.erase(int(m));
-                } else if (options.texture_sink) {
-                    if (auto ok = options.texture_sink(d, w, std::move(*baked)); !ok) return ok.error();
-                }
-                bakes_by_inputs[key] = int(plan.textures.size());
             }
+            plan.textures.push_back(std::move(d));
         }
-        plan.textures.push_back(std::move(d));
     }
 
     // Curvature decisions, one per primitive.
@@ -296,6 +332,7 @@ nlohmann::json plan_to_json(const ScenePlan& plan) {
     for (const TextureDecision& d : plan.textures) {
         json e = {{"material", d.material},
                   {"material_name", d.material_name},
+                  {"layer", d.layer},
                   {"decision", d.bake ? "bake" : "skip"},
                   {"reason", d.reason},
                   {"measure", "max change of perceptual roughness over all texels of all mips"},
@@ -341,7 +378,8 @@ std::string plan_to_table(const ScenePlan& plan) {
     os << line;
     for (const TextureDecision& d : plan.textures) {
         const std::string target = "material " + std::to_string(d.material) +
-                                   (d.material_name.empty() ? "" : " '" + d.material_name.substr(0, 14) + "'");
+                                   (d.material_name.empty() ? "" : " '" + d.material_name.substr(0, 14) + "'") +
+                                   (d.layer == "base" ? "" : " " + d.layer);
         std::snprintf(line, sizeof line, "  %-10s %-28s %-10s %-11s %-11s %s\n", "texture", target.c_str(),
                       d.bake ? "bake" : "skip", measured(d.max_roughness_change).c_str(),
                       d.threshold > 0 ? format_number(d.threshold).c_str() : "-", d.reason.c_str());

@@ -2,7 +2,8 @@
 // threshold and the measured value behind each decision. `specbake plan` prints it, `specbake bake` does
 // exactly what it says and records it in the manifest.
 //
-// Texture bake of a material: only when it has a normal texture that can be decoded, some primitive
+// Texture bake of a material layer (the base, and the clear coat of KHR_materials_clearcoat, each with its
+// own normal texture and roughness): only when it has a normal texture that can be decoded, some primitive
 // samples it with texture coordinates, and the bake changes the output visibly: the largest change of
 // perceptual roughness r over every texel of every mip level (TextureBakeResult::max_roughness_change) is
 // at least half a quantisation step of the roughness output (0.5 / 255 for 8-bit roughness, 0.5 / 65535
@@ -15,7 +16,9 @@
 //     SPEC Sec. 3, a' = (a + kappa (1 - a)) / (1 + kappa (1 - a)), a = r^4, so the measured value is
 //     a'^(1/4) - r_min. 0.05 is reached at r_min ~ 0.74; a material with r_min = 0.9 gains 0.007 and is
 //     left alone. r_min = roughnessFactor times the smallest roughness texel (G channel) when the material
-//     has a metallicRoughness texture; no material means the glTF default, r = 1.
+//     has a metallicRoughness texture; with a clear coat (clearcoatFactor > 0 or a clearcoatTexture) the
+//     smaller of that and the coat's clearcoatRoughnessFactor times its smallest texel; no material means
+//     the glTF default, r = 1.
 //  2. its shading normals actually curve: p95(|k1|) times the bounding-box diagonal (the normal's turn, in
 //     radians, across the primitive at the 95th percentile of vertices; ~2 for a sphere, 0 for a plane or
 //     a faceted box) is at least `min_relative_curvature` (0.05 by default).
@@ -77,6 +80,10 @@ struct PlanOptions {
 struct TextureDecision {
     int material = -1;
     std::string material_name;
+    // "base": normalTexture, roughness from metallicRoughness G and roughnessFactor. "clearcoat"
+    // (KHR_materials_clearcoat): clearcoatNormalTexture, roughness from clearcoatRoughnessTexture G and
+    // clearcoatRoughnessFactor. A material with the extension gets one decision per layer.
+    std::string layer = "base";
     bool bake = false;
     std::string reason;
     std::optional<double> max_roughness_change;  // measured (r units)
@@ -88,7 +95,7 @@ struct TextureDecision {
     float roughness_factor = 1.0f;
     int texcoord = 0;
     std::string stem;                            // output file stem
-    int same_as = -1;                            // material whose identical bake is reused
+    int same_as = -1;                            // index in ScenePlan::textures of the identical bake reused
 };
 
 struct CurvatureDecision {
@@ -127,11 +134,11 @@ struct TextureWork {
 
 struct ScenePlan {
     std::string scene;                            // source file
-    std::vector<TextureDecision> textures;        // one per material
+    std::vector<TextureDecision> textures;        // per material: base layer, then clear coat if it has one
     std::vector<CurvatureDecision> primitives;    // one per primitive
     std::vector<std::string> notes;               // import notes, warnings
     std::map<size_t, PrimitiveWork> work;         // by index into `primitives`, for the ones to bake
-    std::map<int, TextureWork> texture_work;      // by material, for the texture bakes to run
+    std::map<int, TextureWork> texture_work;      // by index in `textures`, for the texture bakes to run
     std::map<int, Image> decoded_images;          // image index -> decoded image
     std::map<int, int> image_bits;                // image index -> bits per channel of the file
 };

@@ -54,7 +54,7 @@ json root_extension(const SceneJob& job, bool textures) {
 
 struct SceneResult {
     std::vector<io::ManifestOutput> outputs;  // paths relative to the scene's output folder
-    std::vector<fs::path> inputs;
+    std::vector<io::ManifestInput> inputs;    // hashed
     ScenePlan plan;
 };
 
@@ -70,17 +70,29 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
     io::GltfScene& scene = loaded->scene;
 
     SceneResult result;
-    result.inputs.push_back(input);
-    for (const fs::path& r : scene.resource_files()) result.inputs.push_back(r);
-    if (auto r = io::check_output_not_input(out_dir, result.inputs); !r) return r.error();
+    std::vector<fs::path> inputs{input};
+    for (const fs::path& r : scene.resource_files()) inputs.push_back(r);
+    if (auto r = io::check_output_not_input(out_dir, inputs); !r) return r.error();
+    // Hashes of the inputs: the ones the loader read come with the scene, the rest (images, files read
+    // through Assimp) are hashed together here.
+    std::vector<fs::path> unhashed;
+    for (const fs::path& in : inputs)
+        if (scene.content_hash(in).empty()) unhashed.push_back(in);
+    auto hashes = io::sha256_files(unhashed);
+    if (!hashes) return hashes.error();
+    for (size_t i = 0, next = 0; i < inputs.size(); ++i) {
+        std::string hash = scene.content_hash(inputs[i]);
+        result.inputs.push_back({inputs[i].string(), hash.empty() ? (*hashes)[next++] : std::move(hash)});
+    }
 
     // Material textures: the plan measures its statistic on the full bake and this writes each kept bake
-    // right away. Materials with identical inputs share one set of files (the first material's).
-    std::map<int, std::vector<io::ManifestOutput>> files_by_material;
+    // right away. Layers with identical inputs share one set of files (the first one's, by its stem).
+    std::map<std::string, std::vector<io::ManifestOutput>> files_by_stem;
     PlanOptions options = job.plan;
     options.texture_sink = [&](const TextureDecision& d, const TextureWork& w,
                                TextureBakeResult&& baked) -> Result<void> {
-        say("writing textures of material " + std::to_string(d.material) + " of " + input.string());
+        say("writing " + (d.layer == "base" ? std::string() : d.layer + " ") + "textures of material " +
+            std::to_string(d.material) + " of " + input.string());
         TextureInputs in;
         in.normal = w.normal;
         in.normal_name = scene.image_label(d.normal_image);
@@ -95,7 +107,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         if (!out) return out.error();
         for (const io::ManifestOutput& o : out->outputs) written.push_back(out_dir / o.path);
         result.outputs.insert(result.outputs.end(), out->outputs.begin(), out->outputs.end());
-        files_by_material[d.material] = std::move(out->outputs);
+        files_by_stem[d.stem] = std::move(out->outputs);
         return {};
     };
     say("planning " + input.string());
@@ -116,29 +128,40 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         ++baked_primitives;
     }
 
-    // Material extensions pointing at the files written during planning.
+    // Material extensions pointing at the files written during planning: the base layer's properties at
+    // the top of the object, the clear coat's in "clearcoat" (io/SPECBAKE_EXTENSION.md).
     const std::vector<io::MaterialInfo> materials = scene.materials();
-    bool any_texture = false;
-    for (const TextureDecision& d : plan->textures) {
+    std::map<int, json> extension_of_material;
+    for (size_t i = 0; i < plan->textures.size(); ++i) {
+        const TextureDecision& d = plan->textures[i];
         if (!d.bake) continue;
-        const int owner = d.same_as >= 0 ? d.same_as : d.material;
+        const size_t owner = d.same_as >= 0 ? size_t(d.same_as) : i;
         const io::MaterialInfo& mat = materials[size_t(d.material)];
+        const bool coat = d.layer == "clearcoat";
+        const io::TextureSlot& normal = coat ? mat.clearcoat.normal : mat.normal;
         json ext = {{"texCoord", d.texcoord},
                     {"roughnessChannel", d.roughness_texture_used ? 1 : 0},
-                    {"source", {{"normalTexture", mat.normal.texture}}}};
-        if (d.roughness_texture_used) ext["source"]["metallicRoughnessTexture"] = mat.metallic_roughness.texture;
-        else ext["source"]["roughness"] = d.roughness_value;
-        if (!mat.normal.transform.is_null()) ext["KHR_texture_transform"] = mat.normal.transform;
-        const std::string& owner_name = plan->textures[size_t(owner)].material_name;
+                    {"source", {{coat ? "clearcoatNormalTexture" : "normalTexture", normal.texture}}}};
+        if (d.roughness_texture_used)
+            ext["source"][coat ? "clearcoatRoughnessTexture" : "metallicRoughnessTexture"] =
+                coat ? mat.clearcoat.roughness.texture : mat.metallic_roughness.texture;
+        else
+            ext["source"]["roughness"] = d.roughness_value;
+        if (!normal.transform.is_null()) ext["KHR_texture_transform"] = normal.transform;
+        const std::string& owner_name = plan->textures[owner].material_name;
         if (job.plan.material_texture_settings.count(owner_name))  // differs from the root's "textures"
             ext["settings"] = texture_settings_json(job.plan.texture_settings_for(owner_name), job.container);
         ext["outputs"] = json::array();
-        for (const io::ManifestOutput& o : files_by_material.at(owner))
+        for (const io::ManifestOutput& o : files_by_stem.at(d.stem))
             ext["outputs"].push_back({{"kind", o.kind}, {"uri", o.path}, {"format", o.format}, {"width", o.width},
                                       {"height", o.height}, {"mips", o.mips}, {"channels", o.channels}});
-        scene.set_material_extension(d.material, ext);
-        any_texture = true;
+        json& target = extension_of_material[d.material];
+        if (target.is_null()) target = json::object();
+        if (coat) target["clearcoat"] = std::move(ext);
+        else target.update(ext);
     }
+    for (const auto& [material, ext] : extension_of_material) scene.set_material_extension(material, ext);
+    const bool any_texture = !extension_of_material.empty();
     if (baked_primitives > 0 || any_texture) scene.set_root_extension(root_extension(job, any_texture));
 
     std::string ext = loaded->is_gltf && scene.source_is_binary() ? ".glb" : ".gltf";
@@ -148,10 +171,11 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
     say("writing " + out_file.string());
     auto files = scene.write(out_file);
     if (!files) return files.error();
-    written.insert(written.end(), files->begin(), files->end());
+    for (const io::GltfScene::WrittenFile& f : *files) written.push_back(f.path);
     for (size_t i = 0; i < files->size(); ++i) {
-        const fs::path& f = (*files)[i];
+        const fs::path& f = (*files)[i].path;
         io::ManifestOutput o;
+        o.sha256 = (*files)[i].sha256;
         o.kind = i == 0 ? "scene" : (std::string(format_of(f)) == "bin" ? "buffer" : "image");
         o.path = io::relative_path(f, out_dir);
         o.format = format_of(f);
@@ -266,11 +290,7 @@ Result<SceneJobOutcome> run_scene_job(const SceneJob& job) {
             o.path = prefix + o.path;
             outcome.manifest.outputs.push_back(std::move(o));
         }
-        for (const fs::path& in : result->inputs) {
-            auto hash = io::sha256_file(in);
-            if (!hash) return hash.error();
-            outcome.manifest.inputs.push_back({in.string(), *hash});
-        }
+        outcome.manifest.inputs.insert(outcome.manifest.inputs.end(), result->inputs.begin(), result->inputs.end());
         outcome.manifest.plan.push_back(plan_to_json(result->plan));
         outcome.plans.push_back(std::move(result->plan));
     }

@@ -1,6 +1,7 @@
 #include "io/gltf_scene.h"
 
 #include "io/atomic_file.h"
+#include "io/sha256.h"
 
 // The tinygltf implementation is compiled here, from the installed header, instead of being taken from
 // Debian's libtinygltf.so: that library's TinyGLTF class does not match the layout its header declares
@@ -15,11 +16,14 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <map>
 #include <set>
 #include <sstream>
+
+#include <tbb/task_group.h>
 
 namespace specbake::io {
 namespace fs = std::filesystem;
@@ -131,13 +135,17 @@ bool fs_file_exists(const std::string& path, void*) {
     return fs::is_regular_file(path, ec);
 }
 std::string fs_expand_path(const std::string& path, void*) { return path; }
-bool fs_read_whole_file(std::vector<unsigned char>* out, std::string* err, const std::string& path, void*) {
+// Files read while loading are hashed on the way (the manifest records every input's hash), into the
+// map passed as user data.
+bool fs_read_whole_file(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* hashes) {
     auto bytes = read_file(path);
     if (!bytes) {
         if (err) *err += bytes.error().message + "\n";
         return false;
     }
-    out->assign(bytes->begin(), bytes->end());
+    if (hashes) (*static_cast<std::map<fs::path, std::string>*>(hashes))[fs::path(path).lexically_normal()] =
+        sha256_hex(*bytes);
+    *out = std::move(*bytes);
     return true;
 }
 bool fs_refuse_write(std::string* err, const std::string& path, const std::vector<unsigned char>&, void*) {
@@ -145,8 +153,8 @@ bool fs_refuse_write(std::string* err, const std::string& path, const std::vecto
     return false;
 }
 
-tinygltf::FsCallbacks fs_callbacks() {
-    return tinygltf::FsCallbacks{&fs_file_exists, &fs_expand_path, &fs_read_whole_file, &fs_refuse_write, nullptr};
+tinygltf::FsCallbacks fs_callbacks(std::map<fs::path, std::string>* hashes) {
+    return tinygltf::FsCallbacks{&fs_file_exists, &fs_expand_path, &fs_read_whole_file, &fs_refuse_write, hashes};
 }
 
 bool keep_image_uri(const std::string*, const std::string*, const tinygltf::Image*, bool, std::string*, void*) {
@@ -268,14 +276,19 @@ struct StridedView {
     size_t stride = 0;
 };
 
-Result<StridedView> view_of(const tinygltf::Model& m, int buffer_view, size_t byte_offset, size_t count,
-                            size_t element_size, size_t element_stride_default, const std::string& what) {
+// The bytes of every buffer, held apart from the tinygltf model so that copying the model for a write
+// never copies them.
+using Payloads = std::vector<std::vector<unsigned char>>;
+
+Result<StridedView> view_of(const tinygltf::Model& m, const Payloads& payloads, int buffer_view, size_t byte_offset,
+                            size_t count, size_t element_size, size_t element_stride_default,
+                            const std::string& what) {
     if (buffer_view < 0 || size_t(buffer_view) >= m.bufferViews.size())
         return make_error(what + ": bufferView " + std::to_string(buffer_view) + " does not exist");
     const tinygltf::BufferView& bv = m.bufferViews[size_t(buffer_view)];
-    if (bv.buffer < 0 || size_t(bv.buffer) >= m.buffers.size())
+    if (bv.buffer < 0 || size_t(bv.buffer) >= payloads.size())
         return make_error(what + ": buffer " + std::to_string(bv.buffer) + " does not exist");
-    const std::vector<unsigned char>& data = m.buffers[size_t(bv.buffer)].data;
+    const std::vector<unsigned char>& data = payloads[size_t(bv.buffer)];
     if (bv.byteOffset > data.size() || bv.byteLength > data.size() - bv.byteOffset)
         return make_error(what + ": bufferView " + std::to_string(buffer_view) + " lies outside its buffer");
     const size_t stride = bv.byteStride ? bv.byteStride : element_stride_default;
@@ -288,7 +301,8 @@ Result<StridedView> view_of(const tinygltf::Model& m, int buffer_view, size_t by
 }
 
 // Dense copy of an accessor's values as doubles (count * components), sparse substitution applied.
-Result<std::vector<double>> read_accessor(const tinygltf::Model& m, int index, const std::string& what) {
+Result<std::vector<double>> read_accessor(const tinygltf::Model& m, const Payloads& payloads, int index,
+                                          const std::string& what) {
     if (index < 0 || size_t(index) >= m.accessors.size())
         return make_error(what + ": accessor " + std::to_string(index) + " does not exist");
     const tinygltf::Accessor& a = m.accessors[size_t(index)];
@@ -297,7 +311,7 @@ Result<std::vector<double>> read_accessor(const tinygltf::Model& m, int index, c
     if (nc == 0 || cs == 0) return make_error(what + ": accessor " + std::to_string(index) + " has an unsupported type");
     std::vector<double> out(a.count * size_t(nc), 0.0);
     if (a.bufferView >= 0) {
-        auto view = view_of(m, a.bufferView, a.byteOffset, a.count, cs * size_t(nc), cs * size_t(nc), what);
+        auto view = view_of(m, payloads, a.bufferView, a.byteOffset, a.count, cs * size_t(nc), cs * size_t(nc), what);
         if (!view) return view.error();
         if (view->stride % cs != 0) return make_error(what + ": byteStride is not a multiple of the component size");
         if (a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT) {  // the common case, without per-component dispatch
@@ -326,9 +340,9 @@ Result<std::vector<double>> read_accessor(const tinygltf::Model& m, int index, c
         const size_t ics = component_size(ict);
         if (ics == 0 || ics > 4 || ict == TINYGLTF_COMPONENT_TYPE_BYTE || ict == TINYGLTF_COMPONENT_TYPE_SHORT)
             return make_error(what + ": sparse indices have an invalid component type");
-        auto iv = view_of(m, a.sparse.indices.bufferView, size_t(std::max(a.sparse.indices.byteOffset, 0)), n, ics, ics, what);
+        auto iv = view_of(m, payloads, a.sparse.indices.bufferView, size_t(std::max(a.sparse.indices.byteOffset, 0)), n, ics, ics, what);
         if (!iv) return iv.error();
-        auto vv = view_of(m, a.sparse.values.bufferView, size_t(std::max(a.sparse.values.byteOffset, 0)), n,
+        auto vv = view_of(m, payloads, a.sparse.values.bufferView, size_t(std::max(a.sparse.values.byteOffset, 0)), n,
                           cs * size_t(nc), cs * size_t(nc), what);
         if (!vv) return vv.error();
         for (size_t s = 0; s < n; ++s) {
@@ -345,14 +359,61 @@ Result<std::vector<double>> read_accessor(const tinygltf::Model& m, int index, c
 }
 
 // Float attribute with exactly `components` per element (TEXCOORD/NORMAL/...).
-Result<std::vector<float>> read_attribute(const tinygltf::Model& m, int index, int components, const std::string& what) {
+Result<std::vector<float>> read_attribute(const tinygltf::Model& m, const Payloads& payloads, int index,
+                                          int components, const std::string& what) {
     const tinygltf::Accessor& a = m.accessors.at(size_t(index));
     if (component_count(a.type) != components)
         return make_error(what + ": expected " + std::to_string(components) + " components per element");
-    auto values = read_accessor(m, index, what);
+    if (a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT && !a.sparse.isSparse && a.bufferView >= 0) {
+        // The common case, copied without the detour through doubles.
+        const size_t element = 4 * size_t(components);
+        auto view = view_of(m, payloads, a.bufferView, a.byteOffset, a.count, element, element, what);
+        if (!view) return view.error();
+        std::vector<float> out(a.count * size_t(components));
+        if (view->stride == element) {
+            if (!out.empty()) std::memcpy(out.data(), view->base, out.size() * sizeof(float));
+        } else {
+            for (size_t i = 0; i < a.count; ++i) std::memcpy(&out[i * size_t(components)], view->base + i * view->stride, element);
+        }
+        return out;
+    }
+    auto values = read_accessor(m, payloads, index, what);
     if (!values) return values.error();
     std::vector<float> out(values->size());
     for (size_t i = 0; i < out.size(); ++i) out[i] = float((*values)[i]);
+    return out;
+}
+
+// An index accessor (unsigned byte, short or int scalars) as uint32, read directly when not sparse.
+Result<std::vector<uint32_t>> read_indices(const tinygltf::Model& m, const Payloads& payloads, int index,
+                                           const std::string& what) {
+    const tinygltf::Accessor& a = m.accessors.at(size_t(index));
+    const size_t cs = component_size(a.componentType);
+    std::vector<uint32_t> out(a.count);
+    if (!a.sparse.isSparse && a.bufferView >= 0 && cs > 0) {
+        auto view = view_of(m, payloads, a.bufferView, a.byteOffset, a.count, cs, cs, what);
+        if (!view) return view.error();
+        if (cs == 4 && view->stride == 4) {
+            if (!out.empty()) std::memcpy(out.data(), view->base, out.size() * 4);
+        } else {
+            for (size_t i = 0; i < a.count; ++i) {
+                const uint8_t* p = view->base + i * view->stride;
+                if (cs == 1) {
+                    out[i] = p[0];
+                } else if (cs == 2) {
+                    uint16_t v;
+                    std::memcpy(&v, p, 2);
+                    out[i] = v;
+                } else {
+                    std::memcpy(&out[i], p, 4);
+                }
+            }
+        }
+        return out;
+    }
+    auto values = read_accessor(m, payloads, index, what);
+    if (!values) return values.error();
+    for (size_t i = 0; i < out.size(); ++i) out[i] = uint32_t((*values)[i]);
     return out;
 }
 
@@ -387,9 +448,11 @@ std::array<double, 16> multiply(const std::array<double, 16>& a, const std::arra
 }  // namespace
 
 struct GltfScene::Impl {
-    tinygltf::Model model;
+    tinygltf::Model model;  // its buffers hold no data: the bytes are in `buffers`
+    Payloads buffers;
     fs::path source;
     bool binary = false;
+    std::map<fs::path, std::string> content_hashes;  // of the files read at load
     struct Added {
         PrimitiveRef ref;
         std::string attribute;
@@ -411,35 +474,52 @@ Result<GltfScene> GltfScene::load(const fs::path& path) {
     auto bytes = read_file(path);
     if (!bytes) return bytes.error();
     GltfScene scene;
-    scene.impl_->source = path;
-    scene.impl_->binary = bytes->size() >= 4 && std::memcmp(bytes->data(), "glTF", 4) == 0;
+    Impl& impl = *scene.impl_;
+    impl.source = path;
+    impl.binary = bytes->size() >= 4 && std::memcmp(bytes->data(), "glTF", 4) == 0;
+    // The manifest records the hash of every input; it is computed here, beside the parse, from the bytes
+    // already in memory instead of reading the file again later.
+    tbb::task_group hashing;
+    std::string scene_hash;
+    hashing.run([&] { scene_hash = sha256_hex(*bytes); });
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(&keep_image_encoded, nullptr);
     loader.SetImageWriter(&keep_image_uri, nullptr);
-    loader.SetFsCallbacks(fs_callbacks());
+    loader.SetFsCallbacks(fs_callbacks(&impl.content_hashes));
     std::string err, warn;
     std::string base_dir = path.parent_path().string();
     if (base_dir.empty()) base_dir = ".";
     bool ok = false;
     try {
-        if (scene.impl_->binary) {
-            if (bytes->size() > std::numeric_limits<unsigned int>::max())
+        if (impl.binary) {
+            if (bytes->size() > std::numeric_limits<unsigned int>::max()) {
+                hashing.wait();
                 return make_error(path.string() + ": GLB larger than 4 GiB");
-            ok = loader.LoadBinaryFromMemory(&scene.impl_->model, &err, &warn, bytes->data(),
+            }
+            ok = loader.LoadBinaryFromMemory(&impl.model, &err, &warn, bytes->data(),
                                              static_cast<unsigned int>(bytes->size()), base_dir);
         } else {
-            ok = loader.LoadASCIIFromString(&scene.impl_->model, &err, &warn,
-                                            reinterpret_cast<const char*>(bytes->data()),
+            ok = loader.LoadASCIIFromString(&impl.model, &err, &warn, reinterpret_cast<const char*>(bytes->data()),
                                             static_cast<unsigned int>(bytes->size()), base_dir);
         }
     } catch (const std::exception& e) {
+        hashing.wait();
         return make_error(path.string() + ": not a valid glTF file: " + e.what());
     }
+    hashing.wait();
     if (!ok) {
         const std::string reason = first_line(err.empty() ? warn : err);
         return make_error(path.string() + ": not a valid glTF file: " + (reason.empty() ? "parse error" : reason));
     }
+    impl.content_hashes[path.lexically_normal()] = std::move(scene_hash);
+    impl.buffers.resize(impl.model.buffers.size());
+    for (size_t i = 0; i < impl.buffers.size(); ++i) impl.buffers[i].swap(impl.model.buffers[i].data);
     return scene;
+}
+
+std::string GltfScene::content_hash(const fs::path& file) const {
+    auto it = impl_->content_hashes.find(file.lexically_normal());
+    return it == impl_->content_hashes.end() ? std::string() : it->second;
 }
 
 Result<GltfScene> GltfScene::from_imported(const ImportedScene& imported) {
@@ -449,7 +529,8 @@ Result<GltfScene> GltfScene::from_imported(const ImportedScene& imported) {
     m.asset.version = "2.0";
     m.asset.generator = "specbake (imported through Assimp)";
     m.buffers.emplace_back();
-    std::vector<unsigned char>& data = m.buffers[0].data;
+    scene.impl_->buffers.emplace_back();
+    std::vector<unsigned char>& data = scene.impl_->buffers[0];
 
     auto add_view = [&](const void* src, size_t bytes, int target) {
         while (data.size() % 4) data.push_back(0);
@@ -645,6 +726,15 @@ std::vector<MaterialInfo> GltfScene::materials() const {
         }
         return s;
     };
+    // A textureInfo object inside an extension (tinygltf leaves those as JSON values).
+    auto slot_json = [&](const json& info) {
+        if (!info.is_object() || !info.contains("index") || !info["index"].is_number_integer()) return TextureSlot();
+        tinygltf::ExtensionMap ext;
+        if (info.contains("extensions") && info["extensions"].is_object())
+            for (auto it = info["extensions"].begin(); it != info["extensions"].end(); ++it) ext[it.key()] = to_value(it.value());
+        const int texcoord = info.contains("texCoord") && info["texCoord"].is_number_integer() ? info["texCoord"].get<int>() : 0;
+        return slot(info["index"].get<int>(), texcoord, ext);
+    };
     std::vector<MaterialInfo> out;
     for (const tinygltf::Material& mat : m.materials) {
         MaterialInfo info;
@@ -656,6 +746,23 @@ std::vector<MaterialInfo> GltfScene::materials() const {
                                        pbr.metallicRoughnessTexture.extensions);
         info.roughness_factor = pbr.roughnessFactor;
         info.metallic_factor = pbr.metallicFactor;
+        if (auto it = mat.extensions.find("KHR_materials_clearcoat"); it != mat.extensions.end()) {
+            const json cc = from_value(it->second);
+            ClearcoatInfo& c = info.clearcoat;
+            c.present = true;
+            auto number = [&](const char* key, double fallback) {
+                return cc.contains(key) && cc[key].is_number() ? cc[key].get<double>() : fallback;
+            };
+            // Defaults of KHR_materials_clearcoat: factors 0, normal scale 1, texCoord 0.
+            c.factor = number("clearcoatFactor", 0.0);
+            c.roughness_factor = number("clearcoatRoughnessFactor", 0.0);
+            c.factor_texture = slot_json(cc.value("clearcoatTexture", json()));
+            c.roughness = slot_json(cc.value("clearcoatRoughnessTexture", json()));
+            const json normal = cc.value("clearcoatNormalTexture", json());
+            c.normal = slot_json(normal);
+            if (normal.is_object() && normal.contains("scale") && normal["scale"].is_number())
+                c.normal_scale = normal["scale"].get<double>();
+        }
         out.push_back(std::move(info));
     }
     return out;
@@ -683,7 +790,7 @@ Result<TriMesh> GltfScene::primitive_mesh(PrimitiveRef ref) const {
         if (it == p.attributes.end()) return {};
         if (it->second < 0 || size_t(it->second) >= m.accessors.size())
             return make_error(t.name + ": " + name + " accessor " + std::to_string(it->second) + " does not exist");
-        auto v = read_attribute(m, it->second, nc, t.name + ": " + name);
+        auto v = read_attribute(m, impl_->buffers, it->second, nc, t.name + ": " + name);
         if (!v) return v.error();
         dst = std::move(*v);
         return {};
@@ -707,15 +814,13 @@ Result<TriMesh> GltfScene::primitive_mesh(PrimitiveRef ref) const {
              ia.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
              ia.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT))
             return make_error(t.name + ": indices are not unsigned integer scalars");
-        auto v = read_accessor(m, p.indices, t.name + ": indices");
+        auto v = read_indices(m, impl_->buffers, p.indices, t.name + ": indices");
         if (!v) return v.error();
-        order.resize(v->size());
-        for (size_t i = 0; i < v->size(); ++i) {
-            const double idx = (*v)[i];
-            if (idx >= double(n))
-                return make_error(t.name + ": index " + std::to_string(uint64_t(idx)) + " at position " +
+        order = std::move(*v);
+        for (size_t i = 0; i < order.size(); ++i) {
+            if (order[i] >= n)
+                return make_error(t.name + ": index " + std::to_string(order[i]) + " at position " +
                                   std::to_string(i) + " is out of range (" + std::to_string(n) + " vertices)");
-            order[i] = uint32_t(idx);
         }
     } else {
         order.resize(n);
@@ -761,7 +866,7 @@ Result<std::vector<uint8_t>> GltfScene::image_bytes(int image) const {
     if (image < 0 || size_t(image) >= m.images.size()) return make_error(image_label(image) + ": does not exist");
     const tinygltf::Image& img = m.images[size_t(image)];
     if (img.bufferView >= 0) {
-        auto view = view_of(m, img.bufferView, 0, 1, 0, 0, image_label(image));
+        auto view = view_of(m, impl_->buffers, img.bufferView, 0, 1, 0, 0, image_label(image));
         if (!view) return view.error();
         const tinygltf::BufferView& bv = m.bufferViews[size_t(img.bufferView)];
         return std::vector<uint8_t>(view->base, view->base + bv.byteLength);
@@ -837,7 +942,70 @@ void GltfScene::set_root_extension(const json& extension) {
     add_extension_used(impl_->model);
 }
 
-Result<std::vector<fs::path>> GltfScene::write(const fs::path& path) const {
+namespace {
+
+// The bytes of one output file (or of the GLB binary chunk) as a list of pieces, each starting at a
+// multiple of 4 (glTF 2.0 Sec. 3.6.2.4 aligns accessors to their component size, at most 4 for vertex data).
+struct PieceList {
+    std::vector<std::span<const uint8_t>> pieces;
+    size_t size = 0;
+
+    size_t append(std::span<const uint8_t> bytes) {
+        static const uint8_t zeros[4] = {};
+        if (size % 4) {
+            const size_t pad = 4 - size % 4;
+            pieces.emplace_back(zeros, pad);
+            size += pad;
+        }
+        const size_t offset = size;
+        if (!bytes.empty()) pieces.push_back(bytes);
+        size += bytes.size();
+        return offset;
+    }
+};
+
+// Writes the pieces to the temporary file of `out` and returns their SHA-256, hashed on a TBB worker while
+// this thread writes. Nothing is renamed into place here.
+Result<std::string> write_pieces(AtomicOutput& out, const std::vector<std::span<const uint8_t>>& pieces) {
+    std::error_code ec;
+    const fs::path& final_path = out.final_path();
+    if (final_path.has_parent_path()) fs::create_directories(final_path.parent_path(), ec);
+    if (ec) return make_error(final_path.parent_path().string() + ": cannot create folder: " + ec.message());
+    std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(out.temp_path().c_str(), "wb"), &std::fclose);
+    if (!f) return make_error(final_path.string() + ": cannot open for writing");
+    std::string hash;
+    tbb::task_group hashing;
+    hashing.run([&] {
+        Sha256 sha;
+        for (std::span<const uint8_t> p : pieces) sha.update(p);
+        hash = sha.hex();
+    });
+    bool ok = true;
+    for (std::span<const uint8_t> p : pieces) ok = ok && std::fwrite(p.data(), 1, p.size(), f.get()) == p.size();
+    ok = std::fflush(f.get()) == 0 && ok;
+    hashing.wait();
+    if (!ok) return make_error(final_path.string() + ": write failed (disk full?)");
+    return hash;
+}
+
+std::string mime_type_of(const fs::path& file) {
+    std::string e = file.extension().string();
+    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    if (e == ".png") return "image/png";
+    if (e == ".jpg" || e == ".jpeg") return "image/jpeg";
+    if (e == ".ktx2") return "image/ktx2";  // KHR_texture_basisu
+    if (e == ".webp") return "image/webp";  // EXT_texture_webp
+    if (e == ".dds") return "image/vnd-ms.dds";  // MSFT_texture_dds
+    return {};
+}
+
+bool inside_folder(const fs::path& relative) {
+    return relative.is_relative() && !relative.empty() && *relative.begin() != "..";
+}
+
+}  // namespace
+
+Result<std::vector<GltfScene::WrittenFile>> GltfScene::write(const fs::path& path) const {
     const std::string ext = [&] {
         std::string e = path.extension().string();
         std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
@@ -848,18 +1016,118 @@ Result<std::vector<fs::path>> GltfScene::write(const fs::path& path) const {
     const fs::path out_dir = path.parent_path().empty() ? fs::path(".") : path.parent_path();
     const std::string stem = path.stem().string();
     const fs::path src_dir = impl_->source.parent_path();
+    const Payloads& payloads = impl_->buffers;
 
-    tinygltf::Model m = impl_->model;
-    // The appended data goes into the GLB binary chunk when there is one, else into a new buffer.
-    if (glb && m.buffers.empty() && !impl_->added.empty()) m.buffers.emplace_back();
-    const bool bin_target = glb && !m.buffers.empty() && m.buffers[0].uri.empty();
-    int target_buffer = bin_target ? 0 : -1;
-    if (!impl_->added.empty() && !bin_target) {
-        m.buffers.emplace_back();
-        m.buffers.back().name = "specbake";
-        target_buffer = int(m.buffers.size() - 1);
+    tinygltf::Model m = impl_->model;  // the buffers hold no bytes, so this copies only the JSON side
+
+    // Where every output buffer's bytes come from. A GLB gets one buffer, its binary chunk, holding every
+    // input buffer, the external images and the appended data, so the file is self-contained. A .gltf
+    // keeps the input's buffers (written next to it) and appends one buffer for the new data.
+    struct OutBuffer {
+        PieceList bytes;
+        std::string uri;  // empty for the GLB binary chunk; a data URI is kept as it was
+        fs::path file;    // relative to out_dir; empty when nothing is written for it
+        int source = -1;  // input buffer written 1:1 (name, extensions kept), -1 for a merged or new one
+    };
+    std::vector<OutBuffer> out_buffers;
+    std::vector<std::vector<uint8_t>> embedded_images;  // file bytes of images moved into the GLB
+    std::vector<std::pair<fs::path, fs::path>> copies;   // images copied next to a .gltf: from, relative to
+    int target_buffer = -1;                              // receives the appended vertex data
+
+    if (glb) {
+        out_buffers.emplace_back();
+        out_buffers[0].source = payloads.size() == 1 ? 0 : -1;
+        std::vector<size_t> shift(payloads.size());
+        for (size_t i = 0; i < payloads.size(); ++i) shift[i] = out_buffers[0].bytes.append(payloads[i]);
+        for (tinygltf::BufferView& bv : m.bufferViews) {
+            if (bv.buffer < 0 || size_t(bv.buffer) >= payloads.size()) continue;
+            bv.byteOffset += shift[size_t(bv.buffer)];
+            bv.buffer = 0;
+        }
+        std::map<fs::path, int> view_of_file;  // an image file used twice is stored once
+        for (size_t i = 0; i < m.images.size(); ++i) {
+            tinygltf::Image& img = m.images[i];
+            if (img.uri.empty() || is_data_uri(img.uri) || is_remote_uri(img.uri)) continue;
+            const fs::path decoded = fs::path(percent_decode(img.uri)).lexically_normal();
+            const fs::path from = src_dir / decoded;
+            const std::string mime = mime_type_of(from);
+            if (mime.empty()) {
+                // Not a type glTF can name in a bufferView: it stays an external file next to the GLB.
+                const fs::path rel = inside_folder(decoded) ? decoded : decoded.filename();
+                if (!inside_folder(decoded)) img.uri = percent_encode(rel.generic_string());
+                copies.push_back({from, rel});
+                continue;
+            }
+            auto [it, is_new] = view_of_file.try_emplace(from, -1);
+            if (is_new) {
+                auto bytes = read_file(from);
+                if (!bytes) return make_error(image_label(int(i)) + ": image referenced by the scene cannot be read");
+                // The vector's heap block does not move when embedded_images grows, so the span stays valid.
+                embedded_images.push_back(std::move(*bytes));
+                tinygltf::BufferView bv;
+                bv.buffer = 0;
+                bv.byteLength = embedded_images.back().size();
+                bv.byteOffset = out_buffers[0].bytes.append(embedded_images.back());
+                m.bufferViews.push_back(bv);
+                it->second = int(m.bufferViews.size() - 1);
+            }
+            img.bufferView = it->second;
+            img.mimeType = mime;
+            img.uri.clear();
+        }
+        target_buffer = 0;
+    } else {
+        std::set<std::string> used_names;
+        for (size_t i = 0; i < payloads.size(); ++i) {
+            OutBuffer b;
+            b.source = int(i);
+            b.bytes.append(payloads[i]);
+            const std::string& uri = m.buffers[i].uri;
+            if (is_data_uri(uri)) {
+                b.uri = uri;
+                out_buffers.push_back(std::move(b));
+                continue;
+            }
+            std::string rel;
+            if (!uri.empty() && !is_remote_uri(uri)) {
+                const fs::path decoded = fs::path(percent_decode(uri)).lexically_normal();
+                rel = inside_folder(decoded) ? decoded.generic_string() : decoded.filename().string();
+            }
+            if (rel.empty() || used_names.count(rel)) {
+                const std::string base = stem + (i == 0 ? "" : "_" + std::to_string(i));
+                rel = base + ".bin";
+                for (int k = 1; used_names.count(rel); ++k) rel = base + "_" + std::to_string(k) + ".bin";
+            }
+            used_names.insert(rel);
+            b.uri = percent_encode(rel);
+            b.file = rel;
+            out_buffers.push_back(std::move(b));
+        }
+        if (!impl_->added.empty()) {
+            OutBuffer b;
+            std::string rel = stem + "_specaa.bin";
+            for (int k = 1; used_names.count(rel); ++k) rel = stem + "_specaa_" + std::to_string(k) + ".bin";
+            b.uri = percent_encode(rel);
+            b.file = rel;
+            out_buffers.push_back(std::move(b));
+            target_buffer = int(out_buffers.size() - 1);
+        }
+        // External images are copied next to the scene, at the same relative path when it stays inside the
+        // output folder, else under their file name (and the URI follows).
+        for (tinygltf::Image& img : m.images) {
+            if (img.uri.empty() || is_data_uri(img.uri) || is_remote_uri(img.uri)) continue;
+            const fs::path decoded = fs::path(percent_decode(img.uri)).lexically_normal();
+            const fs::path rel = inside_folder(decoded) ? decoded : decoded.filename();
+            if (!inside_folder(decoded)) img.uri = percent_encode(rel.generic_string());
+            copies.push_back({src_dir / decoded, rel});
+        }
     }
-    // Primitives that share vertex data get equal values; they share one accessor too.
+    for (const auto& [from, rel] : copies) {
+        std::error_code ec;
+        if (!fs::is_regular_file(from, ec)) return make_error(from.string() + ": image referenced by the scene does not exist");
+    }
+
+    // Appended vertex data. Primitives that share vertex data get equal values; they share one accessor too.
     std::vector<std::pair<const Impl::Added*, int>> accessor_of_values;
     for (const Impl::Added& a : impl_->added) {
         int shared = -1;
@@ -870,16 +1138,13 @@ Result<std::vector<fs::path>> GltfScene::write(const fs::path& path) const {
             m.meshes[size_t(a.ref.mesh)].primitives[size_t(a.ref.primitive)].attributes[a.attribute] = shared;
             continue;
         }
-        std::vector<unsigned char>& data = m.buffers[size_t(target_buffer)].data;
-        while (data.size() % 4) data.push_back(0);
         tinygltf::BufferView bv;
         bv.buffer = target_buffer;
-        bv.byteOffset = data.size();
         bv.byteLength = a.values.size() * sizeof(float);
+        bv.byteOffset = out_buffers[size_t(target_buffer)].bytes.append(
+            std::span<const uint8_t>(reinterpret_cast<const uint8_t*>(a.values.data()), bv.byteLength));
         bv.target = TINYGLTF_TARGET_ARRAY_BUFFER;
         bv.name = a.attribute;
-        const auto* p = reinterpret_cast<const unsigned char*>(a.values.data());
-        data.insert(data.end(), p, p + bv.byteLength);
         m.bufferViews.push_back(bv);
         tinygltf::Accessor acc;
         acc.bufferView = int(m.bufferViews.size() - 1);
@@ -895,42 +1160,17 @@ Result<std::vector<fs::path>> GltfScene::write(const fs::path& path) const {
         accessor_of_values.push_back({&a, int(m.accessors.size() - 1)});
     }
 
-    // Decide where each buffer goes, then serialise the JSON without buffer payloads.
-    struct BufferOut {
-        std::string uri;   // as written into the JSON; empty for the GLB binary chunk
-        fs::path file;     // relative to out_dir; empty when embedded
-    };
-    std::vector<BufferOut> buffer_out(m.buffers.size());
-    std::set<std::string> used_names;
-    std::vector<std::vector<unsigned char>> payload(m.buffers.size());
-    for (size_t i = 0; i < m.buffers.size(); ++i) {
-        tinygltf::Buffer& b = m.buffers[i];
-        payload[i].swap(b.data);
-        if (glb && i == 0 && b.uri.empty()) continue;
-        if (is_data_uri(b.uri)) {
-            buffer_out[i].uri = b.uri;
-            continue;
-        }
-        std::string rel;
-        if (!b.uri.empty() && !is_remote_uri(b.uri)) {
-            const fs::path decoded = fs::path(percent_decode(b.uri)).lexically_normal();
-            const bool inside = decoded.is_relative() && !decoded.empty() && *decoded.begin() != "..";
-            rel = inside ? decoded.generic_string() : decoded.filename().string();
-        }
-        if (rel.empty() || used_names.count(rel)) {
-            const bool appended = int(i) == target_buffer && !bin_target;
-            const std::string base = stem + (appended ? "_specaa" : i == 0 ? "" : "_" + std::to_string(i));
-            rel = base + ".bin";
-            for (int k = 1; used_names.count(rel); ++k) rel = base + "_" + std::to_string(k) + ".bin";
-        }
-        used_names.insert(rel);
-        buffer_out[i] = {percent_encode(rel), fs::path(rel)};
-    }
+    if (glb && out_buffers[0].bytes.size == 0) out_buffers.clear();
+
+    // The JSON, serialised by tinygltf without buffer payloads; then each buffer's length, URI, name and
+    // extensions are set from the output plan (tinygltf 2.7 drops buffer extensions when serialising).
+    std::vector<tinygltf::Buffer> input_buffers = std::move(m.buffers);
+    m.buffers.assign(out_buffers.size(), tinygltf::Buffer());
     std::string json_text;
     try {
         tinygltf::TinyGLTF writer;
         writer.SetImageWriter(&keep_image_uri, nullptr);
-        writer.SetFsCallbacks(fs_callbacks());
+        writer.SetFsCallbacks(fs_callbacks(nullptr));
         std::ostringstream os;
         if (!writer.WriteGltfSceneToStream(&m, os, false, false))
             return make_error(path.string() + ": could not serialise the glTF");
@@ -940,73 +1180,72 @@ Result<std::vector<fs::path>> GltfScene::write(const fs::path& path) const {
     }
     json doc = json::parse(json_text, nullptr, false);
     if (doc.is_discarded()) return make_error(path.string() + ": could not serialise the glTF");
-    if (doc.contains("buffers")) {
-        for (size_t i = 0; i < m.buffers.size() && i < doc["buffers"].size(); ++i) {
-            json& b = doc["buffers"][i];
-            b["byteLength"] = payload[i].size();
-            if (buffer_out[i].uri.empty()) b.erase("uri");
-            else b["uri"] = buffer_out[i].uri;
-            // tinygltf 2.7 drops buffer extensions when serialising; put them back.
-            for (const auto& [name, value] : m.buffers[i].extensions) b["extensions"][name] = from_value(value);
+    if (!out_buffers.empty()) {
+        doc["buffers"] = json::array();
+        for (const OutBuffer& b : out_buffers) {
+            json e = {{"byteLength", b.bytes.size}};
+            if (!b.uri.empty()) e["uri"] = b.uri;
+            if (b.source >= 0) {
+                const tinygltf::Buffer& in = input_buffers[size_t(b.source)];
+                if (!in.name.empty()) e["name"] = in.name;
+                if (in.extras.Type() != tinygltf::NULL_TYPE) e["extras"] = from_value(in.extras);
+                for (const auto& [name, value] : in.extensions) e["extensions"][name] = from_value(value);
+            } else if (int(&b - out_buffers.data()) == target_buffer && !glb) {
+                e["name"] = "specbake";
+            }
+            doc["buffers"].push_back(std::move(e));
         }
     }
 
-    // External images are copied next to the scene, at the same relative path when it stays inside the
-    // output folder, else under their file name (and the URI follows).
-    std::vector<std::pair<fs::path, fs::path>> copies;
-    for (size_t i = 0; i < m.images.size(); ++i) {
-        const std::string& uri = m.images[i].uri;
-        if (uri.empty() || is_data_uri(uri) || is_remote_uri(uri)) continue;
-        const fs::path decoded = fs::path(percent_decode(uri)).lexically_normal();
-        const fs::path from = src_dir / decoded;
-        const bool inside = decoded.is_relative() && !decoded.empty() && *decoded.begin() != "..";
-        fs::path rel = inside ? decoded : decoded.filename();
-        if (!inside) doc["images"][i]["uri"] = percent_encode(rel.generic_string());
-        std::error_code ec;
-        if (!fs::is_regular_file(from, ec))
-            return make_error(image_label(int(i)) + ": image referenced by the scene does not exist");
-        copies.push_back({from, rel});
-    }
-
-    std::vector<fs::path> written;
+    // Every file goes to a temporary first; all are renamed into place once all are written.
+    std::vector<std::unique_ptr<AtomicOutput>> outputs;
+    std::vector<WrittenFile> written;
+    auto emit = [&](const fs::path& file, const std::vector<std::span<const uint8_t>>& pieces) -> Result<void> {
+        outputs.push_back(std::make_unique<AtomicOutput>(file));
+        auto hash = write_pieces(*outputs.back(), pieces);
+        if (!hash) return hash.error();
+        written.push_back({file, std::move(*hash)});
+        return {};
+    };
     const std::string text = doc.dump(glb ? -1 : 2);
+    std::vector<uint8_t> header;
+    auto put32 = [&](uint32_t v) {
+        for (int k = 0; k < 4; ++k) header.push_back(uint8_t(v >> (8 * k)));
+    };
     if (glb) {
         // GLB container (glTF 2.0 Sec. 4.4): 12-byte header, JSON chunk padded with spaces, BIN chunk with zeros.
         std::string json_chunk = text;
         while (json_chunk.size() % 4) json_chunk.push_back(' ');
-        const bool has_bin = !m.buffers.empty() && buffer_out[0].uri.empty();
-        const std::vector<unsigned char> none;
-        const std::vector<unsigned char>& bin = has_bin ? payload[0] : none;
-        std::vector<uint8_t> out;
-        auto put32 = [&](uint32_t v) {
-            for (int k = 0; k < 4; ++k) out.push_back(uint8_t(v >> (8 * k)));
-        };
-        size_t bin_padded = has_bin ? (bin.size() + 3) / 4 * 4 : 0;
+        const bool has_bin = !out_buffers.empty();
+        const size_t bin_size = has_bin ? out_buffers[0].bytes.size : 0;
+        const size_t bin_padded = (bin_size + 3) / 4 * 4;
         const uint64_t total = 12 + 8 + json_chunk.size() + (has_bin ? 8 + bin_padded : 0);
         if (total > std::numeric_limits<uint32_t>::max()) return make_error(path.string() + ": GLB would exceed 4 GiB");
-        out.reserve(size_t(total));
         put32(0x46546C67);
         put32(2);
         put32(uint32_t(total));
         put32(uint32_t(json_chunk.size()));
         put32(0x4E4F534A);
-        out.insert(out.end(), json_chunk.begin(), json_chunk.end());
+        header.insert(header.end(), json_chunk.begin(), json_chunk.end());
+        std::vector<std::span<const uint8_t>> pieces{header};
+        std::vector<uint8_t> bin_header;
+        static const uint8_t zeros[4] = {};
         if (has_bin) {
-            put32(uint32_t(bin_padded));
-            put32(0x004E4942);
-            out.insert(out.end(), bin.begin(), bin.end());
-            out.resize(size_t(total), 0);
+            for (uint32_t v : {uint32_t(bin_padded), uint32_t(0x004E4942)})
+                for (int k = 0; k < 4; ++k) bin_header.push_back(uint8_t(v >> (8 * k)));
+            pieces.push_back(bin_header);
+            pieces.insert(pieces.end(), out_buffers[0].bytes.pieces.begin(), out_buffers[0].bytes.pieces.end());
+            if (bin_padded > bin_size) pieces.emplace_back(zeros, bin_padded - bin_size);
         }
-        if (auto r = write_file_atomic(path, out); !r) return r.error();
+        if (auto r = emit(path, pieces); !r) return r.error();
     } else {
-        if (auto r = write_file_atomic(path, text + "\n"); !r) return r.error();
+        const std::string with_newline = text + "\n";
+        const std::span<const uint8_t> bytes(reinterpret_cast<const uint8_t*>(with_newline.data()), with_newline.size());
+        if (auto r = emit(path, {bytes}); !r) return r.error();
     }
-    written.push_back(path);
-    for (size_t i = 0; i < buffer_out.size(); ++i) {
-        if (buffer_out[i].file.empty()) continue;
-        const fs::path dst = out_dir / buffer_out[i].file;
-        if (auto r = write_file_atomic(dst, payload[i]); !r) return r.error();
-        written.push_back(dst);
+    for (const OutBuffer& b : out_buffers) {
+        if (b.file.empty()) continue;
+        if (auto r = emit(out_dir / b.file, b.bytes.pieces); !r) return r.error();
     }
     std::set<fs::path> copied;
     for (const auto& [from, rel] : copies) {
@@ -1016,9 +1255,10 @@ Result<std::vector<fs::path>> GltfScene::write(const fs::path& path) const {
         if (fs::exists(dst, ec) && fs::equivalent(from, dst, ec)) continue;
         auto bytes = read_file(from);
         if (!bytes) return bytes.error();
-        if (auto r = write_file_atomic(dst, *bytes); !r) return r.error();
-        written.push_back(dst);
+        if (auto r = emit(dst, {std::span<const uint8_t>(*bytes)}); !r) return r.error();
     }
+    for (const auto& out : outputs)
+        if (auto r = out->commit(); !r) return r.error();
     return written;
 }
 

@@ -2,7 +2,7 @@
 // primitives are read as TriMesh in their exact vertex order, baked data is added, and the scene is
 // written back with everything of the input kept: nodes, transforms, materials, textures, samplers,
 // animations, skins, cameras, extras and every extension. New vertex data goes into an appended buffer;
-// existing buffer bytes are never rewritten. The vendor extension is described in io/SPECBAKE_EXTENSION.md.
+// existing buffer bytes are never rewritten (a GLB output holds them in its binary chunk, unchanged). The vendor extension is described in io/SPECBAKE_EXTENSION.md.
 #pragma once
 
 #include "bake/result.h"
@@ -59,6 +59,19 @@ struct TextureSlot {
     nlohmann::json transform;  // that extension object, null when absent
 };
 
+// KHR_materials_clearcoat of a material: the coat's own normal texture and roughness.
+struct ClearcoatInfo {
+    bool present = false;          // the material has the extension
+    double factor = 0.0;           // clearcoatFactor
+    TextureSlot factor_texture;    // clearcoatTexture (R)
+    TextureSlot normal;            // clearcoatNormalTexture; empty: the coat uses the geometry normal
+    double normal_scale = 1.0;
+    TextureSlot roughness;         // clearcoatRoughnessTexture (roughness in G)
+    double roughness_factor = 0.0; // clearcoatRoughnessFactor
+    // The coat exists: the extension is there and its factor is not 0 everywhere.
+    bool active() const { return present && (factor > 0.0 || factor_texture.texture >= 0); }
+};
+
 struct MaterialInfo {
     std::string name;
     TextureSlot normal;
@@ -66,6 +79,7 @@ struct MaterialInfo {
     TextureSlot metallic_roughness;  // roughness in G, metallic in B (glTF)
     double roughness_factor = 1.0;
     double metallic_factor = 1.0;
+    ClearcoatInfo clearcoat;
 };
 
 class GltfScene {
@@ -87,6 +101,9 @@ public:
     bool source_is_binary() const;
     // The files the scene reads besides itself: external buffers and images that exist on disk.
     std::vector<std::filesystem::path> resource_files() const;
+    // SHA-256 of the scene file or of an external buffer, computed from the bytes read at load time;
+    // empty for any other file (images are not read at load) and for scenes built from an import.
+    std::string content_hash(const std::filesystem::path& file) const;
 
     std::vector<PrimitiveInfo> primitives() const;
     std::vector<MaterialInfo> materials() const;
@@ -113,10 +130,16 @@ public:
     // Sets the vendor extension object at the root of the glTF (tool version, settings).
     void set_root_extension(const nlohmann::json& extension);
 
-    // Writes the scene to `path` (.gltf: JSON + external buffers; .glb: binary container) and copies every
-    // external resource it references (buffers, images) into the output folder, so the folder is
-    // self-contained. Every file is written atomically. Returns the written files (the scene first).
-    Result<std::vector<std::filesystem::path>> write(const std::filesystem::path& path) const;
+    struct WrittenFile {
+        std::filesystem::path path;
+        std::string sha256;  // of the bytes written, hashed while writing
+    };
+    // Writes the scene to `path`. A .gltf gets its buffers as files beside it (the input's, plus one for
+    // the appended data) and copies of its external images, so the folder is self-contained. A .glb is
+    // self-contained by itself: every buffer, every external image (PNG, JPEG, KTX2, WebP, DDS) and the
+    // appended data go into its binary chunk as buffer views; data-URI images stay as they are. All files
+    // go to temporaries first and are renamed into place together. Returns the written files, scene first.
+    Result<std::vector<WrittenFile>> write(const std::filesystem::path& path) const;
 
 private:
     struct Impl;

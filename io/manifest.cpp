@@ -66,11 +66,14 @@ std::string relative_path(const fs::path& file, const fs::path& dir) {
 }
 
 Result<void> write_manifest(const fs::path& dir, Manifest manifest) {
-    for (ManifestOutput& o : manifest.outputs) {
-        auto hash = sha256_file(dir / o.path);
-        if (!hash) return hash.error();
-        o.sha256 = *hash;
-    }
+    std::vector<fs::path> unhashed;
+    for (const ManifestOutput& o : manifest.outputs)
+        if (o.sha256.empty()) unhashed.push_back(dir / o.path);
+    auto hashes = sha256_files(unhashed);
+    if (!hashes) return hashes.error();
+    size_t next = 0;
+    for (ManifestOutput& o : manifest.outputs)
+        if (o.sha256.empty()) o.sha256 = (*hashes)[next++];
     return write_file_atomic(dir / "manifest.json", to_json(manifest).dump(2) + "\n");
 }
 

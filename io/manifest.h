@@ -42,8 +42,9 @@ struct Manifest {
 nlohmann::json to_json(const Manifest& m);
 Result<Manifest> manifest_from_json(const nlohmann::json& j, const std::string& source_name);
 
-// Hashes every output file (path relative to `dir`) and fills its sha256, then writes
-// `dir/manifest.json` atomically.
+// Fills the sha256 of every output that has none by hashing its file (path relative to `dir`; files are
+// hashed in parallel), then writes `dir/manifest.json` atomically. A hash already set is the writer's hash
+// of the bytes it wrote and is kept.
 Result<void> write_manifest(const std::filesystem::path& dir, Manifest manifest);
 Result<Manifest> read_manifest(const std::filesystem::path& manifest_path);
 

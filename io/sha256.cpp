@@ -1,13 +1,21 @@
 #include "io/sha256.h"
 
+#include <tbb/parallel_for.h>
+
+#include <cstdio>
 #include <cstring>
-#include <fstream>
-#include <vector>
+#include <memory>
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#include <cpuid.h>
+#include <immintrin.h>
+#define SPECBAKE_SHA_NI 1
+#endif
 
 namespace specbake::io {
 namespace {
 
-constexpr std::array<uint32_t, 64> kRoundConstants = {
+alignas(16) constexpr uint32_t kRoundConstants[64] = {
     0x428a2f98, 0x71374491, 0xb5c0fbcf, 0xe9b5dba5, 0x3956c25b, 0x59f111f1, 0x923f82a4, 0xab1c5ed5,
     0xd807aa98, 0x12835b01, 0x243185be, 0x550c7dc3, 0x72be5d74, 0x80deb1fe, 0x9bdc06a7, 0xc19bf174,
     0xe49b69c1, 0xefbe4786, 0x0fc19dc6, 0x240ca1cc, 0x2de92c6f, 0x4a7484aa, 0x5cb0a9dc, 0x76f988da,
@@ -17,88 +25,218 @@ constexpr std::array<uint32_t, 64> kRoundConstants = {
     0x19a4c116, 0x1e376c08, 0x2748774c, 0x34b0bcb5, 0x391c0cb3, 0x4ed8aa4a, 0x5b9cca4f, 0x682e6ff3,
     0x748f82ee, 0x78a5636f, 0x84c87814, 0x8cc70208, 0x90befffa, 0xa4506ceb, 0xbef9a3f7, 0xc67178f2};
 
+constexpr std::array<uint32_t, 8> kInitialState = {0x6a09e667, 0xbb67ae85, 0x3c6ef372, 0xa54ff53a,
+                                                   0x510e527f, 0x9b05688c, 0x1f83d9ab, 0x5be0cd19};
+
+using CompressFn = void (*)(uint32_t* state, const uint8_t* blocks, size_t block_count);
+
 inline uint32_t rotr(uint32_t x, int n) { return (x >> n) | (x << (32 - n)); }
+inline uint32_t load_be32(const uint8_t* p) {
+    return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | uint32_t(p[3]);
+}
+
+// FIPS 180-4 Sec. 6.2.2, with the message schedule kept in a 16-word ring instead of 64 words.
+void compress_portable(uint32_t* state, const uint8_t* blocks, size_t block_count) {
+    for (; block_count > 0; --block_count, blocks += 64) {
+        uint32_t w[16];
+        for (int i = 0; i < 16; ++i) w[i] = load_be32(blocks + 4 * i);
+        uint32_t a = state[0], b = state[1], c = state[2], d = state[3];
+        uint32_t e = state[4], f = state[5], g = state[6], h = state[7];
+        for (int i = 0; i < 64; ++i) {
+            if (i >= 16) {
+                const uint32_t w15 = w[(i - 15) & 15], w2 = w[(i - 2) & 15];
+                const uint32_t s0 = rotr(w15, 7) ^ rotr(w15, 18) ^ (w15 >> 3);
+                const uint32_t s1 = rotr(w2, 17) ^ rotr(w2, 19) ^ (w2 >> 10);
+                w[i & 15] += s0 + w[(i - 7) & 15] + s1;
+            }
+            const uint32_t t1 = h + (rotr(e, 6) ^ rotr(e, 11) ^ rotr(e, 25)) + ((e & f) ^ (~e & g)) +
+                                kRoundConstants[i] + w[i & 15];
+            const uint32_t t2 = (rotr(a, 2) ^ rotr(a, 13) ^ rotr(a, 22)) + ((a & b) ^ (a & c) ^ (b & c));
+            h = g;
+            g = f;
+            f = e;
+            e = d + t1;
+            d = c;
+            c = b;
+            b = a;
+            a = t1 + t2;
+        }
+        state[0] += a;
+        state[1] += b;
+        state[2] += c;
+        state[3] += d;
+        state[4] += e;
+        state[5] += f;
+        state[6] += g;
+        state[7] += h;
+    }
+}
+
+#ifdef SPECBAKE_SHA_NI
+// The same compression with the x86 SHA extensions (Intel, "New Instructions Supporting the Secure Hash
+// Algorithm on Intel Architecture Processors", 2013): sha256rnds2 does two rounds on the state held as
+// (A,B,E,F) and (C,D,G,H); sha256msg1/msg2 extend the message schedule four words at a time.
+__attribute__((target("sha,sse4.1,ssse3"))) void compress_sha_ni(uint32_t* state, const uint8_t* blocks,
+                                                                   size_t block_count) {
+    const __m128i byte_swap = _mm_set_epi64x(0x0c0d0e0f08090a0bULL, 0x0405060700010203ULL);
+    __m128i dcba = _mm_loadu_si128(reinterpret_cast<const __m128i*>(state));
+    __m128i hgfe = _mm_loadu_si128(reinterpret_cast<const __m128i*>(state + 4));
+    const __m128i cdab = _mm_shuffle_epi32(dcba, 0xB1);
+    const __m128i efgh = _mm_shuffle_epi32(hgfe, 0x1B);
+    __m128i abef = _mm_alignr_epi8(cdab, efgh, 8);
+    __m128i cdgh = _mm_blend_epi16(efgh, cdab, 0xF0);
+    for (; block_count > 0; --block_count, blocks += 64) {
+        const __m128i abef_before = abef, cdgh_before = cdgh;
+        __m128i w[4];
+#pragma GCC unroll 16
+        for (int group = 0; group < 16; ++group) {
+            __m128i& cur = w[group & 3];
+            if (group < 4) {
+                cur = _mm_shuffle_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(blocks + 16 * group)),
+                                       byte_swap);
+            } else {
+                // W[t] = sigma1(W[t-2]) + W[t-7] + sigma0(W[t-15]) + W[t-16], four words at once.
+                const __m128i& prev1 = w[(group - 1) & 3];
+                const __m128i& prev2 = w[(group - 2) & 3];
+                const __m128i& prev3 = w[(group - 3) & 3];
+                __m128i t = _mm_sha256msg1_epu32(cur, prev3);
+                t = _mm_add_epi32(t, _mm_alignr_epi8(prev1, prev2, 4));
+                cur = _mm_sha256msg2_epu32(t, prev1);
+            }
+            __m128i k = _mm_add_epi32(cur, _mm_load_si128(reinterpret_cast<const __m128i*>(kRoundConstants + 4 * group)));
+            cdgh = _mm_sha256rnds2_epu32(cdgh, abef, k);
+            k = _mm_shuffle_epi32(k, 0x0E);
+            abef = _mm_sha256rnds2_epu32(abef, cdgh, k);
+        }
+        abef = _mm_add_epi32(abef, abef_before);
+        cdgh = _mm_add_epi32(cdgh, cdgh_before);
+    }
+    const __m128i feba = _mm_shuffle_epi32(abef, 0x1B);
+    const __m128i dchg = _mm_shuffle_epi32(cdgh, 0xB1);
+    dcba = _mm_blend_epi16(feba, dchg, 0xF0);
+    hgfe = _mm_alignr_epi8(dchg, feba, 8);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(state), dcba);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(state + 4), hgfe);
+}
+
+bool cpu_has_sha_ni() {
+    unsigned eax = 0, ebx = 0, ecx = 0, edx = 0;
+    if (!__get_cpuid(1, &eax, &ebx, &ecx, &edx)) return false;
+    const bool ssse3 = ecx & (1u << 9), sse41 = ecx & (1u << 19);
+    if (!__get_cpuid_count(7, 0, &eax, &ebx, &ecx, &edx)) return false;
+    const bool sha = ebx & (1u << 29);
+    return ssse3 && sse41 && sha;
+}
+#endif
+
+CompressFn best_compress() {
+#ifdef SPECBAKE_SHA_NI
+    static const CompressFn chosen = cpu_has_sha_ni() ? &compress_sha_ni : &compress_portable;
+    return chosen;
+#else
+    return &compress_portable;
+#endif
+}
+
+// Buffering and padding (FIPS 180-4 Sec. 5.1.1) around one compression function.
+class Hasher {
+public:
+    explicit Hasher(CompressFn compress) : compress_(compress) {}
+
+    void update(const uint8_t* bytes, size_t size, std::array<uint32_t, 8>& h, std::array<uint8_t, 64>& buffer,
+                size_t& buffered, uint64_t& total) const {
+        total += size;
+        if (buffered > 0) {
+            const size_t take = std::min(size, 64 - buffered);
+            std::memcpy(buffer.data() + buffered, bytes, take);
+            buffered += take;
+            bytes += take;
+            size -= take;
+            if (buffered < 64) return;
+            compress_(h.data(), buffer.data(), 1);
+            buffered = 0;
+        }
+        const size_t blocks = size / 64;
+        if (blocks > 0) compress_(h.data(), bytes, blocks);
+        buffered = size - blocks * 64;
+        if (buffered > 0) std::memcpy(buffer.data(), bytes + blocks * 64, buffered);
+    }
+
+    std::string finish(std::array<uint32_t, 8>& h, std::array<uint8_t, 64>& buffer, size_t buffered,
+                       uint64_t total) const {
+        const uint64_t bits = total * 8;
+        uint8_t tail[128] = {};
+        std::memcpy(tail, buffer.data(), buffered);
+        tail[buffered] = 0x80;
+        const size_t tail_size = buffered + 1 + 8 <= 64 ? 64 : 128;
+        for (int i = 0; i < 8; ++i) tail[tail_size - 1 - size_t(i)] = uint8_t(bits >> (8 * i));
+        compress_(h.data(), tail, tail_size / 64);
+        static const char* digits = "0123456789abcdef";
+        std::string out;
+        out.reserve(64);
+        for (uint32_t word : h)
+            for (int shift = 28; shift >= 0; shift -= 4) out.push_back(digits[(word >> shift) & 0xf]);
+        return out;
+    }
+
+private:
+    CompressFn compress_;
+};
+
+std::string hash_with(CompressFn compress, std::span<const uint8_t> bytes) {
+    std::array<uint32_t, 8> h = kInitialState;
+    std::array<uint8_t, 64> buffer{};
+    size_t buffered = 0;
+    uint64_t total = 0;
+    const Hasher hasher(compress);
+    hasher.update(bytes.data(), bytes.size(), h, buffer, buffered, total);
+    return hasher.finish(h, buffer, buffered, total);
+}
 
 }  // namespace
 
-Sha256::Sha256()
-    : h_{0x6a09e667, 0xbb67ae85, 0x3c6ef372, 0xa54ff53a, 0x510e527f, 0x9b05688c, 0x1f83d9ab, 0x5be0cd19} {}
-
-void Sha256::compress(const uint8_t* block) {
-    uint32_t w[64];
-    for (int i = 0; i < 16; ++i)
-        w[i] = uint32_t(block[4 * i]) << 24 | uint32_t(block[4 * i + 1]) << 16 | uint32_t(block[4 * i + 2]) << 8 |
-               uint32_t(block[4 * i + 3]);
-    for (int i = 16; i < 64; ++i) {
-        const uint32_t s0 = rotr(w[i - 15], 7) ^ rotr(w[i - 15], 18) ^ (w[i - 15] >> 3);
-        const uint32_t s1 = rotr(w[i - 2], 17) ^ rotr(w[i - 2], 19) ^ (w[i - 2] >> 10);
-        w[i] = w[i - 16] + s0 + w[i - 7] + s1;
-    }
-    uint32_t a = h_[0], b = h_[1], c = h_[2], d = h_[3], e = h_[4], f = h_[5], g = h_[6], h = h_[7];
-    for (int i = 0; i < 64; ++i) {
-        const uint32_t t1 = h + (rotr(e, 6) ^ rotr(e, 11) ^ rotr(e, 25)) + ((e & f) ^ (~e & g)) + kRoundConstants[i] + w[i];
-        const uint32_t t2 = (rotr(a, 2) ^ rotr(a, 13) ^ rotr(a, 22)) + ((a & b) ^ (a & c) ^ (b & c));
-        h = g; g = f; f = e; e = d + t1; d = c; c = b; b = a; a = t1 + t2;
-    }
-    h_[0] += a; h_[1] += b; h_[2] += c; h_[3] += d; h_[4] += e; h_[5] += f; h_[6] += g; h_[7] += h;
-}
+Sha256::Sha256() : h_(kInitialState) {}
 
 void Sha256::update(std::span<const uint8_t> bytes) {
-    total_bytes_ += bytes.size();
-    size_t i = 0;
-    if (buffered_ > 0) {
-        const size_t take = std::min(bytes.size(), 64 - buffered_);
-        std::memcpy(buffer_.data() + buffered_, bytes.data(), take);
-        buffered_ += take;
-        i = take;
-        if (buffered_ < 64) return;
-        compress(buffer_.data());
-        buffered_ = 0;
-    }
-    for (; i + 64 <= bytes.size(); i += 64) compress(bytes.data() + i);
-    buffered_ = bytes.size() - i;
-    if (buffered_ > 0) std::memcpy(buffer_.data(), bytes.data() + i, buffered_);
+    Hasher(best_compress()).update(bytes.data(), bytes.size(), h_, buffer_, buffered_, total_bytes_);
 }
 
 void Sha256::update(const std::string& text) {
     update(std::span<const uint8_t>(reinterpret_cast<const uint8_t*>(text.data()), text.size()));
 }
 
-std::string Sha256::hex() {
-    const uint64_t bits = total_bytes_ * 8;
-    const uint8_t one = 0x80;
-    update(std::span<const uint8_t>(&one, 1));
-    const uint8_t zero = 0;
-    while (buffered_ != 56) update(std::span<const uint8_t>(&zero, 1));
-    uint8_t length[8];
-    for (int i = 0; i < 8; ++i) length[i] = uint8_t(bits >> (56 - 8 * i));
-    update(std::span<const uint8_t>(length, 8));
-    static const char* digits = "0123456789abcdef";
-    std::string out;
-    out.reserve(64);
-    for (uint32_t word : h_)
-        for (int shift = 28; shift >= 0; shift -= 4) out.push_back(digits[(word >> shift) & 0xf]);
-    return out;
-}
+std::string Sha256::hex() { return Hasher(best_compress()).finish(h_, buffer_, buffered_, total_bytes_); }
 
-std::string sha256_hex(std::span<const uint8_t> bytes) {
-    Sha256 s;
-    s.update(bytes);
-    return s.hex();
-}
+std::string sha256_hex(std::span<const uint8_t> bytes) { return hash_with(best_compress(), bytes); }
+
+std::string sha256_hex_portable(std::span<const uint8_t> bytes) { return hash_with(&compress_portable, bytes); }
+
+bool sha256_uses_cpu_extensions() { return best_compress() != &compress_portable; }
 
 Result<std::string> sha256_file(const std::filesystem::path& path) {
-    std::ifstream f(path, std::ios::binary);
+    std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
     if (!f) return make_error(path.string() + ": cannot open for hashing");
     Sha256 s;
-    std::vector<uint8_t> chunk(1 << 20);
-    while (f) {
-        f.read(reinterpret_cast<char*>(chunk.data()), std::streamsize(chunk.size()));
-        const std::streamsize got = f.gcount();
-        if (got > 0) s.update(std::span<const uint8_t>(chunk.data(), size_t(got)));
+    std::vector<uint8_t> chunk(size_t(1) << 20);
+    for (;;) {
+        const size_t got = std::fread(chunk.data(), 1, chunk.size(), f.get());
+        if (got > 0) s.update(std::span<const uint8_t>(chunk.data(), got));
+        if (got < chunk.size()) break;
     }
-    if (f.bad()) return make_error(path.string() + ": read failed while hashing");
+    if (std::ferror(f.get())) return make_error(path.string() + ": read failed while hashing");
     return s.hex();
+}
+
+Result<std::vector<std::string>> sha256_files(std::span<const std::filesystem::path> paths) {
+    std::vector<Result<std::string>> results(paths.size(), Result<std::string>(std::string()));
+    tbb::parallel_for(size_t(0), paths.size(), [&](size_t i) { results[i] = sha256_file(paths[i]); });
+    std::vector<std::string> out;
+    out.reserve(paths.size());
+    for (auto& r : results) {
+        if (!r) return r.error();
+        out.push_back(std::move(*r));
+    }
+    return out;
 }
 
 }  // namespace specbake::io

@@ -3,8 +3,12 @@
 // extensionsUsed only, images kept as they were). The glTF files are written here by hand, byte by byte,
 // so the expected values are independent of the code under test.
 #include "io/gltf_scene.h"
+#include "io/sha256.h"
 
+#include <assimp/Importer.hpp>
+#include <assimp/scene.h>
 #include <gtest/gtest.h>
+#include <tiny_gltf.h>
 #include <nlohmann/json.hpp>
 
 #include <cstring>
@@ -273,5 +277,175 @@ TEST(GltfScene, MissingBufferFileIsOneLineError) {
     ASSERT_FALSE(scene);
     EXPECT_NE(scene.error().message.find("quad.gltf"), std::string::npos) << scene.error().message;
     EXPECT_EQ(scene.error().message.find('\n'), std::string::npos);
+    fs::remove_all(dir);
+}
+
+namespace {
+
+std::vector<uint8_t> file_bytes(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::vector<uint8_t>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+uint32_t u32_at(const std::vector<uint8_t>& b, size_t offset) {
+    uint32_t v;
+    std::memcpy(&v, b.data() + offset, 4);
+    return v;
+}
+
+bool keep_encoded(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
+    return true;
+}
+
+}  // namespace
+
+// A .gltf with an external buffer and external images written as .glb: one file, every byte inside it.
+// The GLB is taken apart here by its chunk layout (glTF 2.0 Sec. 4.4), independently of the writer.
+TEST(GltfScene, GlbOutputEmbedsExternalBuffersAndImages) {
+    const fs::path dir = temp_dir("embed");
+    HandMade h = make_quad_file();
+    const std::vector<uint8_t> png = {0x89, 'P', 'N', 'G', 1, 2, 3, 4, 5};  // never decoded by the writer
+    const std::vector<uint8_t> jpg = {0xFF, 0xD8, 0xFF, 9, 8, 7};
+    fs::create_directories(dir / "maps");
+    std::ofstream(dir / "maps" / "a b.png", std::ios::binary).write(reinterpret_cast<const char*>(png.data()), 9);
+    std::ofstream(dir / "c.jpg", std::ios::binary).write(reinterpret_cast<const char*>(jpg.data()), 6);
+    h.doc["images"] = {{{"uri", "maps/a%20b.png"}}, {{"uri", "c.jpg"}, {"name", "jpeg"}}, {{"uri", "maps/a%20b.png"}}};
+    h.doc["textures"] = {{{"source", 0}}, {{"source", 1}}, {{"source", 2}}};
+    h.doc["materials"][0]["normalTexture"] = {{"index", 0}};
+    auto scene = GltfScene::load(write_hand_made(dir, h));
+    ASSERT_TRUE(scene) << scene.error().message;
+    std::vector<float> curvature(16);
+    for (size_t i = 0; i < curvature.size(); ++i) curvature[i] = 0.25f * float(i) - 1.0f;
+    ASSERT_TRUE(scene->set_vertex_attribute({0, 0}, kCurvatureAttribute, curvature, 4));
+    const fs::path out_dir = dir / "out";
+    auto written = scene->write(out_dir / "quad.glb");
+    ASSERT_TRUE(written) << written.error().message;
+
+    // Exactly one file, and the hash reported is the hash of its bytes (portable path, for independence).
+    ASSERT_EQ(written->size(), 1u);
+    size_t files = 0;
+    for (const auto& e : fs::recursive_directory_iterator(out_dir)) files += e.is_regular_file();
+    EXPECT_EQ(files, 1u);
+    const std::vector<uint8_t> glb = file_bytes(out_dir / "quad.glb");
+    EXPECT_EQ((*written)[0].sha256, sha256_hex_portable(glb));
+
+    ASSERT_GE(glb.size(), 28u);
+    EXPECT_EQ(u32_at(glb, 0), 0x46546C67u);
+    EXPECT_EQ(u32_at(glb, 8), glb.size());
+    const uint32_t json_length = u32_at(glb, 12);
+    ASSERT_EQ(u32_at(glb, 16), 0x4E4F534Au);
+    const json doc = json::parse(glb.begin() + 20, glb.begin() + 20 + json_length);
+    const size_t bin_header = 20 + json_length;
+    ASSERT_LE(bin_header + 8, glb.size());
+    const uint32_t bin_length = u32_at(glb, bin_header);
+    EXPECT_EQ(u32_at(glb, bin_header + 4), 0x004E4942u);
+    EXPECT_EQ(bin_length % 4, 0u);
+    EXPECT_EQ(bin_header + 8 + bin_length, glb.size());
+    const uint8_t* bin = glb.data() + bin_header + 8;
+
+    ASSERT_EQ(doc["buffers"].size(), 1u);
+    EXPECT_FALSE(doc["buffers"][0].contains("uri"));
+    EXPECT_LE(doc["buffers"][0]["byteLength"].get<size_t>(), bin_length);
+    auto view_bytes = [&](int view) {
+        const json& bv = doc["bufferViews"][size_t(view)];
+        EXPECT_EQ(bv["buffer"], 0);
+        const size_t offset = bv.value("byteOffset", size_t(0));
+        return std::vector<uint8_t>(bin + offset, bin + offset + bv["byteLength"].get<size_t>());
+    };
+    // Images: no URI, a buffer view holding the file's bytes, the MIME type; one file stored once.
+    ASSERT_EQ(doc["images"].size(), 3u);
+    for (const json& img : doc["images"]) EXPECT_FALSE(img.contains("uri"));
+    EXPECT_EQ(doc["images"][0]["mimeType"], "image/png");
+    EXPECT_EQ(doc["images"][1]["mimeType"], "image/jpeg");
+    EXPECT_EQ(doc["images"][1]["name"], "jpeg");
+    EXPECT_EQ(view_bytes(doc["images"][0]["bufferView"]), png);
+    EXPECT_EQ(view_bytes(doc["images"][1]["bufferView"]), jpg);
+    EXPECT_EQ(doc["images"][2]["bufferView"], doc["images"][0]["bufferView"]);
+    // The input buffer's bytes, unchanged, behind every original buffer view.
+    for (size_t v = 0; v < h.doc["bufferViews"].size(); ++v) {
+        const json& in = h.doc["bufferViews"][v];
+        const size_t offset = in["byteOffset"];
+        EXPECT_EQ(view_bytes(int(v)), std::vector<uint8_t>(h.bin.begin() + long(offset),
+                                                           h.bin.begin() + long(offset + in["byteLength"].get<size_t>())))
+            << "bufferView " << v;
+        EXPECT_EQ(doc["bufferViews"][v].value("byteStride", 0), in.value("byteStride", 0));
+    }
+    const int acc = doc["meshes"][0]["primitives"][0]["attributes"][kCurvatureAttribute];
+    const std::vector<uint8_t> k = view_bytes(doc["accessors"][size_t(acc)]["bufferView"]);
+    ASSERT_EQ(k.size(), 64u);
+    EXPECT_EQ(std::memcmp(k.data(), curvature.data(), 64), 0);
+
+    // tinygltf and Assimp both load it.
+    tinygltf::Model model;
+    tinygltf::TinyGLTF loader;
+    loader.SetImageLoader(&keep_encoded, nullptr);
+    std::string err, warn;
+    ASSERT_TRUE(loader.LoadBinaryFromFile(&model, &err, &warn, (out_dir / "quad.glb").string())) << err;
+    EXPECT_EQ(model.images.size(), 3u);
+    EXPECT_EQ(model.meshes[0].primitives[0].attributes.count(kCurvatureAttribute), 1u);
+    Assimp::Importer importer;
+    const aiScene* ai = importer.ReadFile((out_dir / "quad.glb").string(), 0);
+    ASSERT_NE(ai, nullptr) << importer.GetErrorString();
+    EXPECT_GE(ai->mNumMeshes, 1u);
+    auto again = GltfScene::load(out_dir / "quad.glb");
+    ASSERT_TRUE(again) << again.error().message;
+    EXPECT_EQ(again->primitive_mesh({0, 0})->positions, scene->primitive_mesh({0, 0})->positions);
+    EXPECT_EQ(again->image_bytes(1).value(), jpg);
+    fs::remove_all(dir);
+}
+
+// Hashes reported by write() for a .gltf output are those of the files written; the input hashes the
+// loader computed are those of the input files.
+TEST(GltfScene, WriteAndLoadReportContentHashes) {
+    const fs::path dir = temp_dir("hashes");
+    const fs::path input = write_hand_made(dir, make_quad_file());
+    auto scene = GltfScene::load(input);
+    ASSERT_TRUE(scene) << scene.error().message;
+    EXPECT_EQ(scene->content_hash(input), sha256_hex_portable(file_bytes(input)));
+    EXPECT_EQ(scene->content_hash(dir / "quad.bin"), sha256_hex_portable(file_bytes(dir / "quad.bin")));
+    ASSERT_TRUE(scene->set_vertex_attribute({0, 0}, kCurvatureAttribute, std::vector<float>(16, 2.0f), 4));
+    auto written = scene->write(dir / "out" / "quad.gltf");
+    ASSERT_TRUE(written) << written.error().message;
+    ASSERT_EQ(written->size(), 3u) << "scene, its buffer, the appended buffer";
+    for (const GltfScene::WrittenFile& f : *written) EXPECT_EQ(f.sha256, sha256_hex_portable(file_bytes(f.path))) << f.path;
+    fs::remove_all(dir);
+}
+
+// KHR_materials_clearcoat is read with the extension's defaults (factors 0, scale 1, texCoord 0).
+TEST(GltfScene, ReadsClearcoatLayer) {
+    const fs::path dir = temp_dir("clearcoat");
+    HandMade h = make_quad_file();
+    h.doc["images"] = {{{"uri", "n.png"}}, {{"uri", "r.png"}}};
+    h.doc["textures"] = {{{"source", 0}}, {{"source", 1}}};
+    h.doc["materials"].push_back({{"name", "coated"},
+                                  {"extensions",
+                                   {{"KHR_materials_clearcoat",
+                                     {{"clearcoatFactor", 0.5},
+                                      {"clearcoatRoughnessFactor", 0.2},
+                                      {"clearcoatRoughnessTexture", {{"index", 1}, {"texCoord", 1}}},
+                                      {"clearcoatNormalTexture", {{"index", 0}, {"scale", 0.75}}}}}}}});
+    h.doc["materials"].push_back({{"name", "empty coat"}, {"extensions", {{"KHR_materials_clearcoat", json::object()}}}});
+    auto scene = GltfScene::load(write_hand_made(dir, h));
+    ASSERT_TRUE(scene) << scene.error().message;
+    const auto materials = scene->materials();
+    ASSERT_EQ(materials.size(), 3u);
+    EXPECT_FALSE(materials[0].clearcoat.present);
+    const ClearcoatInfo& c = materials[1].clearcoat;
+    EXPECT_TRUE(c.present);
+    EXPECT_TRUE(c.active());
+    EXPECT_DOUBLE_EQ(c.factor, 0.5);
+    EXPECT_DOUBLE_EQ(c.roughness_factor, 0.2);
+    EXPECT_EQ(c.normal.texture, 0);
+    EXPECT_EQ(c.normal.image, 0);
+    EXPECT_EQ(c.normal.texcoord, 0);
+    EXPECT_DOUBLE_EQ(c.normal_scale, 0.75);
+    EXPECT_EQ(c.roughness.image, 1);
+    EXPECT_EQ(c.roughness.texcoord, 1);
+    EXPECT_EQ(c.factor_texture.texture, -1);
+    const ClearcoatInfo& empty = materials[2].clearcoat;
+    EXPECT_TRUE(empty.present);
+    EXPECT_FALSE(empty.active()) << "clearcoatFactor defaults to 0";
+    EXPECT_DOUBLE_EQ(empty.roughness_factor, 0.0);
+    EXPECT_EQ(empty.normal.texture, -1);
     fs::remove_all(dir);
 }

@@ -33,6 +33,47 @@ TEST(Sha256, ChunkingDoesNotMatter) {
     EXPECT_EQ(pieces.hex(), expected);
 }
 
+// The CPU-extension path (when this machine has one) and the portable path agree on every length around
+// the block and padding boundaries, and with the FIPS 180-4 vectors.
+TEST(Sha256, PortableAndCpuPathsAgree) {
+    EXPECT_EQ(sha256_hex_portable({}), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+    const std::string two_blocks = "abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq";
+    EXPECT_EQ(sha256_hex_portable(std::span<const uint8_t>(reinterpret_cast<const uint8_t*>(two_blocks.data()),
+                                                           two_blocks.size())),
+              "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
+    std::vector<uint8_t> data(4099);
+    uint32_t x = 12345;
+    for (uint8_t& b : data) b = uint8_t((x = x * 1664525u + 1013904223u) >> 24);
+    for (size_t n : {0, 1, 55, 56, 63, 64, 65, 119, 120, 127, 128, 129, 1000, 4099}) {
+        const std::span<const uint8_t> part(data.data(), n);
+        EXPECT_EQ(sha256_hex(part), sha256_hex_portable(part)) << n << " bytes";
+    }
+    if (!sha256_uses_cpu_extensions()) GTEST_SKIP() << "this CPU has no SHA extensions; only the portable path ran";
+}
+
+TEST(Sha256, FilesHashedTogetherMatchOneByOne) {
+    const fs::path dir = fs::temp_directory_path() / "specbake_sha_files_test";
+    fs::remove_all(dir);
+    std::vector<fs::path> files;
+    for (int i = 0; i < 5; ++i) {
+        files.push_back(dir / ("f" + std::to_string(i) + ".bin"));
+        ASSERT_TRUE(write_file_atomic(files.back(), std::string(size_t(i) * 70001 + 3, char('a' + i))).ok());
+    }
+    auto all = sha256_files(files);
+    ASSERT_TRUE(all.ok());
+    ASSERT_EQ(all->size(), files.size());
+    for (size_t i = 0; i < files.size(); ++i) {
+        const std::string content(i * 70001 + 3, char('a' + i));
+        EXPECT_EQ((*all)[i], sha256_hex_portable(std::span<const uint8_t>(
+                                 reinterpret_cast<const uint8_t*>(content.data()), content.size())));
+    }
+    files.push_back(dir / "missing.bin");
+    auto missing = sha256_files(files);
+    ASSERT_FALSE(missing.ok());
+    EXPECT_NE(missing.error().message.find("missing.bin"), std::string::npos);
+    fs::remove_all(dir);
+}
+
 TEST(AtomicFile, WritesAndLeavesNoTemporary) {
     const fs::path dir = fs::temp_directory_path() / "specbake_atomic_test";
     fs::remove_all(dir);
