@@ -118,14 +118,43 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
             }
         }
     };
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, corners, 8192), [&](const auto& r) {
-        for (uint32_t k = r.begin(); k != r.end(); ++k) {
-            uint32_t total, opposite, partner, lowest;
-            scan_edge(k, total, opposite, partner, lowest);
-            const bool paired = total == 2 && opposite == 1;
-            simple[k] = total == 1 || paired;
-            mate[k] = paired ? partner : kNone;
-            edge_kind[k] = lowest != k ? 0 : total == 1 ? 1 : total >= 3 ? 2 : 0;
+    // The same count for every halfedge at once, per position (its outgoing halfedges), from one sorted list
+    // of the position's halfedges keyed by their other end: local work instead of a scan per halfedge.
+    struct End {
+        uint32_t other, halfedge;
+        bool outgoing;
+    };
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, position_count, 2048), [&](const auto& r) {
+        std::vector<End> ends;
+        for (uint32_t a = r.begin(); a != r.end(); ++a) {
+            ends.clear();
+            for (uint32_t i = start[a]; i < start[a + 1]; ++i) {
+                const uint32_t j = by_position[i];
+                ends.push_back({pos[next_corner(j)], j, true});
+                ends.push_back({pos[prev_corner(j)], prev_corner(j), false});
+            }
+            std::sort(ends.begin(), ends.end(), [](const End& x, const End& y) {
+                return x.other != y.other ? x.other < y.other : x.halfedge < y.halfedge;
+            });
+            for (size_t b = 0; b < ends.size();) {
+                size_t e = b;
+                uint32_t opposite = 0, partner = kNone;
+                for (; e < ends.size() && ends[e].other == ends[b].other; ++e) {
+                    if (ends[e].outgoing) continue;
+                    ++opposite;
+                    partner = ends[e].halfedge;
+                }
+                const uint32_t total = uint32_t(e - b), lowest = ends[b].halfedge;
+                const bool paired = total == 2 && opposite == 1;
+                for (size_t i = b; i < e; ++i) {
+                    if (!ends[i].outgoing) continue;
+                    const uint32_t k = ends[i].halfedge;
+                    simple[k] = total == 1 || paired;
+                    mate[k] = paired ? partner : kNone;
+                    edge_kind[k] = lowest != k ? 0 : total == 1 ? 1 : total >= 3 ? 2 : 0;
+                }
+                b = e;
+            }
         }
     });
     for (uint32_t k = 0; k < corners; ++k) {
