@@ -492,14 +492,14 @@ Result<SimScene> load_sim_scene(const fs::path& path) {
         cam.target = {cam.position[0] + forward[0] * depth, cam.position[1] + forward[1] * depth,
                       cam.position[2] + forward[2] * depth};
     } else {
-        // Automatic orbit: the bounding sphere fills the view, seen from the front (+Z, glTF's front),
-        // slightly from above.
+        // Automatic orbit: the bounding sphere fills about 5/6 of the view height (its silhouette stays
+        // clear of the border and the pixel filter), seen from the front (+Z, glTF's front), slightly from above.
         SimCamera& cam = scene.camera;
         cam.fov_y_degrees = 40.0f;
         cam.target = centre;
         cam.up = {0, 1, 0};
         const Float3 dir = unit({0.0f, 0.35f, 1.0f});
-        const float distance = 1.05f * scene.object_radius / std::sin(0.5f * cam.fov_y_degrees * std::numbers::pi_v<float> / 180.0f);
+        const float distance = 1.2f * scene.object_radius / std::sin(0.5f * cam.fov_y_degrees * std::numbers::pi_v<float> / 180.0f);
         cam.position = {centre[0] + dir[0] * distance, centre[1] + dir[1] * distance, centre[2] + dir[2] * distance};
     }
     if (scene.lights.empty()) {
