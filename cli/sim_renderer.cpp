@@ -334,11 +334,29 @@ struct SimRenderer::Impl {
                     textures[3] = it->second.lean0;
                     textures[4] = it->second.lean1;
                 }
+            } else if (!spec->baked_source.empty()) {
+                // Nothing baked for this material (no normal map, SPEC Sec. 6): the engine binds its own
+                // roughness (map or constant) in the roughness slot and no kernel or LEAN variance.
+                textures[1] = mat.roughness_map >= 0 ? roughness_maps[size_t(mat.roughness_map)]
+                                                     : constant_texture(mat.roughness);
+                textures[2] = textures[3] = textures[4] = constant_texture(0.0f);
             }
         }
         glBindTextures(0, 6, textures);
         glVertexArrayVertexBuffer(mesh.vao, 1, curvature, 0, 4 * sizeof(float));
         glBindVertexArray(mesh.vao);
+    }
+
+    // A 1 x 1 texture holding `value` in every channel (cached).
+    std::map<float, GLuint> constants;
+    GLuint constant_texture(float value) {
+        if (auto it = constants.find(value); it != constants.end()) return it->second;
+        GLuint tex = 0;
+        glCreateTextures(GL_TEXTURE_2D, 1, &tex);
+        glTextureStorage2D(tex, 1, GL_RGBA32F, 1, 1);
+        const float texel[4] = {value, value, value, value};
+        glTextureSubImage2D(tex, 0, 0, 0, 1, 1, GL_RGBA, GL_FLOAT, texel);
+        return constants[value] = tex;
     }
 
     void draw_all(GLuint program, const SimShaderSpec* spec) {
@@ -487,6 +505,7 @@ SimRenderer::~SimRenderer() {
     }
     glDeleteTextures(GLsizei(im.normal_maps.size()), im.normal_maps.data());
     glDeleteTextures(GLsizei(im.roughness_maps.size()), im.roughness_maps.data());
+    for (auto& [value, tex] : im.constants) glDeleteTextures(1, &tex);
     glDeleteFramebuffers(1, &im.fbo);
     glDeleteTextures(1, &im.color);
     glDeleteTextures(1, &im.depth);

@@ -406,6 +406,47 @@ TEST(VerifySceneFile, EveryCandidateRunsOnASceneFileWithEstimatedCurvature) {
     EXPECT_TRUE(baked_curvature);
 }
 
+TEST(VerifySceneFile, MaterialsWithoutANormalMapKeepTheirRoughnessInBakedCandidates) {
+    ASSERT_TRUE(environment().error.empty()) << environment().error;
+    // Two spheres side by side, only the right one normal-mapped: nothing is baked for the left one, so the
+    // baked-texture candidate must shade it exactly like no filtering (its own roughness, no kernel).
+    auto bumpy = make_builtin_scene("bumpy-sphere", 0.3f, 0.5f);
+    ASSERT_TRUE(bumpy.ok());
+    SimScene scene = *bumpy;
+    scene.objects.push_back(scene.objects[0]);
+    for (size_t o = 0; o < 2; ++o) {
+        TriMesh& m = scene.objects[o].mesh;
+        for (size_t v = 0; v < m.vertex_count(); ++v) m.positions[3 * v] += o == 0 ? -1.2f : 1.2f;
+    }
+    scene.objects[0].material.normal_map = -1;
+    scene.camera = {{0.0f, 0.0f, 6.0f}, {0, 0, 0}, {0, 1, 0}, 40.0f};
+    VerifyOptions options;
+    options.include_glsl = environment().include;
+    options.width = 64;
+    options.height = 32;
+    options.spp = 4;
+    options.frames = 1;
+    options.timing_repeats = 0;
+    options.spirv = false;
+    options.variants = false;
+    options.only = {"baked-texture"};
+    auto report = run_verify(scene, options);
+    ASSERT_TRUE(report.ok()) << report.error().message;
+    ASSERT_EQ(report->candidates.size(), 2u);
+    const SimImage& none = report->candidates[0].image;
+    const SimImage& baked = report->candidates[1].image;
+    double left = 0, right = 0, difference_left = 0, difference_right = 0;
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 64; ++x) {
+            const double d = std::abs(double(baked.texel(x, y)[0]) - none.texel(x, y)[0]);
+            (x < 32 ? left : right) += none.texel(x, y)[0];
+            (x < 32 ? difference_left : difference_right) += d;
+        }
+    ASSERT_GT(left, 0.0);
+    EXPECT_LT(difference_left, 1e-4 * left);
+    EXPECT_GT(difference_right, 1e-3 * right);  // the normal-mapped sphere does change
+}
+
 TEST(VerifySceneFile, BadFilesGiveAnErrorNamingTheFile) {
     TempDir dir;
     auto missing = load_sim_scene(dir.path() / "nope.gltf");
