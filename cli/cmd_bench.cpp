@@ -1,4 +1,5 @@
-// specbake bench: the accuracy/cost table of every candidate on the built-in scenes (SPEC Sec. 8).
+// specbake bench: the accuracy/cost table of every candidate on the built-in scenes and given scene files
+// (SPEC Sec. 8).
 #include "cli/command.h"
 #include "cli/gl_context.h"
 #include "cli/job_bench.h"
@@ -17,6 +18,8 @@ extern const std::size_t kSpecaaGlslSize;
 namespace {
 
 struct BenchCommandOptions {
+    std::vector<std::string> files;
+    bool no_builtin = false;
     std::vector<std::string> scenes;
     std::vector<float> alpha{0.01f, 0.05f, 0.2f};
     std::string size = "128x128";
@@ -49,6 +52,8 @@ int run_bench_command(const BenchCommandOptions& o) {
     v.variants = !o.no_variants;
     v.keep_images = !o.output.empty();
     options.scenes = o.scenes;
+    options.no_builtin = o.no_builtin;
+    for (const std::string& f : o.files) options.scene_files.emplace_back(f);
     options.alpha = o.alpha;
     options.command_line = o.command_line;
     auto context = GlContext::create();
@@ -75,9 +80,14 @@ int run_bench_command(const BenchCommandOptions& o) {
 
 void add_bench_command(CLI::App& app, std::function<int()>& run) {
     auto* sub = app.add_subcommand("bench",
-                                   "Accuracy against cost of every anti-aliasing candidate on the built-in scenes: "
-                                   "Markdown table, CSV, SVG plot, PNG image strips");
+                                   "Accuracy against cost of every anti-aliasing candidate on the built-in scenes "
+                                   "and any given scene files: Markdown table, CSV, SVG plot, PNG image strips");
     auto o = std::make_shared<BenchCommandOptions>();
+    sub->add_option("files", o->files,
+                    "Scene files (glTF/GLB or any mesh Assimp reads), each simulated with its own materials, "
+                    "lights and camera")
+        ->check(CLI::ExistingFile);
+    sub->add_flag("--no-builtin", o->no_builtin, "Only the given scene files, no built-in scenes");
     sub->add_option("--scenes", o->scenes, "Built-in scenes (default: sphere,cylinder,torus,bumpy-sphere)")
         ->delimiter(',');
     sub->add_option("--alpha", o->alpha, "GGX alpha (= r^2) values of the materials")
@@ -94,12 +104,13 @@ void add_bench_command(CLI::App& app, std::function<int()>& run) {
     sub->add_option("-o,--output", o->output, "Folder for bench.md, bench.csv, bench.svg and strips/");
     sub->footer("Examples:\n"
                 "  specbake bench -o bench-out\n"
+                "  specbake bench --no-builtin helmet.glb -o helmet-bench\n"
                 "  specbake bench --scenes torus,cylinder --alpha 0.01 --size 256x256 --spp 1024 --frames 16 -o big\n");
     sub->callback([&run, o, sub] {
         o->command_line = "specbake bench";
         for (CLI::Option* opt : sub->get_options()) {
             if (opt->count() == 0 || opt->get_name() == "--help") continue;
-            o->command_line += " " + opt->get_name();
+            if (opt->get_name() != "files") o->command_line += " " + opt->get_name();
             if (opt->get_type_size() != 0) {
                 std::string joined;
                 for (const std::string& r : opt->results()) joined += (joined.empty() ? "" : ",") + r;

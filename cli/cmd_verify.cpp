@@ -2,6 +2,7 @@
 #include "cli/command.h"
 #include "cli/gl_context.h"
 #include "cli/job_verify.h"
+#include "cli/sim_scene_file.h"
 #include "cli/sim_strips.h"
 
 #include <cmath>
@@ -19,6 +20,7 @@ extern const std::size_t kSpecaaGlslSize;
 namespace {
 
 struct VerifyCommandOptions {
+    std::string scene_file;
     std::string builtin;
     float alpha = 0.05f;
     std::string size = "128x128";
@@ -43,11 +45,19 @@ int run_verify_command(const VerifyCommandOptions& o) {
     options.timing_repeats = o.repeats;
     options.variants = !o.no_variants;
     options.only = o.only;
-    auto scene = make_builtin_scene(o.builtin, std::sqrt(o.alpha));
-    if (!scene) {
-        print_error(scene.error().message);
+    if (o.scene_file.empty() == o.builtin.empty()) {
+        print_error("give either a scene file or --builtin NAME (see specbake verify --help)");
         return kExitUsage;
     }
+    auto scene = o.builtin.empty() ? load_sim_scene(o.scene_file) : make_builtin_scene(o.builtin, std::sqrt(o.alpha));
+    if (!scene) {
+        print_error(scene.error().message);
+        return o.builtin.empty() ? kExitFailed : kExitUsage;
+    }
+    if (!o.scene_file.empty())
+        std::fprintf(stderr, "specbake: %s: %zu objects, %zu normal maps, %zu roughness maps, %zu lights\n",
+                     o.scene_file.c_str(), scene->objects.size(), scene->normal_maps.size(),
+                     scene->roughness_maps.size(), scene->lights.size());
     auto context = GlContext::create();
     if (!context) {
         print_error(context.error().message);
@@ -58,10 +68,14 @@ int run_verify_command(const VerifyCommandOptions& o) {
         print_error(report.error().message);
         return kExitFailed;
     }
-    std::printf("Scene %s, roughness %.3g (alpha %.3g), %dx%d, ground truth %d spp (%.1f s), %d frames; %s\n\n",
-                report->scene.c_str(), double(report->roughness), double(report->roughness * report->roughness),
-                report->width, report->height, report->spp, report->ground_truth_ms / 1000.0, report->frames,
-                (*context)->description().c_str());
+    char material[96];
+    if (report->from_file) std::snprintf(material, sizeof material, "its own materials");
+    else
+        std::snprintf(material, sizeof material, "roughness %.3g (alpha %.3g)", double(report->roughness),
+                      double(report->roughness * report->roughness));
+    std::printf("Scene %s, %s, %dx%d, ground truth %d spp (%.1f s), %d frames; %s\n\n", report->scene.c_str(),
+                material, report->width, report->height, report->spp, report->ground_truth_ms / 1000.0,
+                report->frames, (*context)->description().c_str());
     std::fputs(markdown_table(*report).c_str(), stdout);
     for (const std::string& note : report->notes) print_warning(note);
     if (!o.strip.empty()) {
@@ -80,9 +94,13 @@ void add_verify_command(CLI::App& app, std::function<int()>& run) {
                                    "Render a scene's ground truth and every anti-aliasing candidate on headless "
                                    "OpenGL and print accuracy and cost");
     auto o = std::make_shared<VerifyCommandOptions>();
+    auto* file = sub->add_option("scene", o->scene_file,
+                                 "Scene file: glTF/GLB (its KHR_lights_punctual lights, first perspective camera, "
+                                 "roughness and normal textures) or any mesh Assimp reads")
+                     ->check(CLI::ExistingFile);
     sub->add_option("--builtin", o->builtin, "Built-in analytic scene: sphere, cylinder, torus, bumpy-sphere")
-        ->required();
-    sub->add_option("--alpha", o->alpha, "GGX alpha of the scene's material (the papers' roughness; glTF r = sqrt(alpha))")
+        ->excludes(file);
+    sub->add_option("--alpha", o->alpha, "GGX alpha of a built-in scene's material (the papers' roughness; glTF r = sqrt(alpha))")
         ->capture_default_str()
         ->check(CLI::Range(0.0001f, 1.0f));
     sub->add_option("--size", o->size, "Image size WxH")->capture_default_str();
@@ -100,6 +118,7 @@ void add_verify_command(CLI::App& app, std::function<int()>& run) {
         ->delimiter(',');
     sub->add_option("--strip", o->strip, "Also write the image strip (frame 0) to this PNG file");
     sub->footer("Examples:\n"
+                "  specbake verify scene.glb --strip scene.png\n"
                 "  specbake verify --builtin torus --alpha 0.01 --strip torus.png\n"
                 "  specbake verify --builtin cylinder --alpha 0.01 --spp 1024 --frames 16 --size 256x256\n"
                 "  specbake verify --builtin bumpy-sphere --only baked-texture,default");

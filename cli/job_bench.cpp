@@ -1,5 +1,6 @@
 #include "cli/job_bench.h"
 
+#include "cli/sim_scene_file.h"
 #include "cli/sim_strips.h"
 #include "io/atomic_file.h"
 
@@ -19,6 +20,7 @@ std::string fmt(const char* f, double v) {
 }
 
 std::string scene_label(const SceneReport& s) {
+    if (s.from_file) return s.scene;
     return s.scene + " a=" + fmt("%.3g", double(s.roughness) * double(s.roughness));
 }
 
@@ -55,7 +57,11 @@ std::vector<Aggregate> aggregate(const BenchReport& r) {
         if (!none) continue;
         for (const CandidateReport& c : s.candidates) {
             auto [it, fresh] = index.try_emplace(c.name, out.size());
-            if (fresh) out.push_back({c.name, c.family});
+            if (fresh) {
+                out.emplace_back();
+                out.back().name = c.name;
+                out.back().family = c.family;
+            }
             Aggregate& a = out[it->second];
             a.log_error += std::log(std::max(c.metrics.rmse_tonemapped, kFloor) /
                                     std::max(none->metrics.rmse_tonemapped, kFloor));
@@ -88,7 +94,7 @@ Result<BenchReport> run_bench(const BenchOptions& options, const std::function<v
     report.renderer = options.renderer;
     report.command_line = options.command_line;
     std::vector<std::string> scenes = options.scenes;
-    if (scenes.empty())
+    if (scenes.empty() && !options.no_builtin)
         for (auto n : builtin_scene_names()) scenes.emplace_back(n);
     for (const std::string& name : scenes) {
         for (float alpha : options.alpha) {
@@ -102,6 +108,16 @@ Result<BenchReport> run_bench(const BenchOptions& options, const std::function<v
                 progress(scene_label(report.scenes.back()) + ": ground truth " +
                          fmt("%.1f s", report.scenes.back().ground_truth_ms / 1000.0));
         }
+    }
+    for (const std::filesystem::path& file : options.scene_files) {
+        auto scene = load_sim_scene(file);
+        if (!scene) return scene.error();
+        auto result = run_verify(*scene, options.verify);
+        if (!result) return make_error(file.string() + ": " + result.error().message);
+        report.scenes.push_back(std::move(*result));
+        if (progress)
+            progress(scene_label(report.scenes.back()) + ": ground truth " +
+                     fmt("%.1f s", report.scenes.back().ground_truth_ms / 1000.0));
     }
     return report;
 }
@@ -149,7 +165,9 @@ std::string bench_full_markdown(const BenchReport& r) {
            "radiance unless marked tm)\n\n";
     out += bench_summary_markdown(r);
     for (const SceneReport& s : r.scenes) {
-        out += "\n## " + scene_label(s) + " (r = " + fmt("%.3g", s.roughness) + ")\n\n";
+        out += "\n## " + scene_label(s) +
+               (s.from_file ? std::string(" (scene file, its own materials)") : " (r = " + fmt("%.3g", s.roughness) + ")") +
+               "\n\n";
         out += markdown_table(s);
         for (const std::string& note : s.notes) out += "\n- " + note;
         if (!s.notes.empty()) out += "\n";
@@ -171,7 +189,8 @@ std::string bench_csv(const BenchReport& r) {
     for (const SceneReport& s : r.scenes) {
         for (const CandidateReport& c : s.candidates) {
             const SimMetrics& m = c.metrics;
-            out += s.scene + "," + fmt("%.6g", double(s.roughness) * s.roughness) + "," + fmt("%.6g", s.roughness) +
+            // A scene file's materials have their own roughness: alpha and roughness stay empty.
+            out += s.scene + "," + (s.from_file ? "," : fmt("%.6g", double(s.roughness) * s.roughness) + "," + fmt("%.6g", s.roughness)) +
                    "," + std::to_string(s.width) + "," + std::to_string(s.height) + "," + std::to_string(s.spp) +
                    "," + std::to_string(s.frames) + "," + csv_escape(c.name) + "," + c.family + "," +
                    csv_escape(c.source) + "," + fmt("%.6g", m.rmse) + "," + fmt("%.6g", m.mae) + "," +
@@ -263,7 +282,8 @@ Result<void> write_bench_outputs(const BenchReport& r, const std::filesystem::pa
         std::vector<StripTile> tiles;
         for (const CandidateReport& c : s.candidates)
             if (!c.image.empty()) tiles.push_back({c.name, &c.image});
-        const auto path = dir / "strips" / (s.scene + "-a" + fmt("%.3g", double(s.roughness) * s.roughness) + ".png");
+        const auto path = dir / "strips" / (s.from_file ? s.scene + ".png"
+                                                        : s.scene + "-a" + fmt("%.3g", double(s.roughness) * s.roughness) + ".png");
         if (auto w = write_strip_png(make_strip(s.ground_truth, tiles), path); !w) return w;
     }
     return {};

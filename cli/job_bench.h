@@ -1,4 +1,5 @@
-// specbake bench: runs `verify` on the built-in scenes (each at several roughness values), then prints a
+// specbake bench: runs `verify` on the built-in scenes (each at several roughness values) and on any given
+// scene files (with their own materials), then prints a
 // Markdown summary and writes, into one output folder, the full per-scene tables (bench.md), every number
 // as CSV (bench.csv), error against cost as an SVG plot (bench.svg) and one PNG image strip per scene
 // (strips/<scene>-r<roughness>.png). All files are written atomically (SPEC Sec. 7-8).
@@ -16,7 +17,9 @@ namespace specbake::cli {
 
 struct BenchOptions {
     VerifyOptions verify;
-    std::vector<std::string> scenes;   // built-in scene names; empty: all
+    std::vector<std::string> scenes;   // built-in scene names; empty: all (none with `no_builtin`)
+    bool no_builtin = false;           // only the scene files
+    std::vector<std::filesystem::path> scene_files;  // glTF/GLB or other mesh files, each run once
     // GGX alpha (= r^2) of the materials, the papers' "roughness"; r = sqrt(alpha) is what glTF stores.
     std::vector<float> alpha{0.01f, 0.05f, 0.2f};
     std::filesystem::path output_dir;  // empty: print only

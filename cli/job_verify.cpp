@@ -42,6 +42,8 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
     SceneReport report;
     report.scene = scene.name;
     report.roughness = scene.objects.empty() ? 0.0f : scene.objects[0].material.roughness;
+    report.from_file = scene.from_file;
+    report.notes = scene.notes;
     report.width = options.width;
     report.height = options.height;
     report.spp = ground_truth_layout(options.spp, options.width, options.height).samples();
@@ -58,19 +60,19 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
         });
     }
 
-    // Bakes (timed): texture bakes per normal map, curvature estimates per object.
+    // Bakes (timed): texture bakes per texture set, curvature estimates per object.
     std::map<std::string, double> bake_ms;
+    const std::vector<SimTextureSet> sets = texture_sets(scene);
     for (const SimTextureBake& bake : texture_bakes_for(candidates)) {
         double total = 0;
-        for (size_t map = 0; map < scene.normal_maps.size(); ++map) {
-            float roughness = 0.5f;
-            for (const SimObject& o : scene.objects)
-                if (o.material.normal_map == int(map)) roughness = o.material.roughness;
+        for (size_t set = 0; set < sets.size(); ++set) {
+            const SimTextureSet& t = sets[set];
+            const Image* roughness_map = t.roughness_map >= 0 ? &scene.roughness_maps[size_t(t.roughness_map)] : nullptr;
             const auto start = std::chrono::steady_clock::now();
-            auto baked = bake_texture(scene.normal_maps[map], nullptr, 0, roughness, bake.settings);
+            auto baked = bake_texture(scene.normal_maps[size_t(t.normal_map)], roughness_map, 0, t.roughness, bake.settings);
             total += ms_since(start);
             if (!baked) return make_error(scene.name + ": texture bake failed: " + baked.error().message);
-            renderer.set_baked(bake.key, int(map), to_textures(std::move(*baked)));
+            renderer.set_baked(bake.key, int(set), to_textures(std::move(*baked)));
         }
         bake_ms[bake.key] = total;
     }

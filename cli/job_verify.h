@@ -39,7 +39,8 @@ struct CandidateReport {
 
 struct SceneReport {
     std::string scene;          // e.g. "torus"
-    float roughness = 0;        // perceptual r of the scene's materials
+    float roughness = 0;        // perceptual r of the scene's materials (of the first object for a file)
+    bool from_file = false;     // a scene file, whose materials keep their own roughness
     int width = 0, height = 0, spp = 0, frames = 0;
     double ground_truth_ms = 0; // wall time of all ground-truth frames
     SimImage ground_truth;      // frame 0 (when keep_images)

@@ -14,6 +14,9 @@ SimCandidate derivative(const char* name, const char* source, const char* body) 
 const char* kBakedRoughnessDefines =
     "#define SPECAA_ROUGHNESS_TEXTURE uBakedRoughness\n#define SPECAA_ROUGHNESS_CHANNEL r\n";
 const char* kIsotropicDefault = "float f = specaa_filtered_alpha2(s); A = vec3(f, f, 0.0);";
+const char* kMatrixDefault = "A = specaa_filtered_alpha2_matrix(s);";
+
+void add_variants(std::vector<SimCandidate>& c, bool normal_mapped);
 
 }  // namespace
 
@@ -68,18 +71,34 @@ std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool varia
                       "exact", "mean-projected"},
                      "mean-projected", ""});
     }
-    c.push_back({"default", "default", "specaa_filtered_alpha2 (baked data + per-pixel kernel)",
+    c.push_back({"default", "default", "specaa_filtered_alpha2_matrix (baked data + anisotropic per-pixel kernel)",
+                 {normal_mapped ? kBakedRoughnessDefines : "", kMatrixDefault, "exact", "mean-projected"},
+                 normal_mapped ? "mean-projected" : "", ""});
+    c.push_back({"default-isotropic", "default", "specaa_filtered_alpha2 (isotropic form of the default)",
                  {normal_mapped ? kBakedRoughnessDefines : "", kIsotropicDefault, "exact", "mean-projected"},
                  normal_mapped ? "mean-projected" : "", ""});
-    c.push_back({"default+curvature", "default", "specaa_filtered_alpha2 with SPECAA_USE_CURVATURE",
+    c.push_back({"default+curvature", "default", "specaa_filtered_alpha2_matrix with SPECAA_USE_CURVATURE",
                  {std::string(normal_mapped ? kBakedRoughnessDefines : "") + "#define SPECAA_USE_CURVATURE\n",
-                  kIsotropicDefault, "exact", "mean-projected"},
+                  kMatrixDefault, "exact", "mean-projected"},
                  normal_mapped ? "mean-projected" : "", "exact"});
-    if (!variants) return c;
-    c.push_back({"default-matrix", "variant", "specaa_filtered_alpha2_matrix (anisotropic pixel kernel)",
-                 {normal_mapped ? kBakedRoughnessDefines : "", "A = specaa_filtered_alpha2_matrix(s);", "exact",
-                  "mean-projected"},
-                 normal_mapped ? "mean-projected" : "", ""});
+    if (variants) add_variants(c, normal_mapped);
+    if (!has_exact_curvature(scene)) {
+        // Scene files: curvature comes from the default estimator, as `specbake bake` writes it, and is
+        // timed as that candidate's bake; its own variant row would repeat "baked-curvature".
+        std::erase_if(c, [](const SimCandidate& x) { return x.name == "baked-curvature/shape-operator"; });
+        for (SimCandidate& x : c) {
+            if (x.curvature_bake != "exact") continue;
+            x.curvature_bake = "shape-operator";
+            x.shader.curvature_source = "shape-operator";
+        }
+    }
+    return c;
+}
+
+namespace {
+
+// The bake's own variants (sim_candidates.h).
+void add_variants(std::vector<SimCandidate>& c, bool normal_mapped) {
     if (normal_mapped) {
         const std::pair<const char*, const char*> texture_variants[] = {
             {"baked-texture/approx", "mean-approx"}, {"baked-texture/sum", "sum-projected"},
@@ -103,8 +122,9 @@ std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool varia
         c.push_back({std::string("baked-curvature/") + estimator, "variant", "SPEC Sec. 4 estimator",
                      {"#define SPECAA_USE_CURVATURE\n", kIsotropicDefault, estimator, ""}, "", estimator});
     }
-    return c;
 }
+
+}  // namespace
 
 std::vector<SimTextureBake> texture_bakes_for(const std::vector<SimCandidate>& candidates) {
     std::vector<SimTextureBake> bakes;

@@ -87,13 +87,19 @@ in vec2 vUv;
 in vec4 vCurvature;
 uniform vec3 uCameraPosition;
 uniform vec3 uCameraForward;
-uniform vec3 uLightDirection[4];
-uniform float uLightRadiance[4];
+uniform int uLightType[8];        // 0 directional, 1 point, 2 spot
+uniform vec3 uLightDirection[8];  // directional: towards the light; spot: the spot's axis
+uniform vec3 uLightPosition[8];
+uniform float uLightRadiance[8];  // directional: irradiance; point/spot: intensity
+uniform float uLightRange[8];     // 0: unlimited
+uniform vec2 uLightCone[8];       // spot: (scale, offset) of the glTF angular attenuation
 uniform int uLightCount;
 uniform float uRoughness;
 uniform int uNormalMapped;
+uniform int uRoughnessMapped;
 uniform float uUvScale;
 uniform sampler2D uNormalMap;
+uniform sampler2D uRoughnessMap;
 uniform float uTanHalfFovY;
 uniform float uViewportHeight;
 uniform sampler2D uBakedRoughness;
@@ -101,6 +107,25 @@ uniform sampler2D uBakedKernel;
 uniform sampler2D uBakedLean0;
 uniform sampler2D uBakedLean1;
 layout(location = 0) out vec4 oColor;
+// Unit vector from `p` towards light k and the irradiance E it delivers to a surface facing it, with the
+// KHR_lights_punctual falloff: inverse square, range window clamp(1 - (d / range)^4, 0, 1) and the spot's
+// smooth cone, saturate(cos * scale + offset)^2.
+vec3 simLight(int k, vec3 p, out float E) {
+    if (uLightType[k] == 0) { E = uLightRadiance[k]; return uLightDirection[k]; }
+    vec3 d = uLightPosition[k] - p;
+    float d2 = max(dot(d, d), 1.0e-12);
+    vec3 l = d * inversesqrt(d2);
+    E = uLightRadiance[k] / d2;
+    if (uLightRange[k] > 0.0) {
+        float x = d2 / (uLightRange[k] * uLightRange[k]);
+        E *= clamp(1.0 - x * x, 0.0, 1.0);
+    }
+    if (uLightType[k] == 2) {
+        float c = clamp(dot(uLightDirection[k], -l) * uLightCone[k].x + uLightCone[k].y, 0.0, 1.0);
+        E *= c * c;
+    }
+    return l;
+}
 )";
 
 // Ground truth: unfiltered isotropic GGX written independently of the include, in the Walter et al. 2007
@@ -119,12 +144,14 @@ void main() {
         n = normalize(t * m.x + b * m.y + nGeo * m.z);
     }
     vec3 v = normalize(uCameraPosition - vPosition);
-    float alpha = uRoughness * uRoughness;
+    float r = uRoughnessMapped != 0 ? textureLod(uRoughnessMap, vUv * uUvScale, 0.0).r : uRoughness;
+    float alpha = r * r;
     float a = max(alpha * alpha, 1.0e-12);
     float nv = dot(n, v);
     float radiance = 0.0;
     for (int k = 0; k < uLightCount; ++k) {
-        vec3 l = uLightDirection[k];
+        float E;
+        vec3 l = simLight(k, vPosition, E);
         vec3 h = normalize(l + v);
         float nl = dot(n, l);
         float nh = dot(n, h);
@@ -132,7 +159,7 @@ void main() {
         float d = nh * nh * (a - 1.0) + 1.0;
         float D = a / (PI * d * d);
         float G2 = 1.0 / (1.0 + lambdaGGX(nl, a) + lambdaGGX(nv, a));
-        radiance += D * G2 / (4.0 * nv) * uLightRadiance[k];
+        radiance += D * G2 / (4.0 * nv) * E;
     }
     oColor = vec4(radiance, 1.0, 0.0, 1.0);
 }
@@ -155,19 +182,21 @@ void main() {
     vec3 v = normalize(uCameraPosition - vPosition);
     vec3 vTS = vec3(dot(v, tn), dot(v, bn), dot(v, n));
     SpecaaSurface s;
-    s.roughness = uRoughness;
+    // An unfiltered material samples its roughness map with the hardware's plain mips.
+    s.roughness = uRoughnessMapped != 0 ? texture(uRoughnessMap, uv).r : uRoughness;
     s.uv = uv;
     s.normal = nGeo;
     s.position = vPosition;
     s.tangent = t;
     s.bitangent = b;
     s.curvature = vCurvature;
-    float alpha = uRoughness * uRoughness;
+    float alpha = s.roughness * s.roughness;
     float a = alpha * alpha;
     float viewDepth = dot(vPosition - uCameraPosition, uCameraForward);
     float radiance = 0.0;
     for (int k = 0; k < uLightCount; ++k) {
-        vec3 l = uLightDirection[k];
+        float E;
+        vec3 l = simLight(k, vPosition, E);
         vec3 h = normalize(l + v);
         vec3 hTS = vec3(dot(h, tn), dot(h, bn), dot(h, n));
         vec3 lTS = vec3(dot(l, tn), dot(l, bn), dot(l, n));
@@ -176,7 +205,7 @@ void main() {
 
 constexpr const char* kCandidateMainTail = R"(
         if (lTS.z > 0.0 && vTS.z > 0.0)
-            radiance += specaa_ggx_D(hTS, A, a * a) * specaa_ggx_G2(lTS, vTS, hTS, A) / (4.0 * vTS.z) * uLightRadiance[k];
+            radiance += specaa_ggx_D(hTS, A, a * a) * specaa_ggx_G2(lTS, vTS, hTS, A) / (4.0 * vTS.z) * E;
     }
     oColor = vec4(radiance, 1.0, 0.0, 1.0);
 }
@@ -231,6 +260,8 @@ struct SimRenderer::Impl {
     };
     std::vector<Mesh> meshes;
     std::vector<GLuint> normal_maps;
+    std::vector<GLuint> roughness_maps;
+    std::vector<int> object_sets;  // texture_set_of() per object
     struct Baked {
         GLuint roughness = 0, kernel = 0, lean0 = 0, lean1 = 0;
     };
@@ -255,20 +286,29 @@ struct SimRenderer::Impl {
         glProgramUniform3fv(program, glGetUniformLocation(program, "uCameraPosition"), 1, cam.position.data());
         const Float3 forward = unit(offset);
         glProgramUniform3fv(program, glGetUniformLocation(program, "uCameraForward"), 1, forward.data());
-        const int count = int(std::min<size_t>(scene->lights.size(), 4));
+        const int count = int(std::min(scene->lights.size(), kMaxSimLights));
         for (int k = 0; k < count; ++k) {
-            const std::string idx = "[" + std::to_string(k) + "]";
-            glProgramUniform3fv(program, glGetUniformLocation(program, ("uLightDirection" + idx).c_str()), 1,
-                                scene->lights[k].direction.data());
-            glProgramUniform1f(program, glGetUniformLocation(program, ("uLightRadiance" + idx).c_str()),
-                               scene->lights[k].radiance);
+            const SimLight& light = scene->lights[size_t(k)];
+            const auto location = [&](const char* name) {
+                return glGetUniformLocation(program, (std::string(name) + "[" + std::to_string(k) + "]").c_str());
+            };
+            glProgramUniform1i(program, location("uLightType"), int(light.type));
+            glProgramUniform3fv(program, location("uLightDirection"), 1, light.direction.data());
+            glProgramUniform3fv(program, location("uLightPosition"), 1, light.position.data());
+            glProgramUniform1f(program, location("uLightRadiance"), light.radiance);
+            glProgramUniform1f(program, location("uLightRange"), light.range);
+            // KHR_lights_punctual spot attenuation: scale = 1 / max(0.001, cos(inner) - cos(outer)),
+            // offset = -cos(outer) scale.
+            const float scale = 1.0f / std::max(0.001f, std::cos(light.inner_cone) - std::cos(light.outer_cone));
+            glProgramUniform2f(program, location("uLightCone"), scale, -std::cos(light.outer_cone) * scale);
         }
         glProgramUniform1i(program, glGetUniformLocation(program, "uLightCount"), count);
         glProgramUniform1f(program, glGetUniformLocation(program, "uTanHalfFovY"),
                            std::tan(0.5f * cam.fov_y_degrees * std::numbers::pi_v<float> / 180.0f));
         glProgramUniform1f(program, glGetUniformLocation(program, "uViewportHeight"), float(height));
-        const char* samplers[] = {"uNormalMap", "uBakedRoughness", "uBakedKernel", "uBakedLean0", "uBakedLean1"};
-        for (int unit_index = 0; unit_index < 5; ++unit_index)
+        const char* samplers[] = {"uNormalMap",  "uBakedRoughness", "uBakedKernel",
+                                  "uBakedLean0", "uBakedLean1",     "uRoughnessMap"};
+        for (int unit_index = 0; unit_index < 6; ++unit_index)
             glProgramUniform1i(program, glGetUniformLocation(program, samplers[unit_index]), unit_index);
     }
 
@@ -279,24 +319,44 @@ struct SimRenderer::Impl {
         glProgramUniform1f(program, glGetUniformLocation(program, "uRoughness"), mat.roughness);
         glProgramUniform1f(program, glGetUniformLocation(program, "uUvScale"), mat.uv_scale);
         glProgramUniform1i(program, glGetUniformLocation(program, "uNormalMapped"), mat.normal_map >= 0 ? 1 : 0);
-        GLuint textures[5] = {mat.normal_map >= 0 ? normal_maps[size_t(mat.normal_map)] : 0, 0, 0, 0, 0};
+        glProgramUniform1i(program, glGetUniformLocation(program, "uRoughnessMapped"), mat.roughness_map >= 0 ? 1 : 0);
+        GLuint textures[6] = {mat.normal_map >= 0 ? normal_maps[size_t(mat.normal_map)] : 0, 0, 0, 0, 0,
+                              mat.roughness_map >= 0 ? roughness_maps[size_t(mat.roughness_map)] : 0};
         Mesh& mesh = meshes[o];
         GLuint curvature = mesh.curvature.at("exact");
         if (spec) {
             if (auto it = mesh.curvature.find(spec->curvature_source); it != mesh.curvature.end())
                 curvature = it->second;
-            if (!spec->baked_source.empty() && mat.normal_map >= 0) {
-                if (auto it = baked.find({spec->baked_source, mat.normal_map}); it != baked.end()) {
+            if (!spec->baked_source.empty() && object_sets[o] >= 0) {
+                if (auto it = baked.find({spec->baked_source, object_sets[o]}); it != baked.end()) {
                     textures[1] = it->second.roughness;
                     textures[2] = it->second.kernel;
                     textures[3] = it->second.lean0;
                     textures[4] = it->second.lean1;
                 }
+            } else if (!spec->baked_source.empty()) {
+                // Nothing baked for this material (no normal map, SPEC Sec. 6): the engine binds its own
+                // roughness (map or constant) in the roughness slot and no kernel or LEAN variance.
+                textures[1] = mat.roughness_map >= 0 ? roughness_maps[size_t(mat.roughness_map)]
+                                                     : constant_texture(mat.roughness);
+                textures[2] = textures[3] = textures[4] = constant_texture(0.0f);
             }
         }
-        glBindTextures(0, 5, textures);
+        glBindTextures(0, 6, textures);
         glVertexArrayVertexBuffer(mesh.vao, 1, curvature, 0, 4 * sizeof(float));
         glBindVertexArray(mesh.vao);
+    }
+
+    // A 1 x 1 texture holding `value` in every channel (cached).
+    std::map<float, GLuint> constants;
+    GLuint constant_texture(float value) {
+        if (auto it = constants.find(value); it != constants.end()) return it->second;
+        GLuint tex = 0;
+        glCreateTextures(GL_TEXTURE_2D, 1, &tex);
+        glTextureStorage2D(tex, 1, GL_RGBA32F, 1, 1);
+        const float texel[4] = {value, value, value, value};
+        glTextureSubImage2D(tex, 0, 0, 0, 1, 1, GL_RGBA, GL_FLOAT, texel);
+        return constants[value] = tex;
     }
 
     void draw_all(GLuint program, const SimShaderSpec* spec) {
@@ -381,7 +441,16 @@ Result<std::unique_ptr<SimRenderer>> SimRenderer::create(const SimScene& scene, 
         glVertexArrayAttribBinding(mesh.vao, 4, 1);
         im.meshes.push_back(std::move(mesh));
     }
-    for (size_t o = 0; o < scene.objects.size(); ++o) r->set_curvature("exact", int(o), scene.objects[o].exact_curvature);
+    // Scene files have no analytic curvature: zeros, so "exact" is always bound (the candidates that use
+    // curvature then name an estimator, see sim_candidates.h).
+    for (size_t o = 0; o < scene.objects.size(); ++o) {
+        const SimObject& object = scene.objects[o];
+        if (object.exact_curvature.values.size() == 4 * object.mesh.vertex_count())
+            r->set_curvature("exact", int(o), object.exact_curvature);
+        else
+            r->set_curvature("exact", int(o), VertexCurvature{std::vector<float>(4 * object.mesh.vertex_count(), 0.0f)});
+        im.object_sets.push_back(texture_set_of(scene, o));
+    }
 
     for (const Image& map : scene.normal_maps) {
         GLuint tex = 0;
@@ -396,6 +465,21 @@ Result<std::unique_ptr<SimRenderer>> SimRenderer::create(const SimScene& scene, 
         glTextureParameteri(tex, GL_TEXTURE_WRAP_S, GL_REPEAT);
         glTextureParameteri(tex, GL_TEXTURE_WRAP_T, GL_REPEAT);
         im.normal_maps.push_back(tex);
+    }
+
+    for (const Image& map : scene.roughness_maps) {
+        // The engine's usual roughness mips: box-filtered r.
+        GLuint tex = 0;
+        const int levels = 1 + int(std::floor(std::log2(double(std::max(map.width, map.height)))));
+        glCreateTextures(GL_TEXTURE_2D, 1, &tex);
+        glTextureStorage2D(tex, levels, GL_R32F, map.width, map.height);
+        glTextureSubImage2D(tex, 0, 0, 0, map.width, map.height, GL_RED, GL_FLOAT, map.pixels.data());
+        glGenerateTextureMipmap(tex);
+        glTextureParameteri(tex, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+        glTextureParameteri(tex, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+        glTextureParameteri(tex, GL_TEXTURE_WRAP_S, GL_REPEAT);
+        glTextureParameteri(tex, GL_TEXTURE_WRAP_T, GL_REPEAT);
+        im.roughness_maps.push_back(tex);
     }
 
     auto gt = compile_program(kVertexShader, std::string("#version 450 core\n") + kFragmentInputs + kGroundTruthMain);
@@ -420,6 +504,8 @@ SimRenderer::~SimRenderer() {
         glDeleteTextures(4, t);
     }
     glDeleteTextures(GLsizei(im.normal_maps.size()), im.normal_maps.data());
+    glDeleteTextures(GLsizei(im.roughness_maps.size()), im.roughness_maps.data());
+    for (auto& [value, tex] : im.constants) glDeleteTextures(1, &tex);
     glDeleteFramebuffers(1, &im.fbo);
     glDeleteTextures(1, &im.color);
     glDeleteTextures(1, &im.depth);
@@ -439,7 +525,7 @@ void SimRenderer::set_curvature(const std::string& key, int object, const Vertex
     buffers[key] = buffer;
 }
 
-void SimRenderer::set_baked(const std::string& key, int map, const SimBakedTextures& textures) {
+void SimRenderer::set_baked(const std::string& key, int texture_set, const SimBakedTextures& textures) {
     Impl::Baked b;
     if (!textures.roughness.levels.empty()) b.roughness = upload_mips(textures.roughness, 0, 1);
     if (!textures.kernel.levels.empty()) b.kernel = upload_mips(textures.kernel, 0, 1);
@@ -447,7 +533,7 @@ void SimRenderer::set_baked(const std::string& key, int map, const SimBakedTextu
         b.lean0 = upload_mips(textures.lean, 0, 4);
         b.lean1 = upload_mips(textures.lean, 4, 1);
     }
-    impl_->baked[{key, map}] = b;
+    impl_->baked[{key, texture_set}] = b;
 }
 
 SimImage SimRenderer::render_ground_truth(int frame, int spp) {

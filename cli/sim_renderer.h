@@ -17,7 +17,8 @@
 
 namespace specbake::cli {
 
-// Baked textures a candidate samples (uploaded with mips, trilinear, repeat), per normal map.
+// Baked textures a candidate samples (uploaded with mips, trilinear, repeat), per texture set
+// (texture_sets() in sim_scene.h: a normal map with its roughness).
 struct SimBakedTextures {
     MipChain roughness;  // 1 channel: filtered perceptual roughness r
     MipChain kernel;     // 1 channel: isotropic kernel t
@@ -56,8 +57,8 @@ public:
 
     // Per-vertex curvature of object `object` under `key` (the exact analytic one is "exact").
     void set_curvature(const std::string& key, int object, const VertexCurvature& curvature);
-    // Baked textures of normal map `map` under `key`.
-    void set_baked(const std::string& key, int map, const SimBakedTextures& textures);
+    // Baked textures of texture set `texture_set` (index into texture_sets(scene)) under `key`.
+    void set_baked(const std::string& key, int texture_set, const SimBakedTextures& textures);
 
     // Ground truth of frame `frame` with about `spp` stratified samples per pixel area (see
     // ground_truth_layout). Each pass renders the scene at `scale` x the resolution with one jittered sample

@@ -125,6 +125,12 @@ Image make_bump_normal_map(int size, float slope_scale, uint32_t seed) {
     return map;
 }
 
+SimLight directional_light(Float3 towards_light) {
+    SimLight light;
+    light.direction = towards_light;
+    return light;
+}
+
 int scaled(int n, float tessellation) { return std::max(8, int(std::lround(n * tessellation))); }
 
 }  // namespace
@@ -145,7 +151,7 @@ Result<SimScene> make_builtin_scene(std::string_view name, float roughness, floa
     if (name == "sphere" || name == "bumpy-sphere") {
         scene.objects.push_back(make_sphere(1.0f, {0, 0, 0}, scaled(256, tessellation), scaled(128, tessellation)));
         scene.camera = {{0.0f, 0.4f, 3.6f}, {0, 0, 0}, {0, 1, 0}, 40.0f};
-        scene.lights.push_back({key_light, 1.0f});
+        scene.lights.push_back(directional_light(key_light));
         scene.object_radius = 1.0f;
         if (name == "bumpy-sphere") {
             scene.normal_maps.push_back(make_bump_normal_map(512, 0.35f, 7));
@@ -157,12 +163,12 @@ Result<SimScene> make_builtin_scene(std::string_view name, float roughness, floa
         // where view and light graze the surface, where slope-space derivatives blow up (TK21 Sec. 3).
         scene.objects.push_back(make_cylinder(0.5f, 12.0f, scaled(256, tessellation), scaled(128, tessellation)));
         scene.camera = {{5.8f, 0.75f, 0.9f}, {0.0f, 0.0f, 0.0f}, {0, 1, 0}, 40.0f};
-        scene.lights.push_back({normalized({-1.0f, 0.35f, -0.25f}), 1.0f});
+        scene.lights.push_back(directional_light(normalized({-1.0f, 0.35f, -0.25f})));
         scene.object_radius = 0.5f;
     } else if (name == "torus") {
         scene.objects.push_back(make_torus(1.0f, 0.35f, scaled(256, tessellation), scaled(96, tessellation)));
         scene.camera = {{0.0f, 2.2f, 3.0f}, {0, 0, 0}, {0, 1, 0}, 40.0f};
-        scene.lights.push_back({key_light, 1.0f});
+        scene.lights.push_back(directional_light(key_light));
         scene.object_radius = 1.35f;
     } else {
         std::string names;
@@ -171,6 +177,31 @@ Result<SimScene> make_builtin_scene(std::string_view name, float roughness, floa
     }
     for (auto& object : scene.objects) object.material.roughness = roughness;
     return scene;
+}
+
+std::vector<SimTextureSet> texture_sets(const SimScene& scene) {
+    std::vector<SimTextureSet> sets;
+    for (const SimObject& o : scene.objects) {
+        if (o.material.normal_map < 0) continue;
+        const SimTextureSet set{o.material.normal_map, o.material.roughness_map,
+                                o.material.roughness_map >= 0 ? 0.0f : o.material.roughness};
+        if (std::find(sets.begin(), sets.end(), set) == sets.end()) sets.push_back(set);
+    }
+    return sets;
+}
+
+int texture_set_of(const SimScene& scene, size_t object) {
+    const SimMaterial& m = scene.objects[object].material;
+    if (m.normal_map < 0) return -1;
+    const std::vector<SimTextureSet> sets = texture_sets(scene);
+    const SimTextureSet set{m.normal_map, m.roughness_map, m.roughness_map >= 0 ? 0.0f : m.roughness};
+    return int(std::find(sets.begin(), sets.end(), set) - sets.begin());
+}
+
+bool has_exact_curvature(const SimScene& scene) {
+    return std::all_of(scene.objects.begin(), scene.objects.end(), [](const SimObject& o) {
+        return o.exact_curvature.values.size() == 4 * o.mesh.vertex_count();
+    });
 }
 
 SimCamera camera_at_frame(const SimScene& scene, int frame, int height) {

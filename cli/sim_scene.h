@@ -21,18 +21,34 @@ using Float3 = std::array<float, 3>;
 struct SimMaterial {
     float roughness = 0.5f;  // perceptual roughness r (SPEC Sec. 2); alpha = r^2
     int normal_map = -1;     // index into SimScene::normal_maps, -1 for none
-    float uv_scale = 1.0f;   // the normal map repeats this many times over the UV square
+    int roughness_map = -1;  // index into SimScene::roughness_maps (replaces `roughness`), -1 for none
+    float uv_scale = 1.0f;   // the maps repeat this many times over the UV square
 };
 
 struct SimObject {
     TriMesh mesh;                      // world space; normals, tangents (w = handedness) and UVs present
-    VertexCurvature exact_curvature;   // analytic (k1, k2, d) of the shading-normal field, SPEC Sec. 4
+    // Analytic (k1, k2, d) of the shading-normal field, SPEC Sec. 4; empty when unknown (scene files), and
+    // the curvature candidates then use the default estimator instead.
+    VertexCurvature exact_curvature;
     SimMaterial material;
 };
 
+// Lights the renderer shades with at once; a scene file with more keeps the first ones (noted).
+inline constexpr size_t kMaxSimLights = 8;
+
+// A punctual light (KHR_lights_punctual): directional, point or spot. Radiance is monochrome: the
+// simulator scores the NDF filter, so the light's colour enters only through its luminance.
 struct SimLight {
-    Float3 direction{0, 1, 0};  // unit vector from the surface towards the light
-    float radiance = 1.0f;      // irradiance on a surface facing the light
+    enum class Type { Directional, Point, Spot };
+    Type type = Type::Directional;
+    Float3 direction{0, 1, 0};  // directional: unit vector from the surface towards the light;
+                                // spot: unit vector the spot points along
+    Float3 position{0, 0, 0};   // point and spot
+    float radiance = 1.0f;      // directional: irradiance on a surface facing it; point/spot: intensity
+                                // (irradiance = intensity / d^2)
+    float range = 0.0f;         // point/spot: glTF range (smooth cut-off), 0 for unlimited
+    float inner_cone = 0.0f;    // spot: glTF innerConeAngle and outerConeAngle in radians
+    float outer_cone = 0.7853982f;
 };
 
 struct SimCamera {
@@ -45,7 +61,8 @@ struct SimCamera {
 struct SimScene {
     std::string name;
     std::vector<SimObject> objects;
-    std::vector<Image> normal_maps;  // 3 channels, encoded (n + 1) / 2, +Y green, power-of-two sides
+    std::vector<Image> normal_maps;     // 3 channels, encoded (n + 1) / 2, +Y green, any size
+    std::vector<Image> roughness_maps;  // 1 channel, perceptual roughness r in [0, 1]
     std::vector<SimLight> lights;
     SimCamera camera;
     // Camera motion for temporal metrics: each frame orbits the camera about the target around `up` by the
@@ -53,7 +70,25 @@ struct SimScene {
     // (measured at the target's depth; slightly more on the near side).
     float motion_pixels = 0.35f;
     float object_radius = 1.0f;  // for the motion scale and the automatic framing
+    bool from_file = false;          // read by load_sim_scene(): materials keep their own roughness
+    std::vector<std::string> notes;  // what a scene file contained that the simulator leaves out
 };
+
+// What one texture bake runs on: a normal map with its material's roughness map or constant roughness.
+struct SimTextureSet {
+    int normal_map = -1;
+    int roughness_map = -1;
+    float roughness = 0.5f;
+    friend bool operator==(const SimTextureSet&, const SimTextureSet&) = default;
+};
+
+// The distinct texture sets of the scene's normal-mapped materials, in first-use order.
+std::vector<SimTextureSet> texture_sets(const SimScene& scene);
+// Index into texture_sets(scene) of object `object`'s material, -1 without a normal map.
+int texture_set_of(const SimScene& scene, size_t object);
+
+// True when every object carries its analytic curvature (the built-in scenes).
+bool has_exact_curvature(const SimScene& scene);
 
 // Names of the built-in analytic scenes: "sphere", "cylinder" (grazing view), "torus", "bumpy-sphere"
 // (normal-mapped).

@@ -29,7 +29,16 @@ constexpr Glyph kFont[] = {
     {'_', {0, 0, 0, 0, 7}}, {'|', {2, 2, 2, 2, 2}},
 };
 constexpr int kScale = 2;
-constexpr int kLabelHeight = 5 * kScale + 6;
+constexpr int kLineHeight = 5 * kScale + 3;
+constexpr int kLabelHeight = 2 * kLineHeight + 4;  // two lines of text above each tile
+
+// `label` in at most two lines of `width` characters, broken after a '/', '-' or '+' where one fits.
+std::pair<std::string, std::string> wrap_label(const std::string& label, size_t width) {
+    if (label.size() <= width) return {label, ""};
+    size_t cut = label.find_last_of("/-+", width - 1);
+    cut = cut == std::string::npos || cut == 0 ? width : cut + 1;
+    return {label.substr(0, cut), label.substr(cut, width)};
+}
 
 void draw_text(Image& im, int x0, int y0, const std::string& text) {
     int x = x0;
@@ -92,7 +101,9 @@ Image make_strip(const SimImage& gt, const std::vector<StripTile>& candidates) {
     for (size_t c = 0; c < candidates.size(); ++c) {
         const int column = int(c) + 1;
         put_image(*candidates[c].image, column);
-        draw_text(strip, column * tile_w + 2, 3, candidates[c].label.substr(0, size_t(w / (4 * kScale))));
+        const auto [first, second] = wrap_label(candidates[c].label, size_t(std::max(1, w / (4 * kScale))));
+        draw_text(strip, column * tile_w + 2, 3, first);
+        draw_text(strip, column * tile_w + 2, 3 + kLineHeight, second);
         for (int y = 0; y < h; ++y)
             for (int x = 0; x < w; ++x) {
                 const float err = std::abs(tone(candidates[c].image->texel(x, y)[0]) - tone(gt.texel(x, y)[0]));

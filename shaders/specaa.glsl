@@ -400,6 +400,10 @@ float specaa_ggx_G2(SPECAA_FLOAT3 i, SPECAA_FLOAT3 o, SPECAA_FLOAT3 h, SPECAA_FL
 
 // ---------------------------------------------------------------------------------------------------
 // Default entry point: filtered roughness from whatever baked data is bound plus a per-pixel kernel.
+// The default rule is the matrix form, specaa_filtered_alpha2_matrix (an anisotropic per-pixel kernel
+// in the tangent frame, with specaa_ggx_D / specaa_ggx_G2): of the combinations `specbake bench` scores
+// it has the lowest linear error and flicker (README "Accuracy and its cost"). specaa_filtered_alpha2 /
+// specaa_filtered_roughness are its isotropic form, a drop-in for BRDFs that take one roughness.
 // ---------------------------------------------------------------------------------------------------
 
 // Per-fragment inputs. Fill every field the configuration uses (see the header comment).
@@ -476,7 +480,7 @@ float specaa_pixel_kernel(SpecaaSurface s) {
 #endif
 }
 
-// Filtered squared roughness a (isotropic form). The baked and per-pixel kernels are variances of
+// Filtered squared roughness a (isotropic form of the default). The baked and per-pixel kernels are variances of
 // independent footprints, so they add in projected space (TK21 Eq. 6) before mapping back (Eq. 7).
 float specaa_filtered_alpha2(SpecaaSurface s) {
     SPECAA_FLOAT3 baked = specaa_baked_kernel_matrix(s);
@@ -486,8 +490,9 @@ float specaa_filtered_alpha2(SpecaaSurface s) {
 // Filtered perceptual roughness r = a^(1/4): drop-in for the material's roughness.
 float specaa_filtered_roughness(SpecaaSurface s) { return specaa_roughness_from_alpha2(specaa_filtered_alpha2(s)); }
 
-// Filtered roughness matrix A_bar in the (T, B) frame (matrix form), for specaa_ggx_D / specaa_ggx_G2
-// with tau = a^2 of the unfiltered material. Same composition as specaa_filtered_alpha2.
+// The default: filtered roughness matrix A_bar in the (T, B) frame, for specaa_ggx_D / specaa_ggx_G2 with
+// tau = a^2 of the unfiltered material. Same composition as specaa_filtered_alpha2, with the per-pixel
+// kernel kept anisotropic.
 SPECAA_FLOAT3 specaa_filtered_alpha2_matrix(SpecaaSurface s) {
     float a = specaa_base_alpha2(s);
     return specaa_filter_projected_matrix(SPECAA_FLOAT2(a, a), specaa_baked_kernel_matrix(s) + specaa_pixel_kernel_matrix(s));

@@ -30,15 +30,16 @@ void main() {
     s.normal = n;
     s.tangent = vTangent.xyz;
     s.bitangent = cross(n, vTangent.xyz) * vTangent.w;
-    float a = specaa_filtered_alpha2(s);
+    // The default rule: an anisotropic roughness matrix in the (T, B) frame.
+    vec3 A = specaa_filtered_alpha2_matrix(s);
+    float a = specaa_alpha2_from_roughness(roughness);   // unfiltered a, for the determinant clamp
 
     vec3 v = normalize(vViewDir);
     vec3 h = normalize(v + lightDir);
-    vec3 aIso = vec3(a, a, 0.0);   // isotropic roughness matrix
-    // Tangent-space vectors relative to n; for an isotropic A any frame around n works.
+    // Tangent-space vectors in the frame A lives in: T orthogonalised against n, B = cross(n, T) * w.
     vec3 t = normalize(vTangent.xyz - n * dot(n, vTangent.xyz));
-    mat3 toTangent = transpose(mat3(t, cross(n, t), n));
+    mat3 toTangent = transpose(mat3(t, cross(n, t) * vTangent.w, n));
     vec3 hT = toTangent * h, lT = toTangent * lightDir, vT = toTangent * v;
-    float specular = specaa_ggx_D(hT, aIso, a * a) * specaa_ggx_G2(lT, vT, hT, aIso) / max(4.0 * vT.z, 1e-4);
+    float specular = specaa_ggx_D(hT, A, a * a) * specaa_ggx_G2(lT, vT, hT, A) / max(4.0 * vT.z, 1e-4);
     fragColor = vec4(lightColor * specular, 1.0);
 }

@@ -1,0 +1,472 @@
+// `specbake verify SCENE`: scene files become simulator scenes with their own transforms, cameras, lights
+// and materials. Each test writes a small glTF with known content and checks the loaded scene or its
+// ground truth against an independent construction: the same sphere transformed by hand and rendered as
+// a built-in-style scene, far point and spot lights against a directional light of equal irradiance,
+// texture values decoded and scaled by hand.
+#include "cli/gl_context.h"
+#include "cli/job_verify.h"
+#include "cli/sim_renderer.h"
+#include "cli/sim_scene.h"
+#include "cli/sim_scene_file.h"
+#include "io/image_io.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+
+namespace specbake::cli {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+struct GlEnvironment {
+    std::unique_ptr<GlContext> context;
+    std::string error;
+    std::string include;
+};
+
+GlEnvironment& environment() {
+    static GlEnvironment env = [] {
+        GlEnvironment e;
+        auto context = GlContext::create();
+        if (!context) {
+            e.error = context.error().message;
+            return e;
+        }
+        e.context = std::move(*context);
+        std::ifstream in(std::string(SPECBAKE_SOURCE_DIR) + "/shaders/specaa.glsl");
+        std::stringstream text;
+        text << in.rdbuf();
+        e.include = text.str();
+        if (e.include.empty()) e.error = "cannot read shaders/specaa.glsl";
+        return e;
+    }();
+    return env;
+}
+
+class TempDir {
+public:
+    TempDir() {
+        path_ = fs::temp_directory_path() / ("specbake-verify-scene-" + std::to_string(::getpid()) + "-" +
+                                             std::to_string(counter_++));
+        fs::create_directories(path_);
+    }
+    ~TempDir() { fs::remove_all(path_); }
+    const fs::path& path() const { return path_; }
+
+private:
+    fs::path path_;
+    static inline int counter_ = 0;
+};
+
+constexpr double kPi = std::numbers::pi;
+constexpr float kSphereRadius = 0.5f;
+const Float3 kCentre{2.0f, -1.0f, 0.5f};
+constexpr double kYaw = 30.0 * kPi / 180.0;  // node rotation about +Y
+
+// The unit sphere of the built-in scenes, object space.
+TriMesh unit_sphere() {
+    auto scene = make_builtin_scene("sphere", 0.3f, 0.25f);
+    return scene->objects[0].mesh;
+}
+
+// Appends `values` to the binary buffer as a float accessor of `type` ("VEC3", ...) and returns its index.
+int add_accessor(json& gltf, std::string& bin, const std::vector<float>& values, int components, const char* type,
+                 bool bounds = false) {
+    const size_t offset = bin.size();
+    bin.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(float));
+    gltf["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", offset}, {"byteLength", values.size() * 4}});
+    json accessor = {{"bufferView", gltf["bufferViews"].size() - 1},
+                     {"componentType", 5126},
+                     {"count", values.size() / size_t(components)},
+                     {"type", type}};
+    if (bounds) {
+        std::vector<float> lo(size_t(components), 1e30f), hi(size_t(components), -1e30f);
+        for (size_t i = 0; i < values.size(); ++i) {
+            lo[i % size_t(components)] = std::min(lo[i % size_t(components)], values[i]);
+            hi[i % size_t(components)] = std::max(hi[i % size_t(components)], values[i]);
+        }
+        accessor["min"] = lo;
+        accessor["max"] = hi;
+    }
+    gltf["accessors"].push_back(accessor);
+    return int(gltf["accessors"].size() - 1);
+}
+
+// A glTF with the unit sphere under a node at kCentre, scaled to kSphereRadius and turned by kYaw, a
+// perspective camera 1.8 in front of it looking down -Z, and the given lights (KHR_lights_punctual
+// definitions with their node's translation and rotation). Returns the .gltf path.
+fs::path write_sphere_gltf(const fs::path& dir, const std::vector<std::pair<json, json>>& lights,
+                           const json& material = json::object(), bool camera = true) {
+    const TriMesh m = unit_sphere();
+    json gltf = {{"asset", {{"version", "2.0"}}}, {"bufferViews", json::array()}, {"accessors", json::array()}};
+    std::string bin;
+    const int pos = add_accessor(gltf, bin, m.positions, 3, "VEC3", true);
+    const int nrm = add_accessor(gltf, bin, m.normals, 3, "VEC3");
+    const int tan = add_accessor(gltf, bin, m.tangents, 4, "VEC4");
+    const int uv = add_accessor(gltf, bin, m.uv0, 2, "VEC2");
+    const size_t index_offset = bin.size();
+    bin.append(reinterpret_cast<const char*>(m.indices.data()), m.indices.size() * 4);
+    gltf["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", index_offset}, {"byteLength", m.indices.size() * 4}});
+    gltf["accessors"].push_back({{"bufferView", gltf["bufferViews"].size() - 1},
+                                 {"componentType", 5125},
+                                 {"count", m.indices.size()},
+                                 {"type", "SCALAR"}});
+    const int idx = int(gltf["accessors"].size() - 1);
+    json primitive = {{"attributes", {{"POSITION", pos}, {"NORMAL", nrm}, {"TANGENT", tan}, {"TEXCOORD_0", uv}}},
+                      {"indices", idx}};
+    if (!material.empty()) {
+        gltf["materials"] = json::array({material});
+        primitive["material"] = 0;
+    }
+    gltf["meshes"] = json::array({{{"primitives", json::array({primitive})}}});
+    gltf["buffers"] = json::array({{{"uri", "sphere.bin"}, {"byteLength", bin.size()}}});
+    const double s = std::sin(0.5 * kYaw), c = std::cos(0.5 * kYaw);
+    gltf["nodes"] = json::array({{{"mesh", 0},
+                                  {"translation", {kCentre[0], kCentre[1], kCentre[2]}},
+                                  {"rotation", {0.0, s, 0.0, c}},
+                                  {"scale", {kSphereRadius, kSphereRadius, kSphereRadius}}}});
+    json roots = {0};
+    if (camera) {
+        gltf["cameras"] = json::array({{{"type", "perspective"},
+                                        {"perspective", {{"yfov", 40.0 * kPi / 180.0}, {"znear", 0.01}}}}});
+        // Parent with a translation, child with the rest: the camera's world transform is their product.
+        gltf["nodes"].push_back({{"translation", {kCentre[0], 0.0, 0.0}}, {"children", {2}}});
+        gltf["nodes"].push_back({{"camera", 0}, {"translation", {0.0, kCentre[1], kCentre[2] + 1.8}}});
+        roots.push_back(1);
+    }
+    if (!lights.empty()) {
+        gltf["extensionsUsed"] = {"KHR_lights_punctual"};
+        json defs = json::array();
+        for (const auto& [def, node] : lights) {
+            defs.push_back(def);
+            json n = node;
+            n["extensions"] = {{"KHR_lights_punctual", {{"light", defs.size() - 1}}}};
+            gltf["nodes"].push_back(n);
+            roots.push_back(gltf["nodes"].size() - 1);
+        }
+        gltf["extensions"] = {{"KHR_lights_punctual", {{"lights", defs}}}};
+    }
+    gltf["scenes"] = json::array({{{"nodes", roots}}});
+    gltf["scene"] = 0;
+    std::ofstream(dir / "sphere.bin", std::ios::binary) << bin;
+    std::ofstream(dir / "sphere.gltf") << gltf.dump(1);
+    return dir / "sphere.gltf";
+}
+
+// Quaternion (x, y, z, w) turning -Z into the unit vector `d` (a light or spot pointing along d).
+json rotation_pointing(Float3 d) {
+    // Axis -Z x d, angle acos(-d.z).
+    const double ax = d[1], ay = -d[0];
+    const double angle = std::acos(std::clamp(-double(d[2]), -1.0, 1.0));
+    const double len = std::sqrt(ax * ax + ay * ay);
+    if (len < 1e-12) return {0.0, 0.0, 0.0, 1.0};
+    const double s = std::sin(0.5 * angle) / len;
+    return {ax * s, ay * s, 0.0, std::cos(0.5 * angle)};
+}
+
+// The same sphere transformed by hand, with the camera and one directional light of irradiance E from
+// `towards_light`: the independent construction the loaded scenes are compared with.
+SimScene reference_scene(Float3 towards_light, float irradiance, float roughness) {
+    SimScene scene;
+    scene.name = "reference";
+    SimObject object;
+    object.mesh = unit_sphere();
+    const float c = float(std::cos(kYaw)), s = float(std::sin(kYaw));
+    const auto rotate = [&](float* v) {
+        const float x = v[0], z = v[2];
+        v[0] = c * x + s * z;
+        v[2] = -s * x + c * z;
+    };
+    for (size_t v = 0; v < object.mesh.vertex_count(); ++v) {
+        float* p = &object.mesh.positions[3 * v];
+        rotate(p);
+        for (int a = 0; a < 3; ++a) p[a] = kCentre[a] + kSphereRadius * p[a];
+        rotate(&object.mesh.normals[3 * v]);
+        rotate(&object.mesh.tangents[4 * v]);
+    }
+    object.material.roughness = roughness;
+    scene.objects.push_back(std::move(object));
+    scene.camera = {{kCentre[0], kCentre[1], kCentre[2] + 1.8f}, kCentre, {0, 1, 0}, 40.0f};
+    scene.object_radius = kSphereRadius;
+    SimLight light;
+    light.direction = towards_light;
+    light.radiance = irradiance;
+    scene.lights.push_back(light);
+    return scene;
+}
+
+SimImage ground_truth(const SimScene& scene, int size = 48, int spp = 16) {
+    auto renderer = SimRenderer::create(scene, size, size, environment().include);
+    EXPECT_TRUE(renderer.ok()) << (renderer.ok() ? "" : renderer.error().message);
+    return renderer.ok() ? (*renderer)->render_ground_truth(0, spp) : SimImage(size, size, 2);
+}
+
+// RMSE of the radiance divided by the reference's mean radiance.
+double relative_rmse(const SimImage& a, const SimImage& reference) {
+    double sum = 0, mean = 0;
+    for (size_t i = 0; i < reference.texel_count(); ++i) {
+        const double d = a.pixels[2 * i] - reference.pixels[2 * i];
+        sum += d * d;
+        mean += reference.pixels[2 * i];
+    }
+    const double n = double(reference.texel_count());
+    return std::sqrt(sum / n) / std::max(mean / n, 1e-12);
+}
+
+double total_radiance(const SimImage& image) {
+    double sum = 0;
+    for (size_t i = 0; i < image.texel_count(); ++i) sum += image.pixels[2 * i];
+    return sum;
+}
+
+const Float3 kTowardsLight{0.0f, 0.5f, 0.8660254f};
+
+TEST(VerifySceneFile, NodeTransformsCameraAndDirectionalLightMatchAHandBuiltScene) {
+    ASSERT_TRUE(environment().error.empty()) << environment().error;
+    TempDir dir;
+    const json light = {{"type", "directional"}, {"intensity", 4.0}, {"color", {0.5, 0.5, 0.5}}};
+    auto scene = load_sim_scene(write_sphere_gltf(dir.path(), {{light, {{"rotation", rotation_pointing({-kTowardsLight[0], -kTowardsLight[1], -kTowardsLight[2]})}}}},
+                                                  {{"pbrMetallicRoughness", {{"roughnessFactor", 0.3}}}}));
+    ASSERT_TRUE(scene.ok()) << scene.error().message;
+    ASSERT_EQ(scene->objects.size(), 1u);
+    ASSERT_EQ(scene->lights.size(), 1u);
+    EXPECT_EQ(scene->lights[0].type, SimLight::Type::Directional);
+    EXPECT_NEAR(scene->lights[0].radiance, 2.0f, 1e-6f);  // intensity x luminance of the grey colour
+    for (int a = 0; a < 3; ++a) {
+        EXPECT_NEAR(scene->lights[0].direction[a], kTowardsLight[a], 1e-5f);
+        EXPECT_NEAR(scene->camera.position[a], (Float3{kCentre[0], kCentre[1], kCentre[2] + 1.8f})[a], 1e-5f);
+        EXPECT_NEAR(scene->camera.target[a], kCentre[a], 1e-4f);
+    }
+    EXPECT_NEAR(scene->camera.fov_y_degrees, 40.0f, 1e-4f);
+    EXPECT_NEAR(scene->objects[0].material.roughness, 0.3f, 1e-6f);
+    EXPECT_NEAR(scene->object_radius, kSphereRadius, 1e-3f);
+
+    const SimImage loaded = ground_truth(*scene);
+    const SimImage reference = ground_truth(reference_scene(kTowardsLight, 2.0f, 0.3f));
+    EXPECT_GT(total_radiance(reference), 0.0);
+    EXPECT_LT(relative_rmse(loaded, reference), 1e-3);
+}
+
+TEST(VerifySceneFile, FarPointAndSpotLightsGiveTheIrradianceOfADirectionalLight) {
+    ASSERT_TRUE(environment().error.empty()) << environment().error;
+    // At distance D an intensity of E D^2 gives irradiance E; the sphere (radius 0.5) is so small against D
+    // that direction and falloff vary by under 0.1% across it.
+    constexpr double D = 2000.0;
+    const json position = {kCentre[0] + D * kTowardsLight[0], kCentre[1] + D * kTowardsLight[1],
+                           kCentre[2] + D * kTowardsLight[2]};
+    const SimImage reference = ground_truth(reference_scene(kTowardsLight, 1.5f, 0.3f));
+    const json material = {{"pbrMetallicRoughness", {{"roughnessFactor", 0.3}}}};
+    {
+        TempDir dir;
+        const json point = {{"type", "point"}, {"intensity", 1.5 * D * D}, {"range", 100.0 * D}};
+        auto scene = load_sim_scene(write_sphere_gltf(dir.path(), {{point, {{"translation", position}}}}, material));
+        ASSERT_TRUE(scene.ok()) << scene.error().message;
+        EXPECT_EQ(scene->lights[0].type, SimLight::Type::Point);
+        EXPECT_LT(relative_rmse(ground_truth(*scene), reference), 5e-3);
+    }
+    const json spot_towards = rotation_pointing({-kTowardsLight[0], -kTowardsLight[1], -kTowardsLight[2]});
+    {
+        TempDir dir;
+        const json spot = {{"type", "spot"}, {"intensity", 1.5 * D * D}, {"spot", {{"innerConeAngle", 0.2}, {"outerConeAngle", 0.4}}}};
+        auto scene = load_sim_scene(
+            write_sphere_gltf(dir.path(), {{spot, {{"translation", position}, {"rotation", spot_towards}}}}, material));
+        ASSERT_TRUE(scene.ok()) << scene.error().message;
+        EXPECT_EQ(scene->lights[0].type, SimLight::Type::Spot);
+        EXPECT_LT(relative_rmse(ground_truth(*scene), reference), 5e-3);
+    }
+    {
+        // The same spot turned away from the sphere lights nothing.
+        TempDir dir;
+        const json spot = {{"type", "spot"}, {"intensity", 1.5 * D * D}, {"spot", {{"innerConeAngle", 0.2}, {"outerConeAngle", 0.4}}}};
+        auto scene = load_sim_scene(write_sphere_gltf(
+            dir.path(), {{spot, {{"translation", position}, {"rotation", rotation_pointing(kTowardsLight)}}}}, material));
+        ASSERT_TRUE(scene.ok()) << scene.error().message;
+        EXPECT_EQ(total_radiance(ground_truth(*scene)), 0.0);
+    }
+}
+
+TEST(VerifySceneFile, WithoutLightsAndCameraTheSceneGetsADefaultLightAndAFramingOrbit) {
+    ASSERT_TRUE(environment().error.empty()) << environment().error;
+    TempDir dir;
+    auto scene = load_sim_scene(write_sphere_gltf(dir.path(), {}, json::object(), false));
+    ASSERT_TRUE(scene.ok()) << scene.error().message;
+    ASSERT_EQ(scene->lights.size(), 1u);
+    EXPECT_EQ(scene->lights[0].type, SimLight::Type::Directional);
+    EXPECT_FALSE(scene->notes.empty());
+    EXPECT_EQ(scene->objects[0].material.roughness, 1.0f);  // glTF default material
+    for (int a = 0; a < 3; ++a) EXPECT_NEAR(scene->camera.target[a], kCentre[a], 1e-3f);
+    // The whole sphere is in view and fills a good part of it: coverage reaches the middle, not the border.
+    const SimImage gt = ground_truth(*scene, 32, 4);
+    double border = 0, covered = 0;
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 32; ++x) {
+            const float c = gt.texel(x, y)[1];
+            covered += c;
+            if (x == 0 || y == 0 || x == 31 || y == 31) border += c;
+        }
+    EXPECT_EQ(border, 0.0);
+    EXPECT_GT(covered, 0.3 * 32 * 32);
+}
+
+TEST(VerifySceneFile, MaterialTexturesAreDecodedWithTheirFactorAndScale) {
+    TempDir dir;
+    // 4 x 4 metallicRoughness map with G = x / 3 and a normal map tilted along +x by 0.6 (encoded).
+    Image orm(4, 4, 3), normal(4, 4, 3);
+    for (int y = 0; y < 4; ++y)
+        for (int x = 0; x < 4; ++x) {
+            orm.texel(x, y)[1] = float(x) / 3.0f;
+            const double nx = 0.6, nz = 0.8;
+            normal.texel(x, y)[0] = float(0.5 * (nx + 1));
+            normal.texel(x, y)[1] = 0.5f;
+            normal.texel(x, y)[2] = float(0.5 * (nz + 1));
+        }
+    ASSERT_TRUE(io::write_image(dir.path() / "orm.png", orm, 16).ok());
+    ASSERT_TRUE(io::write_image(dir.path() / "normal.png", normal, 16).ok());
+    json material = {{"pbrMetallicRoughness",
+                      {{"roughnessFactor", 0.5}, {"metallicRoughnessTexture", {{"index", 0}}}}},
+                     {"normalTexture", {{"index", 1}, {"scale", 0.5}}}};
+    const fs::path path = write_sphere_gltf(dir.path(), {}, material);
+    {
+        std::ifstream in(path);
+        json gltf = json::parse(in);
+        gltf["images"] = json::array({{{"uri", "orm.png"}}, {{"uri", "normal.png"}}});
+        gltf["textures"] = json::array({{{"source", 0}}, {{"source", 1}}});
+        std::ofstream(path) << gltf.dump(1);
+    }
+    auto scene = load_sim_scene(path);
+    ASSERT_TRUE(scene.ok()) << scene.error().message;
+    ASSERT_EQ(scene->roughness_maps.size(), 1u);
+    ASSERT_EQ(scene->normal_maps.size(), 1u);
+    // Texels below the simulator's smallest roughness (0.045) are raised to it.
+    for (int x = 0; x < 4; ++x)
+        EXPECT_NEAR(scene->roughness_maps[0].texel(x, 2)[0], std::max(0.045, 0.5 * x / 3.0), 1e-4);
+    // glTF normalTexture scale multiplies x and y before normalising: (0.3, 0, 0.8) / |.|.
+    const double l = std::sqrt(0.3 * 0.3 + 0.8 * 0.8);
+    const float* n = scene->normal_maps[0].texel(1, 1);
+    EXPECT_NEAR(2.0 * n[0] - 1.0, 0.3 / l, 1e-3);
+    EXPECT_NEAR(2.0 * n[1] - 1.0, 0.0, 1e-3);
+    EXPECT_NEAR(2.0 * n[2] - 1.0, 0.8 / l, 1e-3);
+    EXPECT_EQ(scene->objects[0].material.normal_map, 0);
+    EXPECT_EQ(scene->objects[0].material.roughness_map, 0);
+}
+
+TEST(VerifySceneFile, EveryCandidateRunsOnASceneFileWithEstimatedCurvature) {
+    ASSERT_TRUE(environment().error.empty()) << environment().error;
+    TempDir dir;
+    Image normal(64, 64, 3);
+    for (int y = 0; y < 64; ++y)
+        for (int x = 0; x < 64; ++x) {
+            // Ribs along x: n = (-h', 0, 1) / |.|, h' = 0.4 cos(2 pi 8 x / 64).
+            const double g = 0.4 * std::cos(2 * kPi * 8 * x / 64.0), l = std::sqrt(1 + g * g);
+            normal.texel(x, y)[0] = float(0.5 * (-g / l + 1));
+            normal.texel(x, y)[1] = 0.5f;
+            normal.texel(x, y)[2] = float(0.5 * (1 / l + 1));
+        }
+    ASSERT_TRUE(io::write_image(dir.path() / "normal.png", normal, 16).ok());
+    const fs::path path = write_sphere_gltf(dir.path(), {}, {{"pbrMetallicRoughness", {{"roughnessFactor", 0.25}}},
+                                                             {"normalTexture", {{"index", 0}}}});
+    {
+        std::ifstream in(path);
+        json gltf = json::parse(in);
+        gltf["images"] = json::array({{{"uri", "normal.png"}}});
+        gltf["textures"] = json::array({{{"source", 0}}});
+        std::ofstream(path) << gltf.dump(1);
+    }
+    auto scene = load_sim_scene(path);
+    ASSERT_TRUE(scene.ok()) << scene.error().message;
+    EXPECT_FALSE(has_exact_curvature(*scene));
+    VerifyOptions options;
+    options.include_glsl = environment().include;
+    options.width = options.height = 32;
+    options.spp = 16;
+    options.frames = 2;
+    options.timing_repeats = 0;
+    options.spirv = false;
+    auto report = run_verify(*scene, options);
+    ASSERT_TRUE(report.ok()) << report.error().message;
+    EXPECT_TRUE(report->from_file);
+    bool baked_texture = false, baked_curvature = false;
+    for (const CandidateReport& c : report->candidates) {
+        EXPECT_TRUE(std::isfinite(c.metrics.rmse) && std::isfinite(c.metrics.flicker_linear)) << c.name;
+        EXPECT_NE(c.name, "baked-curvature/shape-operator");
+        if (c.name == "baked-texture") baked_texture = c.bake_ms.has_value();
+        // Curvature comes from the default estimator, timed as a bake.
+        if (c.name == "baked-curvature") baked_curvature = c.bake_ms.has_value();
+    }
+    EXPECT_TRUE(baked_texture);
+    EXPECT_TRUE(baked_curvature);
+}
+
+TEST(VerifySceneFile, MaterialsWithoutANormalMapKeepTheirRoughnessInBakedCandidates) {
+    ASSERT_TRUE(environment().error.empty()) << environment().error;
+    // Two spheres side by side, only the right one normal-mapped: nothing is baked for the left one, so the
+    // baked-texture candidate must shade it exactly like no filtering (its own roughness, no kernel).
+    auto bumpy = make_builtin_scene("bumpy-sphere", 0.3f, 0.5f);
+    ASSERT_TRUE(bumpy.ok());
+    SimScene scene = *bumpy;
+    scene.objects.push_back(scene.objects[0]);
+    for (size_t o = 0; o < 2; ++o) {
+        TriMesh& m = scene.objects[o].mesh;
+        for (size_t v = 0; v < m.vertex_count(); ++v) m.positions[3 * v] += o == 0 ? -1.2f : 1.2f;
+    }
+    scene.objects[0].material.normal_map = -1;
+    scene.camera = {{0.0f, 0.0f, 6.0f}, {0, 0, 0}, {0, 1, 0}, 40.0f};
+    VerifyOptions options;
+    options.include_glsl = environment().include;
+    options.width = 64;
+    options.height = 32;
+    options.spp = 4;
+    options.frames = 1;
+    options.timing_repeats = 0;
+    options.spirv = false;
+    options.variants = false;
+    options.only = {"baked-texture"};
+    auto report = run_verify(scene, options);
+    ASSERT_TRUE(report.ok()) << report.error().message;
+    ASSERT_EQ(report->candidates.size(), 2u);
+    const SimImage& none = report->candidates[0].image;
+    const SimImage& baked = report->candidates[1].image;
+    double left = 0, right = 0, difference_left = 0, difference_right = 0;
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 64; ++x) {
+            const double d = std::abs(double(baked.texel(x, y)[0]) - none.texel(x, y)[0]);
+            (x < 32 ? left : right) += none.texel(x, y)[0];
+            (x < 32 ? difference_left : difference_right) += d;
+        }
+    ASSERT_GT(left, 0.0);
+    EXPECT_LT(difference_left, 1e-4 * left);
+    EXPECT_GT(difference_right, 1e-3 * right);  // the normal-mapped sphere does change
+}
+
+TEST(VerifySceneFile, BadFilesGiveAnErrorNamingTheFile) {
+    TempDir dir;
+    auto missing = load_sim_scene(dir.path() / "nope.gltf");
+    ASSERT_FALSE(missing.ok());
+    EXPECT_NE(missing.error().message.find("nope.gltf"), std::string::npos);
+    std::ofstream(dir.path() / "broken.gltf") << "{ not json";
+    auto broken = load_sim_scene(dir.path() / "broken.gltf");
+    ASSERT_FALSE(broken.ok());
+    EXPECT_NE(broken.error().message.find("broken.gltf"), std::string::npos);
+    // A node hierarchy with a cycle must not hang.
+    const fs::path path = write_sphere_gltf(dir.path(), {}, json::object(), false);
+    std::ifstream in(path);
+    json gltf = json::parse(in);
+    in.close();
+    gltf["nodes"][0]["children"] = {0};
+    std::ofstream(path) << gltf.dump();
+    auto cyclic = load_sim_scene(path);
+    ASSERT_FALSE(cyclic.ok());
+    EXPECT_NE(cyclic.error().message.find("sphere.gltf"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace specbake::cli
