@@ -1,5 +1,6 @@
 // Speed of the mesh stages on a generated 1M-triangle mesh (issue 4 item 7): Assimp import of a binary PLY
-// written to a temporary file, preparation (validation + tangent generation), and curvature per estimator
+// written to a temporary file, preparation (validation + tangent generation) and its OpenMesh half-edge
+// build (against building the same mesh face by face with OpenMesh's add_face), and curvature per estimator
 // on 1 and 2 threads. Goal for the default estimator: >= 2M faces/s on 2 threads.
 // Usage: bench_mesh [--benchmark_filter=REGEX]  (see --help of Google Benchmark)
 #include <benchmark/benchmark.h>
@@ -11,6 +12,7 @@
 #include "io/mesh_import.h"
 #include "mesh/curvature.h"
 #include "mesh/generate_tangents.h"
+#include "mesh/halfedge_mesh.h"
 #include "mesh/prepare_mesh.h"
 #include "mesh/procedural_shapes.h"
 
@@ -82,6 +84,49 @@ void BM_Prepare1M(benchmark::State& state) {
         benchmark::Counter(double(million().triangle_count()) * double(state.iterations()), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_Prepare1M)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+
+WeldedTopology million_positions() {
+    WeldOptions by_position;
+    by_position.split_by_normals = false;
+    return weld_by_position(million(), by_position);
+}
+
+void BM_HalfEdgeMesh1M(benchmark::State& state) {
+    const WeldedTopology positions = million_positions();
+    for (auto _ : state) {
+        HalfEdgeTopology h = build_halfedge_mesh(million(), positions);
+        benchmark::DoNotOptimize(h.mesh.n_faces());
+    }
+    state.counters["faces/s"] =
+        benchmark::Counter(double(million().triangle_count()) * double(state.iterations()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_HalfEdgeMesh1M)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+
+// The same topology through OpenMesh's add_face, one face at a time (the mesh is manifold, so no face is
+// refused): what build_halfedge_mesh is measured against.
+void BM_HalfEdgeMeshByAddFace1M(benchmark::State& state) {
+    const TriMesh& m = million();
+    const WeldedTopology positions = million_positions();
+    for (auto _ : state) {
+        HalfEdgeMesh h;
+        h.reserve(positions.position_count, 3 * m.triangle_count() / 2, m.triangle_count());
+        std::vector<HalfEdgeMesh::VertexHandle> vh(positions.position_count);
+        std::vector<char> made(positions.position_count, 0);
+        for (size_t v = 0; v < m.vertex_count(); ++v) {
+            const uint32_t p = positions.position_id[v];
+            if (made[p]) continue;
+            made[p] = 1;
+            vh[p] = h.add_vertex(HalfEdgeMesh::Point(m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]));
+        }
+        for (size_t t = 0; t < m.triangle_count(); ++t)
+            h.add_face(vh[positions.position_id[m.indices[3 * t]]], vh[positions.position_id[m.indices[3 * t + 1]]],
+                       vh[positions.position_id[m.indices[3 * t + 2]]]);
+        benchmark::DoNotOptimize(h.n_faces());
+    }
+    state.counters["faces/s"] =
+        benchmark::Counter(double(million().triangle_count()) * double(state.iterations()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_HalfEdgeMeshByAddFace1M)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
 
 void curvature(benchmark::State& state, const TriMesh& mesh, CurvatureEstimator estimator) {
     CurvatureOptions options;
