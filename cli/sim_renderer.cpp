@@ -222,6 +222,13 @@ Result<GLuint> compile_program(const std::string& vertex, const std::string& fra
     return link_program(*vs, *fs);
 }
 
+void set_trilinear_repeat(GLuint tex) {
+    glTextureParameteri(tex, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+    glTextureParameteri(tex, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTextureParameteri(tex, GL_TEXTURE_WRAP_S, GL_REPEAT);
+    glTextureParameteri(tex, GL_TEXTURE_WRAP_T, GL_REPEAT);
+}
+
 GLuint upload_mips(const MipChain& chain, int first_channel, int channel_count) {
     static constexpr GLenum internal[] = {0, GL_R32F, GL_RG32F, GL_RGB32F, GL_RGBA32F};
     static constexpr GLenum format[] = {0, GL_RED, GL_RG, GL_RGB, GL_RGBA};
@@ -238,10 +245,20 @@ GLuint upload_mips(const MipChain& chain, int first_channel, int channel_count) 
         glTextureSubImage2D(tex, GLint(level), 0, 0, im.width, im.height, format[channel_count], GL_FLOAT,
                             buffer.data());
     }
-    glTextureParameteri(tex, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
-    glTextureParameteri(tex, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTextureParameteri(tex, GL_TEXTURE_WRAP_S, GL_REPEAT);
-    glTextureParameteri(tex, GL_TEXTURE_WRAP_T, GL_REPEAT);
+    set_trilinear_repeat(tex);
+    return tex;
+}
+
+// A 1- or 3-channel map with a full chain of box-filtered mips (glGenerateTextureMipmap), trilinear, repeat.
+GLuint upload_with_box_mips(const Image& map) {
+    const bool rgb = map.channels == 3;
+    GLuint tex = 0;
+    const int levels = 1 + int(std::floor(std::log2(double(std::max(map.width, map.height)))));
+    glCreateTextures(GL_TEXTURE_2D, 1, &tex);
+    glTextureStorage2D(tex, levels, rgb ? GL_RGB32F : GL_R32F, map.width, map.height);
+    glTextureSubImage2D(tex, 0, 0, 0, map.width, map.height, rgb ? GL_RGB : GL_RED, GL_FLOAT, map.pixels.data());
+    glGenerateTextureMipmap(tex);
+    set_trilinear_repeat(tex);
     return tex;
 }
 
@@ -452,35 +469,9 @@ Result<std::unique_ptr<SimRenderer>> SimRenderer::create(const SimScene& scene, 
         im.object_sets.push_back(texture_set_of(scene, o));
     }
 
-    for (const Image& map : scene.normal_maps) {
-        GLuint tex = 0;
-        const int levels = 1 + int(std::floor(std::log2(double(std::max(map.width, map.height)))));
-        glCreateTextures(GL_TEXTURE_2D, 1, &tex);
-        glTextureStorage2D(tex, levels, GL_RGB32F, map.width, map.height);
-        glTextureSubImage2D(tex, 0, 0, 0, map.width, map.height, GL_RGB, GL_FLOAT, map.pixels.data());
-        // The engine's usual normal mips: box-filtered encoded normals, renormalised in the shader.
-        glGenerateTextureMipmap(tex);
-        glTextureParameteri(tex, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
-        glTextureParameteri(tex, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-        glTextureParameteri(tex, GL_TEXTURE_WRAP_S, GL_REPEAT);
-        glTextureParameteri(tex, GL_TEXTURE_WRAP_T, GL_REPEAT);
-        im.normal_maps.push_back(tex);
-    }
-
-    for (const Image& map : scene.roughness_maps) {
-        // The engine's usual roughness mips: box-filtered r.
-        GLuint tex = 0;
-        const int levels = 1 + int(std::floor(std::log2(double(std::max(map.width, map.height)))));
-        glCreateTextures(GL_TEXTURE_2D, 1, &tex);
-        glTextureStorage2D(tex, levels, GL_R32F, map.width, map.height);
-        glTextureSubImage2D(tex, 0, 0, 0, map.width, map.height, GL_RED, GL_FLOAT, map.pixels.data());
-        glGenerateTextureMipmap(tex);
-        glTextureParameteri(tex, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
-        glTextureParameteri(tex, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-        glTextureParameteri(tex, GL_TEXTURE_WRAP_S, GL_REPEAT);
-        glTextureParameteri(tex, GL_TEXTURE_WRAP_T, GL_REPEAT);
-        im.roughness_maps.push_back(tex);
-    }
+    // The engine's usual mips: box-filtered encoded normals (renormalised in the shader) and box-filtered r.
+    for (const Image& map : scene.normal_maps) im.normal_maps.push_back(upload_with_box_mips(map));
+    for (const Image& map : scene.roughness_maps) im.roughness_maps.push_back(upload_with_box_mips(map));
 
     auto gt = compile_program(kVertexShader, std::string("#version 450 core\n") + kFragmentInputs + kGroundTruthMain);
     if (!gt) return make_error("ground-truth " + gt.error().message);

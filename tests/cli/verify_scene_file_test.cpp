@@ -3,12 +3,13 @@
 // ground truth against an independent construction: the same sphere transformed by hand and rendered as
 // a built-in-style scene, far point and spot lights against a directional light of equal irradiance,
 // texture values decoded and scaled by hand.
-#include "cli/gl_context.h"
 #include "cli/job_verify.h"
 #include "cli/sim_renderer.h"
 #include "cli/sim_scene.h"
 #include "cli/sim_scene_file.h"
 #include "io/image_io.h"
+
+#include "tests/cli/sim_test_environment.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -27,30 +28,7 @@ namespace {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 
-struct GlEnvironment {
-    std::unique_ptr<GlContext> context;
-    std::string error;
-    std::string include;
-};
-
-GlEnvironment& environment() {
-    static GlEnvironment env = [] {
-        GlEnvironment e;
-        auto context = GlContext::create();
-        if (!context) {
-            e.error = context.error().message;
-            return e;
-        }
-        e.context = std::move(*context);
-        std::ifstream in(std::string(SPECBAKE_SOURCE_DIR) + "/shaders/specaa.glsl");
-        std::stringstream text;
-        text << in.rdbuf();
-        e.include = text.str();
-        if (e.include.empty()) e.error = "cannot read shaders/specaa.glsl";
-        return e;
-    }();
-    return env;
-}
+test::SimTestEnvironment& environment() { return test::sim_environment(); }
 
 class TempDir {
 public:
@@ -231,7 +209,7 @@ double total_radiance(const SimImage& image) {
 const Float3 kTowardsLight{0.0f, 0.5f, 0.8660254f};
 
 TEST(VerifySceneFile, NodeTransformsCameraAndDirectionalLightMatchAHandBuiltScene) {
-    ASSERT_TRUE(environment().error.empty()) << environment().error;
+    SPECBAKE_REQUIRE_GL();
     TempDir dir;
     const json light = {{"type", "directional"}, {"intensity", 4.0}, {"color", {0.5, 0.5, 0.5}}};
     auto scene = load_sim_scene(write_sphere_gltf(dir.path(), {{light, {{"rotation", rotation_pointing({-kTowardsLight[0], -kTowardsLight[1], -kTowardsLight[2]})}}}},
@@ -257,7 +235,7 @@ TEST(VerifySceneFile, NodeTransformsCameraAndDirectionalLightMatchAHandBuiltScen
 }
 
 TEST(VerifySceneFile, FarPointAndSpotLightsGiveTheIrradianceOfADirectionalLight) {
-    ASSERT_TRUE(environment().error.empty()) << environment().error;
+    SPECBAKE_REQUIRE_GL();
     // At distance D an intensity of E D^2 gives irradiance E; the sphere (radius 0.5) is so small against D
     // that direction and falloff vary by under 0.1% across it.
     constexpr double D = 2000.0;
@@ -295,7 +273,7 @@ TEST(VerifySceneFile, FarPointAndSpotLightsGiveTheIrradianceOfADirectionalLight)
 }
 
 TEST(VerifySceneFile, WithoutLightsAndCameraTheSceneGetsADefaultLightAndAFramingOrbit) {
-    ASSERT_TRUE(environment().error.empty()) << environment().error;
+    SPECBAKE_REQUIRE_GL();
     TempDir dir;
     auto scene = load_sim_scene(write_sphere_gltf(dir.path(), {}, json::object(), false));
     ASSERT_TRUE(scene.ok()) << scene.error().message;
@@ -360,7 +338,7 @@ TEST(VerifySceneFile, MaterialTexturesAreDecodedWithTheirFactorAndScale) {
 }
 
 TEST(VerifySceneFile, EveryCandidateRunsOnASceneFileWithEstimatedCurvature) {
-    ASSERT_TRUE(environment().error.empty()) << environment().error;
+    SPECBAKE_REQUIRE_GL();
     TempDir dir;
     Image normal(64, 64, 3);
     for (int y = 0; y < 64; ++y)
@@ -407,7 +385,7 @@ TEST(VerifySceneFile, EveryCandidateRunsOnASceneFileWithEstimatedCurvature) {
 }
 
 TEST(VerifySceneFile, MaterialsWithoutANormalMapKeepTheirRoughnessInBakedCandidates) {
-    ASSERT_TRUE(environment().error.empty()) << environment().error;
+    SPECBAKE_REQUIRE_GL();
     // Two spheres side by side, only the right one normal-mapped: nothing is baked for the left one, so the
     // baked-texture candidate must shade it exactly like no filtering (its own roughness, no kernel).
     auto bumpy = make_builtin_scene("bumpy-sphere", 0.3f, 0.5f);

@@ -1,10 +1,11 @@
 // The simulator on the headless OpenGL context (llvmpipe on CI), at small sizes: the ground truth
 // converges and agrees with an unfiltered render where the image has no sub-pixel detail, and the
 // accuracy claims of the papers that hold robustly in measurement (see each test for what is asserted).
-#include "cli/gl_context.h"
 #include "cli/job_verify.h"
 #include "cli/sim_renderer.h"
 #include "cli/sim_scene.h"
+
+#include "tests/cli/sim_test_environment.h"
 
 #include <gtest/gtest.h>
 
@@ -15,35 +16,7 @@
 namespace specbake::cli {
 namespace {
 
-struct GlEnvironment {
-    std::unique_ptr<GlContext> context;
-    std::string error;
-    std::string include;
-};
-
-GlEnvironment& environment() {
-    static GlEnvironment env = [] {
-        GlEnvironment e;
-        auto context = GlContext::create();
-        if (!context) {
-            e.error = context.error().message;
-            return e;
-        }
-        e.context = std::move(*context);
-        std::ifstream in(std::string(SPECBAKE_SOURCE_DIR) + "/shaders/specaa.glsl");
-        std::stringstream text;
-        text << in.rdbuf();
-        e.include = text.str();
-        if (e.include.empty()) e.error = "cannot read shaders/specaa.glsl";
-        return e;
-    }();
-    return env;
-}
-
-#define REQUIRE_GL()                                          \
-    do {                                                      \
-        ASSERT_TRUE(environment().error.empty()) << environment().error; \
-    } while (false)
+test::SimTestEnvironment& environment() { return test::sim_environment(); }
 
 SceneReport verify(const std::string& name, float alpha, int size, int spp, int frames,
                    std::vector<std::string> only = {}) {
@@ -86,7 +59,7 @@ double rmse(const SimImage& a, const SimImage& reference) {
 }
 
 TEST(VerifySimulation, GroundTruthConvergesToFourTimesTheSamples) {
-    REQUIRE_GL();
+    SPECBAKE_REQUIRE_GL();
     auto scene = make_builtin_scene("torus", std::sqrt(0.05f));
     ASSERT_TRUE(scene.ok());
     auto renderer = SimRenderer::create(*scene, 48, 48, environment().include);
@@ -103,7 +76,7 @@ TEST(VerifySimulation, GroundTruthConvergesToFourTimesTheSamples) {
 }
 
 TEST(VerifySimulation, GroundTruthAgreesWithUnfilteredWhereTheImageIsSmooth) {
-    REQUIRE_GL();
+    SPECBAKE_REQUIRE_GL();
     // alpha = 0.2 on a sphere at 64 x 64: the highlight spans many pixels, so the pixel filter changes little
     // and one centred sample of the include's GGX must match the independently written ground-truth GGX.
     const SceneReport r = verify("sphere", 0.2f, 64, 64, 1, {"none"});
@@ -114,7 +87,7 @@ TEST(VerifySimulation, GroundTruthAgreesWithUnfilteredWhereTheImageIsSmooth) {
 }
 
 TEST(VerifySimulation, ProjectedBeatsSlopeSpaceAtGrazingAnglesOnTheCylinder) {
-    REQUIRE_GL();
+    SPECBAKE_REQUIRE_GL();
     // TK21 Fig. 13 (non-axis-aligned) and Fig. 14 (axis-aligned).
     const SceneReport r = verify("cylinder", 0.01f, 96, 64, 2, {"slope", "projected", "slope-aa", "projected-aa"});
     for (auto [slope, projected] : {std::pair{"slope", "projected"}, std::pair{"slope-aa", "projected-aa"}}) {
@@ -125,7 +98,7 @@ TEST(VerifySimulation, ProjectedBeatsSlopeSpaceAtGrazingAnglesOnTheCylinder) {
 }
 
 TEST(VerifySimulation, EveryFilterReducesFlickerOnTheGlossyTorus) {
-    REQUIRE_GL();
+    SPECBAKE_REQUIRE_GL();
     const SceneReport r = verify("torus", 0.01f, 96, 64, 6);
     const double none = metrics(r, "none").flicker_linear;
     EXPECT_GT(none, 0.0);
@@ -136,7 +109,7 @@ TEST(VerifySimulation, EveryFilterReducesFlickerOnTheGlossyTorus) {
 }
 
 TEST(VerifySimulation, DefaultIsAtLeastAsAccurateAsTheBestDerivativeMethodOnTheNormalMappedSphere) {
-    REQUIRE_GL();
+    SPECBAKE_REQUIRE_GL();
     // Linear RMSE: the baked roughness restores the normal map's sub-pixel variance that no screen-space
     // derivative sees (tone-mapped RMSE does not separate them: see the bench notes).
     const SceneReport r = verify("bumpy-sphere", 0.05f, 96, 64, 2);
@@ -151,7 +124,7 @@ TEST(VerifySimulation, DefaultIsAtLeastAsAccurateAsTheBestDerivativeMethodOnTheN
 }
 
 TEST(VerifySimulation, BakedCurvatureIsAtLeastAsStableAsNormalDerivativesOnCurvedGlossyScenes) {
-    REQUIRE_GL();
+    SPECBAKE_REQUIRE_GL();
     // What holds robustly on these finely tessellated analytic meshes: the curvature kernel flickers no more
     // than the quad-derivative kernel with the same (mean) reduction, and less than the isotropic peers.
     for (const char* scene : {"torus", "sphere"}) {
