@@ -1,6 +1,7 @@
 // specbake verify: scores every specular anti-aliasing candidate against the ground truth on one scene.
 #include "cli/command.h"
 #include "cli/gl_context.h"
+#include "cli/job_pipeline.h"
 #include "cli/job_verify.h"
 #include "cli/sim_scene_file.h"
 #include "cli/sim_strips.h"
@@ -45,6 +46,8 @@ int run_verify_command(const VerifyCommandOptions& o) {
     options.timing_repeats = o.repeats;
     options.variants = !o.no_variants;
     options.only = o.only;
+    if (run_settings().verbosity != Verbosity::quiet)
+        options.progress = [](const std::string& line) { std::fprintf(stderr, "specbake: %s\n", line.c_str()); };
     if (o.scene_file.empty() == o.builtin.empty()) {
         print_error("give either a scene file or --builtin NAME (see specbake verify --help)");
         return kExitUsage;
@@ -54,7 +57,7 @@ int run_verify_command(const VerifyCommandOptions& o) {
         print_error(scene.error().message);
         return o.builtin.empty() ? kExitFailed : kExitUsage;
     }
-    if (!o.scene_file.empty())
+    if (!o.scene_file.empty() && options.progress)
         std::fprintf(stderr, "specbake: %s: %zu objects, %zu normal maps, %zu roughness maps, %zu lights\n",
                      o.scene_file.c_str(), scene->objects.size(), scene->normal_maps.size(),
                      scene->roughness_maps.size(), scene->lights.size());

@@ -88,6 +88,15 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
         bake_ms["curvature:" + bake.key] = total;
     }
 
+    const auto say = [&](const std::string& line) {
+        if (options.progress) options.progress(scene.name + ": " + line);
+    };
+    if (!bake_ms.empty()) {
+        std::string done;
+        for (const auto& [key, ms] : bake_ms) done += (done.empty() ? "" : ", ") + key + format(" %.0f ms", ms);
+        say("baked " + done);
+    }
+
     // Compile every candidate before rendering so a shader error fails fast.
     std::vector<int> ids;
     for (const SimCandidate& c : candidates) {
@@ -109,6 +118,8 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
             if (frame == 0 && options.keep_images) report.candidates[i].image = std::move(image);
         }
         if (frame == 0 && options.keep_images) report.ground_truth = std::move(gt);
+        say("frame " + std::to_string(frame + 1) + "/" + std::to_string(options.frames) + ": ground truth and " +
+            std::to_string(candidates.size()) + " candidates rendered");
     }
     report.ground_truth_ms = gt_total;
 
@@ -133,6 +144,7 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
         }
     }
     if (options.timing_repeats > 0) {
+        say("timing " + std::to_string(candidates.size()) + " candidates x " + std::to_string(options.timing_repeats));
         // Round robin over the candidates, so load changes on a shared machine hit all of them alike;
         // each sample is 4 back-to-back frames, the reported time the median sample per frame.
         constexpr int kDrawsPerSample = 4;

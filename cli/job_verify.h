@@ -8,6 +8,7 @@
 #include "cli/sim_metrics.h"
 #include "cli/sim_scene.h"
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -25,6 +26,8 @@ struct VerifyOptions {
     bool variants = true;     // include the bake variants
     std::vector<std::string> only;  // candidate names to keep ("none" is always kept); empty: all
     bool keep_images = true;  // keep frame 0 of every image for strips
+    // Receives one line per finished stage (bakes, each ground-truth frame, timing); may be empty.
+    std::function<void(const std::string&)> progress;
 };
 
 struct CandidateReport {
