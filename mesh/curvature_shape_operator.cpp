@@ -62,22 +62,8 @@ void face_shape(const TriMesh& mesh, const WeldedTopology& topology, const detai
     // Same test as detail::is_degenerate_triangle: smallest angle under ~1e-10 rad.
     if (!(twice_area > 1e-10 * lsum)) return;
 
-    // Mixed-Voronoi corner areas (Meyer et al. 2003, Fig. 4), as detail::mixed_voronoi_areas.
-    const double area = 0.5 * twice_area;
     double w[3];
-    if (l[0] > l[1] + l[2]) {
-        w[0] = 0.5 * area; w[1] = w[2] = 0.25 * area;
-    } else if (l[1] > l[0] + l[2]) {
-        w[1] = 0.5 * area; w[0] = w[2] = 0.25 * area;
-    } else if (l[2] > l[0] + l[1]) {
-        w[2] = 0.5 * area; w[0] = w[1] = 0.25 * area;
-    } else {
-        const double inv = 1.0 / (4.0 * area);
-        const double c0 = (l[1] + l[2] - l[0]) * inv, c1 = (l[0] + l[2] - l[1]) * inv, c2 = (l[0] + l[1] - l[2]) * inv;
-        w[0] = (l[1] * c1 + l[2] * c2) / 8.0;
-        w[1] = (l[0] * c0 + l[2] * c2) / 8.0;
-        w[2] = (l[0] * c0 + l[1] * c1) / 8.0;
-    }
+    detail::mixed_voronoi_areas(l[0], l[1], l[2], 0.5 * twice_area, w);
 
     double n[3][3];
     for (int i = 0; i < 3; ++i) {

@@ -37,14 +37,10 @@ inline void orthonormal_basis(const Vec3d& n, Vec3d& t, Vec3d& b) {
     b = Vec3d(bb, sign + n.y() * n.y() * a, -n.y());
 }
 
-// Mixed-Voronoi areas of the three corners of triangle (p0, p1, p2) (Meyer, Desbrun, Schroder & Barr 2003,
-// Fig. 4): the Voronoi region when no angle is obtuse, else half the area at the obtuse corner and a
-// quarter at the two others. Sum = triangle area. Returns false for zero-area triangles.
-inline bool mixed_voronoi_areas(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2, double w[3]) {
-    const Vec3d e0 = p2 - p1, e1 = p0 - p2, e2 = p1 - p0;  // e_i opposite corner i
-    const double area = 0.5 * e0.cross(e1).norm();
-    if (!(area > 0.0)) return false;
-    const double l0 = e0.squaredNorm(), l1 = e1.squaredNorm(), l2 = e2.squaredNorm();
+// Mixed-Voronoi areas of the three corners of a triangle (Meyer, Desbrun, Schroder & Barr 2003, Fig. 4),
+// from its squared edge lengths l_i (edge i opposite corner i) and its area (> 0): the Voronoi region when
+// no angle is obtuse, else half the area at the obtuse corner and a quarter at the two others. Sum = area.
+inline void mixed_voronoi_areas(double l0, double l1, double l2, double area, double w[3]) {
     // Corner i is obtuse when the opposite squared edge exceeds the sum of the two others.
     if (l0 > l1 + l2) {
         w[0] = 0.5 * area; w[1] = w[2] = 0.25 * area;
@@ -55,14 +51,12 @@ inline bool mixed_voronoi_areas(const Vec3d& p0, const Vec3d& p1, const Vec3d& p
     } else {
         // Voronoi area of corner i = (|e_j|^2 cot(angle k) + |e_k|^2 cot(angle j)) / 8, with
         // cot(angle i) = (l_j + l_k - l_i) / (4 area).
-        const double c0 = (l1 + l2 - l0) / (4.0 * area);
-        const double c1 = (l0 + l2 - l1) / (4.0 * area);
-        const double c2 = (l0 + l1 - l2) / (4.0 * area);
+        const double inv = 1.0 / (4.0 * area);
+        const double c0 = (l1 + l2 - l0) * inv, c1 = (l0 + l2 - l1) * inv, c2 = (l0 + l1 - l2) * inv;
         w[0] = (l1 * c1 + l2 * c2) / 8.0;
         w[1] = (l0 * c0 + l2 * c2) / 8.0;
         w[2] = (l0 * c0 + l1 * c1) / 8.0;
     }
-    return true;
 }
 
 }  // namespace specbake::detail
