@@ -1,10 +1,13 @@
 // One headless GL context and the runtime include text for every simulator test of this executable.
+// SPECBAKE_REQUIRE_GL() skips the test when SPECBAKE_NO_GL=1 (as the GL suite does) and fails with the
+// reason when no context can be created.
 #pragma once
 
 #include "cli/gl_context.h"
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <fstream>
 #include <memory>
 #include <sstream>
@@ -17,6 +20,11 @@ struct SimTestEnvironment {
     std::string error;    // why there is no context (reported by the tests, never skipped)
     std::string include;  // shaders/specaa.glsl
 };
+
+inline bool gl_disabled() {
+    const char* v = std::getenv("SPECBAKE_NO_GL");
+    return v && std::string(v) == "1";
+}
 
 inline SimTestEnvironment& sim_environment() {
     static SimTestEnvironment env = [] {
@@ -39,5 +47,10 @@ inline SimTestEnvironment& sim_environment() {
 
 }  // namespace specbake::cli::test
 
-#define SPECBAKE_REQUIRE_GL() \
-    ASSERT_TRUE(::specbake::cli::test::sim_environment().error.empty()) << ::specbake::cli::test::sim_environment().error
+#define SPECBAKE_REQUIRE_GL()                                                                           \
+    do {                                                                                                \
+        if (::specbake::cli::test::gl_disabled()) GTEST_SKIP() << "SPECBAKE_NO_GL=1: OpenGL tests disabled"; \
+        ASSERT_TRUE(::specbake::cli::test::sim_environment().error.empty())                             \
+            << "no headless OpenGL context (set SPECBAKE_NO_GL=1 to skip): "                           \
+            << ::specbake::cli::test::sim_environment().error;                                          \
+    } while (false)
