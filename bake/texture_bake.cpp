@@ -320,6 +320,104 @@ void write_base_row(const double* v, const float* r0, int W, const Layout& layou
     }
 }
 
+// The SPEC Sec. 3 formulas for `n` texels of a level >= 1, before they are stored as floats.
+constexpr int kChunk = 64;
+struct Finalized {
+    double r[kChunk], t[kChunk], sxx[kChunk], syy[kChunk], sxy[kChunk], nx[kChunk], ny[kChunk], nz[kChunk];
+    double change = 0.0;  // largest |r - r_in| so far, r_in = (mean alpha^2)^(1/4)
+};
+
+// Texel k of the chunk from its means; the scalar definition the SSE2 path below reproduces bit for bit.
+inline void finalize_one(double mx, double my, double mz, double mxx, double myy, double mxy, double ma,
+                         const TextureBakeSettings& s, bool flip_y, Finalized& f, int k) {
+    // Sigma = M - m m^T, clamped to positive semi-definite.
+    const double sxx = std::max(0.0, mxx - mx * mx);
+    const double syy = std::max(0.0, myy - my * my);
+    const double bound = std::sqrt(sxx * syy);
+    const double sxy = std::clamp(mxy - mx * my, -bound, bound);
+    double t = reduce_covariance(s.isotropic, sxx, syy, sxy);
+    if (s.max_kernel) t = std::min(t, *s.max_kernel);
+    const double a_base = std::clamp(ma, 0.0, 1.0);
+    const double a = s.filter == RoughnessFilterMode::Projected ? filter_projected_isotropic(a_base, t)
+                                                                : filter_approx_isotropic(a_base, t);
+    const double r = std::sqrt(std::sqrt(a));  // r = a^(1/4)
+    f.change = std::max(f.change, std::abs(r - std::sqrt(std::sqrt(a_base))));
+    f.r[k] = r, f.t[k] = t, f.sxx[k] = sxx, f.syy[k] = syy, f.sxy[k] = sxy;
+    double nx = mx, ny = my, nz = mz;
+    const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
+    if (len > 1e-12) {
+        nx /= len, ny /= len, nz /= len;
+    } else {
+        nx = 0.0, ny = 0.0, nz = 1.0;
+    }
+    if (flip_y) ny = -ny;
+    f.nx[k] = nx, f.ny[k] = ny, f.nz[k] = nz;
+}
+
+#if defined(__SSE2__)
+// (mask ? a : b) per lane.
+inline __m128d select_pd(__m128d mask, __m128d a, __m128d b) { return _mm_or_pd(_mm_and_pd(mask, a), _mm_andnot_pd(mask, b)); }
+
+// Texels k, k + 1 of the chunk: finalize_one two at a time. Every step is the same IEEE operation in the
+// same order (std::max / std::min / std::clamp as their comparisons and selects), so results are identical.
+inline void finalize_two(const double* mx_, const double* my_, const double* mz_, const double* mxx_,
+                         const double* myy_, const double* mxy_, const double* ma_, const TextureBakeSettings& s,
+                         bool flip_y, Finalized& f, int k, __m128d& change) {
+    const __m128d zero = _mm_setzero_pd(), one = _mm_set1_pd(1.0), half = _mm_set1_pd(0.5), two = _mm_set1_pd(2.0);
+    const __m128d sign = _mm_set1_pd(-0.0);
+    const __m128d mx = _mm_loadu_pd(mx_), my = _mm_loadu_pd(my_), mz = _mm_loadu_pd(mz_);
+    const __m128d sxx = _mm_max_pd(_mm_sub_pd(_mm_loadu_pd(mxx_), _mm_mul_pd(mx, mx)), zero);
+    const __m128d syy = _mm_max_pd(_mm_sub_pd(_mm_loadu_pd(myy_), _mm_mul_pd(my, my)), zero);
+    const __m128d bound = _mm_sqrt_pd(_mm_mul_pd(sxx, syy));
+    const __m128d neg_bound = _mm_xor_pd(bound, sign);
+    const __m128d dxy = _mm_sub_pd(_mm_loadu_pd(mxy_), _mm_mul_pd(mx, my));
+    const __m128d sxy = select_pd(_mm_cmplt_pd(dxy, neg_bound), neg_bound,
+                                  select_pd(_mm_cmplt_pd(bound, dxy), bound, dxy));
+    __m128d t = _mm_add_pd(sxx, syy);  // mean
+    switch (s.isotropic) {
+        case IsotropicReduction::Mean: break;
+        case IsotropicReduction::Sum: t = _mm_mul_pd(two, t); break;
+        case IsotropicReduction::Max: {
+            const __m128d half_tr = _mm_mul_pd(half, _mm_add_pd(sxx, syy));
+            const __m128d d = _mm_mul_pd(half, _mm_sub_pd(sxx, syy));
+            const __m128d root = _mm_sqrt_pd(_mm_add_pd(_mm_mul_pd(d, d), _mm_mul_pd(sxy, sxy)));
+            t = _mm_mul_pd(two, _mm_add_pd(half_tr, root));
+            break;
+        }
+    }
+    if (s.max_kernel) {
+        const __m128d K = _mm_set1_pd(*s.max_kernel);
+        t = select_pd(_mm_cmplt_pd(K, t), K, t);
+    }
+    const __m128d ma = _mm_loadu_pd(ma_);
+    const __m128d a_base = select_pd(_mm_cmplt_pd(ma, zero), zero, select_pd(_mm_cmplt_pd(one, ma), one, ma));
+    __m128d a;
+    if (s.filter == RoughnessFilterMode::Projected) {
+        const __m128d kk = _mm_mul_pd(t, _mm_sub_pd(one, a_base));
+        a = _mm_div_pd(_mm_add_pd(a_base, kk), _mm_add_pd(one, kk));
+    } else {
+        const __m128d sum = _mm_add_pd(a_base, t);
+        a = select_pd(_mm_cmplt_pd(sum, one), sum, one);
+    }
+    const __m128d r = _mm_sqrt_pd(_mm_sqrt_pd(a));
+    const __m128d r_in = _mm_sqrt_pd(_mm_sqrt_pd(a_base));
+    const __m128d diff = _mm_andnot_pd(sign, _mm_sub_pd(r, r_in));
+    change = select_pd(_mm_cmplt_pd(change, diff), diff, change);
+    _mm_storeu_pd(f.r + k, r);
+    _mm_storeu_pd(f.t + k, t);
+    _mm_storeu_pd(f.sxx + k, sxx);
+    _mm_storeu_pd(f.syy + k, syy);
+    _mm_storeu_pd(f.sxy + k, sxy);
+    const __m128d len = _mm_sqrt_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(mx, mx), _mm_mul_pd(my, my)), _mm_mul_pd(mz, mz)));
+    const __m128d ok = _mm_cmpgt_pd(len, _mm_set1_pd(1e-12));
+    __m128d ny = select_pd(ok, _mm_div_pd(my, len), zero);
+    if (flip_y) ny = _mm_xor_pd(ny, sign);
+    _mm_storeu_pd(f.nx + k, select_pd(ok, _mm_div_pd(mx, len), zero));
+    _mm_storeu_pd(f.ny + k, ny);
+    _mm_storeu_pd(f.nz + k, select_pd(ok, _mm_div_pd(mz, len), one));
+}
+#endif
+
 // Outputs of one row of a level >= 1 from its means `m` (planes of w doubles), SPEC Sec. 3; returns the
 // row's largest |r_out - r_in|, r_in = (mean alpha^2)^(1/4).
 double finalize_row(const double* m, int w, const Layout& layout, const TextureBakeSettings& s, bool flip_y,
@@ -331,66 +429,65 @@ double finalize_row(const double* m, int w, const Layout& layout, const TextureB
     const double* pyy = plane(m, kPyy, w);
     const double* pxy = plane(m, kPxy, w);
     const double* pa = plane(m, kA, w);
-    const bool projected = s.filter == RoughnessFilterMode::Projected;
-    double change = 0.0;
-    for (int i = 0; i < w; ++i) {
-        const double mx = pmx[i], my = pmy[i];
-        // Sigma = M - m m^T, clamped to positive semi-definite.
-        const double sxx = std::max(0.0, pxx[i] - mx * mx);
-        const double syy = std::max(0.0, pyy[i] - my * my);
-        const double bound = std::sqrt(sxx * syy);
-        const double sxy = std::clamp(pxy[i] - mx * my, -bound, bound);
-        double t = reduce_covariance(s.isotropic, sxx, syy, sxy);
-        if (s.max_kernel) t = std::min(t, *s.max_kernel);
-        const double a_base = std::clamp(pa[i], 0.0, 1.0);
-        const double a = projected ? filter_projected_isotropic(a_base, t) : filter_approx_isotropic(a_base, t);
-        const double r = std::sqrt(std::sqrt(a));  // r = a^(1/4)
-        change = std::max(change, std::abs(r - std::sqrt(std::sqrt(a_base))));
-        if (rough) {
-            if (layout.occlusion >= 0) {
-                float* o = rough + 3 * size_t(i);
-                o[0] = float(plane(m, layout.occlusion, w)[i]);
-                o[1] = float(r);
-                o[2] = float(plane(m, layout.metallic, w)[i]);
-            } else {
-                rough[i] = float(r);
-            }
+    Finalized f;
+    for (int i0 = 0; i0 < w; i0 += kChunk) {
+        const int n = std::min(kChunk, w - i0);
+        int k = 0;
+#if defined(__SSE2__)
+        __m128d lanes = _mm_setzero_pd();
+        for (; k + 2 <= n; k += 2) {
+            const int i = i0 + k;
+            finalize_two(pmx + i, pmy + i, pmz + i, pxx + i, pyy + i, pxy + i, pa + i, s, flip_y, f, k, lanes);
         }
-        if (kern) {
-            if (s.anisotropic) {
-                float* k = kern + 3 * size_t(i);
-                k[0] = float(sxx), k[1] = float(syy), k[2] = float(sxy);
-            } else {
-                kern[i] = float(t);
-            }
+        double two[2];
+        _mm_storeu_pd(two, lanes);
+        f.change = std::max(f.change, std::max(two[0], two[1]));
+#endif
+        for (; k < n; ++k) {
+            const int i = i0 + k;
+            finalize_one(pmx[i], pmy[i], pmz[i], pxx[i], pyy[i], pxy[i], pa[i], s, flip_y, f, k);
         }
-        if (lean) {
-            float* l = lean + 5 * size_t(i);
-            if (layout.slope >= 0) {
-                // Olano & Baker LEAN: first and second slope moments with the base lobe's slope covariance
-                // A / 2 = (alpha^2 / 2) I folded into the second moments (A = 2 x slope covariance, TK21 Sec. 2.1).
-                const double* sl = m + size_t(layout.slope) * w + i;
-                l[0] = float(sl[0]), l[1] = float(sl[size_t(w)]);
-                l[2] = float(sl[2 * size_t(w)] + 0.5 * pa[i]), l[3] = float(sl[3 * size_t(w)] + 0.5 * pa[i]);
-                l[4] = float(sl[4 * size_t(w)]);
-            } else {
-                l[0] = float(mx), l[1] = float(my), l[2] = float(pxx[i]), l[3] = float(pyy[i]), l[4] = float(pxy[i]);
+        for (k = 0; k < n; ++k) {
+            const int i = i0 + k;
+            if (rough) {
+                if (layout.occlusion >= 0) {
+                    float* o = rough + 3 * size_t(i);
+                    o[0] = float(plane(m, layout.occlusion, w)[i]);
+                    o[1] = float(f.r[k]);
+                    o[2] = float(plane(m, layout.metallic, w)[i]);
+                } else {
+                    rough[i] = float(f.r[k]);
+                }
             }
-        }
-        if (nrm) {
-            double nx = mx, ny = my, nz = pmz[i];
-            const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
-            if (len > 1e-12) {
-                nx /= len, ny /= len, nz /= len;
-            } else {
-                nx = 0.0, ny = 0.0, nz = 1.0;
+            if (kern) {
+                if (s.anisotropic) {
+                    float* q = kern + 3 * size_t(i);
+                    q[0] = float(f.sxx[k]), q[1] = float(f.syy[k]), q[2] = float(f.sxy[k]);
+                } else {
+                    kern[i] = float(f.t[k]);
+                }
             }
-            if (flip_y) ny = -ny;
-            float* n = nrm + 3 * size_t(i);
-            n[0] = float(0.5 * nx + 0.5), n[1] = float(0.5 * ny + 0.5), n[2] = float(0.5 * nz + 0.5);
+            if (lean) {
+                float* l = lean + 5 * size_t(i);
+                if (layout.slope >= 0) {
+                    // Olano & Baker LEAN: first and second slope moments with the base lobe's slope covariance
+                    // A / 2 = (alpha^2 / 2) I folded into the second moments (A = 2 x slope covariance, TK21 Sec. 2.1).
+                    const double* sl = m + size_t(layout.slope) * w + i;
+                    l[0] = float(sl[0]), l[1] = float(sl[size_t(w)]);
+                    l[2] = float(sl[2 * size_t(w)] + 0.5 * pa[i]), l[3] = float(sl[3 * size_t(w)] + 0.5 * pa[i]);
+                    l[4] = float(sl[4 * size_t(w)]);
+                } else {
+                    l[0] = float(pmx[i]), l[1] = float(pmy[i]), l[2] = float(pxx[i]), l[3] = float(pyy[i]);
+                    l[4] = float(pxy[i]);
+                }
+            }
+            if (nrm) {
+                float* q = nrm + 3 * size_t(i);
+                q[0] = float(0.5 * f.nx[k] + 0.5), q[1] = float(0.5 * f.ny[k] + 0.5), q[2] = float(0.5 * f.nz[k] + 0.5);
+            }
         }
     }
-    return change;
+    return f.change;
 }
 
 // Means of one row of a level whose footprints are fx x fy blocks of the finer level: `fine` holds the

@@ -93,11 +93,51 @@ void encode_run(const float* src, size_t count, int src_channels, int channels, 
     }
 }
 
+// The common case without padding (channels == out_channels), with the channel count N known at compile
+// time so the per-texel loop unrolls; same rounding as encode_run.
+template <int N>
+void encode_fixed(const float* src, size_t count, int src_channels, TexelEncoding encoding, uint8_t* dst) {
+    switch (encoding) {
+        case TexelEncoding::Unorm8:
+            for (size_t i = 0; i < count; ++i, src += src_channels, dst += N)
+                for (int c = 0; c < N; ++c) dst[c] = uint8_t(unorm(src[c], 255.0f));
+            break;
+        case TexelEncoding::Unorm16:
+            for (size_t i = 0; i < count; ++i, src += src_channels, dst += 2 * N)
+                for (int c = 0; c < N; ++c) put<uint16_t>(dst + 2 * c, uint16_t(unorm(src[c], 65535.0f)));
+            break;
+        case TexelEncoding::Float16: {
+            constexpr size_t kTexels = 256;
+            float buffer[kTexels * N];
+            for (size_t begin = 0; begin < count; begin += kTexels) {
+                const size_t n = std::min(kTexels, count - begin);
+                const float* s = src + begin * size_t(src_channels);
+                for (size_t i = 0; i < n; ++i, s += src_channels)
+                    for (int c = 0; c < N; ++c) buffer[i * N + c] = s[c];
+                halves(buffer, n * N, dst + begin * 2 * N);
+            }
+            break;
+        }
+        case TexelEncoding::Float32:
+            for (size_t i = 0; i < count; ++i, src += src_channels, dst += 4 * N) std::memcpy(dst, src, 4 * N);
+            break;
+    }
+}
+
 }  // namespace
 
 void encode_texels_into(const float* src, size_t count, int src_channels, int first, int channels,
                         TexelEncoding encoding, int out_channels, float pad, uint8_t* dst) {
     src += first;
+    if (channels == out_channels) {
+        switch (channels) {
+            case 1: return encode_fixed<1>(src, count, src_channels, encoding, dst);
+            case 2: return encode_fixed<2>(src, count, src_channels, encoding, dst);
+            case 3: return encode_fixed<3>(src, count, src_channels, encoding, dst);
+            case 4: return encode_fixed<4>(src, count, src_channels, encoding, dst);
+            default: break;
+        }
+    }
     switch (encoding) {
         case TexelEncoding::Unorm8:
             encode_run<TexelEncoding::Unorm8>(src, count, src_channels, channels, out_channels, pad, dst);
