@@ -115,16 +115,17 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
     if (!plan) return plan.error();
     for (const std::string& n : plan->notes) warnings.push_back(n);
 
-    // Curvature, and the frame it refers to.
+    // Curvature, and the frame it refers to. The vectors move into the scene (the plan keeps the meshes'
+    // positions, which is all the manifest needs of them).
     size_t baked_primitives = 0;
     for (auto& [index, work] : plan->work) {
         const CurvatureDecision& d = plan->primitives[index];
-        if (auto r = scene.set_vertex_attribute(d.ref, io::kCurvatureAttribute, work.curvature.values, 4); !r)
+        if (auto r = scene.set_vertex_attribute(d.ref, io::kCurvatureAttribute, std::move(work.curvature.values), 4); !r)
             return r.error();
         if (d.generates_tangents || work.report.repaired_tangents > 0)
-            if (auto r = scene.set_vertex_attribute(d.ref, "TANGENT", work.mesh.tangents, 4); !r) return r.error();
+            if (auto r = scene.set_vertex_attribute(d.ref, "TANGENT", std::move(work.mesh.tangents), 4); !r) return r.error();
         if (d.repairs_normals)
-            if (auto r = scene.set_vertex_attribute(d.ref, "NORMAL", work.mesh.normals, 3); !r) return r.error();
+            if (auto r = scene.set_vertex_attribute(d.ref, "NORMAL", std::move(work.mesh.normals), 3); !r) return r.error();
         ++baked_primitives;
     }
 
