@@ -29,7 +29,8 @@ struct WeldOptions {
 
 // Positions are compared exactly (after mapping -0 to +0): exporters duplicate seam vertices bit for bit.
 // Ids are numbered in order of first occurrence, so the result is deterministic. Without normals every
-// vertex of a position is in one group. Linear time (hashing).
+// vertex of a position is in one group. Linear time (hashing), parallel over hash buckets, the same ids for
+// any thread count.
 WeldedTopology weld_by_position(const TriMesh& mesh, const WeldOptions& options = {});
 
 }  // namespace specbake
