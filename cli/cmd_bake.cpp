@@ -71,7 +71,7 @@ void add_bake_command(CLI::App& app, std::function<int()>& run) {
                                                    "into it directly, several into one subfolder each")
         ->required();
     sub->add_option("--format", o->format, "Scene format written: same (as the input; non-glTF inputs give gltf), "
-                                           "gltf or glb")
+                                           "gltf or glb (self-contained: buffers and images go into the file)")
         ->check(CLI::IsMember({"same", "gltf", "glb"}))
         ->capture_default_str();
     sub->add_option("--container", o->container, "Texture container: ktx2, dds, exr or png (one file per mip)")

@@ -22,7 +22,8 @@ enum class SceneFormat { SameAsInput, Gltf, Glb };
 struct SceneJob {
     std::vector<std::filesystem::path> scenes;
     std::filesystem::path output_dir;      // one scene: written directly into it; several: into <dir>/<stem>/
-    SceneFormat format = SceneFormat::SameAsInput;  // non-glTF inputs: .gltf unless Glb is asked for
+    // Non-glTF inputs: .gltf unless Glb is asked for. A .glb holds the input's buffers and images itself.
+    SceneFormat format = SceneFormat::SameAsInput;
     PlanOptions plan;
     io::TextureContainer container = io::TextureContainer::Ktx2;
     ProgressFn progress;
