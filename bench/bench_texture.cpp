@@ -223,13 +223,12 @@ int main(int argc, char** argv) {
     const double decoded_u8 = 2.0 * size * size * 3;  // both inputs, 8-bit RGB
     const double decoded_f32 = decoded_u8 * 4;        // as the float images specbake holds
     const double memory_ratio = rss_kib * 1024.0 / (decoded_u8 + double(output_bytes));
-    std::printf("\nsummary, %dx%d RGB8 normal + ORM, all default outputs (KTX2); medians of the repetitions\n", size,
-                size);
-    std::printf("(a) compute only                        wall Mtexel/s   CPU ns/texel (all threads)\n");
+    std::printf("\nsummary, %dx%d RGB8 normal + ORM, all default outputs (KTX2)\n", size, size);
+    std::printf("(a) compute only, median over all timed runs  wall Mtexel/s   CPU ns/texel (all threads)\n");
     for (const char* kind : {"bake_texture_encoded/", "bake_texture_float_chains/"}) {
         for (int threads : {1, 2}) {
             const std::string name = kind + std::to_string(size) + "/threads:" + std::to_string(threads);
-            std::printf("  %-28s %d thread%s %10.1f %14.1f\n", kind, threads, threads > 1 ? "s" : " ",
+            std::printf("  %-28s %d thread%s %21.1f %14.1f\n", kind, threads, threads > 1 ? "s" : " ",
                         median(g_rates[name]), median(g_cpu_ns[name]));
         }
     }

@@ -9,6 +9,9 @@
 #if defined(__x86_64__)
 #include <immintrin.h>
 #endif
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace specbake::io {
 
@@ -93,12 +96,33 @@ void encode_run(const float* src, size_t count, int src_channels, int channels, 
     }
 }
 
+// Unorm8 of n contiguous floats, as unorm(v, 255): four per SSE2 instruction. max/min stand in for the
+// clamp (they differ only in the sign of a zero, which rounds to the same byte), and the rounding adds 0.5
+// in double, exactly as the scalar form.
+void unorm8_flat(const float* src, size_t n, uint8_t* dst) {
+    size_t i = 0;
+#if defined(__SSE2__)
+    const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f), scale = _mm_set1_ps(255.0f);
+    const __m128d half = _mm_set1_pd(0.5);
+    for (; i + 4 <= n; i += 4) {
+        const __m128 x = _mm_mul_ps(_mm_min_ps(_mm_max_ps(_mm_loadu_ps(src + i), zero), one), scale);
+        const __m128i lo = _mm_cvttpd_epi32(_mm_add_pd(_mm_cvtps_pd(x), half));
+        const __m128i hi = _mm_cvttpd_epi32(_mm_add_pd(_mm_cvtps_pd(_mm_movehl_ps(x, x)), half));
+        const __m128i words = _mm_packs_epi32(_mm_unpacklo_epi64(lo, hi), _mm_setzero_si128());
+        const int bytes = _mm_cvtsi128_si32(_mm_packus_epi16(words, words));
+        std::memcpy(dst + i, &bytes, 4);
+    }
+#endif
+    for (; i < n; ++i) dst[i] = uint8_t(unorm(src[i], 255.0f));
+}
+
 // The common case without padding (channels == out_channels), with the channel count N known at compile
 // time so the per-texel loop unrolls; same rounding as encode_run.
 template <int N>
 void encode_fixed(const float* src, size_t count, int src_channels, TexelEncoding encoding, uint8_t* dst) {
     switch (encoding) {
         case TexelEncoding::Unorm8:
+            if (src_channels == N) return unorm8_flat(src, count * N, dst);
             for (size_t i = 0; i < count; ++i, src += src_channels, dst += N)
                 for (int c = 0; c < N; ++c) dst[c] = uint8_t(unorm(src[c], 255.0f));
             break;
@@ -107,6 +131,7 @@ void encode_fixed(const float* src, size_t count, int src_channels, TexelEncodin
                 for (int c = 0; c < N; ++c) put<uint16_t>(dst + 2 * c, uint16_t(unorm(src[c], 65535.0f)));
             break;
         case TexelEncoding::Float16: {
+            if (src_channels == N) return halves(src, count * N, dst);
             constexpr size_t kTexels = 256;
             float buffer[kTexels * N];
             for (size_t begin = 0; begin < count; begin += kTexels) {
