@@ -204,6 +204,22 @@ TEST(HalfEdgeMesh, NonManifoldInputIsSplitAndCounted) {
     size_t boundary = 0;
     for (auto e : h.mesh.edges()) boundary += h.mesh.is_boundary(e);
     EXPECT_EQ(boundary, 6u);  // the hole's three edges and the detached face's three
+
+    // The same triangle twice: the copy is detached. Twice with opposite windings (a two-sided sheet): both
+    // attached, closed into a pillow with no boundary.
+    TriMesh twice;
+    twice.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    twice.indices = {0, 1, 2, 0, 1, 2};
+    h = halfedge_of(twice);
+    expect_valid(h, "same triangle twice");
+    EXPECT_EQ(h.detached_faces, 1u);
+    EXPECT_EQ(h.mesh.n_faces(), 2u);
+    twice.indices = {0, 1, 2, 0, 2, 1};
+    h = halfedge_of(twice);
+    expect_valid(h, "pillow");
+    EXPECT_EQ(h.detached_faces, 0u);
+    EXPECT_EQ(h.boundary_edges, 0u);
+    for (auto e : h.mesh.edges()) EXPECT_FALSE(h.mesh.is_boundary(e));
 }
 
 }  // namespace
