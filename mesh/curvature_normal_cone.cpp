@@ -19,15 +19,16 @@ VertexCurvature curvature_normal_cone(const TriMesh& mesh, const WeldedTopology&
     const detail::GroupCorners lists = detail::group_corners(mesh, topology);
     std::vector<Shape2> shape(topology.group_count);
 
+    // Edge directions (in a group's u, v frame) with their signed rates; at most a few dozen per group.
+    struct EdgeRate {
+        double x, y, rate;
+    };
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, topology.group_count, 4096), [&](const auto& range) {
+        std::vector<EdgeRate> rates;  // reused by the groups of this range
         for (uint32_t g = range.begin(); g != range.end(); ++g) {
             double best = 0.0, best_x = 1.0, best_y = 0.0;
             bool found = false;
-            // Edge directions (in the group's u, v frame) with their signed rates; at most a few dozen.
-            struct EdgeRate {
-                double x, y, rate;
-            };
-            std::vector<EdgeRate> rates;
+            rates.clear();
             for (uint32_t k = lists.start[g]; k < lists.start[g + 1]; ++k) {
                 const uint32_t corner = lists.order[k];
                 const size_t t = corner / 3;
