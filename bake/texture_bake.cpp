@@ -41,9 +41,6 @@ struct Layout {
     int slope = -1;                     // s.x, s.y, s.x^2, s.y^2, s.x s.y
 };
 
-// Largest number of per-texel quantities: the core group, ORM R and B, and five slope moments.
-constexpr int kMaxChannels = kCore + 2 + 5;
-
 // Smallest |n.z| used for slope space s = -(n.x, n.y) / n.z: keeps grazing normals finite (|s| <= 1e4).
 constexpr double kMinSlopeZ = 1e-4;
 
