@@ -13,6 +13,7 @@
 
 #include "mesh/curvature.h"
 #include "mesh/curvature_frames.h"
+#include "mesh/halfedge_mesh.h"
 
 namespace specbake {
 namespace {
@@ -20,29 +21,32 @@ namespace {
 using Kernel = CGAL::Simple_cartesian<double>;
 using MongeFit = CGAL::Monge_via_jet_fitting<Kernel>;
 
-// Neighbouring positions of every position over the usable triangles, sorted and unique.
+// Neighbouring positions of every position, sorted and unique: the one-rings of the OpenMesh half-edge mesh
+// over the usable triangles (a position split into several fans, or with detached faces, gathers the rings
+// of all its vertices).
 void position_adjacency(const TriMesh& mesh, const WeldedTopology& topology, std::vector<uint32_t>& start,
                         std::vector<uint32_t>& neighbours) {
-    std::vector<uint64_t> pairs;
-    pairs.reserve(2 * mesh.indices.size());
-    for (size_t t = 0; t < mesh.triangle_count(); ++t) {
-        if (detail::skip_triangle(mesh, topology, t)) continue;
-        for (int c = 0; c < 3; ++c) {
-            const uint64_t a = topology.position_id[mesh.indices[3 * t + c]];
-            const uint64_t b = topology.position_id[mesh.indices[3 * t + (c + 1) % 3]];
-            pairs.push_back(a << 32 | b);
-            pairs.push_back(b << 32 | a);
+    const HalfEdgeTopology h = build_halfedge_mesh(mesh, topology);
+    std::vector<uint32_t> first(topology.position_count + 1, 0);
+    for (auto v : h.mesh.vertices()) first[h.vertex_position[v.idx()] + 1] += uint32_t(h.mesh.valence(v));
+    for (uint32_t p = 0; p < topology.position_count; ++p) first[p + 1] += first[p];
+    std::vector<uint32_t> all(first.back());
+    {
+        std::vector<uint32_t> fill(first.begin(), first.end() - 1);
+        for (auto v : h.mesh.vertices()) {
+            const uint32_t p = h.vertex_position[v.idx()];
+            for (auto w : h.mesh.vv_range(v)) all[fill[p]++] = h.vertex_position[w.idx()];
         }
     }
-    std::sort(pairs.begin(), pairs.end());
-    pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
     start.assign(topology.position_count + 1, 0);
-    neighbours.resize(pairs.size());
-    for (size_t k = 0; k < pairs.size(); ++k) {
-        ++start[(pairs[k] >> 32) + 1];
-        neighbours[k] = uint32_t(pairs[k] & 0xffffffffu);
+    neighbours.clear();
+    neighbours.reserve(all.size());
+    for (uint32_t p = 0; p < topology.position_count; ++p) {
+        std::sort(all.begin() + first[p], all.begin() + first[p + 1]);
+        const auto end = std::unique(all.begin() + first[p], all.begin() + first[p + 1]);
+        neighbours.insert(neighbours.end(), all.begin() + first[p], end);
+        start[p + 1] = uint32_t(neighbours.size());
     }
-    for (uint32_t p = 0; p < topology.position_count; ++p) start[p + 1] += start[p];
 }
 
 }  // namespace
