@@ -258,6 +258,8 @@ struct GltfContents {
 Result<void> load_gltf(const fs::path& path, SimScene& scene, GltfContents& out) {
     auto loaded = io::GltfScene::load(path);
     if (!loaded) return loaded.error();
+    // io::GltfScene reads primitives, materials and images; the node graph, cameras and lights, which only
+    // the simulator needs, are read from the same JSON here.
     auto json = read_gltf_json(path);
     if (!json) return json.error();
     const nlohmann::json& j = *json;
