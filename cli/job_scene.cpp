@@ -216,12 +216,12 @@ Result<LoadedScene> load_scene(const fs::path& path) {
     size_t generated = 0;
     for (TriMesh& m : imported->meshes) {
         if (m.has_normals()) continue;
-        generate_normals(m, NormalWeighting::Angle);
+        generate_normals(m);  // Max (1999) weights, as for glTF primitives without normals
         ++generated;
     }
     if (generated > 0)
         out.notes.push_back(path.string() + ": " + std::to_string(generated) +
-                            " mesh(es) without normals: angle-weighted normals generated and written");
+                            " mesh(es) without normals: normals generated (Max weights) and written");
     for (const ImportedMaterial& m : imported->materials)
         out.roughness_known.push_back(m.roughness_from_file || m.roughness_factor != 1.0f);
     auto scene = io::GltfScene::from_imported(*imported);

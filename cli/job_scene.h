@@ -38,7 +38,7 @@ struct LoadedScene {
 };
 
 // glTF/GLB (detected by content) through tinygltf; everything else through Assimp. Imported meshes
-// without normals get angle-weighted normals (noted), which are written into the output.
+// without normals get generated normals (Max weights, noted), which are written into the output.
 Result<LoadedScene> load_scene(const std::filesystem::path& path);
 
 struct SceneJobOutcome {
