@@ -377,10 +377,11 @@ std::string plan_to_table(const ScenePlan& plan) {
                   "threshold", "reason");
     os << line;
     for (const TextureDecision& d : plan.textures) {
+        // The "what" column names the layer, so the target stays within its column.
         const std::string target = "material " + std::to_string(d.material) +
-                                   (d.material_name.empty() ? "" : " '" + d.material_name.substr(0, 14) + "'") +
-                                   (d.layer == "base" ? "" : " " + d.layer);
-        std::snprintf(line, sizeof line, "  %-10s %-28s %-10s %-11s %-11s %s\n", "texture", target.c_str(),
+                                   (d.material_name.empty() ? "" : " '" + d.material_name.substr(0, 14) + "'");
+        const std::string what = d.layer == "base" ? "texture" : d.layer;
+        std::snprintf(line, sizeof line, "  %-10s %-28s %-10s %-11s %-11s %s\n", what.c_str(), target.c_str(),
                       d.bake ? "bake" : "skip", measured(d.max_roughness_change).c_str(),
                       d.threshold > 0 ? format_number(d.threshold).c_str() : "-", d.reason.c_str());
         os << line;
