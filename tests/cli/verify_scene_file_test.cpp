@@ -206,6 +206,21 @@ double total_radiance(const SimImage& image) {
     return sum;
 }
 
+// Options for a small, quick simulation: no timing, no SPIR-V counts, no bake variants, no images.
+VerifyOptions small_verify(int width, int height, int spp, int frames) {
+    VerifyOptions options;
+    options.include_glsl = environment().include;
+    options.width = width;
+    options.height = height;
+    options.spp = spp;
+    options.frames = frames;
+    options.timing_repeats = 0;
+    options.spirv = false;
+    options.variants = false;
+    options.keep_images = false;
+    return options;
+}
+
 const Float3 kTowardsLight{0.0f, 0.5f, 0.8660254f};
 
 TEST(VerifySceneFile, NodeTransformsCameraAndDirectionalLightMatchAHandBuiltScene) {
@@ -362,13 +377,8 @@ TEST(VerifySceneFile, EveryCandidateRunsOnASceneFileWithEstimatedCurvature) {
     auto scene = load_sim_scene(path);
     ASSERT_TRUE(scene.ok()) << scene.error().message;
     EXPECT_FALSE(has_exact_curvature(*scene));
-    VerifyOptions options;
-    options.include_glsl = environment().include;
-    options.width = options.height = 32;
-    options.spp = 16;
-    options.frames = 2;
-    options.timing_repeats = 0;
-    options.spirv = false;
+    VerifyOptions options = small_verify(32, 32, 16, 2);
+    options.variants = true;
     auto report = run_verify(*scene, options);
     ASSERT_TRUE(report.ok()) << report.error().message;
     EXPECT_TRUE(report->from_file);
@@ -398,15 +408,8 @@ TEST(VerifySceneFile, MaterialsWithoutANormalMapKeepTheirRoughnessInBakedCandida
     }
     scene.objects[0].material.normal_map = -1;
     scene.camera = {{0.0f, 0.0f, 6.0f}, {0, 0, 0}, {0, 1, 0}, 40.0f};
-    VerifyOptions options;
-    options.include_glsl = environment().include;
-    options.width = 64;
-    options.height = 32;
-    options.spp = 4;
-    options.frames = 1;
-    options.timing_repeats = 0;
-    options.spirv = false;
-    options.variants = false;
+    VerifyOptions options = small_verify(64, 32, 4, 1);
+    options.keep_images = true;
     options.only = {"baked-texture"};
     auto report = run_verify(scene, options);
     ASSERT_TRUE(report.ok()) << report.error().message;
@@ -438,17 +441,9 @@ TEST(VerifySceneFile, EverySharedGltfModelIsSimulated) {
     for (const fs::path& path : scenes) {
         auto scene = load_sim_scene(path);
         ASSERT_TRUE(scene.ok()) << scene.error().message;
-        VerifyOptions options;
-        options.include_glsl = environment().include;
         // Large enough that the models' many small glossy parts cover whole pixels, so the ground truth
         // resolves their highlights.
-        options.width = options.height = 48;
-        options.spp = 16;
-        options.frames = 1;
-        options.timing_repeats = 0;
-        options.spirv = false;
-        options.variants = false;
-        options.keep_images = false;
+        VerifyOptions options = small_verify(48, 48, 16, 1);
         options.only = {"default", "baked-texture", "baked-curvature"};
         auto report = run_verify(*scene, options);
         ASSERT_TRUE(report.ok()) << path << ": " << report.error().message;

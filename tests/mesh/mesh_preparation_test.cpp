@@ -9,6 +9,7 @@
 #include "mesh/procedural_shapes.h"
 #include "mesh/validate_mesh.h"
 #include "mesh/weld_by_position.h"
+#include "tests/mesh/nonmanifold_meshes.h"
 
 namespace specbake {
 namespace {
@@ -119,17 +120,7 @@ TEST(Validate, ClosedMeshHasNoBoundaryAndHourglassVertexIsFound) {
     EXPECT_EQ(r->nonmanifold_edges, 0u);
     EXPECT_EQ(r->nonmanifold_vertices, 0u);
     // Two cones sharing their apex only.
-    TriMesh hourglass;
-    hourglass.positions = {0, 0, 0};
-    for (int cone = 0; cone < 2; ++cone)
-        for (int i = 0; i < 6; ++i) {
-            const double a = i * M_PI / 3.0;
-            hourglass.positions.insert(hourglass.positions.end(),
-                                       {float(std::cos(a)), float(std::sin(a)), cone ? 1.0f : -1.0f});
-        }
-    for (int cone = 0; cone < 2; ++cone)
-        for (uint32_t i = 0; i < 6; ++i)
-            hourglass.indices.insert(hourglass.indices.end(), {0, 1 + 6 * cone + i, 1 + 6 * cone + (i + 1) % 6});
+    TriMesh hourglass = test::hourglass_mesh();
     r = validate_mesh(hourglass);
     ASSERT_TRUE(r.ok());
     EXPECT_EQ(r->nonmanifold_vertices, 1u);

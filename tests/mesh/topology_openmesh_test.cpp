@@ -13,6 +13,7 @@
 #include "mesh/procedural_shapes.h"
 #include "mesh/validate_mesh.h"
 #include "mesh/weld_by_position.h"
+#include "tests/mesh/nonmanifold_meshes.h"
 
 namespace specbake {
 namespace {
@@ -163,17 +164,7 @@ TEST(HalfEdgeMesh, NonManifoldInputIsSplitAndCounted) {
     EXPECT_EQ(h.face_triangle[2], 2u);  // the detached face comes last
 
     // Two closed cones sharing their apex: one vertex per fan, each with its full ring of six.
-    TriMesh hourglass;
-    hourglass.positions = {0, 0, 0};
-    for (int cone = 0; cone < 2; ++cone)
-        for (int i = 0; i < 6; ++i) {
-            const double a = i * M_PI / 3.0;
-            hourglass.positions.insert(hourglass.positions.end(),
-                                       {float(std::cos(a)), float(std::sin(a)), cone ? 1.0f : -1.0f});
-        }
-    for (int cone = 0; cone < 2; ++cone)
-        for (uint32_t i = 0; i < 6; ++i)
-            hourglass.indices.insert(hourglass.indices.end(), {0, 1 + 6 * cone + i, 1 + 6 * cone + (i + 1) % 6});
+    TriMesh hourglass = test::hourglass_mesh();
     EXPECT_EQ(openmesh_counts(hourglass).refused_faces, 6u);  // add_face refuses the whole second cone
     h = halfedge_of(hourglass);
     expect_valid(h, "hourglass");
