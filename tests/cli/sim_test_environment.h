@@ -1,9 +1,11 @@
-// One headless GL context and the runtime include text for every simulator test of this executable.
+// One headless GL context and the runtime include text for every simulator test of this executable, and
+// the options of a small simulation.
 // SPECBAKE_REQUIRE_GL() skips the test when SPECBAKE_NO_GL=1 (as the GL suite does) and fails with the
 // reason when no context can be created.
 #pragma once
 
 #include "cli/gl_context.h"
+#include "cli/job_verify.h"
 
 #include <gtest/gtest.h>
 
@@ -43,6 +45,21 @@ inline SimTestEnvironment& sim_environment() {
         return e;
     }();
     return env;
+}
+
+// Options for a small, quick simulation: no timing, no SPIR-V counts, no bake variants, no images.
+inline VerifyOptions small_verify(int width, int height, int spp, int frames) {
+    VerifyOptions options;
+    options.include_glsl = sim_environment().include;
+    options.width = width;
+    options.height = height;
+    options.spp = spp;
+    options.frames = frames;
+    options.timing_repeats = 0;
+    options.spirv = false;
+    options.variants = false;
+    options.keep_images = false;
+    return options;
 }
 
 }  // namespace specbake::cli::test

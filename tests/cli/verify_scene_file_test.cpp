@@ -206,21 +206,6 @@ double total_radiance(const SimImage& image) {
     return sum;
 }
 
-// Options for a small, quick simulation: no timing, no SPIR-V counts, no bake variants, no images.
-VerifyOptions small_verify(int width, int height, int spp, int frames) {
-    VerifyOptions options;
-    options.include_glsl = environment().include;
-    options.width = width;
-    options.height = height;
-    options.spp = spp;
-    options.frames = frames;
-    options.timing_repeats = 0;
-    options.spirv = false;
-    options.variants = false;
-    options.keep_images = false;
-    return options;
-}
-
 const Float3 kTowardsLight{0.0f, 0.5f, 0.8660254f};
 
 TEST(VerifySceneFile, NodeTransformsCameraAndDirectionalLightMatchAHandBuiltScene) {
@@ -377,7 +362,7 @@ TEST(VerifySceneFile, EveryCandidateRunsOnASceneFileWithEstimatedCurvature) {
     auto scene = load_sim_scene(path);
     ASSERT_TRUE(scene.ok()) << scene.error().message;
     EXPECT_FALSE(has_exact_curvature(*scene));
-    VerifyOptions options = small_verify(32, 32, 16, 2);
+    VerifyOptions options = test::small_verify(32, 32, 16, 2);
     options.variants = true;
     auto report = run_verify(*scene, options);
     ASSERT_TRUE(report.ok()) << report.error().message;
@@ -408,7 +393,7 @@ TEST(VerifySceneFile, MaterialsWithoutANormalMapKeepTheirRoughnessInBakedCandida
     }
     scene.objects[0].material.normal_map = -1;
     scene.camera = {{0.0f, 0.0f, 6.0f}, {0, 0, 0}, {0, 1, 0}, 40.0f};
-    VerifyOptions options = small_verify(64, 32, 4, 1);
+    VerifyOptions options = test::small_verify(64, 32, 4, 1);
     options.keep_images = true;
     options.only = {"baked-texture"};
     auto report = run_verify(scene, options);
@@ -443,7 +428,7 @@ TEST(VerifySceneFile, EverySharedGltfModelIsSimulated) {
         ASSERT_TRUE(scene.ok()) << scene.error().message;
         // Large enough that the models' many small glossy parts cover whole pixels, so the ground truth
         // resolves their highlights.
-        VerifyOptions options = small_verify(48, 48, 16, 1);
+        VerifyOptions options = test::small_verify(48, 48, 16, 1);
         options.only = {"default", "baked-texture", "baked-curvature"};
         auto report = run_verify(*scene, options);
         ASSERT_TRUE(report.ok()) << path << ": " << report.error().message;

@@ -22,15 +22,7 @@ SceneReport verify(const std::string& name, float alpha, int size, int spp, int 
                    std::vector<std::string> only = {}) {
     auto scene = make_builtin_scene(name, std::sqrt(alpha));
     EXPECT_TRUE(scene.ok());
-    VerifyOptions options;
-    options.include_glsl = environment().include;
-    options.width = options.height = size;
-    options.spp = spp;
-    options.frames = frames;
-    options.timing_repeats = 0;
-    options.spirv = false;
-    options.variants = false;
-    options.keep_images = false;
+    VerifyOptions options = test::small_verify(size, size, spp, frames);
     options.only = std::move(only);
     auto report = run_verify(*scene, options);
     EXPECT_TRUE(report.ok()) << (report.ok() ? "" : report.error().message);
