@@ -3,6 +3,7 @@
 #include "cli/command.h"
 #include "cli/gl_context.h"
 #include "cli/job_bench.h"
+#include "cli/sim_command_options.h"
 
 #include <cstddef>
 #include <cstdio>
@@ -11,10 +12,6 @@
 
 namespace specbake::cli {
 
-// Defined in the build-generated shader_embed.cpp (shaders/embed.cmake).
-extern const unsigned char kSpecaaGlsl[];
-extern const std::size_t kSpecaaGlslSize;
-
 namespace {
 
 struct BenchCommandOptions {
@@ -22,11 +19,7 @@ struct BenchCommandOptions {
     bool no_builtin = false;
     std::vector<std::string> scenes;
     std::vector<float> alpha{0.01f, 0.05f, 0.2f};
-    std::string size = "128x128";
-    int spp = 256;
-    int frames = 8;
-    int repeats = 7;
-    bool no_variants = false;
+    SimCommandOptions sim;
     std::string output;
     std::string command_line;
 };
@@ -34,22 +27,13 @@ struct BenchCommandOptions {
 int run_bench_command(const BenchCommandOptions& o) {
     BenchOptions options;
     VerifyOptions& v = options.verify;
-    if (std::sscanf(o.size.c_str(), "%dx%d", &v.width, &v.height) != 2 || v.width < 2 || v.height < 2 ||
-        v.width > 8192 || v.height > 8192) {
-        print_error("--size: expected WxH between 2x2 and 8192x8192, got '" + o.size + "'");
-        return kExitUsage;
-    }
+    if (!apply_sim_command_options(o.sim, v)) return kExitUsage;
     for (const std::string& name : o.scenes) {
         if (auto scene = make_builtin_scene(name, 0.5f); !scene) {
             print_error(scene.error().message);
             return kExitUsage;
         }
     }
-    v.include_glsl.assign(reinterpret_cast<const char*>(kSpecaaGlsl), kSpecaaGlslSize);
-    v.spp = o.spp;
-    v.frames = o.frames;
-    v.timing_repeats = o.repeats;
-    v.variants = !o.no_variants;
     v.keep_images = !o.output.empty();
     options.scenes = o.scenes;
     options.no_builtin = o.no_builtin;
@@ -94,13 +78,7 @@ void add_bench_command(CLI::App& app, std::function<int()>& run) {
         ->delimiter(',')
         ->capture_default_str()
         ->check(CLI::Range(0.0001f, 1.0f));
-    sub->add_option("--size", o->size, "Image size WxH")->capture_default_str();
-    sub->add_option("--spp", o->spp, "Ground-truth samples per pixel")->capture_default_str()->check(CLI::Range(1, 65536));
-    sub->add_option("--frames", o->frames, "Frames of slow camera motion")->capture_default_str()->check(CLI::Range(1, 1024));
-    sub->add_option("--repeats", o->repeats, "Timing samples per candidate (0: no timing)")
-        ->capture_default_str()
-        ->check(CLI::Range(0, 1000));
-    sub->add_flag("--no-variants", o->no_variants, "Leave out the bake variants");
+    add_sim_command_options(sub, o->sim);
     sub->add_option("-o,--output", o->output, "Folder for bench.md, bench.csv, bench.svg and strips/");
     sub->footer("Examples:\n"
                 "  specbake bench -o bench-out\n"

@@ -3,6 +3,7 @@
 #include "cli/gl_context.h"
 #include "cli/job_pipeline.h"
 #include "cli/job_verify.h"
+#include "cli/sim_command_options.h"
 #include "cli/sim_scene_file.h"
 #include "cli/sim_strips.h"
 
@@ -14,37 +15,20 @@
 
 namespace specbake::cli {
 
-// Defined in the build-generated shader_embed.cpp (shaders/embed.cmake).
-extern const unsigned char kSpecaaGlsl[];
-extern const std::size_t kSpecaaGlslSize;
-
 namespace {
 
 struct VerifyCommandOptions {
     std::string scene_file;
     std::string builtin;
     float alpha = 0.05f;
-    std::string size = "128x128";
-    int spp = 256;
-    int frames = 8;
-    int repeats = 7;
-    bool no_variants = false;
+    SimCommandOptions sim;
     std::vector<std::string> only;
     std::string strip;
 };
 
 int run_verify_command(const VerifyCommandOptions& o) {
     VerifyOptions options;
-    if (std::sscanf(o.size.c_str(), "%dx%d", &options.width, &options.height) != 2 || options.width < 2 ||
-        options.height < 2 || options.width > 8192 || options.height > 8192) {
-        print_error("--size: expected WxH between 2x2 and 8192x8192, got '" + o.size + "'");
-        return kExitUsage;
-    }
-    options.include_glsl.assign(reinterpret_cast<const char*>(kSpecaaGlsl), kSpecaaGlslSize);
-    options.spp = o.spp;
-    options.frames = o.frames;
-    options.timing_repeats = o.repeats;
-    options.variants = !o.no_variants;
+    if (!apply_sim_command_options(o.sim, options)) return kExitUsage;
     options.only = o.only;
     if (run_settings().verbosity != Verbosity::quiet)
         options.progress = [](const std::string& line) { std::fprintf(stderr, "specbake: %s\n", line.c_str()); };
@@ -106,17 +90,7 @@ void add_verify_command(CLI::App& app, std::function<int()>& run) {
     sub->add_option("--alpha", o->alpha, "GGX alpha of a built-in scene's material (the papers' roughness; glTF r = sqrt(alpha))")
         ->capture_default_str()
         ->check(CLI::Range(0.0001f, 1.0f));
-    sub->add_option("--size", o->size, "Image size WxH")->capture_default_str();
-    sub->add_option("--spp", o->spp, "Ground-truth samples per pixel (rounded to a square)")
-        ->capture_default_str()
-        ->check(CLI::Range(1, 65536));
-    sub->add_option("--frames", o->frames, "Frames of slow sub-pixel camera motion (temporal instability)")
-        ->capture_default_str()
-        ->check(CLI::Range(1, 1024));
-    sub->add_option("--repeats", o->repeats, "Renders per candidate for the median frame time (0: no timing)")
-        ->capture_default_str()
-        ->check(CLI::Range(0, 1000));
-    sub->add_flag("--no-variants", o->no_variants, "Leave out the bake variants");
+    add_sim_command_options(sub, o->sim);
     sub->add_option("--only", o->only, "Only these candidates (plus 'none'), e.g. --only projected,default")
         ->delimiter(',');
     sub->add_option("--strip", o->strip, "Also write the image strip (frame 0) to this PNG file");

@@ -262,14 +262,39 @@ GLuint upload_with_box_mips(const Image& map) {
     return tex;
 }
 
+// A float colour target with a depth buffer.
+struct RenderTarget {
+    GLuint fbo = 0, color = 0, depth = 0;
+    int width = 0, height = 0;
+
+    bool create(GLenum color_format, int w, int h) {
+        glCreateTextures(GL_TEXTURE_2D, 1, &color);
+        glTextureStorage2D(color, 1, color_format, w, h);
+        glCreateTextures(GL_TEXTURE_2D, 1, &depth);
+        glTextureStorage2D(depth, 1, GL_DEPTH_COMPONENT32F, w, h);
+        glCreateFramebuffers(1, &fbo);
+        glNamedFramebufferTexture(fbo, GL_COLOR_ATTACHMENT0, color, 0);
+        glNamedFramebufferTexture(fbo, GL_DEPTH_ATTACHMENT, depth, 0);
+        width = w;
+        height = h;
+        return glCheckNamedFramebufferStatus(fbo, GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE;
+    }
+    void destroy() {
+        if (!fbo) return;
+        glDeleteFramebuffers(1, &fbo);
+        glDeleteTextures(1, &color);
+        glDeleteTextures(1, &depth);
+        *this = RenderTarget{};
+    }
+};
+
 }  // namespace
 
 struct SimRenderer::Impl {
     const SimScene* scene = nullptr;
     int width = 0, height = 0;
-    GLuint fbo = 0, color = 0, depth = 0;
-    GLuint gt_fbo = 0, gt_color = 0, gt_depth = 0;
-    int gt_width = 0, gt_height = 0;
+    RenderTarget target;  // candidates, at the image size
+    RenderTarget gt;      // ground-truth passes, at the supersampled size
     struct Mesh {
         GLuint vao = 0, vertices = 0, indices = 0;
         GLsizei index_count = 0;
@@ -386,7 +411,7 @@ struct SimRenderer::Impl {
 
     SimImage read_back() const {
         std::vector<float> rgba(size_t(width) * height * 4);
-        glGetTextureImage(color, 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)), rgba.data());
+        glGetTextureImage(target.color, 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)), rgba.data());
         SimImage image(width, height, 2);
         for (int y = 0; y < height; ++y) {
             for (int x = 0; x < width; ++x) {
@@ -414,14 +439,7 @@ Result<std::unique_ptr<SimRenderer>> SimRenderer::create(const SimScene& scene, 
     im.height = height;
     im.include = std::move(include_glsl);
 
-    glCreateTextures(GL_TEXTURE_2D, 1, &im.color);
-    glTextureStorage2D(im.color, 1, GL_RGBA32F, width, height);
-    glCreateTextures(GL_TEXTURE_2D, 1, &im.depth);
-    glTextureStorage2D(im.depth, 1, GL_DEPTH_COMPONENT32F, width, height);
-    glCreateFramebuffers(1, &im.fbo);
-    glNamedFramebufferTexture(im.fbo, GL_COLOR_ATTACHMENT0, im.color, 0);
-    glNamedFramebufferTexture(im.fbo, GL_DEPTH_ATTACHMENT, im.depth, 0);
-    if (glCheckNamedFramebufferStatus(im.fbo, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    if (!im.target.create(GL_RGBA32F, width, height))
         return make_error("headless OpenGL: float framebuffer is incomplete");
 
     for (const SimObject& object : scene.objects) {
@@ -497,14 +515,8 @@ SimRenderer::~SimRenderer() {
     glDeleteTextures(GLsizei(im.normal_maps.size()), im.normal_maps.data());
     glDeleteTextures(GLsizei(im.roughness_maps.size()), im.roughness_maps.data());
     for (auto& [value, tex] : im.constants) glDeleteTextures(1, &tex);
-    glDeleteFramebuffers(1, &im.fbo);
-    glDeleteTextures(1, &im.color);
-    glDeleteTextures(1, &im.depth);
-    if (im.gt_fbo) {
-        glDeleteFramebuffers(1, &im.gt_fbo);
-        glDeleteTextures(1, &im.gt_color);
-        glDeleteTextures(1, &im.gt_depth);
-    }
+    im.target.destroy();
+    im.gt.destroy();
 }
 
 void SimRenderer::set_curvature(const std::string& key, int object, const VertexCurvature& curvature) {
@@ -532,21 +544,9 @@ SimImage SimRenderer::render_ground_truth(int frame, int spp) {
     const GroundTruthLayout layout = ground_truth_layout(spp, im.width, im.height);
     const int s = layout.scale, q = layout.passes_per_axis;
     const int hw = im.width * s, hh = im.height * s;
-    if (im.gt_fbo == 0 || im.gt_width != hw || im.gt_height != hh) {
-        if (im.gt_fbo) {
-            glDeleteFramebuffers(1, &im.gt_fbo);
-            glDeleteTextures(1, &im.gt_color);
-            glDeleteTextures(1, &im.gt_depth);
-        }
-        glCreateTextures(GL_TEXTURE_2D, 1, &im.gt_color);
-        glTextureStorage2D(im.gt_color, 1, GL_RG32F, hw, hh);
-        glCreateTextures(GL_TEXTURE_2D, 1, &im.gt_depth);
-        glTextureStorage2D(im.gt_depth, 1, GL_DEPTH_COMPONENT32F, hw, hh);
-        glCreateFramebuffers(1, &im.gt_fbo);
-        glNamedFramebufferTexture(im.gt_fbo, GL_COLOR_ATTACHMENT0, im.gt_color, 0);
-        glNamedFramebufferTexture(im.gt_fbo, GL_DEPTH_ATTACHMENT, im.gt_depth, 0);
-        im.gt_width = hw;
-        im.gt_height = hh;
+    if (im.gt.fbo == 0 || im.gt.width != hw || im.gt.height != hh) {
+        im.gt.destroy();
+        im.gt.create(GL_RG32F, hw, hh);
     }
     // Gaussian pixel filter, TK21 App. B, truncated at 3 sigma.
     const double sigma2 = 1.0 / (2.0 * std::numbers::pi);
@@ -554,7 +554,7 @@ SimImage SimRenderer::render_ground_truth(int frame, int spp) {
     const int reach = int(std::ceil(radius * s)) + 1;
     std::vector<double> sum_l(size_t(im.width) * im.height, 0.0), sum_c(sum_l.size(), 0.0), sum_w(sum_l.size(), 0.0);
     std::vector<float> hires(size_t(hw) * hh * 2);
-    glBindFramebuffer(GL_FRAMEBUFFER, im.gt_fbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, im.gt.fbo);
     glViewport(0, 0, hw, hh);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
@@ -571,10 +571,10 @@ SimImage SimRenderer::render_ground_truth(int frame, int spp) {
             im.set_frame_uniforms(im.ground_truth, frame, float(2.0 * (0.5 - jx) / hw), float(-2.0 * (0.5 - jy) / hh));
             const float zero[4] = {0, 0, 0, 0};
             const float one = 1.0f;
-            glClearNamedFramebufferfv(im.gt_fbo, GL_COLOR, 0, zero);
-            glClearNamedFramebufferfv(im.gt_fbo, GL_DEPTH, 0, &one);
+            glClearNamedFramebufferfv(im.gt.fbo, GL_COLOR, 0, zero);
+            glClearNamedFramebufferfv(im.gt.fbo, GL_DEPTH, 0, &one);
             im.draw_all(im.ground_truth, nullptr);
-            glGetTextureImage(im.gt_color, 0, GL_RG, GL_FLOAT, GLsizei(hires.size() * sizeof(float)), hires.data());
+            glGetTextureImage(im.gt.color, 0, GL_RG, GL_FLOAT, GLsizei(hires.size() * sizeof(float)), hires.data());
             for (int y = 0; y < im.height; ++y) {
                 const double cy = y + 0.5;
                 for (int x = 0; x < im.width; ++x) {
@@ -641,12 +641,12 @@ Result<int> SimRenderer::compile_candidate(const SimShaderSpec& spec) {
 void SimRenderer::draw_candidate(int id, int frame) {
     Impl& im = *impl_;
     const auto& c = im.candidates[size_t(id)];
-    glBindFramebuffer(GL_FRAMEBUFFER, im.fbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, im.target.fbo);
     glViewport(0, 0, im.width, im.height);
     const float zero[4] = {0, 0, 0, 0};
     const float one = 1.0f;
-    glClearNamedFramebufferfv(im.fbo, GL_COLOR, 0, zero);
-    glClearNamedFramebufferfv(im.fbo, GL_DEPTH, 0, &one);
+    glClearNamedFramebufferfv(im.target.fbo, GL_COLOR, 0, zero);
+    glClearNamedFramebufferfv(im.target.fbo, GL_DEPTH, 0, &one);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
     glDisable(GL_BLEND);
