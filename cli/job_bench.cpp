@@ -2,6 +2,7 @@
 
 #include "cli/sim_scene_file.h"
 #include "cli/sim_strips.h"
+#include "cli/text_format.h"
 #include "io/atomic_file.h"
 
 #include <algorithm>
@@ -13,15 +14,9 @@
 namespace specbake::cli {
 namespace {
 
-std::string fmt(const char* f, double v) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, f, v);
-    return buf;
-}
-
 std::string scene_label(const SceneReport& s) {
     if (s.from_file) return s.scene;
-    return s.scene + " a=" + fmt("%.3g", double(s.roughness) * double(s.roughness));
+    return s.scene + " a=" + format_double("%.3g", double(s.roughness) * double(s.roughness));
 }
 
 const CandidateReport* find_row(const SceneReport& s, const std::string& name) {
@@ -85,7 +80,7 @@ std::string csv_escape(const std::string& s) {
     return s.find_first_of(",\"") == std::string::npos ? s : "\"" + s + "\"";
 }
 
-std::string opt(const std::optional<double>& v, const char* f) { return v ? fmt(f, *v) : ""; }
+std::string opt(const std::optional<double>& v, const char* f) { return v ? format_double(f, *v) : ""; }
 
 }  // namespace
 
@@ -106,7 +101,7 @@ Result<BenchReport> run_bench(const BenchOptions& options, const std::function<v
             report.scenes.push_back(std::move(*result));
             if (progress)
                 progress(scene_label(report.scenes.back()) + ": ground truth " +
-                         fmt("%.1f s", report.scenes.back().ground_truth_ms / 1000.0));
+                         format_double("%.1f s", report.scenes.back().ground_truth_ms / 1000.0));
         }
     }
     for (const std::filesystem::path& file : options.scene_files) {
@@ -117,7 +112,7 @@ Result<BenchReport> run_bench(const BenchOptions& options, const std::function<v
         report.scenes.push_back(std::move(*result));
         if (progress)
             progress(scene_label(report.scenes.back()) + ": ground truth " +
-                     fmt("%.1f s", report.scenes.back().ground_truth_ms / 1000.0));
+                     format_double("%.1f s", report.scenes.back().ground_truth_ms / 1000.0));
     }
     return report;
 }
@@ -129,12 +124,12 @@ std::string bench_summary_markdown(const BenchReport& r) {
     out += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const Aggregate& a : aggregate(r)) {
         const double frame = median(a.frame_rel), bake = median(a.bake_ms);
-        out += "| " + a.name + " | " + a.family + " | " + fmt("%.3f", a.rel_error_linear()) + " | " +
-               fmt("%.3f", a.rel_error()) + " | " +
-               fmt("%.3f", a.rel_flicker()) + " | " + fmt("%.2f", a.energy / a.n) + " | " +
-               fmt("%.2f", a.peak / a.n) + " | " + (a.spirv ? std::to_string(*a.spirv) : "-") + " | " +
-               (std::isnan(frame) ? "-" : fmt("%.2f", frame)) + " | " +
-               (std::isnan(bake) ? "-" : fmt("%.1f", bake)) + " |\n";
+        out += "| " + a.name + " | " + a.family + " | " + format_double("%.3f", a.rel_error_linear()) + " | " +
+               format_double("%.3f", a.rel_error()) + " | " +
+               format_double("%.3f", a.rel_flicker()) + " | " + format_double("%.2f", a.energy / a.n) + " | " +
+               format_double("%.2f", a.peak / a.n) + " | " + (a.spirv ? std::to_string(*a.spirv) : "-") + " | " +
+               (std::isnan(frame) ? "-" : format_double("%.2f", frame)) + " | " +
+               (std::isnan(bake) ? "-" : format_double("%.1f", bake)) + " |\n";
     }
     out += "\nBest per scene (lowest linear RMSE / lowest flicker among filtering candidates):\n\n";
     out += "| scene | none RMSE | best RMSE | none flicker | best flicker |\n|---|---:|---|---:|---|\n";
@@ -147,9 +142,9 @@ std::string bench_summary_markdown(const BenchReport& r) {
             if (!best_f || c.metrics.flicker_linear < best_f->metrics.flicker_linear) best_f = &c;
         }
         if (!none || !best_e) continue;
-        out += "| " + scene_label(s) + " | " + fmt("%.3f", none->metrics.rmse) + " | " + best_e->name + " " +
-               fmt("%.3f", best_e->metrics.rmse) + " | " + fmt("%.3f", none->metrics.flicker_linear) + " | " +
-               best_f->name + " " + fmt("%.3f", best_f->metrics.flicker_linear) + " |\n";
+        out += "| " + scene_label(s) + " | " + format_double("%.3f", none->metrics.rmse) + " | " + best_e->name + " " +
+               format_double("%.3f", best_e->metrics.rmse) + " | " + format_double("%.3f", none->metrics.flicker_linear) + " | " +
+               best_f->name + " " + format_double("%.3f", best_f->metrics.flicker_linear) + " |\n";
     }
     return out;
 }
@@ -166,7 +161,7 @@ std::string bench_full_markdown(const BenchReport& r) {
     out += bench_summary_markdown(r);
     for (const SceneReport& s : r.scenes) {
         out += "\n## " + scene_label(s) +
-               (s.from_file ? std::string(" (scene file, its own materials)") : " (r = " + fmt("%.3g", s.roughness) + ")") +
+               (s.from_file ? std::string(" (scene file, its own materials)") : " (r = " + format_double("%.3g", s.roughness) + ")") +
                "\n\n";
         out += markdown_table(s);
         for (const std::string& note : s.notes) out += "\n- " + note;
@@ -190,13 +185,13 @@ std::string bench_csv(const BenchReport& r) {
         for (const CandidateReport& c : s.candidates) {
             const SimMetrics& m = c.metrics;
             // A scene file's materials have their own roughness: alpha and roughness stay empty.
-            out += s.scene + "," + (s.from_file ? "," : fmt("%.6g", double(s.roughness) * s.roughness) + "," + fmt("%.6g", s.roughness)) +
+            out += s.scene + "," + (s.from_file ? "," : format_double("%.6g", double(s.roughness) * s.roughness) + "," + format_double("%.6g", s.roughness)) +
                    "," + std::to_string(s.width) + "," + std::to_string(s.height) + "," + std::to_string(s.spp) +
                    "," + std::to_string(s.frames) + "," + csv_escape(c.name) + "," + c.family + "," +
-                   csv_escape(c.source) + "," + fmt("%.6g", m.rmse) + "," + fmt("%.6g", m.mae) + "," +
-                   fmt("%.6g", m.rmse_tonemapped) + "," + fmt("%.6g", m.mae_tonemapped) + "," +
-                   fmt("%.6g", m.flicker) + "," + fmt("%.6g", m.flicker_linear) + "," +
-                   fmt("%.6g", m.energy_ratio) + "," + fmt("%.6g", m.peak_ratio) + "," + std::to_string(m.pixels) +
+                   csv_escape(c.source) + "," + format_double("%.6g", m.rmse) + "," + format_double("%.6g", m.mae) + "," +
+                   format_double("%.6g", m.rmse_tonemapped) + "," + format_double("%.6g", m.mae_tonemapped) + "," +
+                   format_double("%.6g", m.flicker) + "," + format_double("%.6g", m.flicker_linear) + "," +
+                   format_double("%.6g", m.energy_ratio) + "," + format_double("%.6g", m.peak_ratio) + "," + std::to_string(m.pixels) +
                    "," + opt(c.bake_ms, "%.3f") + "," +
                    (c.spirv_instructions ? std::to_string(*c.spirv_instructions) : "") + "," +
                    opt(c.frame_ms, "%.4f") + "," + opt(c.frame_relative, "%.4f") + "\n";
@@ -240,28 +235,28 @@ std::string bench_svg(const BenchReport& r) {
         svg += "<rect x=\"" + std::to_string(ox) + "\" y=\"" + std::to_string(oy) + "\" width=\"" +
                std::to_string(pw) + "\" height=\"" + std::to_string(ph) + "\" fill=\"none\" stroke=\"#888\"/>\n";
         for (double t = 0; t <= y_max; t += y_max > 4 ? 1.0 : 0.25) {
-            svg += "<line x1=\"" + fmt("%.1f", double(ox)) + "\" x2=\"" + fmt("%.1f", double(ox + pw)) + "\" y1=\"" +
-                   fmt("%.1f", py(t)) + "\" y2=\"" + fmt("%.1f", py(t)) + "\" stroke=\"" +
+            svg += "<line x1=\"" + format_double("%.1f", double(ox)) + "\" x2=\"" + format_double("%.1f", double(ox + pw)) + "\" y1=\"" +
+                   format_double("%.1f", py(t)) + "\" y2=\"" + format_double("%.1f", py(t)) + "\" stroke=\"" +
                    (std::abs(t - 1.0) < 1e-9 ? "#444" : "#ddd") + "\"/>\n";
-            svg += "<text x=\"" + std::to_string(ox - 6) + "\" y=\"" + fmt("%.1f", py(t) + 3) +
-                   "\" text-anchor=\"end\">" + fmt("%.2f", t) + "</text>\n";
+            svg += "<text x=\"" + std::to_string(ox - 6) + "\" y=\"" + format_double("%.1f", py(t) + 3) +
+                   "\" text-anchor=\"end\">" + format_double("%.2f", t) + "</text>\n";
         }
-        svg += "<text x=\"" + fmt("%.1f", ox + pw / 2.0) + "\" y=\"" + std::to_string(oy + ph + 30) +
+        svg += "<text x=\"" + format_double("%.1f", ox + pw / 2.0) + "\" y=\"" + std::to_string(oy + ph + 30) +
                "\" text-anchor=\"middle\">" +
                std::string(have_x ? "SPIR-V instructions (spirv-opt -O)" : "candidate") + "</text>\n";
         for (int t = 0; t < 5; ++t) {
             const double x = x_min + (x_max - x_min) * t / 4.0;
-            svg += "<text x=\"" + fmt("%.1f", px(x)) + "\" y=\"" + std::to_string(oy + ph + 14) +
-                   "\" text-anchor=\"middle\">" + fmt("%.0f", x) + "</text>\n";
+            svg += "<text x=\"" + format_double("%.1f", px(x)) + "\" y=\"" + std::to_string(oy + ph + 14) +
+                   "\" text-anchor=\"middle\">" + format_double("%.0f", x) + "</text>\n";
         }
         for (size_t i = 0; i < rows.size(); ++i) {
             const Aggregate& a = rows[i];
             const double x = have_x ? (a.spirv ? double(*a.spirv) : double(x_min)) : double(i);
             const double y = panel ? a.rel_flicker() : a.rel_error_linear();
             auto colour = colours.count(a.family) ? colours.at(a.family) : "#555";
-            svg += "<circle cx=\"" + fmt("%.1f", px(x)) + "\" cy=\"" + fmt("%.1f", py(y)) + "\" r=\"3.5\" fill=\"" +
+            svg += "<circle cx=\"" + format_double("%.1f", px(x)) + "\" cy=\"" + format_double("%.1f", py(y)) + "\" r=\"3.5\" fill=\"" +
                    colour + "\"/>\n";
-            svg += "<text x=\"" + fmt("%.1f", px(x) + 5) + "\" y=\"" + fmt("%.1f", py(y) - 4 - 9.0 * double(i % 2)) +
+            svg += "<text x=\"" + format_double("%.1f", px(x) + 5) + "\" y=\"" + format_double("%.1f", py(y) - 4 - 9.0 * double(i % 2)) +
                    "\" fill=\"" + colour + "\">" + a.name + "</text>\n";
         }
     }
@@ -283,7 +278,7 @@ Result<void> write_bench_outputs(const BenchReport& r, const std::filesystem::pa
         for (const CandidateReport& c : s.candidates)
             if (!c.image.empty()) tiles.push_back({c.name, &c.image});
         const auto path = dir / "strips" / (s.from_file ? s.scene + ".png"
-                                                        : s.scene + "-a" + fmt("%.3g", double(s.roughness) * s.roughness) + ".png");
+                                                        : s.scene + "-a" + format_double("%.3g", double(s.roughness) * s.roughness) + ".png");
         if (auto w = write_strip_png(make_strip(s.ground_truth, tiles), path); !w) return w;
     }
     return {};

@@ -1,5 +1,6 @@
 #include "cli/job_inspect.h"
 
+#include "cli/text_format.h"
 #include "io/manifest.h"
 #include "io/sha256.h"
 
@@ -175,12 +176,6 @@ std::string sparkline(const std::vector<long long>& counts) {
     return out;
 }
 
-std::string fmt(const char* f, double v) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, f, v);
-    return buf;
-}
-
 }  // namespace
 
 json report_json(const TextureReport& r) {
@@ -214,8 +209,8 @@ std::string report_text(const TextureReport& r, bool all) {
     const bool any_derived = std::any_of(r.quantities.begin(), r.quantities.end(), [](auto& q) { return q.derived; });
     for (const Quantity& q : r.quantities) {
         if (any_derived && !q.derived && !all) continue;
-        out += "  " + q.name + "   (histogram over [" + fmt("%.4g", q.stats[0].hist_lo) + ", " +
-               fmt("%.4g", q.stats[0].hist_hi) + "])\n";
+        out += "  " + q.name + "   (histogram over [" + format_double("%.4g", q.stats[0].hist_lo) + ", " +
+               format_double("%.4g", q.stats[0].hist_hi) + "])\n";
         out += "    mip  size          min        p5       p50       p95       max      mean  histogram\n";
         for (size_t L = 0; L < q.stats.size(); ++L) {
             const QuantityStats& s = q.stats[L];
@@ -457,7 +452,7 @@ Result<void> write_contact_sheet(std::span<const TextureReport> reports, const f
         for (int bx = 0; bx < bar_w; ++bx)
             for (int by = 0; by < kBarHeight; ++by)
                 canvas.put(kMargin + bx, bar_y + by, false_colour(double(bx) / std::max(1, bar_w - 1)));
-        const std::string lo_text = fmt("%.3g", lo), mid_text = fmt("%.3g", 0.5 * (lo + hi)), hi_text = fmt("%.3g", hi);
+        const std::string lo_text = format_double("%.3g", lo), mid_text = format_double("%.3g", 0.5 * (lo + hi)), hi_text = format_double("%.3g", hi);
         const int text_y = bar_y + kBarHeight + 2;
         canvas.text(kMargin, text_y, lo_text);
         canvas.text(kMargin + bar_w / 2 - Canvas::text_width(mid_text) / 2, text_y, mid_text);

@@ -1,5 +1,6 @@
 #include "cli/job_plan.h"
 
+#include "cli/text_format.h"
 #include "io/image_io.h"
 #include "mesh/curvature_summary.h"
 #include "mesh/prepare_mesh.h"
@@ -16,11 +17,7 @@ namespace {
 constexpr int kModeTriangles = 4;
 constexpr int kModeFan = 6;
 
-std::string format_number(double v) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%.4g", v);
-    return buf;
-}
+std::string format_number(double v) { return format_double("%.4g", v); }
 
 // Half a quantisation step of a roughness texture stored with `bits` per channel (SPEC Sec. 6).
 double half_quantisation_step(int bits, bool is_float) {

@@ -2,6 +2,7 @@
 
 #include "cli/sim_renderer.h"
 #include "cli/sim_spirv.h"
+#include "cli/text_format.h"
 
 #include <algorithm>
 #include <chrono>
@@ -22,12 +23,6 @@ SimBakedTextures to_textures(TextureBakeResult&& result) {
     t.kernel = std::move(result.kernel);
     t.lean = std::move(result.lean);
     return t;
-}
-
-std::string format(const char* fmt, double v) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, fmt, v);
-    return buf;
 }
 
 }  // namespace
@@ -93,7 +88,7 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
     };
     if (!bake_ms.empty()) {
         std::string done;
-        for (const auto& [key, ms] : bake_ms) done += (done.empty() ? "" : ", ") + key + format(" %.0f ms", ms);
+        for (const auto& [key, ms] : bake_ms) done += (done.empty() ? "" : ", ") + key + format_double(" %.0f ms", ms);
         say("baked " + done);
     }
 
@@ -171,13 +166,13 @@ std::string markdown_table(const SceneReport& r) {
     out += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const CandidateReport& c : r.candidates) {
         const SimMetrics& m = c.metrics;
-        out += "| " + c.name + " | " + format("%.3f", m.rmse) + " | " + format("%.3f", m.mae) + " | " +
-               format("%.4f", m.rmse_tonemapped) + " | " + format("%.3f", m.flicker_linear) + " | " +
-               format("%.4f", m.flicker) + " | " +
-               format("%.2f", m.energy_ratio) + " | " + format("%.2f", m.peak_ratio) + " | " +
-               (c.bake_ms ? format("%.1f", *c.bake_ms) : "-") + " | " +
+        out += "| " + c.name + " | " + format_double("%.3f", m.rmse) + " | " + format_double("%.3f", m.mae) + " | " +
+               format_double("%.4f", m.rmse_tonemapped) + " | " + format_double("%.3f", m.flicker_linear) + " | " +
+               format_double("%.4f", m.flicker) + " | " +
+               format_double("%.2f", m.energy_ratio) + " | " + format_double("%.2f", m.peak_ratio) + " | " +
+               (c.bake_ms ? format_double("%.1f", *c.bake_ms) : "-") + " | " +
                (c.spirv_instructions ? std::to_string(*c.spirv_instructions) : "-") + " | " +
-               (c.frame_relative ? format("%.2f", *c.frame_relative) : "-") + " |\n";
+               (c.frame_relative ? format_double("%.2f", *c.frame_relative) : "-") + " |\n";
     }
     return out;
 }

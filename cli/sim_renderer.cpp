@@ -303,7 +303,7 @@ struct SimRenderer::Impl {
     std::vector<Mesh> meshes;
     std::vector<GLuint> normal_maps;
     std::vector<GLuint> roughness_maps;
-    std::vector<int> object_sets;  // texture_set_of() per object
+    std::vector<int> object_sets;  // per object: index into texture_sets(), -1 without a normal map
     struct Baked {
         GLuint roughness = 0, kernel = 0, lean0 = 0, lean1 = 0;
     };
@@ -476,6 +476,7 @@ Result<std::unique_ptr<SimRenderer>> SimRenderer::create(const SimScene& scene, 
         glVertexArrayAttribBinding(mesh.vao, 4, 1);
         im.meshes.push_back(std::move(mesh));
     }
+    texture_sets(scene, &im.object_sets);
     // Scene files have no analytic curvature: zeros, so "exact" is always bound (the candidates that use
     // curvature then name an estimator, see sim_candidates.h).
     for (size_t o = 0; o < scene.objects.size(); ++o) {
@@ -484,7 +485,6 @@ Result<std::unique_ptr<SimRenderer>> SimRenderer::create(const SimScene& scene, 
             r->set_curvature("exact", int(o), object.exact_curvature);
         else
             r->set_curvature("exact", int(o), VertexCurvature{std::vector<float>(4 * object.mesh.vertex_count(), 0.0f)});
-        im.object_sets.push_back(texture_set_of(scene, o));
     }
 
     // The engine's usual mips: box-filtered encoded normals (renormalised in the shader) and box-filtered r.

@@ -179,23 +179,21 @@ Result<SimScene> make_builtin_scene(std::string_view name, float roughness, floa
     return scene;
 }
 
-std::vector<SimTextureSet> texture_sets(const SimScene& scene) {
+std::vector<SimTextureSet> texture_sets(const SimScene& scene, std::vector<int>* object_sets) {
     std::vector<SimTextureSet> sets;
+    if (object_sets) object_sets->clear();
     for (const SimObject& o : scene.objects) {
-        if (o.material.normal_map < 0) continue;
-        const SimTextureSet set{o.material.normal_map, o.material.roughness_map,
-                                o.material.roughness_map >= 0 ? 0.0f : o.material.roughness};
-        if (std::find(sets.begin(), sets.end(), set) == sets.end()) sets.push_back(set);
+        int index = -1;
+        if (o.material.normal_map >= 0) {
+            const SimTextureSet set{o.material.normal_map, o.material.roughness_map,
+                                    o.material.roughness_map >= 0 ? 0.0f : o.material.roughness};
+            const auto it = std::find(sets.begin(), sets.end(), set);
+            index = int(it - sets.begin());
+            if (it == sets.end()) sets.push_back(set);
+        }
+        if (object_sets) object_sets->push_back(index);
     }
     return sets;
-}
-
-int texture_set_of(const SimScene& scene, size_t object) {
-    const SimMaterial& m = scene.objects[object].material;
-    if (m.normal_map < 0) return -1;
-    const std::vector<SimTextureSet> sets = texture_sets(scene);
-    const SimTextureSet set{m.normal_map, m.roughness_map, m.roughness_map >= 0 ? 0.0f : m.roughness};
-    return int(std::find(sets.begin(), sets.end(), set) - sets.begin());
 }
 
 bool has_exact_curvature(const SimScene& scene) {

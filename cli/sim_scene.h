@@ -82,10 +82,9 @@ struct SimTextureSet {
     friend bool operator==(const SimTextureSet&, const SimTextureSet&) = default;
 };
 
-// The distinct texture sets of the scene's normal-mapped materials, in first-use order.
-std::vector<SimTextureSet> texture_sets(const SimScene& scene);
-// Index into texture_sets(scene) of object `object`'s material, -1 without a normal map.
-int texture_set_of(const SimScene& scene, size_t object);
+// The distinct texture sets of the scene's normal-mapped materials, in first-use order. With
+// `object_sets`, also each object's index into them (-1 without a normal map).
+std::vector<SimTextureSet> texture_sets(const SimScene& scene, std::vector<int>* object_sets = nullptr);
 
 // True when every object carries its analytic curvature (the built-in scenes).
 bool has_exact_curvature(const SimScene& scene);

@@ -48,39 +48,36 @@ double ggx_at_projected(double x, double y, const Sym2<double>& A) {
     return 1.0 / (kPi * std::sqrt(A.xx * A.yy) * q * q);
 }
 
+// E[f(a)], a ~ N(0, sigma2), by the midpoint rule over +-8 sigma (8000 nodes).
+template <class F>
+double gaussian_average(double sigma2, F&& f) {
+    const int n = 8000;
+    const double lim = 8 * std::sqrt(sigma2), step = 2 * lim / n;
+    double sum = 0, wsum = 0;
+    for (int i = 0; i < n; ++i) {
+        const double a = -lim + (i + 0.5) * step;
+        const double w = std::exp(-0.5 * a * a / sigma2);
+        sum += w * f(a);
+        wsum += w;
+    }
+    return sum / wsum;
+}
+
 // Fig. 7 "numerical filtering": E[D(h_xy + a du + b dv)], a, b ~ N(0, sigma^2), by the midpoint rule.
 double reference_projected_footprint(const FilterInput<double>& in) {
     const Sym2<double> A{in.alpha.x * in.alpha.x, 0, in.alpha.y * in.alpha.y};
     const double dux = in.h_dx.x - in.h.x, duy = in.h_dx.y - in.h.y;
-    const double s = std::sqrt(in.sigma2);
-    const int n = 8000;
-    const double lim = 8 * s, step = 2 * lim / n;
-    double sum = 0, wsum = 0;
-    for (int i = 0; i < n; ++i) {
-        const double a = -lim + (i + 0.5) * step;
-        const double w = std::exp(-0.5 * a * a / in.sigma2);
-        sum += w * ggx_at_projected(in.h.x + a * dux, in.h.y + a * duy, A);
-        wsum += w;
-    }
-    return sum / wsum;
+    return gaussian_average(in.sigma2, [&](double a) { return ggx_at_projected(in.h.x + a * dux, in.h.y + a * duy, A); });
 }
 
 // The pixel average with the exact rotation of the normal, E[D(R(delta a) h)], a ~ N(0, sigma^2)
 // (the SPEC Sec. 8 ground truth for this fragment).
 double reference_rotating_normal(const FilterInput<double>& in, double beta, double delta) {
     const Sym2<double> A{in.alpha.x * in.alpha.x, 0, in.alpha.y * in.alpha.y};
-    const double s = std::sqrt(in.sigma2);
-    const int n = 8000;
-    const double lim = 8 * s, step = 2 * lim / n;
-    double sum = 0, wsum = 0;
-    for (int i = 0; i < n; ++i) {
-        const double a = -lim + (i + 0.5) * step;
-        const double w = std::exp(-0.5 * a * a / in.sigma2);
+    return gaussian_average(in.sigma2, [&](double a) {
         const double b = beta - delta * a;
-        sum += w * (std::cos(b) > 0 ? ggx_at_projected(std::sin(b), 0, A) : 0.0);
-        wsum += w;
-    }
-    return sum / wsum;
+        return std::cos(b) > 0 ? ggx_at_projected(std::sin(b), 0, A) : 0.0;
+    });
 }
 
 double method_ndf(const FilterMethod& m, const FilterInput<double>& in) {

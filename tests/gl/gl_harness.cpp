@@ -73,6 +73,17 @@ GLuint load_spirv(GLenum stage, const std::vector<char>& binary, std::string& lo
     return shader;
 }
 
+// Links the two stages when both exist; otherwise deletes whichever does and returns 0 (the log already
+// says why).
+GLuint link_both(GLuint vs, GLuint fs, std::string& log) {
+    if (!vs || !fs) {
+        glDeleteShader(vs);
+        glDeleteShader(fs);
+        return 0;
+    }
+    return link(vs, fs, log);
+}
+
 }  // namespace
 
 bool gl_disabled() {
@@ -139,26 +150,31 @@ int run_command(const std::string& command, std::string& output) {
     return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
-GLuint build_program_glsl(const std::string& vertex, const std::string& fragment, std::string& log) {
-    GLuint vs = compile_glsl(GL_VERTEX_SHADER, vertex, log);
-    GLuint fs = compile_glsl(GL_FRAGMENT_SHADER, fragment, log);
-    if (!vs || !fs) {
-        glDeleteShader(vs);
-        glDeleteShader(fs);
-        return 0;
+GLuint create_float_targets(int count, int width, int height, GLuint* textures) {
+    const GLenum attachments[4] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2, GL_COLOR_ATTACHMENT3};
+    GLuint fbo = 0;
+    glGenFramebuffers(1, &fbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+    glGenTextures(count, textures);
+    for (int i = 0; i < count; ++i) {
+        glBindTexture(GL_TEXTURE_2D, textures[i]);
+        glTexStorage2D(GL_TEXTURE_2D, 1, GL_RGBA32F, width, height);
+        glFramebufferTexture2D(GL_FRAMEBUFFER, attachments[i], GL_TEXTURE_2D, textures[i], 0);
     }
-    return link(vs, fs, log);
+    glDrawBuffers(count, attachments);
+    return fbo;
+}
+
+GLuint build_program_glsl(const std::string& vertex, const std::string& fragment, std::string& log) {
+    const GLuint vs = compile_glsl(GL_VERTEX_SHADER, vertex, log);
+    const GLuint fs = compile_glsl(GL_FRAGMENT_SHADER, fragment, log);
+    return link_both(vs, fs, log);
 }
 
 GLuint build_program_spirv(const std::vector<char>& vertex, const std::vector<char>& fragment, std::string& log) {
-    GLuint vs = load_spirv(GL_VERTEX_SHADER, vertex, log);
-    GLuint fs = load_spirv(GL_FRAGMENT_SHADER, fragment, log);
-    if (!vs || !fs) {
-        glDeleteShader(vs);
-        glDeleteShader(fs);
-        return 0;
-    }
-    return link(vs, fs, log);
+    const GLuint vs = load_spirv(GL_VERTEX_SHADER, vertex, log);
+    const GLuint fs = load_spirv(GL_FRAGMENT_SHADER, fragment, log);
+    return link_both(vs, fs, log);
 }
 
 std::string grid_vertex_shader() {
@@ -246,16 +262,7 @@ std::vector<GridResult> evaluate_grid(GLuint program, const std::vector<GridCase
         glVertexAttribPointer(a, a < 6 ? 4 : 2, GL_FLOAT, GL_FALSE, stride,
                               reinterpret_cast<const void*>(static_cast<uintptr_t>(a * 4 * sizeof(float))));
     }
-    glGenFramebuffers(1, &fbo);
-    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
-    glGenTextures(4, targets.data());
-    const GLenum attachments[4] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2, GL_COLOR_ATTACHMENT3};
-    for (int t = 0; t < 4; ++t) {
-        glBindTexture(GL_TEXTURE_2D, targets[static_cast<size_t>(t)]);
-        glTexStorage2D(GL_TEXTURE_2D, 1, GL_RGBA32F, width, height);
-        glFramebufferTexture2D(GL_FRAMEBUFFER, attachments[t], GL_TEXTURE_2D, targets[static_cast<size_t>(t)], 0);
-    }
-    glDrawBuffers(4, attachments);
+    fbo = create_float_targets(4, width, height, targets.data());
     std::vector<GridResult> results;
     if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
         log += "float framebuffer incomplete";
@@ -269,7 +276,7 @@ std::vector<GridResult> evaluate_grid(GLuint program, const std::vector<GridCase
         std::vector<float> pixels(static_cast<size_t>(width * height * 4));
         results.resize(cases.size());
         for (int t = 0; t < 4; ++t) {
-            glReadBuffer(attachments[t]);
+            glReadBuffer(GL_COLOR_ATTACHMENT0 + GLenum(t));
             glReadPixels(0, 0, width, height, GL_RGBA, GL_FLOAT, pixels.data());
             for (int i = 0; i < count; ++i)
                 for (int c = 0; c < 4; ++c)

@@ -53,6 +53,10 @@ private:
 // Runs a shell command, returns its exit status and stores stdout+stderr in `output`.
 int run_command(const std::string& command, std::string& output);
 
+// Creates and binds a framebuffer with `count` (1-4) RGBA32F colour attachments of `width` x `height`,
+// written to `textures`, all set as draw buffers. Returns the framebuffer; the caller deletes both.
+GLuint create_float_targets(int count, int width, int height, GLuint* textures);
+
 // Linked program from GLSL sources; 0 and a log on failure.
 GLuint build_program_glsl(const std::string& vertex, const std::string& fragment, std::string& log);
 // Linked program from SPIR-V binaries (GL_ARB_gl_spirv), entry point "main" in both; 0 and a log on failure.

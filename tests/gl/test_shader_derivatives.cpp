@@ -129,16 +129,7 @@ void render_and_compare(GLuint program, int surface, const char* name) {
     GLuint vao = 0, fbo = 0, targets[4] = {};
     glGenVertexArrays(1, &vao);
     glBindVertexArray(vao);
-    glGenFramebuffers(1, &fbo);
-    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
-    glGenTextures(4, targets);
-    const GLenum attachments[4] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2, GL_COLOR_ATTACHMENT3};
-    for (int i = 0; i < 4; ++i) {
-        glBindTexture(GL_TEXTURE_2D, targets[i]);
-        glTexStorage2D(GL_TEXTURE_2D, 1, GL_RGBA32F, kSize, kSize);
-        glFramebufferTexture2D(GL_FRAMEBUFFER, attachments[i], GL_TEXTURE_2D, targets[i], 0);
-    }
-    glDrawBuffers(4, attachments);
+    fbo = create_float_targets(4, kSize, kSize, targets);
     ASSERT_EQ(glCheckFramebufferStatus(GL_FRAMEBUFFER), static_cast<GLenum>(GL_FRAMEBUFFER_COMPLETE));
     glViewport(0, 0, kSize, kSize);
     glUseProgram(program);
@@ -146,7 +137,7 @@ void render_and_compare(GLuint program, int surface, const char* name) {
     std::vector<float> out[4];
     for (int i = 0; i < 4; ++i) {
         out[i].resize(kSize * kSize * 4);
-        glReadBuffer(attachments[i]);
+        glReadBuffer(GL_COLOR_ATTACHMENT0 + GLenum(i));
         glReadPixels(0, 0, kSize, kSize, GL_RGBA, GL_FLOAT, out[i].data());
     }
     ASSERT_EQ(glGetError(), static_cast<GLenum>(GL_NO_ERROR));

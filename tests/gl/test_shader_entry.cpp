@@ -138,16 +138,7 @@ void run_config(const Config& c) {
     GLuint vao = 0, fbo = 0, targets[2] = {};
     glGenVertexArrays(1, &vao);
     glBindVertexArray(vao);
-    glGenFramebuffers(1, &fbo);
-    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
-    glGenTextures(2, targets);
-    const GLenum attachments[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
-    for (int i = 0; i < 2; ++i) {
-        glBindTexture(GL_TEXTURE_2D, targets[i]);
-        glTexStorage2D(GL_TEXTURE_2D, 1, GL_RGBA32F, kView, kView);
-        glFramebufferTexture2D(GL_FRAMEBUFFER, attachments[i], GL_TEXTURE_2D, targets[i], 0);
-    }
-    glDrawBuffers(2, attachments);
+    fbo = create_float_targets(2, kView, kView, targets);
     ASSERT_EQ(glCheckFramebufferStatus(GL_FRAMEBUFFER), static_cast<GLenum>(GL_FRAMEBUFFER_COMPLETE));
     // Bound after the render targets: creating them rebinds GL_TEXTURE_2D on the active unit.
     glBindTextureUnit(0, tex0);
@@ -166,9 +157,9 @@ void run_config(const Config& c) {
         glUniform1f(glGetUniformLocation(program, "uUvPerPixel"), float(std::ldexp(1.0, L) / kTexSize));
         glDrawArrays(GL_TRIANGLES, 0, 3);
         std::vector<float> out0(kView * kView * 4), out1(kView * kView * 4);
-        glReadBuffer(attachments[0]);
+        glReadBuffer(GL_COLOR_ATTACHMENT0);
         glReadPixels(0, 0, kView, kView, GL_RGBA, GL_FLOAT, out0.data());
-        glReadBuffer(attachments[1]);
+        glReadBuffer(GL_COLOR_ATTACHMENT1);
         glReadPixels(0, 0, kView, kView, GL_RGBA, GL_FLOAT, out1.data());
         ASSERT_EQ(glGetError(), static_cast<GLenum>(GL_NO_ERROR));
 
