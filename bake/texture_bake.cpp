@@ -21,6 +21,7 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <memory>
 
 #if defined(__x86_64__)
 #include <immintrin.h>
@@ -294,12 +295,19 @@ std::vector<double> resample_roughness(const Image& rough, int channel, bool orm
     return out;
 }
 
-// Float output rows of one block of rows of one level, interleaved as the chains; an empty vector for an
+// An array of n values left uninitialised (scratch that is written before it is read).
+template <class T>
+std::unique_ptr<T[]> uninitialized(size_t n) {
+    return n ? std::unique_ptr<T[]>(new T[n]) : nullptr;
+}
+
+// Float output rows of one block of rows of one level, interleaved as the chains; null for an
 // output that was not requested.
 struct RowBlock {
     int width = 0;
     int rough_ch = 0, kern_ch = 0, lean_ch = 0, nrm_ch = 0;
-    std::vector<float> rough, kern, lean, nrm;
+    // Not zero-filled: every texel of a block is written before it is emitted.
+    std::unique_ptr<float[]> rough, kern, lean, nrm;
 
     RowBlock(const TextureBakeShape& shape, int w, int rows)
         : width(w),
@@ -307,13 +315,13 @@ struct RowBlock {
           kern_ch(shape.kernel_channels),
           lean_ch(shape.lean_channels),
           nrm_ch(shape.normal_channels),
-          rough(size_t(w) * rows * size_t(rough_ch)),
-          kern(size_t(w) * rows * size_t(kern_ch)),
-          lean(size_t(w) * rows * size_t(lean_ch)),
-          nrm(size_t(w) * rows * size_t(nrm_ch)) {}
+          rough(uninitialized<float>(size_t(w) * rows * size_t(rough_ch))),
+          kern(uninitialized<float>(size_t(w) * rows * size_t(kern_ch))),
+          lean(uninitialized<float>(size_t(w) * rows * size_t(lean_ch))),
+          nrm(uninitialized<float>(size_t(w) * rows * size_t(nrm_ch))) {}
 
-    static float* row(std::vector<float>& v, int ch, int width, int k) {
-        return v.empty() ? nullptr : v.data() + size_t(k) * size_t(width) * size_t(ch);
+    static float* row(const std::unique_ptr<float[]>& v, int ch, int width, int k) {
+        return v ? v.get() + size_t(k) * size_t(width) * size_t(ch) : nullptr;
     }
     float* rough_row(int k) { return row(rough, rough_ch, width, k); }
     float* kern_row(int k) { return row(kern, kern_ch, width, k); }
@@ -323,10 +331,10 @@ struct RowBlock {
     void emit(const TextureBakeRowSink& sink, int level, int x0, int y0, int rows) const {
         TextureBakeRows r;
         r.level = level, r.x0 = x0, r.y0 = y0, r.rows = rows, r.width = width;
-        r.roughness = rough.empty() ? nullptr : rough.data();
-        r.kernel = kern.empty() ? nullptr : kern.data();
-        r.lean = lean.empty() ? nullptr : lean.data();
-        r.normal = nrm.empty() ? nullptr : nrm.data();
+        r.roughness = rough.get();
+        r.kernel = kern.get();
+        r.lean = lean.get();
+        r.normal = nrm.get();
         sink(r);
     }
 };
@@ -662,16 +670,31 @@ double finalize_row(const double* m, int w, const Layout& layout, const TextureB
 }
 
 #if defined(SPECBAKE_AVX2)
-// o[i] += src[2i]; o[i] += src[2i + 1] for the first multiple of four of the w outputs, four per instruction
-// (the even and odd source texels of four blocks, added in the scalar loop's order); returns how many.
-SPECBAKE_AVX2 int add_pairs_avx2(const double* src, int w, double* o) {
+// acc + the even and then the odd texels of the four 2-wide blocks starting at s: unpack gives
+// (s0, s4, s2, s6) and (s1, s5, s3, s7); the permute puts the blocks in order.
+SPECBAKE_AVX2 inline __m256d add_row(__m256d acc, const double* s) {
+    const __m256d a = _mm256_loadu_pd(s), b = _mm256_loadu_pd(s + 4);
+    acc = _mm256_add_pd(acc, _mm256_permute4x64_pd(_mm256_unpacklo_pd(a, b), 0xD8));
+    return _mm256_add_pd(acc, _mm256_permute4x64_pd(_mm256_unpackhi_pd(a, b), 0xD8));
+}
+
+// block_means with fx = 2 for one plane, four means per instruction: the even and odd source texels of four
+// blocks of each of the fy rows `src`, added from zero in the scalar loop's order, times `inv`. Does the
+// first multiple of four of the w means; returns how many.
+SPECBAKE_AVX2 int pair_means_avx2(const double* const* src, int fy, int w, double inv, double* o) {
+    const __m256d scale = _mm256_set1_pd(inv);
     int i = 0;
+    if (fy == 2) {  // the common case, unrolled
+        for (; i + 4 <= w; i += 4) {
+            const __m256d acc = add_row(add_row(_mm256_setzero_pd(), src[0] + 2 * size_t(i)), src[1] + 2 * size_t(i));
+            _mm256_storeu_pd(o + i, _mm256_mul_pd(acc, scale));
+        }
+        return i;
+    }
     for (; i + 4 <= w; i += 4) {
-        const __m256d a = _mm256_loadu_pd(src + 2 * size_t(i)), b = _mm256_loadu_pd(src + 2 * size_t(i) + 4);
-        // unpack gives (s0, s4, s2, s6) and (s1, s5, s3, s7); the permute puts the blocks in order.
-        const __m256d even = _mm256_permute4x64_pd(_mm256_unpacklo_pd(a, b), 0xD8);
-        const __m256d odd = _mm256_permute4x64_pd(_mm256_unpackhi_pd(a, b), 0xD8);
-        _mm256_storeu_pd(o + i, _mm256_add_pd(_mm256_add_pd(_mm256_loadu_pd(o + i), even), odd));
+        __m256d acc = _mm256_setzero_pd();
+        for (int dy = 0; dy < fy; ++dy) acc = add_row(acc, src[dy] + 2 * size_t(i));
+        _mm256_storeu_pd(o + i, _mm256_mul_pd(acc, scale));
     }
     return i;
 }
@@ -679,29 +702,24 @@ SPECBAKE_AVX2 int add_pairs_avx2(const double* src, int w, double* o) {
 
 // Means of one row of a level whose footprints are fx x fy blocks of the finer level: `fine` holds the
 // fy finer rows (each C planes of pw doubles), `out` receives C planes of w means. Each mean sums its
-// block in the order (dy, dx), starting from zero.
+// block in the order (dy, dx), starting from zero, and is multiplied by 1 / (fx fy).
 void block_means(const double* fine, int pw, int fx, int fy, int C, int w, double* out) {
     const double inv = 1.0 / double(fx * fy);
     for (int c = 0; c < C; ++c) {
         double* o = plane(out, c, w);
-        std::fill(o, o + w, 0.0);
-        for (int dy = 0; dy < fy; ++dy) {
-            const double* src = plane(fine + size_t(dy) * size_t(C) * size_t(pw), c, pw);
-            if (fx == 2) {
-                int i = 0;
+        // Level sizes are max(1, n >> L), so a block spans at most 3 finer rows (3 -> 1).
+        const double* src[3];
+        for (int dy = 0; dy < fy; ++dy) src[dy] = plane(fine + size_t(dy) * size_t(C) * size_t(pw), c, pw);
+        int i = 0;
 #if defined(SPECBAKE_AVX2)
-                if (has_avx2()) i = add_pairs_avx2(src, w, o);
+        if (fx == 2 && has_avx2()) i = pair_means_avx2(src, fy, w, inv, o);
 #endif
-                for (; i < w; ++i) {
-                    o[i] += src[2 * size_t(i)];
-                    o[i] += src[2 * size_t(i) + 1];
-                }
-            } else {
-                for (int i = 0; i < w; ++i)
-                    for (int dx = 0; dx < fx; ++dx) o[i] += src[size_t(i) * fx + dx];
-            }
+        for (; i < w; ++i) {
+            double acc = 0.0;
+            for (int dy = 0; dy < fy; ++dy)
+                for (int dx = 0; dx < fx; ++dx) acc += src[dy][size_t(i) * fx + dx];
+            o[i] = acc * inv;
         }
-        for (int i = 0; i < w; ++i) o[i] *= inv;
     }
 }
 
@@ -973,9 +991,10 @@ Result<TextureBakeResult> bake_validated(const Image& normal, const Image* rough
         const int t2 = std::clamp(kTileTexels / (fx * fx2), 1, w2);
         tbb::parallel_for(tbb::blocked_range<int>(0, h2, with2 ? 1 : 4), [&](const tbb::blocked_range<int>& rows) {
             const int t1 = t2 * fx2, t0 = t1 * fx;
-            std::vector<double> base(size_t(C) * size_t(t0) * size_t(fy));
-            std::vector<float> r0(static_cast<size_t>(t0));
-            std::vector<double> means1(size_t(C) * t1 * size_t(fy2)), means2(size_t(C) * t2);
+            const auto base = uninitialized<double>(size_t(C) * size_t(t0) * size_t(fy));
+            const auto r0 = uninitialized<float>(size_t(t0));
+            const auto means1 = uninitialized<double>(size_t(C) * t1 * size_t(fy2));
+            const auto means2 = uninitialized<double>(size_t(C) * t2);
             RowBlock out0(shape, t0, fy * fy2), out1(shape, t1, fy2), out2(shape, t2, 1);
             long long task_degenerate = 0;
             for (int j2 = rows.begin(); j2 < rows.end(); ++j2) {
@@ -986,22 +1005,22 @@ Result<TextureBakeResult> bake_validated(const Image& normal, const Image* rough
                     for (int dy2 = 0; dy2 < fy2; ++dy2) {
                         const int j = j2 * fy2 + dy2;
                         for (int dy = 0; dy < fy; ++dy) {
-                            double* v = base.data() + size_t(dy) * size_t(C) * size_t(n0);
-                            task_degenerate += dec.decode_span(j * fy + dy, x0, n0, v, r0.data());
-                            base_into(out0, dy2 * fy + dy, v, r0.data(), n0);
+                            double* v = base.get() + size_t(dy) * size_t(C) * size_t(n0);
+                            task_degenerate += dec.decode_span(j * fy + dy, x0, n0, v, r0.get());
+                            base_into(out0, dy2 * fy + dy, v, r0.get(), n0);
                         }
-                        double* means = means1.data() + size_t(dy2) * C * n1;
-                        block_means(base.data(), n0, fx, fy, C, n1, means);
+                        double* means = means1.get() + size_t(dy2) * C * n1;
+                        block_means(base.get(), n0, fx, fy, C, n1, means);
                         change1[size_t(j)] = std::max(change1[size_t(j)], finalize_into(out1, dy2, means, n1));
                     }
                     out0.emit(sink, 0, x0, j2 * fy2 * fy, fy2 * fy);
                     out1.emit(sink, 1, x1, j2 * fy2, fy2);
-                    const double* kept = means1.data();
+                    const double* kept = means1.get();
                     if (with2) {
-                        block_means(means1.data(), n1, fx2, fy2, C, n2, means2.data());
-                        change2[size_t(j2)] = std::max(change2[size_t(j2)], finalize_into(out2, 0, means2.data(), n2));
+                        block_means(means1.get(), n1, fx2, fy2, C, n2, means2.get());
+                        change2[size_t(j2)] = std::max(change2[size_t(j2)], finalize_into(out2, 0, means2.get(), n2));
                         out2.emit(sink, 2, x2, j2, 1);
-                        kept = means2.data();
+                        kept = means2.get();
                     }
                     if (keep)
                         for (int c = 0; c < C; ++c)
