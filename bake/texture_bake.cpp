@@ -58,10 +58,12 @@ SPECBAKE_AVX2 inline __m256d select4(__m256d mask, __m256d a, __m256d b) { retur
 // four of the n texels at `row` (`ch` floats each); returns how many texels it did.
 SPECBAKE_AVX2 int decode_normals_avx2(const float* row, int ch, int n, bool reconstruct, bool flip_y, double* nx,
                                       double* ny, double* nz, double* pxx, double* pyy, double* pxy,
-                                      long long& degenerate) {
+                                      long long& degenerate, bool& non_finite) {
     const __m256d one = _mm256_set1_pd(1.0), two = _mm256_set1_pd(2.0), zero = _mm256_setzero_pd();
     const __m256d tiny = _mm256_set1_pd(1e-20), sign = _mm256_set1_pd(-0.0);
     const size_t stride = size_t(ch);
+    // Sum of (v - v) over the values read: 0 while they are finite, NaN for good once one is not.
+    __m256d finite = _mm256_setzero_pd();
     int x = 0;
     for (; x + 4 <= n; x += 4) {
         const float* c = row + size_t(x) * stride;
@@ -72,6 +74,8 @@ SPECBAKE_AVX2 int decode_normals_avx2(const float* row, int ch, int n, bool reco
         const __m256d vz = reconstruct
                                ? _mm256_sqrt_pd(_mm256_max_pd(_mm256_sub_pd(_mm256_sub_pd(one, xx), yy), zero))
                                : _mm256_sub_pd(_mm256_mul_pd(two, load_channel4(c, stride, 2)), one);
+        const __m256d read = reconstruct ? _mm256_add_pd(vx, vy) : _mm256_add_pd(_mm256_add_pd(vx, vy), vz);
+        finite = _mm256_add_pd(finite, _mm256_sub_pd(read, read));
         const __m256d len2 = _mm256_add_pd(_mm256_add_pd(xx, yy), _mm256_mul_pd(vz, vz));
         const __m256d inv = _mm256_div_pd(one, _mm256_sqrt_pd(len2));
         const __m256d ok = _mm256_cmp_pd(len2, tiny, _CMP_GT_OQ);
@@ -86,19 +90,22 @@ SPECBAKE_AVX2 int decode_normals_avx2(const float* row, int ch, int n, bool reco
         _mm256_storeu_pd(pyy + x, _mm256_mul_pd(uy, uy));
         _mm256_storeu_pd(pxy + x, _mm256_mul_pd(ux, uy));
     }
+    if (_mm256_movemask_pd(_mm256_cmp_pd(finite, finite, _CMP_UNORD_Q))) non_finite = true;
     return x;
 }
 
 // Roughness of a same-size map (Decoder::decode_span, four texels at a time): r = clamp(t[channel]),
 // a = (r^2)^2 in double, and, when `occlusion` is given, ORM R and B; returns how many texels it did.
 SPECBAKE_AVX2 int decode_roughness_avx2(const float* t, int ch, int channel, int n, double* a, float* r0,
-                                        double* occlusion, double* metallic) {
+                                        double* occlusion, double* metallic, bool& non_finite) {
     const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
     const size_t stride = size_t(ch);
+    __m128 finite = zero;  // as in decode_normals_avx2
     int x = 0;
     for (; x + 4 <= n; x += 4) {
         const float* c = t + size_t(x) * stride;
         const __m128 v = _mm_set_ps(c[3 * stride + channel], c[2 * stride + channel], c[stride + channel], c[channel]);
+        finite = _mm_add_ps(finite, _mm_sub_ps(v, v));
         // std::clamp(v, 0, 1): v < 0 ? 0 : (1 < v ? 1 : v)
         const __m128 r = _mm_blendv_ps(_mm_blendv_ps(v, one, _mm_cmplt_ps(one, v)), zero, _mm_cmplt_ps(v, zero));
         const __m256d rd = _mm256_cvtps_pd(r);
@@ -106,10 +113,14 @@ SPECBAKE_AVX2 int decode_roughness_avx2(const float* t, int ch, int channel, int
         _mm256_storeu_pd(a + x, _mm256_mul_pd(r2, r2));
         _mm_storeu_ps(r0 + x, r);
         if (occlusion) {
-            _mm256_storeu_pd(occlusion + x, load_channel4(c, stride, 0));
-            _mm256_storeu_pd(metallic + x, load_channel4(c, stride, 2));
+            const __m128 o = _mm_set_ps(c[3 * stride], c[2 * stride], c[stride], c[0]);
+            const __m128 m = _mm_set_ps(c[3 * stride + 2], c[2 * stride + 2], c[stride + 2], c[2]);
+            finite = _mm_add_ps(finite, _mm_add_ps(_mm_sub_ps(o, o), _mm_sub_ps(m, m)));
+            _mm256_storeu_pd(occlusion + x, _mm256_cvtps_pd(o));
+            _mm256_storeu_pd(metallic + x, _mm256_cvtps_pd(m));
         }
     }
+    if (_mm_movemask_ps(_mm_cmpunord_ps(finite, finite))) non_finite = true;
     return x;
 }
 #endif
@@ -167,10 +178,14 @@ struct Decoder {
     double constant_a = 0.0;
     float constant_r = 0.0f;  // (constant_a)^(1/4) as written at mip 0
     Layout layout;
+    // Set when a value the bake reads is NaN or infinite (checked as the texels are decoded; the bake
+    // fails afterwards, naming the texel).
+    mutable std::atomic<bool> normal_non_finite{false}, roughness_non_finite{false};
 
     // Unit normal of base texel (x, y) in the +Y tangent frame; zero-length vectors decode to +Z.
-    void decode_normal(int x, int y, double n[3], bool& degenerate) const {
+    void decode_normal(int x, int y, double n[3], bool& degenerate, bool& non_finite) const {
         const float* c = normal.texel(x, y);
+        if (!std::isfinite(c[0]) || !std::isfinite(c[1]) || (!reconstruct && !std::isfinite(c[2]))) non_finite = true;
         double nx = 2.0 * c[0] - 1.0;
         double ny = 2.0 * c[1] - 1.0;
         if (flip_y) ny = -ny;
@@ -195,20 +210,22 @@ struct Decoder {
     long long decode_normal_span(int y, int x0, int n, double* nx, double* ny, double* nz, double* xx, double* yy,
                                  double* xy) const {
         long long degenerate_count = 0;
+        bool non_finite = false;
         int x = 0;
 #if defined(SPECBAKE_AVX2)
         if (has_avx2())
             x = decode_normals_avx2(normal.texel(x0, y), normal.channels, n, reconstruct, flip_y, nx, ny, nz, xx, yy,
-                                    xy, degenerate_count);
+                                    xy, degenerate_count, non_finite);
 #endif
         for (; x < n; ++x) {
             double v[3];
             bool degenerate = false;
-            decode_normal(x0 + x, y, v, degenerate);
+            decode_normal(x0 + x, y, v, degenerate, non_finite);
             degenerate_count += degenerate;
             nx[x] = v[0], ny[x] = v[1], nz[x] = v[2];
             xx[x] = v[0] * v[0], yy[x] = v[1] * v[1], xy[x] = v[0] * v[1];
         }
+        if (non_finite) normal_non_finite.store(true, std::memory_order_relaxed);
         return degenerate_count;
     }
 
@@ -237,17 +254,23 @@ struct Decoder {
             const int ch = roughness->channels;
             const float* t = roughness->texel(x0, y);
             int done = 0;
+            bool non_finite = false;
 #if defined(SPECBAKE_AVX2)
-            if (has_avx2()) done = decode_roughness_avx2(t, ch, roughness_channel, W, a, r0, occlusion, metallic);
+            if (has_avx2())
+                done = decode_roughness_avx2(t, ch, roughness_channel, W, a, r0, occlusion, metallic, non_finite);
 #endif
             for (int x = done; x < W; ++x) {
-                const float r = std::clamp(t[size_t(x) * ch + roughness_channel], 0.0f, 1.0f);
+                const float* c = t + size_t(x) * ch;
+                if (!std::isfinite(c[roughness_channel]) || (occlusion && !(std::isfinite(c[0]) && std::isfinite(c[2]))))
+                    non_finite = true;
+                const float r = std::clamp(c[roughness_channel], 0.0f, 1.0f);
                 const double r2 = double(r) * double(r);
                 a[x] = r2 * r2;  // a = alpha^2 = r^4 (SPEC Sec. 2)
                 r0[x] = r;
             }
             if (occlusion)
                 for (int x = done; x < W; ++x) occlusion[x] = t[size_t(x) * ch], metallic[x] = t[size_t(x) * ch + 2];
+            if (non_finite) roughness_non_finite.store(true, std::memory_order_relaxed);
         } else {
             std::fill(a, a + W, constant_a);
             std::fill(r0, r0 + W, constant_r);
@@ -762,6 +785,15 @@ bool looks_srgb_encoded(const Image& n) {
     return dev_linear > 0.08 && dev_srgb < 0.5 * dev_linear;
 }
 
+// "<what>: NaN or infinite value at texel (x, y)" for the first such texel of `image`.
+Error non_finite_error(const std::string& what, const Image& image) {
+    const auto bad = find_non_finite(image);
+    return Error{what + ": NaN or infinite value" +
+                 (bad ? " at texel (" + std::to_string(bad->first) + ", " + std::to_string(bad->second) + ")" : "")};
+}
+
+// Checks of the inputs' shapes and of the parts that are not read texel by texel in the decode (which
+// checks every value it reads for NaN and infinity itself).
 Result<void> validate(const Image& normal, const Image* roughness, int channel, float value) {
     if (normal.empty()) return make_error("normal map: empty image (0x0)");
     if (normal.channels < 2)
@@ -769,9 +801,6 @@ Result<void> validate(const Image& normal, const Image* roughness, int channel, 
                           " channel; a normal map needs 2 (x, y) or 3+ (x, y, z) channels");
     if (normal.pixels.size() != normal.texel_count() * size_t(normal.channels))
         return make_error("normal map: pixel buffer does not match its size");
-    if (auto bad = find_non_finite(normal))
-        return make_error("normal map: NaN or infinite value at texel (" + std::to_string(bad->first) + ", " +
-                          std::to_string(bad->second) + ")");
     if (roughness) {
         if (roughness->empty()) return make_error("roughness map: empty image (0x0)");
         if (roughness->pixels.size() != roughness->texel_count() * size_t(roughness->channels))
@@ -779,9 +808,8 @@ Result<void> validate(const Image& normal, const Image* roughness, int channel, 
         if (channel < 0 || channel >= roughness->channels)
             return make_error("roughness map: channel " + std::to_string(channel) + " does not exist (the map has " +
                               std::to_string(roughness->channels) + ")");
-        if (auto bad = find_non_finite(*roughness))
-            return make_error("roughness map: NaN or infinite value at texel (" + std::to_string(bad->first) +
-                              ", " + std::to_string(bad->second) + ")");
+        const bool resampled = roughness->width != normal.width || roughness->height != normal.height;
+        if (resampled && find_non_finite(*roughness)) return non_finite_error("roughness map", *roughness);
     } else if (!(value >= 0.0f && value <= 1.0f)) {
         return make_error("roughness value " + std::to_string(value) + " is outside [0, 1]");
     }
@@ -1099,6 +1127,8 @@ Result<TextureBakeResult> bake_validated(const Image& normal, const Image* rough
     };
     run_with_threads(settings.threads, run);
 
+    if (dec.normal_non_finite) return non_finite_error("normal map", normal);
+    if (dec.roughness_non_finite) return non_finite_error("roughness map", *roughness);
     notes.degenerate_normals = degenerate;
     if (notes.degenerate_normals > 0)
         notes.warnings.push_back("normal map: " + std::to_string(notes.degenerate_normals) +

@@ -75,8 +75,8 @@ struct TextureBakeResult {
 // Bakes `normal` (2, 3 or 4 channels; 4th ignored) with roughness from channel `roughness_channel` of
 // `roughness` (any resolution; R and B carried through when it has 3+ channels and roughness_channel is 1)
 // or, when `roughness` is null, the constant perceptual roughness `roughness_value` in [0, 1].
-// Errors: empty maps, 1-channel normal map, non-finite values, channel out of range, roughness_value
-// outside [0, 1]. Messages say "normal map: ..." / "roughness map: ..."; callers prefix the file name.
+// Errors: empty maps, 1-channel normal map, NaN or infinity in a value it reads, channel out of range,
+// roughness_value outside [0, 1]. Messages say "normal map: ..." / "roughness map: ..."; callers prefix the file name.
 Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughness, int roughness_channel,
                                        float roughness_value, const TextureBakeSettings& settings);
 

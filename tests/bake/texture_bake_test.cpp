@@ -427,6 +427,45 @@ TEST(TextureBake, SrgbLookingMapIsWarnedAbout) {
     EXPECT_FALSE(warned->notes.warnings.empty());
 }
 
+// NaN and infinity are caught wherever the decode meets them (vector body and scalar tail, normal and ORM
+// channels, a roughness map of another size), each error naming the texel; a channel the bake never reads
+// (the alpha of an RGBA normal map, B of a roughness map read from R) does not stop it.
+TEST(TextureBake, NonFiniteValuesThatAreReadAreErrors) {
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    const Image nm = random_normal_map(11, 6, 31, 0.2);
+    const Image orm = random_orm(11, 6, 32);
+    struct Case { bool in_normal; int x, y, channel; float value; };
+    for (const Case& c : {Case{true, 1, 2, 0, nan}, Case{true, 9, 4, 2, -inf}, Case{true, 10, 5, 1, inf},
+                          Case{false, 2, 1, 1, nan}, Case{false, 10, 0, 0, inf}, Case{false, 5, 5, 2, nan}}) {
+        SCOPED_TRACE(std::string(c.in_normal ? "normal" : "orm") + " texel " + std::to_string(c.x) + "," +
+                     std::to_string(c.y) + " channel " + std::to_string(c.channel));
+        Image n = nm, r = orm;
+        (c.in_normal ? n : r).texel(c.x, c.y)[c.channel] = c.value;
+        auto res = bake_texture(n, &r, 1, 0.0f, TextureBakeSettings{});
+        ASSERT_FALSE(res.ok());
+        const std::string where = std::string(c.in_normal ? "normal map" : "roughness map") +
+                                  ": NaN or infinite value at texel (" + std::to_string(c.x) + ", " +
+                                  std::to_string(c.y) + ")";
+        EXPECT_EQ(res.error().message, where);
+    }
+    Image small(3, 2, 1);
+    small.pixels.assign(6, 0.5f);
+    small.texel(2, 1)[0] = nan;
+    auto resampled = bake_texture(nm, &small, 0, 0.0f, TextureBakeSettings{});
+    ASSERT_FALSE(resampled.ok());
+    EXPECT_EQ(resampled.error().message, "roughness map: NaN or infinite value at texel (2, 1)");
+
+    Image rgba(8, 4, 4);
+    for (size_t i = 0; i < rgba.texel_count(); ++i) {
+        float* t = rgba.pixels.data() + 4 * i;
+        t[0] = 0.5f, t[1] = 0.5f, t[2] = 1.0f, t[3] = nan;  // alpha unused
+    }
+    EXPECT_TRUE(bake_texture(rgba, nullptr, 0, 0.5f, TextureBakeSettings{}).ok());
+    Image r_unused = orm;
+    r_unused.texel(3, 3)[2] = nan;  // roughness from R: not an ORM map, so B is not read
+    EXPECT_TRUE(bake_texture(nm, &r_unused, 0, 0.0f, TextureBakeSettings{}).ok());
+}
+
 TEST(TextureBake, BadInputsAreErrors) {
     Image one_channel(4, 4, 1);
     auto e1 = bake_texture(one_channel, nullptr, 0, 0.5f, TextureBakeSettings{});
