@@ -16,6 +16,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstdint>
@@ -763,6 +764,18 @@ double srgb_to_linear(double c) { return c <= 0.04045 ? c / 12.92 : std::pow((c 
 // (flat (0.5, 0.5, 1) becomes (0.735, 0.735, 1)); decoding the sRGB curve first brings them back.
 bool looks_srgb_encoded(const Image& n) {
     if (n.channels < 3) return false;
+    // Values of 8-bit inputs (most maps; within float rounding of a code k / 255) take the curve from a
+    // table of the 256 codes instead of a pow() per value: this only decides a warning.
+    static const std::array<double, 256> table = [] {
+        std::array<double, 256> t{};
+        for (int k = 0; k < 256; ++k) t[size_t(k)] = srgb_to_linear(k / 255.0);
+        return t;
+    }();
+    auto linear = [](double c) {
+        const double code = c * 255.0;
+        const long k = long(code + 0.5);  // code >= 0: the values are clamped to [0, 1]
+        return k >= 0 && k <= 255 && std::abs(code - double(k)) < 1e-4 ? table[size_t(k)] : srgb_to_linear(c);
+    };
     const size_t count = n.texel_count();
     const size_t stride = std::max<size_t>(1, count / 65536);
     double dev_linear = 0.0, dev_srgb = 0.0;
@@ -772,7 +785,7 @@ bool looks_srgb_encoded(const Image& n) {
         double l2 = 0.0, s2 = 0.0;
         for (int k = 0; k < 3; ++k) {
             const double a = 2.0 * c[k] - 1.0;
-            const double b = 2.0 * srgb_to_linear(std::clamp(double(c[k]), 0.0, 1.0)) - 1.0;
+            const double b = 2.0 * linear(std::clamp(double(c[k]), 0.0, 1.0)) - 1.0;
             l2 += a * a;
             s2 += b * b;
         }
