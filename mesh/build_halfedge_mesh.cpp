@@ -118,42 +118,47 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
             }
         }
     };
-    // The same count for every halfedge at once, per position (its outgoing halfedges), from one sorted list
-    // of the position's halfedges keyed by their other end: local work instead of a scan per halfedge.
-    struct End {
-        uint32_t other, halfedge;
-        bool outgoing;
+    // The same count for every halfedge at once, per position (its outgoing halfedges): the position's
+    // corners with the positions after and before them are gathered once, and each outgoing halfedge a -> b
+    // is compared with all of them (a few dozen branch-free comparisons at a vertex of valence 6, no sort and
+    // no scan of other positions' corners). The lowest halfedge of an edge only matters when the edge has
+    // three or more halfedges (total 1: the halfedge itself; total 2: neither boundary nor non-manifold).
+    struct CornerEnds {
+        uint32_t corner, next, prev;  // the corner and the positions of its next and previous corners
     };
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, position_count, 2048), [&](const auto& r) {
-        std::vector<End> ends;
+        std::vector<CornerEnds> around;
         for (uint32_t a = r.begin(); a != r.end(); ++a) {
-            ends.clear();
-            for (uint32_t i = start[a]; i < start[a + 1]; ++i) {
-                const uint32_t j = by_position[i];
-                ends.push_back({pos[next_corner(j)], j, true});
-                ends.push_back({pos[prev_corner(j)], prev_corner(j), false});
+            const uint32_t count = start[a + 1] - start[a];
+            around.resize(count);
+            for (uint32_t i = 0; i < count; ++i) {
+                const uint32_t j = by_position[start[a] + i];
+                around[i] = {j, pos[next_corner(j)], pos[prev_corner(j)]};
             }
-            std::sort(ends.begin(), ends.end(), [](const End& x, const End& y) {
-                return x.other != y.other ? x.other < y.other : x.halfedge < y.halfedge;
-            });
-            for (size_t b = 0; b < ends.size();) {
-                size_t e = b;
-                uint32_t opposite = 0, partner = kNone;
-                for (; e < ends.size() && ends[e].other == ends[b].other; ++e) {
-                    if (ends[e].outgoing) continue;
-                    ++opposite;
-                    partner = ends[e].halfedge;
+            for (uint32_t i = 0; i < count; ++i) {
+                const uint32_t k = around[i].corner, b = around[i].next;
+                // A corner runs a -> b when its next corner is at b; the halfedge of its previous corner runs
+                // b -> a when that corner is at b. The triangle's corners are distinct, so never both.
+                uint32_t total = 0, opposite = 0, partner = kNone;
+                for (uint32_t m = 0; m < count; ++m) {
+                    const uint32_t same = around[m].next == b, opp = around[m].prev == b;
+                    total += same + opp;
+                    opposite += opp;
+                    partner = opp ? prev_corner(around[m].corner) : partner;
                 }
-                const uint32_t total = uint32_t(e - b), lowest = ends[b].halfedge;
                 const bool paired = total == 2 && opposite == 1;
-                for (size_t i = b; i < e; ++i) {
-                    if (!ends[i].outgoing) continue;
-                    const uint32_t k = ends[i].halfedge;
-                    simple[k] = total == 1 || paired;
-                    mate[k] = paired ? partner : kNone;
-                    edge_kind[k] = lowest != k ? 0 : total == 1 ? 1 : total >= 3 ? 2 : 0;
+                simple[k] = total == 1 || paired;
+                mate[k] = paired ? partner : kNone;
+                uint8_t kind = total == 1 ? 1 : 0;
+                if (total >= 3) {
+                    uint32_t lowest = k;
+                    for (uint32_t m = 0; m < count; ++m) {
+                        if (around[m].next == b) lowest = std::min(lowest, around[m].corner);
+                        else if (around[m].prev == b) lowest = std::min(lowest, prev_corner(around[m].corner));
+                    }
+                    kind = lowest == k ? 2 : 0;
                 }
-                b = e;
+                edge_kind[k] = kind;
             }
         }
     });
