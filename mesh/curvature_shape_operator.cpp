@@ -30,6 +30,7 @@
 // sums and the result do not depend on the thread count.
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "mesh/curvature.h"
@@ -41,6 +42,16 @@ namespace {
 
 using detail::Shape2;
 
+// The hot functions are compiled twice, for AVX2 + FMA and for the baseline instruction set, and chosen once
+// at load time (GCC/Clang function multiversioning); their helpers are inlined into each version.
+#if defined(__GNUC__) && defined(__x86_64__) && defined(__linux__)
+#define SPECBAKE_AVX2_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+#define SPECBAKE_INLINE __attribute__((always_inline)) inline
+#else
+#define SPECBAKE_AVX2_CLONES
+#define SPECBAKE_INLINE inline
+#endif
+
 constexpr int kUnknowns = 7;  // a, b, c, alpha, beta, gamma, delta
 
 // Ridge on the C block, relative to the mean of its diagonal: negligible where the spokes determine C
@@ -49,7 +60,7 @@ constexpr double kRidge = 1e-6;
 
 // Mixed-Voronoi weights of the corners of triangle t; zeros when it carries no information (corners not
 // three distinct positions, or smallest angle under ~1e-10 rad, as detail::is_degenerate_triangle).
-void corner_weights(const TriMesh& mesh, const WeldedTopology& topology, size_t t, float out[3]) {
+SPECBAKE_AVX2_CLONES void corner_weights(const TriMesh& mesh, const WeldedTopology& topology, size_t t, float out[3]) {
     const uint32_t* f = &mesh.indices[3 * t];
     out[0] = out[1] = out[2] = 0.0f;
     const uint32_t* pid = topology.position_id.data();
@@ -74,142 +85,261 @@ void corner_weights(const TriMesh& mesh, const WeldedTopology& topology, size_t 
     for (int i = 0; i < 3; ++i) out[i] = float(w[i]);
 }
 
-// Weighted sums of one vertex's spoke equations: moments m[p][q] = sum w x^p y^q (p + q = 2..4) of the
-// projected offsets and mu/mv[p][q] = sum w n_t.u x^p y^q, sum w n_t.v x^p y^q (p + q = 1..2).
+// Weighted sums of one vertex's spoke equations, the moments the normal equations are made of:
+// m_pq = sum w x^p y^q (p + q = 2..4) of the projected offsets, and mu_pq, mv_pq = sum w n_t.u x^p y^q,
+// sum w n_t.v x^p y^q (p + q = 1..2) of the normals' tangential differences.
 struct SpokeMoments {
-    double m[5][5] = {};
-    double mu[3][3] = {};
-    double mv[3][3] = {};
+    double m20 = 0, m11 = 0, m02 = 0, m30 = 0, m21 = 0, m12 = 0, m03 = 0, m40 = 0, m31 = 0, m22 = 0, m13 = 0,
+           m04 = 0;
+    double mu10 = 0, mu01 = 0, mu20 = 0, mu11 = 0, mu02 = 0, mv10 = 0, mv01 = 0, mv20 = 0, mv11 = 0, mv02 = 0;
 
-    void add(double w, double x, double y, double du, double dv) {
-        const double x2 = x * x, xy = x * y, y2 = y * y;
-        m[2][0] += w * x2;
-        m[1][1] += w * xy;
-        m[0][2] += w * y2;
-        m[3][0] += w * x2 * x;
-        m[2][1] += w * x2 * y;
-        m[1][2] += w * x * y2;
-        m[0][3] += w * y2 * y;
-        m[4][0] += w * x2 * x2;
-        m[3][1] += w * x2 * xy;
-        m[2][2] += w * x2 * y2;
-        m[1][3] += w * xy * y2;
-        m[0][4] += w * y2 * y2;
-        const double wu = w * du, wv = w * dv;
-        mu[1][0] += wu * x;
-        mu[0][1] += wu * y;
-        mu[2][0] += wu * x2;
-        mu[1][1] += wu * xy;
-        mu[0][2] += wu * y2;
-        mv[1][0] += wv * x;
-        mv[0][1] += wv * y;
-        mv[2][0] += wv * x2;
-        mv[1][1] += wv * xy;
-        mv[0][2] += wv * y2;
+    SPECBAKE_INLINE void add(double w, double x, double y, double du, double dv) {
+        const double wx = w * x, wy = w * y;
+        const double wx2 = wx * x, wxy = wx * y, wy2 = wy * y;
+        m20 += wx2;
+        m11 += wxy;
+        m02 += wy2;
+        m30 += wx2 * x;
+        m21 += wx2 * y;
+        m12 += wy2 * x;
+        m03 += wy2 * y;
+        m40 += wx2 * x * x;
+        m31 += wx2 * x * y;
+        m22 += wx2 * y * y;
+        m13 += wy2 * y * x;
+        m04 += wy2 * y * y;
+        mu10 += wx * du;
+        mu01 += wy * du;
+        mu20 += wx2 * du;
+        mu11 += wxy * du;
+        mu02 += wy2 * du;
+        mv10 += wx * dv;
+        mv01 += wy * dv;
+        mv20 += wx2 * dv;
+        mv11 += wxy * dv;
+        mv02 += wy2 * dv;
     }
 };
 
-// Row of the model for the u and the v component of n_t: coefficient times x^px y^py per unknown.
-struct Term {
-    double coef;
-    int px, py;
-};
-constexpr Term kRowU[kUnknowns] = {{1, 1, 0}, {1, 0, 1}, {0, 0, 0}, {0.5, 2, 0}, {1, 1, 1}, {0.5, 0, 2}, {0, 0, 0}};
-constexpr Term kRowV[kUnknowns] = {{0, 0, 0}, {1, 1, 0}, {1, 0, 1}, {0, 0, 0}, {0.5, 2, 0}, {1, 1, 1}, {0.5, 0, 2}};
-
-// In-place Cholesky solve of the symmetric system M z = r of size n; false when M is not numerically
-// positive definite (a pivot below 1e-12 of its diagonal entry).
-bool cholesky_solve(double M[kUnknowns][kUnknowns], double r[kUnknowns], int n) {
-    for (int j = 0; j < n; ++j) {
+// In-place Cholesky solve of the symmetric positive definite system M z = r (lower triangle of M used);
+// false when a pivot falls below 1e-12 of its diagonal entry.
+template <int N>
+bool cholesky_solve(double (&M)[kUnknowns][kUnknowns], double (&r)[kUnknowns]) {
+#pragma GCC unroll 7
+    for (int j = 0; j < N; ++j) {
         double d = M[j][j];
         for (int k = 0; k < j; ++k) d -= M[j][k] * M[j][k];
         if (!(d > 1e-12 * M[j][j])) return false;
-        const double s = std::sqrt(d);
+        const double s = std::sqrt(d), inv = 1.0 / s;
         M[j][j] = s;
-        for (int i = j + 1; i < n; ++i) {
+#pragma GCC unroll 7
+        for (int i = j + 1; i < N; ++i) {
             double v = M[i][j];
             for (int k = 0; k < j; ++k) v -= M[i][k] * M[j][k];
-            M[i][j] = v / s;
+            M[i][j] = v * inv;
         }
     }
-    for (int i = 0; i < n; ++i) {
+#pragma GCC unroll 7
+    for (int i = 0; i < N; ++i) {
         double v = r[i];
         for (int k = 0; k < i; ++k) v -= M[i][k] * r[k];
         r[i] = v / M[i][i];
     }
-    for (int i = n - 1; i >= 0; --i) {
+#pragma GCC unroll 7
+    for (int i = N - 1; i >= 0; --i) {
         double v = r[i];
-        for (int k = i + 1; k < n; ++k) v -= M[k][i] * r[k];
+        for (int k = i + 1; k < N; ++k) v -= M[k][i] * r[k];
         r[i] = v / M[i][i];
     }
     return true;
 }
 
-// S from the moments: the normal equations of the model, with the ridge on the C block; falls back to the
-// linear model (S alone) when even that fails, and to no curvature when the spokes do not span the plane.
-bool solve_shape(const SpokeMoments& s, Shape2& out) {
-    double M[kUnknowns][kUnknowns], r[kUnknowns];
-    for (int i = 0; i < kUnknowns; ++i) {
-        r[i] = kRowU[i].coef * s.mu[kRowU[i].px][kRowU[i].py] + kRowV[i].coef * s.mv[kRowV[i].px][kRowV[i].py];
-        for (int j = 0; j < kUnknowns; ++j)
-            M[i][j] = kRowU[i].coef * kRowU[j].coef * s.m[kRowU[i].px + kRowU[j].px][kRowU[i].py + kRowU[j].py] +
-                      kRowV[i].coef * kRowV[j].coef * s.m[kRowV[i].px + kRowV[j].px][kRowV[i].py + kRowV[j].py];
+// Normal equations of the model rows r_u = (x, y, 0, x^2/2, xy, y^2/2, 0) and r_v = (0, x, y, 0, x^2/2, xy,
+// y^2/2) for the unknowns z = (a, b, c, alpha, beta, gamma, delta): M = sum w (r_u r_u^T + r_v r_v^T)
+// and r = sum w (r_u du + r_v dv), from the moments; lower triangle of M in lane l.
+template <int Lanes>
+SPECBAKE_INLINE void normal_equations(const SpokeMoments& s, double (&M)[7][7][Lanes], double (&r)[7][Lanes], int l) {
+    M[0][0][l] = s.m20;
+    M[1][0][l] = s.m11;
+    M[1][1][l] = s.m02 + s.m20;
+    M[2][0][l] = 0.0;
+    M[2][1][l] = s.m11;
+    M[2][2][l] = s.m02;
+    M[3][0][l] = 0.5 * s.m30;
+    M[3][1][l] = 0.5 * s.m21;
+    M[3][2][l] = 0.0;
+    M[3][3][l] = 0.25 * s.m40;
+    M[4][0][l] = s.m21;
+    M[4][1][l] = s.m12 + 0.5 * s.m30;
+    M[4][2][l] = 0.5 * s.m21;
+    M[4][3][l] = 0.5 * s.m31;
+    M[4][4][l] = s.m22 + 0.25 * s.m40;
+    M[5][0][l] = 0.5 * s.m12;
+    M[5][1][l] = 0.5 * s.m03 + s.m21;
+    M[5][2][l] = s.m12;
+    M[5][3][l] = 0.25 * s.m22;
+    M[5][4][l] = 0.5 * (s.m13 + s.m31);
+    M[5][5][l] = 0.25 * s.m04 + s.m22;
+    M[6][0][l] = 0.0;
+    M[6][1][l] = 0.5 * s.m12;
+    M[6][2][l] = 0.5 * s.m03;
+    M[6][3][l] = 0.0;
+    M[6][4][l] = 0.25 * s.m22;
+    M[6][5][l] = 0.5 * s.m13;
+    M[6][6][l] = 0.25 * s.m04;
+    r[0][l] = s.mu10;
+    r[1][l] = s.mu01 + s.mv10;
+    r[2][l] = s.mv01;
+    r[3][l] = 0.5 * s.mu20;
+    r[4][l] = s.mu11 + 0.5 * s.mv20;
+    r[5][l] = 0.5 * s.mu02 + s.mv11;
+    r[6][l] = 0.5 * s.mv02;
+}
+
+// Groups are solved in batches, lane by lane in lockstep, so the divisions of the factorisations overlap
+// (and vectorise) instead of forming one long dependency chain per group.
+constexpr int kBatch = 4;
+
+// S of up to kBatch groups: LDL^T solve of the normal equations with the ridge on the C block; a lane whose
+// system is not numerically positive definite falls back to the linear model (S alone), and to no
+// curvature when even that fails (the spokes do not span the plane).
+SPECBAKE_INLINE void solve_shapes(const SpokeMoments (&s)[kBatch], const bool (&any)[kBatch], int lanes, Shape2* out) {
+    double M[kUnknowns][kUnknowns][kBatch], r[kUnknowns][kBatch];
+    for (int l = 0; l < kBatch; ++l) {
+        normal_equations(s[l], M, r, l);
+        const double ridge = kRidge * (M[3][3][l] + M[4][4][l] + M[5][5][l] + M[6][6][l]) / (kUnknowns - 3);
+        for (int i = 3; i < kUnknowns; ++i) M[i][i][l] += ridge;
     }
-    double diag = 0.0;
-    for (int i = 3; i < kUnknowns; ++i) diag += M[i][i];
-    const double ridge = kRidge * diag / (kUnknowns - 3);
-    for (int i = 3; i < kUnknowns; ++i) M[i][i] += ridge;
-    double L[kUnknowns][kUnknowns], z[kUnknowns];
-    std::copy(&M[0][0], &M[0][0] + kUnknowns * kUnknowns, &L[0][0]);
-    std::copy(r, r + kUnknowns, z);
-    if (!cholesky_solve(L, z, kUnknowns)) {
-        std::copy(r, r + 3, z);
-        if (!cholesky_solve(M, z, 3)) return false;
+
+    double L[kUnknowns][kUnknowns][kBatch], inv_d[kUnknowns][kBatch], d[kUnknowns][kBatch];
+    bool ok[kBatch] = {true, true, true, true};
+    for (int j = 0; j < kUnknowns; ++j) {
+        for (int l = 0; l < kBatch; ++l) {
+            double dj = M[j][j][l];
+            for (int k = 0; k < j; ++k) dj -= L[j][k][l] * L[j][k][l] * d[k][l];
+            const bool pivot = dj > 1e-12 * M[j][j][l];
+            ok[l] = ok[l] && pivot;
+            d[j][l] = dj;
+            inv_d[j][l] = pivot ? 1.0 / dj : 0.0;
+        }
+        for (int i = j + 1; i < kUnknowns; ++i)
+            for (int l = 0; l < kBatch; ++l) {
+                double v = M[i][j][l];
+                for (int k = 0; k < j; ++k) v -= L[i][k][l] * L[j][k][l] * d[k][l];
+                L[i][j][l] = v * inv_d[j][l];
+            }
     }
-    out = {z[0], z[1], z[2]};
-    return std::isfinite(z[0]) && std::isfinite(z[1]) && std::isfinite(z[2]);
+    double z[kUnknowns][kBatch];
+    for (int i = 0; i < kUnknowns; ++i)
+        for (int l = 0; l < kBatch; ++l) {
+            double v = r[i][l];
+            for (int k = 0; k < i; ++k) v -= L[i][k][l] * z[k][l];
+            z[i][l] = v;
+        }
+    for (int i = 0; i < kUnknowns; ++i)
+        for (int l = 0; l < kBatch; ++l) z[i][l] *= inv_d[i][l];
+    for (int i = kUnknowns - 1; i >= 0; --i)
+        for (int l = 0; l < kBatch; ++l) {
+            double v = z[i][l];
+            for (int k = i + 1; k < kUnknowns; ++k) v -= L[k][i][l] * z[k][l];
+            z[i][l] = v;
+        }
+
+    for (int l = 0; l < lanes; ++l) {
+        out[l] = {};
+        if (!any[l]) continue;
+        double S[3] = {z[0][l], z[1][l], z[2][l]};
+        if (!ok[l]) {
+            double Ml[kUnknowns][kUnknowns][1], rl[kUnknowns][1];
+            normal_equations(s[l], Ml, rl, 0);
+            double M3[kUnknowns][kUnknowns], r3[kUnknowns];
+            for (int i = 0; i < 3; ++i) {
+                for (int j = 0; j <= i; ++j) M3[i][j] = Ml[i][j][0];
+                r3[i] = rl[i][0];
+            }
+            if (!cholesky_solve<3>(M3, r3)) continue;
+            for (int i = 0; i < 3; ++i) S[i] = r3[i];
+        }
+        if (std::isfinite(S[0]) && std::isfinite(S[1]) && std::isfinite(S[2])) out[l] = {S[0], S[1], S[2]};
+    }
+}
+
+// Everything one curvature group's fit reads, as flat arrays.
+struct GatherInput {
+    const uint32_t* indices;
+    const float* positions;
+    const float* unit_normals;
+    const float* weight;  // per corner
+    const uint32_t* start;
+    const uint32_t* order;
+    const detail::GroupFrames* frames;
+    Shape2* shape;
+};
+
+// The fit of groups [begin, end).
+SPECBAKE_AVX2_CLONES void fit_groups(const GatherInput& in, uint32_t begin, uint32_t end) {
+    for (uint32_t first = begin; first < end; first += kBatch) {
+        const int lanes = int(std::min<uint32_t>(kBatch, end - first));
+        SpokeMoments moments[kBatch];
+        bool any[kBatch] = {};  // lanes past `lanes` repeat the first group's (valid) system, unused
+        for (int l = 0; l < lanes; ++l) {
+            const uint32_t g = first + uint32_t(l);
+            const double* u = in.frames->u[g].data();
+            const double* v = in.frames->v[g].data();
+            for (uint32_t k = in.start[g]; k < in.start[g + 1]; ++k) {
+                const uint32_t corner = in.order[k];
+                const double w = in.weight[corner];
+                if (!(w > 0.0)) continue;
+                any[l] = true;
+                const uint32_t* f = &in.indices[corner - corner % 3];
+                const int i = int(corner % 3);
+                const float* p0 = &in.positions[3 * size_t(f[i])];
+                const float* n0 = &in.unit_normals[3 * size_t(f[i])];
+                const double nu0 = n0[0] * u[0] + n0[1] * u[1] + n0[2] * u[2];
+                const double nv0 = n0[0] * v[0] + n0[1] * v[1] + n0[2] * v[2];
+                for (int o = 1; o <= 2; ++o) {
+                    const size_t j = f[(i + o) % 3];
+                    const float* pj = &in.positions[3 * j];
+                    const float* nj = &in.unit_normals[3 * j];
+                    // Float differences of nearby positions are exact in double: the fit sees the mesh as stored.
+                    const double d[3] = {double(pj[0]) - p0[0], double(pj[1]) - p0[1], double(pj[2]) - p0[2]};
+                    moments[l].add(w, d[0] * u[0] + d[1] * u[1] + d[2] * u[2],
+                                   d[0] * v[0] + d[1] * v[1] + d[2] * v[2],
+                                   nj[0] * u[0] + nj[1] * u[1] + nj[2] * u[2] - nu0,
+                                   nj[0] * v[0] + nj[1] * v[1] + nj[2] * v[2] - nv0);
+                }
+            }
+        }
+        for (int l = lanes; l < kBatch; ++l) moments[l] = moments[0];
+        solve_shapes(moments, any, lanes, &in.shape[first]);
+    }
 }
 
 }  // namespace
 
 VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopology& topology) {
     const detail::GroupFrames frames = detail::make_group_frames(mesh, topology);
-    const size_t tris = mesh.triangle_count();
-    detail::ScratchArray<float> weight(3 * tris);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, tris, 4096), [&](const auto& range) {
+    const size_t tris = mesh.triangle_count(), verts = mesh.vertex_count();
+    detail::ScratchArray<float> weight(3 * tris), unit_normals(3 * verts);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, tris, 8192), [&](const auto& range) {
         for (size_t t = range.begin(); t != range.end(); ++t) corner_weights(mesh, topology, t, &weight[3 * t]);
+    });
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, verts, 8192), [&](const auto& range) {
+        for (size_t v = range.begin(); v != range.end(); ++v) {
+            const float* n = &mesh.normals[3 * v];
+            const double len = std::sqrt(double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2]);
+            const double inv = len > 0.0 ? 1.0 / len : 0.0;
+            for (int k = 0; k < 3; ++k) unit_normals[3 * v + k] = float(n[k] * inv);
+        }
     });
 
     const uint32_t groups = topology.group_count;
     const detail::GroupCorners lists = detail::group_corners(mesh, topology);
     std::vector<Shape2> shape(groups);
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, groups, 1024), [&](const auto& range) {
-        for (uint32_t g = range.begin(); g != range.end(); ++g) {
-            const double* u = frames.u[g].data();
-            const double* v = frames.v[g].data();
-            SpokeMoments moments;
-            bool any = false;
-            for (uint32_t k = lists.start[g]; k < lists.start[g + 1]; ++k) {
-                const uint32_t corner = lists.order[k];
-                const double w = weight[corner];
-                if (!(w > 0.0)) continue;
-                any = true;
-                const uint32_t* f = &mesh.indices[corner - corner % 3];
-                const int i = int(corner % 3);
-                const float* p0 = &mesh.positions[3 * size_t(f[i])];
-                const Eigen::Vector3d n0 = detail::normal(mesh, f[i]).normalized();
-                for (int o = 1; o <= 2; ++o) {
-                    const uint32_t j = f[(i + o) % 3];
-                    const float* pj = &mesh.positions[3 * size_t(j)];
-                    const double d[3] = {double(pj[0]) - p0[0], double(pj[1]) - p0[1], double(pj[2]) - p0[2]};
-                    const Eigen::Vector3d dn = detail::normal(mesh, j).normalized() - n0;
-                    moments.add(w, d[0] * u[0] + d[1] * u[1] + d[2] * u[2], d[0] * v[0] + d[1] * v[1] + d[2] * v[2],
-                                dn[0] * u[0] + dn[1] * u[1] + dn[2] * u[2], dn[0] * v[0] + dn[1] * v[1] + dn[2] * v[2]);
-                }
-            }
-            if (any && !solve_shape(moments, shape[g])) shape[g] = {};
-        }
-    });
+    const GatherInput input{mesh.indices.data(), mesh.positions.data(), unit_normals.data(), weight.data(),
+                            lists.start.data(), lists.order.data(), &frames, shape.data()};
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, groups, 2048),
+                      [&](const auto& range) { fit_groups(input, range.begin(), range.end()); });
     return detail::vertex_curvature_from_groups(mesh, topology, frames, shape);
 }
 
