@@ -36,6 +36,26 @@ std::vector<Vec3d> corner_normals(const TriMesh& mesh, const std::vector<char>& 
 }  // namespace
 
 Result<MeshReport> validate_mesh(TriMesh& mesh) {
+    Result<MeshReport> report = check_and_repair_mesh(mesh);
+    if (report) add_topology_report(mesh, *report);
+    return report;
+}
+
+void add_topology_report(const TriMesh& mesh, MeshReport& report) {
+    WeldOptions by_position;
+    by_position.split_by_normals = false;  // positions only: the normals may be written meanwhile
+    const WeldedTopology topo = weld_by_position(mesh, by_position);
+    report.duplicate_vertices = mesh.vertex_count() - topo.position_count;
+    const HalfEdgeTopology halfedge = build_halfedge_mesh(mesh, topo);
+    report.degenerate_triangles = halfedge.degenerate_triangles;
+    report.boundary_edges = halfedge.boundary_edges;
+    report.nonmanifold_edges = halfedge.nonmanifold_edges;
+    report.nonmanifold_vertices = halfedge.nonmanifold_vertices;
+    report.detached_faces = halfedge.detached_faces;
+    report.split_vertices = halfedge.split_vertices;
+}
+
+Result<MeshReport> check_and_repair_mesh(TriMesh& mesh) {
     const std::string name = label(mesh);
     if (mesh.positions.size() % 3 != 0)
         return make_error(name + ": position array length " + std::to_string(mesh.positions.size()) +
@@ -68,22 +88,9 @@ Result<MeshReport> validate_mesh(TriMesh& mesh) {
     report.vertices = n;
     report.triangles = mesh.triangle_count();
 
-    WeldOptions by_position;
-    by_position.split_by_normals = false;
-    const WeldedTopology topo = weld_by_position(mesh, by_position);
-    report.duplicate_vertices = n - topo.position_count;
-
     std::vector<char> used(n, 0);
     for (uint32_t i : mesh.indices) used[i] = 1;
     report.unreferenced_vertices = size_t(std::count(used.begin(), used.end(), 0));
-
-    const HalfEdgeTopology halfedge = build_halfedge_mesh(mesh, topo);
-    report.degenerate_triangles = halfedge.degenerate_triangles;
-    report.boundary_edges = halfedge.boundary_edges;
-    report.nonmanifold_edges = halfedge.nonmanifold_edges;
-    report.nonmanifold_vertices = halfedge.nonmanifold_vertices;
-    report.detached_faces = halfedge.detached_faces;
-    report.split_vertices = halfedge.split_vertices;
 
     if (mesh.has_normals()) {
         std::vector<char> broken(n, 0);
