@@ -89,36 +89,8 @@ SPECBAKE_AVX2_CLONES void corner_weights(const TriMesh& mesh, const WeldedTopolo
 // m_pq = sum w x^p y^q (p + q = 2..4) of the projected offsets, and mu_pq, mv_pq = sum w n_t.u x^p y^q,
 // sum w n_t.v x^p y^q (p + q = 1..2) of the normals' tangential differences.
 struct SpokeMoments {
-    double m20 = 0, m11 = 0, m02 = 0, m30 = 0, m21 = 0, m12 = 0, m03 = 0, m40 = 0, m31 = 0, m22 = 0, m13 = 0,
-           m04 = 0;
-    double mu10 = 0, mu01 = 0, mu20 = 0, mu11 = 0, mu02 = 0, mv10 = 0, mv01 = 0, mv20 = 0, mv11 = 0, mv02 = 0;
-
-    SPECBAKE_INLINE void add(double w, double x, double y, double du, double dv) {
-        const double wx = w * x, wy = w * y;
-        const double wx2 = wx * x, wxy = wx * y, wy2 = wy * y;
-        m20 += wx2;
-        m11 += wxy;
-        m02 += wy2;
-        m30 += wx2 * x;
-        m21 += wx2 * y;
-        m12 += wy2 * x;
-        m03 += wy2 * y;
-        m40 += wx2 * x * x;
-        m31 += wx2 * x * y;
-        m22 += wx2 * y * y;
-        m13 += wy2 * y * x;
-        m04 += wy2 * y * y;
-        mu10 += wx * du;
-        mu01 += wy * du;
-        mu20 += wx2 * du;
-        mu11 += wxy * du;
-        mu02 += wy2 * du;
-        mv10 += wx * dv;
-        mv01 += wy * dv;
-        mv20 += wx2 * dv;
-        mv11 += wxy * dv;
-        mv02 += wy2 * dv;
-    }
+    double m20, m11, m02, m30, m21, m12, m03, m40, m31, m22, m13, m04;
+    double mu10, mu01, mu20, mu11, mu02, mv10, mv01, mv20, mv11, mv02;
 };
 
 // In-place Cholesky solve of the symmetric positive definite system M z = r (lower triangle of M used);
@@ -276,40 +248,102 @@ struct GatherInput {
     Shape2* shape;
 };
 
+// A group's spokes in structure-of-arrays form, summed four at a time in four independent lanes (each lane
+// in a fixed order, then the lanes in a fixed order: the same sums for any thread count), which the
+// compiler turns into one 4-wide vector operation per moment.
+constexpr int kLanes = 4;
+constexpr int kSpokeBlock = 64;
+struct SpokeBlock {
+    alignas(32) double x[kSpokeBlock], y[kSpokeBlock], du[kSpokeBlock], dv[kSpokeBlock], w[kSpokeBlock];
+    int n = 0;
+};
+constexpr int kMoments = 22;
+
+SPECBAKE_INLINE void sum_block(SpokeBlock& b, double (&acc)[kMoments][kLanes]) {
+    while (b.n % kLanes != 0) {
+        b.x[b.n] = b.y[b.n] = b.du[b.n] = b.dv[b.n] = b.w[b.n] = 0.0;
+        ++b.n;
+    }
+    for (int s = 0; s < b.n; s += kLanes) {
+        for (int l = 0; l < kLanes; ++l) {
+            const double x = b.x[s + l], y = b.y[s + l], du = b.du[s + l], dv = b.dv[s + l];
+            const double wx = b.w[s + l] * x, wy = b.w[s + l] * y;
+            const double wx2 = wx * x, wxy = wx * y, wy2 = wy * y;
+            acc[0][l] += wx2;
+            acc[1][l] += wxy;
+            acc[2][l] += wy2;
+            acc[3][l] += wx2 * x;
+            acc[4][l] += wx2 * y;
+            acc[5][l] += wy2 * x;
+            acc[6][l] += wy2 * y;
+            acc[7][l] += wx2 * x * x;
+            acc[8][l] += wx2 * x * y;
+            acc[9][l] += wx2 * y * y;
+            acc[10][l] += wy2 * y * x;
+            acc[11][l] += wy2 * y * y;
+            acc[12][l] += wx * du;
+            acc[13][l] += wy * du;
+            acc[14][l] += wx2 * du;
+            acc[15][l] += wxy * du;
+            acc[16][l] += wy2 * du;
+            acc[17][l] += wx * dv;
+            acc[18][l] += wy * dv;
+            acc[19][l] += wx2 * dv;
+            acc[20][l] += wxy * dv;
+            acc[21][l] += wy2 * dv;
+        }
+    }
+    b.n = 0;
+}
+
+// The moments of group g's spokes; false when it has no usable triangle.
+SPECBAKE_INLINE bool group_moments(const GatherInput& in, uint32_t g, SpokeBlock& b, SpokeMoments& out) {
+    const double* u = in.frames->u[g].data();
+    const double* v = in.frames->v[g].data();
+    double acc[kMoments][kLanes] = {};
+    bool any = false;
+    for (uint32_t k = in.start[g]; k < in.start[g + 1]; ++k) {
+        const uint32_t corner = in.order[k];
+        const double w = in.weight[corner];
+        if (!(w > 0.0)) continue;
+        any = true;
+        const uint32_t* f = &in.indices[corner - corner % 3];
+        const int i = int(corner % 3);
+        const float* p0 = &in.positions[3 * size_t(f[i])];
+        const float* n0 = &in.unit_normals[3 * size_t(f[i])];
+        const double nu0 = n0[0] * u[0] + n0[1] * u[1] + n0[2] * u[2];
+        const double nv0 = n0[0] * v[0] + n0[1] * v[1] + n0[2] * v[2];
+        if (b.n + 2 > kSpokeBlock) sum_block(b, acc);
+        for (int o = 1; o <= 2; ++o) {
+            const size_t j = f[(i + o) % 3];
+            const float* pj = &in.positions[3 * j];
+            const float* nj = &in.unit_normals[3 * j];
+            // Float differences of nearby positions are exact in double: the fit sees the mesh as stored.
+            const double d[3] = {double(pj[0]) - p0[0], double(pj[1]) - p0[1], double(pj[2]) - p0[2]};
+            b.x[b.n] = d[0] * u[0] + d[1] * u[1] + d[2] * u[2];
+            b.y[b.n] = d[0] * v[0] + d[1] * v[1] + d[2] * v[2];
+            b.du[b.n] = nj[0] * u[0] + nj[1] * u[1] + nj[2] * u[2] - nu0;
+            b.dv[b.n] = nj[0] * v[0] + nj[1] * v[1] + nj[2] * v[2] - nv0;
+            b.w[b.n] = w;
+            ++b.n;
+        }
+    }
+    sum_block(b, acc);
+    double m[kMoments];
+    for (int q = 0; q < kMoments; ++q) m[q] = (acc[q][0] + acc[q][1]) + (acc[q][2] + acc[q][3]);
+    out = {m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8], m[9], m[10], m[11],
+           m[12], m[13], m[14], m[15], m[16], m[17], m[18], m[19], m[20], m[21]};
+    return any;
+}
+
 // The fit of groups [begin, end).
 SPECBAKE_AVX2_CLONES void fit_groups(const GatherInput& in, uint32_t begin, uint32_t end) {
+    SpokeBlock block;
     for (uint32_t first = begin; first < end; first += kBatch) {
         const int lanes = int(std::min<uint32_t>(kBatch, end - first));
         SpokeMoments moments[kBatch];
         bool any[kBatch] = {};  // lanes past `lanes` repeat the first group's (valid) system, unused
-        for (int l = 0; l < lanes; ++l) {
-            const uint32_t g = first + uint32_t(l);
-            const double* u = in.frames->u[g].data();
-            const double* v = in.frames->v[g].data();
-            for (uint32_t k = in.start[g]; k < in.start[g + 1]; ++k) {
-                const uint32_t corner = in.order[k];
-                const double w = in.weight[corner];
-                if (!(w > 0.0)) continue;
-                any[l] = true;
-                const uint32_t* f = &in.indices[corner - corner % 3];
-                const int i = int(corner % 3);
-                const float* p0 = &in.positions[3 * size_t(f[i])];
-                const float* n0 = &in.unit_normals[3 * size_t(f[i])];
-                const double nu0 = n0[0] * u[0] + n0[1] * u[1] + n0[2] * u[2];
-                const double nv0 = n0[0] * v[0] + n0[1] * v[1] + n0[2] * v[2];
-                for (int o = 1; o <= 2; ++o) {
-                    const size_t j = f[(i + o) % 3];
-                    const float* pj = &in.positions[3 * j];
-                    const float* nj = &in.unit_normals[3 * j];
-                    // Float differences of nearby positions are exact in double: the fit sees the mesh as stored.
-                    const double d[3] = {double(pj[0]) - p0[0], double(pj[1]) - p0[1], double(pj[2]) - p0[2]};
-                    moments[l].add(w, d[0] * u[0] + d[1] * u[1] + d[2] * u[2],
-                                   d[0] * v[0] + d[1] * v[1] + d[2] * v[2],
-                                   nj[0] * u[0] + nj[1] * u[1] + nj[2] * u[2] - nu0,
-                                   nj[0] * v[0] + nj[1] * v[1] + nj[2] * v[2] - nv0);
-                }
-            }
-        }
+        for (int l = 0; l < lanes; ++l) any[l] = group_moments(in, first + uint32_t(l), block, moments[l]);
         for (int l = lanes; l < kBatch; ++l) moments[l] = moments[0];
         solve_shapes(moments, any, lanes, &in.shape[first]);
     }
