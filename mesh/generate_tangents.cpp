@@ -75,8 +75,9 @@ void generate_tangents(TriMesh& mesh) {
                 Vec3d e1 = detail::position(mesh, f[(c + 1) % 3]) - p, e2 = detail::position(mesh, f[(c + 2) % 3]) - p;
                 e1 -= nrm.dot(e1) * nrm;
                 e2 -= nrm.dot(e2) * nrm;
-                // MikkTSpace works in float; the corner angle is only a weight, and float atan2 halves its cost.
-                const double angle = std::atan2(float(e1.cross(e2).norm()), float(e1.dot(e2)));
+                // The corner angle is only a weight: a polynomial atan2 (error < 3e-11 rad) instead of libm's,
+                // about five times cheaper and the same on every platform.
+                const double angle = detail::corner_angle(e1.cross(e2).norm(), e1.dot(e2));
                 const Vec3d dpdu(ft.dpdu[0], ft.dpdu[1], ft.dpdu[2]);
                 const Vec3d tp = dpdu - nrm.dot(dpdu) * nrm;
                 const double tl = tp.norm();
