@@ -2,6 +2,8 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+
 namespace specbake::detail {
 
 GroupFrames make_group_frames(const TriMesh& mesh, const WeldedTopology& topology) {
@@ -21,13 +23,38 @@ GroupFrames make_group_frames(const TriMesh& mesh, const WeldedTopology& topolog
 }
 
 GroupCorners group_corners(const TriMesh& mesh, const WeldedTopology& topology) {
+    // A stable counting sort in a fixed number of slices of the corner range: each slice counts its corners
+    // per group, a group's corners are then placed slice by slice, so every group lists its corners in
+    // increasing order whatever the number of threads that ran the slices.
+    const size_t corners = mesh.indices.size();
+    const uint32_t groups = topology.group_count;
+    const uint32_t* group_id = topology.group_id.data();
+    const uint32_t* indices = mesh.indices.data();
+    constexpr size_t kSlices = 4;
+    const size_t slice = (corners + kSlices - 1) / kSlices;
+    std::vector<uint32_t> count(kSlices * size_t(groups), 0);
+    tbb::parallel_for(size_t(0), kSlices, [&](size_t s) {
+        uint32_t* c = &count[s * groups];
+        for (size_t k = s * slice; k < std::min(corners, (s + 1) * slice); ++k) ++c[group_id[indices[k]]];
+    });
     GroupCorners out;
-    out.start.assign(topology.group_count + 1, 0);
-    for (uint32_t v : mesh.indices) ++out.start[topology.group_id[v] + 1];
-    for (uint32_t g = 0; g < topology.group_count; ++g) out.start[g + 1] += out.start[g];
-    out.order.resize(mesh.indices.size());
-    std::vector<uint32_t> fill(out.start.begin(), out.start.end() - 1);
-    for (size_t k = 0; k < mesh.indices.size(); ++k) out.order[fill[topology.group_id[mesh.indices[k]]]++] = uint32_t(k);
+    out.start.resize(groups + 1);
+    uint32_t total = 0;
+    for (uint32_t g = 0; g < groups; ++g) {
+        out.start[g] = total;
+        for (size_t s = 0; s < kSlices; ++s) {
+            const uint32_t n = count[s * groups + g];
+            count[s * groups + g] = total;  // now the slice's first slot in group g
+            total += n;
+        }
+    }
+    out.start[groups] = total;
+    out.order.resize(corners);
+    tbb::parallel_for(size_t(0), kSlices, [&](size_t s) {
+        uint32_t* fill = &count[s * groups];
+        for (size_t k = s * slice; k < std::min(corners, (s + 1) * slice); ++k)
+            out.order[fill[group_id[indices[k]]]++] = uint32_t(k);
+    });
     return out;
 }
 
