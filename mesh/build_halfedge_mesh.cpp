@@ -124,7 +124,8 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     // no scan of other positions' corners). The lowest halfedge of an edge only matters when the edge has
     // three or more halfedges (total 1: the halfedge itself; total 2: neither boundary nor non-manifold).
     struct CornerEnds {
-        uint32_t corner, next, prev;  // the corner and the positions of its next and previous corners
+        uint32_t next, prev;             // positions of the corner's next and previous corners
+        uint32_t corner, prev_halfedge;  // the corner (its halfedge runs a -> next) and prev_corner(corner)
     };
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, position_count, 2048), [&](const auto& r) {
         std::vector<CornerEnds> around;
@@ -132,19 +133,20 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
             const uint32_t count = start[a + 1] - start[a];
             around.resize(count);
             for (uint32_t i = 0; i < count; ++i) {
-                const uint32_t j = by_position[start[a] + i];
-                around[i] = {j, pos[next_corner(j)], pos[prev_corner(j)]};
+                const uint32_t j = by_position[start[a] + i], p = prev_corner(j);
+                around[i] = {pos[next_corner(j)], pos[p], j, p};
             }
+            const CornerEnds* c = around.data();
             for (uint32_t i = 0; i < count; ++i) {
-                const uint32_t k = around[i].corner, b = around[i].next;
+                const uint32_t k = c[i].corner, b = c[i].next;
                 // A corner runs a -> b when its next corner is at b; the halfedge of its previous corner runs
                 // b -> a when that corner is at b. The triangle's corners are distinct, so never both.
                 uint32_t total = 0, opposite = 0, partner = kNone;
                 for (uint32_t m = 0; m < count; ++m) {
-                    const uint32_t same = around[m].next == b, opp = around[m].prev == b;
+                    const uint32_t same = c[m].next == b, opp = c[m].prev == b;
                     total += same + opp;
                     opposite += opp;
-                    partner = opp ? prev_corner(around[m].corner) : partner;
+                    partner = opp ? c[m].prev_halfedge : partner;
                 }
                 const bool paired = total == 2 && opposite == 1;
                 simple[k] = total == 1 || paired;
@@ -153,8 +155,8 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
                 if (total >= 3) {
                     uint32_t lowest = k;
                     for (uint32_t m = 0; m < count; ++m) {
-                        if (around[m].next == b) lowest = std::min(lowest, around[m].corner);
-                        else if (around[m].prev == b) lowest = std::min(lowest, prev_corner(around[m].corner));
+                        if (c[m].next == b) lowest = std::min(lowest, c[m].corner);
+                        else if (c[m].prev == b) lowest = std::min(lowest, c[m].prev_halfedge);
                     }
                     kind = lowest == k ? 2 : 0;
                 }
@@ -237,14 +239,24 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
                     continue;
                 }
                 if (fan[k] != kNone) continue;
-                uint32_t head = k;
-                for (uint32_t back = mate[prev_corner(head)]; back != kNone && back != k; back = mate[prev_corner(head)])
-                    head = back;
-                uint32_t x = head;
+                // Forward from k. A cycle comes back to k; its head is k's successor (where the walk back from
+                // k, which stops at the corner whose predecessor is k, ends). An open chain is also walked back
+                // from k to the corner without a predecessor, its head.
+                uint32_t x = k, last = k;
                 do {
                     fan[x] = fans;
+                    last = x;
                     x = mate[x] == kNone ? kNone : next_corner(mate[x]);
-                } while (x != kNone && x != head);
+                } while (x != kNone && x != k);
+                uint32_t head = k;
+                if (x == k) {
+                    head = last == k ? k : next_corner(mate[k]);
+                } else {
+                    for (uint32_t back = mate[prev_corner(head)]; back != kNone && back != k; back = mate[prev_corner(head)]) {
+                        head = back;
+                        fan[head] = fans;
+                    }
+                }
                 fan_head[head] = 1;
                 ++fans;
             }
