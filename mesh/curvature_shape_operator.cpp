@@ -69,35 +69,51 @@ constexpr int kUnknowns = 7;  // a, b, c, alpha, beta, gamma, delta
 // (it shifts C by 1e-6 of itself), decisive only along directions the spokes do not see.
 constexpr double kRidge = 1e-6;
 
-// Mixed-Voronoi weights of the corners of triangles [begin, end); zeros for a triangle that carries no
-// information (corners not three distinct positions, or smallest angle under ~1e-10 rad, as
+// Mixed-Voronoi weights of the corners of triangles [begin, end), four triangles per vector (the
+// branch-free form of detail::mixed_voronoi_areas); zeros for a triangle that carries no information
+// (corners not three distinct positions, or smallest angle under ~1e-10 rad, as
 // detail::is_degenerate_triangle).
 SPECBAKE_AVX2_CLONES void corner_weights(const TriMesh& mesh, const WeldedTopology& topology, size_t begin,
                                          size_t end, float* weight) {
     const uint32_t* pid = topology.position_id.data();
-    for (size_t t = begin; t != end; ++t) {
-        const uint32_t* f = &mesh.indices[3 * t];
-        float* out = &weight[3 * t];
-        out[0] = out[1] = out[2] = 0.0f;
-        if (pid[f[0]] == pid[f[1]] || pid[f[1]] == pid[f[2]] || pid[f[0]] == pid[f[2]]) continue;
-        double p[3][3];
-        for (int i = 0; i < 3; ++i)
-            for (int k = 0; k < 3; ++k) p[i][k] = mesh.positions[3 * size_t(f[i]) + k];
-        double e[3][3];
+    for (size_t first = begin; first < end; first += kLanes) {
+        const int lanes = int(std::min<size_t>(kLanes, end - first));
+        v4d p[3][3];  // corner, coordinate; lane = triangle
+        v4l distinct;
+        for (int l = 0; l < kLanes; ++l) {
+            const uint32_t* f = &mesh.indices[3 * (first + size_t(std::min(l, lanes - 1)))];
+            for (int i = 0; i < 3; ++i)
+                for (int k = 0; k < 3; ++k) p[i][k][l] = mesh.positions[3 * size_t(f[i]) + k];
+            distinct[l] = pid[f[0]] != pid[f[1]] && pid[f[1]] != pid[f[2]] && pid[f[0]] != pid[f[2]] ? -1 : 0;
+        }
+        v4d e[3][3];
         for (int k = 0; k < 3; ++k) {
             e[0][k] = p[2][k] - p[1][k];  // e_i opposite corner i
             e[1][k] = p[0][k] - p[2][k];
             e[2][k] = p[1][k] - p[0][k];
         }
-        const double cr[3] = {e[0][1] * e[1][2] - e[0][2] * e[1][1], e[0][2] * e[1][0] - e[0][0] * e[1][2],
-                              e[0][0] * e[1][1] - e[0][1] * e[1][0]};
-        double l[3];
+        const v4d cx = e[0][1] * e[1][2] - e[0][2] * e[1][1], cy = e[0][2] * e[1][0] - e[0][0] * e[1][2],
+                  cz = e[0][0] * e[1][1] - e[0][1] * e[1][0];
+        v4d l[3];
         for (int i = 0; i < 3; ++i) l[i] = e[i][0] * e[i][0] + e[i][1] * e[i][1] + e[i][2] * e[i][2];
-        const double twice_area = std::sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]);
-        if (!(twice_area > 1e-10 * (l[0] + l[1] + l[2]))) continue;
-        double w[3];
-        detail::mixed_voronoi_areas(l[0], l[1], l[2], 0.5 * twice_area, w);
-        for (int i = 0; i < 3; ++i) out[i] = float(w[i]);
+        v4d twice_area;
+        for (int q = 0; q < kLanes; ++q) twice_area[q] = std::sqrt(cx[q] * cx[q] + cy[q] * cy[q] + cz[q] * cz[q]);
+        const v4l usable = distinct & (twice_area > 1e-10 * (l[0] + l[1] + l[2]));
+        const v4d area = 0.5 * twice_area;
+        // Voronoi areas: (|e_j|^2 cot(angle k) + |e_k|^2 cot(angle j)) / 8, cot(angle i) = (l_j + l_k - l_i) / 4A.
+        const v4d inv = usable ? 1.0 / (4.0 * area) : splat(0.0);
+        const v4d c0 = (l[1] + l[2] - l[0]) * inv, c1 = (l[0] + l[2] - l[1]) * inv, c2 = (l[0] + l[1] - l[2]) * inv;
+        v4d w[3] = {(l[1] * c1 + l[2] * c2) / 8.0, (l[0] * c0 + l[2] * c2) / 8.0, (l[0] * c0 + l[1] * c1) / 8.0};
+        // An obtuse corner (opposite squared edge above the sum of the other two) takes half the area, the
+        // two others a quarter each.
+        const v4l obtuse[3] = {l[0] > l[1] + l[2], l[1] > l[0] + l[2], l[2] > l[0] + l[1]};
+        const v4l any_obtuse = obtuse[0] | obtuse[1] | obtuse[2];
+        for (int i = 0; i < 3; ++i) {
+            w[i] = any_obtuse ? (obtuse[i] ? 0.5 * area : 0.25 * area) : w[i];
+            w[i] = usable ? w[i] : splat(0.0);
+        }
+        for (int q = 0; q < lanes; ++q)
+            for (int i = 0; i < 3; ++i) weight[3 * (first + size_t(q)) + size_t(i)] = float(w[i][q]);
     }
 }
 
