@@ -6,18 +6,21 @@
 
 namespace specbake::detail {
 
+void group_frame(const float normal[3], Vec3d& n, Vec3d& u, Vec3d& v) {
+    const Vec3d nv(normal[0], normal[1], normal[2]);
+    const double len = nv.norm();
+    n = len > 0.0 ? Vec3d(nv / len) : Vec3d(0.0, 0.0, 1.0);
+    orthonormal_basis(n, u, v);
+}
+
 GroupFrames make_group_frames(const TriMesh& mesh, const WeldedTopology& topology) {
     GroupFrames frames;
     frames.n.resize(topology.group_count);
     frames.u.resize(topology.group_count);
     frames.v.resize(topology.group_count);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, topology.group_count, 4096), [&](const auto& r) {
-        for (size_t g = r.begin(); g != r.end(); ++g) {
-            const Vec3d nv = normal(mesh, topology.group_vertex[g]);
-            const double len = nv.norm();
-            frames.n[g] = len > 0.0 ? Vec3d(nv / len) : Vec3d(0.0, 0.0, 1.0);
-            orthonormal_basis(frames.n[g], frames.u[g], frames.v[g]);
-        }
+        for (size_t g = r.begin(); g != r.end(); ++g)
+            group_frame(&mesh.normals[3 * size_t(topology.group_vertex[g])], frames.n[g], frames.u[g], frames.v[g]);
     });
     return frames;
 }
@@ -65,48 +68,49 @@ bool skip_triangle(const TriMesh& mesh, const WeldedTopology& topology, size_t t
     return is_degenerate_triangle(position(mesh, f[0]), position(mesh, f[1]), position(mesh, f[2]));
 }
 
-VertexCurvature vertex_curvature_from_groups(const TriMesh& mesh, const WeldedTopology& topology,
-                                             const GroupFrames& frames, const std::vector<Shape2>& shape) {
-    const size_t groups = topology.group_count;
-    std::vector<double> k1(groups), k2(groups);
-    std::vector<Vec3d> dir(groups);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, groups, 4096), [&](const auto& r) {
-        for (size_t g = r.begin(); g != r.end(); ++g) {
-            const Shape2& s = shape[g];
-            const double mean = 0.5 * (s.a + s.c);
-            const double half_diff = 0.5 * (s.a - s.c);
-            const double radius = std::sqrt(half_diff * half_diff + s.b * s.b);
-            const double hi = mean + radius, lo = mean - radius;
-            const bool hi_first = std::abs(hi) >= std::abs(lo);
-            k1[g] = hi_first ? hi : lo;
-            k2[g] = hi_first ? lo : hi;
-            // Eigenvector of k1 from whichever row of (S - k1 I) is better conditioned.
-            const double x1 = s.b, y1 = k1[g] - s.a;  // from row 1: (a - k1) x + b y = 0
-            const double x2 = k1[g] - s.c, y2 = s.b;  // from row 2: b x + (c - k1) y = 0
-            double x = x1, y = y1;
-            if (x2 * x2 + y2 * y2 > x1 * x1 + y1 * y1) {
-                x = x2;
-                y = y2;
-            }
-            const double len = std::sqrt(x * x + y * y);
-            if (!(len > 1e-12 * std::max(std::abs(k1[g]), 1e-300))) {
-                x = 1.0;
-                y = 0.0;
-            } else {
-                x /= len;
-                y /= len;
-            }
-            dir[g] = x * frames.u[g] + y * frames.v[g];
-        }
-    });
+GroupPrincipal principal_curvatures(const Shape2& s, const Vec3d& u, const Vec3d& v) {
+    GroupPrincipal p{};
+    const double mean = 0.5 * (s.a + s.c);
+    const double half_diff = 0.5 * (s.a - s.c);
+    const double radius = std::sqrt(half_diff * half_diff + s.b * s.b);
+    const double hi = mean + radius, lo = mean - radius;
+    const bool hi_first = std::abs(hi) >= std::abs(lo);
+    p.k1 = hi_first ? hi : lo;
+    p.k2 = hi_first ? lo : hi;
+    // Eigenvector of k1 from whichever row of (S - k1 I) is better conditioned.
+    const double x1 = s.b, y1 = p.k1 - s.a;  // from row 1: (a - k1) x + b y = 0
+    const double x2 = p.k1 - s.c, y2 = s.b;  // from row 2: b x + (c - k1) y = 0
+    double x = x1, y = y1;
+    if (x2 * x2 + y2 * y2 > x1 * x1 + y1 * y1) {
+        x = x2;
+        y = y2;
+    }
+    const double len = std::sqrt(x * x + y * y);
+    if (!(len > 1e-12 * std::max(std::abs(p.k1), 1e-300))) {
+        x = 1.0;
+        y = 0.0;
+    } else {
+        x /= len;
+        y /= len;
+    }
+    for (int k = 0; k < 3; ++k) p.dir[k] = x * u[k] + y * v[k];
+    return p;
+}
 
+VertexCurvature vertex_curvature_from_principal(const TriMesh& mesh, const WeldedTopology& topology,
+                                                const GroupPrincipal* principal) {
     VertexCurvature out;
     out.values.resize(4 * mesh.vertex_count());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.vertex_count(), 4096), [&](const auto& r) {
         for (size_t v = r.begin(); v != r.end(); ++v) {
-            const uint32_t g = topology.group_id[v];
+            const GroupPrincipal& p = principal[topology.group_id[v]];
             Vec3d nv = normal(mesh, uint32_t(v));
-            nv = nv.norm() > 0.0 ? Vec3d(nv.normalized()) : frames.n[g];
+            if (nv.norm() > 0.0) {
+                nv.normalize();
+            } else {
+                Vec3d u, w;
+                group_frame(&mesh.normals[3 * size_t(topology.group_vertex[topology.group_id[v]])], nv, u, w);
+            }
             Vec3d t = tangent(mesh, uint32_t(v));
             t -= nv.dot(t) * nv;
             const double tl = t.norm();
@@ -117,7 +121,8 @@ VertexCurvature vertex_curvature_from_groups(const TriMesh& mesh, const WeldedTo
                 orthonormal_basis(nv, t, b);
             }
             b = tangent_sign(mesh, uint32_t(v)) * nv.cross(t);
-            double dx = dir[g].dot(t), dy = dir[g].dot(b);
+            const Vec3d dir(p.dir[0], p.dir[1], p.dir[2]);
+            double dx = dir.dot(t), dy = dir.dot(b);
             const double dl = std::sqrt(dx * dx + dy * dy);
             if (dl > 1e-12) {
                 dx /= dl;
@@ -127,13 +132,22 @@ VertexCurvature vertex_curvature_from_groups(const TriMesh& mesh, const WeldedTo
                 dy = 0.0;
             }
             float* o = &out.values[4 * v];
-            o[0] = float(k1[g]);
-            o[1] = float(k2[g]);
+            o[0] = float(p.k1);
+            o[1] = float(p.k2);
             o[2] = float(dx);
             o[3] = float(dy);
         }
     });
     return out;
+}
+
+VertexCurvature vertex_curvature_from_groups(const TriMesh& mesh, const WeldedTopology& topology,
+                                             const GroupFrames& frames, const std::vector<Shape2>& shape) {
+    std::vector<GroupPrincipal> principal(topology.group_count);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, topology.group_count, 4096), [&](const auto& r) {
+        for (size_t g = r.begin(); g != r.end(); ++g) principal[g] = principal_curvatures(shape[g], frames.u[g], frames.v[g]);
+    });
+    return vertex_curvature_from_principal(mesh, topology, principal.data());
 }
 
 }  // namespace specbake::detail

@@ -132,8 +132,8 @@ struct GatherInput {
     const uint32_t* start;
     const uint32_t* order;
     const uint32_t* group_vertex;
-    const detail::GroupFrames* frames;
-    Shape2* shape;
+    const float* normals;  // as authored: the group frame is built from the first vertex's normal
+    detail::GroupPrincipal* principal;
 };
 
 // Spokes of four groups, one group per vector lane: spoke s of lane l at [4 s + l], as stored (float
@@ -189,19 +189,22 @@ SPECBAKE_INLINE void sum_block(const SpokeBlock& b, int slots, const v4d (&p0)[3
     }
 }
 
-// Moments of groups first .. first + 3 (lane l: group first + l, lanes past `lanes` empty), and whether each
-// has a usable triangle.
+// Frames (u, v) and moments of groups first .. first + 3 (lane l: group first + l, lanes past `lanes`
+// empty), and whether each has a usable triangle.
 SPECBAKE_INLINE void group_moments(const GatherInput& in, uint32_t first, int lanes, SpokeBlock& b,
-                                   v4d (&acc)[kMoments], bool (&any)[kLanes]) {
-    v4d p0[3], u[3], v[3];
+                                   v4d (&u)[3], v4d (&v)[3], v4d (&acc)[kMoments], bool (&any)[kLanes]) {
+    v4d p0[3];
     uint32_t cursor[kLanes], stop[kLanes];
     for (int l = 0; l < kLanes; ++l) {
         const uint32_t g = first + uint32_t(std::min(l, lanes - 1));
-        const float* p = &in.positions[3 * size_t(in.group_vertex[g])];
+        const size_t first_vertex = in.group_vertex[g];
+        const float* p = &in.positions[3 * first_vertex];
+        detail::Vec3d n, fu, fv;
+        detail::group_frame(&in.normals[3 * first_vertex], n, fu, fv);
         for (int c = 0; c < 3; ++c) {
             p0[c][l] = p[c];
-            u[c][l] = in.frames->u[g][c];
-            v[c][l] = in.frames->v[g][c];
+            u[c][l] = fu[c];
+            v[c][l] = fv[c];
         }
         cursor[l] = in.start[g];
         stop[l] = l < lanes ? in.start[g + 1] : in.start[g];
@@ -341,22 +344,25 @@ SPECBAKE_INLINE void solve_shapes(const v4d (&s)[kMoments], const bool (&any)[kL
     }
 }
 
-// The fit of groups [begin, end), four at a time.
+// The fit of groups [begin, end), four at a time, and their principal curvatures.
 SPECBAKE_AVX2_CLONES void fit_groups(const GatherInput& in, uint32_t begin, uint32_t end) {
     SpokeBlock block;
     for (uint32_t first = begin; first < end; first += kLanes) {
         const int lanes = int(std::min<uint32_t>(kLanes, end - first));
-        v4d moments[kMoments];
+        v4d u[3], v[3], moments[kMoments];
         bool any[kLanes];
-        group_moments(in, first, lanes, block, moments, any);
-        solve_shapes(moments, any, lanes, &in.shape[first]);
+        group_moments(in, first, lanes, block, u, v, moments, any);
+        Shape2 shape[kLanes];
+        solve_shapes(moments, any, lanes, shape);
+        for (int l = 0; l < lanes; ++l)
+            in.principal[first + uint32_t(l)] = detail::principal_curvatures(
+                shape[l], detail::Vec3d(u[0][l], u[1][l], u[2][l]), detail::Vec3d(v[0][l], v[1][l], v[2][l]));
     }
 }
 
 }  // namespace
 
 VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopology& topology) {
-    const detail::GroupFrames frames = detail::make_group_frames(mesh, topology);
     const size_t tris = mesh.triangle_count(), verts = mesh.vertex_count();
     detail::ScratchArray<float> weight(3 * tris), unit_normals(3 * verts);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, tris, 8192), [&](const auto& range) {
@@ -373,13 +379,13 @@ VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopolo
 
     const uint32_t groups = topology.group_count;
     const detail::GroupCorners lists = detail::group_corners(mesh, topology);
-    std::vector<Shape2> shape(groups);
+    detail::ScratchArray<detail::GroupPrincipal> principal(groups);
     const GatherInput input{mesh.indices.data(), mesh.positions.data(), unit_normals.data(), weight.data(),
-                            lists.start.data(), lists.order.data(), topology.group_vertex.data(), &frames,
-                            shape.data()};
+                            lists.start.data(), lists.order.data(), topology.group_vertex.data(),
+                            mesh.normals.data(), principal.data()};
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, groups, 2048),
                       [&](const auto& range) { fit_groups(input, range.begin(), range.end()); });
-    return detail::vertex_curvature_from_groups(mesh, topology, frames, shape);
+    return detail::vertex_curvature_from_principal(mesh, topology, principal.data());
 }
 
 }  // namespace specbake
