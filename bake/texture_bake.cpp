@@ -16,21 +16,115 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <memory>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
+#if defined(__x86_64__)
+#include <immintrin.h>
 #endif
 #if defined(__linux__)
 #include <sys/mman.h>
 #endif
 
+// The inner loops have AVX2 forms (four doubles per instruction), chosen at run time; each performs the
+// same IEEE operations in the same order as the scalar form it stands for, so results are bit-identical
+// on every CPU. Only "avx2" is enabled for them, not "fma": a fused multiply-add would round differently.
+#if defined(__x86_64__)
+#define SPECBAKE_AVX2 __attribute__((target("avx2")))
+#endif
+
 namespace specbake {
 namespace {
+
+#if defined(SPECBAKE_AVX2)
+bool has_avx2() {
+    static const bool yes = (__builtin_cpu_init(), __builtin_cpu_supports("avx2"));
+    return yes;
+}
+
+// Channel k of the four texels at c, c + stride, c + 2 stride, c + 3 stride, widened to double.
+SPECBAKE_AVX2 inline __m256d load_channel4(const float* c, size_t stride, int k) {
+    return _mm256_cvtps_pd(_mm_set_ps(c[3 * stride + k], c[2 * stride + k], c[stride + k], c[k]));
+}
+
+// (mask ? a : b) per lane.
+SPECBAKE_AVX2 inline __m256d select4(__m256d mask, __m256d a, __m256d b) { return _mm256_blendv_pd(b, a, mask); }
+
+// Unit normals and their products (Decoder::decode_normal, four texels at a time) of the first multiple of
+// four of the n texels at `row` (`ch` floats each); returns how many texels it did.
+SPECBAKE_AVX2 int decode_normals_avx2(const float* row, int ch, int n, bool reconstruct, bool flip_y, double* nx,
+                                      double* ny, double* nz, double* pxx, double* pyy, double* pxy,
+                                      long long& degenerate, bool& non_finite) {
+    const __m256d one = _mm256_set1_pd(1.0), two = _mm256_set1_pd(2.0), zero = _mm256_setzero_pd();
+    const __m256d tiny = _mm256_set1_pd(1e-20), sign = _mm256_set1_pd(-0.0);
+    const size_t stride = size_t(ch);
+    // Sum of (v - v) over the values read: 0 while they are finite, NaN for good once one is not.
+    __m256d finite = _mm256_setzero_pd();
+    int x = 0;
+    for (; x + 4 <= n; x += 4) {
+        const float* c = row + size_t(x) * stride;
+        const __m256d vx = _mm256_sub_pd(_mm256_mul_pd(two, load_channel4(c, stride, 0)), one);
+        __m256d vy = _mm256_sub_pd(_mm256_mul_pd(two, load_channel4(c, stride, 1)), one);
+        if (flip_y) vy = _mm256_xor_pd(vy, sign);
+        const __m256d xx = _mm256_mul_pd(vx, vx), yy = _mm256_mul_pd(vy, vy);
+        const __m256d vz = reconstruct
+                               ? _mm256_sqrt_pd(_mm256_max_pd(_mm256_sub_pd(_mm256_sub_pd(one, xx), yy), zero))
+                               : _mm256_sub_pd(_mm256_mul_pd(two, load_channel4(c, stride, 2)), one);
+        const __m256d read = reconstruct ? _mm256_add_pd(vx, vy) : _mm256_add_pd(_mm256_add_pd(vx, vy), vz);
+        finite = _mm256_add_pd(finite, _mm256_sub_pd(read, read));
+        const __m256d len2 = _mm256_add_pd(_mm256_add_pd(xx, yy), _mm256_mul_pd(vz, vz));
+        const __m256d inv = _mm256_div_pd(one, _mm256_sqrt_pd(len2));
+        const __m256d ok = _mm256_cmp_pd(len2, tiny, _CMP_GT_OQ);
+        degenerate += 4 - __builtin_popcount(unsigned(_mm256_movemask_pd(ok)));
+        const __m256d ux = _mm256_and_pd(ok, _mm256_mul_pd(vx, inv));
+        const __m256d uy = _mm256_and_pd(ok, _mm256_mul_pd(vy, inv));
+        const __m256d uz = select4(ok, _mm256_mul_pd(vz, inv), one);
+        _mm256_storeu_pd(nx + x, ux);
+        _mm256_storeu_pd(ny + x, uy);
+        _mm256_storeu_pd(nz + x, uz);
+        _mm256_storeu_pd(pxx + x, _mm256_mul_pd(ux, ux));
+        _mm256_storeu_pd(pyy + x, _mm256_mul_pd(uy, uy));
+        _mm256_storeu_pd(pxy + x, _mm256_mul_pd(ux, uy));
+    }
+    if (_mm256_movemask_pd(_mm256_cmp_pd(finite, finite, _CMP_UNORD_Q))) non_finite = true;
+    return x;
+}
+
+// Roughness of a same-size map (Decoder::decode_span, four texels at a time): r = clamp(t[channel]),
+// a = (r^2)^2 in double, and, when `occlusion` is given, ORM R and B; returns how many texels it did.
+SPECBAKE_AVX2 int decode_roughness_avx2(const float* t, int ch, int channel, int n, double* a, float* r0,
+                                        double* occlusion, double* metallic, bool& non_finite) {
+    const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
+    const size_t stride = size_t(ch);
+    __m128 finite = zero;  // as in decode_normals_avx2
+    int x = 0;
+    for (; x + 4 <= n; x += 4) {
+        const float* c = t + size_t(x) * stride;
+        const __m128 v = _mm_set_ps(c[3 * stride + channel], c[2 * stride + channel], c[stride + channel], c[channel]);
+        finite = _mm_add_ps(finite, _mm_sub_ps(v, v));
+        // std::clamp(v, 0, 1): v < 0 ? 0 : (1 < v ? 1 : v)
+        const __m128 r = _mm_blendv_ps(_mm_blendv_ps(v, one, _mm_cmplt_ps(one, v)), zero, _mm_cmplt_ps(v, zero));
+        const __m256d rd = _mm256_cvtps_pd(r);
+        const __m256d r2 = _mm256_mul_pd(rd, rd);
+        _mm256_storeu_pd(a + x, _mm256_mul_pd(r2, r2));
+        _mm_storeu_ps(r0 + x, r);
+        if (occlusion) {
+            const __m128 o = _mm_set_ps(c[3 * stride], c[2 * stride], c[stride], c[0]);
+            const __m128 m = _mm_set_ps(c[3 * stride + 2], c[2 * stride + 2], c[stride + 2], c[2]);
+            finite = _mm_add_ps(finite, _mm_add_ps(_mm_sub_ps(o, o), _mm_sub_ps(m, m)));
+            _mm256_storeu_pd(occlusion + x, _mm256_cvtps_pd(o));
+            _mm256_storeu_pd(metallic + x, _mm256_cvtps_pd(m));
+        }
+    }
+    if (_mm_movemask_ps(_mm_cmpunord_ps(finite, finite))) non_finite = true;
+    return x;
+}
+#endif
 
 // Per-texel linear quantities, in this order; the ORM and slope groups are present only when needed.
 enum Channel : int { kPx, kPy, kPz, kPxx, kPyy, kPxy, kA, kCore };
@@ -85,10 +179,14 @@ struct Decoder {
     double constant_a = 0.0;
     float constant_r = 0.0f;  // (constant_a)^(1/4) as written at mip 0
     Layout layout;
+    // Set when a value the bake reads is NaN or infinite (checked as the texels are decoded; the bake
+    // fails afterwards, naming the texel).
+    mutable std::atomic<bool> normal_non_finite{false}, roughness_non_finite{false};
 
     // Unit normal of base texel (x, y) in the +Y tangent frame; zero-length vectors decode to +Z.
-    void decode_normal(int x, int y, double n[3], bool& degenerate) const {
+    void decode_normal(int x, int y, double n[3], bool& degenerate, bool& non_finite) const {
         const float* c = normal.texel(x, y);
+        if (!std::isfinite(c[0]) || !std::isfinite(c[1]) || (!reconstruct && !std::isfinite(c[2]))) non_finite = true;
         double nx = 2.0 * c[0] - 1.0;
         double ny = 2.0 * c[1] - 1.0;
         if (flip_y) ny = -ny;
@@ -108,64 +206,45 @@ struct Decoder {
         n[0] = nx * inv, n[1] = ny * inv, n[2] = nz * inv;
     }
 
-    // Unit normals of base row y into nx, ny, nz (same arithmetic as decode_normal, two texels per SSE2
-    // instruction: packed sqrt and division round exactly like the scalar ones); returns the degenerate count.
-    long long decode_normal_row(int y, double* nx, double* ny, double* nz) const {
+    // Unit normals of base texels [x0, x0 + n) of row y into nx, ny, nz and their products into xx, yy,
+    // xy; returns the degenerate count.
+    long long decode_normal_span(int y, int x0, int n, double* nx, double* ny, double* nz, double* xx, double* yy,
+                                 double* xy) const {
         long long degenerate_count = 0;
+        bool non_finite = false;
         int x = 0;
-#if defined(__SSE2__)
-        const int ch = normal.channels;
-        const float* row = normal.texel(0, y);
-        const __m128d one = _mm_set1_pd(1.0), two = _mm_set1_pd(2.0), zero = _mm_setzero_pd();
-        const __m128d tiny = _mm_set1_pd(1e-20);
-        for (; x + 2 <= normal.width; x += 2) {
-            const float* c0 = row + size_t(x) * ch;
-            const float* c1 = c0 + ch;
-            const __m128d vx = _mm_sub_pd(_mm_mul_pd(two, _mm_set_pd(c1[0], c0[0])), one);
-            __m128d vy = _mm_sub_pd(_mm_mul_pd(two, _mm_set_pd(c1[1], c0[1])), one);
-            if (flip_y) vy = _mm_xor_pd(vy, _mm_set1_pd(-0.0));
-            const __m128d xx = _mm_mul_pd(vx, vx), yy = _mm_mul_pd(vy, vy);
-            const __m128d vz = reconstruct ? _mm_sqrt_pd(_mm_max_pd(_mm_sub_pd(_mm_sub_pd(one, xx), yy), zero))
-                                           : _mm_sub_pd(_mm_mul_pd(two, _mm_set_pd(c1[2], c0[2])), one);
-            const __m128d len2 = _mm_add_pd(_mm_add_pd(xx, yy), _mm_mul_pd(vz, vz));
-            const __m128d inv = _mm_div_pd(one, _mm_sqrt_pd(len2));
-            const __m128d ok = _mm_cmpgt_pd(len2, tiny);
-            const int ok_bits = _mm_movemask_pd(ok);
-            degenerate_count += 2 - ((ok_bits & 1) + (ok_bits >> 1));
-            _mm_storeu_pd(nx + x, _mm_and_pd(ok, _mm_mul_pd(vx, inv)));
-            _mm_storeu_pd(ny + x, _mm_and_pd(ok, _mm_mul_pd(vy, inv)));
-            _mm_storeu_pd(nz + x, _mm_or_pd(_mm_and_pd(ok, _mm_mul_pd(vz, inv)), _mm_andnot_pd(ok, one)));
-        }
+#if defined(SPECBAKE_AVX2)
+        if (has_avx2())
+            x = decode_normals_avx2(normal.texel(x0, y), normal.channels, n, reconstruct, flip_y, nx, ny, nz, xx, yy,
+                                    xy, degenerate_count, non_finite);
 #endif
-        for (; x < normal.width; ++x) {
-            double n[3];
+        for (; x < n; ++x) {
+            double v[3];
             bool degenerate = false;
-            decode_normal(x, y, n, degenerate);
+            decode_normal(x0 + x, y, v, degenerate, non_finite);
             degenerate_count += degenerate;
-            nx[x] = n[0], ny[x] = n[1], nz[x] = n[2];
+            nx[x] = v[0], ny[x] = v[1], nz[x] = v[2];
+            xx[x] = v[0] * v[0], yy[x] = v[1] * v[1], xy[x] = v[0] * v[1];
         }
+        if (non_finite) normal_non_finite.store(true, std::memory_order_relaxed);
         return degenerate_count;
     }
 
-    // The layout.count quantities of base row y as planes of W doubles in `v`, and the mip-0 output
-    // roughness of every texel in `r0`; returns the number of degenerate normals. The mip-0 roughness is
-    // (a)^(1/4); for a same-size map that is the clamped input value itself (the double round trip
-    // r -> r^4 -> r rounds back to the same float), so the roots are taken only for resampled maps.
-    long long decode_row(int y, double* v, float* r0) const {
-        const int W = normal.width;
+    // The layout.count quantities of base texels [x0, x0 + W) of row y as planes of W doubles in `v`, and
+    // the mip-0 output roughness of every texel in `r0`; returns the number of degenerate normals. The mip-0
+    // roughness is (a)^(1/4); for a same-size map that is the clamped input value itself (the double round
+    // trip r -> r^4 -> r rounds back to the same float), so the roots are taken only for resampled maps.
+    long long decode_span(int y, int x0, int W, double* v, float* r0) const {
         double* nx = plane(v, kPx, W);
         double* ny = plane(v, kPy, W);
         double* nz = plane(v, kPz, W);
-        const long long degenerate = decode_normal_row(y, nx, ny, nz);
-        double* xx = plane(v, kPxx, W);
-        double* yy = plane(v, kPyy, W);
-        double* xy = plane(v, kPxy, W);
-        for (int x = 0; x < W; ++x) xx[x] = nx[x] * nx[x], yy[x] = ny[x] * ny[x], xy[x] = nx[x] * ny[x];
+        const long long degenerate = decode_normal_span(y, x0, W, nx, ny, nz, plane(v, kPxx, W), plane(v, kPyy, W),
+                                                        plane(v, kPxy, W));
         double* a = plane(v, kA, W);
         double* occlusion = layout.occlusion >= 0 ? plane(v, layout.occlusion, W) : nullptr;
         double* metallic = layout.occlusion >= 0 ? plane(v, layout.metallic, W) : nullptr;
         if (!resampled.empty()) {
-            const double* r = resampled.data() + size_t(y) * size_t(W) * 3;
+            const double* r = resampled.data() + (size_t(y) * size_t(normal.width) + size_t(x0)) * 3;
             for (int x = 0; x < W; ++x) {
                 a[x] = r[3 * size_t(x)];
                 r0[x] = float(std::sqrt(std::sqrt(std::clamp(a[x], 0.0, 1.0))));
@@ -174,15 +253,25 @@ struct Decoder {
                 for (int x = 0; x < W; ++x) occlusion[x] = r[3 * size_t(x) + 1], metallic[x] = r[3 * size_t(x) + 2];
         } else if (roughness) {
             const int ch = roughness->channels;
-            const float* t = roughness->texel(0, y);
-            for (int x = 0; x < W; ++x) {
-                const float r = std::clamp(t[size_t(x) * ch + roughness_channel], 0.0f, 1.0f);
+            const float* t = roughness->texel(x0, y);
+            int done = 0;
+            bool non_finite = false;
+#if defined(SPECBAKE_AVX2)
+            if (has_avx2())
+                done = decode_roughness_avx2(t, ch, roughness_channel, W, a, r0, occlusion, metallic, non_finite);
+#endif
+            for (int x = done; x < W; ++x) {
+                const float* c = t + size_t(x) * ch;
+                if (!std::isfinite(c[roughness_channel]) || (occlusion && !(std::isfinite(c[0]) && std::isfinite(c[2]))))
+                    non_finite = true;
+                const float r = std::clamp(c[roughness_channel], 0.0f, 1.0f);
                 const double r2 = double(r) * double(r);
                 a[x] = r2 * r2;  // a = alpha^2 = r^4 (SPEC Sec. 2)
                 r0[x] = r;
             }
             if (occlusion)
-                for (int x = 0; x < W; ++x) occlusion[x] = t[size_t(x) * ch], metallic[x] = t[size_t(x) * ch + 2];
+                for (int x = done; x < W; ++x) occlusion[x] = t[size_t(x) * ch], metallic[x] = t[size_t(x) * ch + 2];
+            if (non_finite) roughness_non_finite.store(true, std::memory_order_relaxed);
         } else {
             std::fill(a, a + W, constant_a);
             std::fill(r0, r0 + W, constant_r);
@@ -230,12 +319,19 @@ std::vector<double> resample_roughness(const Image& rough, int channel, bool orm
     return out;
 }
 
-// Float output rows of one block of rows of one level, interleaved as the chains; an empty vector for an
+// An array of n values left uninitialised (scratch that is written before it is read).
+template <class T>
+std::unique_ptr<T[]> uninitialized(size_t n) {
+    return n ? std::unique_ptr<T[]>(new T[n]) : nullptr;
+}
+
+// Float output rows of one block of rows of one level, interleaved as the chains; null for an
 // output that was not requested.
 struct RowBlock {
     int width = 0;
     int rough_ch = 0, kern_ch = 0, lean_ch = 0, nrm_ch = 0;
-    std::vector<float> rough, kern, lean, nrm;
+    // Not zero-filled: every texel of a block is written before it is emitted.
+    std::unique_ptr<float[]> rough, kern, lean, nrm;
 
     RowBlock(const TextureBakeShape& shape, int w, int rows)
         : width(w),
@@ -243,35 +339,96 @@ struct RowBlock {
           kern_ch(shape.kernel_channels),
           lean_ch(shape.lean_channels),
           nrm_ch(shape.normal_channels),
-          rough(size_t(w) * rows * size_t(rough_ch)),
-          kern(size_t(w) * rows * size_t(kern_ch)),
-          lean(size_t(w) * rows * size_t(lean_ch)),
-          nrm(size_t(w) * rows * size_t(nrm_ch)) {}
+          rough(uninitialized<float>(size_t(w) * rows * size_t(rough_ch))),
+          kern(uninitialized<float>(size_t(w) * rows * size_t(kern_ch))),
+          lean(uninitialized<float>(size_t(w) * rows * size_t(lean_ch))),
+          nrm(uninitialized<float>(size_t(w) * rows * size_t(nrm_ch))) {}
 
-    static float* row(std::vector<float>& v, int ch, int width, int k) {
-        return v.empty() ? nullptr : v.data() + size_t(k) * size_t(width) * size_t(ch);
+    static float* row(const std::unique_ptr<float[]>& v, int ch, int width, int k) {
+        return v ? v.get() + size_t(k) * size_t(width) * size_t(ch) : nullptr;
     }
     float* rough_row(int k) { return row(rough, rough_ch, width, k); }
     float* kern_row(int k) { return row(kern, kern_ch, width, k); }
     float* lean_row(int k) { return row(lean, lean_ch, width, k); }
     float* nrm_row(int k) { return row(nrm, nrm_ch, width, k); }
 
-    void emit(const TextureBakeRowSink& sink, int level, int y0, int rows) const {
+    void emit(const TextureBakeRowSink& sink, int level, int x0, int y0, int rows) const {
         TextureBakeRows r;
-        r.level = level, r.y0 = y0, r.rows = rows, r.width = width;
-        r.roughness = rough.empty() ? nullptr : rough.data();
-        r.kernel = kern.empty() ? nullptr : kern.data();
-        r.lean = lean.empty() ? nullptr : lean.data();
-        r.normal = nrm.empty() ? nullptr : nrm.data();
+        r.level = level, r.x0 = x0, r.y0 = y0, r.rows = rows, r.width = width;
+        r.roughness = rough.get();
+        r.kernel = kern.get();
+        r.lean = lean.get();
+        r.normal = nrm.get();
         sink(r);
     }
 };
 
+#if defined(SPECBAKE_AVX2)
+// Four floats float(scale * src[i] + offset), the product and sum in double as in the scalar form.
+SPECBAKE_AVX2 inline __m128 to_float4(const double* src, double scale, double offset) {
+    if (scale == 1.0 && offset == 0.0) return _mm256_cvtpd_ps(_mm256_loadu_pd(src));  // keeps the sign of a zero
+    return _mm256_cvtpd_ps(_mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(scale), _mm256_loadu_pd(src)),
+                                         _mm256_set1_pd(offset)));
+}
+
+// Four texels of three channels a, b, c interleaved into out[0 .. 12).
+SPECBAKE_AVX2 inline void store3x4(float* out, __m128 a, __m128 b, __m128 c) {
+    const __m128 ab_lo = _mm_unpacklo_ps(a, b), ab_hi = _mm_unpackhi_ps(a, b);  // a0 b0 a1 b1, a2 b2 a3 b3
+    _mm_storeu_ps(out, _mm_blend_ps(_mm_shuffle_ps(ab_lo, ab_lo, _MM_SHUFFLE(2, 0, 1, 0)),
+                                    _mm_shuffle_ps(c, c, _MM_SHUFFLE(0, 0, 0, 0)), 0x4));  // a0 b0 c0 a1
+    _mm_storeu_ps(out + 4, _mm_blend_ps(_mm_shuffle_ps(ab_lo, ab_hi, _MM_SHUFFLE(1, 0, 3, 3)),
+                                        _mm_shuffle_ps(c, c, _MM_SHUFFLE(1, 1, 1, 1)), 0x2));  // b1 c1 a2 b2
+    _mm_storeu_ps(out + 8, _mm_blend_ps(_mm_shuffle_ps(ab_hi, ab_hi, _MM_SHUFFLE(3, 3, 2, 3)),
+                                        _mm_shuffle_ps(c, c, _MM_SHUFFLE(3, 3, 3, 2)), 0x9));  // c2 a3 b3 c3
+}
+
+// Four texels of five channels float(p0[k]) .. float(p4[k]) interleaved into out[0 .. 20): texel k's first
+// four are row k of the transposed 4 x 4 block, the fifth follows it.
+SPECBAKE_AVX2 inline void store5x4(float* out, const double* p0, const double* p1, const double* p2, const double* p3,
+                                   const double* p4) {
+    __m128 m0 = to_float4(p0, 1.0, 0.0), m1 = to_float4(p1, 1.0, 0.0);
+    __m128 m2 = to_float4(p2, 1.0, 0.0), m3 = to_float4(p3, 1.0, 0.0);
+    alignas(16) float m4[4];
+    _mm_store_ps(m4, to_float4(p4, 1.0, 0.0));
+    _MM_TRANSPOSE4_PS(m0, m1, m2, m3);
+    _mm_storeu_ps(out, m0), out[4] = m4[0];
+    _mm_storeu_ps(out + 5, m1), out[9] = m4[1];
+    _mm_storeu_ps(out + 10, m2), out[14] = m4[2];
+    _mm_storeu_ps(out + 15, m3), out[19] = m4[3];
+}
+
+// The mip-0 outputs (see write_base_row) of the first multiple of four of the W texels; returns how many.
+SPECBAKE_AVX2 int write_base_avx2(const double* v, const float* r0, int W, const Layout& layout, bool flip_y,
+                                  float* rough, float* lean, float* nrm) {
+    const double* px = plane(v, kPx, W);
+    const double* py = plane(v, kPy, W);
+    const double* pz = plane(v, kPz, W);
+    int x = 0;
+    for (; x + 4 <= W; x += 4) {
+        if (rough && layout.occlusion >= 0)
+            store3x4(rough + 3 * size_t(x), to_float4(plane(v, layout.occlusion, W) + x, 1.0, 0.0),
+                     _mm_loadu_ps(r0 + x), to_float4(plane(v, layout.metallic, W) + x, 1.0, 0.0));
+        if (lean)
+            store5x4(lean + 5 * size_t(x), px + x, py + x, plane(v, kPxx, W) + x, plane(v, kPyy, W) + x,
+                     plane(v, kPxy, W) + x);
+        if (nrm)  // (n + 1) / 2 as 0.5 n + 0.5, green with the input's sign convention
+            store3x4(nrm + 3 * size_t(x), to_float4(px + x, 0.5, 0.5), to_float4(py + x, flip_y ? -0.5 : 0.5, 0.5),
+                     to_float4(pz + x, 0.5, 0.5));
+    }
+    return x;
+}
+#endif
+
 // Mip-0 outputs of one base row from its planes `v` and output roughness `r0`. Every footprint is one
 // base texel, so Sigma = 0, t = 0 and a = a_base exactly (SPEC Sec. 3: the input roughness passes
 // through), and the decoded normal is already unit length: no divisions or roots.
-void write_base_row(const double* v, const float* r0, int W, const Layout& layout, const TextureBakeSettings& s,
-                    bool flip_y, float* rough, float* kern, int kern_ch, float* lean, float* nrm) {
+void write_base_row(const double* v, const float* r0, int W, const Layout& layout, bool flip_y, float* rough,
+                    float* kern, int kern_ch, float* lean, float* nrm) {
+    const bool slope = layout.slope >= 0;
+    int x0 = 0;  // texels [0, x0) done by the vector form (projected-space LEAN only)
+#if defined(SPECBAKE_AVX2)
+    if (has_avx2() && !slope) x0 = write_base_avx2(v, r0, W, layout, flip_y, rough, lean, nrm);
+#endif
     const double* px = plane(v, kPx, W);
     const double* py = plane(v, kPy, W);
     const double* pz = plane(v, kPz, W);
@@ -279,7 +436,7 @@ void write_base_row(const double* v, const float* r0, int W, const Layout& layou
         if (layout.occlusion >= 0) {
             const double* o = plane(v, layout.occlusion, W);
             const double* m = plane(v, layout.metallic, W);
-            for (int x = 0; x < W; ++x)
+            for (int x = x0; x < W; ++x)
                 rough[3 * size_t(x)] = float(o[x]), rough[3 * size_t(x) + 1] = r0[x], rough[3 * size_t(x) + 2] = float(m[x]);
         } else {
             std::memcpy(rough, r0, size_t(W) * sizeof(float));
@@ -287,12 +444,12 @@ void write_base_row(const double* v, const float* r0, int W, const Layout& layou
     }
     if (kern) std::fill(kern, kern + size_t(W) * size_t(kern_ch), 0.0f);
     if (lean) {
-        if (layout.slope >= 0) {
+        if (slope) {
             // Olano & Baker LEAN: the base lobe's slope covariance alpha^2 / 2 folded into the second moments.
             const double* a = plane(v, kA, W);
             const double* sl[5];
             for (int k = 0; k < 5; ++k) sl[k] = plane(v, layout.slope + k, W);
-            for (int x = 0; x < W; ++x) {
+            for (int x = x0; x < W; ++x) {
                 float* l = lean + 5 * size_t(x);
                 l[0] = float(sl[0][x]), l[1] = float(sl[1][x]);
                 l[2] = float(sl[2][x] + 0.5 * a[x]), l[3] = float(sl[3][x] + 0.5 * a[x]);
@@ -302,7 +459,7 @@ void write_base_row(const double* v, const float* r0, int W, const Layout& layou
             const double* xx = plane(v, kPxx, W);
             const double* yy = plane(v, kPyy, W);
             const double* xy = plane(v, kPxy, W);
-            for (int x = 0; x < W; ++x) {
+            for (int x = x0; x < W; ++x) {
                 float* l = lean + 5 * size_t(x);
                 l[0] = float(px[x]), l[1] = float(py[x]), l[2] = float(xx[x]), l[3] = float(yy[x]), l[4] = float(xy[x]);
             }
@@ -310,7 +467,7 @@ void write_base_row(const double* v, const float* r0, int W, const Layout& layou
     }
     if (nrm) {
         const double sign = flip_y ? -1.0 : 1.0;
-        for (int x = 0; x < W; ++x) {
+        for (int x = x0; x < W; ++x) {
             float* n = nrm + 3 * size_t(x);
             n[0] = float(0.5 * px[x] + 0.5), n[1] = float(0.5 * (sign * py[x]) + 0.5), n[2] = float(0.5 * pz[x] + 0.5);
         }
@@ -319,6 +476,9 @@ void write_base_row(const double* v, const float* r0, int W, const Layout& layou
 
 // The SPEC Sec. 3 formulas for `n` texels of a level >= 1, before they are stored as floats.
 constexpr int kChunk = 64;
+
+// Width in base texels of the column tiles of the fused pass over levels 0-2 (see bake_validated).
+constexpr int kTileTexels = 256;
 struct Finalized {
     double r[kChunk], t[kChunk], sxx[kChunk], syy[kChunk], sxy[kChunk], nx[kChunk], ny[kChunk], nz[kChunk];
     double change = 0.0;  // largest |r - r_in| so far, r_in = (mean alpha^2)^(1/4)
@@ -351,67 +511,115 @@ inline void finalize_one(double mx, double my, double mz, double mxx, double myy
     f.nx[k] = nx, f.ny[k] = ny, f.nz[k] = nz;
 }
 
-#if defined(__SSE2__)
-// (mask ? a : b) per lane.
-inline __m128d select_pd(__m128d mask, __m128d a, __m128d b) { return _mm_or_pd(_mm_and_pd(mask, a), _mm_andnot_pd(mask, b)); }
-
-// Texels k, k + 1 of the chunk: finalize_one two at a time. Every step is the same IEEE operation in the
+#if defined(SPECBAKE_AVX2)
+// Texels k .. k + 3 of the chunk: finalize_one four at a time. Every step is the same IEEE operation in the
 // same order (std::max / std::min / std::clamp as their comparisons and selects), so results are identical.
-inline void finalize_two(const double* mx_, const double* my_, const double* mz_, const double* mxx_,
-                         const double* myy_, const double* mxy_, const double* ma_, const TextureBakeSettings& s,
-                         bool flip_y, Finalized& f, int k, __m128d& change) {
-    const __m128d zero = _mm_setzero_pd(), one = _mm_set1_pd(1.0), half = _mm_set1_pd(0.5), two = _mm_set1_pd(2.0);
-    const __m128d sign = _mm_set1_pd(-0.0);
-    const __m128d mx = _mm_loadu_pd(mx_), my = _mm_loadu_pd(my_), mz = _mm_loadu_pd(mz_);
-    const __m128d sxx = _mm_max_pd(_mm_sub_pd(_mm_loadu_pd(mxx_), _mm_mul_pd(mx, mx)), zero);
-    const __m128d syy = _mm_max_pd(_mm_sub_pd(_mm_loadu_pd(myy_), _mm_mul_pd(my, my)), zero);
-    const __m128d bound = _mm_sqrt_pd(_mm_mul_pd(sxx, syy));
-    const __m128d neg_bound = _mm_xor_pd(bound, sign);
-    const __m128d dxy = _mm_sub_pd(_mm_loadu_pd(mxy_), _mm_mul_pd(mx, my));
-    const __m128d sxy = select_pd(_mm_cmplt_pd(dxy, neg_bound), neg_bound,
-                                  select_pd(_mm_cmplt_pd(bound, dxy), bound, dxy));
-    __m128d t = _mm_add_pd(sxx, syy);  // mean
+SPECBAKE_AVX2 inline void finalize_four(const double* mx_, const double* my_, const double* mz_, const double* mxx_,
+                                        const double* myy_, const double* mxy_, const double* ma_,
+                                        const TextureBakeSettings& s, bool flip_y, Finalized& f, int k,
+                                        __m256d& change) {
+    const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0), half = _mm256_set1_pd(0.5);
+    const __m256d two = _mm256_set1_pd(2.0), sign = _mm256_set1_pd(-0.0);
+    const __m256d mx = _mm256_loadu_pd(mx_), my = _mm256_loadu_pd(my_), mz = _mm256_loadu_pd(mz_);
+    const __m256d sxx = _mm256_max_pd(_mm256_sub_pd(_mm256_loadu_pd(mxx_), _mm256_mul_pd(mx, mx)), zero);
+    const __m256d syy = _mm256_max_pd(_mm256_sub_pd(_mm256_loadu_pd(myy_), _mm256_mul_pd(my, my)), zero);
+    const __m256d bound = _mm256_sqrt_pd(_mm256_mul_pd(sxx, syy));
+    const __m256d neg_bound = _mm256_xor_pd(bound, sign);
+    const __m256d dxy = _mm256_sub_pd(_mm256_loadu_pd(mxy_), _mm256_mul_pd(mx, my));
+    const __m256d sxy = select4(_mm256_cmp_pd(dxy, neg_bound, _CMP_LT_OQ), neg_bound,
+                                select4(_mm256_cmp_pd(bound, dxy, _CMP_LT_OQ), bound, dxy));
+    __m256d t = _mm256_add_pd(sxx, syy);  // mean
     switch (s.isotropic) {
         case IsotropicReduction::Mean: break;
-        case IsotropicReduction::Sum: t = _mm_mul_pd(two, t); break;
+        case IsotropicReduction::Sum: t = _mm256_mul_pd(two, t); break;
         case IsotropicReduction::Max: {
-            const __m128d half_tr = _mm_mul_pd(half, _mm_add_pd(sxx, syy));
-            const __m128d d = _mm_mul_pd(half, _mm_sub_pd(sxx, syy));
-            const __m128d root = _mm_sqrt_pd(_mm_add_pd(_mm_mul_pd(d, d), _mm_mul_pd(sxy, sxy)));
-            t = _mm_mul_pd(two, _mm_add_pd(half_tr, root));
+            const __m256d half_tr = _mm256_mul_pd(half, _mm256_add_pd(sxx, syy));
+            const __m256d d = _mm256_mul_pd(half, _mm256_sub_pd(sxx, syy));
+            const __m256d root = _mm256_sqrt_pd(_mm256_add_pd(_mm256_mul_pd(d, d), _mm256_mul_pd(sxy, sxy)));
+            t = _mm256_mul_pd(two, _mm256_add_pd(half_tr, root));
             break;
         }
     }
     if (s.max_kernel) {
-        const __m128d K = _mm_set1_pd(*s.max_kernel);
-        t = select_pd(_mm_cmplt_pd(K, t), K, t);
+        const __m256d K = _mm256_set1_pd(*s.max_kernel);
+        t = select4(_mm256_cmp_pd(K, t, _CMP_LT_OQ), K, t);
     }
-    const __m128d ma = _mm_loadu_pd(ma_);
-    const __m128d a_base = select_pd(_mm_cmplt_pd(ma, zero), zero, select_pd(_mm_cmplt_pd(one, ma), one, ma));
-    __m128d a;
+    const __m256d ma = _mm256_loadu_pd(ma_);
+    const __m256d a_base = select4(_mm256_cmp_pd(ma, zero, _CMP_LT_OQ), zero,
+                                   select4(_mm256_cmp_pd(one, ma, _CMP_LT_OQ), one, ma));
+    __m256d a;
     if (s.filter == RoughnessFilterMode::Projected) {
-        const __m128d kk = _mm_mul_pd(t, _mm_sub_pd(one, a_base));
-        a = _mm_div_pd(_mm_add_pd(a_base, kk), _mm_add_pd(one, kk));
+        const __m256d kk = _mm256_mul_pd(t, _mm256_sub_pd(one, a_base));
+        a = _mm256_div_pd(_mm256_add_pd(a_base, kk), _mm256_add_pd(one, kk));
     } else {
-        const __m128d sum = _mm_add_pd(a_base, t);
-        a = select_pd(_mm_cmplt_pd(sum, one), sum, one);
+        const __m256d sum = _mm256_add_pd(a_base, t);
+        a = select4(_mm256_cmp_pd(sum, one, _CMP_LT_OQ), sum, one);
     }
-    const __m128d r = _mm_sqrt_pd(_mm_sqrt_pd(a));
-    const __m128d r_in = _mm_sqrt_pd(_mm_sqrt_pd(a_base));
-    const __m128d diff = _mm_andnot_pd(sign, _mm_sub_pd(r, r_in));
-    change = select_pd(_mm_cmplt_pd(change, diff), diff, change);
-    _mm_storeu_pd(f.r + k, r);
-    _mm_storeu_pd(f.t + k, t);
-    _mm_storeu_pd(f.sxx + k, sxx);
-    _mm_storeu_pd(f.syy + k, syy);
-    _mm_storeu_pd(f.sxy + k, sxy);
-    const __m128d len = _mm_sqrt_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(mx, mx), _mm_mul_pd(my, my)), _mm_mul_pd(mz, mz)));
-    const __m128d ok = _mm_cmpgt_pd(len, _mm_set1_pd(1e-12));
-    __m128d ny = select_pd(ok, _mm_div_pd(my, len), zero);
-    if (flip_y) ny = _mm_xor_pd(ny, sign);
-    _mm_storeu_pd(f.nx + k, select_pd(ok, _mm_div_pd(mx, len), zero));
-    _mm_storeu_pd(f.ny + k, ny);
-    _mm_storeu_pd(f.nz + k, select_pd(ok, _mm_div_pd(mz, len), one));
+    const __m256d r = _mm256_sqrt_pd(_mm256_sqrt_pd(a));
+    const __m256d r_in = _mm256_sqrt_pd(_mm256_sqrt_pd(a_base));
+    const __m256d diff = _mm256_andnot_pd(sign, _mm256_sub_pd(r, r_in));
+    change = select4(_mm256_cmp_pd(change, diff, _CMP_LT_OQ), diff, change);
+    _mm256_storeu_pd(f.r + k, r);
+    _mm256_storeu_pd(f.t + k, t);
+    _mm256_storeu_pd(f.sxx + k, sxx);
+    _mm256_storeu_pd(f.syy + k, syy);
+    _mm256_storeu_pd(f.sxy + k, sxy);
+    const __m256d len = _mm256_sqrt_pd(
+        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(mx, mx), _mm256_mul_pd(my, my)), _mm256_mul_pd(mz, mz)));
+    const __m256d ok = _mm256_cmp_pd(len, _mm256_set1_pd(1e-12), _CMP_GT_OQ);
+    __m256d ny = select4(ok, _mm256_div_pd(my, len), zero);
+    if (flip_y) ny = _mm256_xor_pd(ny, sign);
+    _mm256_storeu_pd(f.nx + k, select4(ok, _mm256_div_pd(mx, len), zero));
+    _mm256_storeu_pd(f.ny + k, ny);
+    _mm256_storeu_pd(f.nz + k, select4(ok, _mm256_div_pd(mz, len), one));
+}
+
+// The stores of finalize_row (projected-space LEAN) for the first multiple of four of the chunk's n texels
+// at i0, from its means m (planes of w) and the chunk's results f; returns how many texels it did.
+SPECBAKE_AVX2 int store_finalized_avx2(const double* m, int w, const Layout& layout, bool anisotropic,
+                                       const Finalized& f, int i0, int n, float* rough, float* kern, float* lean,
+                                       float* nrm) {
+    int k = 0;
+    for (; k + 4 <= n; k += 4) {
+        const size_t i = size_t(i0 + k);
+        if (rough) {
+            if (layout.occlusion >= 0)
+                store3x4(rough + 3 * i, to_float4(plane(m, layout.occlusion, w) + i, 1.0, 0.0),
+                         to_float4(f.r + k, 1.0, 0.0), to_float4(plane(m, layout.metallic, w) + i, 1.0, 0.0));
+            else
+                _mm_storeu_ps(rough + i, to_float4(f.r + k, 1.0, 0.0));
+        }
+        if (kern) {
+            if (anisotropic)
+                store3x4(kern + 3 * i, to_float4(f.sxx + k, 1.0, 0.0), to_float4(f.syy + k, 1.0, 0.0),
+                         to_float4(f.sxy + k, 1.0, 0.0));
+            else
+                _mm_storeu_ps(kern + i, to_float4(f.t + k, 1.0, 0.0));
+        }
+        if (lean)
+            store5x4(lean + 5 * i, plane(m, kPx, w) + i, plane(m, kPy, w) + i, plane(m, kPxx, w) + i,
+                     plane(m, kPyy, w) + i, plane(m, kPxy, w) + i);
+        if (nrm)
+            store3x4(nrm + 3 * i, to_float4(f.nx + k, 0.5, 0.5), to_float4(f.ny + k, 0.5, 0.5),
+                     to_float4(f.nz + k, 0.5, 0.5));
+    }
+    return k;
+}
+
+// finalize_four over the first multiple of four of the chunk's n texels at i0; returns how many it did.
+SPECBAKE_AVX2 int finalize_chunk_avx2(const double* pmx, const double* pmy, const double* pmz, const double* pxx,
+                                      const double* pyy, const double* pxy, const double* pa, int i0, int n,
+                                      const TextureBakeSettings& s, bool flip_y, Finalized& f) {
+    __m256d lanes = _mm256_setzero_pd();
+    int k = 0;
+    for (; k + 4 <= n; k += 4) {
+        const int i = i0 + k;
+        finalize_four(pmx + i, pmy + i, pmz + i, pxx + i, pyy + i, pxy + i, pa + i, s, flip_y, f, k, lanes);
+    }
+    double four[4];
+    _mm256_storeu_pd(four, lanes);
+    f.change = std::max(f.change, std::max(std::max(four[0], four[1]), std::max(four[2], four[3])));
+    return k;
 }
 #endif
 
@@ -430,21 +638,19 @@ double finalize_row(const double* m, int w, const Layout& layout, const TextureB
     for (int i0 = 0; i0 < w; i0 += kChunk) {
         const int n = std::min(kChunk, w - i0);
         int k = 0;
-#if defined(__SSE2__)
-        __m128d lanes = _mm_setzero_pd();
-        for (; k + 2 <= n; k += 2) {
-            const int i = i0 + k;
-            finalize_two(pmx + i, pmy + i, pmz + i, pxx + i, pyy + i, pxy + i, pa + i, s, flip_y, f, k, lanes);
-        }
-        double two[2];
-        _mm_storeu_pd(two, lanes);
-        f.change = std::max(f.change, std::max(two[0], two[1]));
+#if defined(SPECBAKE_AVX2)
+        if (has_avx2()) k = finalize_chunk_avx2(pmx, pmy, pmz, pxx, pyy, pxy, pa, i0, n, s, flip_y, f);
 #endif
         for (; k < n; ++k) {
             const int i = i0 + k;
             finalize_one(pmx[i], pmy[i], pmz[i], pxx[i], pyy[i], pxy[i], pa[i], s, flip_y, f, k);
         }
-        for (k = 0; k < n; ++k) {
+        k = 0;
+#if defined(SPECBAKE_AVX2)
+        if (has_avx2() && layout.slope < 0)
+            k = store_finalized_avx2(m, w, layout, s.anisotropic, f, i0, n, rough, kern, lean, nrm);
+#endif
+        for (; k < n; ++k) {
             const int i = i0 + k;
             if (rough) {
                 if (layout.occlusion >= 0) {
@@ -487,39 +693,57 @@ double finalize_row(const double* m, int w, const Layout& layout, const TextureB
     return f.change;
 }
 
+#if defined(SPECBAKE_AVX2)
+// acc + the even and then the odd texels of the four 2-wide blocks starting at s: unpack gives
+// (s0, s4, s2, s6) and (s1, s5, s3, s7); the permute puts the blocks in order.
+SPECBAKE_AVX2 inline __m256d add_row(__m256d acc, const double* s) {
+    const __m256d a = _mm256_loadu_pd(s), b = _mm256_loadu_pd(s + 4);
+    acc = _mm256_add_pd(acc, _mm256_permute4x64_pd(_mm256_unpacklo_pd(a, b), 0xD8));
+    return _mm256_add_pd(acc, _mm256_permute4x64_pd(_mm256_unpackhi_pd(a, b), 0xD8));
+}
+
+// block_means with fx = 2 for one plane, four means per instruction: the even and odd source texels of four
+// blocks of each of the fy rows `src`, added from zero in the scalar loop's order, times `inv`. Does the
+// first multiple of four of the w means; returns how many.
+SPECBAKE_AVX2 int pair_means_avx2(const double* const* src, int fy, int w, double inv, double* o) {
+    const __m256d scale = _mm256_set1_pd(inv);
+    int i = 0;
+    if (fy == 2) {  // the common case, unrolled
+        for (; i + 4 <= w; i += 4) {
+            const __m256d acc = add_row(add_row(_mm256_setzero_pd(), src[0] + 2 * size_t(i)), src[1] + 2 * size_t(i));
+            _mm256_storeu_pd(o + i, _mm256_mul_pd(acc, scale));
+        }
+        return i;
+    }
+    for (; i + 4 <= w; i += 4) {
+        __m256d acc = _mm256_setzero_pd();
+        for (int dy = 0; dy < fy; ++dy) acc = add_row(acc, src[dy] + 2 * size_t(i));
+        _mm256_storeu_pd(o + i, _mm256_mul_pd(acc, scale));
+    }
+    return i;
+}
+#endif
+
 // Means of one row of a level whose footprints are fx x fy blocks of the finer level: `fine` holds the
 // fy finer rows (each C planes of pw doubles), `out` receives C planes of w means. Each mean sums its
-// block in the order (dy, dx), starting from zero.
+// block in the order (dy, dx), starting from zero, and is multiplied by 1 / (fx fy).
 void block_means(const double* fine, int pw, int fx, int fy, int C, int w, double* out) {
     const double inv = 1.0 / double(fx * fy);
     for (int c = 0; c < C; ++c) {
         double* o = plane(out, c, w);
-        std::fill(o, o + w, 0.0);
-        for (int dy = 0; dy < fy; ++dy) {
-            const double* src = plane(fine + size_t(dy) * size_t(C) * size_t(pw), c, pw);
-            if (fx == 2) {
-                int i = 0;
-#if defined(__SSE2__)
-                // Two means per instruction: the even and odd source texels of two blocks, added in the same
-                // order as the scalar loop.
-                for (; i + 2 <= w; i += 2) {
-                    const __m128d a = _mm_loadu_pd(src + 2 * size_t(i)), b = _mm_loadu_pd(src + 2 * size_t(i) + 2);
-                    __m128d acc = _mm_loadu_pd(o + i);
-                    acc = _mm_add_pd(acc, _mm_unpacklo_pd(a, b));
-                    acc = _mm_add_pd(acc, _mm_unpackhi_pd(a, b));
-                    _mm_storeu_pd(o + i, acc);
-                }
+        // Level sizes are max(1, n >> L), so a block spans at most 3 finer rows (3 -> 1).
+        const double* src[3];
+        for (int dy = 0; dy < fy; ++dy) src[dy] = plane(fine + size_t(dy) * size_t(C) * size_t(pw), c, pw);
+        int i = 0;
+#if defined(SPECBAKE_AVX2)
+        if (fx == 2 && has_avx2()) i = pair_means_avx2(src, fy, w, inv, o);
 #endif
-                for (; i < w; ++i) {
-                    o[i] += src[2 * size_t(i)];
-                    o[i] += src[2 * size_t(i) + 1];
-                }
-            } else {
-                for (int i = 0; i < w; ++i)
-                    for (int dx = 0; dx < fx; ++dx) o[i] += src[size_t(i) * fx + dx];
-            }
+        for (; i < w; ++i) {
+            double acc = 0.0;
+            for (int dy = 0; dy < fy; ++dy)
+                for (int dx = 0; dx < fx; ++dx) acc += src[dy][size_t(i) * fx + dx];
+            o[i] = acc * inv;
         }
-        for (int i = 0; i < w; ++i) o[i] *= inv;
     }
 }
 
@@ -540,6 +764,18 @@ double srgb_to_linear(double c) { return c <= 0.04045 ? c / 12.92 : std::pow((c 
 // (flat (0.5, 0.5, 1) becomes (0.735, 0.735, 1)); decoding the sRGB curve first brings them back.
 bool looks_srgb_encoded(const Image& n) {
     if (n.channels < 3) return false;
+    // Values of 8-bit inputs (most maps; within float rounding of a code k / 255) take the curve from a
+    // table of the 256 codes instead of a pow() per value: this only decides a warning.
+    static const std::array<double, 256> table = [] {
+        std::array<double, 256> t{};
+        for (int k = 0; k < 256; ++k) t[size_t(k)] = srgb_to_linear(k / 255.0);
+        return t;
+    }();
+    auto linear = [](double c) {
+        const double code = c * 255.0;
+        const long k = long(code + 0.5);  // code >= 0: the values are clamped to [0, 1]
+        return k >= 0 && k <= 255 && std::abs(code - double(k)) < 1e-4 ? table[size_t(k)] : srgb_to_linear(c);
+    };
     const size_t count = n.texel_count();
     const size_t stride = std::max<size_t>(1, count / 65536);
     double dev_linear = 0.0, dev_srgb = 0.0;
@@ -549,7 +785,7 @@ bool looks_srgb_encoded(const Image& n) {
         double l2 = 0.0, s2 = 0.0;
         for (int k = 0; k < 3; ++k) {
             const double a = 2.0 * c[k] - 1.0;
-            const double b = 2.0 * srgb_to_linear(std::clamp(double(c[k]), 0.0, 1.0)) - 1.0;
+            const double b = 2.0 * linear(std::clamp(double(c[k]), 0.0, 1.0)) - 1.0;
             l2 += a * a;
             s2 += b * b;
         }
@@ -562,6 +798,15 @@ bool looks_srgb_encoded(const Image& n) {
     return dev_linear > 0.08 && dev_srgb < 0.5 * dev_linear;
 }
 
+// "<what>: NaN or infinite value at texel (x, y)" for the first such texel of `image`.
+Error non_finite_error(const std::string& what, const Image& image) {
+    const auto bad = find_non_finite(image);
+    return Error{what + ": NaN or infinite value" +
+                 (bad ? " at texel (" + std::to_string(bad->first) + ", " + std::to_string(bad->second) + ")" : "")};
+}
+
+// Checks of the inputs' shapes and of the parts that are not read texel by texel in the decode (which
+// checks every value it reads for NaN and infinity itself).
 Result<void> validate(const Image& normal, const Image* roughness, int channel, float value) {
     if (normal.empty()) return make_error("normal map: empty image (0x0)");
     if (normal.channels < 2)
@@ -569,9 +814,6 @@ Result<void> validate(const Image& normal, const Image* roughness, int channel, 
                           " channel; a normal map needs 2 (x, y) or 3+ (x, y, z) channels");
     if (normal.pixels.size() != normal.texel_count() * size_t(normal.channels))
         return make_error("normal map: pixel buffer does not match its size");
-    if (auto bad = find_non_finite(normal))
-        return make_error("normal map: NaN or infinite value at texel (" + std::to_string(bad->first) + ", " +
-                          std::to_string(bad->second) + ")");
     if (roughness) {
         if (roughness->empty()) return make_error("roughness map: empty image (0x0)");
         if (roughness->pixels.size() != roughness->texel_count() * size_t(roughness->channels))
@@ -579,9 +821,8 @@ Result<void> validate(const Image& normal, const Image* roughness, int channel, 
         if (channel < 0 || channel >= roughness->channels)
             return make_error("roughness map: channel " + std::to_string(channel) + " does not exist (the map has " +
                               std::to_string(roughness->channels) + ")");
-        if (auto bad = find_non_finite(*roughness))
-            return make_error("roughness map: NaN or infinite value at texel (" + std::to_string(bad->first) +
-                              ", " + std::to_string(bad->second) + ")");
+        const bool resampled = roughness->width != normal.width || roughness->height != normal.height;
+        if (resampled && find_non_finite(*roughness)) return non_finite_error("roughness map", *roughness);
     } else if (!(value >= 0.0f && value <= 1.0f)) {
         return make_error("roughness value " + std::to_string(value) + " is outside [0, 1]");
     }
@@ -762,8 +1003,8 @@ Result<TextureBakeResult> bake_validated(const Image& normal, const Image* rough
         return finalize_row(means, w, layout, settings, dec.flip_y, block.rough_row(k), block.kern_row(k),
                             block.lean_row(k), block.nrm_row(k));
     };
-    auto base_into = [&](RowBlock& block, int k, const double* v, const float* r0) {
-        write_base_row(v, r0, W, layout, settings, dec.flip_y, block.rough_row(k), block.kern_row(k),
+    auto base_into = [&](RowBlock& block, int k, const double* v, const float* r0, int n) {
+        write_base_row(v, r0, n, layout, dec.flip_y, block.rough_row(k), block.kern_row(k),
                        block.kern_ch, block.lean_row(k), block.nrm_row(k));
     };
     auto reduce_changes = [](const std::vector<double>& rows) {
@@ -786,34 +1027,47 @@ Result<TextureBakeResult> bake_validated(const Image& normal, const Image* rough
         const bool keep = next < levels && tiles_previous(next);
         current.assign(keep ? size_t(w2) * h2 * C : 0, 0.0);
         std::vector<double> change1(size_t(h1), 0.0), change2(size_t(h2), 0.0);
+        // Column tiles of about kTileTexels base texels keep a task's decoded planes and float rows in the
+        // L2 cache; every output texel still sums its own footprint in the same order.
+        const int t2 = std::clamp(kTileTexels / (fx * fx2), 1, w2);
         tbb::parallel_for(tbb::blocked_range<int>(0, h2, with2 ? 1 : 4), [&](const tbb::blocked_range<int>& rows) {
-            std::vector<double> base(row_doubles * size_t(fy));
-            std::vector<float> r0(static_cast<size_t>(W));
-            std::vector<double> means1(size_t(C) * w1 * size_t(fy2)), means2(size_t(C) * w2);
-            RowBlock out0(shape, W, fy * fy2), out1(shape, w1, fy2), out2(shape, w2, 1);
+            const int t1 = t2 * fx2, t0 = t1 * fx;
+            const auto base = uninitialized<double>(size_t(C) * size_t(t0) * size_t(fy));
+            const auto r0 = uninitialized<float>(size_t(t0));
+            const auto means1 = uninitialized<double>(size_t(C) * t1 * size_t(fy2));
+            const auto means2 = uninitialized<double>(size_t(C) * t2);
+            RowBlock out0(shape, t0, fy * fy2), out1(shape, t1, fy2), out2(shape, t2, 1);
             long long task_degenerate = 0;
             for (int j2 = rows.begin(); j2 < rows.end(); ++j2) {
-                for (int dy2 = 0; dy2 < fy2; ++dy2) {
-                    const int j = j2 * fy2 + dy2;
-                    for (int dy = 0; dy < fy; ++dy) {
-                        double* v = base.data() + size_t(dy) * row_doubles;
-                        task_degenerate += dec.decode_row(j * fy + dy, v, r0.data());
-                        base_into(out0, dy2 * fy + dy, v, r0.data());
+                for (int x2 = 0; x2 < w2; x2 += t2) {
+                    const int n2 = std::min(t2, w2 - x2), n1 = n2 * fx2, n0 = n1 * fx;
+                    const int x1 = x2 * fx2, x0 = x1 * fx;
+                    out0.width = n0, out1.width = n1, out2.width = n2;
+                    for (int dy2 = 0; dy2 < fy2; ++dy2) {
+                        const int j = j2 * fy2 + dy2;
+                        for (int dy = 0; dy < fy; ++dy) {
+                            double* v = base.get() + size_t(dy) * size_t(C) * size_t(n0);
+                            task_degenerate += dec.decode_span(j * fy + dy, x0, n0, v, r0.get());
+                            base_into(out0, dy2 * fy + dy, v, r0.get(), n0);
+                        }
+                        double* means = means1.get() + size_t(dy2) * C * n1;
+                        block_means(base.get(), n0, fx, fy, C, n1, means);
+                        change1[size_t(j)] = std::max(change1[size_t(j)], finalize_into(out1, dy2, means, n1));
                     }
-                    double* means = means1.data() + size_t(dy2) * C * w1;
-                    block_means(base.data(), W, fx, fy, C, w1, means);
-                    change1[size_t(j)] = finalize_into(out1, dy2, means, w1);
+                    out0.emit(sink, 0, x0, j2 * fy2 * fy, fy2 * fy);
+                    out1.emit(sink, 1, x1, j2 * fy2, fy2);
+                    const double* kept = means1.get();
+                    if (with2) {
+                        block_means(means1.get(), n1, fx2, fy2, C, n2, means2.get());
+                        change2[size_t(j2)] = std::max(change2[size_t(j2)], finalize_into(out2, 0, means2.get(), n2));
+                        out2.emit(sink, 2, x2, j2, 1);
+                        kept = means2.get();
+                    }
+                    if (keep)
+                        for (int c = 0; c < C; ++c)
+                            std::copy_n(kept + size_t(c) * n2, n2,
+                                        current.begin() + ptrdiff_t((size_t(j2) * C + c) * w2 + x2));
                 }
-                out0.emit(sink, 0, j2 * fy2 * fy, fy2 * fy);
-                out1.emit(sink, 1, j2 * fy2, fy2);
-                const double* kept = means1.data();
-                if (with2) {
-                    block_means(means1.data(), w1, fx2, fy2, C, w2, means2.data());
-                    change2[size_t(j2)] = finalize_into(out2, 0, means2.data(), w2);
-                    out2.emit(sink, 2, j2, 1);
-                    kept = means2.data();
-                }
-                if (keep) std::copy(kept, kept + size_t(w2) * C, current.begin() + ptrdiff_t(size_t(j2) * w2 * C));
             }
             degenerate += task_degenerate;
         });
@@ -846,9 +1100,9 @@ Result<TextureBakeResult> bake_validated(const Image& normal, const Image* rough
                 long long task_degenerate = 0;
                 for (int j = rows.begin(); j < rows.end(); ++j) {
                     if (L == 0) {
-                        task_degenerate += dec.decode_row(j, base.data(), r0.data());
-                        base_into(out, 0, base.data(), r0.data());
-                        out.emit(sink, 0, j, 1);
+                        task_degenerate += dec.decode_span(j, 0, W, base.data(), r0.data());
+                        base_into(out, 0, base.data(), r0.data(), W);
+                        out.emit(sink, 0, 0, j, 1);
                         continue;
                     }
                     if (from_previous) {
@@ -859,7 +1113,7 @@ Result<TextureBakeResult> bake_validated(const Image& normal, const Image* rough
                         for (size_t k = 0; k < sy.weight.size(); ++k) {
                             const double wy = sy.weight[k];
                             if (wy <= 0.0) continue;
-                            dec.decode_row(sy.first + int(k), base.data(), r0.data());
+                            dec.decode_span(sy.first + int(k), 0, W, base.data(), r0.data());
                             for (int c = 0; c < C; ++c) {
                                 double* m = plane(means.data(), c, w);
                                 const double* v = plane(base.data(), c, W);
@@ -874,7 +1128,7 @@ Result<TextureBakeResult> bake_validated(const Image& normal, const Image* rough
                         for (double& m : means) m *= inv;
                     }
                     row_change[size_t(j)] = finalize_into(out, 0, means.data(), w);
-                    out.emit(sink, L, j, 1);
+                    out.emit(sink, L, 0, j, 1);
                     if (keep) std::copy(means.begin(), means.end(), current.begin() + ptrdiff_t(size_t(j) * w * C));
                 }
                 degenerate += task_degenerate;
@@ -886,6 +1140,8 @@ Result<TextureBakeResult> bake_validated(const Image& normal, const Image* rough
     };
     run_with_threads(settings.threads, run);
 
+    if (dec.normal_non_finite) return non_finite_error("normal map", normal);
+    if (dec.roughness_non_finite) return non_finite_error("roughness map", *roughness);
     notes.degenerate_normals = degenerate;
     if (notes.degenerate_normals > 0)
         notes.warnings.push_back("normal map: " + std::to_string(notes.degenerate_normals) +
@@ -925,7 +1181,9 @@ Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughne
     auto copy_rows = [](MipChain& chain, const TextureBakeRows& r, const float* src) {
         if (!src) return;
         Image& level = chain.levels[size_t(r.level)];
-        std::memcpy(level.texel(0, r.y0), src, size_t(r.rows) * size_t(r.width) * size_t(level.channels) * sizeof(float));
+        const size_t row_floats = size_t(r.width) * size_t(level.channels);
+        for (int k = 0; k < r.rows; ++k)
+            std::memcpy(level.texel(r.x0, r.y0 + k), src + size_t(k) * row_floats, row_floats * sizeof(float));
     };
     auto baked = bake_validated(normal, roughness, roughness_channel, roughness_value, settings,
                                 [&](const TextureBakeRows& r) {

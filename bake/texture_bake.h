@@ -75,15 +75,17 @@ struct TextureBakeResult {
 // Bakes `normal` (2, 3 or 4 channels; 4th ignored) with roughness from channel `roughness_channel` of
 // `roughness` (any resolution; R and B carried through when it has 3+ channels and roughness_channel is 1)
 // or, when `roughness` is null, the constant perceptual roughness `roughness_value` in [0, 1].
-// Errors: empty maps, 1-channel normal map, non-finite values, channel out of range, roughness_value
-// outside [0, 1]. Messages say "normal map: ..." / "roughness map: ..."; callers prefix the file name.
+// Errors: empty maps, 1-channel normal map, NaN or infinity in a value it reads, channel out of range,
+// roughness_value outside [0, 1]. Messages say "normal map: ..." / "roughness map: ..."; callers prefix the file name.
 Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughness, int roughness_channel,
                                        float roughness_value, const TextureBakeSettings& settings);
 
-// Rows [y0, y0 + rows) of mip level `level` (`width` texels each), interleaved with the channels of the
-// matching TextureBakeResult chain; null for an output that was not requested. Valid during the call only.
+// The block of texels [x0, x0 + width) x [y0, y0 + rows) of mip level `level`: `rows` rows of `width`
+// texels, interleaved with the channels of the matching TextureBakeResult chain; null for an output that
+// was not requested. Valid during the call only. Large levels arrive in column blocks that fit the cache.
 struct TextureBakeRows {
     int level = 0;
+    int x0 = 0;
     int y0 = 0;
     int rows = 0;
     int width = 0;
@@ -93,7 +95,7 @@ struct TextureBakeRows {
     const float* normal = nullptr;
 };
 
-// Receives every row of every level exactly once, from several threads at once (disjoint rows), in no
+// Receives every texel of every level exactly once, from several threads at once (disjoint blocks), in no
 // particular order. The values do not depend on the thread count.
 using TextureBakeRowSink = std::function<void(const TextureBakeRows&)>;
 
@@ -105,7 +107,7 @@ struct TextureBakeShape {
 TextureBakeShape texture_bake_shape(const Image& normal, const Image* roughness, int roughness_channel,
                                     const TextureBakeSettings& settings);
 
-// bake_texture() without materialising the chains: every finished block of rows goes to `sink`, so a
+// bake_texture() without materialising the chains: every finished block of texels goes to `sink`, so a
 // caller can encode outputs straight into their containers. The returned result has empty chains.
 Result<TextureBakeResult> bake_texture_rows(const Image& normal, const Image* roughness, int roughness_channel,
                                             float roughness_value, const TextureBakeSettings& settings,

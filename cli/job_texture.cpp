@@ -289,7 +289,8 @@ Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, cons
     auto baked = bake_texture_rows(*in.normal, in.roughness, channel, in.roughness_value, settings,
                                    [&](const TextureBakeRows& r) {
                                        for (size_t i = 0; i < files.size(); ++i)
-                                           out.textures[i]->put_rows(r.level, r.y0, r.rows, rows_of(r, files[i].chain),
+                                           out.textures[i]->put_block(r.level, r.x0, r.y0, r.width, r.rows,
+                                                                      rows_of(r, files[i].chain),
                                                                      chain_channels(shape, files[i].chain),
                                                                      files[i].first);
                                    });

@@ -9,9 +9,6 @@
 #if defined(__x86_64__)
 #include <immintrin.h>
 #endif
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 
 namespace specbake::io {
 
@@ -56,12 +53,24 @@ __attribute__((target("f16c"))) void halves_f16c(const float* src, size_t n, uin
     }
     for (; i < n; ++i) put<uint16_t>(dst + 2 * i, _cvtss_sh(src[i], _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC));
 }
+
+bool f16c_supported() {
+    static const bool yes = (__builtin_cpu_init(), __builtin_cpu_supports("f16c"));
+    return yes;
+}
+
+// Halves of the first four of every texel's src_channels (>= 4) floats: one conversion per texel.
+__attribute__((target("f16c"))) void halves4_strided_f16c(const float* src, size_t count, int src_channels,
+                                                         uint8_t* dst) {
+    for (size_t i = 0; i < count; ++i, src += src_channels, dst += 8)
+        _mm_storel_epi64(reinterpret_cast<__m128i*>(dst),
+                         _mm_cvtps_ph(_mm_loadu_ps(src), _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC));
+}
 #endif
 
 void halves(const float* src, size_t n, uint8_t* dst) {
 #if defined(__x86_64__)
-    static const bool f16c = __builtin_cpu_supports("f16c");
-    if (f16c) return halves_f16c(src, n, dst);
+    if (f16c_supported()) return halves_f16c(src, n, dst);
 #endif
     for (size_t i = 0; i < n; ++i) put<uint16_t>(dst + 2 * i, Imath::half(src[i]).bits());
 }
@@ -96,22 +105,35 @@ void encode_run(const float* src, size_t count, int src_channels, int channels, 
     }
 }
 
-// Unorm8 of n contiguous floats, as unorm(v, 255): four per SSE2 instruction. max/min stand in for the
-// clamp (they differ only in the sign of a zero, which rounds to the same byte), and the rounding adds 0.5
-// in double, exactly as the scalar form.
+#if defined(__x86_64__)
+// unorm(v, 255) of the first multiple of eight of n floats, eight per AVX2 instruction, in float: x =
+// clamp(v) * 255 is the same float product as the scalar form; the conversion rounds half to even, so a
+// tie x = k + 1/2 with k even comes out as k and is bumped to k + 1 (std::lround rounds halves up). The
+// difference x - round(x) is exact (both lie within 256 and within 1/2 of each other). max/min stand in
+// for the clamp: they differ only in the sign of a zero, which rounds to the same byte, and a NaN gives 0
+// as the scalar clamp does. Returns how many it did.
+__attribute__((target("avx2"))) size_t unorm8_avx2(const float* src, size_t n, uint8_t* dst) {
+    const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f), scale = _mm256_set1_ps(255.0f);
+    const __m256 half = _mm256_set1_ps(0.5f);
+    size_t i = 0;
+    for (; i + 8 <= n; i += 8) {
+        const __m256 x = _mm256_mul_ps(_mm256_min_ps(_mm256_max_ps(_mm256_loadu_ps(src + i), zero), one), scale);
+        __m256i r = _mm256_cvtps_epi32(x);
+        const __m256 tie = _mm256_cmp_ps(_mm256_sub_ps(x, _mm256_cvtepi32_ps(r)), half, _CMP_EQ_OQ);
+        r = _mm256_sub_epi32(r, _mm256_castps_si256(tie));  // the mask is -1 on a tie
+        const __m128i words = _mm_packs_epi32(_mm256_castsi256_si128(r), _mm256_extracti128_si256(r, 1));
+        _mm_storel_epi64(reinterpret_cast<__m128i*>(dst + i), _mm_packus_epi16(words, words));
+    }
+    return i;
+}
+#endif
+
+// Unorm8 of n contiguous floats, as unorm(v, 255).
 void unorm8_flat(const float* src, size_t n, uint8_t* dst) {
     size_t i = 0;
-#if defined(__SSE2__)
-    const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f), scale = _mm_set1_ps(255.0f);
-    const __m128d half = _mm_set1_pd(0.5);
-    for (; i + 4 <= n; i += 4) {
-        const __m128 x = _mm_mul_ps(_mm_min_ps(_mm_max_ps(_mm_loadu_ps(src + i), zero), one), scale);
-        const __m128i lo = _mm_cvttpd_epi32(_mm_add_pd(_mm_cvtps_pd(x), half));
-        const __m128i hi = _mm_cvttpd_epi32(_mm_add_pd(_mm_cvtps_pd(_mm_movehl_ps(x, x)), half));
-        const __m128i words = _mm_packs_epi32(_mm_unpacklo_epi64(lo, hi), _mm_setzero_si128());
-        const int bytes = _mm_cvtsi128_si32(_mm_packus_epi16(words, words));
-        std::memcpy(dst + i, &bytes, 4);
-    }
+#if defined(__x86_64__)
+    static const bool avx2 = (__builtin_cpu_init(), __builtin_cpu_supports("avx2"));
+    if (avx2) i = unorm8_avx2(src, n, dst);
 #endif
     for (; i < n; ++i) dst[i] = uint8_t(unorm(src[i], 255.0f));
 }
@@ -132,6 +154,9 @@ void encode_fixed(const float* src, size_t count, int src_channels, TexelEncodin
             break;
         case TexelEncoding::Float16: {
             if (src_channels == N) return halves(src, count * N, dst);
+#if defined(__x86_64__)
+            if (N == 4 && f16c_supported()) return halves4_strided_f16c(src, count, src_channels, dst);
+#endif
             constexpr size_t kTexels = 256;
             float buffer[kTexels * N];
             for (size_t begin = 0; begin < count; begin += kTexels) {

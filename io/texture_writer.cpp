@@ -166,7 +166,7 @@ Result<std::vector<ManifestOutput>> write_texture(const MipChain& chain, TexelEn
             EncodedTexture t(container, encoding, chain.width(), chain.height(), mips, chain.channels());
             for (int L = 0; L < mips; ++L) {
                 const Image& level = chain.levels[size_t(L)];
-                t.put_rows(L, 0, level.height, level.pixels.data(), level.channels, 0);
+                t.put_block(L, 0, 0, level.width, level.height, level.pixels.data(), level.channels, 0);
             }
             const EncodedFile file{&t, stem, kind};
             return write_encoded_textures({&file, 1}, dir);
@@ -236,12 +236,19 @@ EncodedTexture::EncodedTexture(TextureContainer container, TexelEncoding encodin
     else dds_write_header(data_.get(), layout_, width, height, encoding, channels);
 }
 
-void EncodedTexture::put_rows(int level, int y0, int rows, const float* src, int src_channels, int first) {
+void EncodedTexture::put_block(int level, int x0, int y0, int width, int rows, const float* src, int src_channels,
+                               int first) {
     const size_t w = size_t(std::max(1, width_ >> level));
     const size_t texel_bytes = size_t(layout_.stored_channels) * size_t(encoding_bytes(encoding_));
-    uint8_t* dst = data_.get() + layout_.level_offset[size_t(level)] + size_t(y0) * w * texel_bytes;
-    encode_texels_into(src, w * size_t(rows), src_channels, first, channels_, encoding_, layout_.stored_channels,
-                       1.0f, dst);
+    uint8_t* dst = data_.get() + layout_.level_offset[size_t(level)] + (size_t(y0) * w + size_t(x0)) * texel_bytes;
+    if (size_t(width) == w) {  // whole rows: one run
+        encode_texels_into(src, w * size_t(rows), src_channels, first, channels_, encoding_, layout_.stored_channels,
+                           1.0f, dst);
+        return;
+    }
+    for (int k = 0; k < rows; ++k, src += size_t(width) * size_t(src_channels), dst += w * texel_bytes)
+        encode_texels_into(src, size_t(width), src_channels, first, channels_, encoding_, layout_.stored_channels,
+                           1.0f, dst);
 }
 
 ManifestOutput EncodedTexture::entry(const std::string& filename, const std::string& kind) const {

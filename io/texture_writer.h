@@ -48,17 +48,17 @@ Result<std::vector<ManifestOutput>> write_texture(const MipChain& chain, TexelEn
                                                   WrapMode wrap = WrapMode::Repeat);
 
 // A KTX2 or DDS file assembled in memory, level by level and row by row, so a producer can encode rows
-// as it finishes them instead of holding float chains. put_rows() may run on several threads at once
-// for disjoint rows; the file is complete once every row of every level was put.
+// as it finishes them instead of holding float chains. put_block() may run on several threads at once
+// for disjoint blocks; the file is complete once every texel of every level was put.
 class EncodedTexture {
 public:
     static bool supports(TextureContainer container);  // KTX2 and DDS
     EncodedTexture(TextureContainer container, TexelEncoding encoding, int width, int height, int levels,
                    int channels);
 
-    // Encodes rows [y0, y0 + rows) of `level` from interleaved floats with `src_channels` per texel,
-    // taking channels [first, first + channels()).
-    void put_rows(int level, int y0, int rows, const float* src, int src_channels, int first);
+    // Encodes the texels [x0, x0 + width) x [y0, y0 + rows) of `level` from `rows` rows of `width`
+    // interleaved floats with `src_channels` per texel, taking channels [first, first + channels()).
+    void put_block(int level, int x0, int y0, int width, int rows, const float* src, int src_channels, int first);
 
     std::span<const uint8_t> bytes() const { return {data_.get(), layout_.total}; }
     int channels() const { return channels_; }

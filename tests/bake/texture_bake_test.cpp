@@ -309,10 +309,11 @@ TEST(TextureBake, OutputsAreIdenticalForAnyThreadCount) {
     }
 }
 
-// The streamed bake hands every row of every level over exactly once, with the values bake_texture()
-// returns, for fused (even), odd and non-square sizes.
-TEST(TextureBake, RowsStreamEveryRowOnceWithTheChainValues) {
-    for (const auto& [W, H] : {std::pair{64, 32}, std::pair{37, 23}, std::pair{16, 1}, std::pair{6, 12}}) {
+// The streamed bake hands every texel of every level over exactly once, with the values bake_texture()
+// returns, for fused (even), odd and non-square sizes, and for maps wide enough to arrive in column blocks.
+TEST(TextureBake, BlocksStreamEveryTexelOnceWithTheChainValues) {
+    for (const auto& [W, H] : {std::pair{64, 32}, std::pair{37, 23}, std::pair{16, 1}, std::pair{6, 12},
+                               std::pair{600, 20}, std::pair{1030, 6}}) {
         SCOPED_TRACE(std::to_string(W) + "x" + std::to_string(H));
         const Image nm = random_normal_map(W, H, 16, 0.3);
         const Image orm = random_orm(W, H, 17);
@@ -325,26 +326,35 @@ TEST(TextureBake, RowsStreamEveryRowOnceWithTheChainValues) {
         EXPECT_EQ(shape.roughness_channels, 3);
         EXPECT_EQ(shape.lean_channels, 5);
         std::vector<std::vector<int>> seen(size_t(shape.levels));
+        for (size_t L = 0; L < seen.size(); ++L) seen[L].assign(chains->roughness.levels[L].texel_count(), 0);
         std::mutex m;
-        bool equal = true;
-        auto same = [](const float* rows, const Image& level, int y0, int count) {
-            return std::memcmp(rows, level.texel(0, y0), size_t(count) * level.width * level.channels * sizeof(float)) == 0;
+        bool equal = true, inside = true;
+        auto same = [](const float* block, const Image& level, const TextureBakeRows& r) {
+            const size_t row_floats = size_t(r.width) * size_t(level.channels);
+            for (int k = 0; k < r.rows; ++k)
+                if (std::memcmp(block + size_t(k) * row_floats, level.texel(r.x0, r.y0 + k), row_floats * sizeof(float)))
+                    return false;
+            return true;
         };
         auto streamed = bake_texture_rows(nm, &orm, 1, 0, s, [&](const TextureBakeRows& r) {
             std::lock_guard<std::mutex> lock(m);
             const size_t L = size_t(r.level);
-            if (seen[L].empty()) seen[L].assign(size_t(chains->roughness.levels[L].height), 0);
-            for (int y = r.y0; y < r.y0 + r.rows; ++y) ++seen[L][size_t(y)];
-            equal = equal && r.width == chains->roughness.levels[L].width &&
-                    same(r.roughness, chains->roughness.levels[L], r.y0, r.rows) &&
-                    same(r.kernel, chains->kernel.levels[L], r.y0, r.rows) &&
-                    same(r.lean, chains->lean.levels[L], r.y0, r.rows) &&
-                    same(r.normal, chains->normal.levels[L], r.y0, r.rows);
+            const Image& level = chains->roughness.levels[L];
+            if (r.x0 < 0 || r.y0 < 0 || r.x0 + r.width > level.width || r.y0 + r.rows > level.height) {
+                inside = false;
+                return;
+            }
+            for (int y = r.y0; y < r.y0 + r.rows; ++y)
+                for (int x = r.x0; x < r.x0 + r.width; ++x) ++seen[L][size_t(y) * level.width + x];
+            equal = equal && same(r.roughness, chains->roughness.levels[L], r) &&
+                    same(r.kernel, chains->kernel.levels[L], r) && same(r.lean, chains->lean.levels[L], r) &&
+                    same(r.normal, chains->normal.levels[L], r);
         });
         ASSERT_TRUE(streamed.ok());
+        EXPECT_TRUE(inside);
         EXPECT_TRUE(equal);
         for (size_t L = 0; L < seen.size(); ++L)
-            EXPECT_EQ(seen[L], std::vector<int>(size_t(chains->roughness.levels[L].height), 1)) << "level " << L;
+            EXPECT_EQ(seen[L], std::vector<int>(seen[L].size(), 1)) << "level " << L;
         EXPECT_EQ(streamed->max_roughness_change, chains->max_roughness_change);
         EXPECT_TRUE(streamed->roughness.levels.empty());
     }
@@ -415,6 +425,45 @@ TEST(TextureBake, SrgbLookingMapIsWarnedAbout) {
     ASSERT_TRUE(warned.ok());
     EXPECT_TRUE(warned->notes.looks_srgb);
     EXPECT_FALSE(warned->notes.warnings.empty());
+}
+
+// NaN and infinity are caught wherever the decode meets them (vector body and scalar tail, normal and ORM
+// channels, a roughness map of another size), each error naming the texel; a channel the bake never reads
+// (the alpha of an RGBA normal map, B of a roughness map read from R) does not stop it.
+TEST(TextureBake, NonFiniteValuesThatAreReadAreErrors) {
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    const Image nm = random_normal_map(11, 6, 31, 0.2);
+    const Image orm = random_orm(11, 6, 32);
+    struct Case { bool in_normal; int x, y, channel; float value; };
+    for (const Case& c : {Case{true, 1, 2, 0, nan}, Case{true, 9, 4, 2, -inf}, Case{true, 10, 5, 1, inf},
+                          Case{false, 2, 1, 1, nan}, Case{false, 10, 0, 0, inf}, Case{false, 5, 5, 2, nan}}) {
+        SCOPED_TRACE(std::string(c.in_normal ? "normal" : "orm") + " texel " + std::to_string(c.x) + "," +
+                     std::to_string(c.y) + " channel " + std::to_string(c.channel));
+        Image n = nm, r = orm;
+        (c.in_normal ? n : r).texel(c.x, c.y)[c.channel] = c.value;
+        auto res = bake_texture(n, &r, 1, 0.0f, TextureBakeSettings{});
+        ASSERT_FALSE(res.ok());
+        const std::string where = std::string(c.in_normal ? "normal map" : "roughness map") +
+                                  ": NaN or infinite value at texel (" + std::to_string(c.x) + ", " +
+                                  std::to_string(c.y) + ")";
+        EXPECT_EQ(res.error().message, where);
+    }
+    Image small(3, 2, 1);
+    small.pixels.assign(6, 0.5f);
+    small.texel(2, 1)[0] = nan;
+    auto resampled = bake_texture(nm, &small, 0, 0.0f, TextureBakeSettings{});
+    ASSERT_FALSE(resampled.ok());
+    EXPECT_EQ(resampled.error().message, "roughness map: NaN or infinite value at texel (2, 1)");
+
+    Image rgba(8, 4, 4);
+    for (size_t i = 0; i < rgba.texel_count(); ++i) {
+        float* t = rgba.pixels.data() + 4 * i;
+        t[0] = 0.5f, t[1] = 0.5f, t[2] = 1.0f, t[3] = nan;  // alpha unused
+    }
+    EXPECT_TRUE(bake_texture(rgba, nullptr, 0, 0.5f, TextureBakeSettings{}).ok());
+    Image r_unused = orm;
+    r_unused.texel(3, 3)[2] = nan;  // roughness from R: not an ORM map, so B is not read
+    EXPECT_TRUE(bake_texture(nm, &r_unused, 0, 0.0f, TextureBakeSettings{}).ok());
 }
 
 TEST(TextureBake, BadInputsAreErrors) {

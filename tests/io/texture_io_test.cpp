@@ -223,9 +223,10 @@ TEST(TexelEncoding, UnormRoundingMatchesLround) {
     }
 }
 
-// A container filled row block by row block, in scrambled order and with channels taken from a wider
-// interleaved source, is byte for byte the file encode_ktx2 / encode_dds make from the whole chain.
-TEST(EncodedTexture, RowsInAnyOrderGiveTheWholeChainFile) {
+// A container filled block by block (whole rows and column blocks), in scrambled order and with channels
+// taken from a wider interleaved source, is byte for byte the file encode_ktx2 / encode_dds make from the
+// whole chain.
+TEST(EncodedTexture, BlocksInAnyOrderGiveTheWholeChainFile) {
     const MipChain wide = random_chain(13, 6, 5, 21);
     for (TextureContainer container : {TextureContainer::Ktx2, TextureContainer::Dds}) {
         for (TexelEncoding e : {TexelEncoding::Unorm8, TexelEncoding::Unorm16, TexelEncoding::Float16,
@@ -243,8 +244,19 @@ TEST(EncodedTexture, RowsInAnyOrderGiveTheWholeChainFile) {
             for (int L = int(wide.levels.size()) - 1; L >= 0; --L) {
                 const Image& l = wide.levels[size_t(L)];
                 for (int y = l.height - 1; y >= 0; y -= 2) {
-                    const int y0 = std::max(0, y - 1);
-                    t.put_rows(L, y0, y - y0 + 1, l.texel(0, y0), 5, first);
+                    const int y0 = std::max(0, y - 1), rows = y - y0 + 1;
+                    if (L % 2 == 0) {
+                        t.put_block(L, 0, y0, l.width, rows, l.texel(0, y0), 5, first);
+                        continue;
+                    }
+                    // Odd levels: column blocks of up to 4 texels, right to left, copied out of the level.
+                    for (int x1 = l.width; x1 > 0; x1 -= 4) {
+                        const int x0 = std::max(0, x1 - 4), w = x1 - x0;
+                        std::vector<float> block;
+                        for (int k = 0; k < rows; ++k)
+                            block.insert(block.end(), l.texel(x0, y0 + k), l.texel(x0, y0 + k) + size_t(w) * 5);
+                        t.put_block(L, x0, y0, w, rows, block.data(), 5, first);
+                    }
                 }
             }
             const std::vector<uint8_t> whole =
