@@ -47,9 +47,24 @@ bool has_avx2() {
     return yes;
 }
 
-// Channel k of the four texels at c, c + stride, c + 2 stride, c + 3 stride, widened to double.
-SPECBAKE_AVX2 inline __m256d load_channel4(const float* c, size_t stride, int k) {
-    return _mm256_cvtps_pd(_mm_set_ps(c[3 * stride + k], c[2 * stride + k], c[stride + k], c[k]));
+// Channels 0, 1, 2 of the four texels at c, c + stride, c + 2 stride, c + 3 stride. Three-channel rows
+// (the usual RGB map) are split with three loads and shuffles instead of twelve scalar loads.
+struct Channels4 {
+    __m128 x, y, z;
+};
+SPECBAKE_AVX2 inline Channels4 load_channels4(const float* c, size_t stride) {
+    if (stride == 3) {
+        const __m128 a = _mm_loadu_ps(c), b = _mm_loadu_ps(c + 4), d = _mm_loadu_ps(c + 8);  // x0 y0 z0 x1 | y1 ..
+        const __m128 x = _mm_blend_ps(_mm_blend_ps(a, b, 0x4), d, 0x2);                      // x0 x3 x2 x1 (lanes)
+        const __m128 y = _mm_blend_ps(_mm_blend_ps(a, b, 0x9), d, 0x4);                      // y1 y0 y3 y2
+        const __m128 z = _mm_blend_ps(_mm_blend_ps(a, b, 0x2), d, 0x9);                      // z2 z1 z0 z3
+        return {_mm_shuffle_ps(x, x, _MM_SHUFFLE(1, 2, 3, 0)), _mm_shuffle_ps(y, y, _MM_SHUFFLE(2, 3, 0, 1)),
+                _mm_shuffle_ps(z, z, _MM_SHUFFLE(3, 0, 1, 2))};
+    }
+    auto channel = [&](int k) {
+        return _mm_set_ps(c[3 * stride + k], c[2 * stride + k], c[stride + k], c[k]);
+    };
+    return {channel(0), channel(1), stride > 2 ? channel(2) : _mm_setzero_ps()};
 }
 
 // (mask ? a : b) per lane.
@@ -68,13 +83,14 @@ SPECBAKE_AVX2 int decode_normals_avx2(const float* row, int ch, int n, bool reco
     int x = 0;
     for (; x + 4 <= n; x += 4) {
         const float* c = row + size_t(x) * stride;
-        const __m256d vx = _mm256_sub_pd(_mm256_mul_pd(two, load_channel4(c, stride, 0)), one);
-        __m256d vy = _mm256_sub_pd(_mm256_mul_pd(two, load_channel4(c, stride, 1)), one);
+        const Channels4 in = load_channels4(c, stride);
+        const __m256d vx = _mm256_sub_pd(_mm256_mul_pd(two, _mm256_cvtps_pd(in.x)), one);
+        __m256d vy = _mm256_sub_pd(_mm256_mul_pd(two, _mm256_cvtps_pd(in.y)), one);
         if (flip_y) vy = _mm256_xor_pd(vy, sign);
         const __m256d xx = _mm256_mul_pd(vx, vx), yy = _mm256_mul_pd(vy, vy);
         const __m256d vz = reconstruct
                                ? _mm256_sqrt_pd(_mm256_max_pd(_mm256_sub_pd(_mm256_sub_pd(one, xx), yy), zero))
-                               : _mm256_sub_pd(_mm256_mul_pd(two, load_channel4(c, stride, 2)), one);
+                               : _mm256_sub_pd(_mm256_mul_pd(two, _mm256_cvtps_pd(in.z)), one);
         const __m256d read = reconstruct ? _mm256_add_pd(vx, vy) : _mm256_add_pd(_mm256_add_pd(vx, vy), vz);
         finite = _mm256_add_pd(finite, _mm256_sub_pd(read, read));
         const __m256d len2 = _mm256_add_pd(_mm256_add_pd(xx, yy), _mm256_mul_pd(vz, vz));
@@ -105,7 +121,10 @@ SPECBAKE_AVX2 int decode_roughness_avx2(const float* t, int ch, int channel, int
     int x = 0;
     for (; x + 4 <= n; x += 4) {
         const float* c = t + size_t(x) * stride;
-        const __m128 v = _mm_set_ps(c[3 * stride + channel], c[2 * stride + channel], c[stride + channel], c[channel]);
+        const Channels4 in = stride >= 3 ? load_channels4(c, stride) : Channels4{};
+        const __m128 v = stride >= 3 && channel < 3
+                             ? (channel == 0 ? in.x : channel == 1 ? in.y : in.z)
+                             : _mm_set_ps(c[3 * stride + channel], c[2 * stride + channel], c[stride + channel], c[channel]);
         finite = _mm_add_ps(finite, _mm_sub_ps(v, v));
         // std::clamp(v, 0, 1): v < 0 ? 0 : (1 < v ? 1 : v)
         const __m128 r = _mm_blendv_ps(_mm_blendv_ps(v, one, _mm_cmplt_ps(one, v)), zero, _mm_cmplt_ps(v, zero));
@@ -113,9 +132,8 @@ SPECBAKE_AVX2 int decode_roughness_avx2(const float* t, int ch, int channel, int
         const __m256d r2 = _mm256_mul_pd(rd, rd);
         _mm256_storeu_pd(a + x, _mm256_mul_pd(r2, r2));
         _mm_storeu_ps(r0 + x, r);
-        if (occlusion) {
-            const __m128 o = _mm_set_ps(c[3 * stride], c[2 * stride], c[stride], c[0]);
-            const __m128 m = _mm_set_ps(c[3 * stride + 2], c[2 * stride + 2], c[stride + 2], c[2]);
+        if (occlusion) {  // an ORM map: 3+ channels
+            const __m128 o = in.x, m = in.z;
             finite = _mm_add_ps(finite, _mm_add_ps(_mm_sub_ps(o, o), _mm_sub_ps(m, m)));
             _mm256_storeu_pd(occlusion + x, _mm256_cvtps_pd(o));
             _mm256_storeu_pd(metallic + x, _mm256_cvtps_pd(m));
