@@ -21,6 +21,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <memory>
 
@@ -495,8 +496,10 @@ void write_base_row(const double* v, const float* r0, int W, const Layout& layou
 // The SPEC Sec. 3 formulas for `n` texels of a level >= 1, before they are stored as floats.
 constexpr int kChunk = 64;
 
-// Width in base texels of the column tiles of the fused pass over levels 0-2 (see bake_validated).
+// The fused pass over the largest levels (see bake_validated): width in base texels of its column tiles,
+// and how many levels above the base it covers at most.
 constexpr int kTileTexels = 256;
+constexpr int kMaxFusedLevels = 4;
 struct Finalized {
     double r[kChunk], t[kChunk], sxx[kChunk], syy[kChunk], sxy[kChunk], nx[kChunk], ny[kChunk], nz[kChunk];
     double change = 0.0;  // largest |r - r_in| so far, r_in = (mean alpha^2)^(1/4)
@@ -1031,68 +1034,73 @@ Result<TextureBakeResult> bake_validated(const Image& normal, const Image* rough
         return m;
     };
 
-    // Levels 0 and 1 in one pass when level 1's footprints are whole blocks of base texels (all even
-    // sizes): every base row is decoded once, written as level 0 and summed into its level-1 row. When
-    // level 2 tiles level 1 as well, each task owns whole level-2 rows: the level-1 rows of one level-2
-    // row stay in the task, and only level-2 means (a sixteenth of the base) are kept for level 3.
+    // Levels 0 .. F in one pass when each of levels 1 .. F has footprints that are whole blocks of the level
+    // before (all even sizes, up to kMaxFusedLevels): every base row is decoded once, written as level 0
+    // and summed upwards. Each task owns whole rows of level F, so the finer rows under them never leave
+    // the task, and only level-F means (a 4^F-th of the base) are kept for level F + 1. Column tiles of
+    // about kTileTexels base texels keep a task's planes and float rows in the L2 cache; every output texel
+    // still sums its own footprint in the same order.
     const bool fused = levels >= 2 && W % level_w(1) == 0 && H % level_h(1) == 0;
     auto run_fused = [&] {
-        const int w1 = level_w(1), h1 = level_h(1), fx = W / w1, fy = H / h1;
-        const bool with2 = levels > 2 && tiles_previous(2);
-        const int w2 = with2 ? level_w(2) : w1, h2 = with2 ? level_h(2) : h1;
-        const int fx2 = w1 / w2, fy2 = h1 / h2;  // 1 x 1 when level 2 is not part of this pass
-        const int next = with2 ? 3 : 2;
-        const bool keep = next < levels && tiles_previous(next);
-        current.assign(keep ? size_t(w2) * h2 * C : 0, 0.0);
-        std::vector<double> change1(size_t(h1), 0.0), change2(size_t(h2), 0.0);
-        // Column tiles of about kTileTexels base texels keep a task's decoded planes and float rows in the
-        // L2 cache; every output texel still sums its own footprint in the same order.
-        const int t2 = std::clamp(kTileTexels / (fx * fx2), 1, w2);
-        tbb::parallel_for(tbb::blocked_range<int>(0, h2, with2 ? 1 : 4), [&](const tbb::blocked_range<int>& rows) {
-            const int t1 = t2 * fx2, t0 = t1 * fx;
-            const auto base = uninitialized<double>(size_t(C) * size_t(t0) * size_t(fy));
-            const auto r0 = uninitialized<float>(size_t(t0));
-            const auto means1 = uninitialized<double>(size_t(C) * t1 * size_t(fy2));
-            const auto means2 = uninitialized<double>(size_t(C) * t2);
-            RowBlock out0(shape, t0, fy * fy2), out1(shape, t1, fy2), out2(shape, t2, 1);
+        int F = 1;
+        while (F < kMaxFusedLevels && F + 1 < levels && tiles_previous(F + 1)) ++F;
+        std::vector<int> fx(size_t(F) + 1, 1), fy(size_t(F) + 1, 1), tile(size_t(F) + 1, 1);
+        for (int L = 1; L <= F; ++L)
+            fx[size_t(L)] = level_w(L - 1) / level_w(L), fy[size_t(L)] = level_h(L - 1) / level_h(L);
+        int span = 1;  // base texels per level-F texel along x
+        for (int L = 1; L <= F; ++L) span *= fx[size_t(L)];
+        tile[size_t(F)] = std::clamp(kTileTexels / span, 1, level_w(F));
+        for (int L = F; L >= 1; --L) tile[size_t(L) - 1] = tile[size_t(L)] * fx[size_t(L)];
+        const int wF = level_w(F), hF = level_h(F);
+        const bool keep = F + 1 < levels && tiles_previous(F + 1);
+        current.assign(keep ? size_t(wF) * hF * C : 0, 0.0);
+        std::vector<std::vector<double>> change(size_t(F) + 1);
+        for (int L = 1; L <= F; ++L) change[size_t(L)].assign(size_t(level_h(L)), 0.0);
+
+        tbb::parallel_for(tbb::blocked_range<int>(0, hF), [&](const tbb::blocked_range<int>& rows) {
+            // Per level: the finer rows under one row of it, its means, and its output row.
+            std::vector<std::unique_ptr<double[]>> fine(size_t(F) + 1), means(size_t(F) + 1);
+            std::vector<RowBlock> out;
+            for (int L = 0; L <= F; ++L) {
+                if (L >= 1) fine[size_t(L)] = uninitialized<double>(size_t(C) * tile[size_t(L) - 1] * fy[size_t(L)]);
+                means[size_t(L)] = uninitialized<double>(size_t(C) * tile[size_t(L)]);
+                out.emplace_back(shape, tile[size_t(L)], 1);
+            }
+            const auto r0 = uninitialized<float>(size_t(tile[0]));
             long long task_degenerate = 0;
-            for (int j2 = rows.begin(); j2 < rows.end(); ++j2) {
-                for (int x2 = 0; x2 < w2; x2 += t2) {
-                    const int n2 = std::min(t2, w2 - x2), n1 = n2 * fx2, n0 = n1 * fx;
-                    const int x1 = x2 * fx2, x0 = x1 * fx;
-                    out0.width = n0, out1.width = n1, out2.width = n2;
-                    for (int dy2 = 0; dy2 < fy2; ++dy2) {
-                        const int j = j2 * fy2 + dy2;
-                        for (int dy = 0; dy < fy; ++dy) {
-                            double* v = base.get() + size_t(dy) * size_t(C) * size_t(n0);
-                            task_degenerate += dec.decode_span(j * fy + dy, x0, n0, v, r0.get());
-                            base_into(out0, dy2 * fy + dy, v, r0.get(), n0);
-                        }
-                        double* means = means1.get() + size_t(dy2) * C * n1;
-                        block_means(base.get(), n0, fx, fy, C, n1, means);
-                        change1[size_t(j)] = std::max(change1[size_t(j)], finalize_into(out1, dy2, means, n1));
-                    }
-                    out0.emit(sink, 0, x0, j2 * fy2 * fy, fy2 * fy);
-                    out1.emit(sink, 1, x1, j2 * fy2, fy2);
-                    const double* kept = means1.get();
-                    if (with2) {
-                        block_means(means1.get(), n1, fx2, fy2, C, n2, means2.get());
-                        change2[size_t(j2)] = std::max(change2[size_t(j2)], finalize_into(out2, 0, means2.get(), n2));
-                        out2.emit(sink, 2, x2, j2, 1);
-                        kept = means2.get();
-                    }
+            // Means of texels [x, x + n) of row j of level L into m (C planes of n), after emitting the
+            // outputs of every level up to L under them.
+            std::function<void(int, int, int, int, double*)> block = [&](int L, int j, int x, int n, double* m) {
+                RowBlock& o = out[size_t(L)];
+                o.width = n;
+                if (L == 0) {
+                    task_degenerate += dec.decode_span(j, x, n, m, r0.get());
+                    base_into(o, 0, m, r0.get(), n);
+                } else {
+                    const int fxL = fx[size_t(L)], fyL = fy[size_t(L)], nf = n * fxL;
+                    double* f = fine[size_t(L)].get();
+                    for (int dy = 0; dy < fyL; ++dy) block(L - 1, j * fyL + dy, x * fxL, nf, f + size_t(dy) * C * nf);
+                    block_means(f, nf, fxL, fyL, C, n, m);
+                    double& c = change[size_t(L)][size_t(j)];
+                    c = std::max(c, finalize_into(o, 0, m, n));
+                }
+                o.emit(sink, L, x, j, 1);
+            };
+            for (int j = rows.begin(); j < rows.end(); ++j) {
+                for (int x = 0; x < wF; x += tile[size_t(F)]) {
+                    const int n = std::min(tile[size_t(F)], wF - x);
+                    double* m = means[size_t(F)].get();
+                    block(F, j, x, n, m);
                     if (keep)
                         for (int c = 0; c < C; ++c)
-                            std::copy_n(kept + size_t(c) * n2, n2,
-                                        current.begin() + ptrdiff_t((size_t(j2) * C + c) * w2 + x2));
+                            std::copy_n(m + size_t(c) * n, n, current.begin() + ptrdiff_t((size_t(j) * C + c) * wF + x));
                 }
             }
             degenerate += task_degenerate;
         });
-        level_change[1] = reduce_changes(change1);
-        if (with2) level_change[2] = reduce_changes(change2);
+        for (int L = 1; L <= F; ++L) level_change[size_t(L)] = reduce_changes(change[size_t(L)]);
         previous.swap(current);
-        return next;
+        return F + 1;
     };
 
     auto run = [&] {
