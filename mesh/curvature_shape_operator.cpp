@@ -25,16 +25,19 @@
 // the undetermined directions and S reduces to the first-order fit. Degenerate triangles are skipped; a
 // vertex whose spokes do not span the plane gets no curvature.
 //
-// Layout for speed: a face pass writes the mixed-Voronoi weight of every corner (zero for skipped
-// triangles); a vertex pass gathers each curvature group's corners in corner order into a small
-// structure-of-arrays block, sums the moments of the normal equations four spokes at a time, and solves
-// four groups' 7x7 systems at a time (LDL^T), lane-parallel in 4-wide double vectors. Every sum runs in a
-// fixed order, so the result does not depend on the thread count.
+// Layout for speed: one pass over the curvature groups (parallel, four groups per 4-wide double vector, one
+// group per lane). Each group's corners are gathered in corner order into a small structure-of-arrays
+// block; the corner weights, the spokes' moments and the 7x7 LDL^T solve then run lane-parallel. Every
+// sum runs in a fixed order, so the result does not depend on the thread count.
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "mesh/curvature.h"
 #include "mesh/curvature_frames.h"
@@ -63,59 +66,21 @@ constexpr int kLanes = 4;
 
 SPECBAKE_INLINE v4d splat(double x) { return v4d{x, x, x, x}; }
 
+// Lane-wise square root (non-negative input): two SSE2 square roots where available.
+SPECBAKE_INLINE v4d sqrt4(v4d x) {
+#if defined(__SSE2__)
+    const __m128d lo = _mm_sqrt_pd(__m128d{x[0], x[1]}), hi = _mm_sqrt_pd(__m128d{x[2], x[3]});
+    return v4d{lo[0], lo[1], hi[0], hi[1]};
+#else
+    return v4d{std::sqrt(x[0]), std::sqrt(x[1]), std::sqrt(x[2]), std::sqrt(x[3])};
+#endif
+}
+
 constexpr int kUnknowns = 7;  // a, b, c, alpha, beta, gamma, delta
 
 // Ridge on the C block, relative to the mean of its diagonal: negligible where the spokes determine C
 // (it shifts C by 1e-6 of itself), decisive only along directions the spokes do not see.
 constexpr double kRidge = 1e-6;
-
-// Mixed-Voronoi weights of the corners of triangles [begin, end), four triangles per vector (the
-// branch-free form of detail::mixed_voronoi_areas); zeros for a triangle that carries no information
-// (corners not three distinct positions, or smallest angle under ~1e-10 rad, as
-// detail::is_degenerate_triangle).
-SPECBAKE_AVX2_CLONES void corner_weights(const TriMesh& mesh, const WeldedTopology& topology, size_t begin,
-                                         size_t end, float* weight) {
-    const uint32_t* pid = topology.position_id.data();
-    for (size_t first = begin; first < end; first += kLanes) {
-        const int lanes = int(std::min<size_t>(kLanes, end - first));
-        v4d p[3][3];  // corner, coordinate; lane = triangle
-        v4l distinct;
-        for (int l = 0; l < kLanes; ++l) {
-            const uint32_t* f = &mesh.indices[3 * (first + size_t(std::min(l, lanes - 1)))];
-            for (int i = 0; i < 3; ++i)
-                for (int k = 0; k < 3; ++k) p[i][k][l] = mesh.positions[3 * size_t(f[i]) + k];
-            distinct[l] = pid[f[0]] != pid[f[1]] && pid[f[1]] != pid[f[2]] && pid[f[0]] != pid[f[2]] ? -1 : 0;
-        }
-        v4d e[3][3];
-        for (int k = 0; k < 3; ++k) {
-            e[0][k] = p[2][k] - p[1][k];  // e_i opposite corner i
-            e[1][k] = p[0][k] - p[2][k];
-            e[2][k] = p[1][k] - p[0][k];
-        }
-        const v4d cx = e[0][1] * e[1][2] - e[0][2] * e[1][1], cy = e[0][2] * e[1][0] - e[0][0] * e[1][2],
-                  cz = e[0][0] * e[1][1] - e[0][1] * e[1][0];
-        v4d l[3];
-        for (int i = 0; i < 3; ++i) l[i] = e[i][0] * e[i][0] + e[i][1] * e[i][1] + e[i][2] * e[i][2];
-        v4d twice_area;
-        for (int q = 0; q < kLanes; ++q) twice_area[q] = std::sqrt(cx[q] * cx[q] + cy[q] * cy[q] + cz[q] * cz[q]);
-        const v4l usable = distinct & (twice_area > 1e-10 * (l[0] + l[1] + l[2]));
-        const v4d area = 0.5 * twice_area;
-        // Voronoi areas: (|e_j|^2 cot(angle k) + |e_k|^2 cot(angle j)) / 8, cot(angle i) = (l_j + l_k - l_i) / 4A.
-        const v4d inv = usable ? 1.0 / (4.0 * area) : splat(0.0);
-        const v4d c0 = (l[1] + l[2] - l[0]) * inv, c1 = (l[0] + l[2] - l[1]) * inv, c2 = (l[0] + l[1] - l[2]) * inv;
-        v4d w[3] = {(l[1] * c1 + l[2] * c2) / 8.0, (l[0] * c0 + l[2] * c2) / 8.0, (l[0] * c0 + l[1] * c1) / 8.0};
-        // An obtuse corner (opposite squared edge above the sum of the other two) takes half the area, the
-        // two others a quarter each.
-        const v4l obtuse[3] = {l[0] > l[1] + l[2], l[1] > l[0] + l[2], l[2] > l[0] + l[1]};
-        const v4l any_obtuse = obtuse[0] | obtuse[1] | obtuse[2];
-        for (int i = 0; i < 3; ++i) {
-            w[i] = any_obtuse ? (obtuse[i] ? 0.5 * area : 0.25 * area) : w[i];
-            w[i] = usable ? w[i] : splat(0.0);
-        }
-        for (int q = 0; q < lanes; ++q)
-            for (int i = 0; i < 3; ++i) weight[3 * (first + size_t(q)) + size_t(i)] = float(w[i][q]);
-    }
-}
 
 // Moments of one group's spoke equations, the sums its normal equations are made of:
 // m_pq = sum w x^p y^q (p + q = 2..4) of the projected offsets, and mu_pq, mv_pq = sum w n_t.u x^p y^q,
@@ -128,7 +93,6 @@ struct GatherInput {
     const uint32_t* indices;
     const float* positions;
     const float* unit_normals;
-    const float* weight;  // per corner
     const uint32_t* start;
     const uint32_t* order;
     const uint32_t* group_vertex;
@@ -136,12 +100,13 @@ struct GatherInput {
     detail::GroupPrincipal* principal;
 };
 
-// Spokes of four groups, one group per vector lane: spoke s of lane l at [4 s + l], as stored (float
-// neighbour position and normal, the corner's own normal, the corner weight). Groups with more spokes than
-// a block holds are summed over several rounds.
-constexpr int kSlots = 16;
-struct SpokeBlock {
-    alignas(32) float p[3][kSlots * kLanes], n[3][kSlots * kLanes], n0[3][kSlots * kLanes], w[kSlots * kLanes];
+// Corners of four groups, one group per vector lane: corner c of lane l at [4 c + l], as stored (float
+// positions and unit normals of the next and the previous vertex of the triangle, and the corner's own
+// unit normal). Groups with more corners than a block holds are summed over several rounds.
+constexpr int kSlots = 8;
+struct CornerBlock {
+    alignas(32) float pa[3][kSlots * kLanes], pb[3][kSlots * kLanes], na[3][kSlots * kLanes],
+        nb[3][kSlots * kLanes], n0[3][kSlots * kLanes];
 };
 
 typedef float v4f __attribute__((vector_size(16)));
@@ -151,49 +116,82 @@ SPECBAKE_INLINE v4d load4(const float* p) {
     return __builtin_convertvector(f, v4d);
 }
 
-// Adds the first `slots` spokes of every lane to the lanes' moments. Float differences of nearby values
-// are exact in double, so the fit sees the mesh as stored.
-SPECBAKE_INLINE void sum_block(const SpokeBlock& b, int slots, const v4d (&p0)[3], const v4d (&u)[3],
+// Adds one spoke (offset d, normal difference dn, weight w) per lane to the lanes' moments.
+SPECBAKE_INLINE void add_spoke(const v4d (&d)[3], const v4d (&dn)[3], v4d w, const v4d (&u)[3], const v4d (&v)[3],
+                               v4d (&acc)[kMoments]) {
+    const v4d x = d[0] * u[0] + d[1] * u[1] + d[2] * u[2], y = d[0] * v[0] + d[1] * v[1] + d[2] * v[2];
+    const v4d du = dn[0] * u[0] + dn[1] * u[1] + dn[2] * u[2], dv = dn[0] * v[0] + dn[1] * v[1] + dn[2] * v[2];
+    const v4d wx = w * x, wy = w * y;
+    const v4d wx2 = wx * x, wxy = wx * y, wy2 = wy * y;
+    acc[m20] += wx2;
+    acc[m11] += wxy;
+    acc[m02] += wy2;
+    acc[m30] += wx2 * x;
+    acc[m21] += wx2 * y;
+    acc[m12] += wy2 * x;
+    acc[m03] += wy2 * y;
+    acc[m40] += wx2 * x * x;
+    acc[m31] += wx2 * x * y;
+    acc[m22] += wx2 * y * y;
+    acc[m13] += wy2 * y * x;
+    acc[m04] += wy2 * y * y;
+    acc[mu10] += wx * du;
+    acc[mu01] += wy * du;
+    acc[mu20] += wx2 * du;
+    acc[mu11] += wxy * du;
+    acc[mu02] += wy2 * du;
+    acc[mv10] += wx * dv;
+    acc[mv01] += wy * dv;
+    acc[mv20] += wx2 * dv;
+    acc[mv11] += wxy * dv;
+    acc[mv02] += wy2 * dv;
+}
+
+// Adds the first `slots` corners of every lane to the lanes' moments: each corner's two spokes with the
+// corner's mixed-Voronoi area (the branch-free form of detail::mixed_voronoi_areas), zero when the triangle
+// carries no information (corners not three distinct positions, or smallest angle under ~1e-10 rad, as
+// detail::is_degenerate_triangle). Float differences of nearby values are exact in double, so the fit sees
+// the mesh as stored.
+SPECBAKE_INLINE void sum_block(const CornerBlock& b, int slots, const v4d (&p0)[3], const v4d (&u)[3],
                                const v4d (&v)[3], v4d (&acc)[kMoments]) {
     for (int s = 0; s < slots * kLanes; s += kLanes) {
-        const v4d d0 = load4(&b.p[0][s]) - p0[0], d1 = load4(&b.p[1][s]) - p0[1], d2 = load4(&b.p[2][s]) - p0[2];
-        const v4d n0 = load4(&b.n[0][s]) - load4(&b.n0[0][s]), n1 = load4(&b.n[1][s]) - load4(&b.n0[1][s]),
-                  n2 = load4(&b.n[2][s]) - load4(&b.n0[2][s]);
-        const v4d x = d0 * u[0] + d1 * u[1] + d2 * u[2], y = d0 * v[0] + d1 * v[1] + d2 * v[2];
-        const v4d du = n0 * u[0] + n1 * u[1] + n2 * u[2], dv = n0 * v[0] + n1 * v[1] + n2 * v[2];
-        const v4d w = load4(&b.w[s]);
-        const v4d wx = w * x, wy = w * y;
-        const v4d wx2 = wx * x, wxy = wx * y, wy2 = wy * y;
-        acc[m20] += wx2;
-        acc[m11] += wxy;
-        acc[m02] += wy2;
-        acc[m30] += wx2 * x;
-        acc[m21] += wx2 * y;
-        acc[m12] += wy2 * x;
-        acc[m03] += wy2 * y;
-        acc[m40] += wx2 * x * x;
-        acc[m31] += wx2 * x * y;
-        acc[m22] += wx2 * y * y;
-        acc[m13] += wy2 * y * x;
-        acc[m04] += wy2 * y * y;
-        acc[mu10] += wx * du;
-        acc[mu01] += wy * du;
-        acc[mu20] += wx2 * du;
-        acc[mu11] += wxy * du;
-        acc[mu02] += wy2 * du;
-        acc[mv10] += wx * dv;
-        acc[mv01] += wy * dv;
-        acc[mv20] += wx2 * dv;
-        acc[mv11] += wxy * dv;
-        acc[mv02] += wy2 * dv;
+        v4d da[3], db[3], dna[3], dnb[3];
+        for (int c = 0; c < 3; ++c) {
+            const v4d n0 = load4(&b.n0[c][s]);
+            da[c] = load4(&b.pa[c][s]) - p0[c];
+            db[c] = load4(&b.pb[c][s]) - p0[c];
+            dna[c] = load4(&b.na[c][s]) - n0;
+            dnb[c] = load4(&b.nb[c][s]) - n0;
+        }
+        // Squared edges opposite this corner (lo), the next (la) and the previous vertex (lb); twice the area.
+        const v4d e[3] = {da[0] - db[0], da[1] - db[1], da[2] - db[2]};
+        const v4d lo = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+        const v4d la = db[0] * db[0] + db[1] * db[1] + db[2] * db[2];
+        const v4d lb = da[0] * da[0] + da[1] * da[1] + da[2] * da[2];
+        const v4d cx = da[1] * db[2] - da[2] * db[1], cy = da[2] * db[0] - da[0] * db[2],
+                  cz = da[0] * db[1] - da[1] * db[0];
+        const v4d twice_area = sqrt4(cx * cx + cy * cy + cz * cz);
+        const v4l usable = twice_area > 1e-10 * (lo + la + lb);
+        // Voronoi area (lb cot(angle at b) + la cot(angle at a)) / 8, cot(angle at m) = (sum of the other two
+        // squared edges - l_m) / (4 area) = (...) / (2 twice_area); an obtuse corner here takes half the area,
+        // an obtuse corner elsewhere leaves a quarter.
+        const v4d inv = usable ? 0.5 / twice_area : splat(0.0);
+        const v4d cot_a = (lo + lb - la) * inv, cot_b = (lo + la - lb) * inv;
+        const v4d voronoi = (lb * cot_b + la * cot_a) / 8.0;
+        const v4l obtuse_here = lo > la + lb, obtuse_elsewhere = (la > lo + lb) | (lb > lo + la);
+        v4d w = obtuse_here ? 0.25 * twice_area : (obtuse_elsewhere ? 0.125 * twice_area : voronoi);
+        w = usable ? w : splat(0.0);
+        add_spoke(da, dna, w, u, v, acc);
+        add_spoke(db, dnb, w, u, v, acc);
     }
 }
 
 // Frames (u, v) and moments of groups first .. first + 3 (lane l: group first + l, lanes past `lanes`
-// empty), and whether each has a usable triangle.
-SPECBAKE_INLINE void group_moments(const GatherInput& in, uint32_t first, int lanes, SpokeBlock& b,
-                                   v4d (&u)[3], v4d (&v)[3], v4d (&acc)[kMoments], bool (&any)[kLanes]) {
+// empty).
+SPECBAKE_INLINE void group_moments(const GatherInput& in, uint32_t first, int lanes, CornerBlock& b,
+                                   v4d (&u)[3], v4d (&v)[3], v4d (&acc)[kMoments]) {
     v4d p0[3];
+    float p0f[3][kLanes];
     uint32_t cursor[kLanes], stop[kLanes];
     for (int l = 0; l < kLanes; ++l) {
         const uint32_t g = first + uint32_t(std::min(l, lanes - 1));
@@ -202,36 +200,31 @@ SPECBAKE_INLINE void group_moments(const GatherInput& in, uint32_t first, int la
         detail::Vec3d n, fu, fv;
         detail::group_frame(&in.normals[3 * first_vertex], n, fu, fv);
         for (int c = 0; c < 3; ++c) {
+            p0f[c][l] = p[c];
             p0[c][l] = p[c];
             u[c][l] = fu[c];
             v[c][l] = fv[c];
         }
         cursor[l] = in.start[g];
         stop[l] = l < lanes ? in.start[g + 1] : in.start[g];
-        any[l] = false;
     }
     for (int q = 0; q < kMoments; ++q) acc[q] = splat(0.0);
     for (;;) {
         int filled[kLanes], most = 0;
         for (int l = 0; l < kLanes; ++l) {
             int s = 0;
-            while (cursor[l] < stop[l] && s + 2 <= kSlots) {
+            for (; cursor[l] < stop[l] && s < kSlots; ++s) {
                 const uint32_t corner = in.order[cursor[l]++];
-                const float w = in.weight[corner];
-                if (!(w > 0.0f)) continue;
-                any[l] = true;
-                const uint32_t* f = &in.indices[corner - corner % 3];
-                const int i = int(corner % 3);
-                const float* n0 = &in.unit_normals[3 * size_t(f[i])];
-                for (int o = 1; o <= 2; ++o, ++s) {
-                    const size_t j = f[(i + o) % 3];
-                    const int at = s * kLanes + l;
-                    for (int c = 0; c < 3; ++c) {
-                        b.p[c][at] = in.positions[3 * j + c];
-                        b.n[c][at] = in.unit_normals[3 * j + c];
-                        b.n0[c][at] = n0[c];
-                    }
-                    b.w[at] = w;
+                const uint32_t t = corner / 3, i = corner - 3 * t;
+                const uint32_t* f = &in.indices[3 * size_t(t)];
+                const size_t a = f[i == 2 ? 0 : i + 1], bv = f[i == 0 ? 2 : i - 1], o = f[i];
+                const int at = s * kLanes + l;
+                for (int c = 0; c < 3; ++c) {
+                    b.pa[c][at] = in.positions[3 * a + c];
+                    b.pb[c][at] = in.positions[3 * bv + c];
+                    b.na[c][at] = in.unit_normals[3 * a + c];
+                    b.nb[c][at] = in.unit_normals[3 * bv + c];
+                    b.n0[c][at] = in.unit_normals[3 * o + c];
                 }
             }
             filled[l] = s;
@@ -239,10 +232,12 @@ SPECBAKE_INLINE void group_moments(const GatherInput& in, uint32_t first, int la
         }
         if (most == 0) break;
         for (int l = 0; l < kLanes; ++l)
-            for (int s = filled[l]; s < most; ++s) {  // padding: zero weight, finite values
-                const int at = s * kLanes + l;
-                for (int c = 0; c < 3; ++c) b.p[c][at] = b.n[c][at] = b.n0[c][at] = 0.0f;
-                b.w[at] = 0.0f;
+            for (int pad = filled[l]; pad < most; ++pad) {  // a degenerate corner at the group's position: weight 0
+                const int at = pad * kLanes + l;
+                for (int c = 0; c < 3; ++c) {
+                    b.pa[c][at] = b.pb[c][at] = p0f[c][l];
+                    b.na[c][at] = b.nb[c][at] = b.n0[c][at] = 0.0f;
+                }
             }
         sum_block(b, most, p0, u, v, acc);
     }
@@ -319,7 +314,7 @@ SPECBAKE_INLINE void ldlt_solve(const T (&M)[kUnknowns][kUnknowns], T (&z)[kUnkn
 // S of `lanes` groups from their moments (lane l): the full model with the ridge on the C block;
 // a lane whose system is not numerically positive definite falls back to the linear model (S alone), and
 // to no curvature when even that fails (the spokes do not span the plane).
-SPECBAKE_INLINE void solve_shapes(const v4d (&s)[kMoments], const bool (&any)[kLanes], int lanes, Shape2* out) {
+SPECBAKE_INLINE void solve_shapes(const v4d (&s)[kMoments], int lanes, Shape2* out) {
     v4d M[kUnknowns][kUnknowns], z[kUnknowns];
     normal_equations(s, M, z);
     const v4d ridge = kRidge * (M[3][3] + M[4][4] + M[5][5] + M[6][6]) / double(kUnknowns - 3);
@@ -329,7 +324,6 @@ SPECBAKE_INLINE void solve_shapes(const v4d (&s)[kMoments], const bool (&any)[kL
 
     for (int l = 0; l < lanes; ++l) {
         out[l] = {};
-        if (!any[l]) continue;
         double S[3] = {z[0][l], z[1][l], z[2][l]};
         if (!ok[l]) {
             double sl[kMoments], Ml[kUnknowns][kUnknowns], zl[kUnknowns];
@@ -346,14 +340,13 @@ SPECBAKE_INLINE void solve_shapes(const v4d (&s)[kMoments], const bool (&any)[kL
 
 // The fit of groups [begin, end), four at a time, and their principal curvatures.
 SPECBAKE_AVX2_CLONES void fit_groups(const GatherInput& in, uint32_t begin, uint32_t end) {
-    SpokeBlock block;
+    CornerBlock block;
     for (uint32_t first = begin; first < end; first += kLanes) {
         const int lanes = int(std::min<uint32_t>(kLanes, end - first));
         v4d u[3], v[3], moments[kMoments];
-        bool any[kLanes];
-        group_moments(in, first, lanes, block, u, v, moments, any);
+        group_moments(in, first, lanes, block, u, v, moments);
         Shape2 shape[kLanes];
-        solve_shapes(moments, any, lanes, shape);
+        solve_shapes(moments, lanes, shape);
         for (int l = 0; l < lanes; ++l)
             in.principal[first + uint32_t(l)] = detail::principal_curvatures(
                 shape[l], detail::Vec3d(u[0][l], u[1][l], u[2][l]), detail::Vec3d(v[0][l], v[1][l], v[2][l]));
@@ -363,11 +356,8 @@ SPECBAKE_AVX2_CLONES void fit_groups(const GatherInput& in, uint32_t begin, uint
 }  // namespace
 
 VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopology& topology) {
-    const size_t tris = mesh.triangle_count(), verts = mesh.vertex_count();
-    detail::ScratchArray<float> weight(3 * tris), unit_normals(3 * verts);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, tris, 8192), [&](const auto& range) {
-        corner_weights(mesh, topology, range.begin(), range.end(), weight.data());
-    });
+    const size_t verts = mesh.vertex_count();
+    detail::ScratchArray<float> unit_normals(3 * verts);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, verts, 8192), [&](const auto& range) {
         for (size_t v = range.begin(); v != range.end(); ++v) {
             const float* n = &mesh.normals[3 * v];
@@ -380,9 +370,9 @@ VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopolo
     const uint32_t groups = topology.group_count;
     const detail::GroupCorners lists = detail::group_corners(mesh, topology);
     detail::ScratchArray<detail::GroupPrincipal> principal(groups);
-    const GatherInput input{mesh.indices.data(), mesh.positions.data(), unit_normals.data(), weight.data(),
-                            lists.start.data(), lists.order.data(), topology.group_vertex.data(),
-                            mesh.normals.data(), principal.data()};
+    const GatherInput input{mesh.indices.data(), mesh.positions.data(), unit_normals.data(), lists.start.data(),
+                            lists.order.data(), topology.group_vertex.data(), mesh.normals.data(),
+                            principal.data()};
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, groups, 2048),
                       [&](const auto& range) { fit_groups(input, range.begin(), range.end()); });
     return detail::vertex_curvature_from_principal(mesh, topology, principal.data());
