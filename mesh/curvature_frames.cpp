@@ -101,28 +101,38 @@ VertexCurvature vertex_curvature_from_principal(const TriMesh& mesh, const Welde
                                                 const GroupPrincipal* principal) {
     VertexCurvature out;
     out.values.resize(4 * mesh.vertex_count());
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.vertex_count(), 4096), [&](const auto& r) {
+    const float* normals = mesh.normals.data();
+    const float* tangents = mesh.tangents.data();
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.vertex_count(), 8192), [&](const auto& r) {
         for (size_t v = r.begin(); v != r.end(); ++v) {
             const GroupPrincipal& p = principal[topology.group_id[v]];
-            Vec3d nv = normal(mesh, uint32_t(v));
-            if (nv.norm() > 0.0) {
-                nv.normalize();
+            double n[3] = {normals[3 * v], normals[3 * v + 1], normals[3 * v + 2]};
+            const double n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+            if (n2 > 0.0) {
+                const double len = std::sqrt(n2);
+                for (double& x : n) x /= len;
             } else {
-                Vec3d u, w;
-                group_frame(&mesh.normals[3 * size_t(topology.group_vertex[topology.group_id[v]])], nv, u, w);
+                Vec3d gn, gu, gv;
+                group_frame(&normals[3 * size_t(topology.group_vertex[topology.group_id[v]])], gn, gu, gv);
+                for (int k = 0; k < 3; ++k) n[k] = gn[k];
             }
-            Vec3d t = tangent(mesh, uint32_t(v));
-            t -= nv.dot(t) * nv;
-            const double tl = t.norm();
-            Vec3d b;
+            // T orthogonalised against N (a fixed perpendicular when T is along N), B = cross(N, T) * w.
+            double t[3] = {tangents[4 * v], tangents[4 * v + 1], tangents[4 * v + 2]};
+            const double nt = n[0] * t[0] + n[1] * t[1] + n[2] * t[2];
+            for (int k = 0; k < 3; ++k) t[k] -= nt * n[k];
+            const double tl = std::sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
             if (tl > 1e-12) {
-                t /= tl;
+                for (double& x : t) x /= tl;
             } else {
-                orthonormal_basis(nv, t, b);
+                Vec3d bt, bb;
+                orthonormal_basis(Vec3d(n[0], n[1], n[2]), bt, bb);
+                for (int k = 0; k < 3; ++k) t[k] = bt[k];
             }
-            b = tangent_sign(mesh, uint32_t(v)) * nv.cross(t);
-            const Vec3d dir(p.dir[0], p.dir[1], p.dir[2]);
-            double dx = dir.dot(t), dy = dir.dot(b);
+            const double sign = tangents[4 * v + 3] < 0.0f ? -1.0 : 1.0;
+            const double b[3] = {sign * (n[1] * t[2] - n[2] * t[1]), sign * (n[2] * t[0] - n[0] * t[2]),
+                                 sign * (n[0] * t[1] - n[1] * t[0])};
+            double dx = p.dir[0] * t[0] + p.dir[1] * t[1] + p.dir[2] * t[2];
+            double dy = p.dir[0] * b[0] + p.dir[1] * b[1] + p.dir[2] * b[2];
             const double dl = std::sqrt(dx * dx + dy * dy);
             if (dl > 1e-12) {
                 dx /= dl;
