@@ -28,31 +28,43 @@ GroupFrames make_group_frames(const TriMesh& mesh, const WeldedTopology& topolog
 GroupCorners group_corners(const TriMesh& mesh, const WeldedTopology& topology) {
     // A stable counting sort in a fixed number of slices of the corner range: each slice counts its corners
     // per group, a group's corners are then placed slice by slice, so every group lists its corners in
-    // increasing order whatever the number of threads that ran the slices.
+    // increasing order whatever the number of threads that ran the slices. The offsets are a two-level scan
+    // over blocks of groups, so no step runs over all groups on one thread.
     const size_t corners = mesh.indices.size();
     const uint32_t groups = topology.group_count;
     const uint32_t* group_id = topology.group_id.data();
     const uint32_t* indices = mesh.indices.data();
     constexpr size_t kSlices = 4;
     const size_t slice = (corners + kSlices - 1) / kSlices;
-    std::vector<uint32_t> count(kSlices * size_t(groups), 0);
+    ScratchArray<uint32_t> count(kSlices * size_t(groups));  // slice s, group g at [s * groups + g]
     tbb::parallel_for(size_t(0), kSlices, [&](size_t s) {
         uint32_t* c = &count[s * groups];
+        std::fill(c, c + groups, 0u);
         for (size_t k = s * slice; k < std::min(corners, (s + 1) * slice); ++k) ++c[group_id[indices[k]]];
     });
-    GroupCorners out;
-    out.start.resize(groups + 1);
-    uint32_t total = 0;
-    for (uint32_t g = 0; g < groups; ++g) {
-        out.start[g] = total;
-        for (size_t s = 0; s < kSlices; ++s) {
-            const uint32_t n = count[s * groups + g];
-            count[s * groups + g] = total;  // now the slice's first slot in group g
-            total += n;
+    GroupCorners out{ScratchArray<uint32_t>(size_t(groups) + 1), ScratchArray<uint32_t>(corners)};
+    constexpr uint32_t kBlock = 16384;
+    const uint32_t blocks = (groups + kBlock - 1) / kBlock;
+    std::vector<uint32_t> block_total(blocks + 1, 0);
+    tbb::parallel_for(uint32_t(0), blocks, [&](uint32_t b) {
+        uint32_t total = 0;
+        for (uint32_t g = b * kBlock; g < std::min(groups, (b + 1) * kBlock); ++g)
+            for (size_t s = 0; s < kSlices; ++s) total += count[s * groups + g];
+        block_total[b + 1] = total;
+    });
+    for (uint32_t b = 0; b < blocks; ++b) block_total[b + 1] += block_total[b];
+    tbb::parallel_for(uint32_t(0), blocks, [&](uint32_t b) {
+        uint32_t total = block_total[b];
+        for (uint32_t g = b * kBlock; g < std::min(groups, (b + 1) * kBlock); ++g) {
+            out.start[g] = total;
+            for (size_t s = 0; s < kSlices; ++s) {
+                const uint32_t n = count[s * groups + g];
+                count[s * groups + g] = total;  // now the slice's first slot in group g
+                total += n;
+            }
         }
-    }
-    out.start[groups] = total;
-    out.order.resize(corners);
+    });
+    out.start[groups] = block_total[blocks];
     tbb::parallel_for(size_t(0), kSlices, [&](size_t s) {
         uint32_t* fill = &count[s * groups];
         for (size_t k = s * slice; k < std::min(corners, (s + 1) * slice); ++k)

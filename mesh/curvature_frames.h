@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "mesh/mesh_math.h"
+#include "mesh/scratch_array.h"
 #include "mesh/weld_by_position.h"
 
 namespace specbake::detail {
@@ -44,7 +45,7 @@ VertexCurvature vertex_curvature_from_groups(const TriMesh& mesh, const WeldedTo
 // Corners (3 * triangle + corner) of each curvature group, in increasing corner order (a counting sort), so
 // per-group sums are the same for any thread count: group g owns order[start[g] .. start[g + 1]).
 struct GroupCorners {
-    std::vector<uint32_t> start, order;
+    ScratchArray<uint32_t> start, order;
 };
 GroupCorners group_corners(const TriMesh& mesh, const WeldedTopology& topology);
 
