@@ -498,7 +498,7 @@ constexpr int kChunk = 64;
 
 // The fused pass over the largest levels (see bake_validated): width in base texels of its column tiles,
 // and how many levels above the base it covers at most.
-constexpr int kTileTexels = 256;
+constexpr int kTileTexels = 512;
 constexpr int kMaxFusedLevels = 4;
 struct Finalized {
     double r[kChunk], t[kChunk], sxx[kChunk], syy[kChunk], sxy[kChunk], nx[kChunk], ny[kChunk], nz[kChunk];
@@ -1058,39 +1058,44 @@ Result<TextureBakeResult> bake_validated(const Image& normal, const Image* rough
         for (int L = 1; L <= F; ++L) change[size_t(L)].assign(size_t(level_h(L)), 0.0);
 
         tbb::parallel_for(tbb::blocked_range<int>(0, hF), [&](const tbb::blocked_range<int>& rows) {
-            // Per level: the finer rows under one row of it, its means, and its output row.
-            std::vector<std::unique_ptr<double[]>> fine(size_t(F) + 1), means(size_t(F) + 1);
+            // Per level: the finer rows under one row of it; its output rows are held until the rows under
+            // one row of the next level are done, and go to the sink as one block.
+            std::vector<std::unique_ptr<double[]>> fine(size_t(F) + 1);
             std::vector<RowBlock> out;
             for (int L = 0; L <= F; ++L) {
                 if (L >= 1) fine[size_t(L)] = uninitialized<double>(size_t(C) * tile[size_t(L) - 1] * fy[size_t(L)]);
-                means[size_t(L)] = uninitialized<double>(size_t(C) * tile[size_t(L)]);
-                out.emplace_back(shape, tile[size_t(L)], 1);
+                out.emplace_back(shape, tile[size_t(L)], L < F ? fy[size_t(L) + 1] : 1);
             }
+            const auto top = uninitialized<double>(size_t(C) * tile[size_t(F)]);  // means of level F
             const auto r0 = uninitialized<float>(size_t(tile[0]));
             long long task_degenerate = 0;
-            // Means of texels [x, x + n) of row j of level L into m (C planes of n), after emitting the
-            // outputs of every level up to L under them.
-            std::function<void(int, int, int, int, double*)> block = [&](int L, int j, int x, int n, double* m) {
+            // Means of texels [x, x + n) of row j of level L into m (C planes of n) and its outputs into row k
+            // of out[L], after the outputs of every finer level under them went to the sink.
+            std::function<void(int, int, int, int, double*, int)> block = [&](int L, int j, int x, int n, double* m,
+                                                                              int k) {
                 RowBlock& o = out[size_t(L)];
-                o.width = n;
                 if (L == 0) {
                     task_degenerate += dec.decode_span(j, x, n, m, r0.get());
-                    base_into(o, 0, m, r0.get(), n);
-                } else {
-                    const int fxL = fx[size_t(L)], fyL = fy[size_t(L)], nf = n * fxL;
-                    double* f = fine[size_t(L)].get();
-                    for (int dy = 0; dy < fyL; ++dy) block(L - 1, j * fyL + dy, x * fxL, nf, f + size_t(dy) * C * nf);
-                    block_means(f, nf, fxL, fyL, C, n, m);
-                    double& c = change[size_t(L)][size_t(j)];
-                    c = std::max(c, finalize_into(o, 0, m, n));
+                    base_into(o, k, m, r0.get(), n);
+                    return;
                 }
-                o.emit(sink, L, x, j, 1);
+                const int fxL = fx[size_t(L)], fyL = fy[size_t(L)], nf = n * fxL;
+                double* f = fine[size_t(L)].get();
+                out[size_t(L) - 1].width = nf;
+                for (int dy = 0; dy < fyL; ++dy)
+                    block(L - 1, j * fyL + dy, x * fxL, nf, f + size_t(dy) * C * nf, dy);
+                out[size_t(L) - 1].emit(sink, L - 1, x * fxL, j * fyL, fyL);
+                block_means(f, nf, fxL, fyL, C, n, m);
+                double& c = change[size_t(L)][size_t(j)];
+                c = std::max(c, finalize_into(o, k, m, n));
             };
             for (int j = rows.begin(); j < rows.end(); ++j) {
                 for (int x = 0; x < wF; x += tile[size_t(F)]) {
                     const int n = std::min(tile[size_t(F)], wF - x);
-                    double* m = means[size_t(F)].get();
-                    block(F, j, x, n, m);
+                    double* m = top.get();
+                    out[size_t(F)].width = n;
+                    block(F, j, x, n, m, 0);
+                    out[size_t(F)].emit(sink, F, x, j, 1);
                     if (keep)
                         for (int c = 0; c < C; ++c)
                             std::copy_n(m + size_t(c) * n, n, current.begin() + ptrdiff_t((size_t(j) * C + c) * wF + x));
