@@ -32,25 +32,23 @@ inline double angle_between(const Vec3d& a, const Vec3d& b) { return std::atan2(
 // atan(t) = pi/4 + atan((t - 1) / (t + 1)), and atan(t) = t P(t^2) with P the degree-6 Chebyshev fit of
 // atan(t)/t on that range (fitted for this function; error below 3e-11 rad, see the Tangents tests). y = 0
 // gives 0 or pi by the sign of x (0 for x = 0, as atan2); NaN in gives NaN out.
+inline constexpr double kAtanFit[7] = {0.047073481419680201663,  -0.084561928869404960153, 0.11040489227218240327,
+                                       -0.14281588772654124125,  0.19999883856551302778,   -0.33333332097609385878,
+                                       0.99999999997839877638};  // highest power of t^2 first
+inline constexpr double kAtanPi = 3.14159265358979323846, kAtanTanPi8 = 0.41421356237309504880;
 inline double corner_angle(double y, double x) {
-    constexpr double kPi = 3.14159265358979323846, kTanPi8 = 0.41421356237309504880;
-    if (y == 0.0) return x < 0.0 ? kPi : 0.0;
+    if (y == 0.0) return x < 0.0 ? kAtanPi : 0.0;
     const double ax = std::abs(x);
     const bool steep = y > ax;  // beyond pi/4: pi/2 - atan(ax / y)
     double t = steep ? ax / y : y / ax;
-    const bool high = t > kTanPi8;
+    const bool high = t > kAtanTanPi8;
     if (high) t = (t - 1.0) / (t + 1.0);
     const double s = t * t;
-    double p = 0.047073481419680201663;
-    p = p * s - 0.084561928869404960153;
-    p = p * s + 0.11040489227218240327;
-    p = p * s - 0.14281588772654124125;
-    p = p * s + 0.19999883856551302778;
-    p = p * s - 0.33333332097609385878;
-    p = p * s + 0.99999999997839877638;
-    double a = t * p + (high ? 0.25 * kPi : 0.0);
-    if (steep) a = 0.5 * kPi - a;
-    return x < 0.0 ? kPi - a : a;
+    double p = kAtanFit[0];
+    for (int i = 1; i < 7; ++i) p = p * s + kAtanFit[i];
+    double a = t * p + (high ? 0.25 * kAtanPi : 0.0);
+    if (steep) a = 0.5 * kAtanPi - a;
+    return x < 0.0 ? kAtanPi - a : a;
 }
 
 // Orthonormal basis (t, b) with n = t x b for unit n (Duff et al., "Building an Orthonormal Basis,
