@@ -217,15 +217,16 @@ SPECBAKE_INLINE void group_moments(const GatherInput& in, uint32_t first, int la
                 const uint32_t corner = in.order[cursor[l]++];
                 const uint32_t t = corner / 3, i = corner - 3 * t;
                 const uint32_t* f = &in.indices[3 * size_t(t)];
-                const size_t a = f[i == 2 ? 0 : i + 1], bv = f[i == 0 ? 2 : i - 1], o = f[i];
+                const size_t a = 3 * size_t(f[i == 2 ? 0 : i + 1]), bv = 3 * size_t(f[i == 0 ? 2 : i - 1]),
+                             o = 3 * size_t(f[i]);
+                const float *pa = &in.positions[a], *pb = &in.positions[bv];
+                const float *na = &in.unit_normals[a], *nb = &in.unit_normals[bv], *n0 = &in.unit_normals[o];
                 const int at = s * kLanes + l;
-                for (int c = 0; c < 3; ++c) {
-                    b.pa[c][at] = in.positions[3 * a + c];
-                    b.pb[c][at] = in.positions[3 * bv + c];
-                    b.na[c][at] = in.unit_normals[3 * a + c];
-                    b.nb[c][at] = in.unit_normals[3 * bv + c];
-                    b.n0[c][at] = in.unit_normals[3 * o + c];
-                }
+                b.pa[0][at] = pa[0], b.pa[1][at] = pa[1], b.pa[2][at] = pa[2];
+                b.pb[0][at] = pb[0], b.pb[1][at] = pb[1], b.pb[2][at] = pb[2];
+                b.na[0][at] = na[0], b.na[1][at] = na[1], b.na[2][at] = na[2];
+                b.nb[0][at] = nb[0], b.nb[1][at] = nb[1], b.nb[2][at] = nb[2];
+                b.n0[0][at] = n0[0], b.n0[1][at] = n0[1], b.n0[2][at] = n0[2];
             }
             filled[l] = s;
             most = std::max(most, s);
@@ -286,29 +287,41 @@ SPECBAKE_INLINE void normal_equations(const T (&s)[kMoments], T (&M)[kUnknowns][
     r[6] = 0.5 * s[mv02];
 }
 
-// LDL^T solve of the first n unknowns of M z = r (lower triangle of M), lane-parallel; ok keeps the lanes
-// whose pivots all exceed 1e-12 of their diagonal entries (the others' results are meaningless).
-template <class T, class Mask>
-SPECBAKE_INLINE void ldlt_solve(const T (&M)[kUnknowns][kUnknowns], T (&z)[kUnknowns], int n, Mask& ok) {
+// LDL^T solve of the first n unknowns of M z = r (lower triangle of M; z holds r on entry), lane-parallel,
+// fully unrolled; ok keeps the lanes whose pivots all exceed 1e-12 of their diagonal entries (the others'
+// results are meaningless).
+template <int n, class T, class Mask>
+SPECBAKE_INLINE void ldlt_solve(const T (&M)[kUnknowns][kUnknowns], T (&z)[kUnknowns], Mask& ok) {
     T L[kUnknowns][kUnknowns], d[kUnknowns], inv_d[kUnknowns];
+#pragma GCC unroll 7
     for (int j = 0; j < n; ++j) {
         T dj = M[j][j];
+#pragma GCC unroll 7
         for (int k = 0; k < j; ++k) dj -= L[j][k] * L[j][k] * d[k];
         const auto pivot = dj > 1e-12 * M[j][j];
         ok = ok & pivot;
         d[j] = dj;
         inv_d[j] = pivot ? 1.0 / dj : dj * 0.0;
+#pragma GCC unroll 7
         for (int i = j + 1; i < n; ++i) {
             T x = M[i][j];
+#pragma GCC unroll 7
             for (int k = 0; k < j; ++k) x -= L[i][k] * L[j][k] * d[k];
             L[i][j] = x * inv_d[j];
         }
     }
-    for (int i = 0; i < n; ++i)
+#pragma GCC unroll 7
+    for (int i = 0; i < n; ++i) {
+#pragma GCC unroll 7
         for (int k = 0; k < i; ++k) z[i] -= L[i][k] * z[k];
+    }
+#pragma GCC unroll 7
     for (int i = 0; i < n; ++i) z[i] *= inv_d[i];
-    for (int i = n - 1; i >= 0; --i)
+#pragma GCC unroll 7
+    for (int i = n - 1; i >= 0; --i) {
+#pragma GCC unroll 7
         for (int k = i + 1; k < n; ++k) z[i] -= L[k][i] * z[k];
+    }
 }
 
 // S of `lanes` groups from their moments (lane l): the full model with the ridge on the C block;
@@ -320,7 +333,7 @@ SPECBAKE_INLINE void solve_shapes(const v4d (&s)[kMoments], int lanes, Shape2* o
     const v4d ridge = kRidge * (M[3][3] + M[4][4] + M[5][5] + M[6][6]) / double(kUnknowns - 3);
     for (int i = 3; i < kUnknowns; ++i) M[i][i] += ridge;
     v4l ok = {-1, -1, -1, -1};
-    ldlt_solve(M, z, kUnknowns, ok);
+    ldlt_solve<kUnknowns>(M, z, ok);
 
     for (int l = 0; l < lanes; ++l) {
         out[l] = {};
@@ -330,7 +343,7 @@ SPECBAKE_INLINE void solve_shapes(const v4d (&s)[kMoments], int lanes, Shape2* o
             for (int q = 0; q < kMoments; ++q) sl[q] = s[q][l];
             normal_equations(sl, Ml, zl);
             bool fine = true;
-            ldlt_solve(Ml, zl, 3, fine);
+            ldlt_solve<3>(Ml, zl, fine);
             if (!fine) continue;
             for (int i = 0; i < 3; ++i) S[i] = zl[i];
         }
