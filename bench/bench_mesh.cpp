@@ -1,7 +1,8 @@
 // Speed of the mesh stages on a generated 1M-triangle mesh (issue 4 item 7): Assimp import of a binary PLY
 // written to a temporary file, preparation (validation + tangent generation) and its OpenMesh half-edge
 // build (against building the same mesh face by face with OpenMesh's add_face), and curvature per estimator
-// on 1 and 2 threads, with the welding they start with on its own. Goal for the default estimator: >= 2M faces/s on 2 threads.
+// on 1 and 2 threads, with the welding they start with on its own. Goal for the default estimator: >= 2M
+// faces/s on 2 threads.
 // Usage: bench_mesh [--benchmark_filter=REGEX]  (see --help of Google Benchmark)
 #include <benchmark/benchmark.h>
 #include <tbb/task_arena.h>

@@ -167,7 +167,8 @@ VertexCurvature vertex_curvature_from_groups(const TriMesh& mesh, const WeldedTo
                                              const GroupFrames& frames, const std::vector<Shape2>& shape) {
     std::vector<GroupPrincipal> principal(topology.group_count);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, topology.group_count, 4096), [&](const auto& r) {
-        for (size_t g = r.begin(); g != r.end(); ++g) principal[g] = principal_curvatures(shape[g], frames.u[g], frames.v[g]);
+        for (size_t g = r.begin(); g != r.end(); ++g)
+            principal[g] = principal_curvatures(shape[g], frames.u[g], frames.v[g]);
     });
     return vertex_curvature_from_principal(mesh, topology, principal.data());
 }
