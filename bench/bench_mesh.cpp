@@ -1,9 +1,11 @@
 // Speed of the mesh stages on a generated 1M-triangle mesh (issue 4 item 7): Assimp import of a binary PLY
 // written to a temporary file, preparation (validation + tangent generation) and its OpenMesh half-edge
 // build (against building the same mesh face by face with OpenMesh's add_face), and curvature per estimator
-// on 1 and 2 threads. Goal for the default estimator: >= 2M faces/s on 2 threads.
+// on 1 and 2 threads, with the welding they start with on its own. Goal for the default estimator: >= 2M
+// faces/s on 2 threads.
 // Usage: bench_mesh [--benchmark_filter=REGEX]  (see --help of Google Benchmark)
 #include <benchmark/benchmark.h>
+#include <tbb/task_arena.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -145,6 +147,19 @@ void BM_CurvatureNormalCone1M(benchmark::State& state) { curvature(state, millio
 void BM_CurvatureJetFitting100k(benchmark::State& state) {
     curvature(state, hundred_thousand(), CurvatureEstimator::JetFitting);
 }
+// The welding every estimator starts with (estimate_curvature includes it), on its own.
+void BM_WeldForCurvature1M(benchmark::State& state) {
+    tbb::task_arena arena(int(state.range(0)));
+    for (auto _ : state) {
+        arena.execute([&] {
+            WeldedTopology w = weld_by_position(million());
+            benchmark::DoNotOptimize(w.group_count);
+        });
+    }
+    state.counters["faces/s"] =
+        benchmark::Counter(double(million().triangle_count()) * double(state.iterations()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_WeldForCurvature1M)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 BENCHMARK(BM_CurvatureShapeOperator1M)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 BENCHMARK(BM_CurvatureNormalCone1M)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 BENCHMARK(BM_CurvatureJetFitting100k)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);

@@ -1,9 +1,9 @@
 // End-to-end scene bake speed on a generated 1M-triangle mesh (a UV sphere, 500 x 1000 quads, as GLB):
 // the whole `bake` (read, plan, curvature, tangents, write, manifest) against the floor of what any
 // pipeline has to do with the same data, Assimp import plus tinygltf write, and the stages of the bake
-// (import, curvature, write, hashing), at 1 and 2 threads. Goal: whole bake within 2x of import + write.
+// (import, preparation, curvature, write, hashing), at 1 and 2 threads. Goal: whole bake within 2x of import + write.
 //
-//   cmake --build build --target bench_scene && build/bench/bench_scene --benchmark_min_time=1x
+//   cmake --build build --target bench_scene && build/bench/bench_scene --benchmark_min_time=0.01 --benchmark_repetitions=3
 #include "cli/job_scene.h"
 #include "io/gltf_scene.h"
 #include "io/sha256.h"
@@ -181,6 +181,27 @@ void BM_StageImport(benchmark::State& state) {
     }
 }
 BENCHMARK(BM_StageImport)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Validation with the topology report (weld + OpenMesh half-edge mesh) beside the tangent generation, as
+// the bake runs it before the curvature.
+void BM_StagePrepare(benchmark::State& state) {
+    auto scene = io::GltfScene::load(sphere_glb());
+    const TriMesh source = std::move(*scene->primitive_mesh({0, 0}));
+    tbb::global_control threads(tbb::global_control::max_allowed_parallelism, size_t(state.range(0)));
+    for (auto _ : state) {
+        state.PauseTiming();
+        TriMesh mesh = source;
+        state.ResumeTiming();
+        auto report = prepare_mesh_for_curvature(mesh);
+        if (!report) {
+            state.SkipWithError("prepare failed");
+            return;
+        }
+        benchmark::DoNotOptimize(mesh.tangents.data());
+    }
+    state.counters["faces/s"] = benchmark::Counter(double(source.triangle_count()), benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_StagePrepare)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_StageCurvature(benchmark::State& state) {
     auto scene = io::GltfScene::load(sphere_glb());

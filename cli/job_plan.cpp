@@ -293,11 +293,14 @@ Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& optio
             if (d.bake) plan.work[i] = plan.work.at(same->second);
         } else {
             measured_geometry[p.geometry_key] = i;
-            auto report = prepare_mesh_for_curvature(*mesh);
-            if (!report) return report.error();
+            // The curvature needs the normals and tangents, not the topology report: it runs beside it.
             CurvatureOptions copts;
             copts.max_threads = options.threads;
-            auto curvature = estimate_curvature(*mesh, options.estimator, copts);
+            Result<VertexCurvature> curvature = make_error(mesh->name + ": curvature not estimated");
+            PrepareOptions prepare;
+            prepare.with_frames = [&](const TriMesh& m) { curvature = estimate_curvature(m, options.estimator, copts); };
+            auto report = prepare_mesh_for_curvature(*mesh, prepare);
+            if (!report) return report.error();
             if (!curvature) return curvature.error();
             for (float v : curvature->values)
                 if (!std::isfinite(v)) return make_error(mesh->name + ": curvature estimate is not finite");

@@ -73,17 +73,6 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
     std::vector<fs::path> inputs{input};
     for (const fs::path& r : scene.resource_files()) inputs.push_back(r);
     if (auto r = io::check_output_not_input(out_dir, inputs); !r) return r.error();
-    // Hashes of the inputs: the ones the loader read come with the scene, the rest (images, files read
-    // through Assimp) are hashed together here.
-    std::vector<fs::path> unhashed;
-    for (const fs::path& in : inputs)
-        if (scene.content_hash(in).empty()) unhashed.push_back(in);
-    auto hashes = io::sha256_files(unhashed);
-    if (!hashes) return hashes.error();
-    for (size_t i = 0, next = 0; i < inputs.size(); ++i) {
-        std::string hash = scene.content_hash(inputs[i]);
-        result.inputs.push_back({inputs[i].string(), hash.empty() ? (*hashes)[next++] : std::move(hash)});
-    }
 
     // Material textures: the plan measures its statistic on the full bake and this writes each kept bake
     // right away. Layers with identical inputs share one set of files (the first one's, by its stem).
@@ -164,6 +153,19 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
     for (const auto& [material, ext] : extension_of_material) scene.set_material_extension(material, ext);
     const bool any_texture = !extension_of_material.empty();
     if (baked_primitives > 0 || any_texture) scene.set_root_extension(root_extension(job, any_texture));
+
+    // Hashes of the inputs, asked for only now: the scene file's is computed in the background since the
+    // load, the other files the loader read come hashed with the scene, the rest (images, files read
+    // through Assimp) are hashed together here.
+    std::vector<fs::path> unhashed;
+    for (const fs::path& in : inputs)
+        if (scene.content_hash(in).empty()) unhashed.push_back(in);
+    auto hashes = io::sha256_files(unhashed);
+    if (!hashes) return hashes.error();
+    for (size_t i = 0, next = 0; i < inputs.size(); ++i) {
+        std::string hash = scene.content_hash(inputs[i]);
+        result.inputs.push_back({inputs[i].string(), hash.empty() ? (*hashes)[next++] : std::move(hash)});
+    }
 
     std::string ext = loaded->is_gltf && scene.source_is_binary() ? ".glb" : ".gltf";
     if (job.format == SceneFormat::Gltf) ext = ".gltf";

@@ -453,6 +453,21 @@ struct GltfScene::Impl {
     fs::path source;
     bool binary = false;
     std::map<fs::path, std::string> content_hashes;  // of the files read at load
+    // The scene file's own hash is computed in the background from its bytes (kept until then) while the
+    // caller plans and bakes; content_hash() collects it.
+    std::vector<uint8_t> source_bytes;
+    std::unique_ptr<tbb::task_group> source_hashing;
+    std::string source_hash;
+    void finish_source_hash() {
+        if (!source_hashing) return;
+        source_hashing->wait();
+        source_hashing.reset();
+        content_hashes[source.lexically_normal()] = std::move(source_hash);
+        source_bytes = {};
+    }
+    ~Impl() {
+        if (source_hashing) source_hashing->wait();
+    }
     struct Added {
         PrimitiveRef ref;
         std::string attribute;
@@ -471,17 +486,18 @@ const fs::path& GltfScene::source() const { return impl_->source; }
 bool GltfScene::source_is_binary() const { return impl_->binary; }
 
 Result<GltfScene> GltfScene::load(const fs::path& path) {
-    auto bytes = read_file(path);
-    if (!bytes) return bytes.error();
+    auto read = read_file(path);
+    if (!read) return read.error();
     GltfScene scene;
     Impl& impl = *scene.impl_;
     impl.source = path;
+    impl.source_bytes = std::move(*read);
+    const std::vector<uint8_t>* bytes = &impl.source_bytes;
     impl.binary = bytes->size() >= 4 && std::memcmp(bytes->data(), "glTF", 4) == 0;
-    // The manifest records the hash of every input; it is computed here, beside the parse, from the bytes
-    // already in memory instead of reading the file again later.
-    tbb::task_group hashing;
-    std::string scene_hash;
-    hashing.run([&] { scene_hash = sha256_hex(*bytes); });
+    // The manifest records the hash of every input; it is computed from the bytes already in memory instead
+    // of reading the file again later, on another thread, beside the parse and whatever the caller does next.
+    impl.source_hashing = std::make_unique<tbb::task_group>();
+    impl.source_hashing->run([&impl] { impl.source_hash = sha256_hex(impl.source_bytes); });
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(&keep_image_encoded, nullptr);
     loader.SetImageWriter(&keep_image_uri, nullptr);
@@ -492,10 +508,8 @@ Result<GltfScene> GltfScene::load(const fs::path& path) {
     bool ok = false;
     try {
         if (impl.binary) {
-            if (bytes->size() > std::numeric_limits<unsigned int>::max()) {
-                hashing.wait();
+            if (bytes->size() > std::numeric_limits<unsigned int>::max())
                 return make_error(path.string() + ": GLB larger than 4 GiB");
-            }
             ok = loader.LoadBinaryFromMemory(&impl.model, &err, &warn, bytes->data(),
                                              static_cast<unsigned int>(bytes->size()), base_dir);
         } else {
@@ -503,21 +517,19 @@ Result<GltfScene> GltfScene::load(const fs::path& path) {
                                             static_cast<unsigned int>(bytes->size()), base_dir);
         }
     } catch (const std::exception& e) {
-        hashing.wait();
         return make_error(path.string() + ": not a valid glTF file: " + e.what());
     }
-    hashing.wait();
     if (!ok) {
         const std::string reason = first_line(err.empty() ? warn : err);
         return make_error(path.string() + ": not a valid glTF file: " + (reason.empty() ? "parse error" : reason));
     }
-    impl.content_hashes[path.lexically_normal()] = std::move(scene_hash);
     impl.buffers.resize(impl.model.buffers.size());
     for (size_t i = 0; i < impl.buffers.size(); ++i) impl.buffers[i].swap(impl.model.buffers[i].data);
     return scene;
 }
 
 std::string GltfScene::content_hash(const fs::path& file) const {
+    impl_->finish_source_hash();
     auto it = impl_->content_hashes.find(file.lexically_normal());
     return it == impl_->content_hashes.end() ? std::string() : it->second;
 }

@@ -101,8 +101,9 @@ public:
     bool source_is_binary() const;
     // The files the scene reads besides itself: external buffers and images that exist on disk.
     std::vector<std::filesystem::path> resource_files() const;
-    // SHA-256 of the scene file or of an external buffer, computed from the bytes read at load time;
-    // empty for any other file (images are not read at load) and for scenes built from an import.
+    // SHA-256 of the scene file or of an external buffer, computed from the bytes read at load time (the
+    // scene file's in the background after load() returns; the first call waits for it); empty for any
+    // other file (images are not read at load) and for scenes built from an import.
     std::string content_hash(const std::filesystem::path& file) const;
 
     std::vector<PrimitiveInfo> primitives() const;

@@ -118,42 +118,49 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
             }
         }
     };
-    // The same count for every halfedge at once, per position (its outgoing halfedges), from one sorted list
-    // of the position's halfedges keyed by their other end: local work instead of a scan per halfedge.
-    struct End {
-        uint32_t other, halfedge;
-        bool outgoing;
+    // The same count for every halfedge at once, per position (its outgoing halfedges): the position's
+    // corners with the positions after and before them are gathered once, and each outgoing halfedge a -> b
+    // is compared with all of them (a few dozen branch-free comparisons at a vertex of valence 6, no sort and
+    // no scan of other positions' corners). The lowest halfedge of an edge only matters when the edge has
+    // three or more halfedges (total 1: the halfedge itself; total 2: neither boundary nor non-manifold).
+    struct CornerEnds {
+        uint32_t next, prev;             // positions of the corner's next and previous corners
+        uint32_t corner, prev_halfedge;  // the corner (its halfedge runs a -> next) and prev_corner(corner)
     };
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, position_count, 2048), [&](const auto& r) {
-        std::vector<End> ends;
+        std::vector<CornerEnds> around;
         for (uint32_t a = r.begin(); a != r.end(); ++a) {
-            ends.clear();
-            for (uint32_t i = start[a]; i < start[a + 1]; ++i) {
-                const uint32_t j = by_position[i];
-                ends.push_back({pos[next_corner(j)], j, true});
-                ends.push_back({pos[prev_corner(j)], prev_corner(j), false});
+            const uint32_t count = start[a + 1] - start[a];
+            around.resize(count);
+            for (uint32_t i = 0; i < count; ++i) {
+                const uint32_t j = by_position[start[a] + i], p = prev_corner(j);
+                around[i] = {pos[next_corner(j)], pos[p], j, p};
             }
-            std::sort(ends.begin(), ends.end(), [](const End& x, const End& y) {
-                return x.other != y.other ? x.other < y.other : x.halfedge < y.halfedge;
-            });
-            for (size_t b = 0; b < ends.size();) {
-                size_t e = b;
-                uint32_t opposite = 0, partner = kNone;
-                for (; e < ends.size() && ends[e].other == ends[b].other; ++e) {
-                    if (ends[e].outgoing) continue;
-                    ++opposite;
-                    partner = ends[e].halfedge;
+            const CornerEnds* c = around.data();
+            for (uint32_t i = 0; i < count; ++i) {
+                const uint32_t k = c[i].corner, b = c[i].next;
+                // A corner runs a -> b when its next corner is at b; the halfedge of its previous corner runs
+                // b -> a when that corner is at b. The triangle's corners are distinct, so never both.
+                uint32_t total = 0, opposite = 0, partner = kNone;
+                for (uint32_t m = 0; m < count; ++m) {
+                    const uint32_t same = c[m].next == b, opp = c[m].prev == b;
+                    total += same + opp;
+                    opposite += opp;
+                    partner = opp ? c[m].prev_halfedge : partner;
                 }
-                const uint32_t total = uint32_t(e - b), lowest = ends[b].halfedge;
                 const bool paired = total == 2 && opposite == 1;
-                for (size_t i = b; i < e; ++i) {
-                    if (!ends[i].outgoing) continue;
-                    const uint32_t k = ends[i].halfedge;
-                    simple[k] = total == 1 || paired;
-                    mate[k] = paired ? partner : kNone;
-                    edge_kind[k] = lowest != k ? 0 : total == 1 ? 1 : total >= 3 ? 2 : 0;
+                simple[k] = total == 1 || paired;
+                mate[k] = paired ? partner : kNone;
+                uint8_t kind = total == 1 ? 1 : 0;
+                if (total >= 3) {
+                    uint32_t lowest = k;
+                    for (uint32_t m = 0; m < count; ++m) {
+                        if (c[m].next == b) lowest = std::min(lowest, c[m].corner);
+                        else if (c[m].prev == b) lowest = std::min(lowest, c[m].prev_halfedge);
+                    }
+                    kind = lowest == k ? 2 : 0;
                 }
-                b = e;
+                edge_kind[k] = kind;
             }
         }
     });
@@ -232,14 +239,24 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
                     continue;
                 }
                 if (fan[k] != kNone) continue;
-                uint32_t head = k;
-                for (uint32_t back = mate[prev_corner(head)]; back != kNone && back != k; back = mate[prev_corner(head)])
-                    head = back;
-                uint32_t x = head;
+                // Forward from k. A cycle comes back to k; its head is k's successor (where the walk back from
+                // k, which stops at the corner whose predecessor is k, ends). An open chain is also walked back
+                // from k to the corner without a predecessor, its head.
+                uint32_t x = k, last = k;
                 do {
                     fan[x] = fans;
+                    last = x;
                     x = mate[x] == kNone ? kNone : next_corner(mate[x]);
-                } while (x != kNone && x != head);
+                } while (x != kNone && x != k);
+                uint32_t head = k;
+                if (x == k) {
+                    head = last == k ? k : next_corner(mate[k]);
+                } else {
+                    for (uint32_t back = mate[prev_corner(head)]; back != kNone && back != k; back = mate[prev_corner(head)]) {
+                        head = back;
+                        fan[head] = fans;
+                    }
+                }
                 fan_head[head] = 1;
                 ++fans;
             }

@@ -1,5 +1,7 @@
 #include "mesh/curvature.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -11,10 +13,21 @@ namespace {
 
 std::string label(const TriMesh& mesh) { return mesh.name.empty() ? std::string("mesh") : mesh.name; }
 
+// Smallest i in [0, n) with bad(i), or n: in parallel, the same answer for any thread count.
+template <class Bad>
+size_t first_bad(size_t n, const Bad& bad) {
+    return tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, n, 1 << 16), n,
+        [&](const tbb::blocked_range<size_t>& r, size_t found) {
+            for (size_t i = r.begin(); i != r.end() && i < found; ++i)
+                if (bad(i)) return i;
+            return found;
+        },
+        [](size_t a, size_t b) { return std::min(a, b); });
+}
+
 bool all_finite(const std::vector<float>& values) {
-    for (float x : values)
-        if (!std::isfinite(x)) return false;
-    return true;
+    return first_bad(values.size(), [&](size_t i) { return !std::isfinite(values[i]); }) == values.size();
 }
 
 }  // namespace
@@ -44,16 +57,23 @@ Result<VertexCurvature> estimate_curvature(const TriMesh& mesh, CurvatureEstimat
         return make_error(name + ": no triangles (or malformed position/index arrays)");
     if (!mesh.has_normals()) return make_error(name + ": curvature needs vertex normals (see prepare_mesh.h)");
     if (!mesh.has_tangents()) return make_error(name + ": curvature needs vertex tangents (see prepare_mesh.h)");
-    for (uint32_t i : mesh.indices)
-        if (i >= n) return make_error(name + ": index " + std::to_string(i) + " out of range");
-    if (!all_finite(mesh.positions) || !all_finite(mesh.normals) || !all_finite(mesh.tangents))
-        return make_error(name + ": non-finite position, normal or tangent (run validate_mesh first)");
     if (options.jet_degree < 2 || options.jet_degree > 4)
         return make_error(name + ": jet fitting degree must be 2..4, got " + std::to_string(options.jet_degree));
 
     const int threads = options.max_threads > 0 ? options.max_threads : tbb::this_task_arena::max_concurrency();
     tbb::task_arena arena(threads);
+    size_t bad_index = 0;
+    bool finite = true;
+    arena.execute([&] {
+        bad_index = first_bad(mesh.indices.size(), [&](size_t k) { return mesh.indices[k] >= n; });
+        finite = all_finite(mesh.positions) && all_finite(mesh.normals) && all_finite(mesh.tangents);
+    });
+    if (bad_index < mesh.indices.size())
+        return make_error(name + ": index " + std::to_string(mesh.indices[bad_index]) + " out of range");
+    if (!finite) return make_error(name + ": non-finite position, normal or tangent (run validate_mesh first)");
+
     VertexCurvature out;
+    size_t bad_vertex = n;
     arena.execute([&] {
         const WeldedTopology topology = weld_by_position(mesh, options.weld);
         switch (estimator) {
@@ -63,13 +83,11 @@ Result<VertexCurvature> estimate_curvature(const TriMesh& mesh, CurvatureEstimat
                 break;
             case CurvatureEstimator::NormalCone: out = curvature_normal_cone(mesh, topology); break;
         }
+        bad_vertex = first_bad(4 * n, [&](size_t k) { return !std::isfinite(out.values[k]); }) / 4;
     });
-    for (size_t v = 0; v < n; ++v) {
-        const float* c = &out.values[4 * v];
-        if (!std::isfinite(c[0]) || !std::isfinite(c[1]) || !std::isfinite(c[2]) || !std::isfinite(c[3]))
-            return make_error(name + ": " + std::string(to_string(estimator)) +
-                              " produced a non-finite curvature at vertex " + std::to_string(v));
-    }
+    if (bad_vertex < n)
+        return make_error(name + ": " + std::string(to_string(estimator)) +
+                          " produced a non-finite curvature at vertex " + std::to_string(bad_vertex));
     return out;
 }
 

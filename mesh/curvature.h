@@ -14,7 +14,8 @@
 namespace specbake {
 
 enum class CurvatureEstimator {
-    ShapeOperator,  // default: per-face least-squares shape operator from normal differences (Rusinkiewicz 2004)
+    ShapeOperator,  // default: least-squares shape operator from the one-ring's normal differences, mixed-Voronoi
+                    // weights, with Rusinkiewicz 2004's curvature-derivative term: second order on any mesh
     JetFitting,     // CGAL Monge jet fitting of welded positions: geometric curvature, oriented by the normals
     NormalCone,     // one-ring bound: largest normal turn per edge length, cheapest
 };

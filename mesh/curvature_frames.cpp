@@ -2,7 +2,16 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+
 namespace specbake::detail {
+
+void group_frame(const float normal[3], Vec3d& n, Vec3d& u, Vec3d& v) {
+    const Vec3d nv(normal[0], normal[1], normal[2]);
+    const double len = nv.norm();
+    n = len > 0.0 ? Vec3d(nv / len) : Vec3d(0.0, 0.0, 1.0);
+    orthonormal_basis(n, u, v);
+}
 
 GroupFrames make_group_frames(const TriMesh& mesh, const WeldedTopology& topology) {
     GroupFrames frames;
@@ -10,24 +19,57 @@ GroupFrames make_group_frames(const TriMesh& mesh, const WeldedTopology& topolog
     frames.u.resize(topology.group_count);
     frames.v.resize(topology.group_count);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, topology.group_count, 4096), [&](const auto& r) {
-        for (size_t g = r.begin(); g != r.end(); ++g) {
-            const Vec3d nv = normal(mesh, topology.group_vertex[g]);
-            const double len = nv.norm();
-            frames.n[g] = len > 0.0 ? Vec3d(nv / len) : Vec3d(0.0, 0.0, 1.0);
-            orthonormal_basis(frames.n[g], frames.u[g], frames.v[g]);
-        }
+        for (size_t g = r.begin(); g != r.end(); ++g)
+            group_frame(&mesh.normals[3 * size_t(topology.group_vertex[g])], frames.n[g], frames.u[g], frames.v[g]);
     });
     return frames;
 }
 
 GroupCorners group_corners(const TriMesh& mesh, const WeldedTopology& topology) {
-    GroupCorners out;
-    out.start.assign(topology.group_count + 1, 0);
-    for (uint32_t v : mesh.indices) ++out.start[topology.group_id[v] + 1];
-    for (uint32_t g = 0; g < topology.group_count; ++g) out.start[g + 1] += out.start[g];
-    out.order.resize(mesh.indices.size());
-    std::vector<uint32_t> fill(out.start.begin(), out.start.end() - 1);
-    for (size_t k = 0; k < mesh.indices.size(); ++k) out.order[fill[topology.group_id[mesh.indices[k]]]++] = uint32_t(k);
+    // A stable counting sort in a fixed number of slices of the corner range: each slice counts its corners
+    // per group, a group's corners are then placed slice by slice, so every group lists its corners in
+    // increasing order whatever the number of threads that ran the slices. The offsets are a two-level scan
+    // over blocks of groups, so no step runs over all groups on one thread.
+    const size_t corners = mesh.indices.size();
+    const uint32_t groups = topology.group_count;
+    const uint32_t* group_id = topology.group_id.data();
+    const uint32_t* indices = mesh.indices.data();
+    constexpr size_t kSlices = 4;
+    const size_t slice = (corners + kSlices - 1) / kSlices;
+    ScratchArray<uint32_t> count(kSlices * size_t(groups));  // slice s, group g at [s * groups + g]
+    tbb::parallel_for(size_t(0), kSlices, [&](size_t s) {
+        uint32_t* c = &count[s * groups];
+        std::fill(c, c + groups, 0u);
+        for (size_t k = s * slice; k < std::min(corners, (s + 1) * slice); ++k) ++c[group_id[indices[k]]];
+    });
+    GroupCorners out{ScratchArray<uint32_t>(size_t(groups) + 1), ScratchArray<uint32_t>(corners)};
+    constexpr uint32_t kBlock = 16384;
+    const uint32_t blocks = (groups + kBlock - 1) / kBlock;
+    std::vector<uint32_t> block_total(blocks + 1, 0);
+    tbb::parallel_for(uint32_t(0), blocks, [&](uint32_t b) {
+        uint32_t total = 0;
+        for (uint32_t g = b * kBlock; g < std::min(groups, (b + 1) * kBlock); ++g)
+            for (size_t s = 0; s < kSlices; ++s) total += count[s * groups + g];
+        block_total[b + 1] = total;
+    });
+    for (uint32_t b = 0; b < blocks; ++b) block_total[b + 1] += block_total[b];
+    tbb::parallel_for(uint32_t(0), blocks, [&](uint32_t b) {
+        uint32_t total = block_total[b];
+        for (uint32_t g = b * kBlock; g < std::min(groups, (b + 1) * kBlock); ++g) {
+            out.start[g] = total;
+            for (size_t s = 0; s < kSlices; ++s) {
+                const uint32_t n = count[s * groups + g];
+                count[s * groups + g] = total;  // now the slice's first slot in group g
+                total += n;
+            }
+        }
+    });
+    out.start[groups] = block_total[blocks];
+    tbb::parallel_for(size_t(0), kSlices, [&](size_t s) {
+        uint32_t* fill = &count[s * groups];
+        for (size_t k = s * slice; k < std::min(corners, (s + 1) * slice); ++k)
+            out.order[fill[group_id[indices[k]]]++] = uint32_t(k);
+    });
     return out;
 }
 
@@ -38,59 +80,71 @@ bool skip_triangle(const TriMesh& mesh, const WeldedTopology& topology, size_t t
     return is_degenerate_triangle(position(mesh, f[0]), position(mesh, f[1]), position(mesh, f[2]));
 }
 
-VertexCurvature vertex_curvature_from_groups(const TriMesh& mesh, const WeldedTopology& topology,
-                                             const GroupFrames& frames, const std::vector<Shape2>& shape) {
-    const size_t groups = topology.group_count;
-    std::vector<double> k1(groups), k2(groups);
-    std::vector<Vec3d> dir(groups);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, groups, 4096), [&](const auto& r) {
-        for (size_t g = r.begin(); g != r.end(); ++g) {
-            const Shape2& s = shape[g];
-            const double mean = 0.5 * (s.a + s.c);
-            const double half_diff = 0.5 * (s.a - s.c);
-            const double radius = std::sqrt(half_diff * half_diff + s.b * s.b);
-            const double hi = mean + radius, lo = mean - radius;
-            const bool hi_first = std::abs(hi) >= std::abs(lo);
-            k1[g] = hi_first ? hi : lo;
-            k2[g] = hi_first ? lo : hi;
-            // Eigenvector of k1 from whichever row of (S - k1 I) is better conditioned.
-            const double x1 = s.b, y1 = k1[g] - s.a;  // from row 1: (a - k1) x + b y = 0
-            const double x2 = k1[g] - s.c, y2 = s.b;  // from row 2: b x + (c - k1) y = 0
-            double x = x1, y = y1;
-            if (x2 * x2 + y2 * y2 > x1 * x1 + y1 * y1) {
-                x = x2;
-                y = y2;
-            }
-            const double len = std::sqrt(x * x + y * y);
-            if (!(len > 1e-12 * std::max(std::abs(k1[g]), 1e-300))) {
-                x = 1.0;
-                y = 0.0;
-            } else {
-                x /= len;
-                y /= len;
-            }
-            dir[g] = x * frames.u[g] + y * frames.v[g];
-        }
-    });
+GroupPrincipal principal_curvatures(const Shape2& s, const Vec3d& u, const Vec3d& v) {
+    GroupPrincipal p{};
+    const double mean = 0.5 * (s.a + s.c);
+    const double half_diff = 0.5 * (s.a - s.c);
+    const double radius = std::sqrt(half_diff * half_diff + s.b * s.b);
+    const double hi = mean + radius, lo = mean - radius;
+    const bool hi_first = std::abs(hi) >= std::abs(lo);
+    p.k1 = hi_first ? hi : lo;
+    p.k2 = hi_first ? lo : hi;
+    // Eigenvector of k1 from whichever row of (S - k1 I) is better conditioned.
+    const double x1 = s.b, y1 = p.k1 - s.a;  // from row 1: (a - k1) x + b y = 0
+    const double x2 = p.k1 - s.c, y2 = s.b;  // from row 2: b x + (c - k1) y = 0
+    double x = x1, y = y1;
+    if (x2 * x2 + y2 * y2 > x1 * x1 + y1 * y1) {
+        x = x2;
+        y = y2;
+    }
+    const double len = std::sqrt(x * x + y * y);
+    if (!(len > 1e-12 * std::max(std::abs(p.k1), 1e-300))) {
+        x = 1.0;
+        y = 0.0;
+    } else {
+        x /= len;
+        y /= len;
+    }
+    for (int k = 0; k < 3; ++k) p.dir[k] = x * u[k] + y * v[k];
+    return p;
+}
 
+VertexCurvature vertex_curvature_from_principal(const TriMesh& mesh, const WeldedTopology& topology,
+                                                const GroupPrincipal* principal) {
     VertexCurvature out;
     out.values.resize(4 * mesh.vertex_count());
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.vertex_count(), 4096), [&](const auto& r) {
+    const float* normals = mesh.normals.data();
+    const float* tangents = mesh.tangents.data();
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.vertex_count(), 8192), [&](const auto& r) {
         for (size_t v = r.begin(); v != r.end(); ++v) {
-            const uint32_t g = topology.group_id[v];
-            Vec3d nv = normal(mesh, uint32_t(v));
-            nv = nv.norm() > 0.0 ? Vec3d(nv.normalized()) : frames.n[g];
-            Vec3d t = tangent(mesh, uint32_t(v));
-            t -= nv.dot(t) * nv;
-            const double tl = t.norm();
-            Vec3d b;
-            if (tl > 1e-12) {
-                t /= tl;
+            const GroupPrincipal& p = principal[topology.group_id[v]];
+            double n[3] = {normals[3 * v], normals[3 * v + 1], normals[3 * v + 2]};
+            const double n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+            if (n2 > 0.0) {
+                const double len = std::sqrt(n2);
+                for (double& x : n) x /= len;
             } else {
-                orthonormal_basis(nv, t, b);
+                Vec3d gn, gu, gv;
+                group_frame(&normals[3 * size_t(topology.group_vertex[topology.group_id[v]])], gn, gu, gv);
+                for (int k = 0; k < 3; ++k) n[k] = gn[k];
             }
-            b = tangent_sign(mesh, uint32_t(v)) * nv.cross(t);
-            double dx = dir[g].dot(t), dy = dir[g].dot(b);
+            // T orthogonalised against N (a fixed perpendicular when T is along N), B = cross(N, T) * w.
+            double t[3] = {tangents[4 * v], tangents[4 * v + 1], tangents[4 * v + 2]};
+            const double nt = n[0] * t[0] + n[1] * t[1] + n[2] * t[2];
+            for (int k = 0; k < 3; ++k) t[k] -= nt * n[k];
+            const double tl = std::sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+            if (tl > 1e-12) {
+                for (double& x : t) x /= tl;
+            } else {
+                Vec3d bt, bb;
+                orthonormal_basis(Vec3d(n[0], n[1], n[2]), bt, bb);
+                for (int k = 0; k < 3; ++k) t[k] = bt[k];
+            }
+            const double sign = tangents[4 * v + 3] < 0.0f ? -1.0 : 1.0;
+            const double b[3] = {sign * (n[1] * t[2] - n[2] * t[1]), sign * (n[2] * t[0] - n[0] * t[2]),
+                                 sign * (n[0] * t[1] - n[1] * t[0])};
+            double dx = p.dir[0] * t[0] + p.dir[1] * t[1] + p.dir[2] * t[2];
+            double dy = p.dir[0] * b[0] + p.dir[1] * b[1] + p.dir[2] * b[2];
             const double dl = std::sqrt(dx * dx + dy * dy);
             if (dl > 1e-12) {
                 dx /= dl;
@@ -100,13 +154,23 @@ VertexCurvature vertex_curvature_from_groups(const TriMesh& mesh, const WeldedTo
                 dy = 0.0;
             }
             float* o = &out.values[4 * v];
-            o[0] = float(k1[g]);
-            o[1] = float(k2[g]);
+            o[0] = float(p.k1);
+            o[1] = float(p.k2);
             o[2] = float(dx);
             o[3] = float(dy);
         }
     });
     return out;
+}
+
+VertexCurvature vertex_curvature_from_groups(const TriMesh& mesh, const WeldedTopology& topology,
+                                             const GroupFrames& frames, const std::vector<Shape2>& shape) {
+    std::vector<GroupPrincipal> principal(topology.group_count);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, topology.group_count, 4096), [&](const auto& r) {
+        for (size_t g = r.begin(); g != r.end(); ++g)
+            principal[g] = principal_curvatures(shape[g], frames.u[g], frames.v[g]);
+    });
+    return vertex_curvature_from_principal(mesh, topology, principal.data());
 }
 
 }  // namespace specbake::detail

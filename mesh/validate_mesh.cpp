@@ -1,7 +1,11 @@
 #include "mesh/validate_mesh.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <sstream>
 
 #include "mesh/halfedge_mesh.h"
@@ -33,9 +37,57 @@ std::vector<Vec3d> corner_normals(const TriMesh& mesh, const std::vector<char>& 
     return sum;
 }
 
+// The smallest i < n with bad(i), or n: the same element a sequential scan would report, found in parallel.
+template <class Bad>
+size_t first_bad(size_t n, const Bad& bad) {
+    return tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, n, 16384), n,
+        [&](const tbb::blocked_range<size_t>& r, size_t found) {
+            for (size_t i = r.begin(); i != r.end() && i < found; ++i)
+                if (bad(i)) return i;
+            return found;
+        },
+        [](size_t a, size_t b) { return std::min(a, b); });
+}
+
+// The sum of count(i) over i < n, in parallel (each i may repair its own element).
+template <class Count>
+size_t count_parallel(size_t n, const Count& count) {
+    return tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, n, 16384), size_t(0),
+        [&](const tbb::blocked_range<size_t>& r, size_t sum) {
+            for (size_t i = r.begin(); i != r.end(); ++i) sum += count(i);
+            return sum;
+        },
+        std::plus<size_t>());
+}
+
 }  // namespace
 
 Result<MeshReport> validate_mesh(TriMesh& mesh) {
+    Result<MeshReport> report = check_and_repair_mesh(mesh);
+    if (report) add_topology_report(mesh, *report);
+    return report;
+}
+
+void add_topology_report(const TriMesh& mesh, MeshReport& report) {
+    WeldOptions by_position;
+    by_position.split_by_normals = false;  // positions only: the normals may be written meanwhile
+    const WeldedTopology topo = weld_by_position(mesh, by_position);
+    report.duplicate_vertices = mesh.vertex_count() - topo.position_count;
+    std::vector<char> used(mesh.vertex_count(), 0);
+    for (uint32_t i : mesh.indices) used[i] = 1;
+    report.unreferenced_vertices = size_t(std::count(used.begin(), used.end(), 0));
+    const HalfEdgeTopology halfedge = build_halfedge_mesh(mesh, topo);
+    report.degenerate_triangles = halfedge.degenerate_triangles;
+    report.boundary_edges = halfedge.boundary_edges;
+    report.nonmanifold_edges = halfedge.nonmanifold_edges;
+    report.nonmanifold_vertices = halfedge.nonmanifold_vertices;
+    report.detached_faces = halfedge.detached_faces;
+    report.split_vertices = halfedge.split_vertices;
+}
+
+Result<MeshReport> check_and_repair_mesh(TriMesh& mesh) {
     const std::string name = label(mesh);
     if (mesh.positions.size() % 3 != 0)
         return make_error(name + ": position array length " + std::to_string(mesh.positions.size()) +
@@ -53,54 +105,33 @@ Result<MeshReport> validate_mesh(TriMesh& mesh) {
     if (!mesh.uv0.empty() && mesh.uv0.size() != 2 * n)
         return make_error(name + ": " + std::to_string(mesh.uv0.size() / 2) + " texture coordinates for " +
                           std::to_string(n) + " vertices");
-    for (size_t i = 0; i < mesh.indices.size(); ++i) {
-        if (mesh.indices[i] >= n)
-            return make_error(name + ": triangle " + std::to_string(i / 3) + " references vertex " +
-                              std::to_string(mesh.indices[i]) + " but there are only " + std::to_string(n) +
-                              " vertices");
-    }
-    for (size_t v = 0; v < n; ++v) {
-        if (!finite3(&mesh.positions[3 * v]))
-            return make_error(name + ": vertex " + std::to_string(v) + " has a non-finite position");
-    }
+    if (const size_t i = first_bad(mesh.indices.size(), [&](size_t i) { return mesh.indices[i] >= n; });
+        i < mesh.indices.size())
+        return make_error(name + ": triangle " + std::to_string(i / 3) + " references vertex " +
+                          std::to_string(mesh.indices[i]) + " but there are only " + std::to_string(n) + " vertices");
+    if (const size_t v = first_bad(n, [&](size_t v) { return !finite3(&mesh.positions[3 * v]); }); v < n)
+        return make_error(name + ": vertex " + std::to_string(v) + " has a non-finite position");
 
     MeshReport report;
     report.vertices = n;
     report.triangles = mesh.triangle_count();
 
-    WeldOptions by_position;
-    by_position.split_by_normals = false;
-    const WeldedTopology topo = weld_by_position(mesh, by_position);
-    report.duplicate_vertices = n - topo.position_count;
-
-    std::vector<char> used(n, 0);
-    for (uint32_t i : mesh.indices) used[i] = 1;
-    report.unreferenced_vertices = size_t(std::count(used.begin(), used.end(), 0));
-
-    const HalfEdgeTopology halfedge = build_halfedge_mesh(mesh, topo);
-    report.degenerate_triangles = halfedge.degenerate_triangles;
-    report.boundary_edges = halfedge.boundary_edges;
-    report.nonmanifold_edges = halfedge.nonmanifold_edges;
-    report.nonmanifold_vertices = halfedge.nonmanifold_vertices;
-    report.detached_faces = halfedge.detached_faces;
-    report.split_vertices = halfedge.split_vertices;
-
     if (mesh.has_normals()) {
         std::vector<char> broken(n, 0);
-        bool any_broken = false;
-        for (size_t v = 0; v < n; ++v) {
+        report.renormalized_normals = count_parallel(n, [&](size_t v) -> size_t {
             float* nv = &mesh.normals[3 * v];
             const double len = finite3(nv) ? std::sqrt(double(nv[0]) * nv[0] + double(nv[1]) * nv[1] +
                                                        double(nv[2]) * nv[2])
                                            : 0.0;
             if (!(len > 1e-12)) {
                 broken[v] = 1;
-                any_broken = true;
-            } else if (std::abs(len - 1.0) > 1e-3) {
-                for (int k = 0; k < 3; ++k) nv[k] = float(nv[k] / len);
-                ++report.renormalized_normals;
+                return 0;
             }
-        }
+            if (!(std::abs(len - 1.0) > 1e-3)) return 0;
+            for (int k = 0; k < 3; ++k) nv[k] = float(nv[k] / len);
+            return 1;
+        });
+        const bool any_broken = std::find(broken.begin(), broken.end(), 1) != broken.end();
         if (any_broken) {
             const std::vector<Vec3d> sum = corner_normals(mesh, broken);
             for (size_t v = 0; v < n; ++v) {
@@ -114,7 +145,7 @@ Result<MeshReport> validate_mesh(TriMesh& mesh) {
     }
 
     if (mesh.has_tangents()) {
-        for (size_t v = 0; v < n; ++v) {
+        report.repaired_tangents = count_parallel(n, [&](size_t v) -> size_t {
             float* tv = &mesh.tangents[4 * v];
             bool repaired = false;
             const Vec3d nv = mesh.has_normals() ? detail::normal(mesh, uint32_t(v)) : Vec3d(0.0, 0.0, 1.0);
@@ -130,17 +161,17 @@ Result<MeshReport> validate_mesh(TriMesh& mesh) {
                 tv[3] = tv[3] < 0.0f ? -1.0f : 1.0f;
                 repaired = true;
             }
-            report.repaired_tangents += repaired;
-        }
+            return size_t(repaired);
+        });
     }
 
     if (mesh.has_uv0()) {
-        for (size_t v = 0; v < n; ++v) {
+        report.repaired_uvs = count_parallel(n, [&](size_t v) -> size_t {
             float* uv = &mesh.uv0[2 * v];
-            if (std::isfinite(uv[0]) && std::isfinite(uv[1])) continue;
+            if (std::isfinite(uv[0]) && std::isfinite(uv[1])) return 0;
             uv[0] = uv[1] = 0.0f;
-            ++report.repaired_uvs;
-        }
+            return 1;
+        });
     }
     return report;
 }

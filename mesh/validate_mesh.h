@@ -43,4 +43,12 @@ struct MeshReport {
 // The topology counts come from the OpenMesh half-edge mesh of the welded positions (build_halfedge_mesh).
 Result<MeshReport> validate_mesh(TriMesh& mesh);
 
+// validate_mesh in its two steps, for callers that overlap the second with other work on the mesh:
+// check_and_repair_mesh rejects and repairs (everything that reads or changes attributes), and
+// add_topology_report fills the topology counts (duplicate and unreferenced vertices, degenerate triangles
+// to split vertices), reading only
+// positions and indices, so it may run while normals and tangents are generated.
+Result<MeshReport> check_and_repair_mesh(TriMesh& mesh);
+void add_topology_report(const TriMesh& mesh, MeshReport& report);
+
 }  // namespace specbake

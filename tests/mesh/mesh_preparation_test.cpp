@@ -2,9 +2,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "mesh/generate_normals.h"
 #include "mesh/generate_tangents.h"
+#include "mesh/mesh_math.h"
 #include "mesh/prepare_mesh.h"
 #include "mesh/procedural_shapes.h"
 #include "mesh/validate_mesh.h"
@@ -210,6 +212,84 @@ TEST(Tangents, FollowUAndTheGltfBitangentConvention) {
         EXPECT_NEAR(t[0] * t[0] + t[1] * t[1] + t[2] * t[2], 1.0, 1e-5);
         EXPECT_NEAR(t[0] * n[0] + t[1] * n[1] + t[2] * n[2], 0.0, 1e-5);
     }
+}
+
+TEST(Tangents, CornerAngleMatchesLibmAtan2) {
+    // The tangent corner weights: against libm's double atan2 over random magnitudes (1e-6 .. 1e6 each, so
+    // both reduction branches and the tan(pi/8) split are hit) and a dense sweep of the angle.
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    double worst = 0.0;
+    for (int i = 0; i < 200000; ++i) {
+        const double y = std::abs(unit(rng)) * std::pow(10.0, 6.0 * unit(rng));
+        const double x = unit(rng) * std::pow(10.0, 6.0 * unit(rng));
+        worst = std::max(worst, std::abs(detail::corner_angle(y, x) - std::atan2(y, x)));
+    }
+    for (int i = 0; i <= 100000; ++i) {
+        const double th = M_PI * i / 100000.0;
+        const double y = std::max(0.0, std::sin(th)), x = std::cos(th);
+        worst = std::max(worst, std::abs(detail::corner_angle(y, x) - std::atan2(y, x)));
+    }
+    EXPECT_LT(worst, 3e-11);
+    // Edges, as atan2: zero sine, zero cosine, NaN.
+    EXPECT_EQ(detail::corner_angle(0.0, 2.0), 0.0);
+    EXPECT_EQ(detail::corner_angle(0.0, 0.0), 0.0);
+    EXPECT_DOUBLE_EQ(detail::corner_angle(0.0, -2.0), M_PI);
+    EXPECT_DOUBLE_EQ(detail::corner_angle(3.0, 0.0), M_PI / 2.0);
+    EXPECT_DOUBLE_EQ(detail::corner_angle(1.0, 1.0), M_PI / 4.0);
+    EXPECT_TRUE(std::isnan(detail::corner_angle(std::nan(""), 1.0)));
+}
+
+TEST(Tangents, IrregularTorusMatchesABruteForceMikkTSpaceSum) {
+    // Irregular triangles make the corner-angle weights matter. Reference, per vertex: the corners' dP/du
+    // (solved per triangle from its UVs), projected into the vertex tangent plane and normalised, summed with
+    // the corner angle in that plane (libm atan2) as weight, then normalised.
+    TriMesh m = make_torus(3.0f, 1.0f, 24, 12, 0.4f, 5);
+    m.tangents.clear();
+    generate_tangents(m);
+    std::vector<double> sum(3 * m.vertex_count(), 0.0), unweighted(3 * m.vertex_count(), 0.0);
+    auto at = [&](uint32_t v, int k) { return double(m.positions[3 * v + k]); };
+    for (size_t t = 0; t < m.triangle_count(); ++t) {
+        const uint32_t* f = &m.indices[3 * t];
+        const double du1 = m.uv0[2 * f[1]] - double(m.uv0[2 * f[0]]), dv1 = m.uv0[2 * f[1] + 1] - double(m.uv0[2 * f[0] + 1]);
+        const double du2 = m.uv0[2 * f[2]] - double(m.uv0[2 * f[0]]), dv2 = m.uv0[2 * f[2] + 1] - double(m.uv0[2 * f[0] + 1]);
+        const double det = du1 * dv2 - du2 * dv1;
+        ASSERT_NE(det, 0.0);
+        double dpdu[3];
+        for (int k = 0; k < 3; ++k) dpdu[k] = ((at(f[1], k) - at(f[0], k)) * dv2 - (at(f[2], k) - at(f[0], k)) * dv1) / det;
+        for (int c = 0; c < 3; ++c) {
+            const uint32_t v = f[c];
+            const double n[3] = {m.normals[3 * v], m.normals[3 * v + 1], m.normals[3 * v + 2]};
+            auto project = [&](const double* a, double* out) {
+                const double d = a[0] * n[0] + a[1] * n[1] + a[2] * n[2];
+                for (int k = 0; k < 3; ++k) out[k] = a[k] - d * n[k];
+            };
+            double e1[3], e2[3], a1[3], a2[3], tp[3];
+            for (int k = 0; k < 3; ++k) {
+                a1[k] = at(f[(c + 1) % 3], k) - at(v, k);
+                a2[k] = at(f[(c + 2) % 3], k) - at(v, k);
+            }
+            project(a1, e1);
+            project(a2, e2);
+            project(dpdu, tp);
+            const double cross[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+            const double angle = std::atan2(std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]),
+                                            e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2]);
+            const double tl = std::sqrt(tp[0] * tp[0] + tp[1] * tp[1] + tp[2] * tp[2]);
+            for (int k = 0; k < 3; ++k) {
+                sum[3 * v + k] += angle * tp[k] / tl;
+                unweighted[3 * v + k] += tp[k] / tl;
+            }
+        }
+    }
+    auto unit = [](const double* x, int k) { return x[k] / std::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]); };
+    double weights_matter = 0.0;  // how far equal weights would be off: the test sees a wrong weighting
+    for (size_t v = 0; v < m.vertex_count(); ++v)
+        for (int k = 0; k < 3; ++k) {
+            EXPECT_NEAR(m.tangents[4 * v + k], unit(&sum[3 * v], k), 2e-7) << v;
+            weights_matter = std::max(weights_matter, std::abs(m.tangents[4 * v + k] - unit(&unweighted[3 * v], k)));
+        }
+    EXPECT_GT(weights_matter, 1e-3);
 }
 
 TEST(Tangents, UvSphereMatchesTheAnalyticDPdu) {
