@@ -6,10 +6,13 @@
 // face's S is rotated into the frame of each corner's curvature group and accumulated with the corner's
 // mixed-Voronoi area (Sec. 4-5), then normalised by the summed area.
 //
-// Layout for speed: one pass over the faces (parallel, no allocation) writes a weighted operator per corner
-// as four floats; a second pass sums each group's corners in corner order, so the result does not depend
-// on the thread count.
+// Layout for speed: the vertices' unit normals (double) and the groups' frames are computed once up front;
+// one pass over the faces (parallel, no allocation) writes a weighted operator per corner as four floats; a
+// second pass sums each group's corners in corner order, so the result does not depend on the thread count,
+// and eigen-decomposes the sum on the spot.
 #include <tbb/parallel_for.h>
+
+#include <cmath>
 
 #include "mesh/curvature.h"
 #include "mesh/curvature_frames.h"
@@ -20,6 +23,11 @@ namespace {
 
 using detail::Shape2;
 using detail::Vec3d;
+
+// A curvature group's frame (detail::group_frame), stored together because each corner reads all three.
+struct Frame {
+    double n[3], u[3], v[3];
+};
 
 // Weighted operator of one corner in its group's (u, v) frame, and the weight (mixed-Voronoi area).
 struct CornerShape {
@@ -39,8 +47,8 @@ inline void cross3(const double* a, const double* b, double* out) {
 }
 
 // The three weighted corner operators of triangle t; zero weights when it carries no information.
-void face_shape(const TriMesh& mesh, const WeldedTopology& topology, const detail::GroupFrames& frames, size_t t,
-                CornerShape out[3]) {
+void face_shape(const TriMesh& mesh, const WeldedTopology& topology, const double* unit_normals,
+                const Frame* frames, size_t t, CornerShape out[3]) {
     const uint32_t* f = &mesh.indices[3 * t];
     for (int i = 0; i < 3; ++i) out[i] = {0.0f, 0.0f, 0.0f, 0.0f};
     const uint32_t* pid = topology.position_id.data();
@@ -65,12 +73,8 @@ void face_shape(const TriMesh& mesh, const WeldedTopology& topology, const detai
     double w[3];
     detail::mixed_voronoi_areas(l[0], l[1], l[2], 0.5 * twice_area, w);
 
-    double n[3][3];
-    for (int i = 0; i < 3; ++i) {
-        load3(&mesh.normals[3 * size_t(f[i])], n[i]);
-        const double inv = 1.0 / std::sqrt(dot3(n[i], n[i]));
-        for (double& x : n[i]) x *= inv;
-    }
+    const double* n[3];
+    for (int i = 0; i < 3; ++i) n[i] = &unit_normals[3 * size_t(f[i])];
 
     // Face frame: u along e_0, normal from the winding, v = n x u.
     double fn[3], fu[3], fv[3];
@@ -108,7 +112,8 @@ void face_shape(const TriMesh& mesh, const WeldedTopology& topology, const detai
 
     for (int i = 0; i < 3; ++i) {
         const uint32_t g = topology.group_id[f[i]];
-        const double* ng = frames.n[g].data();
+        const Frame& frame = frames[g];
+        const double* ng = frame.n;
         // Rotate the face frame about fn x ng into the group's tangent plane (Rusinkiewicz 2004 Sec. 4).
         double ru[3] = {fu[0], fu[1], fu[2]}, rv[3] = {fv[0], fv[1], fv[2]};
         const double ndot = dot3(fn, ng);
@@ -131,8 +136,8 @@ void face_shape(const TriMesh& mesh, const WeldedTopology& topology, const detai
             }
         }
         // Coordinates of the group basis vectors in the rotated face frame: S_group = P^T S_face P.
-        const double* ug = frames.u[g].data();
-        const double* vg = frames.v[g].data();
+        const double* ug = frame.u;
+        const double* vg = frame.v;
         const double p00 = dot3(ug, ru), p10 = dot3(ug, rv), p01 = dot3(vg, ru), p11 = dot3(vg, rv);
         const double s0 = sa * p00 + sb * p10, s1 = sb * p00 + sc * p10;  // S (p00, p10)
         const double t0 = sa * p01 + sb * p11, t1 = sb * p01 + sc * p11;  // S (p01, p11)
@@ -144,18 +149,41 @@ void face_shape(const TriMesh& mesh, const WeldedTopology& topology, const detai
 }  // namespace
 
 VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopology& topology) {
-    const detail::GroupFrames frames = detail::make_group_frames(mesh, topology);
-    const size_t tris = mesh.triangle_count();
-    detail::ScratchArray<CornerShape> corner(3 * tris);
+    const size_t verts = mesh.vertex_count(), tris = mesh.triangle_count();
+    const uint32_t groups = topology.group_count;
+    // Unit normals in double, each normalised once rather than once per triangle (same values); a zero normal
+    // gives non-finite components, and its triangles are then skipped by the finiteness check of the fit.
+    detail::ScratchArray<double> unit_normals(3 * verts);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, verts, 8192), [&](const auto& range) {
+        for (size_t v = range.begin(); v != range.end(); ++v) {
+            double* n = &unit_normals[3 * v];
+            load3(&mesh.normals[3 * v], n);
+            const double inv = 1.0 / std::sqrt(dot3(n, n));
+            for (int k = 0; k < 3; ++k) n[k] *= inv;
+        }
+    });
+    detail::ScratchArray<Frame> frames(groups);
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, groups, 4096), [&](const auto& range) {
+        for (uint32_t g = range.begin(); g != range.end(); ++g) {
+            Vec3d n, u, v;
+            detail::group_frame(&mesh.normals[3 * size_t(topology.group_vertex[g])], n, u, v);
+            for (int k = 0; k < 3; ++k) {
+                frames[g].n[k] = n[k];
+                frames[g].u[k] = u[k];
+                frames[g].v[k] = v[k];
+            }
+        }
+    });
 
+    detail::ScratchArray<CornerShape> corner(3 * tris);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, tris, 4096), [&](const auto& range) {
-        for (size_t t = range.begin(); t != range.end(); ++t) face_shape(mesh, topology, frames, t, &corner[3 * t]);
+        for (size_t t = range.begin(); t != range.end(); ++t)
+            face_shape(mesh, topology, unit_normals.data(), frames.data(), t, &corner[3 * t]);
     });
 
     // Gather corners per group in corner order, so sums do not depend on scheduling.
-    const uint32_t groups = topology.group_count;
     const detail::GroupCorners lists = detail::group_corners(mesh, topology);
-    std::vector<Shape2> shape(groups);
+    detail::ScratchArray<detail::GroupPrincipal> principal(groups);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, groups, 4096), [&](const auto& range) {
         for (uint32_t g = range.begin(); g != range.end(); ++g) {
             double a = 0.0, b = 0.0, c = 0.0, w = 0.0;
@@ -166,10 +194,14 @@ VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopolo
                 c += s.c;
                 w += s.weight;
             }
-            if (w > 0.0) shape[g] = {a / w, b / w, c / w};
+            Shape2 shape;
+            if (w > 0.0) shape = {a / w, b / w, c / w};
+            const Frame& f = frames[g];
+            principal[g] = detail::principal_curvatures(shape, Vec3d(f.u[0], f.u[1], f.u[2]),
+                                                        Vec3d(f.v[0], f.v[1], f.v[2]));
         }
     });
-    return detail::vertex_curvature_from_groups(mesh, topology, frames, shape);
+    return detail::vertex_curvature_from_principal(mesh, topology, principal.data());
 }
 
 }  // namespace specbake
