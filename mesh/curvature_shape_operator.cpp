@@ -1,10 +1,13 @@
-// Default estimator: Rusinkiewicz, "Estimating Curvatures and Their Derivatives on Triangle Meshes",
-// 3DPVT 2004. Per face, the 2x2 shape operator S (second fundamental form) is the least-squares solution of
-// S * e_i = dn_i for the three edges e_i and the differences dn_i of the vertex normals along them, both in
-// the face's (u, v) frame (Sec. 3, Eq. 2-3). S is symmetric, so the unknowns are (a, b, c) of [[a, b], [b, c]]
-// and the normal equations form a full 3x3 system that is solved as such (in closed form, below). Each
-// face's S is rotated into the frame of each corner's curvature group and accumulated with the corner's
-// mixed-Voronoi area (Sec. 4-5), then normalised by the summed area.
+// Default estimator (CurvatureEstimator::ShapeOperator), the method SPEC Sec. 4 names: Rusinkiewicz,
+// "Estimating Curvatures and Their Derivatives on Triangle Meshes", 3DPVT 2004. Per face, the 2x2 shape
+// operator S (second fundamental form) is the least-squares solution of S * e_i = dn_i for the three edges
+// e_i and the differences dn_i of the vertex normals along them, both in the face's (u, v) frame (Sec. 3,
+// Eq. 2-3). S is symmetric, so the unknowns are (a, b, c) of [[a, b], [b, c]] and the normal equations form
+// a full 3x3 system that is solved as such (in closed form, below). Each face's S is rotated into the frame
+// of each corner's curvature group and accumulated with the corner's mixed-Voronoi area (Sec. 4-5), then
+// normalised by the summed area. Exact for spherical and cylindrical normals; on irregular triangulations
+// its error is first order in the edge length (curvature_second_order.cpp explains why and offers a
+// second-order fit).
 //
 // Layout for speed: the vertices' unit normals (double) and the groups' frames are computed once up front;
 // one pass over the faces (parallel, no allocation) writes a weighted operator per corner as four floats; a
