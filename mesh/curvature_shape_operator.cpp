@@ -50,8 +50,9 @@ inline void cross3(const double* a, const double* b, double* out) {
 }
 
 // The three weighted corner operators of triangle t; zero weights when it carries no information.
-void face_shape(const TriMesh& mesh, const WeldedTopology& topology, const double* unit_normals,
-                const Frame* frames, size_t t, CornerShape out[3]) {
+__attribute__((always_inline)) inline void face_shape(const TriMesh& mesh, const WeldedTopology& topology,
+                                                     const double* unit_normals, const Frame* frames, size_t t,
+                                                     CornerShape out[3]) {
     const uint32_t* f = &mesh.indices[3 * t];
     for (int i = 0; i < 3; ++i) out[i] = {0.0f, 0.0f, 0.0f, 0.0f};
     const uint32_t* pid = topology.position_id.data();
@@ -149,6 +150,17 @@ void face_shape(const TriMesh& mesh, const WeldedTopology& topology, const doubl
     }
 }
 
+// The face pass over triangles [begin, end), compiled for AVX2 and for the baseline instruction set and chosen
+// at load time (GCC/Clang function multiversioning). Floating-point contraction is off (ISO C++ mode), so
+// both versions compute the same bits.
+#if defined(__x86_64__) && defined(__linux__)
+__attribute__((target_clones("arch=x86-64-v3", "default")))
+#endif
+void shape_faces(const TriMesh& mesh, const WeldedTopology& topology, const double* unit_normals,
+                 const Frame* frames, size_t begin, size_t end, CornerShape* out) {
+    for (size_t t = begin; t != end; ++t) face_shape(mesh, topology, unit_normals, frames, t, &out[3 * t]);
+}
+
 }  // namespace
 
 VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopology& topology) {
@@ -180,8 +192,7 @@ VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopolo
 
     detail::ScratchArray<CornerShape> corner(3 * tris);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, tris, 4096), [&](const auto& range) {
-        for (size_t t = range.begin(); t != range.end(); ++t)
-            face_shape(mesh, topology, unit_normals.data(), frames.data(), t, &corner[3 * t]);
+        shape_faces(mesh, topology, unit_normals.data(), frames.data(), range.begin(), range.end(), corner.data());
     });
 
     // Gather corners per group in corner order, so sums do not depend on scheduling.
