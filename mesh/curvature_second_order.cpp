@@ -9,11 +9,11 @@
 // Second order on irregular meshes. Rusinkiewicz (and the default estimator) fits S per face and averages
 // the face operators at the vertices. A face's fit is the gradient of the linear interpolant of the
 // normals: it is exact at the face's centroid only up to O(h) terms in the normals' second derivatives, and
-// the averaged centroids sit O(h) away from the vertex on an irregular mesh. On regular grids both cancel between mirrored triangles;
-// on a jittered torus or ellipsoid they leave a first-order error (3% at 32 segments, 0.7% at 128). Here the
-// fit is made per vertex over its triangles' edges from the vertex (the one-ring spokes), with the normal
-// field modelled to second order: in the vertex's tangent frame, with x the projected offset of a
-// neighbour, the tangential part of its unit normal is
+// the averaged centroids sit O(h) away from the vertex on an irregular mesh. On regular grids both cancel
+// between mirrored triangles; on a jittered torus or ellipsoid they leave a first-order error (3% at 32
+// segments, 0.7% at 128). Here the fit is made per vertex over its triangles' edges from the vertex (the
+// one-ring spokes), with the normal field modelled to second order: in the vertex's tangent frame, with x
+// the projected offset of a neighbour, the tangential part of its unit normal is
 //     n_t(x) = S x + 1/2 C(x, x) + O(|x|^3)
 // (Monge patch z = -1/2 x^T S x - 1/6 C(x, x, x): n_t = -grad z to third order), where C is the fully
 // symmetric curvature-derivative tensor of Sec. 6, [[[alpha, beta], [beta, gamma]], [[beta, gamma],
