@@ -4,6 +4,7 @@
 // including welding; small meshes are dominated by fixed costs). Radii are not powers of two, so float
 // rounding of positions against normals shows.
 // Usage: mesh_accuracy [--threads N] [--estimator NAME] [--jet-degree D] [--jet-points N]
+//   NAME: shape-operator (the default), second-order, jet-fitting or normal-cone
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -110,11 +111,15 @@ int main(int argc, char** argv) {
         }
     }
 
+    if (!only.empty() && !parse_curvature_estimator(only)) {
+        std::fprintf(stderr, "mesh_accuracy: unknown estimator %s\n", only.c_str());
+        return 2;
+    }
     std::printf("| estimator | shape | faces | RMS k1 | RMS k2 | max k1 | RMS angle d (deg) | s / Mfaces |\n");
     std::printf("|---|---|---:|---:|---:|---:|---:|---:|\n");
     const std::vector<Shape> all = shapes();
-    for (CurvatureEstimator e :
-         {CurvatureEstimator::ShapeOperator, CurvatureEstimator::JetFitting, CurvatureEstimator::NormalCone}) {
+    for (CurvatureEstimator e : {CurvatureEstimator::ShapeOperator, CurvatureEstimator::SecondOrder,
+                                 CurvatureEstimator::JetFitting, CurvatureEstimator::NormalCone}) {
         if (!only.empty() && only != to_string(e)) continue;
         for (const Shape& s : all) {
             const auto t0 = std::chrono::steady_clock::now();

@@ -41,8 +41,11 @@ struct SceneCliOptions {
 
 // Curvature options (all scene subcommands).
 inline void add_curvature_options(CLI::App* sub, SceneCliOptions& o) {
-    sub->add_option("--estimator", o.estimator, "Curvature estimator")
-        ->check(CLI::IsMember({"shape-operator", "jet-fitting", "normal-cone"}))
+    sub->add_option("--estimator", o.estimator,
+                    "Curvature estimator: shape-operator (SPEC Sec. 4 per-face fit), second-order (per-vertex fit "
+                    "with the curvature derivative, more accurate on irregular meshes), jet-fitting (geometric, "
+                    "CGAL), normal-cone (cheap bound)")
+        ->check(CLI::IsMember({"shape-operator", "second-order", "jet-fitting", "normal-cone"}))
         ->capture_default_str();
     sub->add_option("--min-curvature", o.min_relative_curvature,
                     "Bake curvature only where p95(|k1|) x bounding-box diagonal reaches this (radians of normal turn)")

@@ -118,7 +118,7 @@ void add_variants(std::vector<SimCandidate>& c, bool normal_mapped) {
                       kIsotropicDefault, "exact", "mean-projected"},
                      "mean-projected", ""});
     }
-    for (const char* estimator : {"shape-operator", "jet-fitting", "normal-cone"}) {
+    for (const char* estimator : {"shape-operator", "second-order", "jet-fitting", "normal-cone"}) {
         c.push_back({std::string("baked-curvature/") + estimator, "variant", "SPEC Sec. 4 estimator",
                      {"#define SPECAA_USE_CURVATURE\n", kIsotropicDefault, estimator, ""}, "", estimator});
     }

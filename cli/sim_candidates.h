@@ -23,7 +23,7 @@ struct SimTextureBake {
 
 // A curvature estimate a candidate depends on ("exact" is the analytic curvature: no bake).
 struct SimCurvatureBake {
-    std::string key;  // "exact", "shape-operator", "jet-fitting", "normal-cone"
+    std::string key;  // "exact", "shape-operator", "second-order", "jet-fitting", "normal-cone"
     std::optional<CurvatureEstimator> estimator;
 };
 

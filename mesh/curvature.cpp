@@ -37,13 +37,14 @@ std::string_view to_string(CurvatureEstimator estimator) {
         case CurvatureEstimator::ShapeOperator: return "shape-operator";
         case CurvatureEstimator::JetFitting: return "jet-fitting";
         case CurvatureEstimator::NormalCone: return "normal-cone";
+        case CurvatureEstimator::SecondOrder: return "second-order";
     }
     return "unknown";
 }
 
 std::optional<CurvatureEstimator> parse_curvature_estimator(std::string_view name) {
-    for (CurvatureEstimator e :
-         {CurvatureEstimator::ShapeOperator, CurvatureEstimator::JetFitting, CurvatureEstimator::NormalCone}) {
+    for (CurvatureEstimator e : {CurvatureEstimator::ShapeOperator, CurvatureEstimator::JetFitting,
+                                 CurvatureEstimator::NormalCone, CurvatureEstimator::SecondOrder}) {
         if (name == to_string(e)) return e;
     }
     return std::nullopt;
@@ -82,6 +83,7 @@ Result<VertexCurvature> estimate_curvature(const TriMesh& mesh, CurvatureEstimat
                 out = curvature_jet_fitting(mesh, topology, options.jet_degree, std::max(options.jet_min_points, 6));
                 break;
             case CurvatureEstimator::NormalCone: out = curvature_normal_cone(mesh, topology); break;
+            case CurvatureEstimator::SecondOrder: out = curvature_second_order(mesh, topology); break;
         }
         bad_vertex = first_bad(4 * n, [&](size_t k) { return !std::isfinite(out.values[k]); }) / 4;
     });

@@ -14,10 +14,12 @@
 namespace specbake {
 
 enum class CurvatureEstimator {
-    ShapeOperator,  // default: least-squares shape operator from the one-ring's normal differences, mixed-Voronoi
-                    // weights, with Rusinkiewicz 2004's curvature-derivative term: second order on any mesh
+    ShapeOperator,  // default (SPEC Sec. 4): per-face least-squares shape operator from the normal differences
+                    // along the face's edges, mixed-Voronoi weighted at the vertices (Rusinkiewicz 2004)
     JetFitting,     // CGAL Monge jet fitting of welded positions: geometric curvature, oriented by the normals
     NormalCone,     // one-ring bound: largest normal turn per edge length, cheapest
+    SecondOrder,    // one least-squares fit per vertex over its one-ring with Rusinkiewicz 2004's
+                    // curvature-derivative term: second order on irregular meshes
 };
 
 struct CurvatureOptions {
@@ -33,14 +35,15 @@ struct CurvatureOptions {
 Result<VertexCurvature> estimate_curvature(const TriMesh& mesh, CurvatureEstimator estimator,
                                            const CurvatureOptions& options = {});
 
-// "shape-operator", "jet-fitting", "normal-cone" (the CLI spellings).
+// "shape-operator", "jet-fitting", "normal-cone", "second-order" (the CLI spellings).
 std::string_view to_string(CurvatureEstimator estimator);
 std::optional<CurvatureEstimator> parse_curvature_estimator(std::string_view name);
 
-// The three estimators behind estimate_curvature, one file each; inputs already checked and welded.
+// The four estimators behind estimate_curvature, one file each; inputs already checked and welded.
 VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopology& topology);
 VertexCurvature curvature_jet_fitting(const TriMesh& mesh, const WeldedTopology& topology, int degree,
                                       int min_points);
 VertexCurvature curvature_normal_cone(const TriMesh& mesh, const WeldedTopology& topology);
+VertexCurvature curvature_second_order(const TriMesh& mesh, const WeldedTopology& topology);
 
 }  // namespace specbake

@@ -26,31 +26,42 @@ VertexCurvature estimate(const TriMesh& m, CurvatureEstimator e = CurvatureEstim
     return r.ok() ? r.value() : VertexCurvature{std::vector<float>(4 * m.vertex_count(), 0.0f)};
 }
 
+// The shape-operator fits: the default (per face, SPEC Sec. 4) and the second-order fit per vertex. Both must
+// meet the closed-form bounds below.
+constexpr CurvatureEstimator kFits[] = {CurvatureEstimator::ShapeOperator, CurvatureEstimator::SecondOrder};
+constexpr CurvatureEstimator kAll[] = {CurvatureEstimator::ShapeOperator, CurvatureEstimator::SecondOrder,
+                                       CurvatureEstimator::JetFitting, CurvatureEstimator::NormalCone};
+
 TEST(Curvature, SphereIsOneOverRadius) {
-    for (float radius : {0.01f, 1.0f, 250.0f}) {
-        const TriMesh m = make_uv_sphere(radius, 64, 32);
-        const CurvatureErrors e = testing::compare(m, estimate(m), [&](const float* x) {
-            return testing::sphere_curvature(radius, x);
+    for (CurvatureEstimator f : kFits) {
+        SCOPED_TRACE(std::string(to_string(f)));
+        for (float radius : {0.01f, 1.0f, 250.0f}) {
+            const TriMesh m = make_uv_sphere(radius, 64, 32);
+            const CurvatureErrors e = testing::compare(m, estimate(m, f), [&](const float* x) {
+                return testing::sphere_curvature(radius, x);
+            });
+            EXPECT_LT(e.max_k1, 1e-3) << to_string(f) << " R = " << radius;
+            EXPECT_LT(e.max_k2, 1e-3) << to_string(f) << " R = " << radius;
+            EXPECT_EQ(e.scored, m.vertex_count()) << to_string(f);
+        }
+        const TriMesh ico = make_icosphere(2.0f, 4);
+        const CurvatureErrors e = testing::compare(ico, estimate(ico, f), [](const float* x) {
+            return testing::sphere_curvature(2.0, x);
         });
-        EXPECT_LT(e.max_k1, 1e-3) << "R = " << radius;
-        EXPECT_LT(e.max_k2, 1e-3) << "R = " << radius;
-        EXPECT_EQ(e.scored, m.vertex_count());
+        EXPECT_LT(e.max_k1, 1e-3) << to_string(f);
     }
-    // Irregular UV sphere: poles with one vertex per segment, jittered interior.
+    // Irregular UV sphere (poles with one vertex per segment, jittered interior): the second-order fit
+    // reproduces spherical normals n = p / R whatever the triangulation.
     const TriMesh jittered = make_uv_sphere(1.7f, 64, 32, 0.3f, 5);
-    const CurvatureErrors j = testing::compare(jittered, estimate(jittered), [](const float* x) {
-        return testing::sphere_curvature(1.7, x);
-    });
+    const CurvatureErrors j =
+        testing::compare(jittered, estimate(jittered, CurvatureEstimator::SecondOrder), [](const float* x) {
+            return testing::sphere_curvature(1.7, x);
+        });
     EXPECT_LT(j.max_k1, 1e-3);
     EXPECT_LT(j.max_k2, 1e-3);
-    const TriMesh ico = make_icosphere(2.0f, 4);
-    const CurvatureErrors e = testing::compare(ico, estimate(ico), [](const float* x) {
-        return testing::sphere_curvature(2.0, x);
-    });
-    EXPECT_LT(e.max_k1, 1e-3);
 }
 
-TEST(Curvature, DefaultWithinOnePercentAt64Segments) {
+TEST(Curvature, FitsWithinOnePercentAt64Segments) {
     const float R = 3.0f, r = 1.0f, H = 4.0f;
     struct Case {
         const char* name;
@@ -70,54 +81,62 @@ TEST(Curvature, DefaultWithinOnePercentAt64Segments) {
     cases.push_back({"jittered torus", make_torus(R, r, 64, 64, 0.3f, 7), [=](const float* x) {
                          return testing::torus_curvature(R, r, x);
                      }});
-    for (const Case& c : cases) {
-        const CurvatureErrors e = testing::compare(c.mesh, estimate(c.mesh), c.truth);
-        EXPECT_LT(e.rms_k1, 0.01) << c.name;
-        EXPECT_LT(e.rms_k2, 0.01) << c.name;
-        EXPECT_GT(e.scored, c.mesh.vertex_count() / 2) << c.name;
-        if (e.scored_directions) EXPECT_LT(e.rms_angle_deg, 2.0) << c.name;
-    }
+    for (CurvatureEstimator f : kFits)
+        for (const Case& c : cases) {
+            const CurvatureErrors e = testing::compare(c.mesh, estimate(c.mesh, f), c.truth);
+            EXPECT_LT(e.rms_k1, 0.01) << to_string(f) << " " << c.name;
+            EXPECT_LT(e.rms_k2, 0.01) << to_string(f) << " " << c.name;
+            EXPECT_GT(e.scored, c.mesh.vertex_count() / 2) << to_string(f) << " " << c.name;
+            if (e.scored_directions) EXPECT_LT(e.rms_angle_deg, 2.0) << to_string(f) << " " << c.name;
+        }
 }
 
 TEST(Curvature, DirectionFollowsThePrincipalAxes) {
-    // Cylinder: k1 = 1/R around the axis, i.e. along the tangent T (dP/du) of this parametrisation.
-    const TriMesh cyl = make_cylinder(1.0f, 2.0f, 64, 16);
-    const VertexCurvature c = estimate(cyl);
-    for (size_t v = 0; v < cyl.vertex_count(); ++v) {
-        EXPECT_NEAR(std::abs(c.values[4 * v + 2]), 1.0, 1e-3) << v;
-        EXPECT_NEAR(c.values[4 * v + 3], 0.0, 0.05) << v;
+    for (CurvatureEstimator f : kFits) {
+        SCOPED_TRACE(std::string(to_string(f)));
+        // Cylinder: k1 = 1/R around the axis, i.e. along the tangent T (dP/du) of this parametrisation.
+        const TriMesh cyl = make_cylinder(1.0f, 2.0f, 64, 16);
+        const VertexCurvature c = estimate(cyl, f);
+        for (size_t v = 0; v < cyl.vertex_count(); ++v) {
+            EXPECT_NEAR(std::abs(c.values[4 * v + 2]), 1.0, 1e-3) << v;
+            EXPECT_NEAR(c.values[4 * v + 3], 0.0, 0.05) << v;
+        }
+        // Torus: k1 = 1/r along the meridian, which is the bitangent direction here.
+        const TriMesh torus = make_torus(3.0f, 1.0f, 64, 64);
+        const VertexCurvature t = estimate(torus, f);
+        const CurvatureErrors e = testing::compare(torus, t, [](const float* x) {
+            return testing::torus_curvature(3.0, 1.0, x);
+        });
+        EXPECT_GT(e.scored_directions, torus.vertex_count() / 2);
+        EXPECT_LT(e.rms_angle_deg, 1.0);
+        for (size_t v = 0; v < torus.vertex_count(); ++v) EXPECT_NEAR(std::abs(t.values[4 * v + 3]), 1.0, 1e-3) << v;
     }
-    // Torus: k1 = 1/r along the meridian, which is the bitangent direction here.
-    const TriMesh torus = make_torus(3.0f, 1.0f, 64, 64);
-    const VertexCurvature t = estimate(torus);
-    const CurvatureErrors e = testing::compare(torus, t, [](const float* x) {
-        return testing::torus_curvature(3.0, 1.0, x);
-    });
-    EXPECT_GT(e.scored_directions, torus.vertex_count() / 2);
-    EXPECT_LT(e.rms_angle_deg, 1.0);
-    for (size_t v = 0; v < torus.vertex_count(); ++v) EXPECT_NEAR(std::abs(t.values[4 * v + 3]), 1.0, 1e-3) << v;
 }
 
 TEST(Curvature, ErrorsShrinkWithRefinement) {
-    const float R = 3.0f, r = 1.0f;
-    double previous_k1 = 1e9, previous_k2 = 1e9;
-    for (int n : {16, 32, 64, 128}) {
-        const TriMesh m = make_torus(R, r, n, n, 0.3f, 11);
-        const CurvatureErrors e = testing::compare(m, estimate(m), [=](const float* x) {
-            return testing::torus_curvature(R, r, x);
-        });
-        EXPECT_LT(e.rms_k1, previous_k1) << n;
-        EXPECT_LT(e.rms_k2, previous_k2) << n;
-        previous_k1 = e.rms_k1;
-        previous_k2 = e.rms_k2;
+    for (CurvatureEstimator f : kFits) {
+        SCOPED_TRACE(std::string(to_string(f)));
+        const float R = 3.0f, r = 1.0f;
+        double previous_k1 = 1e9, previous_k2 = 1e9;
+        for (int n : {16, 32, 64, 128}) {
+            const TriMesh m = make_torus(R, r, n, n, 0.3f, 11);
+            const CurvatureErrors e = testing::compare(m, estimate(m, f), [=](const float* x) {
+                return testing::torus_curvature(R, r, x);
+            });
+            EXPECT_LT(e.rms_k1, previous_k1) << n;
+            EXPECT_LT(e.rms_k2, previous_k2) << n;
+            previous_k1 = e.rms_k1;
+            previous_k2 = e.rms_k2;
+        }
+        EXPECT_LT(previous_k1, 0.005);
     }
-    EXPECT_LT(previous_k1, 0.005);
 }
 
-// The default estimator is second order on irregular triangulations (see curvature_shape_operator.cpp):
-// halving the edge length divides the error by about four. The face-averaged operator it replaced was
-// first order here (jittered ellipsoid 3.0% / 1.5% / 0.72% at 32 / 64 / 128 segments).
+// The second-order fit is second order on irregular triangulations (see curvature_second_order.cpp):
+// halving the edge length divides the error by about four. The default, face-averaged operator is first
+// order here (jittered ellipsoid 3.0% / 1.5% / 0.72% at 32 / 64 / 128 segments), pinned below.
 TEST(Curvature, SecondOrderOnIrregularMeshes) {
+    const auto estimate = [](const TriMesh& m) { return specbake::estimate(m, CurvatureEstimator::SecondOrder); };
     auto ellipsoid = [](const float* x) { return testing::ellipsoid_curvature(3.0, 2.0, 1.5, x); };
     auto torus = [](const float* x) { return testing::torus_curvature(3.0, 1.0, x); };
     std::vector<CurvatureErrors> e, t;
@@ -139,9 +158,26 @@ TEST(Curvature, SecondOrderOnIrregularMeshes) {
     }
 }
 
-// Vertices whose spokes cannot determine the curvature derivative (valence 3, a lone triangle) fall back to
-// the linear fit, which is exact for spherical normals n = p / R: 1/R, finite, at every vertex.
+// The default estimator is the per-face fit of SPEC Sec. 4: on irregular meshes its error halves with the
+// edge length (first order), which tells it apart from the second-order fit above. Measured on the
+// jittered ellipsoid: RMS k1 3.04% / 1.48% / 0.72% at 32 / 64 / 128 segments (ratios 2.05, 2.05).
+TEST(Curvature, DefaultIsFirstOrderOnIrregularMeshes) {
+    auto ellipsoid = [](const float* x) { return testing::ellipsoid_curvature(3.0, 2.0, 1.5, x); };
+    std::vector<CurvatureErrors> e;
+    for (int n : {32, 64, 128}) {
+        const TriMesh m = make_ellipsoid(3.0f, 2.0f, 1.5f, n, n / 2, 0.3f, 23);
+        e.push_back(testing::compare(m, estimate(m), ellipsoid));
+    }
+    for (size_t i = 1; i < e.size(); ++i) {
+        EXPECT_GT(e[i - 1].rms_k1 / e[i].rms_k1, 1.6) << i;
+        EXPECT_LT(e[i - 1].rms_k1 / e[i].rms_k1, 2.6) << i;
+    }
+}
+
+// Second-order fit: vertices whose spokes cannot determine the curvature derivative (valence 3, a lone
+// triangle) fall back to the linear fit, which is exact for spherical normals n = p / R: 1/R, finite, at every vertex.
 TEST(Curvature, LowValenceVerticesStayExactOnSphericalNormals) {
+    const auto estimate = [](const TriMesh& m) { return specbake::estimate(m, CurvatureEstimator::SecondOrder); };
     const float R = 1.3f;
     const float a = R / std::sqrt(3.0f);
     TriMesh tetra;
@@ -162,76 +198,87 @@ TEST(Curvature, LowValenceVerticesStayExactOnSphericalNormals) {
 }
 
 TEST(Curvature, ScalingByS_DividesCurvatureByS) {
-    const TriMesh base = make_torus(3.0f, 1.0f, 48, 32, 0.25f, 3);
-    const VertexCurvature c0 = estimate(base);
-    for (float s : {0.001f, 3.7f, 1000.0f}) {
-        TriMesh scaled = base;
-        scale_mesh(scaled, s);
-        const VertexCurvature c1 = estimate(scaled);
-        for (size_t v = 0; v < base.vertex_count(); ++v) {
-            const double scale = std::max(std::abs(c0.values[4 * v]), std::abs(c0.values[4 * v + 1]));
-            EXPECT_NEAR(double(c1.values[4 * v]) * s, c0.values[4 * v], 1e-5 * scale) << "s " << s << " v " << v;
-            EXPECT_NEAR(double(c1.values[4 * v + 1]) * s, c0.values[4 * v + 1], 1e-5 * scale) << "s " << s << " v " << v;
+    for (CurvatureEstimator f : kFits) {
+        SCOPED_TRACE(std::string(to_string(f)));
+        const TriMesh base = make_torus(3.0f, 1.0f, 48, 32, 0.25f, 3);
+        const VertexCurvature c0 = estimate(base, f);
+        for (float s : {0.001f, 3.7f, 1000.0f}) {
+            TriMesh scaled = base;
+            scale_mesh(scaled, s);
+            const VertexCurvature c1 = estimate(scaled, f);
+            for (size_t v = 0; v < base.vertex_count(); ++v) {
+                const double scale = std::max(std::abs(c0.values[4 * v]), std::abs(c0.values[4 * v + 1]));
+                EXPECT_NEAR(double(c1.values[4 * v]) * s, c0.values[4 * v], 1e-5 * scale) << "s " << s << " v " << v;
+                EXPECT_NEAR(double(c1.values[4 * v + 1]) * s, c0.values[4 * v + 1], 1e-5 * scale)
+                    << "s " << s << " v " << v;
+            }
         }
     }
 }
 
 TEST(Curvature, ConcaveSideIsNegative) {
-    // The inside of a sphere: normals pointing at the centre, winding flipped to match.
-    TriMesh m = make_uv_sphere(2.0f, 48, 24);
-    for (float& x : m.normals) x = -x;
-    for (size_t t = 0; t < m.triangle_count(); ++t) std::swap(m.indices[3 * t + 1], m.indices[3 * t + 2]);
-    const VertexCurvature c = estimate(m);
-    for (size_t v = 0; v < m.vertex_count(); ++v) {
-        EXPECT_NEAR(c.values[4 * v], -0.5, 1e-3);
-        EXPECT_NEAR(c.values[4 * v + 1], -0.5, 1e-3);
-    }
-    // The torus' inner equator is a saddle: the parallel curvature is -1/(R - r).
-    const TriMesh torus = make_torus(3.0f, 1.0f, 64, 64);
-    const VertexCurvature t = estimate(torus);
-    bool saw_inner = false;
-    for (size_t v = 0; v < torus.vertex_count(); ++v) {
-        const float* x = &torus.positions[3 * v];
-        if (std::hypot(x[0], x[1]) < 2.0001 && std::abs(x[2]) < 1e-4) {
-            EXPECT_NEAR(t.values[4 * v + 1], -0.5, 0.005);
-            EXPECT_NEAR(t.values[4 * v], 1.0, 0.005);
-            saw_inner = true;
+    for (CurvatureEstimator f : kFits) {
+        SCOPED_TRACE(std::string(to_string(f)));
+        // The inside of a sphere: normals pointing at the centre, winding flipped to match.
+        TriMesh m = make_uv_sphere(2.0f, 48, 24);
+        for (float& x : m.normals) x = -x;
+        for (size_t t = 0; t < m.triangle_count(); ++t) std::swap(m.indices[3 * t + 1], m.indices[3 * t + 2]);
+        const VertexCurvature c = estimate(m, f);
+        for (size_t v = 0; v < m.vertex_count(); ++v) {
+            EXPECT_NEAR(c.values[4 * v], -0.5, 1e-3);
+            EXPECT_NEAR(c.values[4 * v + 1], -0.5, 1e-3);
         }
+        // The torus' inner equator is a saddle: the parallel curvature is -1/(R - r).
+        const TriMesh torus = make_torus(3.0f, 1.0f, 64, 64);
+        const VertexCurvature t = estimate(torus, f);
+        bool saw_inner = false;
+        for (size_t v = 0; v < torus.vertex_count(); ++v) {
+            const float* x = &torus.positions[3 * v];
+            if (std::hypot(x[0], x[1]) < 2.0001 && std::abs(x[2]) < 1e-4) {
+                EXPECT_NEAR(t.values[4 * v + 1], -0.5, 0.005);
+                EXPECT_NEAR(t.values[4 * v], 1.0, 0.005);
+                saw_inner = true;
+            }
+        }
+        EXPECT_TRUE(saw_inner);
     }
-    EXPECT_TRUE(saw_inner);
 }
 
 TEST(Curvature, SeamVerticesShareCurvature) {
-    // Welding the seam by hand must not change anything: split vertices see the same one-ring.
-    const TriMesh seamed = make_torus(3.0f, 1.0f, 40, 24, 0.2f, 5);
-    TriMesh welded = seamed;
-    std::vector<uint32_t> first(seamed.vertex_count());
-    for (size_t v = 0; v < seamed.vertex_count(); ++v) {
-        first[v] = uint32_t(v);
-        for (size_t w = 0; w < v; ++w)
-            if (std::memcmp(&seamed.positions[3 * v], &seamed.positions[3 * w], 12) == 0) {
-                first[v] = uint32_t(w);
-                break;
-            }
-    }
-    size_t seam_vertices = 0;
-    for (size_t v = 0; v < seamed.vertex_count(); ++v) seam_vertices += first[v] != v;
-    EXPECT_GT(seam_vertices, 60u);
-    for (uint32_t& i : welded.indices) i = first[i];
-    const VertexCurvature a = estimate(seamed), b = estimate(welded);
-    for (size_t v = 0; v < seamed.vertex_count(); ++v) {
-        const float* ca = &a.values[4 * v];
-        const float* cb = &b.values[4 * first[v]];
-        EXPECT_NEAR(ca[0], cb[0], 1e-5 * std::abs(cb[0]) + 1e-6) << v;
-        EXPECT_NEAR(ca[1], cb[1], 1e-5 * std::abs(cb[0]) + 1e-6) << v;
-        // Same tangent frames here, so the same direction (up to sign).
-        EXPECT_NEAR(std::abs(ca[2] * cb[2] + ca[3] * cb[3]), 1.0, 1e-4) << v;
+    for (CurvatureEstimator f : kFits) {
+        SCOPED_TRACE(std::string(to_string(f)));
+        // Welding the seam by hand must not change anything: split vertices see the same one-ring.
+        const TriMesh seamed = make_torus(3.0f, 1.0f, 40, 24, 0.2f, 5);
+        TriMesh welded = seamed;
+        std::vector<uint32_t> first(seamed.vertex_count());
+        for (size_t v = 0; v < seamed.vertex_count(); ++v) {
+            first[v] = uint32_t(v);
+            for (size_t w = 0; w < v; ++w)
+                if (std::memcmp(&seamed.positions[3 * v], &seamed.positions[3 * w], 12) == 0) {
+                    first[v] = uint32_t(w);
+                    break;
+                }
+        }
+        size_t seam_vertices = 0;
+        for (size_t v = 0; v < seamed.vertex_count(); ++v) seam_vertices += first[v] != v;
+        EXPECT_GT(seam_vertices, 60u);
+        for (uint32_t& i : welded.indices) i = first[i];
+        const VertexCurvature a = estimate(seamed, f), b = estimate(welded, f);
+        for (size_t v = 0; v < seamed.vertex_count(); ++v) {
+            const float* ca = &a.values[4 * v];
+            const float* cb = &b.values[4 * first[v]];
+            EXPECT_NEAR(ca[0], cb[0], 1e-5 * std::abs(cb[0]) + 1e-6) << v;
+            EXPECT_NEAR(ca[1], cb[1], 1e-5 * std::abs(cb[0]) + 1e-6) << v;
+            // Same tangent frames here, so the same direction (up to sign).
+            EXPECT_NEAR(std::abs(ca[2] * cb[2] + ca[3] * cb[3]), 1.0, 1e-4) << v;
+        }
     }
 }
 
 TEST(Curvature, HardEdgesKeepFlatSidesFlat) {
     const TriMesh cube = make_flat_cube(1.5f);
-    for (CurvatureEstimator e : {CurvatureEstimator::ShapeOperator, CurvatureEstimator::NormalCone}) {
+    for (CurvatureEstimator e :
+         {CurvatureEstimator::ShapeOperator, CurvatureEstimator::SecondOrder, CurvatureEstimator::NormalCone}) {
         const VertexCurvature c = estimate(cube, e);
         for (size_t v = 0; v < cube.vertex_count(); ++v) {
             EXPECT_NEAR(c.values[4 * v], 0.0, 1e-6) << to_string(e);
@@ -255,14 +302,16 @@ TEST(Curvature, HardEdgesKeepFlatSidesFlat) {
         }
     }
     ASSERT_TRUE(prepare_mesh_for_curvature(facets).ok());
-    const VertexCurvature c = estimate(facets);
-    for (float x : c.values) EXPECT_TRUE(std::isfinite(x));
-    for (size_t v = 0; v < facets.vertex_count(); ++v) EXPECT_NEAR(c.values[4 * v], 0.0, 1e-5);
+    for (CurvatureEstimator f : kFits) {
+        const VertexCurvature c = estimate(facets, f);
+        for (float x : c.values) EXPECT_TRUE(std::isfinite(x)) << to_string(f);
+        for (size_t v = 0; v < facets.vertex_count(); ++v) EXPECT_NEAR(c.values[4 * v], 0.0, 1e-5) << to_string(f);
+    }
 }
 
 TEST(Curvature, DegenerateTrianglesAreSkipped) {
     TriMesh m = make_uv_sphere(1.0f, 32, 16);
-    const VertexCurvature before = estimate(m);
+    const VertexCurvature before[] = {estimate(m, kFits[0]), estimate(m, kFits[1])};
     const size_t n = m.vertex_count();
     // Repeated index, three coincident positions, and a collinear sliver through existing vertices.
     m.indices.insert(m.indices.end(), {0, 0, 1, 5, 5, 5, 40, 41, 40});
@@ -277,19 +326,18 @@ TEST(Curvature, DegenerateTrianglesAreSkipped) {
     Result<MeshReport> report = prepare_mesh_for_curvature(m);
     ASSERT_TRUE(report.ok());
     EXPECT_GE(report->degenerate_triangles, 3u);
-    for (CurvatureEstimator e :
-         {CurvatureEstimator::ShapeOperator, CurvatureEstimator::JetFitting, CurvatureEstimator::NormalCone}) {
+    for (CurvatureEstimator e : kAll) {
         const VertexCurvature after = estimate(m, e);
         for (float x : after.values) ASSERT_TRUE(std::isfinite(x)) << to_string(e);
-        if (e == CurvatureEstimator::ShapeOperator)
-            for (size_t v = 0; v < n; ++v) EXPECT_EQ(after.values[4 * v], before.values[4 * v]) << v;
+        for (int f = 0; f < 2; ++f)
+            if (e == kFits[f])
+                for (size_t v = 0; v < n; ++v) EXPECT_EQ(after.values[4 * v], before[f].values[4 * v]) << v;
     }
 }
 
 TEST(Curvature, SameOutputForAnyThreadCount) {
     const TriMesh m = make_torus(3.0f, 1.0f, 200, 100, 0.3f, 9);
-    for (CurvatureEstimator e :
-         {CurvatureEstimator::ShapeOperator, CurvatureEstimator::JetFitting, CurvatureEstimator::NormalCone}) {
+    for (CurvatureEstimator e : kAll) {
         const VertexCurvature one = estimate(m, e, 1), two = estimate(m, e, 2), many = estimate(m, e, 7);
         EXPECT_EQ(one.values, two.values) << to_string(e);
         EXPECT_EQ(one.values, many.values) << to_string(e);
