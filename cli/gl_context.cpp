@@ -28,6 +28,16 @@ void default_shader_cache_dir() {
     if (!ec) setenv("MESA_SHADER_CACHE_DIR", dir.c_str(), 0);
 }
 
+// The info log of a shader or program object, through its pair of query functions.
+template <class GetParameter, class GetLog>
+std::string info_log(GLuint object, GetParameter get_parameter, GetLog get_log) {
+    GLint length = 0;
+    get_parameter(object, GL_INFO_LOG_LENGTH, &length);
+    std::string log(static_cast<size_t>(std::max(length, 1)), '\0');
+    get_log(object, length, nullptr, log.data());
+    return log;
+}
+
 }  // namespace
 
 Result<std::unique_ptr<GlContext>> GlContext::create() {
@@ -89,10 +99,7 @@ Result<GLuint> compile_glsl_shader(GLenum stage, const std::string& source) {
     GLint ok = 0;
     glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
     if (ok) return shader;
-    GLint length = 0;
-    glGetShaderiv(shader, GL_INFO_LOG_LENGTH, &length);
-    std::string log(static_cast<size_t>(std::max(length, 1)), '\0');
-    glGetShaderInfoLog(shader, length, nullptr, log.data());
+    const std::string log = info_log(shader, glGetShaderiv, glGetShaderInfoLog);
     glDeleteShader(shader);
     return make_error(std::string(stage == GL_VERTEX_SHADER ? "vertex" : "fragment") +
                       " shader compilation failed: " + log);
@@ -108,10 +115,7 @@ Result<GLuint> link_program(GLuint vertex, GLuint fragment) {
     GLint ok = 0;
     glGetProgramiv(program, GL_LINK_STATUS, &ok);
     if (ok) return program;
-    GLint length = 0;
-    glGetProgramiv(program, GL_INFO_LOG_LENGTH, &length);
-    std::string log(static_cast<size_t>(std::max(length, 1)), '\0');
-    glGetProgramInfoLog(program, length, nullptr, log.data());
+    const std::string log = info_log(program, glGetProgramiv, glGetProgramInfoLog);
     glDeleteProgram(program);
     return make_error("shader link failed: " + log);
 }
