@@ -32,11 +32,26 @@
 #include <sys/mman.h>
 #endif
 
+// Lengths outside [kMinSeed, kMaxSeed] (squared) are out of float range for the estimate of inverse_length.
+constexpr double kMinSeed = 1e-30, kMaxSeed = 1e30;
+
+// 1 / sqrt(x): a float estimate refined by one Newton step in double (relative error below 2e-14, against
+// 1e-7 for the float estimate), exact division and root outside [kMinSeed, kMaxSeed]. A double square root
+// and division cost several times more than the whole rest of a texel's decode; the vector forms perform the
+// same IEEE operations, so results do not depend on the CPU.
+inline double inverse_length(double x) {
+    if (!(x >= kMinSeed && x <= kMaxSeed)) return 1.0 / std::sqrt(x);
+    const double y = double(1.0f / std::sqrt(float(x)));
+    return y * (1.5 - (0.5 * x) * (y * y));
+}
+
 // The inner loops have AVX2 forms (four doubles per instruction), chosen at run time; each performs the
 // same IEEE operations in the same order as the scalar form it stands for, so results are bit-identical
 // on every CPU. Only "avx2" is enabled for them, not "fma": a fused multiply-add would round differently.
 #if defined(__x86_64__)
 #define SPECBAKE_AVX2 __attribute__((target("avx2")))
+// For the small pieces the loops are built from: vectors passed in registers, not through memory.
+#define SPECBAKE_AVX2_INLINE __attribute__((target("avx2"), always_inline)) inline
 #endif
 
 namespace specbake {
@@ -53,7 +68,7 @@ bool has_avx2() {
 struct Channels4 {
     __m128 x, y, z;
 };
-SPECBAKE_AVX2 inline Channels4 load_channels4(const float* c, size_t stride) {
+SPECBAKE_AVX2_INLINE Channels4 load_channels4(const float* c, size_t stride) {
     if (stride == 3) {
         const __m128 a = _mm_loadu_ps(c), b = _mm_loadu_ps(c + 4), d = _mm_loadu_ps(c + 8);  // x0 y0 z0 x1 | y1 ..
         const __m128 x = _mm_blend_ps(_mm_blend_ps(a, b, 0x4), d, 0x2);                      // x0 x3 x2 x1 (lanes)
@@ -69,81 +84,129 @@ SPECBAKE_AVX2 inline Channels4 load_channels4(const float* c, size_t stride) {
 }
 
 // (mask ? a : b) per lane.
-SPECBAKE_AVX2 inline __m256d select4(__m256d mask, __m256d a, __m256d b) { return _mm256_blendv_pd(b, a, mask); }
+SPECBAKE_AVX2_INLINE __m256d select4(__m256d mask, __m256d a, __m256d b) { return _mm256_blendv_pd(b, a, mask); }
 
-// Unit normals and their products (Decoder::decode_normal, four texels at a time) of the first multiple of
-// four of the n texels at `row` (`ch` floats each); returns how many texels it did.
+// inverse_length of four values.
+SPECBAKE_AVX2_INLINE __m256d inverse_length4(__m256d x) {
+    const __m256d one = _mm256_set1_pd(1.0);
+    const __m256d y = _mm256_cvtps_pd(_mm_div_ps(_mm_set1_ps(1.0f), _mm_sqrt_ps(_mm256_cvtpd_ps(x))));
+    const __m256d r = _mm256_mul_pd(
+        y, _mm256_sub_pd(_mm256_set1_pd(1.5), _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(0.5), x), _mm256_mul_pd(y, y))));
+    const __m256d seeded = _mm256_and_pd(_mm256_cmp_pd(x, _mm256_set1_pd(kMinSeed), _CMP_GE_OQ),
+                                         _mm256_cmp_pd(x, _mm256_set1_pd(kMaxSeed), _CMP_LE_OQ));
+    if (_mm256_movemask_pd(seeded) == 0xF) return r;
+    return select4(seeded, r, _mm256_div_pd(one, _mm256_sqrt_pd(x)));
+}
+
+// Unit normals of four texels (Decoder::decode_normal) and their squares.
+struct Normal4 {
+    __m256d x, y, z, xx, yy;
+};
+
+// The four texels at c, c + stride, .. decoded to vectors (Decoder::decode_normal before normalising): v, its
+// squared length, and the sum of the values read (NaN if one is not finite).
+struct RawNormal4 {
+    __m256d x, y, z, len2, read;
+};
+// y_sign is -0.0 in every lane to flip green (-Y maps), +0.0 otherwise.
+SPECBAKE_AVX2_INLINE RawNormal4 raw_normal4(const float* c, size_t stride, bool reconstruct, __m256d y_sign) {
+    const __m256d one = _mm256_set1_pd(1.0), two = _mm256_set1_pd(2.0), zero = _mm256_setzero_pd();
+    const Channels4 in = load_channels4(c, stride);
+    const __m256d vx = _mm256_sub_pd(_mm256_mul_pd(two, _mm256_cvtps_pd(in.x)), one);
+    const __m256d vy = _mm256_xor_pd(_mm256_sub_pd(_mm256_mul_pd(two, _mm256_cvtps_pd(in.y)), one), y_sign);
+    const __m256d xx = _mm256_mul_pd(vx, vx), yy = _mm256_mul_pd(vy, vy);
+    const __m256d vz = reconstruct ? _mm256_sqrt_pd(_mm256_max_pd(_mm256_sub_pd(_mm256_sub_pd(one, xx), yy), zero))
+                                   : _mm256_sub_pd(_mm256_mul_pd(two, _mm256_cvtps_pd(in.z)), one);
+    const __m256d read = reconstruct ? _mm256_add_pd(vx, vy) : _mm256_add_pd(_mm256_add_pd(vx, vy), vz);
+    return {vx, vy, vz, _mm256_add_pd(_mm256_add_pd(xx, yy), _mm256_mul_pd(vz, vz)), read};
+}
+
+// The unit normals of `v` given inv = inverse_length4(v.len2); `finite` gathers (read - read) (0 while the
+// values are finite, NaN for good once one is not) and `degenerate` counts zero-length vectors (+Z).
+SPECBAKE_AVX2_INLINE Normal4 unit_normal4(const RawNormal4& v, __m256d inv, __m256d& finite, long long& degenerate) {
+    finite = _mm256_add_pd(finite, _mm256_sub_pd(v.read, v.read));
+    const __m256d ok = _mm256_cmp_pd(v.len2, _mm256_set1_pd(1e-20), _CMP_GT_OQ);
+    degenerate += 4 - __builtin_popcount(unsigned(_mm256_movemask_pd(ok)));
+    const __m256d ux = _mm256_and_pd(ok, _mm256_mul_pd(v.x, inv));
+    const __m256d uy = _mm256_and_pd(ok, _mm256_mul_pd(v.y, inv));
+    return {ux, uy, select4(ok, _mm256_mul_pd(v.z, inv), _mm256_set1_pd(1.0)), _mm256_mul_pd(ux, ux),
+            _mm256_mul_pd(uy, uy)};
+}
+
+SPECBAKE_AVX2_INLINE Normal4 decode_normal4(const float* c, size_t stride, bool reconstruct, bool flip_y,
+                                            __m256d& finite, long long& degenerate) {
+    const RawNormal4 v = raw_normal4(c, stride, reconstruct, _mm256_set1_pd(flip_y ? -0.0 : 0.0));
+    return unit_normal4(v, inverse_length4(v.len2), finite, degenerate);
+}
+
+// Unit normals and their products of the first multiple of four of the n texels at `row` (`ch` floats each);
+// returns how many texels it did.
 SPECBAKE_AVX2 int decode_normals_avx2(const float* row, int ch, int n, bool reconstruct, bool flip_y, double* nx,
                                       double* ny, double* nz, double* pxx, double* pyy, double* pxy,
                                       long long& degenerate, bool& non_finite) {
-    const __m256d one = _mm256_set1_pd(1.0), two = _mm256_set1_pd(2.0), zero = _mm256_setzero_pd();
-    const __m256d tiny = _mm256_set1_pd(1e-20), sign = _mm256_set1_pd(-0.0);
     const size_t stride = size_t(ch);
-    // Sum of (v - v) over the values read: 0 while they are finite, NaN for good once one is not.
     __m256d finite = _mm256_setzero_pd();
     int x = 0;
     for (; x + 4 <= n; x += 4) {
-        const float* c = row + size_t(x) * stride;
-        const Channels4 in = load_channels4(c, stride);
-        const __m256d vx = _mm256_sub_pd(_mm256_mul_pd(two, _mm256_cvtps_pd(in.x)), one);
-        __m256d vy = _mm256_sub_pd(_mm256_mul_pd(two, _mm256_cvtps_pd(in.y)), one);
-        if (flip_y) vy = _mm256_xor_pd(vy, sign);
-        const __m256d xx = _mm256_mul_pd(vx, vx), yy = _mm256_mul_pd(vy, vy);
-        const __m256d vz = reconstruct
-                               ? _mm256_sqrt_pd(_mm256_max_pd(_mm256_sub_pd(_mm256_sub_pd(one, xx), yy), zero))
-                               : _mm256_sub_pd(_mm256_mul_pd(two, _mm256_cvtps_pd(in.z)), one);
-        const __m256d read = reconstruct ? _mm256_add_pd(vx, vy) : _mm256_add_pd(_mm256_add_pd(vx, vy), vz);
-        finite = _mm256_add_pd(finite, _mm256_sub_pd(read, read));
-        const __m256d len2 = _mm256_add_pd(_mm256_add_pd(xx, yy), _mm256_mul_pd(vz, vz));
-        const __m256d inv = _mm256_div_pd(one, _mm256_sqrt_pd(len2));
-        const __m256d ok = _mm256_cmp_pd(len2, tiny, _CMP_GT_OQ);
-        degenerate += 4 - __builtin_popcount(unsigned(_mm256_movemask_pd(ok)));
-        const __m256d ux = _mm256_and_pd(ok, _mm256_mul_pd(vx, inv));
-        const __m256d uy = _mm256_and_pd(ok, _mm256_mul_pd(vy, inv));
-        const __m256d uz = select4(ok, _mm256_mul_pd(vz, inv), one);
-        _mm256_storeu_pd(nx + x, ux);
-        _mm256_storeu_pd(ny + x, uy);
-        _mm256_storeu_pd(nz + x, uz);
-        _mm256_storeu_pd(pxx + x, _mm256_mul_pd(ux, ux));
-        _mm256_storeu_pd(pyy + x, _mm256_mul_pd(uy, uy));
-        _mm256_storeu_pd(pxy + x, _mm256_mul_pd(ux, uy));
+        const Normal4 u = decode_normal4(row + size_t(x) * stride, stride, reconstruct, flip_y, finite, degenerate);
+        _mm256_storeu_pd(nx + x, u.x);
+        _mm256_storeu_pd(ny + x, u.y);
+        _mm256_storeu_pd(nz + x, u.z);
+        _mm256_storeu_pd(pxx + x, u.xx);
+        _mm256_storeu_pd(pyy + x, u.yy);
+        _mm256_storeu_pd(pxy + x, _mm256_mul_pd(u.x, u.y));
     }
     if (_mm256_movemask_pd(_mm256_cmp_pd(finite, finite, _CMP_UNORD_Q))) non_finite = true;
     return x;
 }
 
-// Roughness of a same-size map (Decoder::decode_span, four texels at a time): r = clamp(t[channel]),
-// a = (r^2)^2 in double, and, when `occlusion` is given, ORM R and B; returns how many texels it did.
+// Roughness of four texels of a same-size map (Decoder::decode_span): r = clamp(t[channel]), a = (r^2)^2 in
+// double, and for an ORM map (3+ channels, `orm`) R and B as read; `finite` as in decode_normal4.
+struct Roughness4 {
+    __m128 r, occlusion, metallic;
+    __m256d a;
+};
+SPECBAKE_AVX2_INLINE Roughness4 decode_roughness4(const float* c, size_t stride, int channel, bool orm,
+                                                  __m128& finite) {
+    const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
+    const Channels4 in = stride >= 3 ? load_channels4(c, stride) : Channels4{};
+    const __m128 v = stride >= 3 && channel < 3
+                         ? (channel == 0 ? in.x : channel == 1 ? in.y : in.z)
+                         : _mm_set_ps(c[3 * stride + channel], c[2 * stride + channel], c[stride + channel], c[channel]);
+    finite = _mm_add_ps(finite, _mm_sub_ps(v, v));
+    if (orm) finite = _mm_add_ps(finite, _mm_add_ps(_mm_sub_ps(in.x, in.x), _mm_sub_ps(in.z, in.z)));
+    // std::clamp(v, 0, 1): v < 0 ? 0 : (1 < v ? 1 : v)
+    const __m128 r = _mm_blendv_ps(_mm_blendv_ps(v, one, _mm_cmplt_ps(one, v)), zero, _mm_cmplt_ps(v, zero));
+    const __m256d rd = _mm256_cvtps_pd(r);
+    const __m256d r2 = _mm256_mul_pd(rd, rd);
+    return {r, in.x, in.z, _mm256_mul_pd(r2, r2)};
+}
+
+// decode_roughness4 over the first multiple of four of the n texels at t into a and r0 (and, when
+// `occlusion` is given, ORM R and B); returns how many texels it did.
 SPECBAKE_AVX2 int decode_roughness_avx2(const float* t, int ch, int channel, int n, double* a, float* r0,
                                         double* occlusion, double* metallic, bool& non_finite) {
-    const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
     const size_t stride = size_t(ch);
-    __m128 finite = zero;  // as in decode_normals_avx2
+    __m128 finite = _mm_setzero_ps();
     int x = 0;
     for (; x + 4 <= n; x += 4) {
-        const float* c = t + size_t(x) * stride;
-        const Channels4 in = stride >= 3 ? load_channels4(c, stride) : Channels4{};
-        const __m128 v = stride >= 3 && channel < 3
-                             ? (channel == 0 ? in.x : channel == 1 ? in.y : in.z)
-                             : _mm_set_ps(c[3 * stride + channel], c[2 * stride + channel], c[stride + channel], c[channel]);
-        finite = _mm_add_ps(finite, _mm_sub_ps(v, v));
-        // std::clamp(v, 0, 1): v < 0 ? 0 : (1 < v ? 1 : v)
-        const __m128 r = _mm_blendv_ps(_mm_blendv_ps(v, one, _mm_cmplt_ps(one, v)), zero, _mm_cmplt_ps(v, zero));
-        const __m256d rd = _mm256_cvtps_pd(r);
-        const __m256d r2 = _mm256_mul_pd(rd, rd);
-        _mm256_storeu_pd(a + x, _mm256_mul_pd(r2, r2));
-        _mm_storeu_ps(r0 + x, r);
-        if (occlusion) {  // an ORM map: 3+ channels
-            const __m128 o = in.x, m = in.z;
-            finite = _mm_add_ps(finite, _mm_add_ps(_mm_sub_ps(o, o), _mm_sub_ps(m, m)));
-            _mm256_storeu_pd(occlusion + x, _mm256_cvtps_pd(o));
-            _mm256_storeu_pd(metallic + x, _mm256_cvtps_pd(m));
+        const Roughness4 q = decode_roughness4(t + size_t(x) * stride, stride, channel, occlusion != nullptr, finite);
+        _mm256_storeu_pd(a + x, q.a);
+        _mm_storeu_ps(r0 + x, q.r);
+        if (occlusion) {
+            _mm256_storeu_pd(occlusion + x, _mm256_cvtps_pd(q.occlusion));
+            _mm256_storeu_pd(metallic + x, _mm256_cvtps_pd(q.metallic));
         }
     }
     if (_mm_movemask_ps(_mm_cmpunord_ps(finite, finite))) non_finite = true;
     return x;
 }
 #endif
+
+// The fused pass over the largest levels (see bake_validated): width in base texels of its column tiles,
+// and how many levels above the base it covers at most.
+constexpr int kTileTexels = 512;
+constexpr int kMaxFusedLevels = 4;
 
 // Per-texel linear quantities, in this order; the ORM and slope groups are present only when needed.
 enum Channel : int { kPx, kPy, kPz, kPxx, kPyy, kPxy, kA, kCore };
@@ -221,7 +284,7 @@ struct Decoder {
             n[0] = 0.0, n[1] = 0.0, n[2] = 1.0;
             return;
         }
-        const double inv = 1.0 / std::sqrt(len2);
+        const double inv = inverse_length(len2);
         n[0] = nx * inv, n[1] = ny * inv, n[2] = nz * inv;
     }
 
@@ -344,6 +407,14 @@ std::unique_ptr<T[]> uninitialized(size_t n) {
     return n ? std::unique_ptr<T[]>(new T[n]) : nullptr;
 }
 
+// Output rows of one base row; null for an output that was not requested.
+struct BaseRow {
+    float* rough = nullptr;
+    float* kern = nullptr;
+    float* lean = nullptr;
+    float* nrm = nullptr;
+};
+
 // Float output rows of one block of rows of one level, interleaved as the chains; null for an
 // output that was not requested.
 struct RowBlock {
@@ -370,6 +441,12 @@ struct RowBlock {
     float* kern_row(int k) { return row(kern, kern_ch, width, k); }
     float* lean_row(int k) { return row(lean, lean_ch, width, k); }
     float* nrm_row(int k) { return row(nrm, nrm_ch, width, k); }
+    // The rows of row k from texel `offset` on.
+    BaseRow base_row(int k, int offset) {
+        auto from = [&](float* r, int ch) { return r ? r + size_t(offset) * size_t(ch) : nullptr; };
+        return {from(rough_row(k), rough_ch), from(kern_row(k), kern_ch), from(lean_row(k), lean_ch),
+                from(nrm_row(k), nrm_ch)};
+    }
 
     void emit(const TextureBakeRowSink& sink, int level, int x0, int y0, int rows) const {
         TextureBakeRows r;
@@ -384,14 +461,14 @@ struct RowBlock {
 
 #if defined(SPECBAKE_AVX2)
 // Four floats float(scale * src[i] + offset), the product and sum in double as in the scalar form.
-SPECBAKE_AVX2 inline __m128 to_float4(const double* src, double scale, double offset) {
+SPECBAKE_AVX2_INLINE __m128 to_float4(const double* src, double scale, double offset) {
     if (scale == 1.0 && offset == 0.0) return _mm256_cvtpd_ps(_mm256_loadu_pd(src));  // keeps the sign of a zero
     return _mm256_cvtpd_ps(_mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(scale), _mm256_loadu_pd(src)),
                                          _mm256_set1_pd(offset)));
 }
 
 // Four texels of three channels a, b, c interleaved into out[0 .. 12).
-SPECBAKE_AVX2 inline void store3x4(float* out, __m128 a, __m128 b, __m128 c) {
+SPECBAKE_AVX2_INLINE void store3x4(float* out, __m128 a, __m128 b, __m128 c) {
     const __m128 ab_lo = _mm_unpacklo_ps(a, b), ab_hi = _mm_unpackhi_ps(a, b);  // a0 b0 a1 b1, a2 b2 a3 b3
     _mm_storeu_ps(out, _mm_blend_ps(_mm_shuffle_ps(ab_lo, ab_lo, _MM_SHUFFLE(2, 0, 1, 0)),
                                     _mm_shuffle_ps(c, c, _MM_SHUFFLE(0, 0, 0, 0)), 0x4));  // a0 b0 c0 a1
@@ -401,19 +478,23 @@ SPECBAKE_AVX2 inline void store3x4(float* out, __m128 a, __m128 b, __m128 c) {
                                         _mm_shuffle_ps(c, c, _MM_SHUFFLE(3, 3, 3, 2)), 0x9));  // c2 a3 b3 c3
 }
 
-// Four texels of five channels float(p0[k]) .. float(p4[k]) interleaved into out[0 .. 20): texel k's first
-// four are row k of the transposed 4 x 4 block, the fifth follows it.
-SPECBAKE_AVX2 inline void store5x4(float* out, const double* p0, const double* p1, const double* p2, const double* p3,
-                                   const double* p4) {
-    __m128 m0 = to_float4(p0, 1.0, 0.0), m1 = to_float4(p1, 1.0, 0.0);
-    __m128 m2 = to_float4(p2, 1.0, 0.0), m3 = to_float4(p3, 1.0, 0.0);
-    alignas(16) float m4[4];
-    _mm_store_ps(m4, to_float4(p4, 1.0, 0.0));
+// Four texels of five channels m0[k] .. m4[k] interleaved into out[0 .. 20): texel k's first four are row k
+// of the transposed 4 x 4 block, the fifth follows it.
+SPECBAKE_AVX2_INLINE void store5x4(float* out, __m128 m0, __m128 m1, __m128 m2, __m128 m3, __m128 m4) {
+    alignas(16) float fifth[4];
+    _mm_store_ps(fifth, m4);
     _MM_TRANSPOSE4_PS(m0, m1, m2, m3);
-    _mm_storeu_ps(out, m0), out[4] = m4[0];
-    _mm_storeu_ps(out + 5, m1), out[9] = m4[1];
-    _mm_storeu_ps(out + 10, m2), out[14] = m4[2];
-    _mm_storeu_ps(out + 15, m3), out[19] = m4[3];
+    _mm_storeu_ps(out, m0), out[4] = fifth[0];
+    _mm_storeu_ps(out + 5, m1), out[9] = fifth[1];
+    _mm_storeu_ps(out + 10, m2), out[14] = fifth[2];
+    _mm_storeu_ps(out + 15, m3), out[19] = fifth[3];
+}
+
+// The same with float(p0[k]) .. float(p4[k]).
+SPECBAKE_AVX2_INLINE void store5x4(float* out, const double* p0, const double* p1, const double* p2, const double* p3,
+                                   const double* p4) {
+    store5x4(out, to_float4(p0, 1.0, 0.0), to_float4(p1, 1.0, 0.0), to_float4(p2, 1.0, 0.0), to_float4(p3, 1.0, 0.0),
+             to_float4(p4, 1.0, 0.0));
 }
 
 // The mip-0 outputs (see write_base_row) of the first multiple of four of the W texels; returns how many.
@@ -441,8 +522,12 @@ SPECBAKE_AVX2 int write_base_avx2(const double* v, const float* r0, int W, const
 // Mip-0 outputs of one base row from its planes `v` and output roughness `r0`. Every footprint is one
 // base texel, so Sigma = 0, t = 0 and a = a_base exactly (SPEC Sec. 3: the input roughness passes
 // through), and the decoded normal is already unit length: no divisions or roots.
-void write_base_row(const double* v, const float* r0, int W, const Layout& layout, bool flip_y, float* rough,
-                    float* kern, int kern_ch, float* lean, float* nrm) {
+void write_base_row(const double* v, const float* r0, int W, const Layout& layout, bool flip_y, const BaseRow& out,
+                    int kern_ch) {
+    float* const rough = out.rough;
+    float* const kern = out.kern;
+    float* const lean = out.lean;
+    float* const nrm = out.nrm;
     const bool slope = layout.slope >= 0;
     int x0 = 0;  // texels [0, x0) done by the vector form (projected-space LEAN only)
 #if defined(SPECBAKE_AVX2)
@@ -493,19 +578,137 @@ void write_base_row(const double* v, const float* r0, int W, const Layout& layou
     }
 }
 
+#if defined(SPECBAKE_AVX2)
+// sum = v (the first row of a column) or sum + v.
+SPECBAKE_AVX2_INLINE void add_column(double* sum, __m256d v, bool first) {
+    _mm256_store_pd(sum, first ? v : _mm256_add_pd(_mm256_load_pd(sum), v));
+}
+
+// Levels 0 and 1 of base rows y and y + 1 over base texels [bx, bx + 2 n) in one pass, for a level 1 whose
+// footprints are 2 x 2 blocks of the base: each 4 x 2 group of texels is decoded in registers, written as
+// level 0 into rows[0] and rows[1], and its column sums kept; the pair sums of two groups give four level-1
+// means, stored into the C planes of `m` (w doubles each). These are the operations of decode_span,
+// write_base_row and block_means, in the same order, so the results are identical; the base planes are
+// never stored. Projected-space LEAN, with ORM R and B (kOrm) or not, roughness from a same-size map (kMap)
+// or a constant. Does the first multiple of four of the n means; returns how many.
+// kRgb: three-channel normal map with z read, and a three-channel roughness map if any (the usual case,
+// with strides and the decode known at compile time).
+template <bool kOrm, bool kMap, bool kRgb>
+SPECBAKE_AVX2 int base_and_pairs_avx2(const Decoder& dec, int y, int bx, int n, const BaseRow rows[2], int kern_ch,
+                                      double* m, int w, long long& degenerate) {
+    constexpr int C = kOrm ? kCore + 2 : kCore;
+    const size_t normal_stride = kRgb ? 3 : size_t(dec.normal.channels);
+    const size_t rough_stride = !kMap ? 0 : kRgb ? 3 : size_t(dec.roughness->channels);
+    const float* normal_row[2] = {dec.normal.texel(bx, y), dec.normal.texel(bx, y + 1)};
+    const float* rough_row[2] = {kMap ? dec.roughness->texel(bx, y) : nullptr,
+                                 kMap ? dec.roughness->texel(bx, y + 1) : nullptr};
+    const bool reconstruct = !kRgb && dec.reconstruct, flip_y = dec.flip_y;
+    const __m256d y_sign = _mm256_set1_pd(flip_y ? -0.0 : 0.0);
+    const int channel = dec.roughness_channel;
+    long long zero_length = 0;
+    const __m256d half = _mm256_set1_pd(0.5), half_y = _mm256_set1_pd(flip_y ? -0.5 : 0.5);
+    const __m256d quarter = _mm256_set1_pd(0.25);
+    const __m128 constant_r = _mm_set1_ps(dec.constant_r);
+    const __m256d constant_a = _mm256_set1_pd(dec.constant_a);
+    __m256d normal_finite = _mm256_setzero_pd();
+    __m128 rough_finite = _mm_setzero_ps();
+    alignas(32) double sums[2][C][4];  // column sums of the group's two halves, per quantity
+    // The unit normals first, in a loop of their own: the float root, division and Newton step of their
+    // inverse lengths are one long chain of latency, which the out-of-order core overlaps across iterations
+    // of a short loop but not across the long one below.
+    alignas(32) double unit[2][3][kTileTexels];
+    n = std::min(n, kTileTexels / 2);  // a column tile's (the rest goes through the planes)
+    const int n4 = n & ~3;
+    for (int r = 0; r < 2; ++r)
+        for (int x = 0; x < 2 * n4; x += 4) {
+            const RawNormal4 v = raw_normal4(normal_row[r] + size_t(x) * normal_stride, normal_stride, reconstruct, y_sign);
+            const Normal4 u = unit_normal4(v, inverse_length4(v.len2), normal_finite, zero_length);
+            _mm256_store_pd(unit[r][0] + x, u.x);
+            _mm256_store_pd(unit[r][1] + x, u.y);
+            _mm256_store_pd(unit[r][2] + x, u.z);
+        }
+    int i = 0;
+    for (; i + 4 <= n; i += 4) {
+        for (int h = 0; h < 2; ++h) {
+            const size_t o = size_t(2 * i + 4 * h);  // the half's first texel in the rows
+            for (int r = 0; r < 2; ++r) {
+                const __m256d ux = _mm256_load_pd(unit[r][0] + o), uy = _mm256_load_pd(unit[r][1] + o);
+                const __m256d uz = _mm256_load_pd(unit[r][2] + o);
+                const Normal4 u{ux, uy, uz, _mm256_mul_pd(ux, ux), _mm256_mul_pd(uy, uy)};
+                __m128 rough = constant_r, occlusion = constant_r, metallic = constant_r;
+                __m256d a = constant_a;
+                if constexpr (kMap) {
+                    const Roughness4 q = decode_roughness4(rough_row[r] + o * rough_stride, rough_stride, channel,
+                                                           kOrm, rough_finite);
+                    rough = q.r, occlusion = q.occlusion, metallic = q.metallic, a = q.a;
+                }
+                const __m256d xy = _mm256_mul_pd(u.x, u.y);
+                const BaseRow& out = rows[r];
+                if (out.rough) {
+                    if constexpr (kOrm)
+                        store3x4(out.rough + 3 * o, occlusion, rough, metallic);
+                    else
+                        _mm_storeu_ps(out.rough + o, rough);
+                }
+                if (out.kern)  // Sigma = 0 at the base
+                    for (int k = 0; k < kern_ch; ++k) _mm_storeu_ps(out.kern + size_t(kern_ch) * o + 4 * k, _mm_setzero_ps());
+                if (out.lean)
+                    store5x4(out.lean + 5 * o, _mm256_cvtpd_ps(u.x), _mm256_cvtpd_ps(u.y), _mm256_cvtpd_ps(u.xx),
+                             _mm256_cvtpd_ps(u.yy), _mm256_cvtpd_ps(xy));
+                if (out.nrm)
+                    store3x4(out.nrm + 3 * o, _mm256_cvtpd_ps(_mm256_add_pd(_mm256_mul_pd(half, u.x), half)),
+                             _mm256_cvtpd_ps(_mm256_add_pd(_mm256_mul_pd(half_y, u.y), half)),
+                             _mm256_cvtpd_ps(_mm256_add_pd(_mm256_mul_pd(half, u.z), half)));
+                double(*sum)[4] = sums[h];
+                const bool first = r == 0;
+                add_column(sum[kPx], u.x, first), add_column(sum[kPy], u.y, first), add_column(sum[kPz], u.z, first);
+                add_column(sum[kPxx], u.xx, first), add_column(sum[kPyy], u.yy, first);
+                add_column(sum[kPxy], xy, first), add_column(sum[kA], a, first);
+                if constexpr (kOrm) {
+                    add_column(sum[kCore], _mm256_cvtps_pd(occlusion), first);
+                    add_column(sum[kCore + 1], _mm256_cvtps_pd(metallic), first);
+                }
+            }
+        }
+        for (int c = 0; c < C; ++c) {  // as pair_means_avx2
+            const __m256d pairs = _mm256_hadd_pd(_mm256_load_pd(sums[0][c]), _mm256_load_pd(sums[1][c]));
+            _mm256_storeu_pd(plane(m, c, w) + i, _mm256_mul_pd(_mm256_permute4x64_pd(pairs, 0xD8), quarter));
+        }
+    }
+    degenerate += zero_length;
+    if (_mm256_movemask_pd(_mm256_cmp_pd(normal_finite, normal_finite, _CMP_UNORD_Q)))
+        dec.normal_non_finite.store(true, std::memory_order_relaxed);
+    if (_mm_movemask_ps(_mm_cmpunord_ps(rough_finite, rough_finite)))
+        dec.roughness_non_finite.store(true, std::memory_order_relaxed);
+    return i;
+}
+
+// base_and_pairs_avx2 for the decoder's roughness source and layout.
+int base_and_pairs(const Decoder& dec, int y, int bx, int n, const BaseRow rows[2], int kern_ch, double* m, int w,
+                   long long& degenerate) {
+    const bool orm = dec.layout.occlusion >= 0;
+    const bool rgb = dec.normal.channels == 3 && !dec.reconstruct && (!dec.roughness || dec.roughness->channels == 3);
+    if (dec.roughness) {
+        if (orm)  // an ORM map has 3+ channels
+            return rgb ? base_and_pairs_avx2<true, true, true>(dec, y, bx, n, rows, kern_ch, m, w, degenerate)
+                       : base_and_pairs_avx2<true, true, false>(dec, y, bx, n, rows, kern_ch, m, w, degenerate);
+        return rgb ? base_and_pairs_avx2<false, true, true>(dec, y, bx, n, rows, kern_ch, m, w, degenerate)
+                   : base_and_pairs_avx2<false, true, false>(dec, y, bx, n, rows, kern_ch, m, w, degenerate);
+    }
+    return rgb ? base_and_pairs_avx2<false, false, true>(dec, y, bx, n, rows, kern_ch, m, w, degenerate)
+               : base_and_pairs_avx2<false, false, false>(dec, y, bx, n, rows, kern_ch, m, w, degenerate);
+}
+#endif
+
 // The SPEC Sec. 3 formulas for `n` texels of a level >= 1, before they are stored as floats.
 constexpr int kChunk = 64;
 
-// The fused pass over the largest levels (see bake_validated): width in base texels of its column tiles,
-// and how many levels above the base it covers at most.
-constexpr int kTileTexels = 512;
-constexpr int kMaxFusedLevels = 4;
 struct Finalized {
     double r[kChunk], t[kChunk], sxx[kChunk], syy[kChunk], sxy[kChunk], nx[kChunk], ny[kChunk], nz[kChunk];
     double change = 0.0;  // largest |r - r_in| so far, r_in = (mean alpha^2)^(1/4)
 };
 
-// Texel k of the chunk from its means; the scalar definition the SSE2 path below reproduces bit for bit.
+// Texel k of the chunk from its means; the scalar definition the AVX2 path below reproduces bit for bit.
 inline void finalize_one(double mx, double my, double mz, double mxx, double myy, double mxy, double ma,
                          const TextureBakeSettings& s, bool flip_y, Finalized& f, int k) {
     // Sigma = M - m m^T, clamped to positive semi-definite.
@@ -522,9 +725,10 @@ inline void finalize_one(double mx, double my, double mz, double mxx, double myy
     f.change = std::max(f.change, std::abs(r - std::sqrt(std::sqrt(a_base))));
     f.r[k] = r, f.t[k] = t, f.sxx[k] = sxx, f.syy[k] = syy, f.sxy[k] = sxy;
     double nx = mx, ny = my, nz = mz;
-    const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
-    if (len > 1e-12) {
-        nx /= len, ny /= len, nz /= len;
+    const double len2 = nx * nx + ny * ny + nz * nz;
+    if (len2 > 1e-24) {
+        const double inv = inverse_length(len2);
+        nx *= inv, ny *= inv, nz *= inv;
     } else {
         nx = 0.0, ny = 0.0, nz = 1.0;
     }
@@ -535,7 +739,7 @@ inline void finalize_one(double mx, double my, double mz, double mxx, double myy
 #if defined(SPECBAKE_AVX2)
 // Texels k .. k + 3 of the chunk: finalize_one four at a time. Every step is the same IEEE operation in the
 // same order (std::max / std::min / std::clamp as their comparisons and selects), so results are identical.
-SPECBAKE_AVX2 inline void finalize_four(const double* mx_, const double* my_, const double* mz_, const double* mxx_,
+SPECBAKE_AVX2_INLINE void finalize_four(const double* mx_, const double* my_, const double* mz_, const double* mxx_,
                                         const double* myy_, const double* mxy_, const double* ma_,
                                         const TextureBakeSettings& s, bool flip_y, Finalized& f, int k,
                                         __m256d& change) {
@@ -544,11 +748,18 @@ SPECBAKE_AVX2 inline void finalize_four(const double* mx_, const double* my_, co
     const __m256d mx = _mm256_loadu_pd(mx_), my = _mm256_loadu_pd(my_), mz = _mm256_loadu_pd(mz_);
     const __m256d sxx = _mm256_max_pd(_mm256_sub_pd(_mm256_loadu_pd(mxx_), _mm256_mul_pd(mx, mx)), zero);
     const __m256d syy = _mm256_max_pd(_mm256_sub_pd(_mm256_loadu_pd(myy_), _mm256_mul_pd(my, my)), zero);
-    const __m256d bound = _mm256_sqrt_pd(_mm256_mul_pd(sxx, syy));
-    const __m256d neg_bound = _mm256_xor_pd(bound, sign);
     const __m256d dxy = _mm256_sub_pd(_mm256_loadu_pd(mxy_), _mm256_mul_pd(mx, my));
-    const __m256d sxy = select4(_mm256_cmp_pd(dxy, neg_bound, _CMP_LT_OQ), neg_bound,
-                                select4(_mm256_cmp_pd(bound, dxy, _CMP_LT_OQ), bound, dxy));
+    // The clamp to +-sqrt(sxx syy) changes nothing where dxy^2 < sxx syy (1 - 1e-9): then |dxy| < sqrt(sxx syy)
+    // exactly, and the rounded root, rounding monotonically, is still >= |dxy|. The root is taken otherwise.
+    const __m256d p = _mm256_mul_pd(sxx, syy);
+    __m256d sxy = dxy;
+    if (_mm256_movemask_pd(_mm256_cmp_pd(_mm256_mul_pd(dxy, dxy), _mm256_mul_pd(p, _mm256_set1_pd(1.0 - 1e-9)),
+                                         _CMP_LT_OQ)) != 0xF) {
+        const __m256d bound = _mm256_sqrt_pd(p);
+        const __m256d neg_bound = _mm256_xor_pd(bound, sign);
+        sxy = select4(_mm256_cmp_pd(dxy, neg_bound, _CMP_LT_OQ), neg_bound,
+                      select4(_mm256_cmp_pd(bound, dxy, _CMP_LT_OQ), bound, dxy));
+    }
     __m256d t = _mm256_add_pd(sxx, syy);  // mean
     switch (s.isotropic) {
         case IsotropicReduction::Mean: break;
@@ -577,22 +788,29 @@ SPECBAKE_AVX2 inline void finalize_four(const double* mx_, const double* my_, co
         a = select4(_mm256_cmp_pd(sum, one, _CMP_LT_OQ), sum, one);
     }
     const __m256d r = _mm256_sqrt_pd(_mm256_sqrt_pd(a));
-    const __m256d r_in = _mm256_sqrt_pd(_mm256_sqrt_pd(a_base));
-    const __m256d diff = _mm256_andnot_pd(sign, _mm256_sub_pd(r, r_in));
-    change = select4(_mm256_cmp_pd(change, diff, _CMP_LT_OQ), diff, change);
+    // |r - r_in| only counts where it can raise the lane's largest change: a float estimate of r_in (error
+    // below 1e-6) rules out the other texels, so their roots are not taken in double.
+    const __m256d r_in_estimate = _mm256_cvtps_pd(_mm_sqrt_ps(_mm_sqrt_ps(_mm256_cvtpd_ps(a_base))));
+    const __m256d reach = _mm256_add_pd(_mm256_andnot_pd(sign, _mm256_sub_pd(r, r_in_estimate)), _mm256_set1_pd(1e-6));
+    if (_mm256_movemask_pd(_mm256_cmp_pd(change, reach, _CMP_LT_OQ))) {
+        const __m256d r_in = _mm256_sqrt_pd(_mm256_sqrt_pd(a_base));
+        const __m256d diff = _mm256_andnot_pd(sign, _mm256_sub_pd(r, r_in));
+        change = select4(_mm256_cmp_pd(change, diff, _CMP_LT_OQ), diff, change);
+    }
     _mm256_storeu_pd(f.r + k, r);
     _mm256_storeu_pd(f.t + k, t);
     _mm256_storeu_pd(f.sxx + k, sxx);
     _mm256_storeu_pd(f.syy + k, syy);
     _mm256_storeu_pd(f.sxy + k, sxy);
-    const __m256d len = _mm256_sqrt_pd(
-        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(mx, mx), _mm256_mul_pd(my, my)), _mm256_mul_pd(mz, mz)));
-    const __m256d ok = _mm256_cmp_pd(len, _mm256_set1_pd(1e-12), _CMP_GT_OQ);
-    __m256d ny = select4(ok, _mm256_div_pd(my, len), zero);
+    const __m256d len2 =
+        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(mx, mx), _mm256_mul_pd(my, my)), _mm256_mul_pd(mz, mz));
+    const __m256d ok = _mm256_cmp_pd(len2, _mm256_set1_pd(1e-24), _CMP_GT_OQ);
+    const __m256d inv = inverse_length4(len2);
+    __m256d ny = select4(ok, _mm256_mul_pd(my, inv), zero);
     if (flip_y) ny = _mm256_xor_pd(ny, sign);
-    _mm256_storeu_pd(f.nx + k, select4(ok, _mm256_div_pd(mx, len), zero));
+    _mm256_storeu_pd(f.nx + k, select4(ok, _mm256_mul_pd(mx, inv), zero));
     _mm256_storeu_pd(f.ny + k, ny);
-    _mm256_storeu_pd(f.nz + k, select4(ok, _mm256_div_pd(mz, len), one));
+    _mm256_storeu_pd(f.nz + k, select4(ok, _mm256_mul_pd(mz, inv), one));
 }
 
 // The stores of finalize_row (projected-space LEAN) for the first multiple of four of the chunk's n texels
@@ -631,7 +849,7 @@ SPECBAKE_AVX2 int store_finalized_avx2(const double* m, int w, const Layout& lay
 SPECBAKE_AVX2 int finalize_chunk_avx2(const double* pmx, const double* pmy, const double* pmz, const double* pxx,
                                       const double* pyy, const double* pxy, const double* pa, int i0, int n,
                                       const TextureBakeSettings& s, bool flip_y, Finalized& f) {
-    __m256d lanes = _mm256_setzero_pd();
+    __m256d lanes = _mm256_set1_pd(f.change);
     int k = 0;
     for (; k + 4 <= n; k += 4) {
         const int i = i0 + k;
@@ -715,39 +933,31 @@ double finalize_row(const double* m, int w, const Layout& layout, const TextureB
 }
 
 #if defined(SPECBAKE_AVX2)
-// acc + the even and then the odd texels of the four 2-wide blocks starting at s: unpack gives
-// (s0, s4, s2, s6) and (s1, s5, s3, s7); the permute puts the blocks in order.
-SPECBAKE_AVX2 inline __m256d add_row(__m256d acc, const double* s) {
-    const __m256d a = _mm256_loadu_pd(s), b = _mm256_loadu_pd(s + 4);
-    acc = _mm256_add_pd(acc, _mm256_permute4x64_pd(_mm256_unpacklo_pd(a, b), 0xD8));
-    return _mm256_add_pd(acc, _mm256_permute4x64_pd(_mm256_unpackhi_pd(a, b), 0xD8));
-}
-
-// block_means with fx = 2 for one plane, four means per instruction: the even and odd source texels of four
-// blocks of each of the fy rows `src`, added from zero in the scalar loop's order, times `inv`. Does the
-// first multiple of four of the w means; returns how many.
+// block_means with fx = 2 for one plane, four means per instruction: the column sums of the fy rows `src`
+// (added row by row, as in the scalar loop), then each mean's even column plus its odd one (hadd gives
+// means i, i + 2, i + 1, i + 3; the permute puts them in order), times `inv`. Does the first multiple of four
+// of the w means; returns how many.
 SPECBAKE_AVX2 int pair_means_avx2(const double* const* src, int fy, int w, double inv, double* o) {
     const __m256d scale = _mm256_set1_pd(inv);
     int i = 0;
-    if (fy == 2) {  // the common case, unrolled
-        for (; i + 4 <= w; i += 4) {
-            const __m256d acc = add_row(add_row(_mm256_setzero_pd(), src[0] + 2 * size_t(i)), src[1] + 2 * size_t(i));
-            _mm256_storeu_pd(o + i, _mm256_mul_pd(acc, scale));
-        }
-        return i;
-    }
     for (; i + 4 <= w; i += 4) {
-        __m256d acc = _mm256_setzero_pd();
-        for (int dy = 0; dy < fy; ++dy) acc = add_row(acc, src[dy] + 2 * size_t(i));
-        _mm256_storeu_pd(o + i, _mm256_mul_pd(acc, scale));
+        const size_t k = 2 * size_t(i);
+        __m256d lo = _mm256_loadu_pd(src[0] + k), hi = _mm256_loadu_pd(src[0] + k + 4);
+        for (int dy = 1; dy < fy; ++dy) {
+            lo = _mm256_add_pd(lo, _mm256_loadu_pd(src[dy] + k));
+            hi = _mm256_add_pd(hi, _mm256_loadu_pd(src[dy] + k + 4));
+        }
+        const __m256d sums = _mm256_permute4x64_pd(_mm256_hadd_pd(lo, hi), 0xD8);
+        _mm256_storeu_pd(o + i, _mm256_mul_pd(sums, scale));
     }
     return i;
 }
 #endif
 
 // Means of one row of a level whose footprints are fx x fy blocks of the finer level: `fine` holds the
-// fy finer rows (each C planes of pw doubles), `out` receives C planes of w means. Each mean sums its
-// block in the order (dy, dx), starting from zero, and is multiplied by 1 / (fx fy).
+// fy finer rows (each C planes of pw doubles), `out` receives C planes of w means. Each mean adds the
+// columns of its block, each column summed over its rows first ((a + c) + (b + d) for a 2 x 2 block with
+// rows a b and c d: pairwise, and the order vector forms add in), and is multiplied by 1 / (fx fy).
 void block_means(const double* fine, int pw, int fx, int fy, int C, int w, double* out) {
     const double inv = 1.0 / double(fx * fy);
     for (int c = 0; c < C; ++c) {
@@ -761,8 +971,12 @@ void block_means(const double* fine, int pw, int fx, int fy, int C, int w, doubl
 #endif
         for (; i < w; ++i) {
             double acc = 0.0;
-            for (int dy = 0; dy < fy; ++dy)
-                for (int dx = 0; dx < fx; ++dx) acc += src[dy][size_t(i) * fx + dx];
+            for (int dx = 0; dx < fx; ++dx) {
+                const size_t k = size_t(i) * fx + dx;
+                double column = src[0][k];
+                for (int dy = 1; dy < fy; ++dy) column += src[dy][k];
+                acc = dx == 0 ? column : acc + column;
+            }
             o[i] = acc * inv;
         }
     }
@@ -1024,9 +1238,8 @@ Result<TextureBakeResult> bake_validated(const Image& normal, const Image* rough
         return finalize_row(means, w, layout, settings, dec.flip_y, block.rough_row(k), block.kern_row(k),
                             block.lean_row(k), block.nrm_row(k));
     };
-    auto base_into = [&](RowBlock& block, int k, const double* v, const float* r0, int n) {
-        write_base_row(v, r0, n, layout, dec.flip_y, block.rough_row(k), block.kern_row(k),
-                       block.kern_ch, block.lean_row(k), block.nrm_row(k));
+    auto base_into = [&](RowBlock& block, int k, const double* v, const float* r0, int n, int offset = 0) {
+        write_base_row(v, r0, n, layout, dec.flip_y, block.base_row(k, offset), block.kern_ch);
     };
     auto reduce_changes = [](const std::vector<double>& rows) {
         double m = 0.0;
@@ -1052,6 +1265,11 @@ Result<TextureBakeResult> bake_validated(const Image& normal, const Image* rough
         tile[size_t(F)] = std::clamp(kTileTexels / span, 1, level_w(F));
         for (int L = F; L >= 1; --L) tile[size_t(L) - 1] = tile[size_t(L)] * fx[size_t(L)];
         const int wF = level_w(F), hF = level_h(F);
+        // Levels 0 and 1 straight from the decoded registers (base_and_pairs_avx2) where it applies.
+        bool pairs_in_registers = false;
+#if defined(SPECBAKE_AVX2)
+        pairs_in_registers = has_avx2() && fx[1] == 2 && fy[1] == 2 && layout.slope < 0 && dec.resampled.empty();
+#endif
         const bool keep = F + 1 < levels && tiles_previous(F + 1);
         current.assign(keep ? size_t(wF) * hF * C : 0, 0.0);
         std::vector<std::vector<double>> change(size_t(F) + 1);
@@ -1069,6 +1287,26 @@ Result<TextureBakeResult> bake_validated(const Image& normal, const Image* rough
             const auto top = uninitialized<double>(size_t(C) * tile[size_t(F)]);  // means of level F
             const auto r0 = uninitialized<float>(size_t(tile[0]));
             long long task_degenerate = 0;
+            // Levels 0 and 1 of texels [x, x + n) of row j of level 1 (2 x 2 footprints) from registers, the
+            // last means (n not a multiple of four) through the planes in `f`.
+            auto levels_0_1 = [&](int j, int x, int n, double* m, double* f) {
+                RowBlock& base = out[0];
+                int done = 0;
+#if defined(SPECBAKE_AVX2)
+                const BaseRow rows[2] = {base.base_row(0, 0), base.base_row(1, 0)};
+                done = base_and_pairs(dec, 2 * j, 2 * x, n, rows, base.kern_ch, m, n, task_degenerate);
+#endif
+                if (done == n) return;
+                const int rest = n - done, nr = 2 * rest;
+                for (int dy = 0; dy < 2; ++dy) {
+                    double* v = f + size_t(dy) * C * nr;
+                    task_degenerate += dec.decode_span(2 * j + dy, 2 * (x + done), nr, v, r0.get());
+                    base_into(base, dy, v, r0.get(), nr, 2 * done);
+                }
+                std::array<double, 4 * 16> tail;  // C (<= 14) planes of rest (< 4) means
+                block_means(f, nr, 2, 2, C, rest, tail.data());
+                for (int c = 0; c < C; ++c) std::copy_n(tail.data() + size_t(c) * rest, rest, plane(m, c, n) + done);
+            };
             // Means of texels [x, x + n) of row j of level L into m (C planes of n) and its outputs into row k
             // of out[L], after the outputs of every finer level under them went to the sink.
             std::function<void(int, int, int, int, double*, int)> block = [&](int L, int j, int x, int n, double* m,
@@ -1082,10 +1320,14 @@ Result<TextureBakeResult> bake_validated(const Image& normal, const Image* rough
                 const int fxL = fx[size_t(L)], fyL = fy[size_t(L)], nf = n * fxL;
                 double* f = fine[size_t(L)].get();
                 out[size_t(L) - 1].width = nf;
-                for (int dy = 0; dy < fyL; ++dy)
-                    block(L - 1, j * fyL + dy, x * fxL, nf, f + size_t(dy) * C * nf, dy);
+                if (L == 1 && pairs_in_registers) {
+                    levels_0_1(j, x, n, m, f);
+                } else {
+                    for (int dy = 0; dy < fyL; ++dy)
+                        block(L - 1, j * fyL + dy, x * fxL, nf, f + size_t(dy) * C * nf, dy);
+                    block_means(f, nf, fxL, fyL, C, n, m);
+                }
                 out[size_t(L) - 1].emit(sink, L - 1, x * fxL, j * fyL, fyL);
-                block_means(f, nf, fxL, fyL, C, n, m);
                 double& c = change[size_t(L)][size_t(j)];
                 c = std::max(c, finalize_into(o, k, m, n));
             };
