@@ -579,11 +579,6 @@ void write_base_row(const double* v, const float* r0, int W, const Layout& layou
 }
 
 #if defined(SPECBAKE_AVX2)
-// sum = v (the first row of a column) or sum + v.
-SPECBAKE_AVX2_INLINE void add_column(double* sum, __m256d v, bool first) {
-    _mm256_store_pd(sum, first ? v : _mm256_add_pd(_mm256_load_pd(sum), v));
-}
-
 // Levels 0 and 1 of base rows y and y + 1 over base texels [bx, bx + 2 n) in one pass, for a level 1 whose
 // footprints are 2 x 2 blocks of the base: each 4 x 2 group of texels is decoded in registers, written as
 // level 0 into rows[0] and rows[1], and its column sums kept; the pair sums of two groups give four level-1
@@ -627,47 +622,56 @@ SPECBAKE_AVX2 int base_and_pairs_avx2(const Decoder& dec, int y, int bx, int n, 
             _mm256_store_pd(unit[r][1] + x, u.y);
             _mm256_store_pd(unit[r][2] + x, u.z);
         }
+    // One row's quantities of a half group: the unit normal, its products, and the roughness.
+    struct Texels {
+        __m256d x, y, z, xx, yy, xy, a;
+        __m128 r, occlusion, metallic;
+    };
     int i = 0;
     for (; i + 4 <= n; i += 4) {
         for (int h = 0; h < 2; ++h) {
             const size_t o = size_t(2 * i + 4 * h);  // the half's first texel in the rows
+            Texels t[2];
             for (int r = 0; r < 2; ++r) {
-                const __m256d ux = _mm256_load_pd(unit[r][0] + o), uy = _mm256_load_pd(unit[r][1] + o);
-                const __m256d uz = _mm256_load_pd(unit[r][2] + o);
-                const Normal4 u{ux, uy, uz, _mm256_mul_pd(ux, ux), _mm256_mul_pd(uy, uy)};
-                __m128 rough = constant_r, occlusion = constant_r, metallic = constant_r;
-                __m256d a = constant_a;
+                Texels& q = t[r];
+                q.x = _mm256_load_pd(unit[r][0] + o), q.y = _mm256_load_pd(unit[r][1] + o);
+                q.z = _mm256_load_pd(unit[r][2] + o);
+                q.xx = _mm256_mul_pd(q.x, q.x), q.yy = _mm256_mul_pd(q.y, q.y), q.xy = _mm256_mul_pd(q.x, q.y);
+                q.r = q.occlusion = q.metallic = constant_r, q.a = constant_a;
                 if constexpr (kMap) {
-                    const Roughness4 q = decode_roughness4(rough_row[r] + o * rough_stride, rough_stride, channel,
+                    const Roughness4 g = decode_roughness4(rough_row[r] + o * rough_stride, rough_stride, channel,
                                                            kOrm, rough_finite);
-                    rough = q.r, occlusion = q.occlusion, metallic = q.metallic, a = q.a;
+                    q.r = g.r, q.occlusion = g.occlusion, q.metallic = g.metallic, q.a = g.a;
                 }
-                const __m256d xy = _mm256_mul_pd(u.x, u.y);
                 const BaseRow& out = rows[r];
                 if (out.rough) {
                     if constexpr (kOrm)
-                        store3x4(out.rough + 3 * o, occlusion, rough, metallic);
+                        store3x4(out.rough + 3 * o, q.occlusion, q.r, q.metallic);
                     else
-                        _mm_storeu_ps(out.rough + o, rough);
+                        _mm_storeu_ps(out.rough + o, q.r);
                 }
                 if (out.kern)  // Sigma = 0 at the base
                     for (int k = 0; k < kern_ch; ++k) _mm_storeu_ps(out.kern + size_t(kern_ch) * o + 4 * k, _mm_setzero_ps());
                 if (out.lean)
-                    store5x4(out.lean + 5 * o, _mm256_cvtpd_ps(u.x), _mm256_cvtpd_ps(u.y), _mm256_cvtpd_ps(u.xx),
-                             _mm256_cvtpd_ps(u.yy), _mm256_cvtpd_ps(xy));
+                    store5x4(out.lean + 5 * o, _mm256_cvtpd_ps(q.x), _mm256_cvtpd_ps(q.y), _mm256_cvtpd_ps(q.xx),
+                             _mm256_cvtpd_ps(q.yy), _mm256_cvtpd_ps(q.xy));
                 if (out.nrm)
-                    store3x4(out.nrm + 3 * o, _mm256_cvtpd_ps(_mm256_add_pd(_mm256_mul_pd(half, u.x), half)),
-                             _mm256_cvtpd_ps(_mm256_add_pd(_mm256_mul_pd(half_y, u.y), half)),
-                             _mm256_cvtpd_ps(_mm256_add_pd(_mm256_mul_pd(half, u.z), half)));
-                double(*sum)[4] = sums[h];
-                const bool first = r == 0;
-                add_column(sum[kPx], u.x, first), add_column(sum[kPy], u.y, first), add_column(sum[kPz], u.z, first);
-                add_column(sum[kPxx], u.xx, first), add_column(sum[kPyy], u.yy, first);
-                add_column(sum[kPxy], xy, first), add_column(sum[kA], a, first);
-                if constexpr (kOrm) {
-                    add_column(sum[kCore], _mm256_cvtps_pd(occlusion), first);
-                    add_column(sum[kCore + 1], _mm256_cvtps_pd(metallic), first);
-                }
+                    store3x4(out.nrm + 3 * o, _mm256_cvtpd_ps(_mm256_add_pd(_mm256_mul_pd(half, q.x), half)),
+                             _mm256_cvtpd_ps(_mm256_add_pd(_mm256_mul_pd(half_y, q.y), half)),
+                             _mm256_cvtpd_ps(_mm256_add_pd(_mm256_mul_pd(half, q.z), half)));
+            }
+            // Column sums: row y plus row y + 1.
+            double(*sum)[4] = sums[h];
+            _mm256_store_pd(sum[kPx], _mm256_add_pd(t[0].x, t[1].x));
+            _mm256_store_pd(sum[kPy], _mm256_add_pd(t[0].y, t[1].y));
+            _mm256_store_pd(sum[kPz], _mm256_add_pd(t[0].z, t[1].z));
+            _mm256_store_pd(sum[kPxx], _mm256_add_pd(t[0].xx, t[1].xx));
+            _mm256_store_pd(sum[kPyy], _mm256_add_pd(t[0].yy, t[1].yy));
+            _mm256_store_pd(sum[kPxy], _mm256_add_pd(t[0].xy, t[1].xy));
+            _mm256_store_pd(sum[kA], _mm256_add_pd(t[0].a, t[1].a));
+            if constexpr (kOrm) {
+                _mm256_store_pd(sum[kCore], _mm256_add_pd(_mm256_cvtps_pd(t[0].occlusion), _mm256_cvtps_pd(t[1].occlusion)));
+                _mm256_store_pd(sum[kCore + 1], _mm256_add_pd(_mm256_cvtps_pd(t[0].metallic), _mm256_cvtps_pd(t[1].metallic)));
             }
         }
         for (int c = 0; c < C; ++c) {  // as pair_means_avx2
