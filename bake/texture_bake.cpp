@@ -599,7 +599,7 @@ SPECBAKE_AVX2 int base_and_pairs_avx2(const Decoder& dec, int y, int bx, int n, 
                                  kMap ? dec.roughness->texel(bx, y + 1) : nullptr};
     const bool reconstruct = !kRgb && dec.reconstruct, flip_y = dec.flip_y;
     const __m256d y_sign = _mm256_set1_pd(flip_y ? -0.0 : 0.0);
-    const int channel = dec.roughness_channel;
+    const int channel = kOrm ? 1 : dec.roughness_channel;  // ORM: roughness is G
     long long zero_length = 0;
     const __m256d half = _mm256_set1_pd(0.5), half_y = _mm256_set1_pd(flip_y ? -0.5 : 0.5);
     const __m256d quarter = _mm256_set1_pd(0.25);
@@ -1015,11 +1015,9 @@ bool looks_srgb_encoded(const Image& n) {
         const long k = long(code + 0.5);  // code >= 0: the values are clamped to [0, 1]
         return k >= 0 && k <= 255 && std::abs(code - double(k)) < 1e-4 ? table[size_t(k)] : srgb_to_linear(c);
     };
-    const size_t count = n.texel_count();
-    const size_t stride = std::max<size_t>(1, count / 65536);
     double dev_linear = 0.0, dev_srgb = 0.0;
     size_t samples = 0;
-    for (size_t i = 0; i < count; i += stride) {
+    auto sample = [&](size_t i) {
         const float* c = n.pixels.data() + i * n.channels;
         double l2 = 0.0, s2 = 0.0;
         for (int k = 0; k < 3; ++k) {
@@ -1031,6 +1029,16 @@ bool looks_srgb_encoded(const Image& n) {
         dev_linear += std::abs(std::sqrt(l2) - 1.0);
         dev_srgb += std::abs(std::sqrt(s2) - 1.0);
         ++samples;
+    };
+    // At most 65536 texels, as 256 runs of 256 consecutive texels spread over the map: runs are read at the
+    // speed of memory, where single texels spread as widely each cost a cache miss.
+    const size_t count = n.texel_count();
+    constexpr size_t kRuns = 256, kRun = 256;
+    if (count <= kRuns * kRun) {
+        for (size_t i = 0; i < count; ++i) sample(i);
+    } else {
+        for (size_t run = 0; run < kRuns; ++run)
+            for (size_t i = run * (count / kRuns), end = i + kRun; i < end; ++i) sample(i);
     }
     dev_linear /= double(samples);
     dev_srgb /= double(samples);
