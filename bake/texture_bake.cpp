@@ -165,6 +165,7 @@ SPECBAKE_AVX2 int decode_normals_avx2(const float* row, int ch, int n, bool reco
 struct Roughness4 {
     __m128 r, occlusion, metallic;
     __m256d a;
+    bool clamped = false;  // r differs from the value read (or it is NaN)
 };
 SPECBAKE_AVX2_INLINE Roughness4 decode_roughness4(const float* c, size_t stride, int channel, bool orm,
                                                   __m128& finite) {
@@ -179,7 +180,7 @@ SPECBAKE_AVX2_INLINE Roughness4 decode_roughness4(const float* c, size_t stride,
     const __m128 r = _mm_blendv_ps(_mm_blendv_ps(v, one, _mm_cmplt_ps(one, v)), zero, _mm_cmplt_ps(v, zero));
     const __m256d rd = _mm256_cvtps_pd(r);
     const __m256d r2 = _mm256_mul_pd(rd, rd);
-    return {r, in.x, in.z, _mm256_mul_pd(r2, r2)};
+    return {r, in.x, in.z, _mm256_mul_pd(r2, r2), _mm_movemask_ps(_mm_cmpneq_ps(r, v)) != 0};
 }
 
 // decode_roughness4 over the first multiple of four of the n texels at t into a and r0 (and, when
@@ -638,20 +639,35 @@ SPECBAKE_AVX2 int base_and_pairs_avx2(const Decoder& dec, int y, int bx, int n, 
                 q.z = _mm256_load_pd(unit[r][2] + o);
                 q.xx = _mm256_mul_pd(q.x, q.x), q.yy = _mm256_mul_pd(q.y, q.y), q.xy = _mm256_mul_pd(q.x, q.y);
                 q.r = q.occlusion = q.metallic = constant_r, q.a = constant_a;
+                bool clamped = false;
                 if constexpr (kMap) {
                     const Roughness4 g = decode_roughness4(rough_row[r] + o * rough_stride, rough_stride, channel,
                                                            kOrm, rough_finite);
-                    q.r = g.r, q.occlusion = g.occlusion, q.metallic = g.metallic, q.a = g.a;
+                    q.r = g.r, q.occlusion = g.occlusion, q.metallic = g.metallic, q.a = g.a, clamped = g.clamped;
                 }
                 const BaseRow& out = rows[r];
                 if (out.rough) {
-                    if constexpr (kOrm)
+                    if constexpr (kOrm && kRgb) {
+                        // The texels as read unless G was clamped: R and B pass through.
+                        const float* in = rough_row[r] + 3 * o;
+                        if (!clamped) {
+                            _mm_storeu_ps(out.rough + 3 * o, _mm_loadu_ps(in));
+                            _mm_storeu_ps(out.rough + 3 * o + 4, _mm_loadu_ps(in + 4));
+                            _mm_storeu_ps(out.rough + 3 * o + 8, _mm_loadu_ps(in + 8));
+                        } else {
+                            store3x4(out.rough + 3 * o, q.occlusion, q.r, q.metallic);
+                        }
+                    } else if constexpr (kOrm) {
                         store3x4(out.rough + 3 * o, q.occlusion, q.r, q.metallic);
-                    else
+                    } else {
                         _mm_storeu_ps(out.rough + o, q.r);
+                    }
                 }
-                if (out.kern)  // Sigma = 0 at the base
-                    for (int k = 0; k < kern_ch; ++k) _mm_storeu_ps(out.kern + size_t(kern_ch) * o + 4 * k, _mm_setzero_ps());
+                if (out.kern) {  // Sigma = 0 at the base
+                    float* k = out.kern + size_t(kern_ch) * o;
+                    _mm_storeu_ps(k, _mm_setzero_ps());
+                    if (kern_ch == 3) _mm_storeu_ps(k + 4, _mm_setzero_ps()), _mm_storeu_ps(k + 8, _mm_setzero_ps());
+                }
                 if (out.lean)
                     store5x4(out.lean + 5 * o, _mm256_cvtpd_ps(q.x), _mm256_cvtpd_ps(q.y), _mm256_cvtpd_ps(q.xx),
                              _mm256_cvtpd_ps(q.yy), _mm256_cvtpd_ps(q.xy));
