@@ -205,6 +205,16 @@ TEST(TextureBake, BruteForcePowerOfTwoNonSquareMinusYAndClamp) {
     expect_matches_reference(nm, nullptr, 0, 0.1, s);
 }
 
+// Even sizes take the pass that builds levels 0 and 1 from registers; 78 = 2 (4 * 9 + 3) leaves a tail of
+// three level-1 texels per row to the planes.
+TEST(TextureBake, BruteForceEvenSizesWithOrmAndTail) {
+    const Image nm = random_normal_map(78, 40, 11, 0.4);
+    const Image orm = random_orm(78, 40, 12);
+    TextureBakeSettings s;
+    s.anisotropic = true;
+    expect_matches_reference(nm, &orm, 1, 0.0, s);
+}
+
 TEST(TextureBake, BruteForceTwoChannelMap) {
     const Image full = random_normal_map(24, 17, 8, 0.3);
     Image two(full.width, full.height, 2);
@@ -305,6 +315,51 @@ TEST(TextureBake, OutputsAreIdenticalForAnyThreadCount) {
             const auto& y = b->levels[L].pixels;
             ASSERT_EQ(x.size(), y.size());
             EXPECT_EQ(std::memcmp(x.data(), y.data(), x.size() * sizeof(float)), 0) << "level " << L;
+        }
+    }
+}
+
+// The same bake through the register pass (roughness map of the normal map's size) and through the planes
+// (the same roughness at twice the resolution, resampled first) is bit for bit the same: the roughness
+// values are chosen so that the resampled means are exact (r in quarters, R and B in eighths).
+TEST(TextureBake, RegisterAndPlanePassesAgreeBitForBit) {
+    const int W = 78, H = 40;
+    std::mt19937 rng(13);
+    std::uniform_int_distribution<int> quarter(0, 4), eighth(0, 8);
+    Image orm(W, H, 3), orm2(2 * W, 2 * H, 3);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const float v[3] = {float(eighth(rng)) / 8.0f, float(quarter(rng)) / 4.0f, float(eighth(rng)) / 8.0f};
+            for (int c = 0; c < 3; ++c) {
+                orm.texel(x, y)[c] = v[c];
+                for (int k = 0; k < 4; ++k) orm2.texel(2 * x + k % 2, 2 * y + k / 2)[c] = v[c];
+            }
+        }
+    const Image rgb = random_normal_map(W, H, 14, 0.5);
+    Image two(W, H, 2);
+    for (size_t i = 0; i < rgb.texel_count(); ++i)
+        two.pixels[2 * i] = rgb.pixels[3 * i], two.pixels[2 * i + 1] = rgb.pixels[3 * i + 1];
+    for (const Image* nm : {&rgb, static_cast<const Image*>(&two)}) {
+        for (const NormalGreen green : {NormalGreen::PlusY, NormalGreen::MinusY}) {
+            TextureBakeSettings s;
+            s.normal_y = green;
+            auto direct = bake_texture(*nm, &orm, 1, 0.0f, s);
+            auto resampled = bake_texture(*nm, &orm2, 1, 0.0f, s);
+            ASSERT_TRUE(direct.ok() && resampled.ok());
+            EXPECT_FALSE(direct->notes.roughness_resampled);
+            EXPECT_TRUE(resampled->notes.roughness_resampled);
+            EXPECT_EQ(direct->max_roughness_change, resampled->max_roughness_change);
+            for (size_t L = 0; L < direct->roughness.levels.size(); ++L) {
+                for (const auto& [a, b] :
+                     {std::pair{&direct->roughness, &resampled->roughness}, std::pair{&direct->kernel, &resampled->kernel},
+                      std::pair{&direct->lean, &resampled->lean}, std::pair{&direct->normal, &resampled->normal}}) {
+                    const auto& x = a->levels[L].pixels;
+                    const auto& y = b->levels[L].pixels;
+                    ASSERT_EQ(x.size(), y.size());
+                    EXPECT_EQ(std::memcmp(x.data(), y.data(), x.size() * sizeof(float)), 0)
+                        << nm->channels << " channels, level " << L;
+                }
+            }
         }
     }
 }
