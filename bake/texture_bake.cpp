@@ -630,9 +630,11 @@ SPECBAKE_AVX2 int base_and_pairs_avx2(const Decoder& dec, int y, int bx, int n, 
     };
     int i = 0;
     for (; i + 4 <= n; i += 4) {
+#pragma GCC unroll 2
         for (int h = 0; h < 2; ++h) {
             const size_t o = size_t(2 * i + 4 * h);  // the half's first texel in the rows
             Texels t[2];
+#pragma GCC unroll 2
             for (int r = 0; r < 2; ++r) {
                 Texels& q = t[r];
                 q.x = _mm256_load_pd(unit[r][0] + o), q.y = _mm256_load_pd(unit[r][1] + o);
@@ -690,6 +692,7 @@ SPECBAKE_AVX2 int base_and_pairs_avx2(const Decoder& dec, int y, int bx, int n, 
                 _mm256_store_pd(sum[kCore + 1], _mm256_add_pd(_mm256_cvtps_pd(t[0].metallic), _mm256_cvtps_pd(t[1].metallic)));
             }
         }
+#pragma GCC unroll 9
         for (int c = 0; c < C; ++c) {  // as pair_means_avx2
             const __m256d pairs = _mm256_hadd_pd(_mm256_load_pd(sums[0][c]), _mm256_load_pd(sums[1][c]));
             _mm256_storeu_pd(plane(m, c, w) + i, _mm256_mul_pd(_mm256_permute4x64_pd(pairs, 0xD8), quarter));
