@@ -1052,10 +1052,10 @@ bool looks_srgb_encoded(const Image& n) {
         dev_srgb += std::abs(std::sqrt(s2) - 1.0);
         ++samples;
     };
-    // At most 65536 texels, as 256 runs of 256 consecutive texels spread over the map: runs are read at the
+    // At most 16384 texels, as 256 runs of 64 consecutive texels spread over the map: runs are read at the
     // speed of memory, where single texels spread as widely each cost a cache miss.
     const size_t count = n.texel_count();
-    constexpr size_t kRuns = 256, kRun = 256;
+    constexpr size_t kRuns = 256, kRun = 64;
     if (count <= kRuns * kRun) {
         for (size_t i = 0; i < count; ++i) sample(i);
     } else {
