@@ -11,6 +11,8 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdlib>
+#include <ctime>
 #include <fstream>
 #include <memory>
 
@@ -94,6 +96,23 @@ std::vector<std::string> names_for(int channels, const std::vector<std::string>&
     return names;
 }
 
+// The DateTime written into EXR headers: SOURCE_DATE_EPOCH (the reproducible-builds convention) when it is
+// set, else the epoch. OpenImageIO stamps the current time otherwise, so the same bake would give files (and
+// manifest hashes) that differ from run to run and defeat build caches.
+std::string reproducible_date_time() {
+    std::time_t t = 0;
+    if (const char* epoch = std::getenv("SOURCE_DATE_EPOCH")) {
+        char* end = nullptr;
+        const long long v = std::strtoll(epoch, &end, 10);
+        if (end != epoch && *end == '\0' && v >= 0) t = std::time_t(v);
+    }
+    std::tm utc{};
+    gmtime_r(&t, &utc);
+    char text[32];
+    std::strftime(text, sizeof text, "%Y:%m:%d %H:%M:%S", &utc);
+    return text;
+}
+
 // One OpenImageIO file: all levels as a tiled MIP-mapped EXR, or a single level (PNG / EXR).
 Result<void> write_oiio(const fs::path& temp, const fs::path& final_path, const std::vector<const Image*>& levels,
                         OIIO::TypeDesc type, bool mipmapped, const std::vector<std::string>& names, WrapMode wrap) {
@@ -115,6 +134,7 @@ Result<void> write_oiio(const fs::path& temp, const fs::path& final_path, const 
         if (type == OIIO::TypeDesc::HALF || type == OIIO::TypeDesc::FLOAT) spec.attribute("compression", "zip");
         spec.attribute("oiio:ColorSpace", "Linear");
         spec.attribute("Software", "specbake");
+        spec.attribute("DateTime", reproducible_date_time());
         const auto mode = i == 0 ? OIIO::ImageOutput::Create : OIIO::ImageOutput::AppendMIPLevel;
         if (!out->open(temp.string(), spec, mode))
             return make_error(final_path.string() + ": cannot write: " + one_line(out->geterror()));

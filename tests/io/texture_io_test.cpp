@@ -11,11 +11,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <thread>
 
 namespace specbake::io {
 namespace {
@@ -321,6 +324,31 @@ TEST(Dds, Dx10HeaderAndLevels) {
             (void)OIIO::geterror();
         }
     }
+    fs::remove_all(dir);
+}
+
+// The same chain written twice, a second apart, gives the same bytes: the header's DateTime is not the
+// clock's (SOURCE_DATE_EPOCH when set, else the epoch), so build caches and manifest hashes stay valid.
+TEST(Exr, SameChainSameBytesAtAnyTime) {
+    const fs::path dir = fresh_dir("exr_reproducible");
+    const MipChain chain = random_chain(20, 12, 1, 3, 0.0f, 1.0f);
+    auto bytes = [&](const std::string& stem) {
+        auto written = write_texture(chain, TexelEncoding::Float16, TextureContainer::Exr, dir, stem, "kernel", {"t"},
+                                     WrapMode::Repeat);
+        EXPECT_TRUE(written.ok()) << written.error().message;
+        std::ifstream f(dir / (stem + ".exr"), std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(f), {});
+    };
+    const std::string first = bytes("a");
+    std::this_thread::sleep_for(std::chrono::milliseconds(1100));
+    const std::string second = bytes("b");
+    ASSERT_FALSE(first.empty());
+    EXPECT_TRUE(first == second);
+    auto in = OIIO::ImageInput::open((dir / "a.exr").string());
+    ASSERT_TRUE(in);
+    const std::string stamp = in->spec().get_string_attribute("DateTime");
+    const char* epoch = std::getenv("SOURCE_DATE_EPOCH");
+    if (!epoch) EXPECT_EQ(stamp, "1970:01:01 00:00:00");
     fs::remove_all(dir);
 }
 
