@@ -1262,7 +1262,8 @@ Result<TextureBakeResult> bake_validated(const Image& normal, const Image* rough
     };
 
     // Means of the previous / current level, kept when the next level tiles it: row j is C planes of w.
-    std::vector<double> previous, current;
+    // Not zero-filled: every mean of a kept level is written before the next level reads it.
+    std::unique_ptr<double[]> previous, current;
     std::vector<double> level_change(size_t(levels), 0.0);
     std::atomic<long long> degenerate{0};
     const size_t row_doubles = size_t(C) * size_t(W);
@@ -1305,7 +1306,7 @@ Result<TextureBakeResult> bake_validated(const Image& normal, const Image* rough
         pairs_in_registers = has_avx2() && fx[1] == 2 && fy[1] == 2 && layout.slope < 0 && dec.resampled.empty();
 #endif
         const bool keep = F + 1 < levels && tiles_previous(F + 1);
-        current.assign(keep ? size_t(wF) * hF * C : 0, 0.0);
+        current = uninitialized<double>(keep ? size_t(wF) * hF * C : 0);
         std::vector<std::vector<double>> change(size_t(F) + 1);
         for (int L = 1; L <= F; ++L) change[size_t(L)].assign(size_t(level_h(L)), 0.0);
 
@@ -1374,7 +1375,7 @@ Result<TextureBakeResult> bake_validated(const Image& normal, const Image* rough
                     out[size_t(F)].emit(sink, F, x, j, 1);
                     if (keep)
                         for (int c = 0; c < C; ++c)
-                            std::copy_n(m + size_t(c) * n, n, current.begin() + ptrdiff_t((size_t(j) * C + c) * wF + x));
+                            std::copy_n(m + size_t(c) * n, n, current.get() + (size_t(j) * C + c) * wF + x);
                 }
             }
             degenerate += task_degenerate;
@@ -1390,7 +1391,7 @@ Result<TextureBakeResult> bake_validated(const Image& normal, const Image* rough
             const int w = level_w(L), h = level_h(L);
             const bool from_previous = tiles_previous(L);
             const bool keep = L >= 1 && L + 1 < levels && tiles_previous(L + 1);
-            current.assign(keep ? size_t(w) * h * C : 0, 0.0);
+            current = uninitialized<double>(keep ? size_t(w) * h * C : 0);
             std::vector<double> row_change(size_t(h), 0.0);
             const std::vector<Span1D> spans_x = from_previous || L == 0 ? std::vector<Span1D>{} : footprint_spans(W, w);
             const std::vector<Span1D> spans_y = from_previous || L == 0 ? std::vector<Span1D>{} : footprint_spans(H, h);
@@ -1413,7 +1414,7 @@ Result<TextureBakeResult> bake_validated(const Image& normal, const Image* rough
                         continue;
                     }
                     if (from_previous) {
-                        block_means(previous.data() + size_t(j) * fy * C * pw, pw, fx, fy, C, w, means.data());
+                        block_means(previous.get() + size_t(j) * fy * C * pw, pw, fx, fy, C, w, means.data());
                     } else {
                         std::fill(means.begin(), means.end(), 0.0);
                         const Span1D& sy = spans_y[size_t(j)];
@@ -1436,7 +1437,7 @@ Result<TextureBakeResult> bake_validated(const Image& normal, const Image* rough
                     }
                     row_change[size_t(j)] = finalize_into(out, 0, means.data(), w);
                     out.emit(sink, L, 0, j, 1);
-                    if (keep) std::copy(means.begin(), means.end(), current.begin() + ptrdiff_t(size_t(j) * w * C));
+                    if (keep) std::copy(means.begin(), means.end(), current.get() + size_t(j) * w * C);
                 }
                 degenerate += task_degenerate;
             });

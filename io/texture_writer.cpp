@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <ctime>
 #include <fstream>
 #include <memory>
@@ -97,7 +98,7 @@ std::vector<std::string> names_for(int channels, const std::vector<std::string>&
 }
 
 // The DateTime written into EXR headers: SOURCE_DATE_EPOCH (the reproducible-builds convention) when it is
-// set, else the epoch. OpenImageIO stamps the current time otherwise, so the same bake would give files (and
+// set, else the epoch. OpenImageIO's EXR writer stamps the current time otherwise (its PNG writer adds none), so the same bake would give files (and
 // manifest hashes) that differ from run to run and defeat build caches.
 std::string reproducible_date_time() {
     std::time_t t = 0;
@@ -134,7 +135,7 @@ Result<void> write_oiio(const fs::path& temp, const fs::path& final_path, const 
         if (type == OIIO::TypeDesc::HALF || type == OIIO::TypeDesc::FLOAT) spec.attribute("compression", "zip");
         spec.attribute("oiio:ColorSpace", "Linear");
         spec.attribute("Software", "specbake");
-        spec.attribute("DateTime", reproducible_date_time());
+        if (std::strcmp(out->format_name(), "openexr") == 0) spec.attribute("DateTime", reproducible_date_time());
         const auto mode = i == 0 ? OIIO::ImageOutput::Create : OIIO::ImageOutput::AppendMIPLevel;
         if (!out->open(temp.string(), spec, mode))
             return make_error(final_path.string() + ": cannot write: " + one_line(out->geterror()));
