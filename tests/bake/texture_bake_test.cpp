@@ -490,18 +490,26 @@ TEST(TextureBake, NonFiniteValuesThatAreReadAreErrors) {
     const Image nm = random_normal_map(11, 6, 31, 0.2);
     const Image orm = random_orm(11, 6, 32);
     struct Case { bool in_normal; int x, y, channel; float value; };
-    for (const Case& c : {Case{true, 1, 2, 0, nan}, Case{true, 9, 4, 2, -inf}, Case{true, 10, 5, 1, inf},
-                          Case{false, 2, 1, 1, nan}, Case{false, 10, 0, 0, inf}, Case{false, 5, 5, 2, nan}}) {
-        SCOPED_TRACE(std::string(c.in_normal ? "normal" : "orm") + " texel " + std::to_string(c.x) + "," +
-                     std::to_string(c.y) + " channel " + std::to_string(c.channel));
-        Image n = nm, r = orm;
-        (c.in_normal ? n : r).texel(c.x, c.y)[c.channel] = c.value;
-        auto res = bake_texture(n, &r, 1, 0.0f, TextureBakeSettings{});
-        ASSERT_FALSE(res.ok());
-        const std::string where = std::string(c.in_normal ? "normal map" : "roughness map") +
-                                  ": NaN or infinite value at texel (" + std::to_string(c.x) + ", " +
-                                  std::to_string(c.y) + ")";
-        EXPECT_EQ(res.error().message, where);
+    // 11 x 6 goes through the planes, 22 x 12 through the register pass for levels 0-1 (x < 16) and the
+    // planes for its last texels of each row.
+    for (const int scale : {1, 2}) {
+        const Image nm_s = scale == 1 ? nm : random_normal_map(22, 12, 33, 0.2);
+        const Image orm_s = scale == 1 ? orm : random_orm(22, 12, 34);
+        for (const Case& c : {Case{true, 1, 2, 0, nan}, Case{true, 9, 4, 2, -inf}, Case{true, 10, 5, 1, inf},
+                              Case{false, 2, 1, 1, nan}, Case{false, 10, 0, 0, inf}, Case{false, 5, 5, 2, nan},
+                              Case{true, 10 * scale, 3, 0, nan}, Case{false, 10 * scale, 4, 1, -inf}}) {
+            SCOPED_TRACE(std::to_string(nm_s.width) + "x" + std::to_string(nm_s.height) + ", " +
+                         (c.in_normal ? "normal" : "orm") + " texel " + std::to_string(c.x) + "," +
+                         std::to_string(c.y) + " channel " + std::to_string(c.channel));
+            Image n = nm_s, r = orm_s;
+            (c.in_normal ? n : r).texel(c.x, c.y)[c.channel] = c.value;
+            auto res = bake_texture(n, &r, 1, 0.0f, TextureBakeSettings{});
+            ASSERT_FALSE(res.ok());
+            const std::string where = std::string(c.in_normal ? "normal map" : "roughness map") +
+                                      ": NaN or infinite value at texel (" + std::to_string(c.x) + ", " +
+                                      std::to_string(c.y) + ")";
+            EXPECT_EQ(res.error().message, where);
+        }
     }
     Image small(3, 2, 1);
     small.pixels.assign(6, 0.5f);
