@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 
 namespace specbake {
@@ -44,11 +45,19 @@ Result<VertexCurvature> estimate(const TriMesh& mesh, const WeldedTopology* shar
     if (shared && (shared->position_id.size() != n || shared->group_id.size() != n))
         return make_error(name + ": the welded topology given is not of this mesh");
 
+    // An arena of its own only for a thread count other than the caller's: work in a new arena reaches the
+    // workers only as they migrate into it, so a worker finishing the caller's other work (the topology
+    // report beside this estimate) may sit idle while this thread runs the face pass alone.
     const int threads = options.max_threads > 0 ? options.max_threads : tbb::this_task_arena::max_concurrency();
-    tbb::task_arena arena(threads);
+    std::optional<tbb::task_arena> own_arena;
+    if (threads != tbb::this_task_arena::max_concurrency()) own_arena.emplace(threads);
+    auto in_arena = [&](const auto& work) {
+        if (own_arena) own_arena->execute(work);
+        else work();
+    };
     size_t bad_index = 0;
     bool finite = true;
-    arena.execute([&] {
+    in_arena([&] {
         bad_index = first_bad(mesh.indices.size(), [&](size_t k) { return mesh.indices[k] >= n; });
         finite = all_finite(mesh.positions) && all_finite(mesh.normals) && all_finite(mesh.tangents);
     });
@@ -58,7 +67,7 @@ Result<VertexCurvature> estimate(const TriMesh& mesh, const WeldedTopology* shar
 
     VertexCurvature out;
     size_t bad_vertex = n;
-    arena.execute([&] {
+    in_arena([&] {
         WeldedTopology own;
         if (!shared) own = weld_by_position(mesh, options.weld);
         const WeldedTopology& topology = shared ? *shared : own;
