@@ -1,4 +1,5 @@
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <numeric>
@@ -99,7 +100,7 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     // corner runs b -> a when that corner is at b. An edge is simple when it has one halfedge, or two running
     // opposite ways; those pair up (mate) without further ado.
     detail::ScratchArray<uint32_t> mate(corners);
-    detail::ScratchArray<uint8_t> simple(corners), edge_kind(corners);  // edge_kind: 1 boundary, 2 non-manifold
+    detail::ScratchArray<uint8_t> simple(corners);
     auto scan_edge = [&](uint32_t k, uint32_t& total, uint32_t& opposite, uint32_t& partner, uint32_t& lowest) {
         const uint32_t a = pos[k], b = pos[next_corner(k)];
         total = opposite = 0;
@@ -127,7 +128,12 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
         uint32_t next, prev;             // positions of the corner's next and previous corners
         uint32_t corner, prev_halfedge;  // the corner (its halfedge runs a -> next) and prev_corner(corner)
     };
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, position_count, 2048), [&](const auto& r) {
+    // Boundary edges (one halfedge) and non-manifold edges (three or more, counted at their lowest halfedge)
+    // are summed per range: integer sums, the same for any split.
+    struct EdgeCounts {
+        size_t boundary = 0, nonmanifold = 0;
+    };
+    auto pair_range = [&](const tbb::blocked_range<uint32_t>& r, EdgeCounts counts) {
         std::vector<CornerEnds> around;
         for (uint32_t a = r.begin(); a != r.end(); ++a) {
             const uint32_t count = start[a + 1] - start[a];
@@ -151,23 +157,27 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
                 const bool paired = total == 2 && opposite == 1;
                 simple[k] = total == 1 || paired;
                 mate[k] = paired ? partner : kNone;
-                uint8_t kind = total == 1 ? 1 : 0;
+                counts.boundary += total == 1;
                 if (total >= 3) {
                     uint32_t lowest = k;
                     for (uint32_t m = 0; m < count; ++m) {
                         if (c[m].next == b) lowest = std::min(lowest, c[m].corner);
                         else if (c[m].prev == b) lowest = std::min(lowest, c[m].prev_halfedge);
                     }
-                    kind = lowest == k ? 2 : 0;
+                    counts.nonmanifold += lowest == k;
                 }
-                edge_kind[k] = kind;
             }
         }
-    });
-    for (uint32_t k = 0; k < corners; ++k) {
-        out.boundary_edges += edge_kind[k] == 1;
-        out.nonmanifold_edges += edge_kind[k] == 2;
-    }
+        return counts;
+    };
+    const EdgeCounts edge_counts = tbb::parallel_reduce(tbb::blocked_range<uint32_t>(0, position_count, 2048),
+                                                        EdgeCounts{}, pair_range, [](EdgeCounts x, const EdgeCounts& y) {
+                                                            x.boundary += y.boundary;
+                                                            x.nonmanifold += y.nonmanifold;
+                                                            return x;
+                                                        });
+    out.boundary_edges = edge_counts.boundary;
+    out.nonmanifold_edges = edge_counts.nonmanifold;
 
     // Faces on a non-simple edge, in triangle order: attached while the edge has no halfedge running their
     // way and fewer than two triangles; otherwise detached.
@@ -279,7 +289,9 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     const uint32_t vertices = attached_vertices + 3 * detached_count;
     auto vertex_of = [&](uint32_t k) { return vertex_base[pos[k]] + fan[k]; };
 
-    detail::ScratchArray<uint32_t> halfedge(corners);  // OpenMesh halfedge of each attached corner
+    // OpenMesh halfedge of each attached corner, in the storage of by_position (no longer read): one fresh
+    // corner-sized array less to fault in.
+    detail::ScratchArray<uint32_t>& halfedge = by_position;
     std::vector<uint32_t> face_index(faces, kNone);
     uint32_t edges = 0, attached_faces = 0;
     for (uint32_t f = 0; f < faces; ++f) {
