@@ -11,8 +11,8 @@
 //
 // Layout for speed: the vertices' unit normals (double) and the groups' frames are computed once up front;
 // one pass over the faces computes a weighted operator per corner as four floats and adds it to its group's
-// sums (double) in corner order, so the result does not depend on the thread count; a last pass
-// eigen-decomposes each group's sum. The faces are cut into chunks of a fixed size, processed in parallel:
+// sums (double) in corner order, so the result does not depend on the thread count; a last pass over the
+// vertices eigen-decomposes each vertex's group sum and writes the vertex's output. The faces are cut into chunks of a fixed size, processed in parallel:
 // a chunk adds a corner straight into its group's sums when the group's first corner lies in that chunk (no
 // other chunk adds to them before it), and otherwise keeps the corner in a list that is added afterwards,
 // chunk by chunk, in corner order. Each group's sum thus runs over its corners in increasing order as one
@@ -257,18 +257,23 @@ VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopolo
     for (const std::vector<DeferredCorner>& list : deferred)
         for (const DeferredCorner& d : list) add_corner(sums[d.group], d.shape);
 
-    detail::ScratchArray<detail::GroupPrincipal> principal(groups);
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, groups, 4096), [&](const auto& range) {
-        for (uint32_t g = range.begin(); g != range.end(); ++g) {
+    // Each vertex eigen-decomposes its group's sums itself (a group has one vertex, or a few along seams): no
+    // per-group array of principal curvatures to fill and read back.
+    VertexCurvature out;
+    out.values.resize(4 * verts);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, verts, 8192), [&](const auto& range) {
+        for (size_t v = range.begin(); v != range.end(); ++v) {
+            const uint32_t g = topology.group_id[v];
             const GroupSum& sum = sums[g];
             Shape2 shape;
             if (sum.weight > 0.0) shape = {sum.a / sum.weight, sum.b / sum.weight, sum.c / sum.weight};
             const Frame& f = frames[g];
-            principal[g] = detail::principal_curvatures(shape, Vec3d(f.u[0], f.u[1], f.u[2]),
-                                                        Vec3d(f.v[0], f.v[1], f.v[2]));
+            const detail::GroupPrincipal principal = detail::principal_curvatures(
+                shape, Vec3d(f.u[0], f.u[1], f.u[2]), Vec3d(f.v[0], f.v[1], f.v[2]));
+            detail::vertex_curvature_at(mesh, topology, v, principal, &out.values[4 * v]);
         }
     });
-    return detail::vertex_curvature_from_principal(mesh, topology, principal.data());
+    return out;
 }
 
 }  // namespace specbake
