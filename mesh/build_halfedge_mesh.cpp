@@ -170,12 +170,13 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
         }
         return counts;
     };
+    auto add_counts = [](EdgeCounts x, const EdgeCounts& y) {
+        x.boundary += y.boundary;
+        x.nonmanifold += y.nonmanifold;
+        return x;
+    };
     const EdgeCounts edge_counts = tbb::parallel_reduce(tbb::blocked_range<uint32_t>(0, position_count, 2048),
-                                                        EdgeCounts{}, pair_range, [](EdgeCounts x, const EdgeCounts& y) {
-                                                            x.boundary += y.boundary;
-                                                            x.nonmanifold += y.nonmanifold;
-                                                            return x;
-                                                        });
+                                                        EdgeCounts{}, pair_range, add_counts);
     out.boundary_edges = edge_counts.boundary;
     out.nonmanifold_edges = edge_counts.nonmanifold;
 

@@ -12,12 +12,12 @@
 // Layout for speed: the vertices' unit normals (double) and the groups' frames are computed once up front;
 // one pass over the faces computes a weighted operator per corner as four floats and adds it to its group's
 // sums (double) in corner order, so the result does not depend on the thread count; a last pass over the
-// vertices eigen-decomposes each vertex's group sum and writes the vertex's output. The faces are cut into chunks of a fixed size, processed in parallel:
-// a chunk adds a corner straight into its group's sums when the group's first corner lies in that chunk (no
-// other chunk adds to them before it), and otherwise keeps the corner in a list that is added afterwards,
-// chunk by chunk, in corner order. Each group's sum thus runs over its corners in increasing order as one
-// sequential pass would, without a per-corner array or a sort of corners by group; meshes in a spatially
-// coherent order (as exported) defer few corners.
+// vertices eigen-decomposes each vertex's group sum and writes the vertex's output. The faces are cut into
+// chunks of a fixed size, processed in parallel: a chunk adds a corner straight into its group's sums when
+// the group's first corner lies in that chunk (no other chunk adds to them before it), and otherwise keeps
+// the corner in a list that is added afterwards, chunk by chunk, in corner order. Each group's sum thus
+// runs over its corners in increasing order as one sequential pass would, without a per-corner array or a
+// sort of corners by group; meshes in a spatially coherent order (as exported) defer few corners.
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
