@@ -62,7 +62,9 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     const std::vector<uint32_t>& pid = positions.position_id;
 
     // Usable triangles, in order: three distinct positions and a non-zero area.
-    std::vector<uint8_t> usable(tris);
+    // The large per-triangle, per-corner and per-position arrays below are scratch arrays (uninitialised,
+    // huge pages) wherever every element read has been written first.
+    detail::ScratchArray<uint8_t> usable(tris);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, tris, 8192), [&](const auto& r) {
         for (size_t t = r.begin(); t != r.end(); ++t) {
             const uint32_t* f = &mesh.indices[3 * t];
@@ -72,12 +74,11 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
                                                         detail::position(mesh, f[2]));
         }
     });
-    std::vector<uint32_t> kept;
-    kept.reserve(tris);
+    detail::ScratchArray<uint32_t> kept(tris);
+    uint32_t faces = 0;
     for (size_t t = 0; t < tris; ++t)
-        if (usable[t]) kept.push_back(uint32_t(t));
-    out.degenerate_triangles = tris - kept.size();
-    const uint32_t faces = uint32_t(kept.size());
+        if (usable[t]) kept[faces++] = uint32_t(t);
+    out.degenerate_triangles = tris - faces;
     const uint32_t corners = 3 * faces;
     detail::ScratchArray<uint32_t> pos(corners);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, faces, 8192), [&](const auto& r) {
@@ -233,8 +234,8 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     // cycle of attached corners is one fan and becomes one OpenMesh vertex.
     detail::ScratchArray<uint32_t> fan(corners);
     detail::ScratchArray<uint8_t> fan_head(corners);
-    std::vector<uint32_t> fan_count(position_count, 0);
-    std::vector<uint8_t> suspect(position_count, 0);
+    detail::ScratchArray<uint32_t> fan_count(position_count);
+    detail::ScratchArray<uint8_t> suspect(position_count);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, position_count, 4096), [&](const auto& r) {
         for (uint32_t p = r.begin(); p != r.end(); ++p) {
             uint32_t fans = 0;
@@ -293,7 +294,7 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     // OpenMesh halfedge of each attached corner, in the storage of by_position (no longer read): one fresh
     // corner-sized array less to fault in.
     detail::ScratchArray<uint32_t>& halfedge = by_position;
-    std::vector<uint32_t> face_index(faces, kNone);
+    detail::ScratchArray<uint32_t> face_index(faces);  // read for attached faces only
     uint32_t edges = 0, attached_faces = 0;
     for (uint32_t f = 0; f < faces; ++f) {
         if (!attached[f]) continue;
