@@ -53,6 +53,7 @@ bool link_is_single_fan(const detail::ScratchArray<uint32_t>& pos, const uint32_
 }  // namespace
 
 HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& positions) {
+    using OpenMesh::EdgeHandle;
     using OpenMesh::FaceHandle;
     using OpenMesh::HalfedgeHandle;
     using OpenMesh::VertexHandle;
@@ -310,9 +311,23 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     edges += 3 * detached_count;
 
     HalfEdgeMesh& m = out.mesh;
-    m.resize(vertices, edges, attached_faces + detached_count);
+    const uint32_t mesh_faces = attached_faces + detached_count;
+    if (vertices > 0 && edges > 0 && mesh_faces > 0) {
+        // OpenMesh value-initialises its arrays in resize, on one thread (some 60 MB for a million triangles):
+        // their storage is reserved first and hinted for huge pages, so resize faults it in 2 MiB at a time.
+        // One element of each reaches the reserved storage.
+        m.reserve(vertices, edges, mesh_faces);
+        m.resize(1, 1, 1);
+        detail::hint_huge_pages(&m.edge(EdgeHandle(0)), size_t(edges) * sizeof(m.edge(EdgeHandle(0))));
+        detail::hint_huge_pages(&m.vertex(VertexHandle(0)), size_t(vertices) * sizeof(m.vertex(VertexHandle(0))));
+        detail::hint_huge_pages(&m.face(FaceHandle(0)), size_t(mesh_faces) * sizeof(m.face(FaceHandle(0))));
+        detail::hint_huge_pages(&m.point(VertexHandle(0)), size_t(vertices) * sizeof(HalfEdgeMesh::Point));
+    }
+    m.resize(vertices, edges, mesh_faces);
+    detail::reserve_huge_pages(out.vertex_position, vertices);
     out.vertex_position.resize(vertices);
-    out.face_triangle.resize(attached_faces + detached_count);
+    detail::reserve_huge_pages(out.face_triangle, mesh_faces);
+    out.face_triangle.resize(mesh_faces);
     std::vector<uint32_t> boundary_out(attached_vertices, kNone);
     auto point = [&](uint32_t f, uint32_t c) {
         const float* x = &mesh.positions[3 * size_t(mesh.indices[3 * size_t(kept[f]) + c])];

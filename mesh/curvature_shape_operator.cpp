@@ -260,6 +260,7 @@ VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopolo
     // Each vertex eigen-decomposes its group's sums itself (a group has one vertex, or a few along seams): no
     // per-group array of principal curvatures to fill and read back.
     VertexCurvature out;
+    detail::reserve_huge_pages(out.values, 4 * verts);
     out.values.resize(4 * verts);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, verts, 8192), [&](const auto& range) {
         for (size_t v = range.begin(); v != range.end(); ++v) {

@@ -151,6 +151,8 @@ void generate_tangents(TriMesh& mesh) {
     // handednesses are not split apart as MikkTSpace would).
     // The corner terms are computed on plain doubles (in Eigen's evaluation order, so the sums are the same)
     // and, with SSE2, two corners at a time; they are added in corner order.
+    mesh.tangents.clear();
+    detail::reserve_huge_pages(mesh.tangents, 4 * n);
     mesh.tangents.resize(4 * n);
     const float* position = mesh.positions.data();
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const auto& range) {
