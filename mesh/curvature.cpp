@@ -31,7 +31,7 @@ bool all_finite(const std::vector<float>& values) {
     return first_bad(values.size(), [&](size_t i) { return !std::isfinite(values[i]); }) == values.size();
 }
 
-// Checks the inputs, welds unless `shared` is given, runs the estimator; everything on `threads` threads.
+// Checks the inputs, welds unless `shared` is given and runs the estimator, on options.max_threads threads.
 Result<VertexCurvature> estimate(const TriMesh& mesh, const WeldedTopology* shared, CurvatureEstimator estimator,
                                  const CurvatureOptions& options) {
     const std::string name = label(mesh);
