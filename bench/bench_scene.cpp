@@ -1,7 +1,8 @@
 // End-to-end scene bake speed on a generated 1M-triangle mesh (a UV sphere, 500 x 1000 quads, as GLB):
 // the whole `bake` (read, plan, curvature, tangents, write, manifest) against the floor of what any
 // pipeline has to do with the same data, Assimp import plus tinygltf write, and the stages of the bake
-// (import, preparation, curvature, write, hashing), at 1 and 2 threads. Goal: whole bake within 2x of import + write.
+// (import, preparation, preparation with the curvature beside it, curvature, write, hashing), at 1 and 2
+// threads. Goal: whole bake within 2x of import + write.
 //
 //   cmake --build build --target bench_scene && build/bench/bench_scene --benchmark_min_time=0.01 --benchmark_repetitions=3
 #include "cli/job_scene.h"
@@ -202,6 +203,34 @@ void BM_StagePrepare(benchmark::State& state) {
     state.counters["faces/s"] = benchmark::Counter(double(source.triangle_count()), benchmark::Counter::kIsIterationInvariantRate);
 }
 BENCHMARK(BM_StagePrepare)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Preparation and curvature as the bake runs them: one weld shared by the topology report and the estimate,
+// the estimate beside the report.
+void BM_StagePrepareAndCurvature(benchmark::State& state) {
+    auto scene = io::GltfScene::load(sphere_glb());
+    const TriMesh source = std::move(*scene->primitive_mesh({0, 0}));
+    tbb::global_control threads(tbb::global_control::max_allowed_parallelism, size_t(state.range(0)));
+    CurvatureOptions options;
+    options.max_threads = int(state.range(0));
+    for (auto _ : state) {
+        state.PauseTiming();
+        TriMesh mesh = source;
+        state.ResumeTiming();
+        Result<VertexCurvature> curvature = make_error("not estimated");
+        PrepareOptions prepare;
+        prepare.weld = options.weld;
+        prepare.with_frames = [&](const TriMesh& m, const WeldedTopology& welded) {
+            curvature = estimate_curvature(m, welded, CurvatureEstimator::ShapeOperator, options);
+        };
+        if (!prepare_mesh_for_curvature(mesh, prepare) || !curvature) {
+            state.SkipWithError("prepare or curvature failed");
+            return;
+        }
+        benchmark::DoNotOptimize(curvature->values.data());
+    }
+    state.counters["faces/s"] = benchmark::Counter(double(source.triangle_count()), benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_StagePrepareAndCurvature)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_StageCurvature(benchmark::State& state) {
     auto scene = io::GltfScene::load(sphere_glb());

@@ -298,7 +298,10 @@ Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& optio
             copts.max_threads = options.threads;
             Result<VertexCurvature> curvature = make_error(mesh->name + ": curvature not estimated");
             PrepareOptions prepare;
-            prepare.with_frames = [&](const TriMesh& m) { curvature = estimate_curvature(m, options.estimator, copts); };
+            prepare.weld = copts.weld;
+            prepare.with_frames = [&](const TriMesh& m, const WeldedTopology& welded) {
+                curvature = estimate_curvature(m, welded, options.estimator, copts);
+            };
             auto report = prepare_mesh_for_curvature(*mesh, prepare);
             if (!report) return report.error();
             if (!curvature) return curvature.error();

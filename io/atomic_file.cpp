@@ -6,6 +6,8 @@
 #include <system_error>
 #include <unistd.h>
 
+#include "mesh/scratch_array.h"
+
 namespace specbake::io {
 namespace fs = std::filesystem;
 
@@ -68,7 +70,10 @@ Result<std::vector<uint8_t>> read_file(const fs::path& path) {
     const std::streamoff size = f.tellg();
     if (size < 0) return make_error(path.string() + ": cannot determine the file size");
     f.seekg(0, std::ios::beg);
-    std::vector<uint8_t> bytes(static_cast<size_t>(size));
+    // Scene files are tens of MB: the buffer is faulted in as huge pages where the kernel has them.
+    std::vector<uint8_t> bytes;
+    detail::reserve_huge_pages(bytes, static_cast<size_t>(size));
+    bytes.resize(static_cast<size_t>(size));
     f.read(reinterpret_cast<char*>(bytes.data()), size);
     if (!f) return make_error(path.string() + ": read failed");
     return bytes;

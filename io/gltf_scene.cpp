@@ -2,6 +2,7 @@
 
 #include "io/atomic_file.h"
 #include "io/sha256.h"
+#include "mesh/scratch_array.h"
 
 // The tinygltf implementation is compiled here, from the installed header, instead of being taken from
 // Debian's libtinygltf.so: that library's TinyGLTF class does not match the layout its header declares
@@ -369,7 +370,10 @@ Result<std::vector<float>> read_attribute(const tinygltf::Model& m, const Payloa
         const size_t element = 4 * size_t(components);
         auto view = view_of(m, payloads, a.bufferView, a.byteOffset, a.count, element, element, what);
         if (!view) return view.error();
-        std::vector<float> out(a.count * size_t(components));
+        // A mesh's attribute arrays are tens of MB: faulted in as huge pages where the kernel has them.
+        std::vector<float> out;
+        detail::reserve_huge_pages(out, a.count * size_t(components));
+        out.resize(a.count * size_t(components));
         if (view->stride == element) {
             if (!out.empty()) std::memcpy(out.data(), view->base, out.size() * sizeof(float));
         } else {
@@ -389,7 +393,9 @@ Result<std::vector<uint32_t>> read_indices(const tinygltf::Model& m, const Paylo
                                            const std::string& what) {
     const tinygltf::Accessor& a = m.accessors.at(size_t(index));
     const size_t cs = component_size(a.componentType);
-    std::vector<uint32_t> out(a.count);
+    std::vector<uint32_t> out;
+    detail::reserve_huge_pages(out, a.count);
+    out.resize(a.count);
     if (!a.sparse.isSparse && a.bufferView >= 0 && cs > 0) {
         auto view = view_of(m, payloads, a.bufferView, a.byteOffset, a.count, cs, cs, what);
         if (!view) return view.error();

@@ -1,4 +1,5 @@
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <numeric>
@@ -52,6 +53,7 @@ bool link_is_single_fan(const detail::ScratchArray<uint32_t>& pos, const uint32_
 }  // namespace
 
 HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& positions) {
+    using OpenMesh::EdgeHandle;
     using OpenMesh::FaceHandle;
     using OpenMesh::HalfedgeHandle;
     using OpenMesh::VertexHandle;
@@ -61,7 +63,9 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     const std::vector<uint32_t>& pid = positions.position_id;
 
     // Usable triangles, in order: three distinct positions and a non-zero area.
-    std::vector<uint8_t> usable(tris);
+    // The large per-triangle, per-corner and per-position arrays below are scratch arrays (uninitialised,
+    // huge pages) wherever every element read has been written first.
+    detail::ScratchArray<uint8_t> usable(tris);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, tris, 8192), [&](const auto& r) {
         for (size_t t = r.begin(); t != r.end(); ++t) {
             const uint32_t* f = &mesh.indices[3 * t];
@@ -71,12 +75,11 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
                                                         detail::position(mesh, f[2]));
         }
     });
-    std::vector<uint32_t> kept;
-    kept.reserve(tris);
+    detail::ScratchArray<uint32_t> kept(tris);
+    uint32_t faces = 0;
     for (size_t t = 0; t < tris; ++t)
-        if (usable[t]) kept.push_back(uint32_t(t));
-    out.degenerate_triangles = tris - kept.size();
-    const uint32_t faces = uint32_t(kept.size());
+        if (usable[t]) kept[faces++] = uint32_t(t);
+    out.degenerate_triangles = tris - faces;
     const uint32_t corners = 3 * faces;
     detail::ScratchArray<uint32_t> pos(corners);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, faces, 8192), [&](const auto& r) {
@@ -99,7 +102,7 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     // corner runs b -> a when that corner is at b. An edge is simple when it has one halfedge, or two running
     // opposite ways; those pair up (mate) without further ado.
     detail::ScratchArray<uint32_t> mate(corners);
-    detail::ScratchArray<uint8_t> simple(corners), edge_kind(corners);  // edge_kind: 1 boundary, 2 non-manifold
+    detail::ScratchArray<uint8_t> simple(corners);
     auto scan_edge = [&](uint32_t k, uint32_t& total, uint32_t& opposite, uint32_t& partner, uint32_t& lowest) {
         const uint32_t a = pos[k], b = pos[next_corner(k)];
         total = opposite = 0;
@@ -127,7 +130,12 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
         uint32_t next, prev;             // positions of the corner's next and previous corners
         uint32_t corner, prev_halfedge;  // the corner (its halfedge runs a -> next) and prev_corner(corner)
     };
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, position_count, 2048), [&](const auto& r) {
+    // Boundary edges (one halfedge) and non-manifold edges (three or more, counted at their lowest halfedge)
+    // are summed per range: integer sums, the same for any split.
+    struct EdgeCounts {
+        size_t boundary = 0, nonmanifold = 0;
+    };
+    auto pair_range = [&](const tbb::blocked_range<uint32_t>& r, EdgeCounts counts) {
         std::vector<CornerEnds> around;
         for (uint32_t a = r.begin(); a != r.end(); ++a) {
             const uint32_t count = start[a + 1] - start[a];
@@ -151,23 +159,28 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
                 const bool paired = total == 2 && opposite == 1;
                 simple[k] = total == 1 || paired;
                 mate[k] = paired ? partner : kNone;
-                uint8_t kind = total == 1 ? 1 : 0;
+                counts.boundary += total == 1;
                 if (total >= 3) {
                     uint32_t lowest = k;
                     for (uint32_t m = 0; m < count; ++m) {
                         if (c[m].next == b) lowest = std::min(lowest, c[m].corner);
                         else if (c[m].prev == b) lowest = std::min(lowest, c[m].prev_halfedge);
                     }
-                    kind = lowest == k ? 2 : 0;
+                    counts.nonmanifold += lowest == k;
                 }
-                edge_kind[k] = kind;
             }
         }
-    });
-    for (uint32_t k = 0; k < corners; ++k) {
-        out.boundary_edges += edge_kind[k] == 1;
-        out.nonmanifold_edges += edge_kind[k] == 2;
-    }
+        return counts;
+    };
+    auto add_counts = [](EdgeCounts x, const EdgeCounts& y) {
+        x.boundary += y.boundary;
+        x.nonmanifold += y.nonmanifold;
+        return x;
+    };
+    const EdgeCounts edge_counts = tbb::parallel_reduce(tbb::blocked_range<uint32_t>(0, position_count, 2048),
+                                                        EdgeCounts{}, pair_range, add_counts);
+    out.boundary_edges = edge_counts.boundary;
+    out.nonmanifold_edges = edge_counts.nonmanifold;
 
     // Faces on a non-simple edge, in triangle order: attached while the edge has no halfedge running their
     // way and fewer than two triangles; otherwise detached.
@@ -222,8 +235,8 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     // cycle of attached corners is one fan and becomes one OpenMesh vertex.
     detail::ScratchArray<uint32_t> fan(corners);
     detail::ScratchArray<uint8_t> fan_head(corners);
-    std::vector<uint32_t> fan_count(position_count, 0);
-    std::vector<uint8_t> suspect(position_count, 0);
+    detail::ScratchArray<uint32_t> fan_count(position_count);
+    detail::ScratchArray<uint8_t> suspect(position_count);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, position_count, 4096), [&](const auto& r) {
         for (uint32_t p = r.begin(); p != r.end(); ++p) {
             uint32_t fans = 0;
@@ -279,8 +292,10 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     const uint32_t vertices = attached_vertices + 3 * detached_count;
     auto vertex_of = [&](uint32_t k) { return vertex_base[pos[k]] + fan[k]; };
 
-    detail::ScratchArray<uint32_t> halfedge(corners);  // OpenMesh halfedge of each attached corner
-    std::vector<uint32_t> face_index(faces, kNone);
+    // OpenMesh halfedge of each attached corner, in the storage of by_position (no longer read): one fresh
+    // corner-sized array less to fault in.
+    detail::ScratchArray<uint32_t>& halfedge = by_position;
+    detail::ScratchArray<uint32_t> face_index(faces);  // read for attached faces only
     uint32_t edges = 0, attached_faces = 0;
     for (uint32_t f = 0; f < faces; ++f) {
         if (!attached[f]) continue;
@@ -296,9 +311,23 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     edges += 3 * detached_count;
 
     HalfEdgeMesh& m = out.mesh;
-    m.resize(vertices, edges, attached_faces + detached_count);
+    const uint32_t mesh_faces = attached_faces + detached_count;
+    if (vertices > 0 && edges > 0 && mesh_faces > 0) {
+        // OpenMesh value-initialises its arrays in resize, on one thread (some 60 MB for a million triangles):
+        // their storage is reserved first and hinted for huge pages, so resize faults it in 2 MiB at a time.
+        // One element of each reaches the reserved storage.
+        m.reserve(vertices, edges, mesh_faces);
+        m.resize(1, 1, 1);
+        detail::hint_huge_pages(&m.edge(EdgeHandle(0)), size_t(edges) * sizeof(m.edge(EdgeHandle(0))));
+        detail::hint_huge_pages(&m.vertex(VertexHandle(0)), size_t(vertices) * sizeof(m.vertex(VertexHandle(0))));
+        detail::hint_huge_pages(&m.face(FaceHandle(0)), size_t(mesh_faces) * sizeof(m.face(FaceHandle(0))));
+        detail::hint_huge_pages(&m.point(VertexHandle(0)), size_t(vertices) * sizeof(HalfEdgeMesh::Point));
+    }
+    m.resize(vertices, edges, mesh_faces);
+    detail::reserve_huge_pages(out.vertex_position, vertices);
     out.vertex_position.resize(vertices);
-    out.face_triangle.resize(attached_faces + detached_count);
+    detail::reserve_huge_pages(out.face_triangle, mesh_faces);
+    out.face_triangle.resize(mesh_faces);
     std::vector<uint32_t> boundary_out(attached_vertices, kNone);
     auto point = [&](uint32_t f, uint32_t c) {
         const float* x = &mesh.positions[3 * size_t(mesh.indices[3 * size_t(kept[f]) + c])];

@@ -35,6 +35,12 @@ struct CurvatureOptions {
 Result<VertexCurvature> estimate_curvature(const TriMesh& mesh, CurvatureEstimator estimator,
                                            const CurvatureOptions& options = {});
 
+// The same with the welding done by the caller: `topology` must be weld_by_position(mesh, options.weld) of
+// this mesh as it is now, so a caller that needs the welded positions for other analyses (the topology
+// report) welds once.
+Result<VertexCurvature> estimate_curvature(const TriMesh& mesh, const WeldedTopology& topology,
+                                           CurvatureEstimator estimator, const CurvatureOptions& options = {});
+
 // "shape-operator", "jet-fitting", "normal-cone", "second-order" (the CLI spellings).
 std::string_view to_string(CurvatureEstimator estimator);
 std::optional<CurvatureEstimator> parse_curvature_estimator(std::string_view name);

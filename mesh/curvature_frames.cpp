@@ -109,56 +109,58 @@ GroupPrincipal principal_curvatures(const Shape2& s, const Vec3d& u, const Vec3d
     return p;
 }
 
+void vertex_curvature_at(const TriMesh& mesh, const WeldedTopology& topology, size_t v, const GroupPrincipal& p,
+                         float out[4]) {
+    const float* normals = mesh.normals.data();
+    const float* tangents = mesh.tangents.data();
+    double n[3] = {normals[3 * v], normals[3 * v + 1], normals[3 * v + 2]};
+    const double n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+    if (n2 > 0.0) {
+        const double len = std::sqrt(n2);
+        for (double& x : n) x /= len;
+    } else {
+        Vec3d gn, gu, gv;
+        group_frame(&normals[3 * size_t(topology.group_vertex[topology.group_id[v]])], gn, gu, gv);
+        for (int k = 0; k < 3; ++k) n[k] = gn[k];
+    }
+    // T orthogonalised against N (a fixed perpendicular when T is along N), B = cross(N, T) * w.
+    double t[3] = {tangents[4 * v], tangents[4 * v + 1], tangents[4 * v + 2]};
+    const double nt = n[0] * t[0] + n[1] * t[1] + n[2] * t[2];
+    for (int k = 0; k < 3; ++k) t[k] -= nt * n[k];
+    const double tl = std::sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+    if (tl > 1e-12) {
+        for (double& x : t) x /= tl;
+    } else {
+        Vec3d bt, bb;
+        orthonormal_basis(Vec3d(n[0], n[1], n[2]), bt, bb);
+        for (int k = 0; k < 3; ++k) t[k] = bt[k];
+    }
+    const double sign = tangents[4 * v + 3] < 0.0f ? -1.0 : 1.0;
+    const double b[3] = {sign * (n[1] * t[2] - n[2] * t[1]), sign * (n[2] * t[0] - n[0] * t[2]),
+                         sign * (n[0] * t[1] - n[1] * t[0])};
+    double dx = p.dir[0] * t[0] + p.dir[1] * t[1] + p.dir[2] * t[2];
+    double dy = p.dir[0] * b[0] + p.dir[1] * b[1] + p.dir[2] * b[2];
+    const double dl = std::sqrt(dx * dx + dy * dy);
+    if (dl > 1e-12) {
+        dx /= dl;
+        dy /= dl;
+    } else {
+        dx = 1.0;
+        dy = 0.0;
+    }
+    out[0] = float(p.k1);
+    out[1] = float(p.k2);
+    out[2] = float(dx);
+    out[3] = float(dy);
+}
+
 VertexCurvature vertex_curvature_from_principal(const TriMesh& mesh, const WeldedTopology& topology,
                                                 const GroupPrincipal* principal) {
     VertexCurvature out;
     out.values.resize(4 * mesh.vertex_count());
-    const float* normals = mesh.normals.data();
-    const float* tangents = mesh.tangents.data();
     tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.vertex_count(), 8192), [&](const auto& r) {
-        for (size_t v = r.begin(); v != r.end(); ++v) {
-            const GroupPrincipal& p = principal[topology.group_id[v]];
-            double n[3] = {normals[3 * v], normals[3 * v + 1], normals[3 * v + 2]};
-            const double n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
-            if (n2 > 0.0) {
-                const double len = std::sqrt(n2);
-                for (double& x : n) x /= len;
-            } else {
-                Vec3d gn, gu, gv;
-                group_frame(&normals[3 * size_t(topology.group_vertex[topology.group_id[v]])], gn, gu, gv);
-                for (int k = 0; k < 3; ++k) n[k] = gn[k];
-            }
-            // T orthogonalised against N (a fixed perpendicular when T is along N), B = cross(N, T) * w.
-            double t[3] = {tangents[4 * v], tangents[4 * v + 1], tangents[4 * v + 2]};
-            const double nt = n[0] * t[0] + n[1] * t[1] + n[2] * t[2];
-            for (int k = 0; k < 3; ++k) t[k] -= nt * n[k];
-            const double tl = std::sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
-            if (tl > 1e-12) {
-                for (double& x : t) x /= tl;
-            } else {
-                Vec3d bt, bb;
-                orthonormal_basis(Vec3d(n[0], n[1], n[2]), bt, bb);
-                for (int k = 0; k < 3; ++k) t[k] = bt[k];
-            }
-            const double sign = tangents[4 * v + 3] < 0.0f ? -1.0 : 1.0;
-            const double b[3] = {sign * (n[1] * t[2] - n[2] * t[1]), sign * (n[2] * t[0] - n[0] * t[2]),
-                                 sign * (n[0] * t[1] - n[1] * t[0])};
-            double dx = p.dir[0] * t[0] + p.dir[1] * t[1] + p.dir[2] * t[2];
-            double dy = p.dir[0] * b[0] + p.dir[1] * b[1] + p.dir[2] * b[2];
-            const double dl = std::sqrt(dx * dx + dy * dy);
-            if (dl > 1e-12) {
-                dx /= dl;
-                dy /= dl;
-            } else {
-                dx = 1.0;
-                dy = 0.0;
-            }
-            float* o = &out.values[4 * v];
-            o[0] = float(p.k1);
-            o[1] = float(p.k2);
-            o[2] = float(dx);
-            o[3] = float(dy);
-        }
+        for (size_t v = r.begin(); v != r.end(); ++v)
+            vertex_curvature_at(mesh, topology, v, principal[topology.group_id[v]], &out.values[4 * v]);
     });
     return out;
 }

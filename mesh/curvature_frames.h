@@ -38,6 +38,10 @@ GroupPrincipal principal_curvatures(const Shape2& s, const Vec3d& u, const Vec3d
 VertexCurvature vertex_curvature_from_principal(const TriMesh& mesh, const WeldedTopology& topology,
                                                 const GroupPrincipal* principal);
 
+// The same for one vertex v with its group's principal curvatures p: out = (k1, k2, d.x, d.y).
+void vertex_curvature_at(const TriMesh& mesh, const WeldedTopology& topology, size_t v, const GroupPrincipal& p,
+                         float out[4]);
+
 // Both steps for operators in the group frames: (k1, k2, d) for every vertex.
 VertexCurvature vertex_curvature_from_groups(const TriMesh& mesh, const WeldedTopology& topology,
                                              const GroupFrames& frames, const std::vector<Shape2>& shape);

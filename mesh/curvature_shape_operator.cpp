@@ -10,12 +10,20 @@
 // second-order fit).
 //
 // Layout for speed: the vertices' unit normals (double) and the groups' frames are computed once up front;
-// one pass over the faces (parallel, no allocation) writes a weighted operator per corner as four floats; a
-// second pass sums each group's corners in corner order, so the result does not depend on the thread count,
-// and eigen-decomposes the sum on the spot.
+// one pass over the faces computes a weighted operator per corner as four floats and adds it to its group's
+// sums (double) in corner order, so the result does not depend on the thread count; a last pass over the
+// vertices eigen-decomposes each vertex's group sum and writes the vertex's output. The faces are cut into
+// chunks of a fixed size, processed in parallel: a chunk adds a corner straight into its group's sums when
+// the group's first corner lies in that chunk (no other chunk adds to them before it), and otherwise keeps
+// the corner in a list that is added afterwards, chunk by chunk, in corner order. Each group's sum thus
+// runs over its corners in increasing order as one sequential pass would, without a per-corner array or a
+// sort of corners by group; meshes in a spatially coherent order (as exported) defer few corners.
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <vector>
 
 #include "mesh/curvature.h"
 #include "mesh/curvature_frames.h"
@@ -150,15 +158,45 @@ __attribute__((always_inline)) inline void face_shape(const TriMesh& mesh, const
     }
 }
 
-// The face pass over triangles [begin, end), compiled for AVX2 and for the baseline instruction set and chosen
-// at load time (GCC/Clang function multiversioning). Floating-point contraction is off (ISO C++ mode), so
-// both versions compute the same bits.
+// A group's running sums of its corners' weighted operators and weights.
+struct GroupSum {
+    double a, b, c, weight;
+};
+
+// A corner whose group's first corner lies in an earlier chunk: added to the sums after all chunks.
+struct DeferredCorner {
+    uint32_t group;
+    CornerShape shape;
+};
+
+constexpr uint32_t kNoChunk = 0xffffffffu;
+constexpr size_t kChunkFaces = 16384;  // fixed, so which corners are deferred does not depend on the threads
+
+inline void add_corner(GroupSum& sum, const CornerShape& s) {
+    sum.a += s.a;
+    sum.b += s.b;
+    sum.c += s.c;
+    sum.weight += s.weight;
+}
+
+// The face pass over chunk `chunk` (triangles [begin, end)), compiled for AVX2 and for the baseline
+// instruction set and chosen at load time (GCC/Clang function multiversioning). Floating-point contraction
+// is off (ISO C++ mode), so both versions compute the same bits.
 #if defined(__x86_64__) && defined(__linux__)
 __attribute__((target_clones("arch=x86-64-v3", "default")))
 #endif
 void shape_faces(const TriMesh& mesh, const WeldedTopology& topology, const double* unit_normals,
-                 const Frame* frames, size_t begin, size_t end, CornerShape* out) {
-    for (size_t t = begin; t != end; ++t) face_shape(mesh, topology, unit_normals, frames, t, &out[3 * t]);
+                 const Frame* frames, const uint32_t* first_chunk, uint32_t chunk, size_t begin, size_t end,
+                 GroupSum* sums, std::vector<DeferredCorner>& deferred) {
+    for (size_t t = begin; t != end; ++t) {
+        CornerShape corner[3];
+        face_shape(mesh, topology, unit_normals, frames, t, corner);
+        for (int i = 0; i < 3; ++i) {
+            const uint32_t g = topology.group_id[mesh.indices[3 * t + i]];
+            if (first_chunk[g] == chunk) add_corner(sums[g], corner[i]);
+            else deferred.push_back({g, corner[i]});
+        }
+    }
 }
 
 }  // namespace
@@ -190,32 +228,53 @@ VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopolo
         }
     });
 
-    detail::ScratchArray<CornerShape> corner(3 * tris);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, tris, 4096), [&](const auto& range) {
-        shape_faces(mesh, topology, unit_normals.data(), frames.data(), range.begin(), range.end(), corner.data());
-    });
-
-    // Gather corners per group in corner order, so sums do not depend on scheduling.
-    const detail::GroupCorners lists = detail::group_corners(mesh, topology);
-    detail::ScratchArray<detail::GroupPrincipal> principal(groups);
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, groups, 4096), [&](const auto& range) {
+    // The chunk of each group's first corner: the smallest chunk that has one of its corners (an atomic
+    // minimum, the same whatever the order the chunks run in).
+    const size_t chunks = (tris + kChunkFaces - 1) / kChunkFaces;
+    detail::ScratchArray<uint32_t> first_chunk(groups);
+    detail::ScratchArray<GroupSum> sums(groups);
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, groups, 16384), [&](const auto& range) {
         for (uint32_t g = range.begin(); g != range.end(); ++g) {
-            double a = 0.0, b = 0.0, c = 0.0, w = 0.0;
-            for (uint32_t k = lists.start[g]; k < lists.start[g + 1]; ++k) {
-                const CornerShape& s = corner[lists.order[k]];
-                a += s.a;
-                b += s.b;
-                c += s.c;
-                w += s.weight;
-            }
-            Shape2 shape;
-            if (w > 0.0) shape = {a / w, b / w, c / w};
-            const Frame& f = frames[g];
-            principal[g] = detail::principal_curvatures(shape, Vec3d(f.u[0], f.u[1], f.u[2]),
-                                                        Vec3d(f.v[0], f.v[1], f.v[2]));
+            first_chunk[g] = kNoChunk;
+            sums[g] = {0.0, 0.0, 0.0, 0.0};
         }
     });
-    return detail::vertex_curvature_from_principal(mesh, topology, principal.data());
+    tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+        const size_t end = std::min(tris, (c + 1) * kChunkFaces);
+        for (size_t k = 3 * c * kChunkFaces; k < 3 * end; ++k) {
+            std::atomic_ref<uint32_t> first(first_chunk[topology.group_id[mesh.indices[k]]]);
+            uint32_t seen = first.load(std::memory_order_relaxed);
+            while (uint32_t(c) < seen && !first.compare_exchange_weak(seen, uint32_t(c), std::memory_order_relaxed)) {
+            }
+        }
+    });
+
+    std::vector<std::vector<DeferredCorner>> deferred(chunks);
+    tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+        shape_faces(mesh, topology, unit_normals.data(), frames.data(), first_chunk.data(), uint32_t(c),
+                    c * kChunkFaces, std::min(tris, (c + 1) * kChunkFaces), sums.data(), deferred[c]);
+    });
+    for (const std::vector<DeferredCorner>& list : deferred)
+        for (const DeferredCorner& d : list) add_corner(sums[d.group], d.shape);
+
+    // Each vertex eigen-decomposes its group's sums itself (a group has one vertex, or a few along seams): no
+    // per-group array of principal curvatures to fill and read back.
+    VertexCurvature out;
+    detail::reserve_huge_pages(out.values, 4 * verts);
+    out.values.resize(4 * verts);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, verts, 8192), [&](const auto& range) {
+        for (size_t v = range.begin(); v != range.end(); ++v) {
+            const uint32_t g = topology.group_id[v];
+            const GroupSum& sum = sums[g];
+            Shape2 shape;
+            if (sum.weight > 0.0) shape = {sum.a / sum.weight, sum.b / sum.weight, sum.c / sum.weight};
+            const Frame& f = frames[g];
+            const detail::GroupPrincipal principal = detail::principal_curvatures(
+                shape, Vec3d(f.u[0], f.u[1], f.u[2]), Vec3d(f.v[0], f.v[1], f.v[2]));
+            detail::vertex_curvature_at(mesh, topology, v, principal, &out.values[4 * v]);
+        }
+    });
+    return out;
 }
 
 }  // namespace specbake

@@ -117,7 +117,8 @@ void generate_tangents(TriMesh& mesh) {
     // MikkTSpace step 1, per triangle: dP/du and dP/dv from [dp1 dp2] = [dP/du dP/dv] [[du1 du2], [dv1 dv2]].
     // cross(N, dP/du) . (-dP/dv) = -|dp1 x dp2| / det, so the handedness is the sign of -det.
     detail::ScratchArray<FaceTangent> face(with_uv ? tris : 0);
-    std::vector<uint32_t> start(n + 1, 0), order;
+    std::vector<uint32_t> start(n + 1, 0);
+    detail::ScratchArray<uint32_t> order(with_uv ? mesh.indices.size() : 0);  // every slot written below
     if (with_uv) {
         tbb::parallel_for(tbb::blocked_range<size_t>(0, tris, 8192), [&](const auto& range) {
             for (size_t t = range.begin(); t != range.end(); ++t) {
@@ -140,7 +141,6 @@ void generate_tangents(TriMesh& mesh) {
         // the same order for any thread count.
         for (uint32_t i : mesh.indices) ++start[i + 1];
         for (size_t v = 0; v < n; ++v) start[v + 1] += start[v];
-        order.resize(mesh.indices.size());
         std::vector<uint32_t> fill(start.begin(), start.end() - 1);
         for (size_t k = 0; k < mesh.indices.size(); ++k) order[fill[mesh.indices[k]]++] = uint32_t(k);
     }
@@ -151,6 +151,8 @@ void generate_tangents(TriMesh& mesh) {
     // handednesses are not split apart as MikkTSpace would).
     // The corner terms are computed on plain doubles (in Eigen's evaluation order, so the sums are the same)
     // and, with SSE2, two corners at a time; they are added in corner order.
+    mesh.tangents.clear();
+    detail::reserve_huge_pages(mesh.tangents, 4 * n);
     mesh.tangents.resize(4 * n);
     const float* position = mesh.positions.data();
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const auto& range) {

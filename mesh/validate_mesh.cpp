@@ -73,7 +73,10 @@ Result<MeshReport> validate_mesh(TriMesh& mesh) {
 void add_topology_report(const TriMesh& mesh, MeshReport& report) {
     WeldOptions by_position;
     by_position.split_by_normals = false;  // positions only: the normals may be written meanwhile
-    const WeldedTopology topo = weld_by_position(mesh, by_position);
+    add_topology_report(mesh, weld_by_position(mesh, by_position), report);
+}
+
+void add_topology_report(const TriMesh& mesh, const WeldedTopology& topo, MeshReport& report) {
     report.duplicate_vertices = mesh.vertex_count() - topo.position_count;
     std::vector<char> used(mesh.vertex_count(), 0);
     for (uint32_t i : mesh.indices) used[i] = 1;

@@ -7,6 +7,7 @@
 
 #include "bake/result.h"
 #include "mesh/trimesh.h"
+#include "mesh/weld_by_position.h"
 
 namespace specbake {
 
@@ -50,5 +51,9 @@ Result<MeshReport> validate_mesh(TriMesh& mesh);
 // positions and indices, so it may run while normals and tangents are generated.
 Result<MeshReport> check_and_repair_mesh(TriMesh& mesh);
 void add_topology_report(const TriMesh& mesh, MeshReport& report);
+
+// add_topology_report on positions the caller welded (weld_by_position of this mesh with any options: only
+// the position ids are used), so the weld can be shared with the curvature estimate.
+void add_topology_report(const TriMesh& mesh, const WeldedTopology& positions, MeshReport& report);
 
 }  // namespace specbake

@@ -5,6 +5,8 @@
 #include <bit>
 #include <cmath>
 
+#include "mesh/scratch_array.h"
+
 namespace specbake {
 namespace {
 
@@ -35,8 +37,9 @@ WeldedTopology weld_by_position(const TriMesh& mesh, const WeldOptions& options)
     const double cos_limit = std::cos(double(options.normal_angle_degrees) * M_PI / 180.0);
 
     // Pass 1 (parallel): position bits and hash of every vertex.
-    std::vector<uint32_t> bits(3 * n);
-    std::vector<uint64_t> hash(n);
+    // Scratch arrays (uninitialised, huge pages): every element is written before it is read.
+    detail::ScratchArray<uint32_t> bits(3 * n);
+    detail::ScratchArray<uint64_t> hash(n);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 16384), [&](const auto& r) {
         for (size_t v = r.begin(); v != r.end(); ++v) {
             for (int k = 0; k < 3; ++k) bits[3 * v + k] = coordinate_bits(mesh.positions[3 * v + k]);
@@ -46,7 +49,8 @@ WeldedTopology weld_by_position(const TriMesh& mesh, const WeldOptions& options)
 
     // Vertices by bucket (top hash bits), each bucket in vertex order: equal positions share a bucket.
     constexpr size_t kBuckets = size_t(1) << kBucketBits;
-    std::vector<uint32_t> bucket_start(kBuckets + 1, 0), order(n);
+    std::vector<uint32_t> bucket_start(kBuckets + 1, 0);
+    detail::ScratchArray<uint32_t> order(n);
     for (size_t v = 0; v < n; ++v) ++bucket_start[(hash[v] >> (64 - kBucketBits)) + 1];
     for (size_t b = 0; b < kBuckets; ++b) bucket_start[b + 1] += bucket_start[b];
     {
@@ -57,7 +61,8 @@ WeldedTopology weld_by_position(const TriMesh& mesh, const WeldOptions& options)
     // Pass 2 (parallel over buckets): the first vertex of each vertex's position and of its curvature group.
     // Within a position, a vertex joins the first earlier group whose first vertex's normal lies within the
     // angle, else starts a group: the same choice, in the same order, as one sequential pass would make.
-    std::vector<uint32_t> position_first(n), group_first(n), next_group(n);  // next_group: per group's first vertex
+    // next_group: per group's first vertex
+    detail::ScratchArray<uint32_t> position_first(n), group_first(n), next_group(n);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, kBuckets, 1), [&](const auto& r) {
         std::vector<uint32_t> slot;
         for (size_t b = r.begin(); b != r.end(); ++b) {
