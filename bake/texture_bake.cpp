@@ -2,12 +2,15 @@
 //
 // Every level is a set of area-weighted means over base texels of the linear per-texel quantities
 // (normal, p p^T, alpha^2, occlusion, metallic, slope moments), accumulated in double. Rows are held
-// structure-of-arrays (one plane of doubles per quantity), so decoding, block sums and the mip-0 outputs
-// are plain loops over contiguous arrays. A level whose footprints tile the previous level's footprints
-// exactly (both sizes divide) is the plain mean of the previous level's blocks; every other level is
-// reduced from the base texels directly. Levels 0, 1 and, when it tiles, 2 come out of one pass over the
-// base rows. Each output texel is summed by one thread in a fixed order, so results do not depend on the
-// thread count. Finished rows go to a sink (bake_texture_rows) or into float chains (bake_texture).
+// structure-of-arrays (one plane of doubles per quantity), so block sums and outputs are plain loops over
+// contiguous arrays. A level whose footprints tile the previous level's footprints exactly (both sizes
+// divide) is the plain mean of the previous level's blocks, 2 x 2 blocks summed pairwise ((a + c) + (b + d));
+// every other level is reduced from the base texels directly. Levels 0 to 4, where they tile, come out of
+// one pass over the base rows in column tiles (bake_validated); levels 0 and 1 are computed from registers
+// there (base_and_pairs_avx2), the base planes never stored. Each output texel is summed by one thread in
+// a fixed order, so results do not depend on the thread count, nor on the CPU: the vector forms perform
+// the scalar forms' IEEE operations in the same order. Finished rows go to a sink (bake_texture_rows) or
+// into float chains (bake_texture).
 #include "bake/texture_bake.h"
 
 #include <tbb/blocked_range.h>
