@@ -215,6 +215,26 @@ TEST(TextureBake, BruteForceEvenSizesWithOrmAndTail) {
     expect_matches_reference(nm, &orm, 1, 0.0, s);
 }
 
+// The register pass's other forms: a four-channel normal map (alpha unread) with -Y, and a one-channel
+// roughness map of the same size; then z reconstructed from a three-channel map.
+TEST(TextureBake, BruteForceEvenSizesRgbaNormalsOneChannelRoughness) {
+    const Image rgb = random_normal_map(40, 24, 15, 0.35);
+    Image rgba(rgb.width, rgb.height, 4);
+    for (size_t i = 0; i < rgb.texel_count(); ++i) {
+        for (int c = 0; c < 3; ++c) rgba.pixels[4 * i + size_t(c)] = rgb.pixels[3 * i + size_t(c)];
+        rgba.pixels[4 * i + 3] = 0.25f;
+    }
+    const Image orm = random_orm(40, 24, 16);
+    Image rough(orm.width, orm.height, 1);
+    for (size_t i = 0; i < orm.texel_count(); ++i) rough.pixels[i] = orm.pixels[3 * i + 1];
+    TextureBakeSettings s;
+    s.normal_y = NormalGreen::MinusY;
+    expect_matches_reference(rgba, &rough, 0, 0.0, s);
+    TextureBakeSettings z;
+    z.reconstruct_z = ReconstructZ::Always;
+    expect_matches_reference(rgb, &rough, 0, 0.0, z);
+}
+
 TEST(TextureBake, BruteForceTwoChannelMap) {
     const Image full = random_normal_map(24, 17, 8, 0.3);
     Image two(full.width, full.height, 2);
