@@ -13,6 +13,8 @@
 // into float chains (bake_texture).
 #include "bake/texture_bake.h"
 
+#include "bake/huge_pages.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
@@ -30,9 +32,6 @@
 
 #if defined(__x86_64__)
 #include <immintrin.h>
-#endif
-#if defined(__linux__)
-#include <sys/mman.h>
 #endif
 
 // Lengths outside [kMinSeed, kMaxSeed] (squared) are out of float range for the estimate of inverse_length.
@@ -1108,13 +1107,7 @@ Image make_output_image(int w, int h, int channels) {
     Image image;
     image.width = w, image.height = h, image.channels = channels;
     const size_t n = size_t(w) * size_t(h) * size_t(channels);
-    image.pixels.reserve(n);
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-    constexpr uintptr_t kHuge = uintptr_t(2) << 20;
-    const uintptr_t begin = (reinterpret_cast<uintptr_t>(image.pixels.data()) + kHuge - 1) & ~(kHuge - 1);
-    const uintptr_t end = (reinterpret_cast<uintptr_t>(image.pixels.data() + n)) & ~(kHuge - 1);
-    if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);  // a hint; failure is harmless
-#endif
+    detail::reserve_huge_pages(image.pixels, n);
     image.pixels.resize(n);
     return image;
 }

@@ -6,7 +6,7 @@
 #include <system_error>
 #include <unistd.h>
 
-#include "mesh/scratch_array.h"
+#include "bake/huge_pages.h"
 
 namespace specbake::io {
 namespace fs = std::filesystem;

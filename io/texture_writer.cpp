@@ -6,6 +6,8 @@
 #include "io/sha256.h"
 #include "io/texel_encoding.h"
 
+#include "bake/huge_pages.h"
+
 #include <OpenImageIO/imageio.h>
 #include <tbb/parallel_for.h>
 
@@ -17,9 +19,6 @@
 #include <fstream>
 #include <memory>
 
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
 
 namespace specbake::io {
 namespace fs = std::filesystem;
@@ -245,14 +244,9 @@ EncodedTexture::EncodedTexture(TextureContainer container, TexelEncoding encodin
     layout_ = container == TextureContainer::Ktx2 ? ktx2_layout(width, height, levels, encoding, channels)
                                                   : dds_layout(width, height, levels, encoding, channels);
     data_.reset(new uint8_t[layout_.total]);
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-    // Large files are faulted in on transparent huge pages as the rows arrive: a 4096^2 bake writes about
-    // 400 MiB of fresh container bytes, and 4 KiB page faults would cost a good part of the encoding time.
-    constexpr uintptr_t kHuge = uintptr_t(2) << 20;
-    const uintptr_t begin = (reinterpret_cast<uintptr_t>(data_.get()) + kHuge - 1) & ~(kHuge - 1);
-    const uintptr_t end = reinterpret_cast<uintptr_t>(data_.get() + layout_.total) & ~(kHuge - 1);
-    if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);  // a hint; failure is harmless
-#endif
+    // Faulted in on transparent huge pages as the rows arrive: a 4096^2 bake writes about 400 MiB of fresh
+    // container bytes.
+    detail::hint_huge_pages(data_.get(), layout_.total);
     if (container == TextureContainer::Ktx2) ktx2_write_header(data_.get(), layout_, width, height, encoding, channels);
     else dds_write_header(data_.get(), layout_, width, height, encoding, channels);
 }
