@@ -1,8 +1,8 @@
 #include "io/container_inspect.h"
 
 #include "io/atomic_file.h"
+#include "io/oiio_api.h"
 
-#include <OpenImageIO/imageio.h>
 
 #include <algorithm>
 #include <array>
@@ -266,25 +266,9 @@ bool has_prefix(std::span<const uint8_t> b, const void* magic, size_t n) {
 }
 
 Result<InspectedTexture> read_with_oiio(const std::filesystem::path& path) {
-    const std::string name = path.string();
-    auto in = OIIO::ImageInput::open(name);
-    if (!in) return make_error(name + ": cannot read image: " + OIIO::geterror());
-    InspectedTexture t;
-    std::string fmt = in->format_name();
-    t.format = fmt == "openexr" ? "exr" : fmt;
-    OIIO::ImageSpec spec = in->spec();
-    t.pixel_format = spec.format.c_str();
-    t.transfer = spec.get_string_attribute("oiio:ColorSpace", "linear");
-    t.channel_names = spec.channelnames;
-    for (int level = 0; in->seek_subimage(0, level); ++level) {
-        spec = in->spec();
-        Image img(spec.width, spec.height, spec.nchannels);
-        if (!in->read_image(0, level, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, img.pixels.data()))
-            return make_error(name + ": mip " + std::to_string(level) + ": " + in->geterror());
-        t.mips.levels.push_back(std::move(img));
-    }
-    if (t.mips.levels.empty()) return make_error(name + ": no image data");
-    return t;
+    auto api = oiio::api();
+    if (!api) return make_error(path.string() + ": " + api.error().message);
+    return (*api)->read_levels(path.string());
 }
 
 }  // namespace
@@ -359,12 +343,10 @@ Result<void> write_png_rgb8(const std::filesystem::path& path, int width, int he
     AtomicOutput out(path);
     std::error_code ec;
     if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path(), ec);
-    auto file = OIIO::ImageOutput::create(out.temp_path().string());
-    if (!file) return make_error(path.string() + ": cannot write PNG: " + OIIO::geterror());
-    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
-    if (!file->open(out.temp_path().string(), spec) || !file->write_image(OIIO::TypeDesc::UINT8, rgb.data()) ||
-        !file->close())
-        return make_error(path.string() + ": cannot write PNG: " + file->geterror());
+    auto api = oiio::api();
+    if (!api) return make_error(path.string() + ": " + api.error().message);
+    if (auto ok = (*api)->write_rgb8(out.temp_path().string(), path.string(), width, height, rgb.data()); !ok)
+        return ok.error();
     return out.commit();
 }
 

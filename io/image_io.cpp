@@ -1,9 +1,7 @@
 #include "io/image_io.h"
 
 #include "io/atomic_file.h"
-
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
+#include "io/oiio_api.h"
 
 #include <algorithm>
 #include <fstream>
@@ -14,44 +12,6 @@ namespace specbake::io {
 namespace fs = std::filesystem;
 
 namespace {
-
-// Largest side accepted: bigger files are almost certainly corrupt headers, and would not fit in memory.
-constexpr int kMaxSide = 1 << 15;
-
-std::string one_line(std::string s) {
-    std::replace(s.begin(), s.end(), '\n', ' ');
-    while (!s.empty() && (s.back() == ' ' || s.back() == '\r')) s.pop_back();
-    return s.empty() ? std::string("unknown decoder error") : s;
-}
-
-OIIO::ImageSpec reader_config() {
-    OIIO::ImageSpec config;
-    // Data maps: keep alpha unassociated (no premultiplication of RGB by A on read).
-    config.attribute("oiio:UnassociatedAlpha", 1);
-    return config;
-}
-
-Result<DecodedImage> decode(OIIO::ImageInput& in, const std::string& name) {
-    const OIIO::ImageSpec& spec = in.spec();
-    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
-        return make_error(name + ": empty image (" + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
-                          ")");
-    if (spec.width > kMaxSide || spec.height > kMaxSide)
-        return make_error(name + ": image is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
-                          ", larger than " + std::to_string(kMaxSide) + " per side");
-    if (spec.depth > 1) return make_error(name + ": volume images are not supported");
-    DecodedImage out;
-    out.image = Image(spec.width, spec.height, spec.nchannels);
-    if (!in.read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, out.image.pixels.data()))
-        return make_error(name + ": cannot decode: " + one_line(in.geterror()));
-    const OIIO::TypeDesc::BASETYPE base = OIIO::TypeDesc::BASETYPE(spec.format.basetype);
-    out.info.is_float = base == OIIO::TypeDesc::HALF || base == OIIO::TypeDesc::FLOAT || base == OIIO::TypeDesc::DOUBLE;
-    out.info.bits_per_channel = int(spec.format.size()) * 8;
-    if (!out.info.is_float && out.info.bits_per_channel > 16) out.info.bits_per_channel = 16;
-    out.info.format = in.format_name();
-    out.info.color_space = spec.get_string_attribute("oiio:ColorSpace");
-    return out;
-}
 
 uint32_t be32(const uint8_t* p) { return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3]; }
 
@@ -97,12 +57,9 @@ Result<DecodedImage> decode_image(const fs::path& path) {
             return decode_image_memory(*bytes, name);  // checks the chunk structure first
         }
     }
-    const OIIO::ImageSpec config = reader_config();
-    auto in = OIIO::ImageInput::open(name, &config);
-    if (!in) return make_error(name + ": cannot read as an image: " + one_line(OIIO::geterror()));
-    auto result = decode(*in, name);
-    in->close();
-    return result;
+    auto oiio = oiio::api();
+    if (!oiio) return make_error(name + ": " + oiio.error().message);
+    return (*oiio)->decode_file(name);
 }
 
 Result<DecodedImage> decode_image_memory(std::span<const uint8_t> bytes, const std::string& name_for_errors) {
@@ -119,15 +76,9 @@ Result<DecodedImage> decode_image_memory(std::span<const uint8_t> bytes, const s
         probe = "image.tif";
     else if (bytes.size() >= 4 && bytes[0] == 'R' && bytes[1] == 'I' && bytes[2] == 'F' && bytes[3] == 'F')
         probe = "image.webp";
-    OIIO::Filesystem::IOMemReader reader(const_cast<uint8_t*>(bytes.data()), bytes.size());
-    OIIO::ImageSpec config = reader_config();
-    void* proxy = &reader;
-    config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
-    auto in = OIIO::ImageInput::open(probe, &config, &reader);
-    if (!in) return make_error(name_for_errors + ": cannot read as an image: " + one_line(OIIO::geterror()));
-    auto result = decode(*in, name_for_errors);
-    in->close();
-    return result;
+    auto oiio = oiio::api();
+    if (!oiio) return make_error(name_for_errors + ": " + oiio.error().message);
+    return (*oiio)->decode_memory(bytes, probe, name_for_errors);
 }
 
 Result<Image> read_image(const fs::path& path) {
@@ -148,15 +99,13 @@ Result<void> write_image(const fs::path& path, const Image& image, int bits) {
     std::error_code ec;
     if (path.has_parent_path()) fs::create_directories(path.parent_path(), ec);
     if (ec) return make_error(path.parent_path().string() + ": cannot create folder: " + ec.message());
+    auto oiio = oiio::api();
+    if (!oiio) return make_error(name + ": " + oiio.error().message);
     AtomicOutput file(path);
-    auto out = OIIO::ImageOutput::create(name);
-    if (!out) return make_error(name + ": no writer for this extension: " + one_line(OIIO::geterror()));
-    OIIO::ImageSpec spec(image.width, image.height, image.channels,
-                         bits <= 8 ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::UINT16);
-    spec.attribute("oiio:UnassociatedAlpha", 1);  // data, not premultiplied colour: store as given
-    if (!out->open(file.temp_path().string(), spec) ||
-        !out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data()) || !out->close())
-        return make_error(name + ": cannot write: " + one_line(out->geterror()));
+    if (auto ok = (*oiio)->write_image(file.temp_path().string(), name, image,
+                                       bits <= 8 ? oiio::PixelType::Uint8 : oiio::PixelType::Uint16);
+        !ok)
+        return ok.error();
     return file.commit();
 }
 

@@ -3,12 +3,12 @@
 #include "io/atomic_file.h"
 #include "io/dds.h"
 #include "io/ktx2.h"
+#include "io/oiio_api.h"
 #include "io/sha256.h"
 #include "io/texel_encoding.h"
 
 #include "bake/huge_pages.h"
 
-#include <OpenImageIO/imageio.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -53,11 +53,6 @@ std::optional<TextureContainer> parse_container(const std::string& name) {
 
 namespace {
 
-std::string one_line(std::string s) {
-    std::replace(s.begin(), s.end(), '\n', ' ');
-    return s;
-}
-
 const char* wrap_name(WrapMode w) {
     switch (w) {
         case WrapMode::Repeat: return "periodic";
@@ -76,14 +71,14 @@ Result<void> write_bytes(const fs::path& path, std::span<const uint8_t> bytes) {
     return {};
 }
 
-OIIO::TypeDesc oiio_type(TexelEncoding e) {
+oiio::PixelType oiio_type(TexelEncoding e) {
     switch (e) {
-        case TexelEncoding::Unorm8: return OIIO::TypeDesc::UINT8;
-        case TexelEncoding::Unorm16: return OIIO::TypeDesc::UINT16;
-        case TexelEncoding::Float16: return OIIO::TypeDesc::HALF;
-        case TexelEncoding::Float32: return OIIO::TypeDesc::FLOAT;
+        case TexelEncoding::Unorm8: return oiio::PixelType::Uint8;
+        case TexelEncoding::Unorm16: return oiio::PixelType::Uint16;
+        case TexelEncoding::Float16: return oiio::PixelType::Half;
+        case TexelEncoding::Float32: return oiio::PixelType::Float;
     }
-    return OIIO::TypeDesc::FLOAT;
+    return oiio::PixelType::Float;
 }
 
 std::vector<std::string> names_for(int channels, const std::vector<std::string>& given) {
@@ -115,34 +110,19 @@ std::string reproducible_date_time() {
 
 // One OpenImageIO file: all levels as a tiled MIP-mapped EXR, or a single level (PNG / EXR).
 Result<void> write_oiio(const fs::path& temp, const fs::path& final_path, const std::vector<const Image*>& levels,
-                        OIIO::TypeDesc type, bool mipmapped, const std::vector<std::string>& names, WrapMode wrap) {
-    auto out = OIIO::ImageOutput::create(temp.string());
-    if (!out) return make_error(final_path.string() + ": no writer: " + one_line(OIIO::geterror()));
-    if (mipmapped && !out->supports("mipmap"))
-        return make_error(final_path.string() + ": the format cannot hold MIP levels");
-    for (size_t i = 0; i < levels.size(); ++i) {
-        const Image& level = *levels[i];
-        OIIO::ImageSpec spec(level.width, level.height, level.channels, type);
-        spec.channelnames = names;
-        spec.attribute("oiio:UnassociatedAlpha", 1);  // data, not premultiplied colour: store as given
-        if (mipmapped) {
-            spec.tile_width = 64;
-            spec.tile_height = 64;
-            spec.attribute("textureformat", "Plain Texture");
-            spec.attribute("wrapmodes", std::string(wrap_name(wrap)) + "," + wrap_name(wrap));
-        }
-        if (type == OIIO::TypeDesc::HALF || type == OIIO::TypeDesc::FLOAT) spec.attribute("compression", "zip");
-        spec.attribute("oiio:ColorSpace", "Linear");
-        spec.attribute("Software", "specbake");
-        if (std::strcmp(out->format_name(), "openexr") == 0) spec.attribute("DateTime", reproducible_date_time());
-        const auto mode = i == 0 ? OIIO::ImageOutput::Create : OIIO::ImageOutput::AppendMIPLevel;
-        if (!out->open(temp.string(), spec, mode))
-            return make_error(final_path.string() + ": cannot write: " + one_line(out->geterror()));
-        if (!out->write_image(OIIO::TypeDesc::FLOAT, level.pixels.data()))
-            return make_error(final_path.string() + ": cannot write: " + one_line(out->geterror()));
-    }
-    if (!out->close()) return make_error(final_path.string() + ": cannot write: " + one_line(out->geterror()));
-    return {};
+                        oiio::PixelType type, bool mipmapped, const std::vector<std::string>& names, WrapMode wrap) {
+    auto api = oiio::api();
+    if (!api) return make_error(final_path.string() + ": " + api.error().message);
+    oiio::LevelsRequest request;
+    request.temp_path = temp.string();
+    request.name = final_path.string();
+    request.levels = levels;
+    request.type = type;
+    request.mipmapped = mipmapped;
+    request.channel_names = names;
+    request.wrap = wrap_name(wrap);
+    request.date_time = reproducible_date_time();
+    return (*api)->write_levels(request);
 }
 
 }  // namespace

@@ -221,3 +221,30 @@ TEST(SceneBakeCli, PlanPrintsJsonWithReasonsAndHelpHasExamples) {
     }
     fs::remove_all(dir);
 }
+
+// OpenImageIO is a module loaded on first use (io/oiio_api.h). With the module made unfindable, commands
+// that pass no image through it still work, and one that does fails with a clear error.
+TEST(SceneBakeCli, OnlyImageWorkLoadsTheImageModule) {
+    const fs::path dir = temp_dir("no_image_module");
+    write_test_model(dir / "sphere.gltf", true, 1.0, 0.2, 8, 16);
+    const fs::path missing = dir / "absent" / "libspecbake_oiio.so";
+    ASSERT_EQ(::setenv("SPECBAKE_OIIO_MODULE", missing.c_str(), 1), 0);
+    const RunResult bake = run_specbake({"bake", (dir / "sphere.gltf").string(), "-o", (dir / "out").string()}, dir);
+    const RunResult plan = run_specbake({"plan", (dir / "sphere.gltf").string()}, dir);
+    const RunResult shader = run_specbake({"shader", "--lang", "hlsl", "-o", (dir / "specaa.hlsl").string()}, dir);
+    const RunResult inspect = run_specbake({"inspect", (dir / "out" / "manifest.json").string()}, dir);
+    const RunResult texture = run_specbake({"texture", "--demo", "-o", (dir / "demo").string()}, dir);
+    ::unsetenv("SPECBAKE_OIIO_MODULE");
+    EXPECT_EQ(bake.exit_code, 0) << bake.err;
+    EXPECT_TRUE(fs::exists(dir / "out" / "sphere.gltf"));
+    EXPECT_EQ(plan.exit_code, 0) << plan.err;
+    EXPECT_EQ(shader.exit_code, 0) << shader.err;
+    EXPECT_EQ(inspect.exit_code, 0) << inspect.err;
+    // The demo writes its input maps as PNG: that needs the module.
+    EXPECT_FALSE(texture.signaled);
+    EXPECT_NE(texture.exit_code, 0);
+    EXPECT_NE(texture.err.find("image support (OpenImageIO) is unavailable"), std::string::npos) << texture.err;
+    EXPECT_NE(texture.err.find(missing.string()), std::string::npos) << texture.err;
+    EXPECT_NE(texture.err.find("SPECBAKE_OIIO_MODULE"), std::string::npos) << texture.err;
+    fs::remove_all(dir);
+}

@@ -1,0 +1,160 @@
+// libspecbake_oiio.so: every call specbake makes into OpenImageIO (io/oiio_api.h says why this is a
+// module loaded on demand). Only specbake_oiio_api() is exported.
+#include "io/oiio_api.h"
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cstring>
+
+namespace specbake::io::oiio {
+namespace {
+
+// Largest side accepted: bigger files are almost certainly corrupt headers, and would not fit in memory.
+constexpr int kMaxSide = 1 << 15;
+
+std::string one_line(std::string s, const char* if_empty) {
+    std::replace(s.begin(), s.end(), '\n', ' ');
+    while (!s.empty() && (s.back() == ' ' || s.back() == '\r')) s.pop_back();
+    return s.empty() ? std::string(if_empty) : s;
+}
+
+OIIO::TypeDesc type_of(PixelType t) {
+    switch (t) {
+        case PixelType::Uint8: return OIIO::TypeDesc::UINT8;
+        case PixelType::Uint16: return OIIO::TypeDesc::UINT16;
+        case PixelType::Half: return OIIO::TypeDesc::HALF;
+        case PixelType::Float: return OIIO::TypeDesc::FLOAT;
+    }
+    return OIIO::TypeDesc::FLOAT;
+}
+
+OIIO::ImageSpec reader_config() {
+    OIIO::ImageSpec config;
+    // Data maps: keep alpha unassociated (no premultiplication of RGB by A on read).
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    return config;
+}
+
+Result<DecodedImage> decode(OIIO::ImageInput& in, const std::string& name) {
+    const OIIO::ImageSpec& spec = in.spec();
+    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
+        return make_error(name + ": empty image (" + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
+                          ")");
+    if (spec.width > kMaxSide || spec.height > kMaxSide)
+        return make_error(name + ": image is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
+                          ", larger than " + std::to_string(kMaxSide) + " per side");
+    if (spec.depth > 1) return make_error(name + ": volume images are not supported");
+    DecodedImage out;
+    out.image = Image(spec.width, spec.height, spec.nchannels);
+    if (!in.read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, out.image.pixels.data()))
+        return make_error(name + ": cannot decode: " + one_line(in.geterror(), "unknown decoder error"));
+    const OIIO::TypeDesc::BASETYPE base = OIIO::TypeDesc::BASETYPE(spec.format.basetype);
+    out.info.is_float = base == OIIO::TypeDesc::HALF || base == OIIO::TypeDesc::FLOAT || base == OIIO::TypeDesc::DOUBLE;
+    out.info.bits_per_channel = int(spec.format.size()) * 8;
+    if (!out.info.is_float && out.info.bits_per_channel > 16) out.info.bits_per_channel = 16;
+    out.info.format = in.format_name();
+    out.info.color_space = spec.get_string_attribute("oiio:ColorSpace");
+    return out;
+}
+
+Result<DecodedImage> decode_file(const std::string& name) {
+    const OIIO::ImageSpec config = reader_config();
+    auto in = OIIO::ImageInput::open(name, &config);
+    if (!in) return make_error(name + ": cannot read as an image: " + one_line(OIIO::geterror(), "unknown decoder error"));
+    auto result = decode(*in, name);
+    in->close();
+    return result;
+}
+
+Result<DecodedImage> decode_memory(std::span<const uint8_t> bytes, const std::string& probe, const std::string& name) {
+    OIIO::Filesystem::IOMemReader reader(const_cast<uint8_t*>(bytes.data()), bytes.size());
+    OIIO::ImageSpec config = reader_config();
+    void* proxy = &reader;
+    config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
+    auto in = OIIO::ImageInput::open(probe, &config, &reader);
+    if (!in) return make_error(name + ": cannot read as an image: " + one_line(OIIO::geterror(), "unknown decoder error"));
+    auto result = decode(*in, name);
+    in->close();
+    return result;
+}
+
+Result<void> write_image(const std::string& temp_path, const std::string& name, const Image& image, PixelType type) {
+    auto out = OIIO::ImageOutput::create(name);
+    if (!out) return make_error(name + ": no writer for this extension: " + one_line(OIIO::geterror(), "unknown format"));
+    OIIO::ImageSpec spec(image.width, image.height, image.channels, type_of(type));
+    spec.attribute("oiio:UnassociatedAlpha", 1);  // data, not premultiplied colour: store as given
+    if (!out->open(temp_path, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data()) || !out->close())
+        return make_error(name + ": cannot write: " + one_line(out->geterror(), "unknown writer error"));
+    return {};
+}
+
+Result<void> write_levels(const LevelsRequest& r) {
+    auto out = OIIO::ImageOutput::create(r.temp_path);
+    if (!out) return make_error(r.name + ": no writer: " + one_line(OIIO::geterror(), "unknown format"));
+    if (r.mipmapped && !out->supports("mipmap")) return make_error(r.name + ": the format cannot hold MIP levels");
+    const OIIO::TypeDesc type = type_of(r.type);
+    for (size_t i = 0; i < r.levels.size(); ++i) {
+        const Image& level = *r.levels[i];
+        OIIO::ImageSpec spec(level.width, level.height, level.channels, type);
+        spec.channelnames = r.channel_names;
+        spec.attribute("oiio:UnassociatedAlpha", 1);  // data, not premultiplied colour: store as given
+        if (r.mipmapped) {
+            spec.tile_width = 64;
+            spec.tile_height = 64;
+            spec.attribute("textureformat", "Plain Texture");
+            spec.attribute("wrapmodes", r.wrap + "," + r.wrap);
+        }
+        if (r.type == PixelType::Half || r.type == PixelType::Float) spec.attribute("compression", "zip");
+        spec.attribute("oiio:ColorSpace", "Linear");
+        spec.attribute("Software", "specbake");
+        if (std::strcmp(out->format_name(), "openexr") == 0) spec.attribute("DateTime", r.date_time);
+        const auto mode = i == 0 ? OIIO::ImageOutput::Create : OIIO::ImageOutput::AppendMIPLevel;
+        if (!out->open(r.temp_path, spec, mode) || !out->write_image(OIIO::TypeDesc::FLOAT, level.pixels.data()))
+            return make_error(r.name + ": cannot write: " + one_line(out->geterror(), "unknown writer error"));
+    }
+    if (!out->close()) return make_error(r.name + ": cannot write: " + one_line(out->geterror(), "unknown writer error"));
+    return {};
+}
+
+Result<InspectedTexture> read_levels(const std::string& name) {
+    auto in = OIIO::ImageInput::open(name);
+    if (!in) return make_error(name + ": cannot read image: " + one_line(OIIO::geterror(), "unknown format"));
+    InspectedTexture t;
+    const std::string fmt = in->format_name();
+    t.format = fmt == "openexr" ? "exr" : fmt;
+    OIIO::ImageSpec spec = in->spec();
+    t.pixel_format = spec.format.c_str();
+    t.transfer = spec.get_string_attribute("oiio:ColorSpace", "linear");
+    t.channel_names = spec.channelnames;
+    for (int level = 0; in->seek_subimage(0, level); ++level) {
+        spec = in->spec();
+        Image img(spec.width, spec.height, spec.nchannels);
+        if (!in->read_image(0, level, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, img.pixels.data()))
+            return make_error(name + ": mip " + std::to_string(level) + ": " + one_line(in->geterror(), "unreadable"));
+        t.mips.levels.push_back(std::move(img));
+    }
+    if (t.mips.levels.empty()) return make_error(name + ": no image data");
+    return t;
+}
+
+Result<void> write_rgb8(const std::string& temp_path, const std::string& name, int width, int height,
+                        const uint8_t* rgb) {
+    auto file = OIIO::ImageOutput::create(temp_path);
+    if (!file) return make_error(name + ": cannot write PNG: " + one_line(OIIO::geterror(), "no PNG writer"));
+    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+    if (!file->open(temp_path, spec) || !file->write_image(OIIO::TypeDesc::UINT8, rgb) || !file->close())
+        return make_error(name + ": cannot write PNG: " + one_line(file->geterror(), "unknown writer error"));
+    return {};
+}
+
+const Api kApi{sizeof(Api), SPECBAKE_OIIO_API_TAG, decode_file, decode_memory, write_image,
+               write_levels, read_levels, write_rgb8};
+
+}  // namespace
+}  // namespace specbake::io::oiio
+
+extern "C" __attribute__((visibility("default"))) const specbake::io::oiio::Api* specbake_oiio_api() {
+    return &specbake::io::oiio::kApi;
+}
