@@ -2,7 +2,8 @@
 // the whole `bake` (read, plan, curvature, tangents, write, manifest) against the floor of what any
 // pipeline has to do with the same data, Assimp import plus tinygltf write, and the stages of the bake
 // (import, preparation, preparation with the curvature beside it, curvature, write, hashing), at 1 and 2
-// threads. Goal: whole bake within 2x of import + write.
+// threads. Goal: whole bake within 2x of import + write. A second reference adds what the bake's output
+// holds beyond the input: Assimp's own tangent step and an output GLB of the bake's size.
 //
 //   cmake --build build --target bench_scene && build/bench/bench_scene --benchmark_min_time=0.01 --benchmark_repetitions=3
 #include "cli/job_scene.h"
@@ -134,32 +135,52 @@ BENCHMARK(BM_WholeBake)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealT
 
 // The reference: Assimp reads the same GLB, tinygltf writes its vertex data (positions, normals, uvs,
 // indices) as a GLB. No analysis at all.
-void BM_AssimpImportTinygltfWrite(benchmark::State& state) {
-    const fs::path out = bench_dir() / "out_ref" / "sphere1m.glb";
+// With `output_sized`, Assimp also runs its tangent-space step (which SPEC Sec. 4 accepts for the tangents
+// the bake generates) and the GLB written is as large as the bake's: the tangents, and one more VEC4 float
+// attribute where the bake writes _SPECAA_CURVATURE (zeros here: Assimp computes no curvature).
+void reference_import_and_write(benchmark::State& state, bool output_sized) {
+    const fs::path out = bench_dir() / (output_sized ? "out_ref_sized" : "out_ref") / "sphere1m.glb";
     fs::create_directories(out.parent_path());
     for (auto _ : state) {
         Assimp::Importer importer;
-        const aiScene* ai = importer.ReadFile(sphere_glb().string(), aiProcess_Triangulate);
-        if (!ai || ai->mNumMeshes == 0) {
+        const unsigned steps = aiProcess_Triangulate | (output_sized ? aiProcess_CalcTangentSpace : 0u);
+        const aiScene* ai = importer.ReadFile(sphere_glb().string(), steps);
+        if (!ai || ai->mNumMeshes == 0 || (output_sized && !ai->mMeshes[0]->mTangents)) {
             state.SkipWithError("assimp failed");
             return;
         }
         const aiMesh* am = ai->mMeshes[0];
+        const size_t nv = am->mNumVertices;
         tinygltf::Model m;
         m.asset.version = "2.0";
         m.buffers.emplace_back();
-        std::vector<float> uv(size_t(am->mNumVertices) * 2);
-        for (unsigned v = 0; v < am->mNumVertices; ++v) uv[2 * v] = am->mTextureCoords[0][v].x, uv[2 * v + 1] = am->mTextureCoords[0][v].y;
+        std::vector<float> uv(nv * 2);
+        for (size_t v = 0; v < nv; ++v) uv[2 * v] = am->mTextureCoords[0][v].x, uv[2 * v + 1] = am->mTextureCoords[0][v].y;
         std::vector<uint32_t> idx(size_t(am->mNumFaces) * 3);
         for (unsigned f = 0; f < am->mNumFaces; ++f)
             for (int k = 0; k < 3; ++k) idx[3 * f + k] = am->mFaces[f].mIndices[k];
         tinygltf::Primitive prim;
-        prim.attributes["POSITION"] = append_accessor(m, am->mVertices, am->mNumVertices * 12, TINYGLTF_TYPE_VEC3,
-                                          TINYGLTF_COMPONENT_TYPE_FLOAT, am->mNumVertices);
-        prim.attributes["NORMAL"] = append_accessor(m, am->mNormals, am->mNumVertices * 12, TINYGLTF_TYPE_VEC3,
-                                        TINYGLTF_COMPONENT_TYPE_FLOAT, am->mNumVertices);
+        prim.attributes["POSITION"] = append_accessor(m, am->mVertices, nv * 12, TINYGLTF_TYPE_VEC3,
+                                          TINYGLTF_COMPONENT_TYPE_FLOAT, nv);
+        prim.attributes["NORMAL"] = append_accessor(m, am->mNormals, nv * 12, TINYGLTF_TYPE_VEC3,
+                                        TINYGLTF_COMPONENT_TYPE_FLOAT, nv);
         prim.attributes["TEXCOORD_0"] = append_accessor(m, uv.data(), uv.size() * 4, TINYGLTF_TYPE_VEC2, TINYGLTF_COMPONENT_TYPE_FLOAT,
-                                            am->mNumVertices);
+                                            nv);
+        if (output_sized) {
+            // glTF TANGENT: xyz and the handedness w of the bitangent Assimp computed.
+            std::vector<float> tangent(nv * 4);
+            for (size_t v = 0; v < nv; ++v) {
+                const aiVector3D& t = am->mTangents[v];
+                const aiVector3D nb = am->mNormals[v] ^ t;
+                const float w = nb * am->mBitangents[v] < 0.0f ? -1.0f : 1.0f;
+                tangent[4 * v] = t.x, tangent[4 * v + 1] = t.y, tangent[4 * v + 2] = t.z, tangent[4 * v + 3] = w;
+            }
+            prim.attributes["TANGENT"] = append_accessor(m, tangent.data(), tangent.size() * 4, TINYGLTF_TYPE_VEC4,
+                                             TINYGLTF_COMPONENT_TYPE_FLOAT, nv);
+            const std::vector<float> same_size(nv * 4, 0.0f);
+            prim.attributes["_SPECAA_CURVATURE"] = append_accessor(m, same_size.data(), same_size.size() * 4,
+                                                       TINYGLTF_TYPE_VEC4, TINYGLTF_COMPONENT_TYPE_FLOAT, nv);
+        }
         prim.indices = append_accessor(m, idx.data(), idx.size() * 4, TINYGLTF_TYPE_SCALAR, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, idx.size());
         tinygltf::Mesh mesh;
         mesh.primitives.push_back(prim);
@@ -171,7 +192,10 @@ void BM_AssimpImportTinygltfWrite(benchmark::State& state) {
         }
     }
 }
+void BM_AssimpImportTinygltfWrite(benchmark::State& state) { reference_import_and_write(state, false); }
 BENCHMARK(BM_AssimpImportTinygltfWrite)->Unit(benchmark::kMillisecond)->UseRealTime();
+void BM_AssimpImportTangentsTinygltfWriteOutputSized(benchmark::State& state) { reference_import_and_write(state, true); }
+BENCHMARK(BM_AssimpImportTangentsTinygltfWriteOutputSized)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // Stages of the bake.
 void BM_StageImport(benchmark::State& state) {
