@@ -1,6 +1,20 @@
+// Layout for speed. The corners are not sorted by vertex: one pass over the triangles in index order computes
+// each triangle's dP/du once and its three corners' terms, and adds every corner term to its vertex's sums
+// (4 doubles: weighted tangent xyz, signed angle), so each vertex adds its corners in corner order. Four
+// triangles run at once, one per lane of a 4-wide double vector (AVX2 where the CPU has it). In parallel,
+// the vertices are split into one index range per thread; each range's pass visits only the blocks of
+// triangles that reference its vertices and adds only its own vertices' corners, so every sum runs in the
+// same order for any thread count. The unit normals, the sums and the final tangent of a range are computed
+// by the thread that owns it.
 #include "mesh/generate_tangents.h"
 
+#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -9,211 +23,290 @@
 #include "mesh/mesh_math.h"
 #include "mesh/scratch_array.h"
 
+// The lane arithmetic must give the scalar results bit for bit in every compiled version: no a * b + c
+// contracted into a fused multiply-add in the AVX2 version.
+#pragma GCC optimize("fp-contract=off")
+
 namespace specbake {
 namespace {
 
-// Per triangle: dP/du, and the handedness its UV mapping gives (+1: B = cross(N, T) points along -dP/dv,
-// i.e. up the glTF image), 0 when the UV triangle is degenerate.
-struct FaceTangent {
-    double dpdu[3];
-    double sign;
-};
-
-// What a corner adds to its vertex: the corner angle in the vertex tangent plane and the triangle's dP/du
-// projected into that plane (tp, length tl).
-struct CornerTerm {
-    double angle, tl, tp[3];
-};
-
-inline double dot3(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-
-// One corner: p its position, p1 and p2 the next two corners' (in winding order), nv the unit vertex normal.
-void corner_term(const float* p, const float* p1, const float* p2, const double* dpdu, const double* nv,
-                 CornerTerm& out) {
-    double e1[3], e2[3];
-    for (int i = 0; i < 3; ++i) {
-        e1[i] = double(p1[i]) - double(p[i]);
-        e2[i] = double(p2[i]) - double(p[i]);
-    }
-    const double d1 = dot3(nv, e1), d2 = dot3(nv, e2), du = dot3(nv, dpdu);
-    for (int i = 0; i < 3; ++i) {
-        e1[i] -= d1 * nv[i];
-        e2[i] -= d2 * nv[i];
-        out.tp[i] = dpdu[i] - du * nv[i];
-    }
-    const double cross[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-    // The corner angle is only a weight: a polynomial atan2 (error < 3e-11 rad) instead of libm's, about five
-    // times cheaper and the same on every platform.
-    out.angle = detail::corner_angle(std::sqrt(dot3(cross, cross)), dot3(e1, e2));
-    out.tl = std::sqrt(dot3(out.tp, out.tp));
-}
-
-#if defined(__SSE2__)
-// Two corners of one vertex at once, one per lane, with exactly the operations of corner_term and
-// detail::corner_angle in the same order (so the same bits): the per-corner work is a long chain of
-// dependent divisions and square roots, and two independent chains share the instructions.
-void corner_terms2(const float* const p[2][3], const double* const dpdu[2], const double* nv, CornerTerm out[2]) {
-    auto lanes = [](double lo, double hi) { return _mm_set_pd(hi, lo); };
-    auto select = [](__m128d mask, __m128d yes, __m128d no) {
-        return _mm_or_pd(_mm_and_pd(mask, yes), _mm_andnot_pd(mask, no));
-    };
-    const __m128d n[3] = {_mm_set1_pd(nv[0]), _mm_set1_pd(nv[1]), _mm_set1_pd(nv[2])};
-    auto dot = [](const __m128d* a, const __m128d* b) {
-        return _mm_add_pd(_mm_add_pd(_mm_mul_pd(a[0], b[0]), _mm_mul_pd(a[1], b[1])), _mm_mul_pd(a[2], b[2]));
-    };
-    __m128d e1[3], e2[3], tp[3], du[3];
-    for (int i = 0; i < 3; ++i) {
-        const __m128d q = lanes(p[0][0][i], p[1][0][i]);
-        e1[i] = _mm_sub_pd(lanes(p[0][1][i], p[1][1][i]), q);
-        e2[i] = _mm_sub_pd(lanes(p[0][2][i], p[1][2][i]), q);
-        du[i] = lanes(dpdu[0][i], dpdu[1][i]);
-    }
-    const __m128d d1 = dot(n, e1), d2 = dot(n, e2), dn = dot(n, du);
-    for (int i = 0; i < 3; ++i) {
-        e1[i] = _mm_sub_pd(e1[i], _mm_mul_pd(d1, n[i]));
-        e2[i] = _mm_sub_pd(e2[i], _mm_mul_pd(d2, n[i]));
-        tp[i] = _mm_sub_pd(du[i], _mm_mul_pd(dn, n[i]));
-    }
-    const __m128d cross[3] = {_mm_sub_pd(_mm_mul_pd(e1[1], e2[2]), _mm_mul_pd(e1[2], e2[1])),
-                              _mm_sub_pd(_mm_mul_pd(e1[2], e2[0]), _mm_mul_pd(e1[0], e2[2])),
-                              _mm_sub_pd(_mm_mul_pd(e1[0], e2[1]), _mm_mul_pd(e1[1], e2[0]))};
-    const __m128d y = _mm_sqrt_pd(dot(cross, cross)), x = dot(e1, e2);
-    // detail::corner_angle, lane-wise: both branches computed, the lane's one selected.
-    const __m128d zero = _mm_setzero_pd(), one = _mm_set1_pd(1.0), pi = _mm_set1_pd(detail::kAtanPi);
-    const __m128d ax = _mm_andnot_pd(_mm_set1_pd(-0.0), x);
-    const __m128d steep = _mm_cmpgt_pd(y, ax);
-    __m128d t = _mm_div_pd(select(steep, ax, y), select(steep, y, ax));
-    const __m128d high = _mm_cmpgt_pd(t, _mm_set1_pd(detail::kAtanTanPi8));
-    t = select(high, _mm_div_pd(_mm_sub_pd(t, one), _mm_add_pd(t, one)), t);
-    const __m128d s = _mm_mul_pd(t, t);
-    __m128d poly = _mm_set1_pd(detail::kAtanFit[0]);
-    for (int i = 1; i < 7; ++i) poly = _mm_add_pd(_mm_mul_pd(poly, s), _mm_set1_pd(detail::kAtanFit[i]));
-    __m128d a = _mm_add_pd(_mm_mul_pd(t, poly), select(high, _mm_set1_pd(0.25 * detail::kAtanPi), zero));
-    a = select(steep, _mm_sub_pd(_mm_set1_pd(0.5 * detail::kAtanPi), a), a);
-    const __m128d negative = _mm_cmplt_pd(x, zero);
-    a = select(negative, _mm_sub_pd(pi, a), a);
-    a = select(_mm_cmpeq_pd(y, zero), select(negative, pi, zero), a);
-    const __m128d tl = _mm_sqrt_pd(dot(tp, tp));
-    double angle[2], length[2], tpv[3][2];
-    _mm_storeu_pd(angle, a);
-    _mm_storeu_pd(length, tl);
-    for (int i = 0; i < 3; ++i) _mm_storeu_pd(tpv[i], tp[i]);
-    for (int l = 0; l < 2; ++l) {
-        out[l].angle = angle[l];
-        out[l].tl = length[l];
-        for (int i = 0; i < 3; ++i) out[l].tp[i] = tpv[i][l];
-    }
-}
+// The corner pass is compiled twice, for AVX2 + FMA and for the baseline instruction set, and chosen once at
+// load time (GCC/Clang function multiversioning); its helpers are inlined into each version.
+#if defined(__x86_64__) && defined(__linux__)
+#define SPECBAKE_AVX2_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define SPECBAKE_AVX2_CLONES
 #endif
+#define SPECBAKE_INLINE __attribute__((always_inline)) inline
+
+// Four doubles processed as one (GCC/Clang vector extension): one AVX2 register, two SSE2 registers. The
+// helpers taking or returning them are always inlined, so the ABI note GCC gives for them does not apply.
+#pragma GCC diagnostic ignored "-Wpsabi"
+typedef double v4d __attribute__((vector_size(32)));
+typedef long v4l __attribute__((vector_size(32)));  // lane masks, as v4d comparisons yield
+constexpr int kLanes = 4;
+
+SPECBAKE_INLINE v4d splat(double x) { return v4d{x, x, x, x}; }
+SPECBAKE_INLINE v4d select(v4l mask, v4d yes, v4d no) { return mask ? yes : no; }
+
+// Lane-wise square root (non-negative input): two SSE2 square roots where available.
+SPECBAKE_INLINE v4d sqrt4(v4d x) {
+#if defined(__SSE2__)
+    const __m128d lo = _mm_sqrt_pd(__m128d{x[0], x[1]}), hi = _mm_sqrt_pd(__m128d{x[2], x[3]});
+    return v4d{lo[0], lo[1], hi[0], hi[1]};
+#else
+    return v4d{std::sqrt(x[0]), std::sqrt(x[1]), std::sqrt(x[2]), std::sqrt(x[3])};
+#endif
+}
+
+// Element k of the records (stride values each) of the four lanes' vertices.
+template <class T>
+SPECBAKE_INLINE v4d gather4(const T* a, const uint32_t (&v)[kLanes], size_t stride, size_t k) {
+    return v4d{double(a[stride * v[0] + k]), double(a[stride * v[1] + k]), double(a[stride * v[2] + k]),
+               double(a[stride * v[3] + k])};
+}
+
+SPECBAKE_INLINE v4d dot4(const v4d (&a)[3], const v4d (&b)[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+// detail::corner_angle lane-wise, with its operations in its order (so the same bits): both branches are
+// computed and each lane's one selected.
+SPECBAKE_INLINE v4d corner_angle4(v4d y, v4d x) {
+    const v4d zero = splat(0.0), one = splat(1.0);
+    const v4d ax = (v4d)((v4l)x & ~(v4l)splat(-0.0));
+    const v4l steep = y > ax;
+    v4d t = select(steep, ax, y) / select(steep, y, ax);
+    const v4l high = t > splat(detail::kAtanTanPi8);
+    t = select(high, (t - one) / (t + one), t);
+    const v4d s = t * t;
+    v4d poly = splat(detail::kAtanFit[0]);
+#pragma GCC unroll 6
+    for (int i = 1; i < 7; ++i) poly = poly * s + splat(detail::kAtanFit[i]);
+    v4d a = t * poly + select(high, splat(0.25 * detail::kAtanPi), zero);
+    a = select(steep, splat(0.5 * detail::kAtanPi) - a, a);
+    const v4l negative = x < zero;
+    a = select(negative, splat(detail::kAtanPi) - a, a);
+    return select(y == zero, select(negative, splat(detail::kAtanPi), zero), a);
+}
+
+// Rows (x, y, z, w) of four lanes to the four lanes' (x, y, z, w).
+SPECBAKE_INLINE void transpose4(const v4d (&in)[4], v4d (&out)[4]) {
+    const v4d t0 = __builtin_shuffle(in[0], in[1], v4l{0, 4, 2, 6}), t1 = __builtin_shuffle(in[0], in[1], v4l{1, 5, 3, 7});
+    const v4d t2 = __builtin_shuffle(in[2], in[3], v4l{0, 4, 2, 6}), t3 = __builtin_shuffle(in[2], in[3], v4l{1, 5, 3, 7});
+    out[0] = __builtin_shuffle(t0, t2, v4l{0, 1, 4, 5});
+    out[1] = __builtin_shuffle(t1, t3, v4l{0, 1, 4, 5});
+    out[2] = __builtin_shuffle(t0, t2, v4l{2, 3, 6, 7});
+    out[3] = __builtin_shuffle(t1, t3, v4l{2, 3, 6, 7});
+}
+
+// Triangles per block of the vertex-index bounds that let a range skip the triangles it has no vertex in.
+constexpr size_t kBlock = 1024;
+
+// Everything the passes read and write, as flat arrays.
+struct TangentInput {
+    const float* positions;
+    const float* normals;
+    const float* uv;             // null without UVs
+    const uint32_t* indices;
+    size_t triangles;
+    const uint32_t* block_bounds;  // smallest and largest vertex index per block; null with a single range
+    double* unit_normals;          // 3 per vertex
+    double* sums;                  // 4 per vertex: sum of the weighted projected dP/du (xyz), of the signed angles
+};
+
+// Unit normal of one vertex, (0, 0, 1) for a zero or non-finite one.
+SPECBAKE_INLINE void unit_normal(const float* n, double* out) {
+    const double x = n[0], y = n[1], z = n[2];
+    const double l = std::sqrt(x * x + y * y + z * z);
+    const bool ok = l > 0.0;
+    out[0] = ok ? x / l : 0.0;
+    out[1] = ok ? y / l : 0.0;
+    out[2] = ok ? z / l : 1.0;
+}
+
+// Unit normals of the vertices [first, last), and their sums cleared (when there are sums).
+SPECBAKE_AVX2_CLONES void start_range(const TangentInput& in, size_t first, size_t last) {
+    size_t v = first;
+    for (; v + kLanes <= last; v += kLanes) {
+        const float* n = in.normals + 3 * v;
+        const v4d x{n[0], n[3], n[6], n[9]}, y{n[1], n[4], n[7], n[10]}, z{n[2], n[5], n[8], n[11]};
+        const v4d l = sqrt4(x * x + y * y + z * z);
+        const v4l ok = l > splat(0.0);
+        const v4d ux = select(ok, x / l, splat(0.0)), uy = select(ok, y / l, splat(0.0)), uz = select(ok, z / l, splat(1.0));
+        double* out = in.unit_normals + 3 * v;
+        for (int j = 0; j < kLanes; ++j) {
+            out[3 * j] = ux[j];
+            out[3 * j + 1] = uy[j];
+            out[3 * j + 2] = uz[j];
+        }
+    }
+    for (; v < last; ++v) unit_normal(in.normals + 3 * v, in.unit_normals + 3 * v);
+    if (in.sums) std::memset(in.sums + 4 * first, 0, 4 * (last - first) * sizeof(double));
+}
+
+// MikkTSpace step 1 and the corner terms of step 2 for the triangles that reference the vertices
+// [first, last), added to those vertices' sums in corner order.
+SPECBAKE_AVX2_CLONES void sum_corners(const TangentInput& in, size_t first, size_t last) {
+    const size_t owned = last - first;
+    const size_t blocks = (in.triangles + kBlock - 1) / kBlock;
+    for (size_t b = 0; b < blocks; ++b) {
+        bool inside = true;  // every vertex of the block is in the range
+        if (in.block_bounds) {
+            const size_t low = in.block_bounds[2 * b], high = in.block_bounds[2 * b + 1];
+            if (high < first || low >= last) continue;
+            inside = low >= first && high < last;
+        }
+        const size_t end = std::min(in.triangles, (b + 1) * kBlock);
+        for (size_t t = b * kBlock; t < end; t += kLanes) {
+            const int lanes = int(std::min<size_t>(kLanes, end - t));
+            uint32_t vi[3][kLanes];  // corner c of lane j's triangle
+            bool any = inside;
+#pragma GCC unroll 4
+            for (int j = 0; j < kLanes; ++j) {
+                const uint32_t* f = in.indices + 3 * (t + std::min(j, lanes - 1));
+                for (int c = 0; c < 3; ++c) {
+                    vi[c][j] = f[c];
+                    any = any || size_t(f[c]) - first < owned;
+                }
+            }
+            if (!any) continue;
+            v4d p[3][3], u[3], v[3];  // p[c][axis]
+#pragma GCC unroll 3
+            for (int c = 0; c < 3; ++c) {
+                for (int k = 0; k < 3; ++k) p[c][k] = gather4(in.positions, vi[c], 3, k);
+                u[c] = gather4(in.uv, vi[c], 2, 0);
+                v[c] = gather4(in.uv, vi[c], 2, 1);
+            }
+            // MikkTSpace step 1: dP/du from [dp1 dp2] = [dP/du dP/dv] [[du1 du2], [dv1 dv2]];
+            // cross(N, dP/du) . (-dP/dv) = -|dp1 x dp2| / det, so the handedness is the sign of -det.
+            v4d dp1[3], dp2[3], dp12[3], dpdu[3];
+            const v4d du1 = u[1] - u[0], dv1 = v[1] - v[0], du2 = u[2] - u[0], dv2 = v[2] - v[0];
+            const v4d det = du1 * dv2 - du2 * dv1;  // twice the signed UV area
+            const v4d adet = (v4d)((v4l)det & ~(v4l)splat(-0.0));
+            const v4l uv_ok = (adet > splat(0.0)) & (adet < splat(INFINITY));
+#pragma GCC unroll 3
+            for (int k = 0; k < 3; ++k) {
+                dp1[k] = p[1][k] - p[0][k];
+                dp2[k] = p[2][k] - p[0][k];
+                dp12[k] = p[2][k] - p[1][k];
+                dpdu[k] = (dp1[k] * dv2 - dp2[k] * dv1) / det;
+            }
+            const v4l negative_det = det < splat(0.0);
+            // Step 2, per corner: the edges to the next and the previous corner (a - b = -(b - a) exactly),
+            // dP/du projected into the vertex's tangent plane, the corner angle measured in that plane.
+            v4d rows[3][4];
+            v4l ok[3];
+#pragma GCC unroll 3
+            for (int c = 0; c < 3; ++c) {
+                v4d e1[3], e2[3], tp[3], n[3];
+#pragma GCC unroll 3
+                for (int k = 0; k < 3; ++k) {
+                    e1[k] = c == 0 ? dp1[k] : c == 1 ? dp12[k] : -dp2[k];
+                    e2[k] = c == 0 ? dp2[k] : c == 1 ? -dp1[k] : -dp12[k];
+                    n[k] = gather4(in.unit_normals, vi[c], 3, k);
+                }
+                const v4d d1 = dot4(n, e1), d2 = dot4(n, e2), dn = dot4(n, dpdu);
+#pragma GCC unroll 3
+                for (int k = 0; k < 3; ++k) {
+                    e1[k] = e1[k] - d1 * n[k];
+                    e2[k] = e2[k] - d2 * n[k];
+                    tp[k] = dpdu[k] - dn * n[k];
+                }
+                const v4d cross[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                                      e1[0] * e2[1] - e1[1] * e2[0]};
+                // The corner angle is only a weight: a polynomial atan2 (detail::corner_angle) instead of libm's.
+                const v4d angle = corner_angle4(sqrt4(dot4(cross, cross)), dot4(e1, e2));
+                const v4d tl = sqrt4(dot4(tp, tp));
+                ok[c] = uv_ok & (angle > splat(0.0)) & (tl > splat(0.0)) & (tl < splat(INFINITY));
+                const v4d weight = angle / tl;
+                rows[c][0] = weight * tp[0];
+                rows[c][1] = weight * tp[1];
+                rows[c][2] = weight * tp[2];
+                rows[c][3] = select(negative_det, angle, -angle);
+            }
+            v4d terms[3][4];
+#pragma GCC unroll 3
+            for (int c = 0; c < 3; ++c) transpose4(rows[c], terms[c]);
+            for (int j = 0; j < lanes; ++j)
+#pragma GCC unroll 3
+                for (int c = 0; c < 3; ++c) {
+                    const size_t vertex = vi[c][j];
+                    if (!ok[c][j] || vertex - first >= owned) continue;
+                    double* sum = in.sums + 4 * vertex;
+                    v4d s;
+                    std::memcpy(&s, sum, sizeof s);
+                    s += terms[c][j];
+                    std::memcpy(sum, &s, sizeof s);
+                }
+        }
+    }
+}
+
+// The tangents of the vertices [first, last) from their sums (none without UVs): the sum projected into the
+// tangent plane and normalised, w the sign of the signed angle sum; Frisvad's basis where the sum vanishes.
+void finish_range(const TangentInput& in, size_t first, size_t last, float* tangents) {
+    using detail::Vec3d;
+    for (size_t vi = first; vi < last; ++vi) {
+        const double* un = in.unit_normals + 3 * vi;
+        const Vec3d nrm(un[0], un[1], un[2]);
+        const double* s = in.sums ? in.sums + 4 * vi : nullptr;
+        const Vec3d sum = s ? Vec3d(s[0], s[1], s[2]) : Vec3d(0.0, 0.0, 0.0);
+        Vec3d t = sum - nrm.dot(sum) * nrm;
+        double w = 1.0;
+        const double tl = t.norm();
+        if (tl > 1e-12 && std::isfinite(tl)) {
+            t /= tl;
+            w = s[3] < 0.0 ? -1.0 : 1.0;
+        } else {
+            Vec3d b;
+            detail::orthonormal_basis(nrm, t, b);
+        }
+        for (int k = 0; k < 3; ++k) tangents[4 * vi + k] = float(t[k]);
+        tangents[4 * vi + 3] = float(w);
+    }
+}
 
 }  // namespace
 
 void generate_tangents(TriMesh& mesh) {
-    using detail::Vec3d;
     const size_t n = mesh.vertex_count();
     const size_t tris = mesh.triangle_count();
     const bool with_uv = mesh.has_uv0();
 
-    // MikkTSpace step 1, per triangle: dP/du and dP/dv from [dp1 dp2] = [dP/du dP/dv] [[du1 du2], [dv1 dv2]].
-    // cross(N, dP/du) . (-dP/dv) = -|dp1 x dp2| / det, so the handedness is the sign of -det.
-    detail::ScratchArray<FaceTangent> face(with_uv ? tris : 0);
-    std::vector<uint32_t> start(n + 1, 0);
-    detail::ScratchArray<uint32_t> order(with_uv ? mesh.indices.size() : 0);  // every slot written below
-    if (with_uv) {
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, tris, 8192), [&](const auto& range) {
-            for (size_t t = range.begin(); t != range.end(); ++t) {
-                const uint32_t* f = &mesh.indices[3 * t];
-                const Vec3d p0 = detail::position(mesh, f[0]);
-                const Vec3d dp1 = detail::position(mesh, f[1]) - p0, dp2 = detail::position(mesh, f[2]) - p0;
-                const double u0 = mesh.uv0[2 * f[0]], v0 = mesh.uv0[2 * f[0] + 1];
-                const double du1 = mesh.uv0[2 * f[1]] - u0, dv1 = mesh.uv0[2 * f[1] + 1] - v0;
-                const double du2 = mesh.uv0[2 * f[2]] - u0, dv2 = mesh.uv0[2 * f[2] + 1] - v0;
-                const double det = du1 * dv2 - du2 * dv1;  // twice the signed UV area
-                FaceTangent& ft = face[t];
-                ft.sign = 0.0;
-                if (!(std::abs(det) > 0.0) || !std::isfinite(det)) continue;
-                const Vec3d dpdu = (dp1 * dv2 - dp2 * dv1) / det;
-                for (int k = 0; k < 3; ++k) ft.dpdu[k] = dpdu[k];
-                ft.sign = det < 0.0 ? 1.0 : -1.0;
+    // One vertex range per thread, each big enough to be worth a task; the split does not change the result.
+    constexpr size_t kMinVerticesPerRange = 16384;
+    const size_t threads = std::min<size_t>(size_t(std::max(1, tbb::this_task_arena::max_concurrency())),
+                                            tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+    const size_t ranges = std::max<size_t>(1, std::min(threads, n / kMinVerticesPerRange));
+
+    detail::ScratchArray<double> unit_normals(3 * n);
+    detail::ScratchArray<double> sums(with_uv ? 4 * n : 0);
+    const size_t blocks = (tris + kBlock - 1) / kBlock;
+    detail::ScratchArray<uint32_t> block_bounds(with_uv && ranges > 1 ? 2 * blocks : 0);
+    const TangentInput in{mesh.positions.data(), mesh.normals.data(), with_uv ? mesh.uv0.data() : nullptr,
+                          mesh.indices.data(), tris, with_uv && ranges > 1 ? block_bounds.data() : nullptr,
+                          unit_normals.data(), with_uv ? sums.data() : nullptr};
+    if (in.block_bounds) {
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 16), [&](const auto& range) {
+            for (size_t b = range.begin(); b != range.end(); ++b) {
+                const uint32_t* first = mesh.indices.data() + 3 * b * kBlock;
+                const uint32_t* last = mesh.indices.data() + 3 * std::min(tris, (b + 1) * kBlock);
+                const auto [low, high] = std::minmax_element(first, last);
+                block_bounds[2 * b] = *low;
+                block_bounds[2 * b + 1] = *high;
             }
         });
-        // Corners of each vertex in triangle order (a counting sort), so each vertex sums its own corners in
-        // the same order for any thread count.
-        for (uint32_t i : mesh.indices) ++start[i + 1];
-        for (size_t v = 0; v < n; ++v) start[v + 1] += start[v];
-        std::vector<uint32_t> fill(start.begin(), start.end() - 1);
-        for (size_t k = 0; k < mesh.indices.size(); ++k) order[fill[mesh.indices[k]]++] = uint32_t(k);
     }
 
-    // MikkTSpace step 2, per vertex: each corner's dP/du projected into the vertex's tangent plane and
-    // normalised, weighted by the corner angle measured in that plane; the sum normalised. The handedness is
-    // the angle-weighted majority of the corners' (a vertex keeps one tangent, so corners of both
-    // handednesses are not split apart as MikkTSpace would).
-    // The corner terms are computed on plain doubles (in Eigen's evaluation order, so the sums are the same)
-    // and, with SSE2, two corners at a time; they are added in corner order.
     mesh.tangents.clear();
     detail::reserve_huge_pages(mesh.tangents, 4 * n);
     mesh.tangents.resize(4 * n);
-    const float* position = mesh.positions.data();
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const auto& range) {
-        for (size_t vi = range.begin(); vi != range.end(); ++vi) {
-            Vec3d nrm = detail::normal(mesh, uint32_t(vi));
-            const double nl = nrm.norm();
-            nrm = nl > 0.0 ? Vec3d(nrm / nl) : Vec3d(0.0, 0.0, 1.0);
-            const double nv[3] = {nrm[0], nrm[1], nrm[2]};
-            double t_sum[3] = {0.0, 0.0, 0.0};
-            double sign_sum = 0.0;
-            auto add = [&](const CornerTerm& term, double sign) {
-                if (!(term.angle > 0.0) || !(term.tl > 0.0) || !std::isfinite(term.tl)) return;
-                const double weight = term.angle / term.tl;
-                for (int i = 0; i < 3; ++i) t_sum[i] += weight * term.tp[i];
-                sign_sum += term.angle * sign;
-            };
-            // The corners of a UV triangle: its three positions from this vertex on, and its face record.
-            const float* corner_points[2][3];
-            const FaceTangent* corner_face[2];
-            int pending = 0;
-            for (uint32_t k = with_uv ? start[vi] : 0; with_uv && k < start[vi + 1]; ++k) {
-                const uint32_t corner = order[k], c = corner % 3;
-                const FaceTangent& ft = face[corner / 3];
-                if (ft.sign == 0.0) continue;
-                const uint32_t* f = &mesh.indices[corner - c];
-                corner_points[pending][0] = position + 3 * size_t(f[c]);
-                corner_points[pending][1] = position + 3 * size_t(f[c == 2 ? 0 : c + 1]);
-                corner_points[pending][2] = position + 3 * size_t(f[c == 0 ? 2 : c - 1]);
-                corner_face[pending] = &ft;
-#if defined(__SSE2__)
-                if (++pending < 2) continue;
-                pending = 0;
-                const double* dpdu[2] = {corner_face[0]->dpdu, corner_face[1]->dpdu};
-                CornerTerm terms[2];
-                corner_terms2(corner_points, dpdu, nv, terms);
-                add(terms[0], corner_face[0]->sign);
-                add(terms[1], corner_face[1]->sign);
-#else
-                CornerTerm term;
-                corner_term(corner_points[0][0], corner_points[0][1], corner_points[0][2], ft.dpdu, nv, term);
-                add(term, ft.sign);
-#endif
-            }
-            if (pending == 1) {
-                CornerTerm term;
-                corner_term(corner_points[0][0], corner_points[0][1], corner_points[0][2], corner_face[0]->dpdu, nv, term);
-                add(term, corner_face[0]->sign);
-            }
-            const Vec3d sum(t_sum[0], t_sum[1], t_sum[2]);
-            Vec3d t = sum - nrm.dot(sum) * nrm;
-            double w = 1.0;
-            const double tl = t.norm();
-            if (tl > 1e-12 && std::isfinite(tl)) {
-                t /= tl;
-                w = sign_sum < 0.0 ? -1.0 : 1.0;
-            } else {
-                Vec3d b;
-                detail::orthonormal_basis(nrm, t, b);
-            }
-            for (int k = 0; k < 3; ++k) mesh.tangents[4 * vi + k] = float(t[k]);
-            mesh.tangents[4 * vi + 3] = float(w);
+    float* tangents = mesh.tangents.data();
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, ranges, 1), [&](const auto& range) {
+        for (size_t r = range.begin(); r != range.end(); ++r) {
+            const size_t first = n * r / ranges, last = n * (r + 1) / ranges;
+            start_range(in, first, last);
+            if (with_uv) sum_corners(in, first, last);
+            finish_range(in, first, last, tangents);
         }
     });
 }
