@@ -69,23 +69,34 @@ SPECBAKE_INLINE v4d gather4(const T* a, const uint32_t (&v)[kLanes], size_t stri
 SPECBAKE_INLINE v4d dot4(const v4d (&a)[3], const v4d (&b)[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
 // detail::corner_angle lane-wise, with its operations in its order (so the same bits): both branches are
-// computed and each lane's one selected.
-SPECBAKE_INLINE v4d corner_angle4(v4d y, v4d x) {
+// computed and each lane's one selected. N vectors at once, step by step: each is a long chain of dependent
+// divisions and multiply-adds, and independent chains side by side keep the units busy.
+#define SPECBAKE_EACH _Pragma("GCC unroll 4") for (int c = 0; c < N; ++c)
+template <int N>
+SPECBAKE_INLINE void corner_angles(const v4d (&y)[N], const v4d (&x)[N], v4d (&a)[N]) {
     const v4d zero = splat(0.0), one = splat(1.0);
-    const v4d ax = (v4d)((v4l)x & ~(v4l)splat(-0.0));
-    const v4l steep = y > ax;
-    v4d t = select(steep, ax, y) / select(steep, y, ax);
-    const v4l high = t > splat(detail::kAtanTanPi8);
-    t = select(high, (t - one) / (t + one), t);
-    const v4d s = t * t;
-    v4d poly = splat(detail::kAtanFit[0]);
+    v4d t[N], s[N], poly[N];
+    v4l steep[N], high[N];
+    SPECBAKE_EACH {
+        const v4d ax = (v4d)((v4l)x[c] & ~(v4l)splat(-0.0));
+        steep[c] = y[c] > ax;
+        t[c] = select(steep[c], ax, y[c]) / select(steep[c], y[c], ax);
+    }
+    SPECBAKE_EACH {
+        high[c] = t[c] > splat(detail::kAtanTanPi8);
+        t[c] = select(high[c], (t[c] - one) / (t[c] + one), t[c]);
+        s[c] = t[c] * t[c];
+        poly[c] = splat(detail::kAtanFit[0]);
+    }
 #pragma GCC unroll 6
-    for (int i = 1; i < 7; ++i) poly = poly * s + splat(detail::kAtanFit[i]);
-    v4d a = t * poly + select(high, splat(0.25 * detail::kAtanPi), zero);
-    a = select(steep, splat(0.5 * detail::kAtanPi) - a, a);
-    const v4l negative = x < zero;
-    a = select(negative, splat(detail::kAtanPi) - a, a);
-    return select(y == zero, select(negative, splat(detail::kAtanPi), zero), a);
+    for (int i = 1; i < 7; ++i) SPECBAKE_EACH poly[c] = poly[c] * s[c] + splat(detail::kAtanFit[i]);
+    SPECBAKE_EACH {
+        a[c] = t[c] * poly[c] + select(high[c], splat(0.25 * detail::kAtanPi), zero);
+        a[c] = select(steep[c], splat(0.5 * detail::kAtanPi) - a[c], a[c]);
+        const v4l negative = x[c] < zero;
+        a[c] = select(negative, splat(detail::kAtanPi) - a[c], a[c]);
+        a[c] = select(y[c] == zero, select(negative, splat(detail::kAtanPi), zero), a[c]);
+    }
 }
 
 // Rows (x, y, z, w) of four lanes to the four lanes' (x, y, z, w).
@@ -193,11 +204,10 @@ SPECBAKE_AVX2_CLONES void sum_corners(const TangentInput& in, size_t first, size
             const v4l negative_det = det < splat(0.0);
             // Step 2, per corner: the edges to the next and the previous corner (a - b = -(b - a) exactly),
             // dP/du projected into the vertex's tangent plane, the corner angle measured in that plane.
-            v4d rows[3][4];
-            v4l ok[3];
-#pragma GCC unroll 3
-            for (int c = 0; c < 3; ++c) {
-                v4d e1[3], e2[3], tp[3], n[3];
+            constexpr int N = 3;
+            v4d tp[3][3], y[3], x[3], tl[3];
+            SPECBAKE_EACH {
+                v4d e1[3], e2[3], n[3];
 #pragma GCC unroll 3
                 for (int k = 0; k < 3; ++k) {
                     e1[k] = c == 0 ? dp1[k] : c == 1 ? dp12[k] : -dp2[k];
@@ -209,19 +219,25 @@ SPECBAKE_AVX2_CLONES void sum_corners(const TangentInput& in, size_t first, size
                 for (int k = 0; k < 3; ++k) {
                     e1[k] = e1[k] - d1 * n[k];
                     e2[k] = e2[k] - d2 * n[k];
-                    tp[k] = dpdu[k] - dn * n[k];
+                    tp[c][k] = dpdu[k] - dn * n[k];
                 }
                 const v4d cross[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
                                       e1[0] * e2[1] - e1[1] * e2[0]};
-                // The corner angle is only a weight: a polynomial atan2 (detail::corner_angle) instead of libm's.
-                const v4d angle = corner_angle4(sqrt4(dot4(cross, cross)), dot4(e1, e2));
-                const v4d tl = sqrt4(dot4(tp, tp));
-                ok[c] = uv_ok & (angle > splat(0.0)) & (tl > splat(0.0)) & (tl < splat(INFINITY));
-                const v4d weight = angle / tl;
-                rows[c][0] = weight * tp[0];
-                rows[c][1] = weight * tp[1];
-                rows[c][2] = weight * tp[2];
-                rows[c][3] = select(negative_det, angle, -angle);
+                y[c] = sqrt4(dot4(cross, cross));
+                x[c] = dot4(e1, e2);
+                tl[c] = sqrt4(dot4(tp[c], tp[c]));
+            }
+            // The corner angle is only a weight: a polynomial atan2 (detail::corner_angle) instead of libm's.
+            v4d angle[3], rows[3][4];
+            v4l ok[3];
+            corner_angles(y, x, angle);
+            SPECBAKE_EACH {
+                ok[c] = uv_ok & (angle[c] > splat(0.0)) & (tl[c] > splat(0.0)) & (tl[c] < splat(INFINITY));
+                const v4d weight = angle[c] / tl[c];
+                rows[c][0] = weight * tp[c][0];
+                rows[c][1] = weight * tp[c][1];
+                rows[c][2] = weight * tp[c][2];
+                rows[c][3] = select(negative_det, angle[c], -angle[c]);
             }
             v4d terms[3][4];
 #pragma GCC unroll 3
