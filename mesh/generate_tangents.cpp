@@ -59,13 +59,6 @@ SPECBAKE_INLINE v4d sqrt4(v4d x) {
 #endif
 }
 
-// Element k of the records (stride values each) of the four lanes' vertices.
-template <class T>
-SPECBAKE_INLINE v4d gather4(const T* a, const uint32_t (&v)[kLanes], size_t stride, size_t k) {
-    return v4d{double(a[stride * v[0] + k]), double(a[stride * v[1] + k]), double(a[stride * v[2] + k]),
-               double(a[stride * v[3] + k])};
-}
-
 SPECBAKE_INLINE v4d dot4(const v4d (&a)[3], const v4d (&b)[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
 // detail::corner_angle lane-wise, with its operations in its order (so the same bits): both branches are
@@ -99,6 +92,16 @@ SPECBAKE_INLINE void corner_angles(const v4d (&y)[N], const v4d (&x)[N], v4d (&a
     }
 }
 
+// One bit per lane of a lane mask (bit j set when lane j is true).
+SPECBAKE_INLINE int lane_bits(v4l mask) {
+#if defined(__SSE2__)
+    const v4d m = (v4d)mask;
+    return _mm_movemask_pd(__m128d{m[0], m[1]}) | _mm_movemask_pd(__m128d{m[2], m[3]}) << 2;
+#else
+    return (mask[0] ? 1 : 0) | (mask[1] ? 2 : 0) | (mask[2] ? 4 : 0) | (mask[3] ? 8 : 0);
+#endif
+}
+
 // Rows (x, y, z, w) of four lanes to the four lanes' (x, y, z, w).
 SPECBAKE_INLINE void transpose4(const v4d (&in)[4], v4d (&out)[4]) {
     const v4d t0 = __builtin_shuffle(in[0], in[1], v4l{0, 4, 2, 6}), t1 = __builtin_shuffle(in[0], in[1], v4l{1, 5, 3, 7});
@@ -107,6 +110,22 @@ SPECBAKE_INLINE void transpose4(const v4d (&in)[4], v4d (&out)[4]) {
     out[1] = __builtin_shuffle(t1, t3, v4l{0, 1, 4, 5});
     out[2] = __builtin_shuffle(t0, t2, v4l{2, 3, 6, 7});
     out[3] = __builtin_shuffle(t1, t3, v4l{2, 3, 6, 7});
+}
+
+
+// Element k of the records (stride floats each) of the four lanes' vertices.
+SPECBAKE_INLINE v4d gather4(const float* a, const uint32_t (&v)[kLanes], size_t stride, size_t k) {
+    return v4d{a[stride * v[0] + k], a[stride * v[1] + k], a[stride * v[2] + k], a[stride * v[3] + k]};
+}
+
+// x, y, z of the four lanes' vertices, as x, y and z vectors, from double xyz records that can be read four
+// doubles at a time (one spare double at the end).
+SPECBAKE_INLINE void gather_xyz(const double* a, const uint32_t (&v)[kLanes], v4d (&out)[3]) {
+    v4d rows[4], columns[4];
+#pragma GCC unroll 4
+    for (int j = 0; j < kLanes; ++j) std::memcpy(&rows[j], a + 3 * size_t(v[j]), sizeof rows[j]);
+    transpose4(rows, columns);
+    for (int k = 0; k < 3; ++k) out[k] = columns[k];
 }
 
 // Triangles per block of the vertex-index bounds that let a range skip the triangles it has no vertex in.
@@ -120,7 +139,7 @@ struct TangentInput {
     const uint32_t* indices;
     size_t triangles;
     const uint32_t* block_bounds;  // smallest and largest vertex index per block; null with a single range
-    double* unit_normals;          // 3 per vertex
+    double* unit_normals;          // 3 per vertex and one spare, so any vertex's can be read as 4 doubles
     double* sums;                  // 4 per vertex: sum of the weighted projected dP/du (xyz), of the signed angles
 };
 
@@ -169,17 +188,22 @@ SPECBAKE_AVX2_CLONES void sum_corners(const TangentInput& in, size_t first, size
         const size_t end = std::min(in.triangles, (b + 1) * kBlock);
         for (size_t t = b * kBlock; t < end; t += kLanes) {
             const int lanes = int(std::min<size_t>(kLanes, end - t));
-            uint32_t vi[3][kLanes];  // corner c of lane j's triangle
-            bool any = inside;
-#pragma GCC unroll 4
-            for (int j = 0; j < kLanes; ++j) {
-                const uint32_t* f = in.indices + 3 * (t + std::min(j, lanes - 1));
-                for (int c = 0; c < 3; ++c) {
-                    vi[c][j] = f[c];
-                    any = any || size_t(f[c]) - first < owned;
-                }
+            uint32_t f[3 * kLanes];  // the lanes' triangles; a short last batch repeats its last one
+            if (lanes == kLanes) {
+                std::memcpy(f, in.indices + 3 * t, sizeof f);
+            } else {
+                for (int j = 0; j < kLanes; ++j) std::memcpy(f + 3 * j, in.indices + 3 * (t + std::min(j, lanes - 1)), 3 * sizeof *f);
             }
-            if (!any) continue;
+            if (!inside) {
+                bool any = false;
+                for (int i = 0; i < 3 * kLanes; ++i) any |= size_t(f[i]) - first < owned;
+                if (!any) continue;
+            }
+            uint32_t vi[3][kLanes];  // corner c of lane j's triangle
+#pragma GCC unroll 3
+            for (int c = 0; c < 3; ++c)
+#pragma GCC unroll 4
+                for (int j = 0; j < kLanes; ++j) vi[c][j] = f[3 * j + c];
             v4d p[3][3], u[3], v[3];  // p[c][axis]
 #pragma GCC unroll 3
             for (int c = 0; c < 3; ++c) {
@@ -208,11 +232,11 @@ SPECBAKE_AVX2_CLONES void sum_corners(const TangentInput& in, size_t first, size
             v4d tp[3][3], y[3], x[3], tl[3];
             SPECBAKE_EACH {
                 v4d e1[3], e2[3], n[3];
+                gather_xyz(in.unit_normals, vi[c], n);
 #pragma GCC unroll 3
                 for (int k = 0; k < 3; ++k) {
                     e1[k] = c == 0 ? dp1[k] : c == 1 ? dp12[k] : -dp2[k];
                     e2[k] = c == 0 ? dp2[k] : c == 1 ? -dp1[k] : -dp12[k];
-                    n[k] = gather4(in.unit_normals, vi[c], 3, k);
                 }
                 const v4d d1 = dot4(n, e1), d2 = dot4(n, e2), dn = dot4(n, dpdu);
 #pragma GCC unroll 3
@@ -242,11 +266,14 @@ SPECBAKE_AVX2_CLONES void sum_corners(const TangentInput& in, size_t first, size
             v4d terms[3][4];
 #pragma GCC unroll 3
             for (int c = 0; c < 3; ++c) transpose4(rows[c], terms[c]);
+            int add[3];  // lanes whose corner c counts, one bit each
+#pragma GCC unroll 3
+            for (int c = 0; c < 3; ++c) add[c] = lane_bits(ok[c]);
             for (int j = 0; j < lanes; ++j)
 #pragma GCC unroll 3
                 for (int c = 0; c < 3; ++c) {
                     const size_t vertex = vi[c][j];
-                    if (!ok[c][j] || vertex - first >= owned) continue;
+                    if (!(add[c] >> j & 1) || (!inside && vertex - first >= owned)) continue;
                     double* sum = in.sums + 4 * vertex;
                     v4d s;
                     std::memcpy(&s, sum, sizeof s);
@@ -294,7 +321,8 @@ void generate_tangents(TriMesh& mesh) {
                                             tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
     const size_t ranges = std::max<size_t>(1, std::min(threads, n / kMinVerticesPerRange));
 
-    detail::ScratchArray<double> unit_normals(3 * n);
+    detail::ScratchArray<double> unit_normals(3 * n + 1);
+    unit_normals[3 * n] = 0.0;
     detail::ScratchArray<double> sums(with_uv ? 4 * n : 0);
     const size_t blocks = (tris + kBlock - 1) / kBlock;
     detail::ScratchArray<uint32_t> block_bounds(with_uv && ranges > 1 ? 2 * blocks : 0);
