@@ -329,29 +329,62 @@ SPECBAKE_AVX2_CLONES void block_bounds_of(const uint32_t* indices, size_t triang
     }
 }
 
-// The tangents of the chunk's vertices from their sums (none without UVs): the sum projected into the
+// One vertex's tangent from its unit normal and its sums (none without UVs): the sum projected into the
 // tangent plane and normalised, w the sign of the signed angle sum; Frisvad's basis where the sum vanishes.
-void finish_chunk(const Chunk& chunk, float* tangents) {
+void finish_vertex(const double* un, const double* s, float* out) {
     using detail::Vec3d;
-    for (size_t i = 0; i < chunk.last - chunk.first; ++i) {
-        const size_t vi = chunk.first + i;
-        const double* un = chunk.unit_normals + 3 * i;
-        const Vec3d nrm(un[0], un[1], un[2]);
-        const double* s = chunk.sums ? chunk.sums + 4 * i : nullptr;
-        const Vec3d sum = s ? Vec3d(s[0], s[1], s[2]) : Vec3d(0.0, 0.0, 0.0);
-        Vec3d t = sum - nrm.dot(sum) * nrm;
-        double w = 1.0;
-        const double tl = t.norm();
-        if (tl > 1e-12 && std::isfinite(tl)) {
-            t /= tl;
-            w = s[3] < 0.0 ? -1.0 : 1.0;
-        } else {
-            Vec3d b;
-            detail::orthonormal_basis(nrm, t, b);
-        }
-        for (int k = 0; k < 3; ++k) tangents[4 * vi + k] = float(t[k]);
-        tangents[4 * vi + 3] = float(w);
+    const Vec3d nrm(un[0], un[1], un[2]);
+    const Vec3d sum = s ? Vec3d(s[0], s[1], s[2]) : Vec3d(0.0, 0.0, 0.0);
+    Vec3d t = sum - nrm.dot(sum) * nrm;
+    double w = 1.0;
+    const double tl = t.norm();
+    if (tl > 1e-12 && std::isfinite(tl)) {
+        t /= tl;
+        w = s[3] < 0.0 ? -1.0 : 1.0;
+    } else {
+        Vec3d b;
+        detail::orthonormal_basis(nrm, t, b);
     }
+    for (int k = 0; k < 3; ++k) out[k] = float(t[k]);
+    out[3] = float(w);
+}
+
+// finish_vertex for the chunk's vertices, four at a time with its operations in its order; lanes whose sum
+// vanishes, and the last few vertices, take finish_vertex itself.
+SPECBAKE_AVX2_CLONES void finish_chunk(const Chunk& chunk, float* tangents) {
+    typedef float v4f __attribute__((vector_size(16)));
+    const size_t count = chunk.last - chunk.first;
+    float* out = tangents + 4 * chunk.first;
+    size_t i = 0;
+    if (chunk.sums) {
+        const uint32_t lanes[kLanes] = {0, 1, 2, 3};
+        for (; i + kLanes <= count; i += kLanes) {
+            v4d n[3], rows[4], s[4];
+            gather_xyz(chunk.unit_normals + 3 * i, lanes, n);
+#pragma GCC unroll 4
+            for (int j = 0; j < kLanes; ++j) std::memcpy(&rows[j], chunk.sums + 4 * (i + j), sizeof rows[j]);
+            transpose4(rows, s);
+            const v4d d = n[0] * s[0] + n[1] * s[1] + n[2] * s[2];
+            v4d t[4];
+#pragma GCC unroll 3
+            for (int k = 0; k < 3; ++k) t[k] = s[k] - d * n[k];
+            const v4d tl = sqrt4(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+            const int good = lane_bits((tl > splat(1e-12)) & (tl < splat(INFINITY)));
+#pragma GCC unroll 3
+            for (int k = 0; k < 3; ++k) t[k] = t[k] / tl;
+            t[3] = select(s[3] < splat(0.0), splat(-1.0), splat(1.0));
+            transpose4(t, rows);
+#pragma GCC unroll 4
+            for (int j = 0; j < kLanes; ++j) {
+                const v4f f = __builtin_convertvector(rows[j], v4f);
+                std::memcpy(out + 4 * (i + j), &f, sizeof f);
+            }
+            if (good != (1 << kLanes) - 1)
+                for (int j = 0; j < kLanes; ++j)
+                    if (!(good >> j & 1)) finish_vertex(chunk.unit_normals + 3 * (i + j), chunk.sums + 4 * (i + j), out + 4 * (i + j));
+        }
+    }
+    for (; i < count; ++i) finish_vertex(chunk.unit_normals + 3 * i, chunk.sums ? chunk.sums + 4 * i : nullptr, out + 4 * i);
 }
 
 }  // namespace
