@@ -10,6 +10,7 @@
 #include "io/gltf_scene.h"
 #include "io/sha256.h"
 #include "mesh/curvature.h"
+#include "mesh/generate_tangents.h"
 #include "mesh/prepare_mesh.h"
 
 #include <assimp/Importer.hpp>
@@ -227,6 +228,22 @@ void BM_StagePrepare(benchmark::State& state) {
     state.counters["faces/s"] = benchmark::Counter(double(source.triangle_count()), benchmark::Counter::kIsIterationInvariantRate);
 }
 BENCHMARK(BM_StagePrepare)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Tangent generation alone (MikkTSpace-style, the sphere has none), the largest CPU cost of the preparation.
+void BM_StageTangents(benchmark::State& state) {
+    auto scene = io::GltfScene::load(sphere_glb());
+    const TriMesh source = std::move(*scene->primitive_mesh({0, 0}));
+    tbb::global_control threads(tbb::global_control::max_allowed_parallelism, size_t(state.range(0)));
+    for (auto _ : state) {
+        state.PauseTiming();
+        TriMesh mesh = source;
+        state.ResumeTiming();
+        generate_tangents(mesh);
+        benchmark::DoNotOptimize(mesh.tangents.data());
+    }
+    state.counters["faces/s"] = benchmark::Counter(double(source.triangle_count()), benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_StageTangents)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // Preparation and curvature as the bake runs them: one weld shared by the topology report and the estimate,
 // the estimate beside the report.

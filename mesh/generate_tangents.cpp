@@ -1,6 +1,21 @@
+// Layout for speed. The corners are not sorted by vertex: a pass over the triangles in index order computes
+// each triangle's dP/du once and its three corners' terms, and adds every corner term to its vertex's sums
+// (4 doubles: weighted tangent xyz, signed angle), so each vertex adds its corners in corner order. Four
+// triangles run at once, one per lane of a 4-wide double vector (AVX2 where the CPU has it). The vertices
+// are split into chunks of consecutive indices (one range of chunks per thread) with one small set of
+// arrays per thread; a chunk's pass visits only the blocks of triangles whose vertex-index bounds meet the
+// chunk and adds only its own vertices' corners, so every sum runs in the same order for any split and any
+// thread count. The bit-identical results of the scalar formulation (detail::corner_angle, Eigen order) are
+// kept: the lanes do the same IEEE operations in the same order.
 #include "mesh/generate_tangents.h"
 
+#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -9,211 +24,417 @@
 #include "mesh/mesh_math.h"
 #include "mesh/scratch_array.h"
 
+// The lane arithmetic must give the scalar results bit for bit in every compiled version: no a * b + c
+// contracted into a fused multiply-add in the AVX2 version.
+#pragma GCC optimize("fp-contract=off")
+
 namespace specbake {
 namespace {
 
-// Per triangle: dP/du, and the handedness its UV mapping gives (+1: B = cross(N, T) points along -dP/dv,
-// i.e. up the glTF image), 0 when the UV triangle is degenerate.
-struct FaceTangent {
-    double dpdu[3];
-    double sign;
-};
-
-// What a corner adds to its vertex: the corner angle in the vertex tangent plane and the triangle's dP/du
-// projected into that plane (tp, length tl).
-struct CornerTerm {
-    double angle, tl, tp[3];
-};
-
-inline double dot3(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-
-// One corner: p its position, p1 and p2 the next two corners' (in winding order), nv the unit vertex normal.
-void corner_term(const float* p, const float* p1, const float* p2, const double* dpdu, const double* nv,
-                 CornerTerm& out) {
-    double e1[3], e2[3];
-    for (int i = 0; i < 3; ++i) {
-        e1[i] = double(p1[i]) - double(p[i]);
-        e2[i] = double(p2[i]) - double(p[i]);
-    }
-    const double d1 = dot3(nv, e1), d2 = dot3(nv, e2), du = dot3(nv, dpdu);
-    for (int i = 0; i < 3; ++i) {
-        e1[i] -= d1 * nv[i];
-        e2[i] -= d2 * nv[i];
-        out.tp[i] = dpdu[i] - du * nv[i];
-    }
-    const double cross[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-    // The corner angle is only a weight: a polynomial atan2 (error < 3e-11 rad) instead of libm's, about five
-    // times cheaper and the same on every platform.
-    out.angle = detail::corner_angle(std::sqrt(dot3(cross, cross)), dot3(e1, e2));
-    out.tl = std::sqrt(dot3(out.tp, out.tp));
-}
-
-#if defined(__SSE2__)
-// Two corners of one vertex at once, one per lane, with exactly the operations of corner_term and
-// detail::corner_angle in the same order (so the same bits): the per-corner work is a long chain of
-// dependent divisions and square roots, and two independent chains share the instructions.
-void corner_terms2(const float* const p[2][3], const double* const dpdu[2], const double* nv, CornerTerm out[2]) {
-    auto lanes = [](double lo, double hi) { return _mm_set_pd(hi, lo); };
-    auto select = [](__m128d mask, __m128d yes, __m128d no) {
-        return _mm_or_pd(_mm_and_pd(mask, yes), _mm_andnot_pd(mask, no));
-    };
-    const __m128d n[3] = {_mm_set1_pd(nv[0]), _mm_set1_pd(nv[1]), _mm_set1_pd(nv[2])};
-    auto dot = [](const __m128d* a, const __m128d* b) {
-        return _mm_add_pd(_mm_add_pd(_mm_mul_pd(a[0], b[0]), _mm_mul_pd(a[1], b[1])), _mm_mul_pd(a[2], b[2]));
-    };
-    __m128d e1[3], e2[3], tp[3], du[3];
-    for (int i = 0; i < 3; ++i) {
-        const __m128d q = lanes(p[0][0][i], p[1][0][i]);
-        e1[i] = _mm_sub_pd(lanes(p[0][1][i], p[1][1][i]), q);
-        e2[i] = _mm_sub_pd(lanes(p[0][2][i], p[1][2][i]), q);
-        du[i] = lanes(dpdu[0][i], dpdu[1][i]);
-    }
-    const __m128d d1 = dot(n, e1), d2 = dot(n, e2), dn = dot(n, du);
-    for (int i = 0; i < 3; ++i) {
-        e1[i] = _mm_sub_pd(e1[i], _mm_mul_pd(d1, n[i]));
-        e2[i] = _mm_sub_pd(e2[i], _mm_mul_pd(d2, n[i]));
-        tp[i] = _mm_sub_pd(du[i], _mm_mul_pd(dn, n[i]));
-    }
-    const __m128d cross[3] = {_mm_sub_pd(_mm_mul_pd(e1[1], e2[2]), _mm_mul_pd(e1[2], e2[1])),
-                              _mm_sub_pd(_mm_mul_pd(e1[2], e2[0]), _mm_mul_pd(e1[0], e2[2])),
-                              _mm_sub_pd(_mm_mul_pd(e1[0], e2[1]), _mm_mul_pd(e1[1], e2[0]))};
-    const __m128d y = _mm_sqrt_pd(dot(cross, cross)), x = dot(e1, e2);
-    // detail::corner_angle, lane-wise: both branches computed, the lane's one selected.
-    const __m128d zero = _mm_setzero_pd(), one = _mm_set1_pd(1.0), pi = _mm_set1_pd(detail::kAtanPi);
-    const __m128d ax = _mm_andnot_pd(_mm_set1_pd(-0.0), x);
-    const __m128d steep = _mm_cmpgt_pd(y, ax);
-    __m128d t = _mm_div_pd(select(steep, ax, y), select(steep, y, ax));
-    const __m128d high = _mm_cmpgt_pd(t, _mm_set1_pd(detail::kAtanTanPi8));
-    t = select(high, _mm_div_pd(_mm_sub_pd(t, one), _mm_add_pd(t, one)), t);
-    const __m128d s = _mm_mul_pd(t, t);
-    __m128d poly = _mm_set1_pd(detail::kAtanFit[0]);
-    for (int i = 1; i < 7; ++i) poly = _mm_add_pd(_mm_mul_pd(poly, s), _mm_set1_pd(detail::kAtanFit[i]));
-    __m128d a = _mm_add_pd(_mm_mul_pd(t, poly), select(high, _mm_set1_pd(0.25 * detail::kAtanPi), zero));
-    a = select(steep, _mm_sub_pd(_mm_set1_pd(0.5 * detail::kAtanPi), a), a);
-    const __m128d negative = _mm_cmplt_pd(x, zero);
-    a = select(negative, _mm_sub_pd(pi, a), a);
-    a = select(_mm_cmpeq_pd(y, zero), select(negative, pi, zero), a);
-    const __m128d tl = _mm_sqrt_pd(dot(tp, tp));
-    double angle[2], length[2], tpv[3][2];
-    _mm_storeu_pd(angle, a);
-    _mm_storeu_pd(length, tl);
-    for (int i = 0; i < 3; ++i) _mm_storeu_pd(tpv[i], tp[i]);
-    for (int l = 0; l < 2; ++l) {
-        out[l].angle = angle[l];
-        out[l].tl = length[l];
-        for (int i = 0; i < 3; ++i) out[l].tp[i] = tpv[i][l];
-    }
-}
+// The corner pass is compiled twice, for AVX2 + FMA and for the baseline instruction set, and chosen once at
+// load time (GCC/Clang function multiversioning); its helpers are inlined into each version.
+#if defined(__x86_64__) && defined(__linux__)
+#define SPECBAKE_AVX2_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define SPECBAKE_AVX2_CLONES
 #endif
+#define SPECBAKE_INLINE __attribute__((always_inline)) inline
+
+// Four doubles processed as one (GCC/Clang vector extension): one AVX2 register, two SSE2 registers. The
+// helpers taking or returning them are always inlined, so the ABI note GCC gives for them does not apply.
+#pragma GCC diagnostic ignored "-Wpsabi"
+typedef double v4d __attribute__((vector_size(32)));
+typedef long v4l __attribute__((vector_size(32)));  // lane masks, as v4d comparisons yield
+constexpr int kLanes = 4;
+
+SPECBAKE_INLINE v4d splat(double x) { return v4d{x, x, x, x}; }
+SPECBAKE_INLINE v4d select(v4l mask, v4d yes, v4d no) { return mask ? yes : no; }
+
+// Lane-wise square root (non-negative input): two SSE2 square roots where available.
+SPECBAKE_INLINE v4d sqrt4(v4d x) {
+#if defined(__SSE2__)
+    const __m128d lo = _mm_sqrt_pd(__m128d{x[0], x[1]}), hi = _mm_sqrt_pd(__m128d{x[2], x[3]});
+    return v4d{lo[0], lo[1], hi[0], hi[1]};
+#else
+    return v4d{std::sqrt(x[0]), std::sqrt(x[1]), std::sqrt(x[2]), std::sqrt(x[3])};
+#endif
+}
+
+SPECBAKE_INLINE v4d dot4(const v4d (&a)[3], const v4d (&b)[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+// detail::corner_angle lane-wise, with its operations in its order (so the same bits): both branches are
+// computed and each lane's one selected. N vectors at once, step by step: each is a long chain of dependent
+// divisions and multiply-adds, and independent chains side by side keep the units busy.
+#define SPECBAKE_EACH _Pragma("GCC unroll 4") for (int c = 0; c < N; ++c)
+template <int N>
+SPECBAKE_INLINE void corner_angles(const v4d (&y)[N], const v4d (&x)[N], v4d (&a)[N]) {
+    const v4d zero = splat(0.0), one = splat(1.0);
+    v4d t[N], s[N], poly[N];
+    v4l steep[N], high[N];
+    SPECBAKE_EACH {
+        const v4d ax = (v4d)((v4l)x[c] & ~(v4l)splat(-0.0));
+        steep[c] = y[c] > ax;
+        t[c] = select(steep[c], ax, y[c]) / select(steep[c], y[c], ax);
+    }
+    SPECBAKE_EACH {
+        high[c] = t[c] > splat(detail::kAtanTanPi8);
+        t[c] = select(high[c], (t[c] - one) / (t[c] + one), t[c]);
+        s[c] = t[c] * t[c];
+        poly[c] = splat(detail::kAtanFit[0]);
+    }
+#pragma GCC unroll 6
+    for (int i = 1; i < 7; ++i) SPECBAKE_EACH poly[c] = poly[c] * s[c] + splat(detail::kAtanFit[i]);
+    SPECBAKE_EACH {
+        a[c] = t[c] * poly[c] + select(high[c], splat(0.25 * detail::kAtanPi), zero);
+        a[c] = select(steep[c], splat(0.5 * detail::kAtanPi) - a[c], a[c]);
+        const v4l negative = x[c] < zero;
+        a[c] = select(negative, splat(detail::kAtanPi) - a[c], a[c]);
+        a[c] = select(y[c] == zero, select(negative, splat(detail::kAtanPi), zero), a[c]);
+    }
+}
+
+// One bit per lane of a lane mask (bit j set when lane j is true).
+SPECBAKE_INLINE int lane_bits(v4l mask) {
+#if defined(__SSE2__)
+    const v4d m = (v4d)mask;
+    return _mm_movemask_pd(__m128d{m[0], m[1]}) | _mm_movemask_pd(__m128d{m[2], m[3]}) << 2;
+#else
+    return (mask[0] ? 1 : 0) | (mask[1] ? 2 : 0) | (mask[2] ? 4 : 0) | (mask[3] ? 8 : 0);
+#endif
+}
+
+// Rows (x, y, z, w) of four lanes to the four lanes' (x, y, z, w).
+SPECBAKE_INLINE void transpose4(const v4d (&in)[4], v4d (&out)[4]) {
+    const v4d t0 = __builtin_shuffle(in[0], in[1], v4l{0, 4, 2, 6}), t1 = __builtin_shuffle(in[0], in[1], v4l{1, 5, 3, 7});
+    const v4d t2 = __builtin_shuffle(in[2], in[3], v4l{0, 4, 2, 6}), t3 = __builtin_shuffle(in[2], in[3], v4l{1, 5, 3, 7});
+    out[0] = __builtin_shuffle(t0, t2, v4l{0, 1, 4, 5});
+    out[1] = __builtin_shuffle(t1, t3, v4l{0, 1, 4, 5});
+    out[2] = __builtin_shuffle(t0, t2, v4l{2, 3, 6, 7});
+    out[3] = __builtin_shuffle(t1, t3, v4l{2, 3, 6, 7});
+}
+
+
+// Element k of the records (stride floats each) of the four lanes' vertices.
+SPECBAKE_INLINE v4d gather4(const float* a, const uint32_t (&v)[kLanes], size_t stride, size_t k) {
+    return v4d{a[stride * v[0] + k], a[stride * v[1] + k], a[stride * v[2] + k], a[stride * v[3] + k]};
+}
+
+// x, y, z of the four lanes' vertices, as x, y and z vectors, from double xyz records that can be read four
+// doubles at a time (one spare double at the end).
+SPECBAKE_INLINE void gather_xyz(const double* a, const uint32_t (&v)[kLanes], v4d (&out)[3]) {
+    v4d rows[4], columns[4];
+#pragma GCC unroll 4
+    for (int j = 0; j < kLanes; ++j) std::memcpy(&rows[j], a + 3 * size_t(v[j]), sizeof rows[j]);
+    transpose4(rows, columns);
+    for (int k = 0; k < 3; ++k) out[k] = columns[k];
+}
+
+// Triangles per block of the vertex-index bounds that let a range skip the triangles it has no vertex in.
+constexpr size_t kBlock = 1024;
+
+// Everything the passes read, as flat arrays.
+struct TangentInput {
+    const float* positions;
+    const float* normals;
+    const float* uv;  // null without UVs
+    const uint32_t* indices;
+    size_t triangles;
+    const uint32_t* block_bounds;  // smallest and largest vertex index per block of triangles; null without UVs
+};
+
+// The vertices [first, last) with their working arrays, indexed from first.
+struct Chunk {
+    size_t first, last;
+    double* unit_normals;  // 3 per vertex and one spare, so any vertex's can be read as 4 doubles
+    double* sums;          // 4 per vertex: sum of the weighted projected dP/du (xyz), of the signed angles
+};
+
+// Unit normal of one vertex, (0, 0, 1) for a zero or non-finite one.
+SPECBAKE_INLINE void unit_normal(const float* n, double* out) {
+    const double x = n[0], y = n[1], z = n[2];
+    const double l = std::sqrt(x * x + y * y + z * z);
+    const bool ok = l > 0.0;
+    out[0] = ok ? x / l : 0.0;
+    out[1] = ok ? y / l : 0.0;
+    out[2] = ok ? z / l : 1.0;
+}
+
+// Unit normals of the chunk's vertices, and their sums cleared (when there are sums).
+SPECBAKE_AVX2_CLONES void start_chunk(const TangentInput& in, const Chunk& chunk) {
+    const size_t count = chunk.last - chunk.first;
+    const float* normals = in.normals + 3 * chunk.first;
+    size_t v = 0;
+    for (; v + kLanes <= count; v += kLanes) {
+        const float* n = normals + 3 * v;
+        const v4d x{n[0], n[3], n[6], n[9]}, y{n[1], n[4], n[7], n[10]}, z{n[2], n[5], n[8], n[11]};
+        const v4d l = sqrt4(x * x + y * y + z * z);
+        const v4l ok = l > splat(0.0);
+        const v4d ux = select(ok, x / l, splat(0.0)), uy = select(ok, y / l, splat(0.0)), uz = select(ok, z / l, splat(1.0));
+        double* out = chunk.unit_normals + 3 * v;
+        for (int j = 0; j < kLanes; ++j) {
+            out[3 * j] = ux[j];
+            out[3 * j + 1] = uy[j];
+            out[3 * j + 2] = uz[j];
+        }
+    }
+    for (; v < count; ++v) unit_normal(normals + 3 * v, chunk.unit_normals + 3 * v);
+    if (chunk.sums) std::memset(chunk.sums, 0, 4 * count * sizeof(double));
+}
+
+// MikkTSpace step 1 and the corner terms of step 2 for the triangles [t, t + lanes) (lanes <= 4), added to
+// the sums of the chunk's vertices; kInside: every vertex of the triangles is in the chunk.
+template <bool kInside>
+SPECBAKE_INLINE void add_batch(const TangentInput& in, const Chunk& chunk, size_t t, int lanes) {
+    const size_t owned = chunk.last - chunk.first;
+    uint32_t f[3 * kLanes];  // the lanes' triangles; a short last batch repeats its last one
+    if (lanes == kLanes) {
+        std::memcpy(f, in.indices + 3 * t, sizeof f);
+    } else {
+        for (int j = 0; j < kLanes; ++j) std::memcpy(f + 3 * j, in.indices + 3 * (t + std::min(j, lanes - 1)), 3 * sizeof *f);
+    }
+    if (!kInside) {
+        bool any = false;
+        for (int i = 0; i < 3 * kLanes; ++i) any |= size_t(f[i]) - chunk.first < owned;
+        if (!any) return;
+    }
+    // Corner c of lane j's triangle: its vertex, and the vertex's place in the chunk (0 for the
+    // vertices of other chunks, whose corners are computed but not added).
+    uint32_t vi[3][kLanes], local[3][kLanes];
+#pragma GCC unroll 3
+    for (int c = 0; c < 3; ++c)
+#pragma GCC unroll 4
+        for (int j = 0; j < kLanes; ++j) {
+            vi[c][j] = f[3 * j + c];
+            const size_t l = vi[c][j] - chunk.first;
+            local[c][j] = uint32_t(kInside || l < owned ? l : 0);
+        }
+    v4d p[3][3], u[3], v[3];  // p[c][axis]
+#pragma GCC unroll 3
+    for (int c = 0; c < 3; ++c) {
+        for (int k = 0; k < 3; ++k) p[c][k] = gather4(in.positions, vi[c], 3, k);
+        u[c] = gather4(in.uv, vi[c], 2, 0);
+        v[c] = gather4(in.uv, vi[c], 2, 1);
+    }
+    // MikkTSpace step 1: dP/du from [dp1 dp2] = [dP/du dP/dv] [[du1 du2], [dv1 dv2]];
+    // cross(N, dP/du) . (-dP/dv) = -|dp1 x dp2| / det, so the handedness is the sign of -det.
+    v4d dp1[3], dp2[3], dp12[3], dpdu[3];
+    const v4d du1 = u[1] - u[0], dv1 = v[1] - v[0], du2 = u[2] - u[0], dv2 = v[2] - v[0];
+    const v4d det = du1 * dv2 - du2 * dv1;  // twice the signed UV area
+    const v4d adet = (v4d)((v4l)det & ~(v4l)splat(-0.0));
+    const v4l uv_ok = (adet > splat(0.0)) & (adet < splat(INFINITY));
+#pragma GCC unroll 3
+    for (int k = 0; k < 3; ++k) {
+        dp1[k] = p[1][k] - p[0][k];
+        dp2[k] = p[2][k] - p[0][k];
+        dp12[k] = p[2][k] - p[1][k];
+        dpdu[k] = (dp1[k] * dv2 - dp2[k] * dv1) / det;
+    }
+    const v4l negative_det = det < splat(0.0);
+    // Step 2, per corner: the edges to the next and the previous corner (a - b = -(b - a) exactly),
+    // dP/du projected into the vertex's tangent plane, the corner angle measured in that plane.
+    constexpr int N = 3;
+    v4d tp[3][3], y[3], x[3], tl[3];
+    SPECBAKE_EACH {
+        v4d e1[3], e2[3], n[3];
+        gather_xyz(chunk.unit_normals, local[c], n);
+#pragma GCC unroll 3
+        for (int k = 0; k < 3; ++k) {
+            e1[k] = c == 0 ? dp1[k] : c == 1 ? dp12[k] : -dp2[k];
+            e2[k] = c == 0 ? dp2[k] : c == 1 ? -dp1[k] : -dp12[k];
+        }
+        const v4d d1 = dot4(n, e1), d2 = dot4(n, e2), dn = dot4(n, dpdu);
+#pragma GCC unroll 3
+        for (int k = 0; k < 3; ++k) {
+            e1[k] = e1[k] - d1 * n[k];
+            e2[k] = e2[k] - d2 * n[k];
+            tp[c][k] = dpdu[k] - dn * n[k];
+        }
+        const v4d cross[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                              e1[0] * e2[1] - e1[1] * e2[0]};
+        y[c] = sqrt4(dot4(cross, cross));
+        x[c] = dot4(e1, e2);
+        tl[c] = sqrt4(dot4(tp[c], tp[c]));
+    }
+    // The corner angle is only a weight: a polynomial atan2 (detail::corner_angle) instead of libm's.
+    v4d angle[3], rows[3][4];
+    v4l ok[3];
+    corner_angles(y, x, angle);
+    SPECBAKE_EACH {
+        ok[c] = uv_ok & (angle[c] > splat(0.0)) & (tl[c] > splat(0.0)) & (tl[c] < splat(INFINITY));
+        const v4d weight = angle[c] / tl[c];
+        rows[c][0] = weight * tp[c][0];
+        rows[c][1] = weight * tp[c][1];
+        rows[c][2] = weight * tp[c][2];
+        rows[c][3] = select(negative_det, angle[c], -angle[c]);
+    }
+    v4d terms[3][4];
+#pragma GCC unroll 3
+    for (int c = 0; c < 3; ++c) transpose4(rows[c], terms[c]);
+    int add[3];  // lanes whose corner c counts, one bit each
+#pragma GCC unroll 3
+    for (int c = 0; c < 3; ++c) add[c] = lane_bits(ok[c]);
+    for (int j = 0; j < lanes; ++j)
+#pragma GCC unroll 3
+        for (int c = 0; c < 3; ++c) {
+            if (!(add[c] >> j & 1) || (!kInside && size_t(vi[c][j]) - chunk.first >= owned)) continue;
+            double* sum = chunk.sums + 4 * size_t(local[c][j]);
+            v4d s;
+            std::memcpy(&s, sum, sizeof s);
+            s += terms[c][j];
+            std::memcpy(sum, &s, sizeof s);
+        }
+}
+
+// The corners of the triangles that reference the chunk's vertices, added to those vertices' sums in corner
+// order.
+SPECBAKE_AVX2_CLONES void sum_corners(const TangentInput& in, const Chunk& chunk) {
+    const size_t blocks = (in.triangles + kBlock - 1) / kBlock;
+    for (size_t b = 0; b < blocks; ++b) {
+        const size_t low = in.block_bounds[2 * b], high = in.block_bounds[2 * b + 1];
+        if (high < chunk.first || low >= chunk.last) continue;
+        const size_t end = std::min(in.triangles, (b + 1) * kBlock);
+        if (low >= chunk.first && high < chunk.last) {
+            for (size_t t = b * kBlock; t < end; t += kLanes) add_batch<true>(in, chunk, t, int(std::min<size_t>(kLanes, end - t)));
+        } else {
+            for (size_t t = b * kBlock; t < end; t += kLanes) add_batch<false>(in, chunk, t, int(std::min<size_t>(kLanes, end - t)));
+        }
+    }
+}
+
+// Smallest and largest vertex index of the blocks [first, last) of triangles, eight indices at a time.
+SPECBAKE_AVX2_CLONES void block_bounds_of(const uint32_t* indices, size_t triangles, size_t first, size_t last,
+                                          uint32_t* bounds) {
+    typedef uint32_t v8u __attribute__((vector_size(32)));
+    for (size_t b = first; b < last; ++b) {
+        const uint32_t* i = indices + 3 * b * kBlock;
+        const uint32_t* end = indices + 3 * std::min(triangles, (b + 1) * kBlock);
+        v8u low = ~v8u{}, high = v8u{};
+        for (; i + 8 <= end; i += 8) {
+            v8u x;
+            std::memcpy(&x, i, sizeof x);
+            low = x < low ? x : low;
+            high = x > high ? x : high;
+        }
+        uint32_t lo = low[0], hi = high[0];
+        for (int k = 1; k < 8; ++k) {
+            lo = std::min(lo, low[k]);
+            hi = std::max(hi, high[k]);
+        }
+        for (; i < end; ++i) {
+            lo = std::min(lo, *i);
+            hi = std::max(hi, *i);
+        }
+        bounds[2 * b] = lo;
+        bounds[2 * b + 1] = hi;
+    }
+}
+
+// One vertex's tangent from its unit normal and its sums (none without UVs): the sum projected into the
+// tangent plane and normalised, w the sign of the signed angle sum; Frisvad's basis where the sum vanishes.
+void finish_vertex(const double* un, const double* s, float* out) {
+    using detail::Vec3d;
+    const Vec3d nrm(un[0], un[1], un[2]);
+    const Vec3d sum = s ? Vec3d(s[0], s[1], s[2]) : Vec3d(0.0, 0.0, 0.0);
+    Vec3d t = sum - nrm.dot(sum) * nrm;
+    double w = 1.0;
+    const double tl = t.norm();
+    if (tl > 1e-12 && std::isfinite(tl)) {
+        t /= tl;
+        w = s[3] < 0.0 ? -1.0 : 1.0;
+    } else {
+        Vec3d b;
+        detail::orthonormal_basis(nrm, t, b);
+    }
+    for (int k = 0; k < 3; ++k) out[k] = float(t[k]);
+    out[3] = float(w);
+}
+
+// finish_vertex for the chunk's vertices, four at a time with its operations in its order; lanes whose sum
+// vanishes, and the last few vertices, take finish_vertex itself.
+SPECBAKE_AVX2_CLONES void finish_chunk(const Chunk& chunk, float* tangents) {
+    typedef float v4f __attribute__((vector_size(16)));
+    const size_t count = chunk.last - chunk.first;
+    float* out = tangents + 4 * chunk.first;
+    size_t i = 0;
+    if (chunk.sums) {
+        const uint32_t lanes[kLanes] = {0, 1, 2, 3};
+        for (; i + kLanes <= count; i += kLanes) {
+            v4d n[3], rows[4], s[4];
+            gather_xyz(chunk.unit_normals + 3 * i, lanes, n);
+#pragma GCC unroll 4
+            for (int j = 0; j < kLanes; ++j) std::memcpy(&rows[j], chunk.sums + 4 * (i + j), sizeof rows[j]);
+            transpose4(rows, s);
+            const v4d d = n[0] * s[0] + n[1] * s[1] + n[2] * s[2];
+            v4d t[4];
+#pragma GCC unroll 3
+            for (int k = 0; k < 3; ++k) t[k] = s[k] - d * n[k];
+            const v4d tl = sqrt4(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+            const int good = lane_bits((tl > splat(1e-12)) & (tl < splat(INFINITY)));
+#pragma GCC unroll 3
+            for (int k = 0; k < 3; ++k) t[k] = t[k] / tl;
+            t[3] = select(s[3] < splat(0.0), splat(-1.0), splat(1.0));
+            transpose4(t, rows);
+#pragma GCC unroll 4
+            for (int j = 0; j < kLanes; ++j) {
+                const v4f f = __builtin_convertvector(rows[j], v4f);
+                std::memcpy(out + 4 * (i + j), &f, sizeof f);
+            }
+            if (good != (1 << kLanes) - 1)
+                for (int j = 0; j < kLanes; ++j)
+                    if (!(good >> j & 1)) finish_vertex(chunk.unit_normals + 3 * (i + j), chunk.sums + 4 * (i + j), out + 4 * (i + j));
+        }
+    }
+    for (; i < count; ++i) finish_vertex(chunk.unit_normals + 3 * i, chunk.sums ? chunk.sums + 4 * i : nullptr, out + 4 * i);
+}
 
 }  // namespace
 
 void generate_tangents(TriMesh& mesh) {
-    using detail::Vec3d;
     const size_t n = mesh.vertex_count();
     const size_t tris = mesh.triangle_count();
     const bool with_uv = mesh.has_uv0();
 
-    // MikkTSpace step 1, per triangle: dP/du and dP/dv from [dp1 dp2] = [dP/du dP/dv] [[du1 du2], [dv1 dv2]].
-    // cross(N, dP/du) . (-dP/dv) = -|dp1 x dp2| / det, so the handedness is the sign of -det.
-    detail::ScratchArray<FaceTangent> face(with_uv ? tris : 0);
-    std::vector<uint32_t> start(n + 1, 0);
-    detail::ScratchArray<uint32_t> order(with_uv ? mesh.indices.size() : 0);  // every slot written below
-    if (with_uv) {
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, tris, 8192), [&](const auto& range) {
-            for (size_t t = range.begin(); t != range.end(); ++t) {
-                const uint32_t* f = &mesh.indices[3 * t];
-                const Vec3d p0 = detail::position(mesh, f[0]);
-                const Vec3d dp1 = detail::position(mesh, f[1]) - p0, dp2 = detail::position(mesh, f[2]) - p0;
-                const double u0 = mesh.uv0[2 * f[0]], v0 = mesh.uv0[2 * f[0] + 1];
-                const double du1 = mesh.uv0[2 * f[1]] - u0, dv1 = mesh.uv0[2 * f[1] + 1] - v0;
-                const double du2 = mesh.uv0[2 * f[2]] - u0, dv2 = mesh.uv0[2 * f[2] + 1] - v0;
-                const double det = du1 * dv2 - du2 * dv1;  // twice the signed UV area
-                FaceTangent& ft = face[t];
-                ft.sign = 0.0;
-                if (!(std::abs(det) > 0.0) || !std::isfinite(det)) continue;
-                const Vec3d dpdu = (dp1 * dv2 - dp2 * dv1) / det;
-                for (int k = 0; k < 3; ++k) ft.dpdu[k] = dpdu[k];
-                ft.sign = det < 0.0 ? 1.0 : -1.0;
-            }
-        });
-        // Corners of each vertex in triangle order (a counting sort), so each vertex sums its own corners in
-        // the same order for any thread count.
-        for (uint32_t i : mesh.indices) ++start[i + 1];
-        for (size_t v = 0; v < n; ++v) start[v + 1] += start[v];
-        std::vector<uint32_t> fill(start.begin(), start.end() - 1);
-        for (size_t k = 0; k < mesh.indices.size(); ++k) order[fill[mesh.indices[k]]++] = uint32_t(k);
-    }
+    // Vertex-index bounds of each block of triangles.
+    const size_t blocks = with_uv ? (tris + kBlock - 1) / kBlock : 0;
+    detail::ScratchArray<uint32_t> block_bounds(2 * blocks);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 16), [&](const auto& range) {
+        block_bounds_of(mesh.indices.data(), tris, range.begin(), range.end(), block_bounds.data());
+    });
+    size_t span = 0;  // mean vertex-index span of a block
+    for (size_t b = 0; b < blocks; ++b) span += block_bounds[2 * b + 1] - block_bounds[2 * b] + 1;
+    span = blocks ? span / blocks : 0;
 
-    // MikkTSpace step 2, per vertex: each corner's dP/du projected into the vertex's tangent plane and
-    // normalised, weighted by the corner angle measured in that plane; the sum normalised. The handedness is
-    // the angle-weighted majority of the corners' (a vertex keeps one tangent, so corners of both
-    // handednesses are not split apart as MikkTSpace would).
-    // The corner terms are computed on plain doubles (in Eigen's evaluation order, so the sums are the same)
-    // and, with SSE2, two corners at a time; they are added in corner order.
+    // One vertex range per thread, each big enough to be worth a task, worked through in chunks with one set
+    // of arrays (4 MiB, instead of 56 bytes per vertex of fresh memory): at least kChunk vertices and 16 block
+    // spans, so the triangles two chunks share, computed by both, stay about a percent. A mesh without index
+    // locality gets a single chunk per range. The split does not change the result.
+    constexpr size_t kMinVerticesPerRange = 16384;
+    constexpr size_t kChunk = ((size_t(4) << 20) / sizeof(double) - 1) / 7;
+    const size_t threads = std::min<size_t>(size_t(std::max(1, tbb::this_task_arena::max_concurrency())),
+                                            tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+    const size_t ranges = std::max<size_t>(1, std::min(threads, n / kMinVerticesPerRange));
+    const size_t chunk_size = std::max(kChunk, 16 * span);
+
+    const TangentInput in{mesh.positions.data(), mesh.normals.data(), with_uv ? mesh.uv0.data() : nullptr,
+                          mesh.indices.data(), tris, block_bounds.data()};
     mesh.tangents.clear();
     detail::reserve_huge_pages(mesh.tangents, 4 * n);
     mesh.tangents.resize(4 * n);
-    const float* position = mesh.positions.data();
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const auto& range) {
-        for (size_t vi = range.begin(); vi != range.end(); ++vi) {
-            Vec3d nrm = detail::normal(mesh, uint32_t(vi));
-            const double nl = nrm.norm();
-            nrm = nl > 0.0 ? Vec3d(nrm / nl) : Vec3d(0.0, 0.0, 1.0);
-            const double nv[3] = {nrm[0], nrm[1], nrm[2]};
-            double t_sum[3] = {0.0, 0.0, 0.0};
-            double sign_sum = 0.0;
-            auto add = [&](const CornerTerm& term, double sign) {
-                if (!(term.angle > 0.0) || !(term.tl > 0.0) || !std::isfinite(term.tl)) return;
-                const double weight = term.angle / term.tl;
-                for (int i = 0; i < 3; ++i) t_sum[i] += weight * term.tp[i];
-                sign_sum += term.angle * sign;
-            };
-            // The corners of a UV triangle: its three positions from this vertex on, and its face record.
-            const float* corner_points[2][3];
-            const FaceTangent* corner_face[2];
-            int pending = 0;
-            for (uint32_t k = with_uv ? start[vi] : 0; with_uv && k < start[vi + 1]; ++k) {
-                const uint32_t corner = order[k], c = corner % 3;
-                const FaceTangent& ft = face[corner / 3];
-                if (ft.sign == 0.0) continue;
-                const uint32_t* f = &mesh.indices[corner - c];
-                corner_points[pending][0] = position + 3 * size_t(f[c]);
-                corner_points[pending][1] = position + 3 * size_t(f[c == 2 ? 0 : c + 1]);
-                corner_points[pending][2] = position + 3 * size_t(f[c == 0 ? 2 : c - 1]);
-                corner_face[pending] = &ft;
-#if defined(__SSE2__)
-                if (++pending < 2) continue;
-                pending = 0;
-                const double* dpdu[2] = {corner_face[0]->dpdu, corner_face[1]->dpdu};
-                CornerTerm terms[2];
-                corner_terms2(corner_points, dpdu, nv, terms);
-                add(terms[0], corner_face[0]->sign);
-                add(terms[1], corner_face[1]->sign);
-#else
-                CornerTerm term;
-                corner_term(corner_points[0][0], corner_points[0][1], corner_points[0][2], ft.dpdu, nv, term);
-                add(term, ft.sign);
-#endif
+    float* tangents = mesh.tangents.data();
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, ranges, 1), [&](const auto& range) {
+        for (size_t r = range.begin(); r != range.end(); ++r) {
+            const size_t first = n * r / ranges, last = n * (r + 1) / ranges;
+            const size_t pieces = std::max<size_t>(1, (last - first + chunk_size - 1) / chunk_size);
+            const size_t length = (last - first + pieces - 1) / pieces;
+            detail::ScratchArray<double> arrays((with_uv ? 7 : 3) * length + 1);
+            arrays[3 * length] = 0.0;  // the spare double after the unit normals
+            for (size_t p = 0; p < pieces; ++p) {
+                const Chunk chunk{first + p * length, std::min(last, first + (p + 1) * length), arrays.data(),
+                                  with_uv ? arrays.data() + 3 * length + 1 : nullptr};
+                start_chunk(in, chunk);
+                if (with_uv) sum_corners(in, chunk);
+                finish_chunk(chunk, tangents);
             }
-            if (pending == 1) {
-                CornerTerm term;
-                corner_term(corner_points[0][0], corner_points[0][1], corner_points[0][2], corner_face[0]->dpdu, nv, term);
-                add(term, corner_face[0]->sign);
-            }
-            const Vec3d sum(t_sum[0], t_sum[1], t_sum[2]);
-            Vec3d t = sum - nrm.dot(sum) * nrm;
-            double w = 1.0;
-            const double tl = t.norm();
-            if (tl > 1e-12 && std::isfinite(tl)) {
-                t /= tl;
-                w = sign_sum < 0.0 ? -1.0 : 1.0;
-            } else {
-                Vec3d b;
-                detail::orthonormal_basis(nrm, t, b);
-            }
-            for (int k = 0; k < 3; ++k) mesh.tangents[4 * vi + k] = float(t[k]);
-            mesh.tangents[4 * vi + 3] = float(w);
         }
     });
 }
