@@ -10,24 +10,33 @@
 // second-order fit).
 //
 // Layout for speed: the vertices' unit normals (double) and the groups' frames are computed once up front;
-// one pass over the faces computes a weighted operator per corner as four floats and adds it to its group's
-// sums (double) in corner order, so the result does not depend on the thread count; a last pass over the
-// vertices eigen-decomposes each vertex's group sum and writes the vertex's output. The faces are cut into
-// chunks of a fixed size, processed in parallel: a chunk adds a corner straight into its group's sums when
-// the group's first corner lies in that chunk (no other chunk adds to them before it), and otherwise keeps
-// the corner in a list that is added afterwards, chunk by chunk, in corner order. Each group's sum thus
-// runs over its corners in increasing order as one sequential pass would, without a per-corner array or a
-// sort of corners by group; meshes in a spatially coherent order (as exported) defer few corners.
+// one pass over the faces, four faces at a time (one per vector lane), computes a weighted operator per
+// corner as four floats and adds it to its group's sums (double) in corner order, so the result does not
+// depend on the thread count; a last pass over the vertices eigen-decomposes each vertex's group sum and
+// writes the vertex's output. The faces are cut into chunks of a fixed size, processed in parallel: a chunk
+// adds a corner straight into its group's sums when the group's first corner lies in that chunk (no other
+// chunk adds to them before it), and otherwise keeps the corner in a list that is added afterwards, chunk by
+// chunk, in corner order. Each group's sum thus runs over its corners in increasing order as one sequential
+// pass would, without a per-corner array or a sort of corners by group; meshes in a spatially coherent order
+// (as exported) defer few corners.
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <vector>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "mesh/curvature.h"
 #include "mesh/curvature_frames.h"
 #include "mesh/scratch_array.h"
+
+// Fused multiply-adds would round differently from the baseline version of the face pass.
+#pragma GCC optimize("fp-contract=off")
 
 namespace specbake {
 namespace {
@@ -40,71 +49,146 @@ struct Frame {
     double n[3], u[3], v[3];
 };
 
-// Weighted operator of one corner in its group's (u, v) frame, and the weight (mixed-Voronoi area).
-struct CornerShape {
-    float a, b, c, weight;
-};
-
 inline void load3(const float* x, double out[3]) {
     out[0] = x[0];
     out[1] = x[1];
     out[2] = x[2];
 }
 inline double dot3(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-inline void cross3(const double* a, const double* b, double* out) {
+
+// The face pass runs four faces at a time, one per lane of a 4-wide double vector (GCC/Clang vector
+// extension: one AVX2 register, two SSE2 registers). It is compiled for AVX2 and for the baseline
+// instruction set and chosen at load time (function multiversioning); the helpers are inlined into both.
+// Each lane performs the IEEE operations of a scalar evaluation in the same order, and contraction into
+// fused multiply-adds is off for this file, so both versions compute the same bits.
+#if defined(__x86_64__) && defined(__linux__)
+#define SPECBAKE_AVX2_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define SPECBAKE_AVX2_CLONES
+#endif
+#define SPECBAKE_INLINE __attribute__((always_inline)) inline
+
+#pragma GCC diagnostic ignored "-Wpsabi"  // v4d only crosses always-inlined functions
+typedef double v4d __attribute__((vector_size(32)));
+typedef long v4l __attribute__((vector_size(32)));  // lane masks, as v4d comparisons yield
+typedef float v4f __attribute__((vector_size(16)));
+typedef int v4i __attribute__((vector_size(16)));  // shuffle selectors
+constexpr int kLanes = 4;
+
+SPECBAKE_INLINE v4d splat(double x) { return v4d{x, x, x, x}; }
+
+// Lane-wise square root (non-negative input): two SSE2 square roots where available.
+SPECBAKE_INLINE v4d sqrt4(v4d x) {
+#if defined(__SSE2__)
+    const __m128d lo = _mm_sqrt_pd(__m128d{x[0], x[1]}), hi = _mm_sqrt_pd(__m128d{x[2], x[3]});
+    return v4d{lo[0], lo[1], hi[0], hi[1]};
+#else
+    return v4d{std::sqrt(x[0]), std::sqrt(x[1]), std::sqrt(x[2]), std::sqrt(x[3])};
+#endif
+}
+
+SPECBAKE_INLINE v4d dot4(const v4d (&a)[3], const v4d (&b)[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+SPECBAKE_INLINE void cross4(const v4d (&a)[3], const v4d (&b)[3], v4d (&out)[3]) {
     out[0] = a[1] * b[2] - a[2] * b[1];
     out[1] = a[2] * b[0] - a[0] * b[2];
     out[2] = a[0] * b[1] - a[1] * b[0];
 }
+SPECBAKE_INLINE v4l is_finite(v4d x) { return x - x == 0.0; }  // inf - inf and NaN - NaN are NaN
 
-// The three weighted corner operators of triangle t; zero weights when it carries no information.
-__attribute__((always_inline)) inline void face_shape(const TriMesh& mesh, const WeldedTopology& topology,
-                                                     const double* unit_normals, const Frame* frames, size_t t,
-                                                     CornerShape out[3]) {
-    const uint32_t* f = &mesh.indices[3 * t];
-    for (int i = 0; i < 3; ++i) out[i] = {0.0f, 0.0f, 0.0f, 0.0f};
-    const uint32_t* pid = topology.position_id.data();
-    if (pid[f[0]] == pid[f[1]] || pid[f[1]] == pid[f[2]] || pid[f[0]] == pid[f[2]]) return;
+// Everything the face pass reads, as flat arrays.
+struct FaceInput {
+    const uint32_t* indices;
+    const uint32_t* position_id;
+    const uint32_t* group_id;
+    const float* positions;
+    const double* unit_normals;  // per vertex
+    const Frame* frames;         // per group
+};
 
-    double p[3][3], e[3][3];
-    for (int i = 0; i < 3; ++i) load3(&mesh.positions[3 * size_t(f[i])], p[i]);
+// Component k of four lanes' 3-vectors.
+SPECBAKE_INLINE v4d gather(const double* const (&x)[kLanes], int k) { return v4d{x[0][k], x[1][k], x[2][k], x[3][k]}; }
+SPECBAKE_INLINE v4d gather(const float* const (&x)[kLanes], int k) {
+    return __builtin_convertvector((v4f{x[0][k], x[1][k], x[2][k], x[3][k]}), v4d);
+}
+
+// Weighted operators of the corners of faces t .. t + 3 (lane l: face t + l; lanes at or past `lanes`
+// repeat the last face): shape[i][l] is (a, b, c, weight) of corner i of lane l, all zero for a face that
+// carries no information; group[i][l] is that corner's curvature group.
+SPECBAKE_INLINE void face_shapes(const FaceInput& in, size_t t, int lanes, uint32_t (&group)[3][kLanes],
+                                 v4f (&shape)[3][kLanes]) {
+    const uint32_t* f[kLanes];
+    v4l distinct;
+#pragma GCC unroll 4
+    for (int l = 0; l < kLanes; ++l) {
+        f[l] = &in.indices[3 * (t + size_t(std::min(l, lanes - 1)))];
+        const uint32_t a = in.position_id[f[l][0]], b = in.position_id[f[l][1]], c = in.position_id[f[l][2]];
+        distinct[l] = a != b && b != c && a != c ? -1 : 0;
+        for (int i = 0; i < 3; ++i) group[i][l] = in.group_id[f[l][i]];
+    }
+    v4d p[3][3], n[3][3];
+#pragma GCC unroll 3
+    for (int i = 0; i < 3; ++i) {
+        const float* const pi[kLanes] = {&in.positions[3 * size_t(f[0][i])], &in.positions[3 * size_t(f[1][i])],
+                                         &in.positions[3 * size_t(f[2][i])], &in.positions[3 * size_t(f[3][i])]};
+        const double* const ni[kLanes] = {
+            &in.unit_normals[3 * size_t(f[0][i])], &in.unit_normals[3 * size_t(f[1][i])],
+            &in.unit_normals[3 * size_t(f[2][i])], &in.unit_normals[3 * size_t(f[3][i])]};
+#pragma GCC unroll 4
+        for (int k = 0; k < 3; ++k) {
+            p[i][k] = gather(pi, k);
+            n[i][k] = gather(ni, k);
+        }
+    }
+
+    v4d e[3][3];
+#pragma GCC unroll 4
     for (int k = 0; k < 3; ++k) {
         e[0][k] = p[2][k] - p[1][k];  // e_i opposite corner i
         e[1][k] = p[0][k] - p[2][k];
         e[2][k] = p[1][k] - p[0][k];
     }
-    double cr[3];
-    cross3(e[0], e[1], cr);  // twice the area along the face normal (winding order)
-    const double cr2 = dot3(cr, cr);
-    const double l[3] = {dot3(e[0], e[0]), dot3(e[1], e[1]), dot3(e[2], e[2])};
-    const double lsum = l[0] + l[1] + l[2];
-    const double twice_area = std::sqrt(cr2);
+    v4d cr[3];
+    cross4(e[0], e[1], cr);  // twice the area along the face normal (winding order)
+    const v4d cr2 = dot4(cr, cr);
+    const v4d l[3] = {dot4(e[0], e[0]), dot4(e[1], e[1]), dot4(e[2], e[2])};
+    const v4d lsum = l[0] + l[1] + l[2];
+    const v4d twice_area = sqrt4(cr2);
     // Same test as detail::is_degenerate_triangle: smallest angle under ~1e-10 rad.
-    if (!(twice_area > 1e-10 * lsum)) return;
+    v4l usable = distinct & (twice_area > 1e-10 * lsum);
 
-    double w[3];
-    detail::mixed_voronoi_areas(l[0], l[1], l[2], 0.5 * twice_area, w);
-
-    const double* n[3];
-    for (int i = 0; i < 3; ++i) n[i] = &unit_normals[3 * size_t(f[i])];
+    // Mixed-Voronoi areas (detail::mixed_voronoi_areas, its operations lane by lane): the Voronoi region
+    // when no angle is obtuse, else half the area at the obtuse corner and a quarter at the two others.
+    const v4d area = 0.5 * twice_area;
+    const v4d inv_area = 1.0 / (4.0 * area);
+    const v4d cot[3] = {(l[1] + l[2] - l[0]) * inv_area, (l[0] + l[2] - l[1]) * inv_area,
+                        (l[0] + l[1] - l[2]) * inv_area};
+    const v4d voronoi[3] = {(l[1] * cot[1] + l[2] * cot[2]) / 8.0, (l[0] * cot[0] + l[2] * cot[2]) / 8.0,
+                            (l[0] * cot[0] + l[1] * cot[1]) / 8.0};
+    const v4l obtuse[3] = {l[0] > l[1] + l[2], l[1] > l[0] + l[2], l[2] > l[0] + l[1]};
+    const v4l any_obtuse = obtuse[0] | obtuse[1] | obtuse[2];
+    v4d w[3];
+#pragma GCC unroll 4
+    for (int i = 0; i < 3; ++i) w[i] = obtuse[i] ? 0.5 * area : (any_obtuse ? 0.25 * area : voronoi[i]);
 
     // Face frame: u along e_0, normal from the winding, v = n x u.
-    double fn[3], fu[3], fv[3];
-    const double inv_cr = 1.0 / twice_area, inv_l0 = 1.0 / std::sqrt(l[0]);
+    v4d fn[3], fu[3], fv[3];
+    const v4d inv_cr = 1.0 / twice_area, inv_l0 = 1.0 / sqrt4(l[0]);
+#pragma GCC unroll 4
     for (int k = 0; k < 3; ++k) {
         fn[k] = cr[k] * inv_cr;
         fu[k] = e[0][k] * inv_l0;
     }
-    cross3(fn, fu, fv);
+    cross4(fn, fu, fv);
 
     // Normal equations of the six equations [eu ev 0; 0 eu ev] (a b c)^T = (dn.u, dn.v):
     // M = [[A, B, 0], [B, A + C, B], [0, B, C]] with A = sum eu^2, B = sum eu ev, C = sum ev^2.
-    double A = 0.0, B = 0.0, C = 0.0, r0 = 0.0, r1 = 0.0, r2 = 0.0;
+    v4d A = splat(0.0), B = A, C = A, r0 = A, r1 = A, r2 = A;
+#pragma GCC unroll 4
     for (int i = 0; i < 3; ++i) {
         const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
-        const double dn[3] = {n[i2][0] - n[i1][0], n[i2][1] - n[i1][1], n[i2][2] - n[i1][2]};
-        const double eu = dot3(e[i], fu), ev = dot3(e[i], fv);
-        const double dnu = dot3(dn, fu), dnv = dot3(dn, fv);
+        const v4d dn[3] = {n[i2][0] - n[i1][0], n[i2][1] - n[i1][1], n[i2][2] - n[i1][2]};
+        const v4d eu = dot4(e[i], fu), ev = dot4(e[i], fv);
+        const v4d dnu = dot4(dn, fu), dnv = dot4(dn, fv);
         A += eu * eu;
         B += eu * ev;
         C += ev * ev;
@@ -114,88 +198,103 @@ __attribute__((always_inline)) inline void face_shape(const TriMesh& mesh, const
     }
     // det M = (A + C)(AC - B^2), and AC - B^2 = sum over edge pairs of (e_i x e_j)^2 (Cauchy-Binet) = 3 |cr|^2,
     // which keeps the solve accurate on thin triangles; A + C is the summed squared edge length.
-    const double G = 3.0 * cr2;
-    const double inv_det = 1.0 / (lsum * G);
-    const double c00 = G + C * C, c11 = A * C, c22 = G + A * A, c01 = -B * C, c02 = B * B, c12 = -A * B;
-    const double sa = (c00 * r0 + c01 * r1 + c02 * r2) * inv_det;
-    const double sb = (c01 * r0 + c11 * r1 + c12 * r2) * inv_det;
-    const double sc = (c02 * r0 + c12 * r1 + c22 * r2) * inv_det;
-    if (!std::isfinite(sa) || !std::isfinite(sb) || !std::isfinite(sc)) return;
+    const v4d G = 3.0 * cr2;
+    const v4d inv_det = 1.0 / (lsum * G);
+    const v4d c00 = G + C * C, c11 = A * C, c22 = G + A * A, c01 = -B * C, c02 = B * B, c12 = -A * B;
+    const v4d sa = (c00 * r0 + c01 * r1 + c02 * r2) * inv_det;
+    const v4d sb = (c01 * r0 + c11 * r1 + c12 * r2) * inv_det;
+    const v4d sc = (c02 * r0 + c12 * r1 + c22 * r2) * inv_det;
+    usable &= is_finite(sa) & is_finite(sb) & is_finite(sc);
 
+#pragma GCC unroll 3
     for (int i = 0; i < 3; ++i) {
-        const uint32_t g = topology.group_id[f[i]];
-        const Frame& frame = frames[g];
-        const double* ng = frame.n;
-        // Rotate the face frame about fn x ng into the group's tangent plane (Rusinkiewicz 2004 Sec. 4).
-        double ru[3] = {fu[0], fu[1], fu[2]}, rv[3] = {fv[0], fv[1], fv[2]};
-        const double ndot = dot3(fn, ng);
-        if (ndot <= -1.0) {
-            for (int k = 0; k < 3; ++k) {
-                ru[k] = -ru[k];
-                rv[k] = -rv[k];
-            }
-        } else {
-            double perp[3], dperp[3];
-            const double inv = 1.0 / (1.0 + ndot);
-            for (int k = 0; k < 3; ++k) {
-                perp[k] = ng[k] - ndot * fn[k];
-                dperp[k] = (fn[k] + ng[k]) * inv;
-            }
-            const double su = dot3(fu, perp), sv = dot3(fv, perp);
-            for (int k = 0; k < 3; ++k) {
-                ru[k] -= dperp[k] * su;
-                rv[k] -= dperp[k] * sv;
-            }
+        const Frame* const frame[kLanes] = {&in.frames[group[i][0]], &in.frames[group[i][1]],
+                                            &in.frames[group[i][2]], &in.frames[group[i][3]]};
+        const double* const fn_g[kLanes] = {frame[0]->n, frame[1]->n, frame[2]->n, frame[3]->n};
+        const double* const fu_g[kLanes] = {frame[0]->u, frame[1]->u, frame[2]->u, frame[3]->u};
+        const double* const fv_g[kLanes] = {frame[0]->v, frame[1]->v, frame[2]->v, frame[3]->v};
+        v4d ng[3], ug[3], vg[3];
+#pragma GCC unroll 4
+        for (int k = 0; k < 3; ++k) {
+            ng[k] = gather(fn_g, k);
+            ug[k] = gather(fu_g, k);
+            vg[k] = gather(fv_g, k);
+        }
+        // Rotate the face frame about fn x ng into the group's tangent plane (Rusinkiewicz 2004 Sec. 4); for
+        // opposite normals, the half turn.
+        const v4d ndot = dot4(fn, ng);
+        const v4l opposite = ndot <= -1.0;
+        const v4d inv = 1.0 / (1.0 + ndot);
+        v4d perp[3], dperp[3];
+#pragma GCC unroll 4
+        for (int k = 0; k < 3; ++k) {
+            perp[k] = ng[k] - ndot * fn[k];
+            dperp[k] = (fn[k] + ng[k]) * inv;
+        }
+        const v4d su = dot4(fu, perp), sv = dot4(fv, perp);
+        v4d ru[3], rv[3];
+#pragma GCC unroll 4
+        for (int k = 0; k < 3; ++k) {
+            ru[k] = opposite ? -fu[k] : fu[k] - dperp[k] * su;
+            rv[k] = opposite ? -fv[k] : fv[k] - dperp[k] * sv;
         }
         // Coordinates of the group basis vectors in the rotated face frame: S_group = P^T S_face P.
-        const double* ug = frame.u;
-        const double* vg = frame.v;
-        const double p00 = dot3(ug, ru), p10 = dot3(ug, rv), p01 = dot3(vg, ru), p11 = dot3(vg, rv);
-        const double s0 = sa * p00 + sb * p10, s1 = sb * p00 + sc * p10;  // S (p00, p10)
-        const double t0 = sa * p01 + sb * p11, t1 = sb * p01 + sc * p11;  // S (p01, p11)
-        out[i] = {float(w[i] * (p00 * s0 + p10 * s1)), float(w[i] * (p00 * t0 + p10 * t1)),
-                  float(w[i] * (p01 * t0 + p11 * t1)), float(w[i])};
+        const v4d p00 = dot4(ug, ru), p10 = dot4(ug, rv), p01 = dot4(vg, ru), p11 = dot4(vg, rv);
+        const v4d s0 = sa * p00 + sb * p10, s1 = sb * p00 + sc * p10;  // S (p00, p10)
+        const v4d t0 = sa * p01 + sb * p11, t1 = sb * p01 + sc * p11;  // S (p01, p11)
+        const v4f a = __builtin_convertvector(usable ? w[i] * (p00 * s0 + p10 * s1) : splat(0.0), v4f);
+        const v4f b = __builtin_convertvector(usable ? w[i] * (p00 * t0 + p10 * t1) : splat(0.0), v4f);
+        const v4f c = __builtin_convertvector(usable ? w[i] * (p01 * t0 + p11 * t1) : splat(0.0), v4f);
+        const v4f weight = __builtin_convertvector(usable ? w[i] : splat(0.0), v4f);
+        // Transpose: one (a, b, c, weight) per lane.
+        const v4f ab_lo = __builtin_shuffle(a, b, v4i{0, 4, 1, 5}), ab_hi = __builtin_shuffle(a, b, v4i{2, 6, 3, 7});
+        const v4f cw_lo = __builtin_shuffle(c, weight, v4i{0, 4, 1, 5}),
+                  cw_hi = __builtin_shuffle(c, weight, v4i{2, 6, 3, 7});
+        shape[i][0] = __builtin_shuffle(ab_lo, cw_lo, v4i{0, 1, 4, 5});
+        shape[i][1] = __builtin_shuffle(ab_lo, cw_lo, v4i{2, 3, 6, 7});
+        shape[i][2] = __builtin_shuffle(ab_hi, cw_hi, v4i{0, 1, 4, 5});
+        shape[i][3] = __builtin_shuffle(ab_hi, cw_hi, v4i{2, 3, 6, 7});
     }
 }
 
-// A group's running sums of its corners' weighted operators and weights.
+// A group's running sums of its corners' weighted operators and weights: a, b, c, weight.
 struct GroupSum {
-    double a, b, c, weight;
+    double s[4];
 };
 
 // A corner whose group's first corner lies in an earlier chunk: added to the sums after all chunks.
 struct DeferredCorner {
     uint32_t group;
-    CornerShape shape;
+    v4f shape;  // (a, b, c, weight) of the corner, weighted by its mixed-Voronoi area, in the group's frame
 };
 
 constexpr uint32_t kNoChunk = 0xffffffffu;
 constexpr size_t kChunkFaces = 16384;  // fixed, so which corners are deferred does not depend on the threads
 
-inline void add_corner(GroupSum& sum, const CornerShape& s) {
-    sum.a += s.a;
-    sum.b += s.b;
-    sum.c += s.c;
-    sum.weight += s.weight;
+// The four sums in one vector addition (each component its own sequential sum). ScratchArray aligns small
+// arrays to 16 bytes only, hence the unaligned loads.
+SPECBAKE_INLINE void add_corner(GroupSum& sum, v4f shape) {
+    v4d x;
+    std::memcpy(&x, sum.s, sizeof x);
+    x += __builtin_convertvector(shape, v4d);
+    std::memcpy(sum.s, &x, sizeof x);
 }
 
-// The face pass over chunk `chunk` (triangles [begin, end)), compiled for AVX2 and for the baseline
-// instruction set and chosen at load time (GCC/Clang function multiversioning). Floating-point contraction
-// is off (ISO C++ mode), so both versions compute the same bits.
-#if defined(__x86_64__) && defined(__linux__)
-__attribute__((target_clones("arch=x86-64-v3", "default")))
-#endif
-void shape_faces(const TriMesh& mesh, const WeldedTopology& topology, const double* unit_normals,
-                 const Frame* frames, const uint32_t* first_chunk, uint32_t chunk, size_t begin, size_t end,
-                 GroupSum* sums, std::vector<DeferredCorner>& deferred) {
-    for (size_t t = begin; t != end; ++t) {
-        CornerShape corner[3];
-        face_shape(mesh, topology, unit_normals, frames, t, corner);
-        for (int i = 0; i < 3; ++i) {
-            const uint32_t g = topology.group_id[mesh.indices[3 * t + i]];
-            if (first_chunk[g] == chunk) add_corner(sums[g], corner[i]);
-            else deferred.push_back({g, corner[i]});
-        }
+// The face pass over chunk `chunk` (triangles [begin, end)), four faces at a time, adding each corner in
+// corner order to its group's sums or to the chunk's deferred list.
+SPECBAKE_AVX2_CLONES void shape_faces(const FaceInput& in, const uint32_t* first_chunk, uint32_t chunk, size_t begin,
+                                      size_t end, GroupSum* sums, std::vector<DeferredCorner>& deferred) {
+    for (size_t t = begin; t < end; t += kLanes) {
+        const int lanes = int(std::min<size_t>(kLanes, end - t));
+        uint32_t group[3][kLanes];
+        v4f shape[3][kLanes];
+        face_shapes(in, t, lanes, group, shape);
+        for (int l = 0; l < lanes; ++l)
+            for (int i = 0; i < 3; ++i) {
+                const uint32_t g = group[i][l];
+                if (first_chunk[g] == chunk) add_corner(sums[g], shape[i][l]);
+                else deferred.push_back({g, shape[i][l]});
+            }
     }
 }
 
@@ -236,7 +335,7 @@ VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopolo
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, groups, 16384), [&](const auto& range) {
         for (uint32_t g = range.begin(); g != range.end(); ++g) {
             first_chunk[g] = kNoChunk;
-            sums[g] = {0.0, 0.0, 0.0, 0.0};
+            sums[g] = {};
         }
     });
     tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
@@ -249,10 +348,12 @@ VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopolo
         }
     });
 
+    const FaceInput input{mesh.indices.data(),      topology.position_id.data(), topology.group_id.data(),
+                          mesh.positions.data(),    unit_normals.data(),         frames.data()};
     std::vector<std::vector<DeferredCorner>> deferred(chunks);
     tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
-        shape_faces(mesh, topology, unit_normals.data(), frames.data(), first_chunk.data(), uint32_t(c),
-                    c * kChunkFaces, std::min(tris, (c + 1) * kChunkFaces), sums.data(), deferred[c]);
+        shape_faces(input, first_chunk.data(), uint32_t(c), c * kChunkFaces, std::min(tris, (c + 1) * kChunkFaces),
+                    sums.data(), deferred[c]);
     });
     for (const std::vector<DeferredCorner>& list : deferred)
         for (const DeferredCorner& d : list) add_corner(sums[d.group], d.shape);
@@ -267,7 +368,8 @@ VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopolo
             const uint32_t g = topology.group_id[v];
             const GroupSum& sum = sums[g];
             Shape2 shape;
-            if (sum.weight > 0.0) shape = {sum.a / sum.weight, sum.b / sum.weight, sum.c / sum.weight};
+            const double weight = sum.s[3];
+            if (weight > 0.0) shape = {sum.s[0] / weight, sum.s[1] / weight, sum.s[2] / weight};
             const Frame& f = frames[g];
             const detail::GroupPrincipal principal = detail::principal_curvatures(
                 shape, Vec3d(f.u[0], f.u[1], f.u[2]), Vec3d(f.v[0], f.v[1], f.v[2]));
