@@ -298,6 +298,117 @@ SPECBAKE_AVX2_CLONES void shape_faces(const FaceInput& in, const uint32_t* first
     }
 }
 
+SPECBAKE_INLINE v4d abs4(v4d x) {
+    constexpr long kMagnitude = 0x7fffffffffffffffL;  // all bits but the sign
+    return (v4d)((v4l)x & v4l{kMagnitude, kMagnitude, kMagnitude, kMagnitude});
+}
+
+// Everything the vertex pass reads and writes, as flat arrays.
+struct VertexInput {
+    const TriMesh* mesh;
+    const WeldedTopology* topology;
+    const GroupSum* sums;  // per group
+    const Frame* frames;   // per group
+    float* out;            // 4 per vertex
+};
+
+// Output (k1, k2, d.x, d.y) of vertices [begin, end), four at a time, lane l for vertex v + l: the group's
+// summed operator normalised by its weight, detail::principal_curvatures of it and detail::vertex_curvature_at,
+// their operations lane by lane. A vertex whose normal is zero or whose tangent is along its normal takes
+// the scalar functions, which handle those cases.
+SPECBAKE_AVX2_CLONES void vertex_outputs(const VertexInput& in, size_t begin, size_t end) {
+    const uint32_t* group_id = in.topology->group_id.data();
+    const float* normals = in.mesh->normals.data();
+    const float* tangents = in.mesh->tangents.data();
+    for (size_t first = begin; first < end; first += kLanes) {
+        const int lanes = int(std::min<size_t>(kLanes, end - first));
+        size_t vertex[kLanes];
+        const double* sum[kLanes];
+        const double *fu[kLanes], *fv[kLanes];
+        const float *vn[kLanes], *vt[kLanes];
+#pragma GCC unroll 4
+        for (int l = 0; l < kLanes; ++l) {
+            vertex[l] = first + size_t(std::min(l, lanes - 1));
+            const uint32_t g = group_id[vertex[l]];
+            sum[l] = in.sums[g].s;
+            fu[l] = in.frames[g].u;
+            fv[l] = in.frames[g].v;
+            vn[l] = &normals[3 * vertex[l]];
+            vt[l] = &tangents[4 * vertex[l]];
+        }
+        // The group's operator (no data: zero).
+        const v4d weight = gather(sum, 3);
+        const v4l weighted = weight > 0.0;
+        const v4d a = weighted ? gather(sum, 0) / weight : splat(0.0);
+        const v4d b = weighted ? gather(sum, 1) / weight : splat(0.0);
+        const v4d c = weighted ? gather(sum, 2) / weight : splat(0.0);
+
+        // Principal curvatures, |k1| >= |k2|, and the k1 eigenvector from the better conditioned row of S - k1 I.
+        const v4d mean = 0.5 * (a + c), half_diff = 0.5 * (a - c);
+        const v4d radius = sqrt4(half_diff * half_diff + b * b);
+        const v4d hi = mean + radius, lo = mean - radius;
+        const v4l hi_first = abs4(hi) >= abs4(lo);
+        const v4d k1 = hi_first ? hi : lo, k2 = hi_first ? lo : hi;
+        const v4d x1 = b, y1 = k1 - a, x2 = k1 - c, y2 = b;
+        const v4l row2 = x2 * x2 + y2 * y2 > x1 * x1 + y1 * y1;
+        v4d x = row2 ? x2 : x1, y = row2 ? y2 : y1;
+        const v4d len = sqrt4(x * x + y * y);
+        const v4d abs_k1 = abs4(k1);
+        const v4l directed = len > 1e-12 * (abs_k1 < 1e-300 ? splat(1e-300) : abs_k1);
+        x = directed ? x / len : splat(1.0);
+        y = directed ? y / len : splat(0.0);
+        v4d dir[3];
+#pragma GCC unroll 3
+        for (int k = 0; k < 3; ++k) dir[k] = x * gather(fu, k) + y * gather(fv, k);
+
+        // The vertex's tangent frame: N normalised, T orthogonalised against N and normalised, B = N x T * w.
+        v4d n[3] = {gather(vn, 0), gather(vn, 1), gather(vn, 2)};
+        const v4d n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+        v4l scalar = !(n2 > 0.0);
+        const v4d n_len = sqrt4(n2);
+#pragma GCC unroll 3
+        for (int k = 0; k < 3; ++k) n[k] = n[k] / n_len;
+        v4d t[3] = {gather(vt, 0), gather(vt, 1), gather(vt, 2)};
+        const v4d nt = n[0] * t[0] + n[1] * t[1] + n[2] * t[2];
+#pragma GCC unroll 3
+        for (int k = 0; k < 3; ++k) t[k] = t[k] - nt * n[k];
+        const v4d t_len = sqrt4(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+        scalar |= !(t_len > 1e-12);
+#pragma GCC unroll 3
+        for (int k = 0; k < 3; ++k) t[k] = t[k] / t_len;
+        const v4d sign = gather(vt, 3) < 0.0 ? splat(-1.0) : splat(1.0);
+        const v4d bt[3] = {sign * (n[1] * t[2] - n[2] * t[1]), sign * (n[2] * t[0] - n[0] * t[2]),
+                           sign * (n[0] * t[1] - n[1] * t[0])};
+        v4d dx = dir[0] * t[0] + dir[1] * t[1] + dir[2] * t[2];
+        v4d dy = dir[0] * bt[0] + dir[1] * bt[1] + dir[2] * bt[2];
+        const v4d d_len = sqrt4(dx * dx + dy * dy);
+        const v4l unit = d_len > 1e-12;
+        dx = unit ? dx / d_len : splat(1.0);
+        dy = unit ? dy / d_len : splat(0.0);
+
+        const v4f o0 = __builtin_convertvector(k1, v4f), o1 = __builtin_convertvector(k2, v4f),
+                  o2 = __builtin_convertvector(dx, v4f), o3 = __builtin_convertvector(dy, v4f);
+        const v4f lo01 = __builtin_shuffle(o0, o1, v4i{0, 4, 1, 5}), hi01 = __builtin_shuffle(o0, o1, v4i{2, 6, 3, 7});
+        const v4f lo23 = __builtin_shuffle(o2, o3, v4i{0, 4, 1, 5}), hi23 = __builtin_shuffle(o2, o3, v4i{2, 6, 3, 7});
+        const v4f value[kLanes] = {__builtin_shuffle(lo01, lo23, v4i{0, 1, 4, 5}),
+                                   __builtin_shuffle(lo01, lo23, v4i{2, 3, 6, 7}),
+                                   __builtin_shuffle(hi01, hi23, v4i{0, 1, 4, 5}),
+                                   __builtin_shuffle(hi01, hi23, v4i{2, 3, 6, 7})};
+        for (int l = 0; l < lanes; ++l) {
+            float* out = &in.out[4 * vertex[l]];
+            if (!scalar[l]) {
+                std::memcpy(out, &value[l], sizeof value[l]);
+                continue;
+            }
+            Shape2 shape;
+            if (weight[l] > 0.0) shape = {a[l], b[l], c[l]};
+            const detail::GroupPrincipal principal = detail::principal_curvatures(
+                shape, Vec3d(fu[l][0], fu[l][1], fu[l][2]), Vec3d(fv[l][0], fv[l][1], fv[l][2]));
+            detail::vertex_curvature_at(*in.mesh, *in.topology, vertex[l], principal, out);
+        }
+    }
+}
+
 }  // namespace
 
 VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopology& topology) {
@@ -363,19 +474,9 @@ VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopolo
     VertexCurvature out;
     detail::reserve_huge_pages(out.values, 4 * verts);
     out.values.resize(4 * verts);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, verts, 8192), [&](const auto& range) {
-        for (size_t v = range.begin(); v != range.end(); ++v) {
-            const uint32_t g = topology.group_id[v];
-            const GroupSum& sum = sums[g];
-            Shape2 shape;
-            const double weight = sum.s[3];
-            if (weight > 0.0) shape = {sum.s[0] / weight, sum.s[1] / weight, sum.s[2] / weight};
-            const Frame& f = frames[g];
-            const detail::GroupPrincipal principal = detail::principal_curvatures(
-                shape, Vec3d(f.u[0], f.u[1], f.u[2]), Vec3d(f.v[0], f.v[1], f.v[2]));
-            detail::vertex_curvature_at(mesh, topology, v, principal, &out.values[4 * v]);
-        }
-    });
+    const VertexInput vertex_input{&mesh, &topology, sums.data(), frames.data(), out.values.data()};
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, verts, 8192),
+                      [&](const auto& range) { vertex_outputs(vertex_input, range.begin(), range.end()); });
     return out;
 }
 
