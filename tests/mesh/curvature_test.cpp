@@ -244,6 +244,28 @@ TEST(Curvature, ConcaveSideIsNegative) {
     }
 }
 
+// k1 is the curvature of largest magnitude, not the largest value: inside a cylinder (normals towards the
+// axis) k1 = -1/R around the axis and k2 = 0 along it.
+TEST(Curvature, LargestMagnitudeComesFirstOnConcaveSides) {
+    for (CurvatureEstimator f : kFits) {
+        SCOPED_TRACE(std::string(to_string(f)));
+        const float R = 1.5f, H = 2.0f;
+        TriMesh m = make_cylinder(R, H, 64, 16);
+        for (float& x : m.normals) x = -x;
+        for (size_t t = 0; t < m.triangle_count(); ++t) std::swap(m.indices[3 * t + 1], m.indices[3 * t + 2]);
+        const VertexCurvature c = estimate(m, f);
+        size_t scored = 0;
+        for (size_t v = 0; v < m.vertex_count(); ++v) {
+            if (!testing::cylinder_curvature(R, H, &m.positions[3 * v]).use) continue;
+            EXPECT_NEAR(c.values[4 * v], -1.0 / R, 1e-3) << v;
+            EXPECT_NEAR(c.values[4 * v + 1], 0.0, 1e-3) << v;
+            EXPECT_NEAR(std::abs(c.values[4 * v + 2]), 1.0, 1e-3) << v;  // around the axis: along T
+            ++scored;
+        }
+        EXPECT_GT(scored, m.vertex_count() / 2);
+    }
+}
+
 TEST(Curvature, SeamVerticesShareCurvature) {
     for (CurvatureEstimator f : kFits) {
         SCOPED_TRACE(std::string(to_string(f)));
