@@ -44,9 +44,10 @@ namespace {
 using detail::Shape2;
 using detail::Vec3d;
 
-// A curvature group's frame (detail::group_frame), stored together because each corner reads all three.
-struct Frame {
-    double n[3], u[3], v[3];
+// A curvature group's unit normal, the n of its frame (detail::group_frame); the basis (u, v) is derived
+// from it where needed, which is cheaper than storing and reading it back.
+struct GroupNormal {
+    double n[3];
 };
 
 inline void load3(const float* x, double out[3]) {
@@ -95,6 +96,21 @@ SPECBAKE_INLINE void cross4(const v4d (&a)[3], const v4d (&b)[3], v4d (&out)[3])
 }
 SPECBAKE_INLINE v4l is_finite(v4d x) { return x - x == 0.0; }  // inf - inf and NaN - NaN are NaN
 
+// detail::orthonormal_basis (Duff et al. 2017), its operations lane by lane: u and v of the group frame
+// with normal n.
+SPECBAKE_INLINE void orthonormal_basis4(const v4d (&n)[3], v4d (&u)[3], v4d (&v)[3]) {
+    const v4l sign_bit = (v4l)splat(-0.0);
+    const v4d sign = (v4d)(((v4l)n[2] & sign_bit) | (v4l)splat(1.0));  // copysign(1, n.z)
+    const v4d a = -1.0 / (sign + n[2]);
+    const v4d b = n[0] * n[1] * a;
+    u[0] = 1.0 + sign * n[0] * n[0] * a;
+    u[1] = sign * b;
+    u[2] = -sign * n[0];
+    v[0] = b;
+    v[1] = sign + n[1] * n[1] * a;
+    v[2] = -n[1];
+}
+
 // Everything the face pass reads, as flat arrays.
 struct FaceInput {
     const uint32_t* indices;
@@ -102,7 +118,7 @@ struct FaceInput {
     const uint32_t* group_id;
     const float* positions;
     const double* unit_normals;  // per vertex
-    const Frame* frames;         // per group
+    const GroupNormal* group_normals;
 };
 
 // Component k of four lanes' 3-vectors.
@@ -208,18 +224,13 @@ SPECBAKE_INLINE void face_shapes(const FaceInput& in, size_t t, int lanes, uint3
 
 #pragma GCC unroll 3
     for (int i = 0; i < 3; ++i) {
-        const Frame* const frame[kLanes] = {&in.frames[group[i][0]], &in.frames[group[i][1]],
-                                            &in.frames[group[i][2]], &in.frames[group[i][3]]};
-        const double* const fn_g[kLanes] = {frame[0]->n, frame[1]->n, frame[2]->n, frame[3]->n};
-        const double* const fu_g[kLanes] = {frame[0]->u, frame[1]->u, frame[2]->u, frame[3]->u};
-        const double* const fv_g[kLanes] = {frame[0]->v, frame[1]->v, frame[2]->v, frame[3]->v};
+        const double* const group_normal[kLanes] = {
+            in.group_normals[group[i][0]].n, in.group_normals[group[i][1]].n, in.group_normals[group[i][2]].n,
+            in.group_normals[group[i][3]].n};
         v4d ng[3], ug[3], vg[3];
-#pragma GCC unroll 4
-        for (int k = 0; k < 3; ++k) {
-            ng[k] = gather(fn_g, k);
-            ug[k] = gather(fu_g, k);
-            vg[k] = gather(fv_g, k);
-        }
+#pragma GCC unroll 3
+        for (int k = 0; k < 3; ++k) ng[k] = gather(group_normal, k);
+        orthonormal_basis4(ng, ug, vg);
         // Rotate the face frame about fn x ng into the group's tangent plane (Rusinkiewicz 2004 Sec. 4); for
         // opposite normals, the half turn.
         const v4d ndot = dot4(fn, ng);
@@ -298,6 +309,25 @@ SPECBAKE_AVX2_CLONES void shape_faces(const FaceInput& in, const uint32_t* first
     }
 }
 
+// Unit normals of groups [begin, end) (detail::group_frame's n, its operations lane by lane): the first
+// vertex's normal divided by its length, +z for a zero normal.
+SPECBAKE_AVX2_CLONES void group_normals(const float* normals, const uint32_t* group_vertex, uint32_t begin,
+                                        uint32_t end, GroupNormal* out) {
+    for (uint32_t first = begin; first < end; first += kLanes) {
+        const int lanes = int(std::min<uint32_t>(kLanes, end - first));
+        const float* normal[kLanes];
+#pragma GCC unroll 4
+        for (int l = 0; l < kLanes; ++l)
+            normal[l] = &normals[3 * size_t(group_vertex[first + uint32_t(std::min(l, lanes - 1))])];
+        const v4d x = gather(normal, 0), y = gather(normal, 1), z = gather(normal, 2);
+        const v4d len = sqrt4(x * x + y * y + z * z);
+        const v4l nonzero = len > 0.0;
+        const v4d n[3] = {nonzero ? x / len : splat(0.0), nonzero ? y / len : splat(0.0),
+                          nonzero ? z / len : splat(1.0)};
+        for (int l = 0; l < lanes; ++l) out[first + uint32_t(l)] = {{n[0][l], n[1][l], n[2][l]}};
+    }
+}
+
 SPECBAKE_INLINE v4d abs4(v4d x) {
     constexpr long kMagnitude = 0x7fffffffffffffffL;  // all bits but the sign
     return (v4d)((v4l)x & v4l{kMagnitude, kMagnitude, kMagnitude, kMagnitude});
@@ -308,8 +338,8 @@ struct VertexInput {
     const TriMesh* mesh;
     const WeldedTopology* topology;
     const GroupSum* sums;  // per group
-    const Frame* frames;   // per group
-    float* out;            // 4 per vertex
+    const GroupNormal* group_normals;
+    float* out;  // 4 per vertex
 };
 
 // Output (k1, k2, d.x, d.y) of vertices [begin, end), four at a time, lane l for vertex v + l: the group's
@@ -324,15 +354,14 @@ SPECBAKE_AVX2_CLONES void vertex_outputs(const VertexInput& in, size_t begin, si
         const int lanes = int(std::min<size_t>(kLanes, end - first));
         size_t vertex[kLanes];
         const double* sum[kLanes];
-        const double *fu[kLanes], *fv[kLanes];
+        const double* group_normal[kLanes];
         const float *vn[kLanes], *vt[kLanes];
 #pragma GCC unroll 4
         for (int l = 0; l < kLanes; ++l) {
             vertex[l] = first + size_t(std::min(l, lanes - 1));
             const uint32_t g = group_id[vertex[l]];
             sum[l] = in.sums[g].s;
-            fu[l] = in.frames[g].u;
-            fv[l] = in.frames[g].v;
+            group_normal[l] = in.group_normals[g].n;
             vn[l] = &normals[3 * vertex[l]];
             vt[l] = &tangents[4 * vertex[l]];
         }
@@ -357,9 +386,11 @@ SPECBAKE_AVX2_CLONES void vertex_outputs(const VertexInput& in, size_t begin, si
         const v4l directed = len > 1e-12 * (abs_k1 < 1e-300 ? splat(1e-300) : abs_k1);
         x = directed ? x / len : splat(1.0);
         y = directed ? y / len : splat(0.0);
-        v4d dir[3];
+        const v4d ng[3] = {gather(group_normal, 0), gather(group_normal, 1), gather(group_normal, 2)};
+        v4d u[3], v[3], dir[3];
+        orthonormal_basis4(ng, u, v);
 #pragma GCC unroll 3
-        for (int k = 0; k < 3; ++k) dir[k] = x * gather(fu, k) + y * gather(fv, k);
+        for (int k = 0; k < 3; ++k) dir[k] = x * u[k] + y * v[k];
 
         // The vertex's tangent frame: N normalised, T orthogonalised against N and normalised, B = N x T * w.
         v4d n[3] = {gather(vn, 0), gather(vn, 1), gather(vn, 2)};
@@ -403,7 +434,7 @@ SPECBAKE_AVX2_CLONES void vertex_outputs(const VertexInput& in, size_t begin, si
             Shape2 shape;
             if (weight[l] > 0.0) shape = {a[l], b[l], c[l]};
             const detail::GroupPrincipal principal = detail::principal_curvatures(
-                shape, Vec3d(fu[l][0], fu[l][1], fu[l][2]), Vec3d(fv[l][0], fv[l][1], fv[l][2]));
+                shape, Vec3d(u[0][l], u[1][l], u[2][l]), Vec3d(v[0][l], v[1][l], v[2][l]));
             detail::vertex_curvature_at(*in.mesh, *in.topology, vertex[l], principal, out);
         }
     }
@@ -425,17 +456,9 @@ VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopolo
             for (int k = 0; k < 3; ++k) n[k] *= inv;
         }
     });
-    detail::ScratchArray<Frame> frames(groups);
+    detail::ScratchArray<GroupNormal> normals(groups);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, groups, 4096), [&](const auto& range) {
-        for (uint32_t g = range.begin(); g != range.end(); ++g) {
-            Vec3d n, u, v;
-            detail::group_frame(&mesh.normals[3 * size_t(topology.group_vertex[g])], n, u, v);
-            for (int k = 0; k < 3; ++k) {
-                frames[g].n[k] = n[k];
-                frames[g].u[k] = u[k];
-                frames[g].v[k] = v[k];
-            }
-        }
+        group_normals(mesh.normals.data(), topology.group_vertex.data(), range.begin(), range.end(), normals.data());
     });
 
     // The chunk of each group's first corner: the smallest chunk that has one of its corners (an atomic
@@ -460,7 +483,7 @@ VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopolo
     });
 
     const FaceInput input{mesh.indices.data(),      topology.position_id.data(), topology.group_id.data(),
-                          mesh.positions.data(),    unit_normals.data(),         frames.data()};
+                          mesh.positions.data(),    unit_normals.data(),         normals.data()};
     std::vector<std::vector<DeferredCorner>> deferred(chunks);
     tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
         shape_faces(input, first_chunk.data(), uint32_t(c), c * kChunkFaces, std::min(tris, (c + 1) * kChunkFaces),
@@ -474,7 +497,7 @@ VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopolo
     VertexCurvature out;
     detail::reserve_huge_pages(out.values, 4 * verts);
     out.values.resize(4 * verts);
-    const VertexInput vertex_input{&mesh, &topology, sums.data(), frames.data(), out.values.data()};
+    const VertexInput vertex_input{&mesh, &topology, sums.data(), normals.data(), out.values.data()};
     tbb::parallel_for(tbb::blocked_range<size_t>(0, verts, 8192),
                       [&](const auto& range) { vertex_outputs(vertex_input, range.begin(), range.end()); });
     return out;
