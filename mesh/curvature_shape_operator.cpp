@@ -20,6 +20,7 @@
 // pass would, without a per-corner array or a sort of corners by group; meshes in a spatially coherent order
 // (as exported) defer few corners.
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <atomic>
@@ -292,7 +293,8 @@ SPECBAKE_INLINE void add_corner(GroupSum& sum, v4f shape) {
 }
 
 // The face pass over chunk `chunk` (triangles [begin, end)), four faces at a time, adding each corner in
-// corner order to its group's sums or to the chunk's deferred list.
+// corner order to its group's sums or to the chunk's deferred list; without first_chunk (one pass over all
+// faces) every corner is added to the sums.
 SPECBAKE_AVX2_CLONES void shape_faces(const FaceInput& in, const uint32_t* first_chunk, uint32_t chunk, size_t begin,
                                       size_t end, GroupSum* sums, std::vector<DeferredCorner>& deferred) {
     for (size_t t = begin; t < end; t += kLanes) {
@@ -303,9 +305,32 @@ SPECBAKE_AVX2_CLONES void shape_faces(const FaceInput& in, const uint32_t* first
         for (int l = 0; l < lanes; ++l)
             for (int i = 0; i < 3; ++i) {
                 const uint32_t g = group[i][l];
-                if (first_chunk[g] == chunk) add_corner(sums[g], shape[i][l]);
+                if (!first_chunk || first_chunk[g] == chunk) add_corner(sums[g], shape[i][l]);
                 else deferred.push_back({g, shape[i][l]});
             }
+    }
+}
+
+// Unit normals (double) of vertices [begin, end): each normal times the reciprocal of its length. Four
+// vertices per vector, read and written as three vectors of consecutive components.
+SPECBAKE_AVX2_CLONES void normalise_normals(const float* normals, size_t begin, size_t end, double* out) {
+    size_t v = begin;
+    for (; v + kLanes <= end; v += kLanes) {
+        v4f f[3];
+        std::memcpy(f, &normals[3 * v], sizeof f);
+        const v4d a = __builtin_convertvector(f[0], v4d), b = __builtin_convertvector(f[1], v4d),
+                  c = __builtin_convertvector(f[2], v4d);  // x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3
+        const v4d x = v4d{a[0], a[3], b[2], c[1]}, y = v4d{a[1], b[0], b[3], c[2]}, z = v4d{a[2], b[1], c[0], c[3]};
+        const v4d inv = 1.0 / sqrt4(x * x + y * y + z * z);
+        const v4d scaled[3] = {a * v4d{inv[0], inv[0], inv[0], inv[1]}, b * v4d{inv[1], inv[1], inv[2], inv[2]},
+                               c * v4d{inv[2], inv[3], inv[3], inv[3]}};
+        std::memcpy(&out[3 * v], scaled, sizeof scaled);
+    }
+    for (; v < end; ++v) {
+        double n[3];
+        load3(&normals[3 * v], n);
+        const double inv = 1.0 / std::sqrt(dot3(n, n));
+        for (int k = 0; k < 3; ++k) out[3 * v + k] = n[k] * inv;
     }
 }
 
@@ -447,50 +472,52 @@ VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopolo
     const uint32_t groups = topology.group_count;
     // Unit normals in double, each normalised once rather than once per triangle (same values); a zero normal
     // gives non-finite components, and its triangles are then skipped by the finiteness check of the fit.
-    detail::ScratchArray<double> unit_normals(3 * verts);
+    detail::ScratchArray<double> unit_normal(3 * verts);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, verts, 8192), [&](const auto& range) {
-        for (size_t v = range.begin(); v != range.end(); ++v) {
-            double* n = &unit_normals[3 * v];
-            load3(&mesh.normals[3 * v], n);
-            const double inv = 1.0 / std::sqrt(dot3(n, n));
-            for (int k = 0; k < 3; ++k) n[k] *= inv;
-        }
+        normalise_normals(mesh.normals.data(), range.begin(), range.end(), unit_normal.data());
     });
     detail::ScratchArray<GroupNormal> normals(groups);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, groups, 4096), [&](const auto& range) {
         group_normals(mesh.normals.data(), topology.group_vertex.data(), range.begin(), range.end(), normals.data());
     });
 
-    // The chunk of each group's first corner: the smallest chunk that has one of its corners (an atomic
-    // minimum, the same whatever the order the chunks run in).
-    const size_t chunks = (tris + kChunkFaces - 1) / kChunkFaces;
-    detail::ScratchArray<uint32_t> first_chunk(groups);
     detail::ScratchArray<GroupSum> sums(groups);
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, groups, 16384), [&](const auto& range) {
-        for (uint32_t g = range.begin(); g != range.end(); ++g) {
-            first_chunk[g] = kNoChunk;
-            sums[g] = {};
-        }
-    });
-    tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
-        const size_t end = std::min(tris, (c + 1) * kChunkFaces);
-        for (size_t k = 3 * c * kChunkFaces; k < 3 * end; ++k) {
-            std::atomic_ref<uint32_t> first(first_chunk[topology.group_id[mesh.indices[k]]]);
-            uint32_t seen = first.load(std::memory_order_relaxed);
-            while (uint32_t(c) < seen && !first.compare_exchange_weak(seen, uint32_t(c), std::memory_order_relaxed)) {
-            }
-        }
-    });
-
     const FaceInput input{mesh.indices.data(),      topology.position_id.data(), topology.group_id.data(),
-                          mesh.positions.data(),    unit_normals.data(),         normals.data()};
-    std::vector<std::vector<DeferredCorner>> deferred(chunks);
-    tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
-        shape_faces(input, first_chunk.data(), uint32_t(c), c * kChunkFaces, std::min(tris, (c + 1) * kChunkFaces),
-                    sums.data(), deferred[c]);
-    });
-    for (const std::vector<DeferredCorner>& list : deferred)
-        for (const DeferredCorner& d : list) add_corner(sums[d.group], d.shape);
+                          mesh.positions.data(),    unit_normal.data(),          normals.data()};
+    if (tbb::this_task_arena::max_concurrency() == 1) {
+        // One thread: a single pass in corner order needs neither the chunks' first corners nor deferral.
+        std::fill(sums.data(), sums.data() + groups, GroupSum{});
+        std::vector<DeferredCorner> none;
+        shape_faces(input, nullptr, 0, 0, tris, sums.data(), none);
+    } else {
+        // The chunk of each group's first corner: the smallest chunk that has one of its corners (an atomic
+        // minimum, the same whatever the order the chunks run in).
+        const size_t chunks = (tris + kChunkFaces - 1) / kChunkFaces;
+        detail::ScratchArray<uint32_t> first_chunk(groups);
+        tbb::parallel_for(tbb::blocked_range<uint32_t>(0, groups, 16384), [&](const auto& range) {
+            for (uint32_t g = range.begin(); g != range.end(); ++g) {
+                first_chunk[g] = kNoChunk;
+                sums[g] = {};
+            }
+        });
+        tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+            const size_t end = std::min(tris, (c + 1) * kChunkFaces);
+            for (size_t k = 3 * c * kChunkFaces; k < 3 * end; ++k) {
+                std::atomic_ref<uint32_t> first(first_chunk[topology.group_id[mesh.indices[k]]]);
+                uint32_t seen = first.load(std::memory_order_relaxed);
+                while (uint32_t(c) < seen &&
+                       !first.compare_exchange_weak(seen, uint32_t(c), std::memory_order_relaxed)) {
+                }
+            }
+        });
+        std::vector<std::vector<DeferredCorner>> deferred(chunks);
+        tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+            shape_faces(input, first_chunk.data(), uint32_t(c), c * kChunkFaces,
+                        std::min(tris, (c + 1) * kChunkFaces), sums.data(), deferred[c]);
+        });
+        for (const std::vector<DeferredCorner>& list : deferred)
+            for (const DeferredCorner& d : list) add_corner(sums[d.group], d.shape);
+    }
 
     // Each vertex eigen-decomposes its group's sums itself (a group has one vertex, or a few along seams): no
     // per-group array of principal curvatures to fill and read back.
