@@ -9,16 +9,21 @@
 // its error is first order in the edge length (curvature_second_order.cpp explains why and offers a
 // second-order fit).
 //
-// Layout for speed: the vertices' unit normals (double) and the groups' frames are computed once up front;
-// one pass over the faces, four faces at a time (one per vector lane), computes a weighted operator per
-// corner as four floats and adds it to its group's sums (double) in corner order, so the result does not
-// depend on the thread count; a last pass over the vertices eigen-decomposes each vertex's group sum and
-// writes the vertex's output. The faces are cut into chunks of a fixed size, processed in parallel: a chunk
-// adds a corner straight into its group's sums when the group's first corner lies in that chunk (no other
-// chunk adds to them before it), and otherwise keeps the corner in a list that is added afterwards, chunk by
-// chunk, in corner order. Each group's sum thus runs over its corners in increasing order as one sequential
-// pass would, without a per-corner array or a sort of corners by group; meshes in a spatially coherent order
-// (as exported) defer few corners.
+// Layout for speed: four passes, over the vertices (unit normals, double), the groups (the unit normal of
+// each group's frame), the faces and the vertices again, each taking four items at a time, one per lane of a
+// 4-wide double vector (GCC/Clang vector extension: one AVX2 register, two SSE2 registers). They are compiled
+// for AVX2 and for the baseline instruction set and chosen at load time (function multiversioning). Every
+// lane performs the IEEE operations of the scalar formulas in the same order, and fused multiply-adds are
+// off, so both versions give the same bits. A group's tangent basis (u, v) is derived from its normal where
+// it is needed, which costs less than writing and reading back 48 more bytes a group. The face pass computes
+// a weighted operator per corner as four floats and adds it to its group's sums (double) in corner order, so
+// the result does not depend on the thread count; the last pass eigen-decomposes each vertex's group sum and
+// writes the vertex's output. On several threads the faces are cut into chunks of a fixed size, processed in
+// parallel: a chunk adds a corner straight into its group's sums when the group's first corner lies in that
+// chunk (no other chunk adds to them before it), and otherwise keeps the corner in a list that is added
+// afterwards, chunk by chunk, in corner order. Each group's sum thus runs over its corners in increasing
+// order as one sequential pass would (which is what one thread runs), without a per-corner array or a sort of
+// corners by group; meshes in a spatially coherent order (as exported) defer few corners.
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -36,7 +41,8 @@
 #include "mesh/curvature_frames.h"
 #include "mesh/scratch_array.h"
 
-// Fused multiply-adds would round differently from the baseline version of the face pass.
+// GCC fuses multiplies and adds in C++ even in ISO mode, and a fused operation rounds once where the baseline
+// version rounds twice: off, so the AVX2 versions compute the same bits.
 #pragma GCC optimize("fp-contract=off")
 
 namespace specbake {
@@ -58,11 +64,8 @@ inline void load3(const float* x, double out[3]) {
 }
 inline double dot3(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
-// The face pass runs four faces at a time, one per lane of a 4-wide double vector (GCC/Clang vector
-// extension: one AVX2 register, two SSE2 registers). It is compiled for AVX2 and for the baseline
-// instruction set and chosen at load time (function multiversioning); the helpers are inlined into both.
-// Each lane performs the IEEE operations of a scalar evaluation in the same order, and contraction into
-// fused multiply-adds is off for this file, so both versions compute the same bits.
+// The passes over the mesh are compiled twice, for AVX2 and for the baseline instruction set, and chosen
+// once at load time; their helpers are inlined into each version.
 #if defined(__x86_64__) && defined(__linux__)
 #define SPECBAKE_AVX2_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
 #else
@@ -95,7 +98,25 @@ SPECBAKE_INLINE void cross4(const v4d (&a)[3], const v4d (&b)[3], v4d (&out)[3])
     out[1] = a[2] * b[0] - a[0] * b[2];
     out[2] = a[0] * b[1] - a[1] * b[0];
 }
+SPECBAKE_INLINE v4d abs4(v4d x) {
+    constexpr long kMagnitude = 0x7fffffffffffffffL;  // all bits but the sign
+    return (v4d)((v4l)x & v4l{kMagnitude, kMagnitude, kMagnitude, kMagnitude});
+}
+
 SPECBAKE_INLINE v4l is_finite(v4d x) { return x - x == 0.0; }  // inf - inf and NaN - NaN are NaN
+
+// The four lanes of four quantities (q[j][l]) as four 4-float records, one per lane (out[l][j]), each
+// converted to float.
+SPECBAKE_INLINE void lane_records(const v4d (&q)[4], v4f (&out)[kLanes]) {
+    const v4f a = __builtin_convertvector(q[0], v4f), b = __builtin_convertvector(q[1], v4f);
+    const v4f c = __builtin_convertvector(q[2], v4f), d = __builtin_convertvector(q[3], v4f);
+    const v4f ab_lo = __builtin_shuffle(a, b, v4i{0, 4, 1, 5}), ab_hi = __builtin_shuffle(a, b, v4i{2, 6, 3, 7});
+    const v4f cd_lo = __builtin_shuffle(c, d, v4i{0, 4, 1, 5}), cd_hi = __builtin_shuffle(c, d, v4i{2, 6, 3, 7});
+    out[0] = __builtin_shuffle(ab_lo, cd_lo, v4i{0, 1, 4, 5});
+    out[1] = __builtin_shuffle(ab_lo, cd_lo, v4i{2, 3, 6, 7});
+    out[2] = __builtin_shuffle(ab_hi, cd_hi, v4i{0, 1, 4, 5});
+    out[3] = __builtin_shuffle(ab_hi, cd_hi, v4i{2, 3, 6, 7});
+}
 
 // detail::orthonormal_basis (Duff et al. 2017), its operations lane by lane: u and v of the group frame
 // with normal n.
@@ -123,7 +144,9 @@ struct FaceInput {
 };
 
 // Component k of four lanes' 3-vectors.
-SPECBAKE_INLINE v4d gather(const double* const (&x)[kLanes], int k) { return v4d{x[0][k], x[1][k], x[2][k], x[3][k]}; }
+SPECBAKE_INLINE v4d gather(const double* const (&x)[kLanes], int k) {
+    return v4d{x[0][k], x[1][k], x[2][k], x[3][k]};
+}
 SPECBAKE_INLINE v4d gather(const float* const (&x)[kLanes], int k) {
     return __builtin_convertvector((v4f{x[0][k], x[1][k], x[2][k], x[3][k]}), v4d);
 }
@@ -254,18 +277,11 @@ SPECBAKE_INLINE void face_shapes(const FaceInput& in, size_t t, int lanes, uint3
         const v4d p00 = dot4(ug, ru), p10 = dot4(ug, rv), p01 = dot4(vg, ru), p11 = dot4(vg, rv);
         const v4d s0 = sa * p00 + sb * p10, s1 = sb * p00 + sc * p10;  // S (p00, p10)
         const v4d t0 = sa * p01 + sb * p11, t1 = sb * p01 + sc * p11;  // S (p01, p11)
-        const v4f a = __builtin_convertvector(usable ? w[i] * (p00 * s0 + p10 * s1) : splat(0.0), v4f);
-        const v4f b = __builtin_convertvector(usable ? w[i] * (p00 * t0 + p10 * t1) : splat(0.0), v4f);
-        const v4f c = __builtin_convertvector(usable ? w[i] * (p01 * t0 + p11 * t1) : splat(0.0), v4f);
-        const v4f weight = __builtin_convertvector(usable ? w[i] : splat(0.0), v4f);
-        // Transpose: one (a, b, c, weight) per lane.
-        const v4f ab_lo = __builtin_shuffle(a, b, v4i{0, 4, 1, 5}), ab_hi = __builtin_shuffle(a, b, v4i{2, 6, 3, 7});
-        const v4f cw_lo = __builtin_shuffle(c, weight, v4i{0, 4, 1, 5}),
-                  cw_hi = __builtin_shuffle(c, weight, v4i{2, 6, 3, 7});
-        shape[i][0] = __builtin_shuffle(ab_lo, cw_lo, v4i{0, 1, 4, 5});
-        shape[i][1] = __builtin_shuffle(ab_lo, cw_lo, v4i{2, 3, 6, 7});
-        shape[i][2] = __builtin_shuffle(ab_hi, cw_hi, v4i{0, 1, 4, 5});
-        shape[i][3] = __builtin_shuffle(ab_hi, cw_hi, v4i{2, 3, 6, 7});
+        const v4d zero = splat(0.0);
+        const v4d record[4] = {usable ? w[i] * (p00 * s0 + p10 * s1) : zero,
+                               usable ? w[i] * (p00 * t0 + p10 * t1) : zero,
+                               usable ? w[i] * (p01 * t0 + p11 * t1) : zero, usable ? w[i] : zero};
+        lane_records(record, shape[i]);
     }
 }
 
@@ -295,8 +311,9 @@ SPECBAKE_INLINE void add_corner(GroupSum& sum, v4f shape) {
 // The face pass over chunk `chunk` (triangles [begin, end)), four faces at a time, adding each corner in
 // corner order to its group's sums or to the chunk's deferred list; without first_chunk (one pass over all
 // faces) every corner is added to the sums.
-SPECBAKE_AVX2_CLONES void shape_faces(const FaceInput& in, const uint32_t* first_chunk, uint32_t chunk, size_t begin,
-                                      size_t end, GroupSum* sums, std::vector<DeferredCorner>& deferred) {
+SPECBAKE_AVX2_CLONES void shape_faces(const FaceInput& in, const uint32_t* first_chunk, uint32_t chunk,
+                                      size_t begin, size_t end, GroupSum* sums,
+                                      std::vector<DeferredCorner>& deferred) {
     for (size_t t = begin; t < end; t += kLanes) {
         const int lanes = int(std::min<size_t>(kLanes, end - t));
         uint32_t group[3][kLanes];
@@ -353,12 +370,7 @@ SPECBAKE_AVX2_CLONES void group_normals(const float* normals, const uint32_t* gr
     }
 }
 
-SPECBAKE_INLINE v4d abs4(v4d x) {
-    constexpr long kMagnitude = 0x7fffffffffffffffL;  // all bits but the sign
-    return (v4d)((v4l)x & v4l{kMagnitude, kMagnitude, kMagnitude, kMagnitude});
-}
-
-// Everything the vertex pass reads and writes, as flat arrays.
+// Everything the vertex pass reads and writes.
 struct VertexInput {
     const TriMesh* mesh;
     const WeldedTopology* topology;
@@ -367,7 +379,7 @@ struct VertexInput {
     float* out;  // 4 per vertex
 };
 
-// Output (k1, k2, d.x, d.y) of vertices [begin, end), four at a time, lane l for vertex v + l: the group's
+// Output (k1, k2, d.x, d.y) of vertices [begin, end), four at a time (lane l: vertex first + l): the group's
 // summed operator normalised by its weight, detail::principal_curvatures of it and detail::vertex_curvature_at,
 // their operations lane by lane. A vertex whose normal is zero or whose tangent is along its normal takes
 // the scalar functions, which handle those cases.
@@ -442,14 +454,8 @@ SPECBAKE_AVX2_CLONES void vertex_outputs(const VertexInput& in, size_t begin, si
         dx = unit ? dx / d_len : splat(1.0);
         dy = unit ? dy / d_len : splat(0.0);
 
-        const v4f o0 = __builtin_convertvector(k1, v4f), o1 = __builtin_convertvector(k2, v4f),
-                  o2 = __builtin_convertvector(dx, v4f), o3 = __builtin_convertvector(dy, v4f);
-        const v4f lo01 = __builtin_shuffle(o0, o1, v4i{0, 4, 1, 5}), hi01 = __builtin_shuffle(o0, o1, v4i{2, 6, 3, 7});
-        const v4f lo23 = __builtin_shuffle(o2, o3, v4i{0, 4, 1, 5}), hi23 = __builtin_shuffle(o2, o3, v4i{2, 6, 3, 7});
-        const v4f value[kLanes] = {__builtin_shuffle(lo01, lo23, v4i{0, 1, 4, 5}),
-                                   __builtin_shuffle(lo01, lo23, v4i{2, 3, 6, 7}),
-                                   __builtin_shuffle(hi01, hi23, v4i{0, 1, 4, 5}),
-                                   __builtin_shuffle(hi01, hi23, v4i{2, 3, 6, 7})};
+        v4f value[kLanes];
+        lane_records({k1, k2, dx, dy}, value);
         for (int l = 0; l < lanes; ++l) {
             float* out = &in.out[4 * vertex[l]];
             if (!scalar[l]) {
@@ -478,7 +484,8 @@ VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopolo
     });
     detail::ScratchArray<GroupNormal> normals(groups);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, groups, 4096), [&](const auto& range) {
-        group_normals(mesh.normals.data(), topology.group_vertex.data(), range.begin(), range.end(), normals.data());
+        group_normals(mesh.normals.data(), topology.group_vertex.data(), range.begin(), range.end(),
+                      normals.data());
     });
 
     detail::ScratchArray<GroupSum> sums(groups);

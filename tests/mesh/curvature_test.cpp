@@ -357,6 +357,39 @@ TEST(Curvature, DegenerateTrianglesAreSkipped) {
     }
 }
 
+// Default estimator, vertices whose own frame is unusable: a tangent along the normal takes a fixed
+// perpendicular, a zero normal gets no curvature (its triangles carry no normal difference and are skipped).
+// The rest of the sphere keeps 1/R, and every direction is a unit vector.
+TEST(Curvature, UnusableVertexFramesKeepTheOutputDefined) {
+    const float R = 2.0f;
+    TriMesh m = make_uv_sphere(R, 32, 16);
+    auto nearest = [&](double x, double y, double z) {
+        size_t best = 0;
+        double best_dot = -2.0;
+        for (size_t v = 0; v < m.vertex_count(); ++v) {
+            const float* p = &m.positions[3 * v];
+            const double d = (p[0] * x + p[1] * y + p[2] * z) / (R * std::sqrt(x * x + y * y + z * z));
+            if (d > best_dot) best_dot = d, best = v;
+        }
+        return best;
+    };
+    const size_t along = nearest(1.0, 1.0, 0.3), zero = nearest(-1.0, 0.5, -0.2);
+    for (int k = 0; k < 3; ++k) m.tangents[4 * along + k] = m.normals[3 * along + k];
+    for (int k = 0; k < 3; ++k) m.normals[3 * zero + k] = 0.0f;
+    const VertexCurvature c = estimate(m);
+    for (size_t v = 0; v < m.vertex_count(); ++v) {
+        const float* x = &c.values[4 * v];
+        EXPECT_NEAR(std::hypot(x[2], x[3]), 1.0, 1e-6) << v;
+        if (v == zero) {
+            EXPECT_EQ(x[0], 0.0f);
+            EXPECT_EQ(x[1], 0.0f);
+        } else {
+            EXPECT_NEAR(x[0], 1.0 / R, 1e-3) << v;
+            EXPECT_NEAR(x[1], 1.0 / R, 1e-3) << v;
+        }
+    }
+}
+
 TEST(Curvature, SameOutputForAnyThreadCount) {
     const TriMesh m = make_torus(3.0f, 1.0f, 200, 100, 0.3f, 9);
     for (CurvatureEstimator e : kAll) {
