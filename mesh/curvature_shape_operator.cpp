@@ -196,10 +196,38 @@ SPECBAKE_INLINE void face_shapes(const FaceInput& in, size_t t, int lanes, uint3
     // Same test as detail::is_degenerate_triangle: smallest angle under ~1e-10 rad.
     v4l usable = distinct & (twice_area > 1e-10 * lsum);
 
-    // Mixed-Voronoi areas (detail::mixed_voronoi_areas, its operations lane by lane): the Voronoi region
-    // when no angle is obtuse, else half the area at the obtuse corner and a quarter at the two others.
+    // The divisions first, so their latency overlaps the rest.
     const v4d area = 0.5 * twice_area;
     const v4d inv_area = 1.0 / (4.0 * area);
+    const v4d inv_cr = 1.0 / twice_area, inv_l0 = 1.0 / sqrt4(l[0]);
+    const v4d G = 3.0 * cr2;
+    const v4d inv_det = 1.0 / (lsum * G);
+
+    // Face frame: u along e_0, normal from the winding, v = n x u.
+    v4d fn[3], fu[3], fv[3];
+#pragma GCC unroll 4
+    for (int k = 0; k < 3; ++k) {
+        fn[k] = cr[k] * inv_cr;
+        fu[k] = e[0][k] * inv_l0;
+    }
+    cross4(fn, fu, fv);
+
+    // The groups' frames and the rotation factor 1 / (1 + n . ng) of each corner.
+    v4d ng[3][3], ug[3][3], vg[3][3], ndot[3], inv_turn[3];
+#pragma GCC unroll 3
+    for (int i = 0; i < 3; ++i) {
+        const double* const group_normal[kLanes] = {
+            in.group_normals[group[i][0]].n, in.group_normals[group[i][1]].n, in.group_normals[group[i][2]].n,
+            in.group_normals[group[i][3]].n};
+#pragma GCC unroll 3
+        for (int k = 0; k < 3; ++k) ng[i][k] = gather(group_normal, k);
+        orthonormal_basis4(ng[i], ug[i], vg[i]);
+        ndot[i] = dot4(fn, ng[i]);
+        inv_turn[i] = 1.0 / (1.0 + ndot[i]);
+    }
+
+    // Mixed-Voronoi areas (detail::mixed_voronoi_areas, its operations lane by lane): the Voronoi region
+    // when no angle is obtuse, else half the area at the obtuse corner and a quarter at the two others.
     const v4d cot[3] = {(l[1] + l[2] - l[0]) * inv_area, (l[0] + l[2] - l[1]) * inv_area,
                         (l[0] + l[1] - l[2]) * inv_area};
     const v4d voronoi[3] = {(l[1] * cot[1] + l[2] * cot[2]) / 8.0, (l[0] * cot[0] + l[2] * cot[2]) / 8.0,
@@ -209,16 +237,6 @@ SPECBAKE_INLINE void face_shapes(const FaceInput& in, size_t t, int lanes, uint3
     v4d w[3];
 #pragma GCC unroll 4
     for (int i = 0; i < 3; ++i) w[i] = obtuse[i] ? 0.5 * area : (any_obtuse ? 0.25 * area : voronoi[i]);
-
-    // Face frame: u along e_0, normal from the winding, v = n x u.
-    v4d fn[3], fu[3], fv[3];
-    const v4d inv_cr = 1.0 / twice_area, inv_l0 = 1.0 / sqrt4(l[0]);
-#pragma GCC unroll 4
-    for (int k = 0; k < 3; ++k) {
-        fn[k] = cr[k] * inv_cr;
-        fu[k] = e[0][k] * inv_l0;
-    }
-    cross4(fn, fu, fv);
 
     // Normal equations of the six equations [eu ev 0; 0 eu ev] (a b c)^T = (dn.u, dn.v):
     // M = [[A, B, 0], [B, A + C, B], [0, B, C]] with A = sum eu^2, B = sum eu ev, C = sum ev^2.
@@ -238,8 +256,6 @@ SPECBAKE_INLINE void face_shapes(const FaceInput& in, size_t t, int lanes, uint3
     }
     // det M = (A + C)(AC - B^2), and AC - B^2 = sum over edge pairs of (e_i x e_j)^2 (Cauchy-Binet) = 3 |cr|^2,
     // which keeps the solve accurate on thin triangles; A + C is the summed squared edge length.
-    const v4d G = 3.0 * cr2;
-    const v4d inv_det = 1.0 / (lsum * G);
     const v4d c00 = G + C * C, c11 = A * C, c22 = G + A * A, c01 = -B * C, c02 = B * B, c12 = -A * B;
     const v4d sa = (c00 * r0 + c01 * r1 + c02 * r2) * inv_det;
     const v4d sb = (c01 * r0 + c11 * r1 + c12 * r2) * inv_det;
@@ -248,23 +264,14 @@ SPECBAKE_INLINE void face_shapes(const FaceInput& in, size_t t, int lanes, uint3
 
 #pragma GCC unroll 3
     for (int i = 0; i < 3; ++i) {
-        const double* const group_normal[kLanes] = {
-            in.group_normals[group[i][0]].n, in.group_normals[group[i][1]].n, in.group_normals[group[i][2]].n,
-            in.group_normals[group[i][3]].n};
-        v4d ng[3], ug[3], vg[3];
-#pragma GCC unroll 3
-        for (int k = 0; k < 3; ++k) ng[k] = gather(group_normal, k);
-        orthonormal_basis4(ng, ug, vg);
         // Rotate the face frame about fn x ng into the group's tangent plane (Rusinkiewicz 2004 Sec. 4); for
         // opposite normals, the half turn.
-        const v4d ndot = dot4(fn, ng);
-        const v4l opposite = ndot <= -1.0;
-        const v4d inv = 1.0 / (1.0 + ndot);
+        const v4l opposite = ndot[i] <= -1.0;
         v4d perp[3], dperp[3];
 #pragma GCC unroll 4
         for (int k = 0; k < 3; ++k) {
-            perp[k] = ng[k] - ndot * fn[k];
-            dperp[k] = (fn[k] + ng[k]) * inv;
+            perp[k] = ng[i][k] - ndot[i] * fn[k];
+            dperp[k] = (fn[k] + ng[i][k]) * inv_turn[i];
         }
         const v4d su = dot4(fu, perp), sv = dot4(fv, perp);
         v4d ru[3], rv[3];
@@ -274,7 +281,7 @@ SPECBAKE_INLINE void face_shapes(const FaceInput& in, size_t t, int lanes, uint3
             rv[k] = opposite ? -fv[k] : fv[k] - dperp[k] * sv;
         }
         // Coordinates of the group basis vectors in the rotated face frame: S_group = P^T S_face P.
-        const v4d p00 = dot4(ug, ru), p10 = dot4(ug, rv), p01 = dot4(vg, ru), p11 = dot4(vg, rv);
+        const v4d p00 = dot4(ug[i], ru), p10 = dot4(ug[i], rv), p01 = dot4(vg[i], ru), p11 = dot4(vg[i], rv);
         const v4d s0 = sa * p00 + sb * p10, s1 = sb * p00 + sc * p10;  // S (p00, p10)
         const v4d t0 = sa * p01 + sb * p11, t1 = sb * p01 + sc * p11;  // S (p01, p11)
         const v4d zero = splat(0.0);
