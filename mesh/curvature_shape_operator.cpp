@@ -409,6 +409,23 @@ SPECBAKE_AVX2_CLONES void vertex_outputs(const VertexInput& in, size_t begin, si
             vn[l] = &normals[3 * vertex[l]];
             vt[l] = &tangents[4 * vertex[l]];
         }
+        // The vertex's tangent frame: N normalised, T orthogonalised against N and normalised (B = N x T * w
+        // below); first, so that its divisions overlap the group's.
+        v4d n[3] = {gather(vn, 0), gather(vn, 1), gather(vn, 2)};
+        const v4d n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+        v4l scalar = !(n2 > 0.0);
+        const v4d n_len = sqrt4(n2);
+#pragma GCC unroll 3
+        for (int k = 0; k < 3; ++k) n[k] = n[k] / n_len;
+        v4d t[3] = {gather(vt, 0), gather(vt, 1), gather(vt, 2)};
+        const v4d nt = n[0] * t[0] + n[1] * t[1] + n[2] * t[2];
+#pragma GCC unroll 3
+        for (int k = 0; k < 3; ++k) t[k] = t[k] - nt * n[k];
+        const v4d t_len = sqrt4(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+        scalar |= !(t_len > 1e-12);
+#pragma GCC unroll 3
+        for (int k = 0; k < 3; ++k) t[k] = t[k] / t_len;
+
         // The group's operator (no data: zero).
         const v4d weight = gather(sum, 3);
         const v4l weighted = weight > 0.0;
@@ -436,21 +453,6 @@ SPECBAKE_AVX2_CLONES void vertex_outputs(const VertexInput& in, size_t begin, si
 #pragma GCC unroll 3
         for (int k = 0; k < 3; ++k) dir[k] = x * u[k] + y * v[k];
 
-        // The vertex's tangent frame: N normalised, T orthogonalised against N and normalised, B = N x T * w.
-        v4d n[3] = {gather(vn, 0), gather(vn, 1), gather(vn, 2)};
-        const v4d n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
-        v4l scalar = !(n2 > 0.0);
-        const v4d n_len = sqrt4(n2);
-#pragma GCC unroll 3
-        for (int k = 0; k < 3; ++k) n[k] = n[k] / n_len;
-        v4d t[3] = {gather(vt, 0), gather(vt, 1), gather(vt, 2)};
-        const v4d nt = n[0] * t[0] + n[1] * t[1] + n[2] * t[2];
-#pragma GCC unroll 3
-        for (int k = 0; k < 3; ++k) t[k] = t[k] - nt * n[k];
-        const v4d t_len = sqrt4(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
-        scalar |= !(t_len > 1e-12);
-#pragma GCC unroll 3
-        for (int k = 0; k < 3; ++k) t[k] = t[k] / t_len;
         const v4d sign = gather(vt, 3) < 0.0 ? splat(-1.0) : splat(1.0);
         const v4d bt[3] = {sign * (n[1] * t[2] - n[2] * t[1]), sign * (n[2] * t[0] - n[0] * t[2]),
                            sign * (n[0] * t[1] - n[1] * t[0])};
