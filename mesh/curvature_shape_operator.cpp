@@ -43,7 +43,11 @@
 
 // GCC fuses multiplies and adds in C++ even in ISO mode, and a fused operation rounds once where the baseline
 // version rounds twice: off, so the AVX2 versions compute the same bits.
+#if defined(__clang__)
+#pragma STDC FP_CONTRACT OFF
+#else
 #pragma GCC optimize("fp-contract=off")
+#endif
 
 namespace specbake {
 namespace {
@@ -77,7 +81,6 @@ inline double dot3(const double* a, const double* b) { return a[0] * b[0] + a[1]
 typedef double v4d __attribute__((vector_size(32)));
 typedef long v4l __attribute__((vector_size(32)));  // lane masks, as v4d comparisons yield
 typedef float v4f __attribute__((vector_size(16)));
-typedef int v4i __attribute__((vector_size(16)));  // shuffle selectors
 constexpr int kLanes = 4;
 
 SPECBAKE_INLINE v4d splat(double x) { return v4d{x, x, x, x}; }
@@ -110,12 +113,12 @@ SPECBAKE_INLINE v4l is_finite(v4d x) { return x - x == 0.0; }  // inf - inf and 
 SPECBAKE_INLINE void lane_records(const v4d (&q)[4], v4f (&out)[kLanes]) {
     const v4f a = __builtin_convertvector(q[0], v4f), b = __builtin_convertvector(q[1], v4f);
     const v4f c = __builtin_convertvector(q[2], v4f), d = __builtin_convertvector(q[3], v4f);
-    const v4f ab_lo = __builtin_shuffle(a, b, v4i{0, 4, 1, 5}), ab_hi = __builtin_shuffle(a, b, v4i{2, 6, 3, 7});
-    const v4f cd_lo = __builtin_shuffle(c, d, v4i{0, 4, 1, 5}), cd_hi = __builtin_shuffle(c, d, v4i{2, 6, 3, 7});
-    out[0] = __builtin_shuffle(ab_lo, cd_lo, v4i{0, 1, 4, 5});
-    out[1] = __builtin_shuffle(ab_lo, cd_lo, v4i{2, 3, 6, 7});
-    out[2] = __builtin_shuffle(ab_hi, cd_hi, v4i{0, 1, 4, 5});
-    out[3] = __builtin_shuffle(ab_hi, cd_hi, v4i{2, 3, 6, 7});
+    const v4f ab_lo = __builtin_shufflevector(a, b, 0, 4, 1, 5), ab_hi = __builtin_shufflevector(a, b, 2, 6, 3, 7);
+    const v4f cd_lo = __builtin_shufflevector(c, d, 0, 4, 1, 5), cd_hi = __builtin_shufflevector(c, d, 2, 6, 3, 7);
+    out[0] = __builtin_shufflevector(ab_lo, cd_lo, 0, 1, 4, 5);
+    out[1] = __builtin_shufflevector(ab_lo, cd_lo, 2, 3, 6, 7);
+    out[2] = __builtin_shufflevector(ab_hi, cd_hi, 0, 1, 4, 5);
+    out[3] = __builtin_shufflevector(ab_hi, cd_hi, 2, 3, 6, 7);
 }
 
 // detail::orthonormal_basis (Duff et al. 2017), its operations lane by lane: u and v of the group frame
