@@ -41,8 +41,8 @@
 #include "mesh/curvature_frames.h"
 #include "mesh/scratch_array.h"
 
-// GCC fuses multiplies and adds in C++ even in ISO mode, and a fused operation rounds once where the baseline
-// version rounds twice: off, so the AVX2 versions compute the same bits.
+// Compilers may fuse multiplies and adds (GCC does in C++ even in ISO mode), and a fused operation rounds once
+// where the baseline version rounds twice: off, so the AVX2 versions compute the same bits.
 #if defined(__clang__)
 #pragma STDC FP_CONTRACT OFF
 #else
@@ -101,11 +101,11 @@ SPECBAKE_INLINE void cross4(const v4d (&a)[3], const v4d (&b)[3], v4d (&out)[3])
     out[1] = a[2] * b[0] - a[0] * b[2];
     out[2] = a[0] * b[1] - a[1] * b[0];
 }
+
 SPECBAKE_INLINE v4d abs4(v4d x) {
     constexpr long kMagnitude = 0x7fffffffffffffffL;  // all bits but the sign
     return (v4d)((v4l)x & v4l{kMagnitude, kMagnitude, kMagnitude, kMagnitude});
 }
-
 SPECBAKE_INLINE v4l is_finite(v4d x) { return x - x == 0.0; }  // inf - inf and NaN - NaN are NaN
 
 // The four lanes of four quantities (q[j][l]) as four 4-float records, one per lane (out[l][j]), each
