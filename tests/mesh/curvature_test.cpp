@@ -244,6 +244,28 @@ TEST(Curvature, ConcaveSideIsNegative) {
     }
 }
 
+// k1 is the curvature of largest magnitude, not the largest value: inside a cylinder (normals towards the
+// axis) k1 = -1/R around the axis and k2 = 0 along it.
+TEST(Curvature, LargestMagnitudeComesFirstOnConcaveSides) {
+    for (CurvatureEstimator f : kFits) {
+        SCOPED_TRACE(std::string(to_string(f)));
+        const float R = 1.5f, H = 2.0f;
+        TriMesh m = make_cylinder(R, H, 64, 16);
+        for (float& x : m.normals) x = -x;
+        for (size_t t = 0; t < m.triangle_count(); ++t) std::swap(m.indices[3 * t + 1], m.indices[3 * t + 2]);
+        const VertexCurvature c = estimate(m, f);
+        size_t scored = 0;
+        for (size_t v = 0; v < m.vertex_count(); ++v) {
+            if (!testing::cylinder_curvature(R, H, &m.positions[3 * v]).use) continue;
+            EXPECT_NEAR(c.values[4 * v], -1.0 / R, 1e-3) << v;
+            EXPECT_NEAR(c.values[4 * v + 1], 0.0, 1e-3) << v;
+            EXPECT_NEAR(std::abs(c.values[4 * v + 2]), 1.0, 1e-3) << v;  // around the axis: along T
+            ++scored;
+        }
+        EXPECT_GT(scored, m.vertex_count() / 2);
+    }
+}
+
 TEST(Curvature, SeamVerticesShareCurvature) {
     for (CurvatureEstimator f : kFits) {
         SCOPED_TRACE(std::string(to_string(f)));
@@ -332,6 +354,39 @@ TEST(Curvature, DegenerateTrianglesAreSkipped) {
         for (int f = 0; f < 2; ++f)
             if (e == kFits[f])
                 for (size_t v = 0; v < n; ++v) EXPECT_EQ(after.values[4 * v], before[f].values[4 * v]) << v;
+    }
+}
+
+// Default estimator, vertices whose own frame is unusable: a tangent along the normal takes a fixed
+// perpendicular, a zero normal gets no curvature (its triangles carry no normal difference and are skipped).
+// The rest of the sphere keeps 1/R, and every direction is a unit vector.
+TEST(Curvature, UnusableVertexFramesKeepTheOutputDefined) {
+    const float R = 2.0f;
+    TriMesh m = make_uv_sphere(R, 32, 16);
+    auto nearest = [&](double x, double y, double z) {
+        size_t best = 0;
+        double best_dot = -2.0;
+        for (size_t v = 0; v < m.vertex_count(); ++v) {
+            const float* p = &m.positions[3 * v];
+            const double d = (p[0] * x + p[1] * y + p[2] * z) / (R * std::sqrt(x * x + y * y + z * z));
+            if (d > best_dot) best_dot = d, best = v;
+        }
+        return best;
+    };
+    const size_t along = nearest(1.0, 1.0, 0.3), zero = nearest(-1.0, 0.5, -0.2);
+    for (int k = 0; k < 3; ++k) m.tangents[4 * along + k] = m.normals[3 * along + k];
+    for (int k = 0; k < 3; ++k) m.normals[3 * zero + k] = 0.0f;
+    const VertexCurvature c = estimate(m);
+    for (size_t v = 0; v < m.vertex_count(); ++v) {
+        const float* x = &c.values[4 * v];
+        EXPECT_NEAR(std::hypot(x[2], x[3]), 1.0, 1e-6) << v;
+        if (v == zero) {
+            EXPECT_EQ(x[0], 0.0f);
+            EXPECT_EQ(x[1], 0.0f);
+        } else {
+            EXPECT_NEAR(x[0], 1.0 / R, 1e-3) << v;
+            EXPECT_NEAR(x[1], 1.0 / R, 1e-3) << v;
+        }
     }
 }
 
