@@ -2,13 +2,14 @@
 // each triangle's dP/du once and its three corners' terms, and adds every corner term to its vertex's sums
 // (4 doubles: weighted tangent xyz, signed angle), so each vertex adds its corners in corner order. Four
 // triangles run at once, one per lane of a 4-wide double vector (AVX2 where the CPU has it). The vertices
-// are split into chunks of consecutive indices (one range of chunks per thread) with one small set of
-// arrays per thread; a chunk's pass visits only the blocks of triangles whose vertex-index bounds meet the
-// chunk and adds only its own vertices' corners, so every sum runs in the same order for any split and any
-// thread count. The bit-identical results of the scalar formulation (detail::corner_angle, Eigen order) are
-// kept: the lanes do the same IEEE operations in the same order.
+// are split into chunks of consecutive indices, parallel tasks sharing one small set of arrays per thread;
+// a chunk's pass visits only the blocks of triangles whose vertex-index bounds meet the chunk and adds only
+// its own vertices' corners, so every sum runs in the same order for any split and any thread count. The
+// results are those of the scalar formulation (detail::corner_angle, Eigen's evaluation order) bit for bit:
+// the lanes do the same IEEE operations in the same order.
 #include "mesh/generate_tangents.h"
 
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -404,16 +405,18 @@ void generate_tangents(TriMesh& mesh) {
     for (size_t b = 0; b < blocks; ++b) span += block_bounds[2 * b + 1] - block_bounds[2 * b] + 1;
     span = blocks ? span / blocks : 0;
 
-    // One vertex range per thread, each big enough to be worth a task, worked through in chunks with one set
-    // of arrays (4 MiB, instead of 56 bytes per vertex of fresh memory): at least kChunk vertices and 16 block
-    // spans, so the triangles two chunks share, computed by both, stay about a percent. A mesh without index
-    // locality gets a single chunk per range. The split does not change the result.
-    constexpr size_t kMinVerticesPerRange = 16384;
+    // Chunks of consecutive vertices, each a task with its thread's set of arrays (4 MiB, instead of 56 bytes
+    // per vertex of fresh memory): at most kChunk vertices or 16 block spans, so the triangles two chunks
+    // share, computed by both, stay about a percent (a mesh without index locality gets one chunk per thread),
+    // at least one chunk per thread, and a multiple of the thread count. The split does not change the result.
+    constexpr size_t kMinChunk = 16384;
     constexpr size_t kChunk = ((size_t(4) << 20) / sizeof(double) - 1) / 7;
     const size_t threads = std::min<size_t>(size_t(std::max(1, tbb::this_task_arena::max_concurrency())),
                                             tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
-    const size_t ranges = std::max<size_t>(1, std::min(threads, n / kMinVerticesPerRange));
     const size_t chunk_size = std::max(kChunk, 16 * span);
+    size_t chunks = std::max({size_t(1), (n + chunk_size - 1) / chunk_size, std::min(threads, n / kMinChunk)});
+    if (chunks > threads) chunks = (chunks + threads - 1) / threads * threads;
+    const size_t length = (n + chunks - 1) / chunks;
 
     const TangentInput in{mesh.positions.data(), mesh.normals.data(), with_uv ? mesh.uv0.data() : nullptr,
                           mesh.indices.data(), tris, block_bounds.data()};
@@ -421,20 +424,18 @@ void generate_tangents(TriMesh& mesh) {
     detail::reserve_huge_pages(mesh.tangents, 4 * n);
     mesh.tangents.resize(4 * n);
     float* tangents = mesh.tangents.data();
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, ranges, 1), [&](const auto& range) {
-        for (size_t r = range.begin(); r != range.end(); ++r) {
-            const size_t first = n * r / ranges, last = n * (r + 1) / ranges;
-            const size_t pieces = std::max<size_t>(1, (last - first + chunk_size - 1) / chunk_size);
-            const size_t length = (last - first + pieces - 1) / pieces;
-            detail::ScratchArray<double> arrays((with_uv ? 7 : 3) * length + 1);
-            arrays[3 * length] = 0.0;  // the spare double after the unit normals
-            for (size_t p = 0; p < pieces; ++p) {
-                const Chunk chunk{first + p * length, std::min(last, first + (p + 1) * length), arrays.data(),
-                                  with_uv ? arrays.data() + 3 * length + 1 : nullptr};
-                start_chunk(in, chunk);
-                if (with_uv) sum_corners(in, chunk);
-                finish_chunk(chunk, tangents);
-            }
+    tbb::enumerable_thread_specific<detail::ScratchArray<double>> arrays([&] {
+        detail::ScratchArray<double> a((with_uv ? 7 : 3) * length + 1);
+        a[3 * length] = 0.0;  // the spare double after the unit normals
+        return a;
+    });
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks, 1), [&](const auto& range) {
+        double* a = arrays.local().data();
+        for (size_t p = range.begin(); p != range.end(); ++p) {
+            const Chunk chunk{std::min(n, p * length), std::min(n, (p + 1) * length), a, with_uv ? a + 3 * length + 1 : nullptr};
+            start_chunk(in, chunk);
+            if (with_uv) sum_corners(in, chunk);
+            finish_chunk(chunk, tangents);
         }
     });
 }
