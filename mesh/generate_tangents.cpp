@@ -66,7 +66,7 @@ SPECBAKE_INLINE v4d dot4(const v4d (&a)[3], const v4d (&b)[3]) { return a[0] * b
 // detail::corner_angle lane-wise, with its operations in its order (so the same bits): both branches are
 // computed and each lane's one selected. N vectors at once, step by step: each is a long chain of dependent
 // divisions and multiply-adds, and independent chains side by side keep the units busy.
-#define SPECBAKE_EACH _Pragma("GCC unroll 4") for (int c = 0; c < N; ++c)
+#define SPECBAKE_EACH _Pragma("GCC unroll 8") for (int c = 0; c < N; ++c)
 template <int N>
 SPECBAKE_INLINE void corner_angles(const v4d (&y)[N], const v4d (&x)[N], v4d (&a)[N]) {
     const v4d zero = splat(0.0), one = splat(1.0);
@@ -182,73 +182,84 @@ SPECBAKE_AVX2_CLONES void start_chunk(const TangentInput& in, const Chunk& chunk
     if (chunk.sums) std::memset(chunk.sums, 0, 4 * count * sizeof(double));
 }
 
-// MikkTSpace step 1 and the corner terms of step 2 for the triangles [t, t + lanes) (lanes <= 4), added to
-// the sums of the chunk's vertices; kInside: every vertex of the triangles is in the chunk.
+// Triangles per batch: kGroups groups of four, one triangle per lane, computed side by side (independent
+// chains of divisions and multiply-adds keep the units busy).
+constexpr int kGroups = 2;
+constexpr int kBatch = kGroups * kLanes;
+
+// MikkTSpace step 1 and the corner terms of step 2 for the triangles [t, t + count) (count <= kBatch), added
+// to the sums of the chunk's vertices; kInside: every vertex of the triangles is in the chunk.
 template <bool kInside>
-SPECBAKE_INLINE void add_batch(const TangentInput& in, const Chunk& chunk, size_t t, int lanes) {
+SPECBAKE_INLINE void add_batch(const TangentInput& in, const Chunk& chunk, size_t t, int count) {
     const size_t owned = chunk.last - chunk.first;
-    uint32_t f[3 * kLanes];  // the lanes' triangles; a short last batch repeats its last one
-    if (lanes == kLanes) {
+    uint32_t f[3 * kBatch];  // the batch's triangles; a short last batch repeats its last one
+    if (count == kBatch) {
         std::memcpy(f, in.indices + 3 * t, sizeof f);
     } else {
-        for (int j = 0; j < kLanes; ++j) std::memcpy(f + 3 * j, in.indices + 3 * (t + std::min(j, lanes - 1)), 3 * sizeof *f);
+        for (int j = 0; j < kBatch; ++j) std::memcpy(f + 3 * j, in.indices + 3 * (t + std::min(j, count - 1)), 3 * sizeof *f);
     }
     if (!kInside) {
         bool any = false;
-        for (int i = 0; i < 3 * kLanes; ++i) any |= size_t(f[i]) - chunk.first < owned;
+        for (int i = 0; i < 3 * kBatch; ++i) any |= size_t(f[i]) - chunk.first < owned;
         if (!any) return;
     }
-    // Corner c of lane j's triangle: its vertex, and the vertex's place in the chunk (0 for the
+    // Corner i % 3 of group i / 3, lane j: its vertex, and the vertex's place in the chunk (0 for the
     // vertices of other chunks, whose corners are computed but not added).
-    uint32_t vi[3][kLanes], local[3][kLanes];
-#pragma GCC unroll 3
-    for (int c = 0; c < 3; ++c)
+    constexpr int N = 3 * kGroups;
+    uint32_t vi[N][kLanes], local[N][kLanes];
+#pragma GCC unroll 8
+    for (int i = 0; i < N; ++i)
 #pragma GCC unroll 4
         for (int j = 0; j < kLanes; ++j) {
-            vi[c][j] = f[3 * j + c];
-            const size_t l = vi[c][j] - chunk.first;
-            local[c][j] = uint32_t(kInside || l < owned ? l : 0);
+            vi[i][j] = f[3 * (kLanes * (i / 3) + j) + i % 3];
+            const size_t l = vi[i][j] - chunk.first;
+            local[i][j] = uint32_t(kInside || l < owned ? l : 0);
         }
-    v4d p[3][3], u[3], v[3];  // p[c][axis]
-#pragma GCC unroll 3
-    for (int c = 0; c < 3; ++c) {
-        for (int k = 0; k < 3; ++k) p[c][k] = gather4(in.positions, vi[c], 3, k);
-        u[c] = gather4(in.uv, vi[c], 2, 0);
-        v[c] = gather4(in.uv, vi[c], 2, 1);
+    v4d p[N][3], u[N], v[N];  // p[corner][axis]
+#pragma GCC unroll 8
+    for (int i = 0; i < N; ++i) {
+        for (int k = 0; k < 3; ++k) p[i][k] = gather4(in.positions, vi[i], 3, k);
+        u[i] = gather4(in.uv, vi[i], 2, 0);
+        v[i] = gather4(in.uv, vi[i], 2, 1);
     }
     // MikkTSpace step 1: dP/du from [dp1 dp2] = [dP/du dP/dv] [[du1 du2], [dv1 dv2]];
     // cross(N, dP/du) . (-dP/dv) = -|dp1 x dp2| / det, so the handedness is the sign of -det.
-    v4d dp1[3], dp2[3], dp12[3], dpdu[3];
-    const v4d du1 = u[1] - u[0], dv1 = v[1] - v[0], du2 = u[2] - u[0], dv2 = v[2] - v[0];
-    const v4d det = du1 * dv2 - du2 * dv1;  // twice the signed UV area
-    const v4d adet = (v4d)((v4l)det & ~(v4l)splat(-0.0));
-    const v4l uv_ok = (adet > splat(0.0)) & (adet < splat(INFINITY));
+    v4d dp1[kGroups][3], dp2[kGroups][3], dp12[kGroups][3], dpdu[kGroups][3];
+    v4l uv_ok[kGroups], negative_det[kGroups];
+#pragma GCC unroll 4
+    for (int g = 0; g < kGroups; ++g) {
+        const int c0 = 3 * g, c1 = c0 + 1, c2 = c0 + 2;
+        const v4d du1 = u[c1] - u[c0], dv1 = v[c1] - v[c0], du2 = u[c2] - u[c0], dv2 = v[c2] - v[c0];
+        const v4d det = du1 * dv2 - du2 * dv1;  // twice the signed UV area
+        const v4d adet = (v4d)((v4l)det & ~(v4l)splat(-0.0));
+        uv_ok[g] = (adet > splat(0.0)) & (adet < splat(INFINITY));
+        negative_det[g] = det < splat(0.0);
 #pragma GCC unroll 3
-    for (int k = 0; k < 3; ++k) {
-        dp1[k] = p[1][k] - p[0][k];
-        dp2[k] = p[2][k] - p[0][k];
-        dp12[k] = p[2][k] - p[1][k];
-        dpdu[k] = (dp1[k] * dv2 - dp2[k] * dv1) / det;
+        for (int k = 0; k < 3; ++k) {
+            dp1[g][k] = p[c1][k] - p[c0][k];
+            dp2[g][k] = p[c2][k] - p[c0][k];
+            dp12[g][k] = p[c2][k] - p[c1][k];
+            dpdu[g][k] = (dp1[g][k] * dv2 - dp2[g][k] * dv1) / det;
+        }
     }
-    const v4l negative_det = det < splat(0.0);
     // Step 2, per corner: the edges to the next and the previous corner (a - b = -(b - a) exactly),
     // dP/du projected into the vertex's tangent plane, the corner angle measured in that plane.
-    constexpr int N = 3;
-    v4d tp[3][3], y[3], x[3], tl[3];
+    v4d tp[N][3], y[N], x[N], tl[N];
     SPECBAKE_EACH {
+        const int g = c / 3, corner = c % 3;
         v4d e1[3], e2[3], n[3];
         gather_xyz(chunk.unit_normals, local[c], n);
 #pragma GCC unroll 3
         for (int k = 0; k < 3; ++k) {
-            e1[k] = c == 0 ? dp1[k] : c == 1 ? dp12[k] : -dp2[k];
-            e2[k] = c == 0 ? dp2[k] : c == 1 ? -dp1[k] : -dp12[k];
+            e1[k] = corner == 0 ? dp1[g][k] : corner == 1 ? dp12[g][k] : -dp2[g][k];
+            e2[k] = corner == 0 ? dp2[g][k] : corner == 1 ? -dp1[g][k] : -dp12[g][k];
         }
-        const v4d d1 = dot4(n, e1), d2 = dot4(n, e2), dn = dot4(n, dpdu);
+        const v4d d1 = dot4(n, e1), d2 = dot4(n, e2), dn = dot4(n, dpdu[g]);
 #pragma GCC unroll 3
         for (int k = 0; k < 3; ++k) {
             e1[k] = e1[k] - d1 * n[k];
             e2[k] = e2[k] - d2 * n[k];
-            tp[c][k] = dpdu[k] - dn * n[k];
+            tp[c][k] = dpdu[g][k] - dn * n[k];
         }
         const v4d cross[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
                               e1[0] * e2[1] - e1[1] * e2[0]};
@@ -257,33 +268,31 @@ SPECBAKE_INLINE void add_batch(const TangentInput& in, const Chunk& chunk, size_
         tl[c] = sqrt4(dot4(tp[c], tp[c]));
     }
     // The corner angle is only a weight: a polynomial atan2 (detail::corner_angle) instead of libm's.
-    v4d angle[3], rows[3][4];
-    v4l ok[3];
+    v4d angle[N], rows[N][4], terms[N][4];
+    int add[N];  // lanes whose corner counts, one bit each
     corner_angles(y, x, angle);
     SPECBAKE_EACH {
-        ok[c] = uv_ok & (angle[c] > splat(0.0)) & (tl[c] > splat(0.0)) & (tl[c] < splat(INFINITY));
+        const v4l ok = uv_ok[c / 3] & (angle[c] > splat(0.0)) & (tl[c] > splat(0.0)) & (tl[c] < splat(INFINITY));
+        add[c] = lane_bits(ok);
         const v4d weight = angle[c] / tl[c];
         rows[c][0] = weight * tp[c][0];
         rows[c][1] = weight * tp[c][1];
         rows[c][2] = weight * tp[c][2];
-        rows[c][3] = select(negative_det, angle[c], -angle[c]);
+        rows[c][3] = select(negative_det[c / 3], angle[c], -angle[c]);
+        transpose4(rows[c], terms[c]);
     }
-    v4d terms[3][4];
+    for (int g = 0; g < kGroups; ++g)
+        for (int j = 0; j < std::min(kLanes, count - kLanes * g); ++j)
 #pragma GCC unroll 3
-    for (int c = 0; c < 3; ++c) transpose4(rows[c], terms[c]);
-    int add[3];  // lanes whose corner c counts, one bit each
-#pragma GCC unroll 3
-    for (int c = 0; c < 3; ++c) add[c] = lane_bits(ok[c]);
-    for (int j = 0; j < lanes; ++j)
-#pragma GCC unroll 3
-        for (int c = 0; c < 3; ++c) {
-            if (!(add[c] >> j & 1) || (!kInside && size_t(vi[c][j]) - chunk.first >= owned)) continue;
-            double* sum = chunk.sums + 4 * size_t(local[c][j]);
-            v4d s;
-            std::memcpy(&s, sum, sizeof s);
-            s += terms[c][j];
-            std::memcpy(sum, &s, sizeof s);
-        }
+            for (int corner = 0; corner < 3; ++corner) {
+                const int c = 3 * g + corner;
+                if (!(add[c] >> j & 1) || (!kInside && size_t(vi[c][j]) - chunk.first >= owned)) continue;
+                double* sum = chunk.sums + 4 * size_t(local[c][j]);
+                v4d s;
+                std::memcpy(&s, sum, sizeof s);
+                s += terms[c][j];
+                std::memcpy(sum, &s, sizeof s);
+            }
 }
 
 // The corners of the triangles that reference the chunk's vertices, added to those vertices' sums in corner
@@ -295,9 +304,9 @@ SPECBAKE_AVX2_CLONES void sum_corners(const TangentInput& in, const Chunk& chunk
         if (high < chunk.first || low >= chunk.last) continue;
         const size_t end = std::min(in.triangles, (b + 1) * kBlock);
         if (low >= chunk.first && high < chunk.last) {
-            for (size_t t = b * kBlock; t < end; t += kLanes) add_batch<true>(in, chunk, t, int(std::min<size_t>(kLanes, end - t)));
+            for (size_t t = b * kBlock; t < end; t += kBatch) add_batch<true>(in, chunk, t, int(std::min<size_t>(kBatch, end - t)));
         } else {
-            for (size_t t = b * kBlock; t < end; t += kLanes) add_batch<false>(in, chunk, t, int(std::min<size_t>(kLanes, end - t)));
+            for (size_t t = b * kBlock; t < end; t += kBatch) add_batch<false>(in, chunk, t, int(std::min<size_t>(kBatch, end - t)));
         }
     }
 }
