@@ -40,6 +40,7 @@ namespace {
 #define SPECBAKE_AVX2_CLONES
 #endif
 #define SPECBAKE_INLINE __attribute__((always_inline)) inline
+#define SPECBAKE_INLINE_LAMBDA __attribute__((always_inline))
 
 // Four doubles processed as one (GCC/Clang vector extension): one AVX2 register, two SSE2 registers. The
 // helpers taking or returning them are always inlined, so the ABI note GCC gives for them does not apply.
@@ -281,17 +282,31 @@ SPECBAKE_INLINE void add_batch(const TangentInput& in, const Chunk& chunk, size_
         rows[c][3] = select(negative_det[c / 3], angle[c], -angle[c]);
         transpose4(rows[c], terms[c]);
     }
+    auto add_term = [&](int c, int j) SPECBAKE_INLINE_LAMBDA {
+        double* sum = chunk.sums + 4 * size_t(local[c][j]);
+        v4d s;
+        std::memcpy(&s, sum, sizeof s);
+        s += terms[c][j];
+        std::memcpy(sum, &s, sizeof s);
+    };
+    // The common case first: every corner of a full batch inside the chunk counts.
+    bool every = kInside && count == kBatch;
+    for (int c = 0; c < N; ++c) every = every && add[c] == (1 << kLanes) - 1;
+    if (every) {
+#pragma GCC unroll 2
+        for (int g = 0; g < kGroups; ++g)
+#pragma GCC unroll 4
+            for (int j = 0; j < kLanes; ++j)
+#pragma GCC unroll 3
+                for (int corner = 0; corner < 3; ++corner) add_term(3 * g + corner, j);
+        return;
+    }
     for (int g = 0; g < kGroups; ++g)
         for (int j = 0; j < std::min(kLanes, count - kLanes * g); ++j)
 #pragma GCC unroll 3
             for (int corner = 0; corner < 3; ++corner) {
                 const int c = 3 * g + corner;
-                if (!(add[c] >> j & 1) || (!kInside && size_t(vi[c][j]) - chunk.first >= owned)) continue;
-                double* sum = chunk.sums + 4 * size_t(local[c][j]);
-                v4d s;
-                std::memcpy(&s, sum, sizeof s);
-                s += terms[c][j];
-                std::memcpy(sum, &s, sizeof s);
+                if ((add[c] >> j & 1) && (kInside || size_t(vi[c][j]) - chunk.first < owned)) add_term(c, j);
             }
 }
 
