@@ -2,13 +2,14 @@
 // each triangle's dP/du once and its three corners' terms, and adds every corner term to its vertex's sums
 // (4 doubles: weighted tangent xyz, signed angle), so each vertex adds its corners in corner order. Four
 // triangles run at once, one per lane of a 4-wide double vector (AVX2 where the CPU has it). The vertices
-// are split into chunks of consecutive indices (one range of chunks per thread) with one small set of
-// arrays per thread; a chunk's pass visits only the blocks of triangles whose vertex-index bounds meet the
-// chunk and adds only its own vertices' corners, so every sum runs in the same order for any split and any
-// thread count. The bit-identical results of the scalar formulation (detail::corner_angle, Eigen order) are
-// kept: the lanes do the same IEEE operations in the same order.
+// are split into chunks of consecutive indices, parallel tasks sharing one small set of arrays per thread;
+// a chunk's pass visits only the blocks of triangles whose vertex-index bounds meet the chunk and adds only
+// its own vertices' corners, so every sum runs in the same order for any split and any thread count. The
+// results are those of the scalar formulation (detail::corner_angle, Eigen's evaluation order) bit for bit:
+// the lanes do the same IEEE operations in the same order.
 #include "mesh/generate_tangents.h"
 
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -39,6 +40,7 @@ namespace {
 #define SPECBAKE_AVX2_CLONES
 #endif
 #define SPECBAKE_INLINE __attribute__((always_inline)) inline
+#define SPECBAKE_INLINE_LAMBDA __attribute__((always_inline))
 
 // Four doubles processed as one (GCC/Clang vector extension): one AVX2 register, two SSE2 registers. The
 // helpers taking or returning them are always inlined, so the ABI note GCC gives for them does not apply.
@@ -65,7 +67,7 @@ SPECBAKE_INLINE v4d dot4(const v4d (&a)[3], const v4d (&b)[3]) { return a[0] * b
 // detail::corner_angle lane-wise, with its operations in its order (so the same bits): both branches are
 // computed and each lane's one selected. N vectors at once, step by step: each is a long chain of dependent
 // divisions and multiply-adds, and independent chains side by side keep the units busy.
-#define SPECBAKE_EACH _Pragma("GCC unroll 4") for (int c = 0; c < N; ++c)
+#define SPECBAKE_EACH _Pragma("GCC unroll 8") for (int c = 0; c < N; ++c)
 template <int N>
 SPECBAKE_INLINE void corner_angles(const v4d (&y)[N], const v4d (&x)[N], v4d (&a)[N]) {
     const v4d zero = splat(0.0), one = splat(1.0);
@@ -181,73 +183,84 @@ SPECBAKE_AVX2_CLONES void start_chunk(const TangentInput& in, const Chunk& chunk
     if (chunk.sums) std::memset(chunk.sums, 0, 4 * count * sizeof(double));
 }
 
-// MikkTSpace step 1 and the corner terms of step 2 for the triangles [t, t + lanes) (lanes <= 4), added to
-// the sums of the chunk's vertices; kInside: every vertex of the triangles is in the chunk.
+// Triangles per batch: kGroups groups of four, one triangle per lane, computed side by side (independent
+// chains of divisions and multiply-adds keep the units busy).
+constexpr int kGroups = 2;
+constexpr int kBatch = kGroups * kLanes;
+
+// MikkTSpace step 1 and the corner terms of step 2 for the triangles [t, t + count) (count <= kBatch), added
+// to the sums of the chunk's vertices; kInside: every vertex of the triangles is in the chunk.
 template <bool kInside>
-SPECBAKE_INLINE void add_batch(const TangentInput& in, const Chunk& chunk, size_t t, int lanes) {
+SPECBAKE_INLINE void add_batch(const TangentInput& in, const Chunk& chunk, size_t t, int count) {
     const size_t owned = chunk.last - chunk.first;
-    uint32_t f[3 * kLanes];  // the lanes' triangles; a short last batch repeats its last one
-    if (lanes == kLanes) {
+    uint32_t f[3 * kBatch];  // the batch's triangles; a short last batch repeats its last one
+    if (count == kBatch) {
         std::memcpy(f, in.indices + 3 * t, sizeof f);
     } else {
-        for (int j = 0; j < kLanes; ++j) std::memcpy(f + 3 * j, in.indices + 3 * (t + std::min(j, lanes - 1)), 3 * sizeof *f);
+        for (int j = 0; j < kBatch; ++j) std::memcpy(f + 3 * j, in.indices + 3 * (t + std::min(j, count - 1)), 3 * sizeof *f);
     }
     if (!kInside) {
         bool any = false;
-        for (int i = 0; i < 3 * kLanes; ++i) any |= size_t(f[i]) - chunk.first < owned;
+        for (int i = 0; i < 3 * kBatch; ++i) any |= size_t(f[i]) - chunk.first < owned;
         if (!any) return;
     }
-    // Corner c of lane j's triangle: its vertex, and the vertex's place in the chunk (0 for the
+    // Corner i % 3 of group i / 3, lane j: its vertex, and the vertex's place in the chunk (0 for the
     // vertices of other chunks, whose corners are computed but not added).
-    uint32_t vi[3][kLanes], local[3][kLanes];
-#pragma GCC unroll 3
-    for (int c = 0; c < 3; ++c)
+    constexpr int N = 3 * kGroups;
+    uint32_t vi[N][kLanes], local[N][kLanes];
+#pragma GCC unroll 8
+    for (int i = 0; i < N; ++i)
 #pragma GCC unroll 4
         for (int j = 0; j < kLanes; ++j) {
-            vi[c][j] = f[3 * j + c];
-            const size_t l = vi[c][j] - chunk.first;
-            local[c][j] = uint32_t(kInside || l < owned ? l : 0);
+            vi[i][j] = f[3 * (kLanes * (i / 3) + j) + i % 3];
+            const size_t l = vi[i][j] - chunk.first;
+            local[i][j] = uint32_t(kInside || l < owned ? l : 0);
         }
-    v4d p[3][3], u[3], v[3];  // p[c][axis]
-#pragma GCC unroll 3
-    for (int c = 0; c < 3; ++c) {
-        for (int k = 0; k < 3; ++k) p[c][k] = gather4(in.positions, vi[c], 3, k);
-        u[c] = gather4(in.uv, vi[c], 2, 0);
-        v[c] = gather4(in.uv, vi[c], 2, 1);
+    v4d p[N][3], u[N], v[N];  // p[corner][axis]
+#pragma GCC unroll 8
+    for (int i = 0; i < N; ++i) {
+        for (int k = 0; k < 3; ++k) p[i][k] = gather4(in.positions, vi[i], 3, k);
+        u[i] = gather4(in.uv, vi[i], 2, 0);
+        v[i] = gather4(in.uv, vi[i], 2, 1);
     }
     // MikkTSpace step 1: dP/du from [dp1 dp2] = [dP/du dP/dv] [[du1 du2], [dv1 dv2]];
     // cross(N, dP/du) . (-dP/dv) = -|dp1 x dp2| / det, so the handedness is the sign of -det.
-    v4d dp1[3], dp2[3], dp12[3], dpdu[3];
-    const v4d du1 = u[1] - u[0], dv1 = v[1] - v[0], du2 = u[2] - u[0], dv2 = v[2] - v[0];
-    const v4d det = du1 * dv2 - du2 * dv1;  // twice the signed UV area
-    const v4d adet = (v4d)((v4l)det & ~(v4l)splat(-0.0));
-    const v4l uv_ok = (adet > splat(0.0)) & (adet < splat(INFINITY));
+    v4d dp1[kGroups][3], dp2[kGroups][3], dp12[kGroups][3], dpdu[kGroups][3];
+    v4l uv_ok[kGroups], negative_det[kGroups];
+#pragma GCC unroll 4
+    for (int g = 0; g < kGroups; ++g) {
+        const int c0 = 3 * g, c1 = c0 + 1, c2 = c0 + 2;
+        const v4d du1 = u[c1] - u[c0], dv1 = v[c1] - v[c0], du2 = u[c2] - u[c0], dv2 = v[c2] - v[c0];
+        const v4d det = du1 * dv2 - du2 * dv1;  // twice the signed UV area
+        const v4d adet = (v4d)((v4l)det & ~(v4l)splat(-0.0));
+        uv_ok[g] = (adet > splat(0.0)) & (adet < splat(INFINITY));
+        negative_det[g] = det < splat(0.0);
 #pragma GCC unroll 3
-    for (int k = 0; k < 3; ++k) {
-        dp1[k] = p[1][k] - p[0][k];
-        dp2[k] = p[2][k] - p[0][k];
-        dp12[k] = p[2][k] - p[1][k];
-        dpdu[k] = (dp1[k] * dv2 - dp2[k] * dv1) / det;
+        for (int k = 0; k < 3; ++k) {
+            dp1[g][k] = p[c1][k] - p[c0][k];
+            dp2[g][k] = p[c2][k] - p[c0][k];
+            dp12[g][k] = p[c2][k] - p[c1][k];
+            dpdu[g][k] = (dp1[g][k] * dv2 - dp2[g][k] * dv1) / det;
+        }
     }
-    const v4l negative_det = det < splat(0.0);
     // Step 2, per corner: the edges to the next and the previous corner (a - b = -(b - a) exactly),
     // dP/du projected into the vertex's tangent plane, the corner angle measured in that plane.
-    constexpr int N = 3;
-    v4d tp[3][3], y[3], x[3], tl[3];
+    v4d tp[N][3], y[N], x[N], tl[N];
     SPECBAKE_EACH {
+        const int g = c / 3, corner = c % 3;
         v4d e1[3], e2[3], n[3];
         gather_xyz(chunk.unit_normals, local[c], n);
 #pragma GCC unroll 3
         for (int k = 0; k < 3; ++k) {
-            e1[k] = c == 0 ? dp1[k] : c == 1 ? dp12[k] : -dp2[k];
-            e2[k] = c == 0 ? dp2[k] : c == 1 ? -dp1[k] : -dp12[k];
+            e1[k] = corner == 0 ? dp1[g][k] : corner == 1 ? dp12[g][k] : -dp2[g][k];
+            e2[k] = corner == 0 ? dp2[g][k] : corner == 1 ? -dp1[g][k] : -dp12[g][k];
         }
-        const v4d d1 = dot4(n, e1), d2 = dot4(n, e2), dn = dot4(n, dpdu);
+        const v4d d1 = dot4(n, e1), d2 = dot4(n, e2), dn = dot4(n, dpdu[g]);
 #pragma GCC unroll 3
         for (int k = 0; k < 3; ++k) {
             e1[k] = e1[k] - d1 * n[k];
             e2[k] = e2[k] - d2 * n[k];
-            tp[c][k] = dpdu[k] - dn * n[k];
+            tp[c][k] = dpdu[g][k] - dn * n[k];
         }
         const v4d cross[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
                               e1[0] * e2[1] - e1[1] * e2[0]};
@@ -256,33 +269,45 @@ SPECBAKE_INLINE void add_batch(const TangentInput& in, const Chunk& chunk, size_
         tl[c] = sqrt4(dot4(tp[c], tp[c]));
     }
     // The corner angle is only a weight: a polynomial atan2 (detail::corner_angle) instead of libm's.
-    v4d angle[3], rows[3][4];
-    v4l ok[3];
+    v4d angle[N], rows[N][4], terms[N][4];
+    int add[N];  // lanes whose corner counts, one bit each
     corner_angles(y, x, angle);
     SPECBAKE_EACH {
-        ok[c] = uv_ok & (angle[c] > splat(0.0)) & (tl[c] > splat(0.0)) & (tl[c] < splat(INFINITY));
+        const v4l ok = uv_ok[c / 3] & (angle[c] > splat(0.0)) & (tl[c] > splat(0.0)) & (tl[c] < splat(INFINITY));
+        add[c] = lane_bits(ok);
         const v4d weight = angle[c] / tl[c];
         rows[c][0] = weight * tp[c][0];
         rows[c][1] = weight * tp[c][1];
         rows[c][2] = weight * tp[c][2];
-        rows[c][3] = select(negative_det, angle[c], -angle[c]);
+        rows[c][3] = select(negative_det[c / 3], angle[c], -angle[c]);
+        transpose4(rows[c], terms[c]);
     }
-    v4d terms[3][4];
+    auto add_term = [&](int c, int j) SPECBAKE_INLINE_LAMBDA {
+        double* sum = chunk.sums + 4 * size_t(local[c][j]);
+        v4d s;
+        std::memcpy(&s, sum, sizeof s);
+        s += terms[c][j];
+        std::memcpy(sum, &s, sizeof s);
+    };
+    // The common case first: every corner of a full batch inside the chunk counts.
+    bool every = kInside && count == kBatch;
+    for (int c = 0; c < N; ++c) every = every && add[c] == (1 << kLanes) - 1;
+    if (every) {
+#pragma GCC unroll 2
+        for (int g = 0; g < kGroups; ++g)
+#pragma GCC unroll 4
+            for (int j = 0; j < kLanes; ++j)
 #pragma GCC unroll 3
-    for (int c = 0; c < 3; ++c) transpose4(rows[c], terms[c]);
-    int add[3];  // lanes whose corner c counts, one bit each
+                for (int corner = 0; corner < 3; ++corner) add_term(3 * g + corner, j);
+        return;
+    }
+    for (int g = 0; g < kGroups; ++g)
+        for (int j = 0; j < std::min(kLanes, count - kLanes * g); ++j)
 #pragma GCC unroll 3
-    for (int c = 0; c < 3; ++c) add[c] = lane_bits(ok[c]);
-    for (int j = 0; j < lanes; ++j)
-#pragma GCC unroll 3
-        for (int c = 0; c < 3; ++c) {
-            if (!(add[c] >> j & 1) || (!kInside && size_t(vi[c][j]) - chunk.first >= owned)) continue;
-            double* sum = chunk.sums + 4 * size_t(local[c][j]);
-            v4d s;
-            std::memcpy(&s, sum, sizeof s);
-            s += terms[c][j];
-            std::memcpy(sum, &s, sizeof s);
-        }
+            for (int corner = 0; corner < 3; ++corner) {
+                const int c = 3 * g + corner;
+                if ((add[c] >> j & 1) && (kInside || size_t(vi[c][j]) - chunk.first < owned)) add_term(c, j);
+            }
 }
 
 // The corners of the triangles that reference the chunk's vertices, added to those vertices' sums in corner
@@ -294,9 +319,9 @@ SPECBAKE_AVX2_CLONES void sum_corners(const TangentInput& in, const Chunk& chunk
         if (high < chunk.first || low >= chunk.last) continue;
         const size_t end = std::min(in.triangles, (b + 1) * kBlock);
         if (low >= chunk.first && high < chunk.last) {
-            for (size_t t = b * kBlock; t < end; t += kLanes) add_batch<true>(in, chunk, t, int(std::min<size_t>(kLanes, end - t)));
+            for (size_t t = b * kBlock; t < end; t += kBatch) add_batch<true>(in, chunk, t, int(std::min<size_t>(kBatch, end - t)));
         } else {
-            for (size_t t = b * kBlock; t < end; t += kLanes) add_batch<false>(in, chunk, t, int(std::min<size_t>(kLanes, end - t)));
+            for (size_t t = b * kBlock; t < end; t += kBatch) add_batch<false>(in, chunk, t, int(std::min<size_t>(kBatch, end - t)));
         }
     }
 }
@@ -404,16 +429,18 @@ void generate_tangents(TriMesh& mesh) {
     for (size_t b = 0; b < blocks; ++b) span += block_bounds[2 * b + 1] - block_bounds[2 * b] + 1;
     span = blocks ? span / blocks : 0;
 
-    // One vertex range per thread, each big enough to be worth a task, worked through in chunks with one set
-    // of arrays (4 MiB, instead of 56 bytes per vertex of fresh memory): at least kChunk vertices and 16 block
-    // spans, so the triangles two chunks share, computed by both, stay about a percent. A mesh without index
-    // locality gets a single chunk per range. The split does not change the result.
-    constexpr size_t kMinVerticesPerRange = 16384;
+    // Chunks of consecutive vertices, each a task with its thread's set of arrays (4 MiB, instead of 56 bytes
+    // per vertex of fresh memory): at most kChunk vertices or 16 block spans, so the triangles two chunks
+    // share, computed by both, stay about a percent (a mesh without index locality gets one chunk per thread),
+    // at least one chunk per thread, and a multiple of the thread count. The split does not change the result.
+    constexpr size_t kMinChunk = 16384;
     constexpr size_t kChunk = ((size_t(4) << 20) / sizeof(double) - 1) / 7;
     const size_t threads = std::min<size_t>(size_t(std::max(1, tbb::this_task_arena::max_concurrency())),
                                             tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
-    const size_t ranges = std::max<size_t>(1, std::min(threads, n / kMinVerticesPerRange));
     const size_t chunk_size = std::max(kChunk, 16 * span);
+    size_t chunks = std::max({size_t(1), (n + chunk_size - 1) / chunk_size, std::min(threads, n / kMinChunk)});
+    if (chunks > threads) chunks = (chunks + threads - 1) / threads * threads;
+    const size_t length = (n + chunks - 1) / chunks;
 
     const TangentInput in{mesh.positions.data(), mesh.normals.data(), with_uv ? mesh.uv0.data() : nullptr,
                           mesh.indices.data(), tris, block_bounds.data()};
@@ -421,20 +448,18 @@ void generate_tangents(TriMesh& mesh) {
     detail::reserve_huge_pages(mesh.tangents, 4 * n);
     mesh.tangents.resize(4 * n);
     float* tangents = mesh.tangents.data();
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, ranges, 1), [&](const auto& range) {
-        for (size_t r = range.begin(); r != range.end(); ++r) {
-            const size_t first = n * r / ranges, last = n * (r + 1) / ranges;
-            const size_t pieces = std::max<size_t>(1, (last - first + chunk_size - 1) / chunk_size);
-            const size_t length = (last - first + pieces - 1) / pieces;
-            detail::ScratchArray<double> arrays((with_uv ? 7 : 3) * length + 1);
-            arrays[3 * length] = 0.0;  // the spare double after the unit normals
-            for (size_t p = 0; p < pieces; ++p) {
-                const Chunk chunk{first + p * length, std::min(last, first + (p + 1) * length), arrays.data(),
-                                  with_uv ? arrays.data() + 3 * length + 1 : nullptr};
-                start_chunk(in, chunk);
-                if (with_uv) sum_corners(in, chunk);
-                finish_chunk(chunk, tangents);
-            }
+    tbb::enumerable_thread_specific<detail::ScratchArray<double>> arrays([&] {
+        detail::ScratchArray<double> a((with_uv ? 7 : 3) * length + 1);
+        a[3 * length] = 0.0;  // the spare double after the unit normals
+        return a;
+    });
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks, 1), [&](const auto& range) {
+        double* a = arrays.local().data();
+        for (size_t p = range.begin(); p != range.end(); ++p) {
+            const Chunk chunk{std::min(n, p * length), std::min(n, (p + 1) * length), a, with_uv ? a + 3 * length + 1 : nullptr};
+            start_chunk(in, chunk);
+            if (with_uv) sum_corners(in, chunk);
+            finish_chunk(chunk, tangents);
         }
     });
 }

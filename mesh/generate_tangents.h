@@ -15,7 +15,7 @@ namespace specbake {
 // corners disagree in handedness keeps one tangent with the angle-weighted majority's w instead of being
 // split. Without UVs, or where every UV triangle at a vertex is degenerate, T is a fixed perpendicular of N
 // (Frisvad's orthonormal basis) with w = +1, so every vertex still has a frame. Linear time, parallel, the
-// same result for any thread count.
+// same result for any thread count and on any CPU (AVX2 or not); working memory a few MB per thread.
 void generate_tangents(TriMesh& mesh);
 
 }  // namespace specbake
