@@ -52,7 +52,7 @@ typedef long v4l __attribute__((vector_size(32)));  // lane masks, as v4d compar
 constexpr int kLanes = 4;
 
 SPECBAKE_INLINE v4d splat(double x) { return v4d{x, x, x, x}; }
-SPECBAKE_INLINE v4d select(v4l mask, v4d yes, v4d no) { return mask ? yes : no; }
+SPECBAKE_INLINE v4d select(v4l mask, v4d yes, v4d no) { return mask ? yes : no; }  // yes where mask is set
 
 // The corner pass comes in two versions: kAvx2, two groups of four triangles side by side in sixteen 256-bit
 // registers; otherwise one group, with the comparisons made on SSE2 halves (the baseline version would
@@ -148,7 +148,6 @@ SPECBAKE_INLINE void transpose4(const v4d (&in)[4], v4d (&out)[4]) {
     out[3] = __builtin_shuffle(t1, t3, v4l{2, 3, 6, 7});
 }
 
-
 // Element k of the records (stride floats each) of the four lanes' vertices.
 SPECBAKE_INLINE v4d gather4(const float* a, const uint32_t (&v)[kLanes], size_t stride, size_t k) {
     return v4d{a[stride * v[0] + k], a[stride * v[1] + k], a[stride * v[2] + k], a[stride * v[3] + k]};
@@ -164,7 +163,7 @@ SPECBAKE_INLINE void gather_xyz(const double* a, const uint32_t (&v)[kLanes], v4
     for (int k = 0; k < 3; ++k) out[k] = columns[k];
 }
 
-// Triangles per block of the vertex-index bounds that let a range skip the triangles it has no vertex in.
+// Triangles per block of the vertex-index bounds that let a chunk skip the triangles it has no vertex in.
 constexpr size_t kBlock = 1024;
 
 // Everything the passes read, as flat arrays.
@@ -174,7 +173,7 @@ struct TangentInput {
     const float* uv;  // null without UVs
     const uint32_t* indices;
     size_t triangles;
-    const uint32_t* block_bounds;  // smallest and largest vertex index per block of triangles; null without UVs
+    const uint32_t* block_bounds;  // smallest and largest vertex index per block of triangles (none without UVs)
 };
 
 // The vertices [first, last) with their working arrays, indexed from first.
@@ -184,7 +183,7 @@ struct Chunk {
     double* sums;          // 4 per vertex: sum of the weighted projected dP/du (xyz), of the signed angles
 };
 
-// Unit normal of one vertex, (0, 0, 1) for a zero or non-finite one.
+// Unit normal of one vertex, (0, 0, 1) for a zero or NaN one.
 SPECBAKE_INLINE void unit_normal(const float* n, double* out) {
     const double x = n[0], y = n[1], z = n[2];
     const double l = std::sqrt(x * x + y * y + z * z);
