@@ -32,9 +32,11 @@
 namespace specbake {
 namespace {
 
-// The corner pass is compiled twice, for AVX2 + FMA and for the baseline instruction set, and chosen once at
-// load time (GCC/Clang function multiversioning); its helpers are inlined into each version.
+// The passes are compiled twice, for AVX2 + FMA and for the baseline instruction set, and chosen once at load
+// time (GCC/Clang function multiversioning); their helpers are inlined into each version. The corner pass
+// differs between the two beyond the instructions (see less()) and is chosen explicitly, once per chunk.
 #if defined(__x86_64__) && defined(__linux__)
+#define SPECBAKE_X86_VERSIONS
 #define SPECBAKE_AVX2_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
 #else
 #define SPECBAKE_AVX2_CLONES
@@ -50,7 +52,38 @@ typedef long v4l __attribute__((vector_size(32)));  // lane masks, as v4d compar
 constexpr int kLanes = 4;
 
 SPECBAKE_INLINE v4d splat(double x) { return v4d{x, x, x, x}; }
-SPECBAKE_INLINE v4d select(v4l mask, v4d yes, v4d no) { return mask ? yes : no; }
+SPECBAKE_INLINE v4d select(v4l mask, v4d yes, v4d no) { return mask ? yes : no; }  // yes where mask is set
+
+// The corner pass comes in two versions: kAvx2, two groups of four triangles side by side in sixteen 256-bit
+// registers; otherwise one group, with the comparisons made on SSE2 halves (the baseline version would
+// otherwise compare element by element) and fewer values spilled from its sixteen 128-bit registers.
+template <bool kAvx2>
+SPECBAKE_INLINE v4l less(v4d a, v4d b) {
+#if defined(__SSE2__)
+    if constexpr (!kAvx2) {
+        const __m128d lo = _mm_cmplt_pd(__m128d{a[0], a[1]}, __m128d{b[0], b[1]});
+        const __m128d hi = _mm_cmplt_pd(__m128d{a[2], a[3]}, __m128d{b[2], b[3]});
+        return (v4l)v4d{lo[0], lo[1], hi[0], hi[1]};
+    }
+#endif
+    return a < b;
+}
+template <bool kAvx2>
+SPECBAKE_INLINE v4l equal(v4d a, v4d b) {
+#if defined(__SSE2__)
+    if constexpr (!kAvx2) {
+        const __m128d lo = _mm_cmpeq_pd(__m128d{a[0], a[1]}, __m128d{b[0], b[1]});
+        const __m128d hi = _mm_cmpeq_pd(__m128d{a[2], a[3]}, __m128d{b[2], b[3]});
+        return (v4l)v4d{lo[0], lo[1], hi[0], hi[1]};
+    }
+#endif
+    return a == b;
+}
+template <bool kAvx2>
+SPECBAKE_INLINE v4d choose(v4l mask, v4d yes, v4d no) {
+    if constexpr (!kAvx2) return (v4d)(((v4l)yes & mask) | ((v4l)no & ~mask));
+    return mask ? yes : no;
+}
 
 // Lane-wise square root (non-negative input): two SSE2 square roots where available.
 SPECBAKE_INLINE v4d sqrt4(v4d x) {
@@ -68,30 +101,30 @@ SPECBAKE_INLINE v4d dot4(const v4d (&a)[3], const v4d (&b)[3]) { return a[0] * b
 // computed and each lane's one selected. N vectors at once, step by step: each is a long chain of dependent
 // divisions and multiply-adds, and independent chains side by side keep the units busy.
 #define SPECBAKE_EACH _Pragma("GCC unroll 8") for (int c = 0; c < N; ++c)
-template <int N>
+template <bool kAvx2, int N>
 SPECBAKE_INLINE void corner_angles(const v4d (&y)[N], const v4d (&x)[N], v4d (&a)[N]) {
     const v4d zero = splat(0.0), one = splat(1.0);
     v4d t[N], s[N], poly[N];
     v4l steep[N], high[N];
     SPECBAKE_EACH {
         const v4d ax = (v4d)((v4l)x[c] & ~(v4l)splat(-0.0));
-        steep[c] = y[c] > ax;
-        t[c] = select(steep[c], ax, y[c]) / select(steep[c], y[c], ax);
+        steep[c] = less<kAvx2>(ax, y[c]);
+        t[c] = choose<kAvx2>(steep[c], ax, y[c]) / choose<kAvx2>(steep[c], y[c], ax);
     }
     SPECBAKE_EACH {
-        high[c] = t[c] > splat(detail::kAtanTanPi8);
-        t[c] = select(high[c], (t[c] - one) / (t[c] + one), t[c]);
+        high[c] = less<kAvx2>(splat(detail::kAtanTanPi8), t[c]);
+        t[c] = choose<kAvx2>(high[c], (t[c] - one) / (t[c] + one), t[c]);
         s[c] = t[c] * t[c];
         poly[c] = splat(detail::kAtanFit[0]);
     }
 #pragma GCC unroll 6
     for (int i = 1; i < 7; ++i) SPECBAKE_EACH poly[c] = poly[c] * s[c] + splat(detail::kAtanFit[i]);
     SPECBAKE_EACH {
-        a[c] = t[c] * poly[c] + select(high[c], splat(0.25 * detail::kAtanPi), zero);
-        a[c] = select(steep[c], splat(0.5 * detail::kAtanPi) - a[c], a[c]);
-        const v4l negative = x[c] < zero;
-        a[c] = select(negative, splat(detail::kAtanPi) - a[c], a[c]);
-        a[c] = select(y[c] == zero, select(negative, splat(detail::kAtanPi), zero), a[c]);
+        a[c] = t[c] * poly[c] + choose<kAvx2>(high[c], splat(0.25 * detail::kAtanPi), zero);
+        a[c] = choose<kAvx2>(steep[c], splat(0.5 * detail::kAtanPi) - a[c], a[c]);
+        const v4l negative = less<kAvx2>(x[c], zero);
+        a[c] = choose<kAvx2>(negative, splat(detail::kAtanPi) - a[c], a[c]);
+        a[c] = choose<kAvx2>(equal<kAvx2>(y[c], zero), choose<kAvx2>(negative, splat(detail::kAtanPi), zero), a[c]);
     }
 }
 
@@ -115,7 +148,6 @@ SPECBAKE_INLINE void transpose4(const v4d (&in)[4], v4d (&out)[4]) {
     out[3] = __builtin_shuffle(t1, t3, v4l{2, 3, 6, 7});
 }
 
-
 // Element k of the records (stride floats each) of the four lanes' vertices.
 SPECBAKE_INLINE v4d gather4(const float* a, const uint32_t (&v)[kLanes], size_t stride, size_t k) {
     return v4d{a[stride * v[0] + k], a[stride * v[1] + k], a[stride * v[2] + k], a[stride * v[3] + k]};
@@ -131,7 +163,7 @@ SPECBAKE_INLINE void gather_xyz(const double* a, const uint32_t (&v)[kLanes], v4
     for (int k = 0; k < 3; ++k) out[k] = columns[k];
 }
 
-// Triangles per block of the vertex-index bounds that let a range skip the triangles it has no vertex in.
+// Triangles per block of the vertex-index bounds that let a chunk skip the triangles it has no vertex in.
 constexpr size_t kBlock = 1024;
 
 // Everything the passes read, as flat arrays.
@@ -141,7 +173,7 @@ struct TangentInput {
     const float* uv;  // null without UVs
     const uint32_t* indices;
     size_t triangles;
-    const uint32_t* block_bounds;  // smallest and largest vertex index per block of triangles; null without UVs
+    const uint32_t* block_bounds;  // smallest and largest vertex index per block of triangles (none without UVs)
 };
 
 // The vertices [first, last) with their working arrays, indexed from first.
@@ -151,7 +183,7 @@ struct Chunk {
     double* sums;          // 4 per vertex: sum of the weighted projected dP/du (xyz), of the signed angles
 };
 
-// Unit normal of one vertex, (0, 0, 1) for a zero or non-finite one.
+// Unit normal of one vertex, (0, 0, 1) for a zero or NaN one.
 SPECBAKE_INLINE void unit_normal(const float* n, double* out) {
     const double x = n[0], y = n[1], z = n[2];
     const double l = std::sqrt(x * x + y * y + z * z);
@@ -185,13 +217,14 @@ SPECBAKE_AVX2_CLONES void start_chunk(const TangentInput& in, const Chunk& chunk
 
 // Triangles per batch: kGroups groups of four, one triangle per lane, computed side by side (independent
 // chains of divisions and multiply-adds keep the units busy).
-constexpr int kGroups = 2;
-constexpr int kBatch = kGroups * kLanes;
+template <bool kAvx2>
+constexpr int kGroupsOf = kAvx2 ? 2 : 1;
 
 // MikkTSpace step 1 and the corner terms of step 2 for the triangles [t, t + count) (count <= kBatch), added
 // to the sums of the chunk's vertices; kInside: every vertex of the triangles is in the chunk.
-template <bool kInside>
+template <bool kAvx2, bool kInside>
 SPECBAKE_INLINE void add_batch(const TangentInput& in, const Chunk& chunk, size_t t, int count) {
+    constexpr int kGroups = kGroupsOf<kAvx2>, kBatch = kGroups * kLanes;
     const size_t owned = chunk.last - chunk.first;
     uint32_t f[3 * kBatch];  // the batch's triangles; a short last batch repeats its last one
     if (count == kBatch) {
@@ -233,8 +266,8 @@ SPECBAKE_INLINE void add_batch(const TangentInput& in, const Chunk& chunk, size_
         const v4d du1 = u[c1] - u[c0], dv1 = v[c1] - v[c0], du2 = u[c2] - u[c0], dv2 = v[c2] - v[c0];
         const v4d det = du1 * dv2 - du2 * dv1;  // twice the signed UV area
         const v4d adet = (v4d)((v4l)det & ~(v4l)splat(-0.0));
-        uv_ok[g] = (adet > splat(0.0)) & (adet < splat(INFINITY));
-        negative_det[g] = det < splat(0.0);
+        uv_ok[g] = less<kAvx2>(splat(0.0), adet) & less<kAvx2>(adet, splat(INFINITY));
+        negative_det[g] = less<kAvx2>(det, splat(0.0));
 #pragma GCC unroll 3
         for (int k = 0; k < 3; ++k) {
             dp1[g][k] = p[c1][k] - p[c0][k];
@@ -271,15 +304,16 @@ SPECBAKE_INLINE void add_batch(const TangentInput& in, const Chunk& chunk, size_
     // The corner angle is only a weight: a polynomial atan2 (detail::corner_angle) instead of libm's.
     v4d angle[N], rows[N][4], terms[N][4];
     int add[N];  // lanes whose corner counts, one bit each
-    corner_angles(y, x, angle);
+    corner_angles<kAvx2>(y, x, angle);
     SPECBAKE_EACH {
-        const v4l ok = uv_ok[c / 3] & (angle[c] > splat(0.0)) & (tl[c] > splat(0.0)) & (tl[c] < splat(INFINITY));
+        const v4l ok = uv_ok[c / 3] & less<kAvx2>(splat(0.0), angle[c]) & less<kAvx2>(splat(0.0), tl[c]) &
+                       less<kAvx2>(tl[c], splat(INFINITY));
         add[c] = lane_bits(ok);
         const v4d weight = angle[c] / tl[c];
         rows[c][0] = weight * tp[c][0];
         rows[c][1] = weight * tp[c][1];
         rows[c][2] = weight * tp[c][2];
-        rows[c][3] = select(negative_det[c / 3], angle[c], -angle[c]);
+        rows[c][3] = choose<kAvx2>(negative_det[c / 3], angle[c], -angle[c]);
         transpose4(rows[c], terms[c]);
     }
     auto add_term = [&](int c, int j) SPECBAKE_INLINE_LAMBDA {
@@ -312,18 +346,34 @@ SPECBAKE_INLINE void add_batch(const TangentInput& in, const Chunk& chunk, size_
 
 // The corners of the triangles that reference the chunk's vertices, added to those vertices' sums in corner
 // order.
-SPECBAKE_AVX2_CLONES void sum_corners(const TangentInput& in, const Chunk& chunk) {
+template <bool kAvx2>
+SPECBAKE_INLINE void sum_corners_with(const TangentInput& in, const Chunk& chunk) {
+    constexpr size_t kBatch = kGroupsOf<kAvx2> * kLanes;
     const size_t blocks = (in.triangles + kBlock - 1) / kBlock;
     for (size_t b = 0; b < blocks; ++b) {
         const size_t low = in.block_bounds[2 * b], high = in.block_bounds[2 * b + 1];
         if (high < chunk.first || low >= chunk.last) continue;
         const size_t end = std::min(in.triangles, (b + 1) * kBlock);
         if (low >= chunk.first && high < chunk.last) {
-            for (size_t t = b * kBlock; t < end; t += kBatch) add_batch<true>(in, chunk, t, int(std::min<size_t>(kBatch, end - t)));
+            for (size_t t = b * kBlock; t < end; t += kBatch) add_batch<kAvx2, true>(in, chunk, t, int(std::min(kBatch, end - t)));
         } else {
-            for (size_t t = b * kBlock; t < end; t += kBatch) add_batch<false>(in, chunk, t, int(std::min<size_t>(kBatch, end - t)));
+            for (size_t t = b * kBlock; t < end; t += kBatch) add_batch<kAvx2, false>(in, chunk, t, int(std::min(kBatch, end - t)));
         }
     }
+}
+
+#if defined(SPECBAKE_X86_VERSIONS)
+__attribute__((target("arch=x86-64-v3"))) void sum_corners_avx2(const TangentInput& in, const Chunk& chunk) {
+    sum_corners_with<true>(in, chunk);
+}
+#endif
+
+void sum_corners(const TangentInput& in, const Chunk& chunk) {
+#if defined(SPECBAKE_X86_VERSIONS)
+    static const bool avx2 = __builtin_cpu_supports("x86-64-v3");
+    if (avx2) return sum_corners_avx2(in, chunk);
+#endif
+    sum_corners_with<false>(in, chunk);
 }
 
 // Smallest and largest vertex index of the blocks [first, last) of triangles, eight indices at a time.

@@ -314,8 +314,9 @@ TEST(Tangents, IrregularTorusMatchesABruteForceMikkTSpaceSum) {
 }
 
 TEST(Tangents, ThreadCountAndVertexOrderLeaveTheBitsAlone) {
-    // About 100k vertices, so the vertices are split into ranges (one per thread) and chunks; every 37th
-    // triangle with collapsed UVs (skipped corners), and a triangle count that is not a multiple of four.
+    // About 100k vertices, so the vertices are split into several chunks (parallel tasks, with triangles on
+    // the chunk borders); every 37th triangle with collapsed UVs (skipped corners), and a triangle count that
+    // is not a multiple of the batch size.
     TriMesh m = make_torus(3.0f, 1.0f, 400, 250, 0.4f, 9);
     m.tangents.clear();
     for (size_t t = 0; t < m.triangle_count(); t += 37) {
