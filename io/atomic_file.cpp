@@ -4,6 +4,9 @@
 #include <cstdio>
 #include <fstream>
 #include <system_error>
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "bake/huge_pages.h"
@@ -77,6 +80,51 @@ Result<std::vector<uint8_t>> read_file(const fs::path& path) {
     f.read(reinterpret_cast<char*>(bytes.data()), size);
     if (!f) return make_error(path.string() + ": read failed");
     return bytes;
+}
+
+Result<MappedFile> MappedFile::open(const fs::path& path) {
+    std::error_code ec;
+    if (!fs::exists(path, ec)) return make_error(path.string() + ": no such file");
+    if (fs::is_directory(path, ec)) return make_error(path.string() + ": is a folder, not a file");
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) return make_error(path.string() + ": cannot open for reading");
+    struct stat st {};
+    if (::fstat(fd, &st) != 0 || st.st_size < 0) {
+        ::close(fd);
+        return make_error(path.string() + ": cannot determine the file size");
+    }
+    MappedFile file;
+    if (st.st_size > 0) {
+        void* p = ::mmap(nullptr, size_t(st.st_size), PROT_READ, MAP_PRIVATE, fd, 0);
+        if (p == MAP_FAILED) {
+            ::close(fd);
+            return make_error(path.string() + ": cannot map for reading");
+        }
+        file.data_ = static_cast<const uint8_t*>(p);
+        file.size_ = size_t(st.st_size);
+    }
+    ::close(fd);  // the mapping stays valid
+    return file;
+}
+
+MappedFile::MappedFile(MappedFile&& other) noexcept : data_(other.data_), size_(other.size_) {
+    other.data_ = nullptr;
+    other.size_ = 0;
+}
+
+MappedFile& MappedFile::operator=(MappedFile&& other) noexcept {
+    if (this != &other) {
+        if (data_) ::munmap(const_cast<uint8_t*>(data_), size_);
+        data_ = other.data_;
+        size_ = other.size_;
+        other.data_ = nullptr;
+        other.size_ = 0;
+    }
+    return *this;
+}
+
+MappedFile::~MappedFile() {
+    if (data_) ::munmap(const_cast<uint8_t*>(data_), size_);
 }
 
 Result<void> check_output_not_input(const fs::path& output_dir, std::span<const fs::path> inputs) {

@@ -39,6 +39,25 @@ Result<void> write_file_atomic(const std::filesystem::path& path, const std::str
 // Reads a whole file; the error names the file.
 Result<std::vector<uint8_t>> read_file(const std::filesystem::path& path);
 
+// A whole file mapped read-only: its bytes without a copy into fresh memory (a 28 MB scene is otherwise
+// copied out of the page cache and faulted in page by page before anything parses it). Move-only; the
+// mapping lasts as long as the object. The error names the file.
+class MappedFile {
+public:
+    static Result<MappedFile> open(const std::filesystem::path& path);
+    MappedFile() = default;
+    MappedFile(MappedFile&& other) noexcept;
+    MappedFile& operator=(MappedFile&& other) noexcept;
+    MappedFile(const MappedFile&) = delete;
+    MappedFile& operator=(const MappedFile&) = delete;
+    ~MappedFile();
+    std::span<const uint8_t> bytes() const { return {data_, size_}; }
+
+private:
+    const uint8_t* data_ = nullptr;
+    size_t size_ = 0;
+};
+
 // Fails when `output` is the same file as any of `inputs` (inputs are never overwritten), or when
 // `output_dir` is a folder that holds one of the inputs directly.
 Result<void> check_output_not_input(const std::filesystem::path& output_dir,

@@ -459,9 +459,9 @@ struct GltfScene::Impl {
     fs::path source;
     bool binary = false;
     std::map<fs::path, std::string> content_hashes;  // of the files read at load
-    // The scene file's own hash is computed in the background from its bytes (kept until then) while the
+    // The scene file's own hash is computed in the background from its bytes (mapped until then) while the
     // caller plans and bakes; content_hash() collects it.
-    std::vector<uint8_t> source_bytes;
+    MappedFile source_bytes;
     std::unique_ptr<tbb::task_group> source_hashing;
     std::string source_hash;
     void finish_source_hash() {
@@ -492,18 +492,19 @@ const fs::path& GltfScene::source() const { return impl_->source; }
 bool GltfScene::source_is_binary() const { return impl_->binary; }
 
 Result<GltfScene> GltfScene::load(const fs::path& path) {
-    auto read = read_file(path);
+    auto read = MappedFile::open(path);
     if (!read) return read.error();
     GltfScene scene;
     Impl& impl = *scene.impl_;
     impl.source = path;
     impl.source_bytes = std::move(*read);
-    const std::vector<uint8_t>* bytes = &impl.source_bytes;
+    const std::span<const uint8_t> source_bytes = impl.source_bytes.bytes();
+    const std::span<const uint8_t>* bytes = &source_bytes;
     impl.binary = bytes->size() >= 4 && std::memcmp(bytes->data(), "glTF", 4) == 0;
     // The manifest records the hash of every input; it is computed from the bytes already in memory instead
     // of reading the file again later, on another thread, beside the parse and whatever the caller does next.
     impl.source_hashing = std::make_unique<tbb::task_group>();
-    impl.source_hashing->run([&impl] { impl.source_hash = sha256_hex(impl.source_bytes); });
+    impl.source_hashing->run([&impl] { impl.source_hash = sha256_hex(impl.source_bytes.bytes()); });
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(&keep_image_encoded, nullptr);
     loader.SetImageWriter(&keep_image_uri, nullptr);
