@@ -95,19 +95,23 @@ Result<MappedFile> MappedFile::open(const fs::path& path) {
     }
     MappedFile file;
     if (st.st_size > 0) {
-        void* p = ::mmap(nullptr, size_t(st.st_size), PROT_READ, MAP_PRIVATE, fd, 0);
-        if (p == MAP_FAILED) {
-            ::close(fd);
-            return make_error(path.string() + ": cannot map for reading");
+        void* p = S_ISREG(st.st_mode) ? ::mmap(nullptr, size_t(st.st_size), PROT_READ, MAP_PRIVATE, fd, 0) : MAP_FAILED;
+        if (p != MAP_FAILED) {
+            file.data_ = static_cast<const uint8_t*>(p);
+            file.size_ = size_t(st.st_size);
         }
-        file.data_ = static_cast<const uint8_t*>(p);
-        file.size_ = size_t(st.st_size);
     }
-    ::close(fd);  // the mapping stays valid
+    ::close(fd);  // a mapping stays valid
+    if (!file.data_ && st.st_size > 0) {
+        auto read = read_file(path);
+        if (!read) return read.error();
+        file.read_ = std::move(*read);
+    }
     return file;
 }
 
-MappedFile::MappedFile(MappedFile&& other) noexcept : data_(other.data_), size_(other.size_) {
+MappedFile::MappedFile(MappedFile&& other) noexcept
+    : data_(other.data_), size_(other.size_), read_(std::move(other.read_)) {
     other.data_ = nullptr;
     other.size_ = 0;
 }
@@ -117,6 +121,7 @@ MappedFile& MappedFile::operator=(MappedFile&& other) noexcept {
         if (data_) ::munmap(const_cast<uint8_t*>(data_), size_);
         data_ = other.data_;
         size_ = other.size_;
+        read_ = std::move(other.read_);
         other.data_ = nullptr;
         other.size_ = 0;
     }

@@ -40,8 +40,8 @@ Result<void> write_file_atomic(const std::filesystem::path& path, const std::str
 Result<std::vector<uint8_t>> read_file(const std::filesystem::path& path);
 
 // A whole file mapped read-only: its bytes without a copy into fresh memory (a 28 MB scene is otherwise
-// copied out of the page cache and faulted in page by page before anything parses it). Move-only; the
-// mapping lasts as long as the object. The error names the file.
+// copied out of the page cache and faulted in page by page before anything parses it). Files that cannot
+// be mapped are read instead. Move-only; the bytes last as long as the object. The error names the file.
 class MappedFile {
 public:
     static Result<MappedFile> open(const std::filesystem::path& path);
@@ -51,11 +51,12 @@ public:
     MappedFile(const MappedFile&) = delete;
     MappedFile& operator=(const MappedFile&) = delete;
     ~MappedFile();
-    std::span<const uint8_t> bytes() const { return {data_, size_}; }
+    std::span<const uint8_t> bytes() const { return data_ ? std::span<const uint8_t>(data_, size_) : std::span<const uint8_t>(read_); }
 
 private:
-    const uint8_t* data_ = nullptr;
+    const uint8_t* data_ = nullptr;  // the mapping, or null
     size_t size_ = 0;
+    std::vector<uint8_t> read_;      // the bytes when the file could not be mapped
 };
 
 // Fails when `output` is the same file as any of `inputs` (inputs are never overwritten), or when
