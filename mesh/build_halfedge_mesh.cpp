@@ -2,6 +2,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <array>
 #include <numeric>
 #include <unordered_map>
 
@@ -61,70 +62,61 @@ bool link_is_single_fan(const detail::ScratchArray<uint32_t>& pos, const uint32_
 // (mate). Boundary edges (one halfedge) and non-manifold edges (three or more, counted at their lowest
 // halfedge) are summed per range: integer sums, the same for any split.
 struct PairingArrays {
-    const uint32_t* pos;          // per corner: its position
-    const uint32_t* start;        // per position: first entry in by_position
+    const uint32_t* start;        // per position: first entry in the columns below
     const uint32_t* by_position;  // corners grouped by position, in corner order
+    const uint32_t* next;         // per entry: the position of the corner's next corner
+    const uint32_t* prev;         // per entry: the position of the corner's previous corner
     uint32_t* mate;               // out, per corner: the paired halfedge or kNone
     uint8_t* simple;              // out, per corner: its edge is simple
 };
 
 struct EdgeCounts {
-    size_t boundary = 0, nonmanifold = 0;
+    size_t boundary = 0, nonmanifold = 0, not_simple = 0;
 };
 
-// A position's corners as columns; next and prev are padded with kNone (never a position) to a multiple
-// of 8. The columns only grow, so a pass allocates them once.
+// A position's corners: `count` entries of the columns from its start on.
 struct Around {
-    std::vector<uint32_t> next, prev, corner, prev_halfedge;
-    uint32_t gather(const PairingArrays& in, uint32_t a) {
-        const uint32_t first = in.start[a], count = in.start[a + 1] - first, padded = (count + 7) & ~7u;
-        if (next.size() < padded)
-            for (std::vector<uint32_t>* v : {&next, &prev, &corner, &prev_halfedge}) v->resize(padded);
-        for (uint32_t i = 0; i < count; ++i) {
-            const uint32_t j = in.by_position[first + i], p = prev_corner(j);
-            next[i] = in.pos[next_corner(j)];
-            prev[i] = in.pos[p];
-            corner[i] = j;
-            prev_halfedge[i] = p;
-        }
-        for (uint32_t i = count; i < padded; ++i) next[i] = prev[i] = kNone;
-        return count;
-    }
+    const uint32_t *next, *prev, *corner;
+    uint32_t count;
+    Around(const PairingArrays& in, uint32_t a)
+        : next(in.next + in.start[a]), prev(in.prev + in.start[a]), corner(in.by_position + in.start[a]),
+          count(in.start[a + 1] - in.start[a]) {}
 };
 
 // The verdict on outgoing halfedge i of a position, from its counts of same-way and opposite halfedges
 // (partner: the last opposite one).
-inline void settle(const PairingArrays& in, const Around& c, uint32_t count, uint32_t i, uint32_t total,
-                   uint32_t opposite, uint32_t partner, EdgeCounts& counts) {
+inline void settle(const PairingArrays& in, const Around& c, uint32_t i, uint32_t total, uint32_t opposite,
+                   uint32_t partner, EdgeCounts& counts) {
     const uint32_t k = c.corner[i], b = c.next[i];
     const bool paired = total == 2 && opposite == 1;
-    in.simple[k] = total == 1 || paired;
+    const bool simple = total == 1 || paired;
+    in.simple[k] = simple;
     in.mate[k] = paired ? partner : kNone;
     counts.boundary += total == 1;
+    counts.not_simple += !simple;
     if (total >= 3) {
         uint32_t lowest = k;
-        for (uint32_t m = 0; m < count; ++m) {
+        for (uint32_t m = 0; m < c.count; ++m) {
             if (c.next[m] == b) lowest = std::min(lowest, c.corner[m]);
-            else if (c.prev[m] == b) lowest = std::min(lowest, c.prev_halfedge[m]);
+            else if (c.prev[m] == b) lowest = std::min(lowest, prev_corner(c.corner[m]));
         }
         counts.nonmanifold += lowest == k;
     }
 }
 
 EdgeCounts pair_positions_scalar(const PairingArrays& in, uint32_t begin, uint32_t end, EdgeCounts counts) {
-    Around c;
     for (uint32_t a = begin; a != end; ++a) {
-        const uint32_t count = c.gather(in, a);
-        for (uint32_t i = 0; i < count; ++i) {
+        const Around c(in, a);
+        for (uint32_t i = 0; i < c.count; ++i) {
             const uint32_t b = c.next[i];
             uint32_t total = 0, opposite = 0, partner = kNone;
-            for (uint32_t m = 0; m < count; ++m) {
+            for (uint32_t m = 0; m < c.count; ++m) {
                 const uint32_t same = c.next[m] == b, opp = c.prev[m] == b;
                 total += same + opp;
                 opposite += opp;
-                partner = opp ? c.prev_halfedge[m] : partner;
+                partner = opp ? prev_corner(c.corner[m]) : partner;
             }
-            settle(in, c, count, i, total, opposite, partner, counts);
+            settle(in, c, i, total, opposite, partner, counts);
         }
     }
     return counts;
@@ -132,25 +124,28 @@ EdgeCounts pair_positions_scalar(const PairingArrays& in, uint32_t begin, uint32
 
 #if defined(__x86_64__) && defined(__GNUC__)
 // The same with eight comparisons per instruction: a position of valence 6 compares each halfedge with all
-// of its corners in two AVX2 compares. Integer logic: the result equals the scalar one bit for bit.
+// of its corners in two AVX2 compares, straight from the columns (they are padded by 8 entries at the end;
+// lanes past the position's corners are masked off). Integer logic: the result equals the scalar one.
 __attribute__((target("avx2,popcnt,lzcnt"))) EdgeCounts pair_positions_avx2(const PairingArrays& in, uint32_t begin,
                                                                            uint32_t end, EdgeCounts counts) {
-    Around c;
     for (uint32_t a = begin; a != end; ++a) {
-        const uint32_t count = c.gather(in, a), padded = (count + 7) & ~7u;
-        for (uint32_t i = 0; i < count; ++i) {
+        const Around c(in, a);
+        for (uint32_t i = 0; i < c.count; ++i) {
             const __m256i b = _mm256_set1_epi32(int(c.next[i]));
             uint32_t total = 0, opposite = 0, partner = kNone;
-            for (uint32_t m = 0; m < padded; m += 8) {
-                const __m256i nx = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(&c.next[m]));
-                const __m256i pv = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(&c.prev[m]));
-                const unsigned same = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(nx, b))));
-                const unsigned opp = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(pv, b))));
+            for (uint32_t m = 0; m < c.count; m += 8) {
+                const unsigned lanes = c.count - m >= 8 ? 0xffu : (1u << (c.count - m)) - 1u;
+                const __m256i nx = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(c.next + m));
+                const __m256i pv = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(c.prev + m));
+                const unsigned same =
+                    lanes & unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(nx, b))));
+                const unsigned opp =
+                    lanes & unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(pv, b))));
                 total += unsigned(__builtin_popcount(same) + __builtin_popcount(opp));
                 opposite += unsigned(__builtin_popcount(opp));
-                if (opp) partner = c.prev_halfedge[m + 31 - unsigned(__builtin_clz(opp))];
+                if (opp) partner = prev_corner(c.corner[m + 31 - unsigned(__builtin_clz(opp))]);
             }
-            settle(in, c, count, i, total, opposite, partner, counts);
+            settle(in, c, i, total, opposite, partner, counts);
         }
     }
     return counts;
@@ -165,6 +160,27 @@ EdgeCounts pair_positions(const PairingArrays& in, uint32_t begin, uint32_t end,
     return pair_positions_scalar(in, begin, end, counts);
 }
 
+// is_degenerate_triangle of three mesh vertices, decided without the square root where the triangle is
+// clearly not degenerate: the twice-area test there holds with a factor 2 to spare (rounding errors are
+// some 1e-16 of the scale, the threshold 1e-10); everything else, NaN included, goes to the exact test.
+inline bool degenerate(const TriMesh& mesh, const uint32_t* f) {
+    const float *p = &mesh.positions[3 * size_t(f[0])], *q = &mesh.positions[3 * size_t(f[1])],
+                *r = &mesh.positions[3 * size_t(f[2])];
+    const double ax = double(q[0]) - p[0], ay = double(q[1]) - p[1], az = double(q[2]) - p[2];
+    const double bx = double(r[0]) - p[0], by = double(r[1]) - p[1], bz = double(r[2]) - p[2];
+    const double cx = double(r[0]) - q[0], cy = double(r[1]) - q[1], cz = double(r[2]) - q[2];
+    const double nx = ay * bz - az * by, ny = az * bx - ax * bz, nz = ax * by - ay * bx;
+    const double area2 = nx * nx + ny * ny + nz * nz;
+    const double scale = ax * ax + ay * ay + az * az + bx * bx + by * by + bz * bz + cx * cx + cy * cy + cz * cz;
+    if (area2 > 4e-20 * scale * scale) return false;
+    return detail::is_degenerate_triangle(detail::position(mesh, f[0]), detail::position(mesh, f[1]),
+                                          detail::position(mesh, f[2]));
+}
+
+// Fixed blocks of triangles for the passes that number things in order: block totals, then their prefix
+// sums, then each block writes from its offset (the same numbers for any thread count).
+constexpr uint32_t kBlock = 16384;
+
 }  // namespace
 
 HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& positions) {
@@ -177,39 +193,69 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     const uint32_t position_count = positions.position_count;
     const std::vector<uint32_t>& pid = positions.position_id;
 
-    // Usable triangles, in order: three distinct positions and a non-zero area.
+    // Usable triangles, in order: three distinct positions and a non-zero area. Per block of triangles the
+    // usable ones are counted, then each block writes its kept triangles and their corners' positions.
     // The large per-triangle, per-corner and per-position arrays below are scratch arrays (uninitialised,
     // huge pages) wherever every element read has been written first.
+    const size_t blocks = (tris + kBlock - 1) / kBlock;
+    auto block_range = [&](size_t block) {
+        return std::pair<size_t, size_t>(block * kBlock, std::min(tris, (block + 1) * kBlock));
+    };
     detail::ScratchArray<uint8_t> usable(tris);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, tris, 8192), [&](const auto& r) {
-        for (size_t t = r.begin(); t != r.end(); ++t) {
-            const uint32_t* f = &mesh.indices[3 * t];
-            const uint32_t a = pid[f[0]], b = pid[f[1]], c = pid[f[2]];
-            usable[t] = a != b && b != c && a != c &&
-                        !detail::is_degenerate_triangle(detail::position(mesh, f[0]), detail::position(mesh, f[1]),
-                                                        detail::position(mesh, f[2]));
+    std::vector<uint32_t> block_faces(blocks + 1, 0);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const auto& r) {
+        for (size_t block = r.begin(); block != r.end(); ++block) {
+            const auto [first, last] = block_range(block);
+            uint32_t count = 0;
+            for (size_t t = first; t != last; ++t) {
+                const uint32_t* f = &mesh.indices[3 * t];
+                const uint32_t a = pid[f[0]], b = pid[f[1]], c = pid[f[2]];
+                const bool ok = a != b && b != c && a != c && !degenerate(mesh, f);
+                usable[t] = ok;
+                count += ok;
+            }
+            block_faces[block + 1] = count;
         }
     });
-    detail::ScratchArray<uint32_t> kept(tris);
-    uint32_t faces = 0;
-    for (size_t t = 0; t < tris; ++t)
-        if (usable[t]) kept[faces++] = uint32_t(t);
+    std::partial_sum(block_faces.begin(), block_faces.end(), block_faces.begin());
+    const uint32_t faces = block_faces[blocks];
     out.degenerate_triangles = tris - faces;
     const uint32_t corners = 3 * faces;
+    detail::ScratchArray<uint32_t> kept(faces);
     detail::ScratchArray<uint32_t> pos(corners);
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, faces, 8192), [&](const auto& r) {
-        for (uint32_t f = r.begin(); f != r.end(); ++f)
-            for (int c = 0; c < 3; ++c) pos[3 * f + c] = pid[mesh.indices[3 * size_t(kept[f]) + c]];
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const auto& r) {
+        for (size_t block = r.begin(); block != r.end(); ++block) {
+            const auto [first, last] = block_range(block);
+            uint32_t f = block_faces[block];
+            for (size_t t = first; t != last; ++t) {
+                if (!usable[t]) continue;
+                kept[f] = uint32_t(t);
+                for (int c = 0; c < 3; ++c) pos[3 * f + c] = pid[mesh.indices[3 * t + c]];
+                ++f;
+            }
+        }
     });
 
-    // Corners of each position, in corner order (a counting sort).
+    // Corners of each position, in corner order (a counting sort), with the positions of their next and
+    // previous corners beside them so that the pairing reads each position's corners contiguously.
     std::vector<uint32_t> start(position_count + 1, 0);
     for (uint32_t k = 0; k < corners; ++k) ++start[pos[k] + 1];
     std::partial_sum(start.begin(), start.end(), start.begin());
     detail::ScratchArray<uint32_t> by_position(corners);
+    detail::ScratchArray<uint32_t> around_next(corners + 8), around_prev(corners + 8);
+    std::fill_n(around_next.data() + corners, 8, kNone);
+    std::fill_n(around_prev.data() + corners, 8, kNone);
     {
         std::vector<uint32_t> fill(start.begin(), start.end() - 1);
-        for (uint32_t k = 0; k < corners; ++k) by_position[fill[pos[k]]++] = k;
+        for (uint32_t f = 0; f < faces; ++f) {
+            const uint32_t p[3] = {pos[3 * f], pos[3 * f + 1], pos[3 * f + 2]};
+            for (uint32_t c = 0; c < 3; ++c) {
+                const uint32_t slot = fill[p[c]]++;
+                by_position[slot] = 3 * f + c;
+                around_next[slot] = p[c == 2 ? 0 : c + 1];
+                around_prev[slot] = p[c == 0 ? 2 : c - 1];
+            }
+        }
     }
 
     // Edge pairing (pair_positions), in parallel over positions.
@@ -224,10 +270,10 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
         lowest = k;
         for (uint32_t i = start[a]; i < start[a + 1]; ++i) {
             const uint32_t j = by_position[i];
-            if (pos[next_corner(j)] == b) {
+            if (around_next[i] == b) {
                 ++total;
                 lowest = std::min(lowest, j);
-            } else if (pos[prev_corner(j)] == b) {
+            } else if (around_prev[i] == b) {
                 ++total;
                 ++opposite;
                 partner = prev_corner(j);
@@ -235,7 +281,8 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
             }
         }
     };
-    const PairingArrays pairing{pos.data(), start.data(), by_position.data(), mate.data(), simple.data()};
+    const PairingArrays pairing{start.data(), by_position.data(), around_next.data(), around_prev.data(),
+                                mate.data(), simple.data()};
     const EdgeCounts edge_counts = tbb::parallel_reduce(
         tbb::blocked_range<uint32_t>(0, position_count, 2048), EdgeCounts{},
         [&](const tbb::blocked_range<uint32_t>& r, EdgeCounts counts) {
@@ -244,6 +291,7 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
         [](EdgeCounts x, const EdgeCounts& y) {
             x.boundary += y.boundary;
             x.nonmanifold += y.nonmanifold;
+            x.not_simple += y.not_simple;
             return x;
         });
     out.boundary_edges = edge_counts.boundary;
@@ -251,13 +299,15 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
 
     // Faces on a non-simple edge, in triangle order: attached while the edge has no halfedge running their
     // way and fewer than two triangles; otherwise detached.
-    std::vector<uint8_t> attached(faces, 1);
+    // Only when some edge is not simple: usually every face is attached and the scan is skipped.
+    const bool any_not_simple = edge_counts.not_simple > 0;
+    std::vector<uint8_t> attached(any_not_simple ? faces : 0, 1);
     struct EdgeState {
         uint32_t first = kNone;
         bool full = false;
     };
     std::unordered_map<uint32_t, EdgeState> state;
-    for (uint32_t f = 0; f < faces; ++f) {
+    for (uint32_t f = 0; any_not_simple && f < faces; ++f) {
         if (simple[3 * f] && simple[3 * f + 1] && simple[3 * f + 2]) continue;
         uint32_t edge[3] = {kNone, kNone, kNone};
         bool fits = true;
@@ -287,7 +337,7 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
         }
     }
     std::vector<uint32_t> detached;
-    for (uint32_t f = 0; f < faces; ++f) {
+    for (uint32_t f = 0; any_not_simple && f < faces; ++f) {
         if (attached[f]) continue;
         detached.push_back(f);
         for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
@@ -300,8 +350,14 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     // Fans: around a position, corner k's successor is the corner at the same position in the triangle across
     // its outgoing halfedge, next_corner(mate[k]); its predecessor is mate[prev_corner(k)]. Each chain or
     // cycle of attached corners is one fan and becomes one OpenMesh vertex.
+    // fan and fan_head start as kNone and 0, written in corner order (cheaper than per position).
+    const bool any_detached = !detached.empty();
     detail::ScratchArray<uint32_t> fan(corners);
     detail::ScratchArray<uint8_t> fan_head(corners);
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, corners, 65536), [&](const auto& r) {
+        std::fill(fan.data() + r.begin(), fan.data() + r.end(), kNone);
+        std::fill(fan_head.data() + r.begin(), fan_head.data() + r.end(), uint8_t(0));
+    });
     detail::ScratchArray<uint32_t> fan_count(position_count);
     detail::ScratchArray<uint8_t> suspect(position_count);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, position_count, 4096), [&](const auto& r) {
@@ -309,12 +365,8 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
             uint32_t fans = 0;
             bool has_detached = false;
             for (uint32_t i = start[p]; i < start[p + 1]; ++i) {
-                fan[by_position[i]] = kNone;
-                fan_head[by_position[i]] = 0;
-            }
-            for (uint32_t i = start[p]; i < start[p + 1]; ++i) {
                 const uint32_t k = by_position[i];
-                if (!attached[k / 3]) {
+                if (any_detached && !attached[k / 3]) {
                     has_detached = true;
                     continue;
                 }
@@ -352,28 +404,57 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
 
     // Numbering: vertices per (position, fan), then three per detached face; an edge per mate pair or
     // unpaired halfedge (its twin is a boundary halfedge), then three per detached face.
-    std::vector<uint32_t> vertex_base(position_count + 1, 0);
+    detail::ScratchArray<uint32_t> vertex_base(position_count + 1);
+    vertex_base[0] = 0;
     for (uint32_t p = 0; p < position_count; ++p) vertex_base[p + 1] = vertex_base[p] + fan_count[p];
     const uint32_t attached_vertices = vertex_base[position_count];
     const uint32_t detached_count = uint32_t(detached.size());
     const uint32_t vertices = attached_vertices + 3 * detached_count;
-    auto vertex_of = [&](uint32_t k) { return vertex_base[pos[k]] + fan[k]; };
+    auto is_attached = [&](uint32_t f) { return !any_detached || attached[f]; };
+    // Halfedge k opens a new edge unless its mate comes first.
+    auto opens_edge = [&](uint32_t k) { return mate[k] == kNone || mate[k] > k; };
 
     // OpenMesh halfedge of each attached corner, in the storage of by_position (no longer read): one fresh
-    // corner-sized array less to fault in.
+    // corner-sized array less to fault in. Per block of faces the edges and attached faces are counted, then
+    // numbered from the block's offsets; fan[k] becomes the OpenMesh vertex of corner k on the way.
     detail::ScratchArray<uint32_t>& halfedge = by_position;
+    detail::ScratchArray<uint32_t>& vertex = fan;
     detail::ScratchArray<uint32_t> face_index(faces);  // read for attached faces only
-    uint32_t edges = 0, attached_faces = 0;
-    for (uint32_t f = 0; f < faces; ++f) {
-        if (!attached[f]) continue;
-        face_index[f] = attached_faces++;
-        for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
-            if (mate[k] != kNone && mate[k] < k) continue;
-            halfedge[k] = 2 * edges;
-            if (mate[k] != kNone) halfedge[mate[k]] = 2 * edges + 1;
-            ++edges;
+    const size_t face_blocks = (size_t(faces) + kBlock - 1) / kBlock;
+    std::vector<std::array<uint32_t, 2>> block_start(face_blocks + 1, {0, 0});  // edges, attached faces
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, face_blocks, 1), [&](const auto& r) {
+        for (size_t block = r.begin(); block != r.end(); ++block) {
+            const uint32_t first = uint32_t(block * kBlock), last = uint32_t(std::min<size_t>(faces, first + size_t(kBlock)));
+            uint32_t block_edges = 0, block_faces_attached = 0;
+            for (uint32_t f = first; f != last; ++f) {
+                if (!is_attached(f)) continue;
+                ++block_faces_attached;
+                for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) block_edges += opens_edge(k);
+            }
+            block_start[block + 1] = {block_edges, block_faces_attached};
         }
-    }
+    });
+    for (size_t block = 0; block < face_blocks; ++block)
+        for (int i = 0; i < 2; ++i) block_start[block + 1][i] += block_start[block][i];
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, face_blocks, 1), [&](const auto& r) {
+        for (size_t block = r.begin(); block != r.end(); ++block) {
+            const uint32_t first = uint32_t(block * kBlock), last = uint32_t(std::min<size_t>(faces, first + size_t(kBlock)));
+            uint32_t e = block_start[block][0], face = block_start[block][1];
+            for (uint32_t f = first; f != last; ++f) {
+                if (!is_attached(f)) continue;
+                face_index[f] = face++;
+                for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
+                    vertex[k] = vertex_base[pos[k]] + fan[k];
+                    if (!opens_edge(k)) continue;
+                    halfedge[k] = 2 * e;
+                    if (mate[k] != kNone) halfedge[mate[k]] = 2 * e + 1;
+                    ++e;
+                }
+            }
+        }
+    });
+    uint32_t edges = block_start[face_blocks][0];
+    const uint32_t attached_faces = block_start[face_blocks][1];
     const uint32_t attached_edges = edges;
     edges += 3 * detached_count;
 
@@ -403,18 +484,18 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
 
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, faces, 8192), [&](const auto& r) {
         for (uint32_t f = r.begin(); f != r.end(); ++f) {
-            if (!attached[f]) continue;
+            if (!is_attached(f)) continue;
             const FaceHandle fh(static_cast<int>(face_index[f]));
             out.face_triangle[face_index[f]] = kept[f];
             for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
                 const HalfedgeHandle h(static_cast<int>(halfedge[k]));
-                const uint32_t to = vertex_of(next_corner(k));
+                const uint32_t to = vertex[next_corner(k)];
                 m.set_vertex_handle(h, VertexHandle(static_cast<int>(to)));
                 m.set_face_handle(h, fh);
                 m.set_next_halfedge_handle(h, HalfedgeHandle(static_cast<int>(halfedge[next_corner(k)])));
                 if (mate[k] == kNone) {
                     const HalfedgeHandle b(static_cast<int>(halfedge[k] ^ 1u));
-                    m.set_vertex_handle(b, VertexHandle(static_cast<int>(vertex_of(k))));
+                    m.set_vertex_handle(b, VertexHandle(static_cast<int>(vertex[k])));
                     boundary_out[to] = uint32_t(b.idx());  // one open fan per vertex: one outgoing boundary halfedge
                 }
             }
@@ -423,9 +504,9 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     });
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, faces, 8192), [&](const auto& r) {
         for (uint32_t f = r.begin(); f != r.end(); ++f) {
-            if (!attached[f]) continue;
+            if (!is_attached(f)) continue;
             for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
-                const uint32_t v = vertex_of(k);
+                const uint32_t v = vertex[k];
                 if (mate[k] == kNone)
                     m.set_next_halfedge_handle(HalfedgeHandle(static_cast<int>(halfedge[k] ^ 1u)), HalfedgeHandle(static_cast<int>(boundary_out[v])));
                 if (!fan_head[k]) continue;
