@@ -2,6 +2,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <cmath>
 #include <array>
 #include <numeric>
 #include <unordered_map>
@@ -130,6 +131,25 @@ __attribute__((target("avx2,popcnt,lzcnt"))) EdgeCounts pair_positions_avx2(cons
                                                                            uint32_t end, EdgeCounts counts) {
     for (uint32_t a = begin; a != end; ++a) {
         const Around c(in, a);
+        if (c.count <= 8) {
+            // Most positions: all corners in one register pair, loaded once (the byte writes of settle
+            // would otherwise force reloads), and the next positions kept in a local copy.
+            const unsigned lanes = (1u << c.count) - 1u;
+            const __m256i nx = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(c.next));
+            const __m256i pv = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(c.prev));
+            alignas(32) uint32_t next[8];
+            _mm256_store_si256(reinterpret_cast<__m256i*>(next), nx);
+            for (uint32_t i = 0; i < c.count; ++i) {
+                const __m256i b = _mm256_set1_epi32(int(next[i]));
+                const unsigned same = lanes & unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(nx, b))));
+                const unsigned opp = lanes & unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(pv, b))));
+                const uint32_t opposite = uint32_t(__builtin_popcount(opp));
+                const uint32_t total = uint32_t(__builtin_popcount(same)) + opposite;
+                const uint32_t partner = opp ? prev_corner(c.corner[31 - unsigned(__builtin_clz(opp))]) : kNone;
+                settle(in, c, i, total, opposite, partner, counts);
+            }
+            continue;
+        }
         for (uint32_t i = 0; i < c.count; ++i) {
             const __m256i b = _mm256_set1_epi32(int(c.next[i]));
             uint32_t total = 0, opposite = 0, partner = kNone;
@@ -160,19 +180,19 @@ EdgeCounts pair_positions(const PairingArrays& in, uint32_t begin, uint32_t end,
     return pair_positions_scalar(in, begin, end, counts);
 }
 
-// is_degenerate_triangle of three mesh vertices, decided without the square root where the triangle is
-// clearly not degenerate: the twice-area test there holds with a factor 2 to spare (rounding errors are
-// some 1e-16 of the scale, the threshold 1e-10); everything else, NaN included, goes to the exact test.
+// is_degenerate_triangle of three mesh vertices, decided in float where the triangle is clearly not
+// degenerate: a component of the float normal above 1e-5 of the float scale means twice the area exceeds
+// 1e-10 of the scale by far more than float rounding (some 1e-7 of the scale) could account for. Tiny,
+// huge and non-finite input fails that filter and goes to the exact double test.
 inline bool degenerate(const TriMesh& mesh, const uint32_t* f) {
     const float *p = &mesh.positions[3 * size_t(f[0])], *q = &mesh.positions[3 * size_t(f[1])],
                 *r = &mesh.positions[3 * size_t(f[2])];
-    const double ax = double(q[0]) - p[0], ay = double(q[1]) - p[1], az = double(q[2]) - p[2];
-    const double bx = double(r[0]) - p[0], by = double(r[1]) - p[1], bz = double(r[2]) - p[2];
-    const double cx = double(r[0]) - q[0], cy = double(r[1]) - q[1], cz = double(r[2]) - q[2];
-    const double nx = ay * bz - az * by, ny = az * bx - ax * bz, nz = ax * by - ay * bx;
-    const double area2 = nx * nx + ny * ny + nz * nz;
-    const double scale = ax * ax + ay * ay + az * az + bx * bx + by * by + bz * bz + cx * cx + cy * cy + cz * cz;
-    if (area2 > 4e-20 * scale * scale) return false;
+    const float ax = q[0] - p[0], ay = q[1] - p[1], az = q[2] - p[2];
+    const float bx = r[0] - p[0], by = r[1] - p[1], bz = r[2] - p[2];
+    const float cx = r[0] - q[0], cy = r[1] - q[1], cz = r[2] - q[2];
+    const float nx = std::abs(ay * bz - az * by), ny = std::abs(az * bx - ax * bz), nz = std::abs(ax * by - ay * bx);
+    const float scale = ax * ax + ay * ay + az * az + bx * bx + by * by + bz * bz + cx * cx + cy * cy + cz * cz;
+    if (scale > 1e-30f && std::max(nx, std::max(ny, nz)) > 1e-5f * scale) return false;
     return detail::is_degenerate_triangle(detail::position(mesh, f[0]), detail::position(mesh, f[1]),
                                           detail::position(mesh, f[2]));
 }
@@ -354,6 +374,7 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     const bool any_detached = !detached.empty();
     detail::ScratchArray<uint32_t> fan(corners);
     detail::ScratchArray<uint8_t> fan_head(corners);
+    detail::ScratchArray<uint32_t> tail_head(corners);  // per corner without successor: its fan's head
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, corners, 65536), [&](const auto& r) {
         std::fill(fan.data() + r.begin(), fan.data() + r.end(), kNone);
         std::fill(fan_head.data() + r.begin(), fan_head.data() + r.end(), uint8_t(0));
@@ -388,6 +409,7 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
                         head = back;
                         fan[head] = fans;
                     }
+                    tail_head[last] = head;
                 }
                 fan_head[head] = 1;
                 ++fans;
@@ -476,12 +498,15 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     out.vertex_position.resize(vertices);
     detail::reserve_huge_pages(out.face_triangle, mesh_faces);
     out.face_triangle.resize(mesh_faces);
-    std::vector<uint32_t> boundary_out(attached_vertices, kNone);
     auto point = [&](uint32_t f, uint32_t c) {
         const float* x = &mesh.positions[3 * size_t(mesh.indices[3 * size_t(kept[f]) + c])];
         return HalfEdgeMesh::Point(x[0], x[1], x[2]);
     };
 
+    // One pass per attached face: its halfedges, the boundary halfedges across its unpaired ones, and the
+    // vertices whose fan it heads. A vertex has one fan, so at most one boundary halfedge out of it: the
+    // twin of the unpaired halfedge into its head corner (OpenMesh keeps a boundary vertex's halfedge there),
+    // which is also the boundary successor of the twin into its tail.
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, faces, 8192), [&](const auto& r) {
         for (uint32_t f = r.begin(); f != r.end(); ++f) {
             if (!is_attached(f)) continue;
@@ -489,33 +514,22 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
             out.face_triangle[face_index[f]] = kept[f];
             for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
                 const HalfedgeHandle h(static_cast<int>(halfedge[k]));
-                const uint32_t to = vertex[next_corner(k)];
-                m.set_vertex_handle(h, VertexHandle(static_cast<int>(to)));
+                m.set_vertex_handle(h, VertexHandle(static_cast<int>(vertex[next_corner(k)])));
                 m.set_face_handle(h, fh);
                 m.set_next_halfedge_handle(h, HalfedgeHandle(static_cast<int>(halfedge[next_corner(k)])));
                 if (mate[k] == kNone) {
                     const HalfedgeHandle b(static_cast<int>(halfedge[k] ^ 1u));
                     m.set_vertex_handle(b, VertexHandle(static_cast<int>(vertex[k])));
-                    boundary_out[to] = uint32_t(b.idx());  // one open fan per vertex: one outgoing boundary halfedge
+                    m.set_next_halfedge_handle(b, HalfedgeHandle(static_cast<int>(halfedge[prev_corner(tail_head[k])] ^ 1u)));
                 }
-            }
-            m.set_halfedge_handle(fh, HalfedgeHandle(static_cast<int>(halfedge[3 * f])));
-        }
-    });
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, faces, 8192), [&](const auto& r) {
-        for (uint32_t f = r.begin(); f != r.end(); ++f) {
-            if (!is_attached(f)) continue;
-            for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
-                const uint32_t v = vertex[k];
-                if (mate[k] == kNone)
-                    m.set_next_halfedge_handle(HalfedgeHandle(static_cast<int>(halfedge[k] ^ 1u)), HalfedgeHandle(static_cast<int>(boundary_out[v])));
                 if (!fan_head[k]) continue;
-                // OpenMesh keeps a boundary vertex's halfedge on the boundary.
-                const uint32_t h = boundary_out[v] != kNone ? boundary_out[v] : halfedge[k];
-                m.set_halfedge_handle(VertexHandle(static_cast<int>(v)), HalfedgeHandle(static_cast<int>(h)));
+                const uint32_t v = vertex[k], in = prev_corner(k);
+                const uint32_t out_h = mate[in] == kNone ? halfedge[in] ^ 1u : halfedge[k];
+                m.set_halfedge_handle(VertexHandle(static_cast<int>(v)), HalfedgeHandle(static_cast<int>(out_h)));
                 m.set_point(VertexHandle(static_cast<int>(v)), point(f, k % 3));
                 out.vertex_position[v] = pos[k];
             }
+            m.set_halfedge_handle(fh, HalfedgeHandle(static_cast<int>(halfedge[3 * f])));
         }
     });
     for (uint32_t d = 0; d < detached_count; ++d) {
