@@ -127,8 +127,9 @@ EdgeCounts pair_positions_scalar(const PairingArrays& in, uint32_t begin, uint32
 // The same with eight comparisons per instruction: a position of valence 6 compares each halfedge with all
 // of its corners in two AVX2 compares, straight from the columns (they are padded by 8 entries at the end;
 // lanes past the position's corners are masked off). Integer logic: the result equals the scalar one.
-__attribute__((target("avx2,popcnt,lzcnt"))) EdgeCounts pair_positions_avx2(const PairingArrays& in, uint32_t begin,
+__attribute__((target("avx2,popcnt,lzcnt"))) EdgeCounts pair_positions_avx2(const PairingArrays& arrays, uint32_t begin,
                                                                            uint32_t end, EdgeCounts counts) {
+    const PairingArrays in = arrays;  // a local copy: the byte stores to simple cannot alias its pointers
     for (uint32_t a = begin; a != end; ++a) {
         const Around c(in, a);
         if (c.count <= 8) {
@@ -382,32 +383,37 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     detail::ScratchArray<uint32_t> fan_count(position_count);
     detail::ScratchArray<uint8_t> suspect(position_count);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, position_count, 4096), [&](const auto& r) {
+        // Local copies: the byte stores below could otherwise alias them and force reloads.
+        const uint32_t *const start_p = start.data(), *const by_position_p = by_position.data(), *const mate_p = mate.data();
+        const uint8_t* const attached_p = attached.data();
+        uint32_t* const fan_p = fan.data();
+        const bool detached_any = any_detached;
         for (uint32_t p = r.begin(); p != r.end(); ++p) {
             uint32_t fans = 0;
             bool has_detached = false;
-            for (uint32_t i = start[p]; i < start[p + 1]; ++i) {
-                const uint32_t k = by_position[i];
-                if (any_detached && !attached[k / 3]) {
+            for (uint32_t i = start_p[p], end = start_p[p + 1]; i < end; ++i) {
+                const uint32_t k = by_position_p[i];
+                if (detached_any && !attached_p[k / 3]) {
                     has_detached = true;
                     continue;
                 }
-                if (fan[k] != kNone) continue;
+                if (fan_p[k] != kNone) continue;
                 // Forward from k. A cycle comes back to k; its head is k's successor (where the walk back from
                 // k, which stops at the corner whose predecessor is k, ends). An open chain is also walked back
                 // from k to the corner without a predecessor, its head.
                 uint32_t x = k, last = k;
                 do {
-                    fan[x] = fans;
+                    fan_p[x] = fans;
                     last = x;
-                    x = mate[x] == kNone ? kNone : next_corner(mate[x]);
+                    x = mate_p[x] == kNone ? kNone : next_corner(mate_p[x]);
                 } while (x != kNone && x != k);
                 uint32_t head = k;
                 if (x == k) {
-                    head = last == k ? k : next_corner(mate[k]);
+                    head = last == k ? k : next_corner(mate_p[k]);
                 } else {
-                    for (uint32_t back = mate[prev_corner(head)]; back != kNone && back != k; back = mate[prev_corner(head)]) {
+                    for (uint32_t back = mate_p[prev_corner(head)]; back != kNone && back != k; back = mate_p[prev_corner(head)]) {
                         head = back;
-                        fan[head] = fans;
+                        fan_p[head] = fans;
                     }
                     tail_head[last] = head;
                 }
@@ -434,7 +440,8 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     const uint32_t vertices = attached_vertices + 3 * detached_count;
     auto is_attached = [&](uint32_t f) { return !any_detached || attached[f]; };
     // Halfedge k opens a new edge unless its mate comes first.
-    auto opens_edge = [&](uint32_t k) { return mate[k] == kNone || mate[k] > k; };
+    // (kNone is above every corner.)
+    auto opens_edge = [](const uint32_t* mate_p, uint32_t k) { return mate_p[k] > k; };
 
     // OpenMesh halfedge of each attached corner, in the storage of by_position (no longer read): one fresh
     // corner-sized array less to fault in. Per block of faces the edges and attached faces are counted, then
@@ -447,11 +454,17 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     tbb::parallel_for(tbb::blocked_range<size_t>(0, face_blocks, 1), [&](const auto& r) {
         for (size_t block = r.begin(); block != r.end(); ++block) {
             const uint32_t first = uint32_t(block * kBlock), last = uint32_t(std::min<size_t>(faces, first + size_t(kBlock)));
+            const uint32_t* const mate_p = mate.data();
             uint32_t block_edges = 0, block_faces_attached = 0;
-            for (uint32_t f = first; f != last; ++f) {
-                if (!is_attached(f)) continue;
-                ++block_faces_attached;
-                for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) block_edges += opens_edge(k);
+            if (!any_detached) {
+                block_faces_attached = last - first;
+                for (uint32_t k = 3 * first; k != 3 * last; ++k) block_edges += opens_edge(mate_p, k);
+            } else {
+                for (uint32_t f = first; f != last; ++f) {
+                    if (!attached[f]) continue;
+                    ++block_faces_attached;
+                    for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) block_edges += opens_edge(mate_p, k);
+                }
             }
             block_start[block + 1] = {block_edges, block_faces_attached};
         }
@@ -461,15 +474,17 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     tbb::parallel_for(tbb::blocked_range<size_t>(0, face_blocks, 1), [&](const auto& r) {
         for (size_t block = r.begin(); block != r.end(); ++block) {
             const uint32_t first = uint32_t(block * kBlock), last = uint32_t(std::min<size_t>(faces, first + size_t(kBlock)));
+            const uint32_t *const mate_p = mate.data(), *const pos_p = pos.data(), *const base_p = vertex_base.data();
+            uint32_t *const halfedge_p = halfedge.data(), *const vertex_p = vertex.data(), *const face_p = face_index.data();
             uint32_t e = block_start[block][0], face = block_start[block][1];
             for (uint32_t f = first; f != last; ++f) {
                 if (!is_attached(f)) continue;
-                face_index[f] = face++;
+                face_p[f] = face++;
                 for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
-                    vertex[k] = vertex_base[pos[k]] + fan[k];
-                    if (!opens_edge(k)) continue;
-                    halfedge[k] = 2 * e;
-                    if (mate[k] != kNone) halfedge[mate[k]] = 2 * e + 1;
+                    vertex_p[k] = base_p[pos_p[k]] + vertex_p[k];
+                    if (!opens_edge(mate_p, k)) continue;
+                    halfedge_p[k] = 2 * e;
+                    if (mate_p[k] != kNone) halfedge_p[mate_p[k]] = 2 * e + 1;
                     ++e;
                 }
             }
@@ -508,28 +523,35 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     // twin of the unpaired halfedge into its head corner (OpenMesh keeps a boundary vertex's halfedge there),
     // which is also the boundary successor of the twin into its tail.
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, faces, 8192), [&](const auto& r) {
+        const uint32_t *const halfedge_p = halfedge.data(), *const vertex_p = vertex.data(), *const mate_p = mate.data();
+        const uint32_t *const face_p = face_index.data(), *const kept_p = kept.data(), *const pos_p = pos.data();
+        const uint8_t* const head_p = fan_head.data();
+        uint32_t *const face_triangle = out.face_triangle.data(), *const vertex_position = out.vertex_position.data();
         for (uint32_t f = r.begin(); f != r.end(); ++f) {
             if (!is_attached(f)) continue;
-            const FaceHandle fh(static_cast<int>(face_index[f]));
-            out.face_triangle[face_index[f]] = kept[f];
-            for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
-                const HalfedgeHandle h(static_cast<int>(halfedge[k]));
-                m.set_vertex_handle(h, VertexHandle(static_cast<int>(vertex[next_corner(k)])));
+            const FaceHandle fh(static_cast<int>(face_p[f]));
+            face_triangle[face_p[f]] = kept_p[f];
+            const uint32_t* const he = halfedge_p + 3 * f;
+#pragma GCC unroll 3
+            for (uint32_t c = 0; c < 3; ++c) {
+                const uint32_t k = 3 * f + c, next = c == 2 ? 0 : c + 1, prev = c == 0 ? 2 : c - 1;
+                const HalfedgeHandle h(static_cast<int>(he[c]));
+                m.set_vertex_handle(h, VertexHandle(static_cast<int>(vertex_p[3 * f + next])));
                 m.set_face_handle(h, fh);
-                m.set_next_halfedge_handle(h, HalfedgeHandle(static_cast<int>(halfedge[next_corner(k)])));
-                if (mate[k] == kNone) {
-                    const HalfedgeHandle b(static_cast<int>(halfedge[k] ^ 1u));
-                    m.set_vertex_handle(b, VertexHandle(static_cast<int>(vertex[k])));
-                    m.set_next_halfedge_handle(b, HalfedgeHandle(static_cast<int>(halfedge[prev_corner(tail_head[k])] ^ 1u)));
+                m.set_next_halfedge_handle(h, HalfedgeHandle(static_cast<int>(he[next])));
+                if (mate_p[k] == kNone) {
+                    const HalfedgeHandle b(static_cast<int>(he[c] ^ 1u));
+                    m.set_vertex_handle(b, VertexHandle(static_cast<int>(vertex_p[k])));
+                    m.set_next_halfedge_handle(b, HalfedgeHandle(static_cast<int>(halfedge_p[prev_corner(tail_head[k])] ^ 1u)));
                 }
-                if (!fan_head[k]) continue;
-                const uint32_t v = vertex[k], in = prev_corner(k);
-                const uint32_t out_h = mate[in] == kNone ? halfedge[in] ^ 1u : halfedge[k];
+                if (!head_p[k]) continue;
+                const uint32_t v = vertex_p[k];
+                const uint32_t out_h = mate_p[3 * f + prev] == kNone ? he[prev] ^ 1u : he[c];
                 m.set_halfedge_handle(VertexHandle(static_cast<int>(v)), HalfedgeHandle(static_cast<int>(out_h)));
-                m.set_point(VertexHandle(static_cast<int>(v)), point(f, k % 3));
-                out.vertex_position[v] = pos[k];
+                m.set_point(VertexHandle(static_cast<int>(v)), point(f, c));
+                vertex_position[v] = pos_p[k];
             }
-            m.set_halfedge_handle(fh, HalfedgeHandle(static_cast<int>(halfedge[3 * f])));
+            m.set_halfedge_handle(fh, HalfedgeHandle(static_cast<int>(he[0])));
         }
     });
     for (uint32_t d = 0; d < detached_count; ++d) {
