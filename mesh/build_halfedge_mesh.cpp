@@ -185,9 +185,8 @@ EdgeCounts pair_positions(const PairingArrays& in, uint32_t begin, uint32_t end,
 // degenerate: a component of the float normal above 1e-5 of the float scale means twice the area exceeds
 // 1e-10 of the scale by far more than float rounding (some 1e-7 of the scale) could account for. Tiny,
 // huge and non-finite input fails that filter and goes to the exact double test.
-inline bool degenerate(const TriMesh& mesh, const uint32_t* f) {
-    const float *p = &mesh.positions[3 * size_t(f[0])], *q = &mesh.positions[3 * size_t(f[1])],
-                *r = &mesh.positions[3 * size_t(f[2])];
+inline bool degenerate(const TriMesh& mesh, const float* positions, const uint32_t* f) {
+    const float *p = positions + 3 * size_t(f[0]), *q = positions + 3 * size_t(f[1]), *r = positions + 3 * size_t(f[2]);
     const float ax = q[0] - p[0], ay = q[1] - p[1], az = q[2] - p[2];
     const float bx = r[0] - p[0], by = r[1] - p[1], bz = r[2] - p[2];
     const float cx = r[0] - q[0], cy = r[1] - q[1], cz = r[2] - q[2];
@@ -227,12 +226,16 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const auto& r) {
         for (size_t block = r.begin(); block != r.end(); ++block) {
             const auto [first, last] = block_range(block);
+            // Local copies: the byte stores could otherwise alias them and force reloads.
+            const uint32_t *const indices = mesh.indices.data(), *const pid_p = pid.data();
+            const float* const positions_p = mesh.positions.data();
+            uint8_t* const usable_p = usable.data();
             uint32_t count = 0;
             for (size_t t = first; t != last; ++t) {
-                const uint32_t* f = &mesh.indices[3 * t];
-                const uint32_t a = pid[f[0]], b = pid[f[1]], c = pid[f[2]];
-                const bool ok = a != b && b != c && a != c && !degenerate(mesh, f);
-                usable[t] = ok;
+                const uint32_t* f = indices + 3 * t;
+                const uint32_t a = pid_p[f[0]], b = pid_p[f[1]], c = pid_p[f[2]];
+                const bool ok = a != b && b != c && a != c && !degenerate(mesh, positions_p, f);
+                usable_p[t] = ok;
                 count += ok;
             }
             block_faces[block + 1] = count;
@@ -247,11 +250,14 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const auto& r) {
         for (size_t block = r.begin(); block != r.end(); ++block) {
             const auto [first, last] = block_range(block);
+            const uint32_t *const indices = mesh.indices.data(), *const pid_p = pid.data();
+            const uint8_t* const usable_p = usable.data();
+            uint32_t *const kept_p = kept.data(), *const pos_p = pos.data();
             uint32_t f = block_faces[block];
             for (size_t t = first; t != last; ++t) {
-                if (!usable[t]) continue;
-                kept[f] = uint32_t(t);
-                for (int c = 0; c < 3; ++c) pos[3 * f + c] = pid[mesh.indices[3 * t + c]];
+                if (!usable_p[t]) continue;
+                kept_p[f] = uint32_t(t);
+                for (int c = 0; c < 3; ++c) pos_p[3 * f + c] = pid_p[indices[3 * t + c]];
                 ++f;
             }
         }
@@ -260,7 +266,7 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     // Corners of each position, in corner order (a counting sort), with the positions of their next and
     // previous corners beside them so that the pairing reads each position's corners contiguously.
     std::vector<uint32_t> start(position_count + 1, 0);
-    for (uint32_t k = 0; k < corners; ++k) ++start[pos[k] + 1];
+    for (uint32_t k = 0, *const start_p = start.data() + 1; k < corners; ++k) ++start_p[pos[k]];
     std::partial_sum(start.begin(), start.end(), start.begin());
     detail::ScratchArray<uint32_t> by_position(corners);
     detail::ScratchArray<uint32_t> around_next(corners + 8), around_prev(corners + 8);
@@ -268,13 +274,17 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     std::fill_n(around_prev.data() + corners, 8, kNone);
     {
         std::vector<uint32_t> fill(start.begin(), start.end() - 1);
+        uint32_t *const fill_p = fill.data(), *const by_position_p = by_position.data();
+        uint32_t *const next_p = around_next.data(), *const prev_p = around_prev.data();
+        const uint32_t* const pos_p = pos.data();
         for (uint32_t f = 0; f < faces; ++f) {
-            const uint32_t p[3] = {pos[3 * f], pos[3 * f + 1], pos[3 * f + 2]};
+            const uint32_t p[3] = {pos_p[3 * f], pos_p[3 * f + 1], pos_p[3 * f + 2]};
+#pragma GCC unroll 3
             for (uint32_t c = 0; c < 3; ++c) {
-                const uint32_t slot = fill[p[c]]++;
-                by_position[slot] = 3 * f + c;
-                around_next[slot] = p[c == 2 ? 0 : c + 1];
-                around_prev[slot] = p[c == 0 ? 2 : c - 1];
+                const uint32_t slot = fill_p[p[c]]++;
+                by_position_p[slot] = 3 * f + c;
+                next_p[slot] = p[c == 2 ? 0 : c + 1];
+                prev_p[slot] = p[c == 0 ? 2 : c - 1];
             }
         }
     }
