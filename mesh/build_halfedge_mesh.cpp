@@ -144,6 +144,14 @@ __attribute__((target("avx2,popcnt,lzcnt"))) EdgeCounts pair_positions_avx2(cons
                 const __m256i b = _mm256_set1_epi32(int(next[i]));
                 const unsigned same = lanes & unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(nx, b))));
                 const unsigned opp = lanes & unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(pv, b))));
+                if ((same & ~(1u << i)) == 0 && (opp & (opp - 1)) == 0) {
+                    // The usual verdict: no other halfedge the same way, at most one the opposite way.
+                    const uint32_t k = c.corner[i];
+                    in.simple[k] = 1;
+                    in.mate[k] = opp ? prev_corner(c.corner[unsigned(__builtin_ctz(opp))]) : kNone;
+                    counts.boundary += opp == 0;
+                    continue;
+                }
                 const uint32_t opposite = uint32_t(__builtin_popcount(opp));
                 const uint32_t total = uint32_t(__builtin_popcount(same)) + opposite;
                 const uint32_t partner = opp ? prev_corner(c.corner[31 - unsigned(__builtin_clz(opp))]) : kNone;
