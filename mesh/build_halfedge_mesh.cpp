@@ -205,6 +205,84 @@ inline bool degenerate(const TriMesh& mesh, const float* positions, const uint32
                                           detail::position(mesh, f[2]));
 }
 
+// Marks triangles [first, last) usable (three distinct positions, not degenerate) and returns how many are.
+uint32_t mark_usable_scalar(const TriMesh& mesh, const uint32_t* pid, uint8_t* usable, size_t first, size_t last) {
+    const uint32_t* const indices = mesh.indices.data();
+    const float* const positions = mesh.positions.data();
+    uint32_t count = 0;
+    for (size_t t = first; t != last; ++t) {
+        const uint32_t* f = indices + 3 * t;
+        const uint32_t a = pid[f[0]], b = pid[f[1]], c = pid[f[2]];
+        const bool ok = a != b && b != c && a != c && !degenerate(mesh, positions, f);
+        usable[t] = ok;
+        count += ok;
+    }
+    return count;
+}
+
+#if defined(__x86_64__) && defined(__GNUC__)
+// The same for eight triangles at a time: the float filter of degenerate() in AVX2 lanes (the same IEEE
+// operations), the exact test only for lanes it does not clear. Needs 3 * vertex_count below 2^31.
+__attribute__((target("avx2,popcnt"))) uint32_t mark_usable_avx2(const TriMesh& mesh, const uint32_t* pid,
+                                                               uint8_t* usable, size_t first, size_t last) {
+    const int* const indices = reinterpret_cast<const int*>(mesh.indices.data());
+    const float* const positions = mesh.positions.data();
+    const __m256i stride = _mm256_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21);
+    const __m256 sign = _mm256_set1_ps(-0.0f), tiny = _mm256_set1_ps(1e-30f), ratio = _mm256_set1_ps(1e-5f);
+    uint32_t count = 0;
+    size_t t = first;
+    for (; t + 8 <= last; t += 8) {
+        const int* f = indices + 3 * t;
+        const __m256i f0 = _mm256_i32gather_epi32(f, stride, 4), f1 = _mm256_i32gather_epi32(f + 1, stride, 4),
+                      f2 = _mm256_i32gather_epi32(f + 2, stride, 4);
+        const int* pid_i = reinterpret_cast<const int*>(pid);
+        const __m256i a = _mm256_i32gather_epi32(pid_i, f0, 4), b = _mm256_i32gather_epi32(pid_i, f1, 4),
+                      c = _mm256_i32gather_epi32(pid_i, f2, 4);
+        const __m256i equal = _mm256_or_si256(_mm256_or_si256(_mm256_cmpeq_epi32(a, b), _mm256_cmpeq_epi32(b, c)),
+                                              _mm256_cmpeq_epi32(a, c));
+        const unsigned distinct = ~unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(equal))) & 0xffu;
+        const __m256i o0 = _mm256_add_epi32(f0, _mm256_add_epi32(f0, f0)), o1 = _mm256_add_epi32(f1, _mm256_add_epi32(f1, f1)),
+                      o2 = _mm256_add_epi32(f2, _mm256_add_epi32(f2, f2));
+        const __m256 px = _mm256_i32gather_ps(positions, o0, 4), py = _mm256_i32gather_ps(positions + 1, o0, 4),
+                     pz = _mm256_i32gather_ps(positions + 2, o0, 4);
+        const __m256 qx = _mm256_i32gather_ps(positions, o1, 4), qy = _mm256_i32gather_ps(positions + 1, o1, 4),
+                     qz = _mm256_i32gather_ps(positions + 2, o1, 4);
+        const __m256 rx = _mm256_i32gather_ps(positions, o2, 4), ry = _mm256_i32gather_ps(positions + 1, o2, 4),
+                     rz = _mm256_i32gather_ps(positions + 2, o2, 4);
+        const __m256 ax = _mm256_sub_ps(qx, px), ay = _mm256_sub_ps(qy, py), az = _mm256_sub_ps(qz, pz);
+        const __m256 bx = _mm256_sub_ps(rx, px), by = _mm256_sub_ps(ry, py), bz = _mm256_sub_ps(rz, pz);
+        const __m256 cx = _mm256_sub_ps(rx, qx), cy = _mm256_sub_ps(ry, qy), cz = _mm256_sub_ps(rz, qz);
+        const __m256 nx = _mm256_andnot_ps(sign, _mm256_sub_ps(_mm256_mul_ps(ay, bz), _mm256_mul_ps(az, by)));
+        const __m256 ny = _mm256_andnot_ps(sign, _mm256_sub_ps(_mm256_mul_ps(az, bx), _mm256_mul_ps(ax, bz)));
+        const __m256 nz = _mm256_andnot_ps(sign, _mm256_sub_ps(_mm256_mul_ps(ax, by), _mm256_mul_ps(ay, bx)));
+        __m256 scale = _mm256_mul_ps(ax, ax);
+        for (const __m256 e : {ay, az, bx, by, bz, cx, cy, cz}) scale = _mm256_add_ps(scale, _mm256_mul_ps(e, e));
+        const __m256 big = _mm256_max_ps(nx, _mm256_max_ps(ny, nz));
+        const __m256 clear = _mm256_and_ps(_mm256_cmp_ps(scale, tiny, _CMP_GT_OQ),
+                                           _mm256_cmp_ps(big, _mm256_mul_ps(ratio, scale), _CMP_GT_OQ));
+        const unsigned cleared = unsigned(_mm256_movemask_ps(clear));
+        for (unsigned lane = 0; lane < 8; ++lane) {
+            const bool ok = ((distinct >> lane) & 1u) &&
+                            (((cleared >> lane) & 1u) ||
+                             !detail::is_degenerate_triangle(detail::position(mesh, mesh.indices[3 * (t + lane)]),
+                                                             detail::position(mesh, mesh.indices[3 * (t + lane) + 1]),
+                                                             detail::position(mesh, mesh.indices[3 * (t + lane) + 2])));
+            usable[t + lane] = ok;
+            count += ok;
+        }
+    }
+    return count + mark_usable_scalar(mesh, pid, usable, t, last);
+}
+#endif
+
+uint32_t mark_usable(const TriMesh& mesh, const uint32_t* pid, uint8_t* usable, size_t first, size_t last) {
+#if defined(__x86_64__) && defined(__GNUC__)
+    static const bool avx2 = __builtin_cpu_supports("avx2");
+    if (avx2 && mesh.vertex_count() < (size_t(1) << 31) / 3) return mark_usable_avx2(mesh, pid, usable, first, last);
+#endif
+    return mark_usable_scalar(mesh, pid, usable, first, last);
+}
+
 // Fixed blocks of triangles for the passes that number things in order: block totals, then their prefix
 // sums, then each block writes from its offset (the same numbers for any thread count).
 constexpr uint32_t kBlock = 16384;
@@ -234,19 +312,7 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const auto& r) {
         for (size_t block = r.begin(); block != r.end(); ++block) {
             const auto [first, last] = block_range(block);
-            // Local copies: the byte stores could otherwise alias them and force reloads.
-            const uint32_t *const indices = mesh.indices.data(), *const pid_p = pid.data();
-            const float* const positions_p = mesh.positions.data();
-            uint8_t* const usable_p = usable.data();
-            uint32_t count = 0;
-            for (size_t t = first; t != last; ++t) {
-                const uint32_t* f = indices + 3 * t;
-                const uint32_t a = pid_p[f[0]], b = pid_p[f[1]], c = pid_p[f[2]];
-                const bool ok = a != b && b != c && a != c && !degenerate(mesh, positions_p, f);
-                usable_p[t] = ok;
-                count += ok;
-            }
-            block_faces[block + 1] = count;
+            block_faces[block + 1] = mark_usable(mesh, pid.data(), usable.data(), first, last);
         }
     });
     std::partial_sum(block_faces.begin(), block_faces.end(), block_faces.begin());
