@@ -459,7 +459,8 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     const bool any_detached = !detached.empty();
     detail::ScratchArray<uint32_t> fan(corners);
     detail::ScratchArray<uint8_t> fan_head(corners);
-    detail::ScratchArray<uint32_t> tail_head(corners);  // per corner without successor: its fan's head
+    // Per corner without successor: its fan's head; in the storage of around_next (no longer read).
+    detail::ScratchArray<uint32_t>& tail_head = around_next;
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, corners, 65536), [&](const auto& r) {
         std::fill(fan.data() + r.begin(), fan.data() + r.end(), kNone);
         std::fill(fan_head.data() + r.begin(), fan_head.data() + r.end(), uint8_t(0));
@@ -532,7 +533,8 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     // numbered from the block's offsets; fan[k] becomes the OpenMesh vertex of corner k on the way.
     detail::ScratchArray<uint32_t>& halfedge = by_position;
     detail::ScratchArray<uint32_t>& vertex = fan;
-    detail::ScratchArray<uint32_t> face_index(faces);  // read for attached faces only
+    // Read for attached faces only; in the storage of around_prev (no longer read, at least faces long).
+    detail::ScratchArray<uint32_t>& face_index = around_prev;
     const size_t face_blocks = (size_t(faces) + kBlock - 1) / kBlock;
     std::vector<std::array<uint32_t, 2>> block_start(face_blocks + 1, {0, 0});  // edges, attached faces
     tbb::parallel_for(tbb::blocked_range<size_t>(0, face_blocks, 1), [&](const auto& r) {
