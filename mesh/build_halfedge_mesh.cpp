@@ -2,6 +2,8 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <cmath>
+#include <array>
 #include <numeric>
 #include <unordered_map>
 
@@ -61,70 +63,61 @@ bool link_is_single_fan(const detail::ScratchArray<uint32_t>& pos, const uint32_
 // (mate). Boundary edges (one halfedge) and non-manifold edges (three or more, counted at their lowest
 // halfedge) are summed per range: integer sums, the same for any split.
 struct PairingArrays {
-    const uint32_t* pos;          // per corner: its position
-    const uint32_t* start;        // per position: first entry in by_position
+    const uint32_t* start;        // per position: first entry in the columns below
     const uint32_t* by_position;  // corners grouped by position, in corner order
+    const uint32_t* next;         // per entry: the position of the corner's next corner
+    const uint32_t* prev;         // per entry: the position of the corner's previous corner
     uint32_t* mate;               // out, per corner: the paired halfedge or kNone
     uint8_t* simple;              // out, per corner: its edge is simple
 };
 
 struct EdgeCounts {
-    size_t boundary = 0, nonmanifold = 0;
+    size_t boundary = 0, nonmanifold = 0, not_simple = 0;
 };
 
-// A position's corners as columns; next and prev are padded with kNone (never a position) to a multiple
-// of 8. The columns only grow, so a pass allocates them once.
+// A position's corners: `count` entries of the columns from its start on.
 struct Around {
-    std::vector<uint32_t> next, prev, corner, prev_halfedge;
-    uint32_t gather(const PairingArrays& in, uint32_t a) {
-        const uint32_t first = in.start[a], count = in.start[a + 1] - first, padded = (count + 7) & ~7u;
-        if (next.size() < padded)
-            for (std::vector<uint32_t>* v : {&next, &prev, &corner, &prev_halfedge}) v->resize(padded);
-        for (uint32_t i = 0; i < count; ++i) {
-            const uint32_t j = in.by_position[first + i], p = prev_corner(j);
-            next[i] = in.pos[next_corner(j)];
-            prev[i] = in.pos[p];
-            corner[i] = j;
-            prev_halfedge[i] = p;
-        }
-        for (uint32_t i = count; i < padded; ++i) next[i] = prev[i] = kNone;
-        return count;
-    }
+    const uint32_t *next, *prev, *corner;
+    uint32_t count;
+    Around(const PairingArrays& in, uint32_t a)
+        : next(in.next + in.start[a]), prev(in.prev + in.start[a]), corner(in.by_position + in.start[a]),
+          count(in.start[a + 1] - in.start[a]) {}
 };
 
 // The verdict on outgoing halfedge i of a position, from its counts of same-way and opposite halfedges
 // (partner: the last opposite one).
-inline void settle(const PairingArrays& in, const Around& c, uint32_t count, uint32_t i, uint32_t total,
-                   uint32_t opposite, uint32_t partner, EdgeCounts& counts) {
+inline void settle(const PairingArrays& in, const Around& c, uint32_t i, uint32_t total, uint32_t opposite,
+                   uint32_t partner, EdgeCounts& counts) {
     const uint32_t k = c.corner[i], b = c.next[i];
     const bool paired = total == 2 && opposite == 1;
-    in.simple[k] = total == 1 || paired;
+    const bool simple = total == 1 || paired;
+    in.simple[k] = simple;
     in.mate[k] = paired ? partner : kNone;
     counts.boundary += total == 1;
+    counts.not_simple += !simple;
     if (total >= 3) {
         uint32_t lowest = k;
-        for (uint32_t m = 0; m < count; ++m) {
+        for (uint32_t m = 0; m < c.count; ++m) {
             if (c.next[m] == b) lowest = std::min(lowest, c.corner[m]);
-            else if (c.prev[m] == b) lowest = std::min(lowest, c.prev_halfedge[m]);
+            else if (c.prev[m] == b) lowest = std::min(lowest, prev_corner(c.corner[m]));
         }
         counts.nonmanifold += lowest == k;
     }
 }
 
 EdgeCounts pair_positions_scalar(const PairingArrays& in, uint32_t begin, uint32_t end, EdgeCounts counts) {
-    Around c;
     for (uint32_t a = begin; a != end; ++a) {
-        const uint32_t count = c.gather(in, a);
-        for (uint32_t i = 0; i < count; ++i) {
+        const Around c(in, a);
+        for (uint32_t i = 0; i < c.count; ++i) {
             const uint32_t b = c.next[i];
             uint32_t total = 0, opposite = 0, partner = kNone;
-            for (uint32_t m = 0; m < count; ++m) {
+            for (uint32_t m = 0; m < c.count; ++m) {
                 const uint32_t same = c.next[m] == b, opp = c.prev[m] == b;
                 total += same + opp;
                 opposite += opp;
-                partner = opp ? c.prev_halfedge[m] : partner;
+                partner = opp ? prev_corner(c.corner[m]) : partner;
             }
-            settle(in, c, count, i, total, opposite, partner, counts);
+            settle(in, c, i, total, opposite, partner, counts);
         }
     }
     return counts;
@@ -132,25 +125,56 @@ EdgeCounts pair_positions_scalar(const PairingArrays& in, uint32_t begin, uint32
 
 #if defined(__x86_64__) && defined(__GNUC__)
 // The same with eight comparisons per instruction: a position of valence 6 compares each halfedge with all
-// of its corners in two AVX2 compares. Integer logic: the result equals the scalar one bit for bit.
-__attribute__((target("avx2,popcnt,lzcnt"))) EdgeCounts pair_positions_avx2(const PairingArrays& in, uint32_t begin,
+// of its corners in two AVX2 compares, straight from the columns (they are padded by 8 entries at the end;
+// lanes past the position's corners are masked off). Integer logic: the result equals the scalar one.
+__attribute__((target("avx2,popcnt,lzcnt"))) EdgeCounts pair_positions_avx2(const PairingArrays& arrays, uint32_t begin,
                                                                            uint32_t end, EdgeCounts counts) {
-    Around c;
+    const PairingArrays in = arrays;  // a local copy: the byte stores to simple cannot alias its pointers
     for (uint32_t a = begin; a != end; ++a) {
-        const uint32_t count = c.gather(in, a), padded = (count + 7) & ~7u;
-        for (uint32_t i = 0; i < count; ++i) {
+        const Around c(in, a);
+        if (c.count <= 8) {
+            // Most positions: all corners in one register pair, loaded once (the byte writes of settle
+            // would otherwise force reloads), and the next positions kept in a local copy.
+            const unsigned lanes = (1u << c.count) - 1u;
+            const __m256i nx = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(c.next));
+            const __m256i pv = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(c.prev));
+            alignas(32) uint32_t next[8];
+            _mm256_store_si256(reinterpret_cast<__m256i*>(next), nx);
+            for (uint32_t i = 0; i < c.count; ++i) {
+                const __m256i b = _mm256_set1_epi32(int(next[i]));
+                const unsigned same = lanes & unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(nx, b))));
+                const unsigned opp = lanes & unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(pv, b))));
+                if ((same & ~(1u << i)) == 0 && (opp & (opp - 1)) == 0) {
+                    // The usual verdict: no other halfedge the same way, at most one the opposite way.
+                    const uint32_t k = c.corner[i];
+                    in.simple[k] = 1;
+                    in.mate[k] = opp ? prev_corner(c.corner[unsigned(__builtin_ctz(opp))]) : kNone;
+                    counts.boundary += opp == 0;
+                    continue;
+                }
+                const uint32_t opposite = uint32_t(__builtin_popcount(opp));
+                const uint32_t total = uint32_t(__builtin_popcount(same)) + opposite;
+                const uint32_t partner = opp ? prev_corner(c.corner[31 - unsigned(__builtin_clz(opp))]) : kNone;
+                settle(in, c, i, total, opposite, partner, counts);
+            }
+            continue;
+        }
+        for (uint32_t i = 0; i < c.count; ++i) {
             const __m256i b = _mm256_set1_epi32(int(c.next[i]));
             uint32_t total = 0, opposite = 0, partner = kNone;
-            for (uint32_t m = 0; m < padded; m += 8) {
-                const __m256i nx = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(&c.next[m]));
-                const __m256i pv = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(&c.prev[m]));
-                const unsigned same = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(nx, b))));
-                const unsigned opp = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(pv, b))));
+            for (uint32_t m = 0; m < c.count; m += 8) {
+                const unsigned lanes = c.count - m >= 8 ? 0xffu : (1u << (c.count - m)) - 1u;
+                const __m256i nx = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(c.next + m));
+                const __m256i pv = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(c.prev + m));
+                const unsigned same =
+                    lanes & unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(nx, b))));
+                const unsigned opp =
+                    lanes & unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(pv, b))));
                 total += unsigned(__builtin_popcount(same) + __builtin_popcount(opp));
                 opposite += unsigned(__builtin_popcount(opp));
-                if (opp) partner = c.prev_halfedge[m + 31 - unsigned(__builtin_clz(opp))];
+                if (opp) partner = prev_corner(c.corner[m + 31 - unsigned(__builtin_clz(opp))]);
             }
-            settle(in, c, count, i, total, opposite, partner, counts);
+            settle(in, c, i, total, opposite, partner, counts);
         }
     }
     return counts;
@@ -165,6 +189,104 @@ EdgeCounts pair_positions(const PairingArrays& in, uint32_t begin, uint32_t end,
     return pair_positions_scalar(in, begin, end, counts);
 }
 
+// is_degenerate_triangle of three mesh vertices, decided in float where the triangle is clearly not
+// degenerate: a component of the float normal above 1e-5 of the float scale means twice the area exceeds
+// 1e-10 of the scale by far more than float rounding (some 1e-7 of the scale) could account for. Tiny,
+// huge and non-finite input fails that filter and goes to the exact double test.
+inline bool degenerate(const TriMesh& mesh, const float* positions, const uint32_t* f) {
+    const float *p = positions + 3 * size_t(f[0]), *q = positions + 3 * size_t(f[1]), *r = positions + 3 * size_t(f[2]);
+    const float ax = q[0] - p[0], ay = q[1] - p[1], az = q[2] - p[2];
+    const float bx = r[0] - p[0], by = r[1] - p[1], bz = r[2] - p[2];
+    const float cx = r[0] - q[0], cy = r[1] - q[1], cz = r[2] - q[2];
+    const float nx = std::abs(ay * bz - az * by), ny = std::abs(az * bx - ax * bz), nz = std::abs(ax * by - ay * bx);
+    const float scale = ax * ax + ay * ay + az * az + bx * bx + by * by + bz * bz + cx * cx + cy * cy + cz * cz;
+    if (scale > 1e-30f && std::max(nx, std::max(ny, nz)) > 1e-5f * scale) return false;
+    return detail::is_degenerate_triangle(detail::position(mesh, f[0]), detail::position(mesh, f[1]),
+                                          detail::position(mesh, f[2]));
+}
+
+// Marks triangles [first, last) usable (three distinct positions, not degenerate) and returns how many are.
+uint32_t mark_usable_scalar(const TriMesh& mesh, const uint32_t* pid, uint8_t* usable, size_t first, size_t last) {
+    const uint32_t* const indices = mesh.indices.data();
+    const float* const positions = mesh.positions.data();
+    uint32_t count = 0;
+    for (size_t t = first; t != last; ++t) {
+        const uint32_t* f = indices + 3 * t;
+        const uint32_t a = pid[f[0]], b = pid[f[1]], c = pid[f[2]];
+        const bool ok = a != b && b != c && a != c && !degenerate(mesh, positions, f);
+        usable[t] = ok;
+        count += ok;
+    }
+    return count;
+}
+
+#if defined(__x86_64__) && defined(__GNUC__)
+// The same for eight triangles at a time: the float filter of degenerate() in AVX2 lanes (the same IEEE
+// operations), the exact test only for lanes it does not clear. Needs 3 * vertex_count below 2^31.
+__attribute__((target("avx2,popcnt"))) uint32_t mark_usable_avx2(const TriMesh& mesh, const uint32_t* pid,
+                                                               uint8_t* usable, size_t first, size_t last) {
+    const int* const indices = reinterpret_cast<const int*>(mesh.indices.data());
+    const float* const positions = mesh.positions.data();
+    const __m256i stride = _mm256_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21);
+    const __m256 sign = _mm256_set1_ps(-0.0f), tiny = _mm256_set1_ps(1e-30f), ratio = _mm256_set1_ps(1e-5f);
+    uint32_t count = 0;
+    size_t t = first;
+    for (; t + 8 <= last; t += 8) {
+        const int* f = indices + 3 * t;
+        const __m256i f0 = _mm256_i32gather_epi32(f, stride, 4), f1 = _mm256_i32gather_epi32(f + 1, stride, 4),
+                      f2 = _mm256_i32gather_epi32(f + 2, stride, 4);
+        const int* pid_i = reinterpret_cast<const int*>(pid);
+        const __m256i a = _mm256_i32gather_epi32(pid_i, f0, 4), b = _mm256_i32gather_epi32(pid_i, f1, 4),
+                      c = _mm256_i32gather_epi32(pid_i, f2, 4);
+        const __m256i equal = _mm256_or_si256(_mm256_or_si256(_mm256_cmpeq_epi32(a, b), _mm256_cmpeq_epi32(b, c)),
+                                              _mm256_cmpeq_epi32(a, c));
+        const unsigned distinct = ~unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(equal))) & 0xffu;
+        const __m256i o0 = _mm256_add_epi32(f0, _mm256_add_epi32(f0, f0)), o1 = _mm256_add_epi32(f1, _mm256_add_epi32(f1, f1)),
+                      o2 = _mm256_add_epi32(f2, _mm256_add_epi32(f2, f2));
+        const __m256 px = _mm256_i32gather_ps(positions, o0, 4), py = _mm256_i32gather_ps(positions + 1, o0, 4),
+                     pz = _mm256_i32gather_ps(positions + 2, o0, 4);
+        const __m256 qx = _mm256_i32gather_ps(positions, o1, 4), qy = _mm256_i32gather_ps(positions + 1, o1, 4),
+                     qz = _mm256_i32gather_ps(positions + 2, o1, 4);
+        const __m256 rx = _mm256_i32gather_ps(positions, o2, 4), ry = _mm256_i32gather_ps(positions + 1, o2, 4),
+                     rz = _mm256_i32gather_ps(positions + 2, o2, 4);
+        const __m256 ax = _mm256_sub_ps(qx, px), ay = _mm256_sub_ps(qy, py), az = _mm256_sub_ps(qz, pz);
+        const __m256 bx = _mm256_sub_ps(rx, px), by = _mm256_sub_ps(ry, py), bz = _mm256_sub_ps(rz, pz);
+        const __m256 cx = _mm256_sub_ps(rx, qx), cy = _mm256_sub_ps(ry, qy), cz = _mm256_sub_ps(rz, qz);
+        const __m256 nx = _mm256_andnot_ps(sign, _mm256_sub_ps(_mm256_mul_ps(ay, bz), _mm256_mul_ps(az, by)));
+        const __m256 ny = _mm256_andnot_ps(sign, _mm256_sub_ps(_mm256_mul_ps(az, bx), _mm256_mul_ps(ax, bz)));
+        const __m256 nz = _mm256_andnot_ps(sign, _mm256_sub_ps(_mm256_mul_ps(ax, by), _mm256_mul_ps(ay, bx)));
+        __m256 scale = _mm256_mul_ps(ax, ax);
+        for (const __m256 e : {ay, az, bx, by, bz, cx, cy, cz}) scale = _mm256_add_ps(scale, _mm256_mul_ps(e, e));
+        const __m256 big = _mm256_max_ps(nx, _mm256_max_ps(ny, nz));
+        const __m256 clear = _mm256_and_ps(_mm256_cmp_ps(scale, tiny, _CMP_GT_OQ),
+                                           _mm256_cmp_ps(big, _mm256_mul_ps(ratio, scale), _CMP_GT_OQ));
+        const unsigned cleared = unsigned(_mm256_movemask_ps(clear));
+        for (unsigned lane = 0; lane < 8; ++lane) {
+            const bool ok = ((distinct >> lane) & 1u) &&
+                            (((cleared >> lane) & 1u) ||
+                             !detail::is_degenerate_triangle(detail::position(mesh, mesh.indices[3 * (t + lane)]),
+                                                             detail::position(mesh, mesh.indices[3 * (t + lane) + 1]),
+                                                             detail::position(mesh, mesh.indices[3 * (t + lane) + 2])));
+            usable[t + lane] = ok;
+            count += ok;
+        }
+    }
+    return count + mark_usable_scalar(mesh, pid, usable, t, last);
+}
+#endif
+
+uint32_t mark_usable(const TriMesh& mesh, const uint32_t* pid, uint8_t* usable, size_t first, size_t last) {
+#if defined(__x86_64__) && defined(__GNUC__)
+    static const bool avx2 = __builtin_cpu_supports("avx2");
+    if (avx2 && mesh.vertex_count() < (size_t(1) << 31) / 3) return mark_usable_avx2(mesh, pid, usable, first, last);
+#endif
+    return mark_usable_scalar(mesh, pid, usable, first, last);
+}
+
+// Fixed blocks of triangles for the passes that number things in order: block totals, then their prefix
+// sums, then each block writes from its offset (the same numbers for any thread count).
+constexpr uint32_t kBlock = 16384;
+
 }  // namespace
 
 HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& positions) {
@@ -177,39 +299,68 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     const uint32_t position_count = positions.position_count;
     const std::vector<uint32_t>& pid = positions.position_id;
 
-    // Usable triangles, in order: three distinct positions and a non-zero area.
+    // Usable triangles, in order: three distinct positions and a non-zero area. Per block of triangles the
+    // usable ones are counted, then each block writes its kept triangles and their corners' positions.
     // The large per-triangle, per-corner and per-position arrays below are scratch arrays (uninitialised,
     // huge pages) wherever every element read has been written first.
+    const size_t blocks = (tris + kBlock - 1) / kBlock;
+    auto block_range = [&](size_t block) {
+        return std::pair<size_t, size_t>(block * kBlock, std::min(tris, (block + 1) * kBlock));
+    };
     detail::ScratchArray<uint8_t> usable(tris);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, tris, 8192), [&](const auto& r) {
-        for (size_t t = r.begin(); t != r.end(); ++t) {
-            const uint32_t* f = &mesh.indices[3 * t];
-            const uint32_t a = pid[f[0]], b = pid[f[1]], c = pid[f[2]];
-            usable[t] = a != b && b != c && a != c &&
-                        !detail::is_degenerate_triangle(detail::position(mesh, f[0]), detail::position(mesh, f[1]),
-                                                        detail::position(mesh, f[2]));
+    std::vector<uint32_t> block_faces(blocks + 1, 0);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const auto& r) {
+        for (size_t block = r.begin(); block != r.end(); ++block) {
+            const auto [first, last] = block_range(block);
+            block_faces[block + 1] = mark_usable(mesh, pid.data(), usable.data(), first, last);
         }
     });
-    detail::ScratchArray<uint32_t> kept(tris);
-    uint32_t faces = 0;
-    for (size_t t = 0; t < tris; ++t)
-        if (usable[t]) kept[faces++] = uint32_t(t);
+    std::partial_sum(block_faces.begin(), block_faces.end(), block_faces.begin());
+    const uint32_t faces = block_faces[blocks];
     out.degenerate_triangles = tris - faces;
     const uint32_t corners = 3 * faces;
+    detail::ScratchArray<uint32_t> kept(faces);
     detail::ScratchArray<uint32_t> pos(corners);
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, faces, 8192), [&](const auto& r) {
-        for (uint32_t f = r.begin(); f != r.end(); ++f)
-            for (int c = 0; c < 3; ++c) pos[3 * f + c] = pid[mesh.indices[3 * size_t(kept[f]) + c]];
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const auto& r) {
+        for (size_t block = r.begin(); block != r.end(); ++block) {
+            const auto [first, last] = block_range(block);
+            const uint32_t *const indices = mesh.indices.data(), *const pid_p = pid.data();
+            const uint8_t* const usable_p = usable.data();
+            uint32_t *const kept_p = kept.data(), *const pos_p = pos.data();
+            uint32_t f = block_faces[block];
+            for (size_t t = first; t != last; ++t) {
+                if (!usable_p[t]) continue;
+                kept_p[f] = uint32_t(t);
+                for (int c = 0; c < 3; ++c) pos_p[3 * f + c] = pid_p[indices[3 * t + c]];
+                ++f;
+            }
+        }
     });
 
-    // Corners of each position, in corner order (a counting sort).
+    // Corners of each position, in corner order (a counting sort), with the positions of their next and
+    // previous corners beside them so that the pairing reads each position's corners contiguously.
     std::vector<uint32_t> start(position_count + 1, 0);
-    for (uint32_t k = 0; k < corners; ++k) ++start[pos[k] + 1];
+    for (uint32_t k = 0, *const start_p = start.data() + 1; k < corners; ++k) ++start_p[pos[k]];
     std::partial_sum(start.begin(), start.end(), start.begin());
     detail::ScratchArray<uint32_t> by_position(corners);
+    detail::ScratchArray<uint32_t> around_next(corners + 8), around_prev(corners + 8);
+    std::fill_n(around_next.data() + corners, 8, kNone);
+    std::fill_n(around_prev.data() + corners, 8, kNone);
     {
         std::vector<uint32_t> fill(start.begin(), start.end() - 1);
-        for (uint32_t k = 0; k < corners; ++k) by_position[fill[pos[k]]++] = k;
+        uint32_t *const fill_p = fill.data(), *const by_position_p = by_position.data();
+        uint32_t *const next_p = around_next.data(), *const prev_p = around_prev.data();
+        const uint32_t* const pos_p = pos.data();
+        for (uint32_t f = 0; f < faces; ++f) {
+            const uint32_t p[3] = {pos_p[3 * f], pos_p[3 * f + 1], pos_p[3 * f + 2]};
+#pragma GCC unroll 3
+            for (uint32_t c = 0; c < 3; ++c) {
+                const uint32_t slot = fill_p[p[c]]++;
+                by_position_p[slot] = 3 * f + c;
+                next_p[slot] = p[c == 2 ? 0 : c + 1];
+                prev_p[slot] = p[c == 0 ? 2 : c - 1];
+            }
+        }
     }
 
     // Edge pairing (pair_positions), in parallel over positions.
@@ -224,10 +375,10 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
         lowest = k;
         for (uint32_t i = start[a]; i < start[a + 1]; ++i) {
             const uint32_t j = by_position[i];
-            if (pos[next_corner(j)] == b) {
+            if (around_next[i] == b) {
                 ++total;
                 lowest = std::min(lowest, j);
-            } else if (pos[prev_corner(j)] == b) {
+            } else if (around_prev[i] == b) {
                 ++total;
                 ++opposite;
                 partner = prev_corner(j);
@@ -235,7 +386,8 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
             }
         }
     };
-    const PairingArrays pairing{pos.data(), start.data(), by_position.data(), mate.data(), simple.data()};
+    const PairingArrays pairing{start.data(), by_position.data(), around_next.data(), around_prev.data(),
+                                mate.data(), simple.data()};
     const EdgeCounts edge_counts = tbb::parallel_reduce(
         tbb::blocked_range<uint32_t>(0, position_count, 2048), EdgeCounts{},
         [&](const tbb::blocked_range<uint32_t>& r, EdgeCounts counts) {
@@ -244,6 +396,7 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
         [](EdgeCounts x, const EdgeCounts& y) {
             x.boundary += y.boundary;
             x.nonmanifold += y.nonmanifold;
+            x.not_simple += y.not_simple;
             return x;
         });
     out.boundary_edges = edge_counts.boundary;
@@ -251,13 +404,15 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
 
     // Faces on a non-simple edge, in triangle order: attached while the edge has no halfedge running their
     // way and fewer than two triangles; otherwise detached.
-    std::vector<uint8_t> attached(faces, 1);
+    // Only when some edge is not simple: usually every face is attached and the scan is skipped.
+    const bool any_not_simple = edge_counts.not_simple > 0;
+    std::vector<uint8_t> attached(any_not_simple ? faces : 0, 1);
     struct EdgeState {
         uint32_t first = kNone;
         bool full = false;
     };
     std::unordered_map<uint32_t, EdgeState> state;
-    for (uint32_t f = 0; f < faces; ++f) {
+    for (uint32_t f = 0; any_not_simple && f < faces; ++f) {
         if (simple[3 * f] && simple[3 * f + 1] && simple[3 * f + 2]) continue;
         uint32_t edge[3] = {kNone, kNone, kNone};
         bool fits = true;
@@ -287,7 +442,7 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
         }
     }
     std::vector<uint32_t> detached;
-    for (uint32_t f = 0; f < faces; ++f) {
+    for (uint32_t f = 0; any_not_simple && f < faces; ++f) {
         if (attached[f]) continue;
         detached.push_back(f);
         for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
@@ -300,42 +455,52 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     // Fans: around a position, corner k's successor is the corner at the same position in the triangle across
     // its outgoing halfedge, next_corner(mate[k]); its predecessor is mate[prev_corner(k)]. Each chain or
     // cycle of attached corners is one fan and becomes one OpenMesh vertex.
+    // fan and fan_head start as kNone and 0, written in corner order (cheaper than per position).
+    const bool any_detached = !detached.empty();
     detail::ScratchArray<uint32_t> fan(corners);
     detail::ScratchArray<uint8_t> fan_head(corners);
+    // Per corner without successor: its fan's head; in the storage of around_next (no longer read).
+    detail::ScratchArray<uint32_t>& tail_head = around_next;
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, corners, 65536), [&](const auto& r) {
+        std::fill(fan.data() + r.begin(), fan.data() + r.end(), kNone);
+        std::fill(fan_head.data() + r.begin(), fan_head.data() + r.end(), uint8_t(0));
+    });
     detail::ScratchArray<uint32_t> fan_count(position_count);
     detail::ScratchArray<uint8_t> suspect(position_count);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, position_count, 4096), [&](const auto& r) {
+        // Local copies: the byte stores below could otherwise alias them and force reloads.
+        const uint32_t *const start_p = start.data(), *const by_position_p = by_position.data(), *const mate_p = mate.data();
+        const uint8_t* const attached_p = attached.data();
+        uint32_t* const fan_p = fan.data();
+        const bool detached_any = any_detached;
         for (uint32_t p = r.begin(); p != r.end(); ++p) {
             uint32_t fans = 0;
             bool has_detached = false;
-            for (uint32_t i = start[p]; i < start[p + 1]; ++i) {
-                fan[by_position[i]] = kNone;
-                fan_head[by_position[i]] = 0;
-            }
-            for (uint32_t i = start[p]; i < start[p + 1]; ++i) {
-                const uint32_t k = by_position[i];
-                if (!attached[k / 3]) {
+            for (uint32_t i = start_p[p], end = start_p[p + 1]; i < end; ++i) {
+                const uint32_t k = by_position_p[i];
+                if (detached_any && !attached_p[k / 3]) {
                     has_detached = true;
                     continue;
                 }
-                if (fan[k] != kNone) continue;
+                if (fan_p[k] != kNone) continue;
                 // Forward from k. A cycle comes back to k; its head is k's successor (where the walk back from
                 // k, which stops at the corner whose predecessor is k, ends). An open chain is also walked back
                 // from k to the corner without a predecessor, its head.
                 uint32_t x = k, last = k;
                 do {
-                    fan[x] = fans;
+                    fan_p[x] = fans;
                     last = x;
-                    x = mate[x] == kNone ? kNone : next_corner(mate[x]);
+                    x = mate_p[x] == kNone ? kNone : next_corner(mate_p[x]);
                 } while (x != kNone && x != k);
                 uint32_t head = k;
                 if (x == k) {
-                    head = last == k ? k : next_corner(mate[k]);
+                    head = last == k ? k : next_corner(mate_p[k]);
                 } else {
-                    for (uint32_t back = mate[prev_corner(head)]; back != kNone && back != k; back = mate[prev_corner(head)]) {
+                    for (uint32_t back = mate_p[prev_corner(head)]; back != kNone && back != k; back = mate_p[prev_corner(head)]) {
                         head = back;
-                        fan[head] = fans;
+                        fan_p[head] = fans;
                     }
+                    tail_head[last] = head;
                 }
                 fan_head[head] = 1;
                 ++fans;
@@ -352,28 +517,67 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
 
     // Numbering: vertices per (position, fan), then three per detached face; an edge per mate pair or
     // unpaired halfedge (its twin is a boundary halfedge), then three per detached face.
-    std::vector<uint32_t> vertex_base(position_count + 1, 0);
+    detail::ScratchArray<uint32_t> vertex_base(position_count + 1);
+    vertex_base[0] = 0;
     for (uint32_t p = 0; p < position_count; ++p) vertex_base[p + 1] = vertex_base[p] + fan_count[p];
     const uint32_t attached_vertices = vertex_base[position_count];
     const uint32_t detached_count = uint32_t(detached.size());
     const uint32_t vertices = attached_vertices + 3 * detached_count;
-    auto vertex_of = [&](uint32_t k) { return vertex_base[pos[k]] + fan[k]; };
+    auto is_attached = [&](uint32_t f) { return !any_detached || attached[f]; };
+    // Halfedge k opens a new edge unless its mate comes first.
+    // (kNone is above every corner.)
+    auto opens_edge = [](const uint32_t* mate_p, uint32_t k) { return mate_p[k] > k; };
 
     // OpenMesh halfedge of each attached corner, in the storage of by_position (no longer read): one fresh
-    // corner-sized array less to fault in.
+    // corner-sized array less to fault in. Per block of faces the edges and attached faces are counted, then
+    // numbered from the block's offsets; fan[k] becomes the OpenMesh vertex of corner k on the way.
     detail::ScratchArray<uint32_t>& halfedge = by_position;
-    detail::ScratchArray<uint32_t> face_index(faces);  // read for attached faces only
-    uint32_t edges = 0, attached_faces = 0;
-    for (uint32_t f = 0; f < faces; ++f) {
-        if (!attached[f]) continue;
-        face_index[f] = attached_faces++;
-        for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
-            if (mate[k] != kNone && mate[k] < k) continue;
-            halfedge[k] = 2 * edges;
-            if (mate[k] != kNone) halfedge[mate[k]] = 2 * edges + 1;
-            ++edges;
+    detail::ScratchArray<uint32_t>& vertex = fan;
+    // Read for attached faces only; in the storage of around_prev (no longer read, at least faces long).
+    detail::ScratchArray<uint32_t>& face_index = around_prev;
+    const size_t face_blocks = (size_t(faces) + kBlock - 1) / kBlock;
+    std::vector<std::array<uint32_t, 2>> block_start(face_blocks + 1, {0, 0});  // edges, attached faces
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, face_blocks, 1), [&](const auto& r) {
+        for (size_t block = r.begin(); block != r.end(); ++block) {
+            const uint32_t first = uint32_t(block * kBlock), last = uint32_t(std::min<size_t>(faces, first + size_t(kBlock)));
+            const uint32_t* const mate_p = mate.data();
+            uint32_t block_edges = 0, block_faces_attached = 0;
+            if (!any_detached) {
+                block_faces_attached = last - first;
+                for (uint32_t k = 3 * first; k != 3 * last; ++k) block_edges += opens_edge(mate_p, k);
+            } else {
+                for (uint32_t f = first; f != last; ++f) {
+                    if (!attached[f]) continue;
+                    ++block_faces_attached;
+                    for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) block_edges += opens_edge(mate_p, k);
+                }
+            }
+            block_start[block + 1] = {block_edges, block_faces_attached};
         }
-    }
+    });
+    for (size_t block = 0; block < face_blocks; ++block)
+        for (int i = 0; i < 2; ++i) block_start[block + 1][i] += block_start[block][i];
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, face_blocks, 1), [&](const auto& r) {
+        for (size_t block = r.begin(); block != r.end(); ++block) {
+            const uint32_t first = uint32_t(block * kBlock), last = uint32_t(std::min<size_t>(faces, first + size_t(kBlock)));
+            const uint32_t *const mate_p = mate.data(), *const pos_p = pos.data(), *const base_p = vertex_base.data();
+            uint32_t *const halfedge_p = halfedge.data(), *const vertex_p = vertex.data(), *const face_p = face_index.data();
+            uint32_t e = block_start[block][0], face = block_start[block][1];
+            for (uint32_t f = first; f != last; ++f) {
+                if (!is_attached(f)) continue;
+                face_p[f] = face++;
+                for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
+                    vertex_p[k] = base_p[pos_p[k]] + vertex_p[k];
+                    if (!opens_edge(mate_p, k)) continue;
+                    halfedge_p[k] = 2 * e;
+                    if (mate_p[k] != kNone) halfedge_p[mate_p[k]] = 2 * e + 1;
+                    ++e;
+                }
+            }
+        }
+    });
+    uint32_t edges = block_start[face_blocks][0];
+    const uint32_t attached_faces = block_start[face_blocks][1];
     const uint32_t attached_edges = edges;
     edges += 3 * detached_count;
 
@@ -395,46 +599,45 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     out.vertex_position.resize(vertices);
     detail::reserve_huge_pages(out.face_triangle, mesh_faces);
     out.face_triangle.resize(mesh_faces);
-    std::vector<uint32_t> boundary_out(attached_vertices, kNone);
     auto point = [&](uint32_t f, uint32_t c) {
         const float* x = &mesh.positions[3 * size_t(mesh.indices[3 * size_t(kept[f]) + c])];
         return HalfEdgeMesh::Point(x[0], x[1], x[2]);
     };
 
+    // One pass per attached face: its halfedges, the boundary halfedges across its unpaired ones, and the
+    // vertices whose fan it heads. A vertex has one fan, so at most one boundary halfedge out of it: the
+    // twin of the unpaired halfedge into its head corner (OpenMesh keeps a boundary vertex's halfedge there),
+    // which is also the boundary successor of the twin into its tail.
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, faces, 8192), [&](const auto& r) {
+        const uint32_t *const halfedge_p = halfedge.data(), *const vertex_p = vertex.data(), *const mate_p = mate.data();
+        const uint32_t *const face_p = face_index.data(), *const kept_p = kept.data(), *const pos_p = pos.data();
+        const uint8_t* const head_p = fan_head.data();
+        uint32_t *const face_triangle = out.face_triangle.data(), *const vertex_position = out.vertex_position.data();
         for (uint32_t f = r.begin(); f != r.end(); ++f) {
-            if (!attached[f]) continue;
-            const FaceHandle fh(static_cast<int>(face_index[f]));
-            out.face_triangle[face_index[f]] = kept[f];
-            for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
-                const HalfedgeHandle h(static_cast<int>(halfedge[k]));
-                const uint32_t to = vertex_of(next_corner(k));
-                m.set_vertex_handle(h, VertexHandle(static_cast<int>(to)));
+            if (!is_attached(f)) continue;
+            const FaceHandle fh(static_cast<int>(face_p[f]));
+            face_triangle[face_p[f]] = kept_p[f];
+            const uint32_t* const he = halfedge_p + 3 * f;
+#pragma GCC unroll 3
+            for (uint32_t c = 0; c < 3; ++c) {
+                const uint32_t k = 3 * f + c, next = c == 2 ? 0 : c + 1, prev = c == 0 ? 2 : c - 1;
+                const HalfedgeHandle h(static_cast<int>(he[c]));
+                m.set_vertex_handle(h, VertexHandle(static_cast<int>(vertex_p[3 * f + next])));
                 m.set_face_handle(h, fh);
-                m.set_next_halfedge_handle(h, HalfedgeHandle(static_cast<int>(halfedge[next_corner(k)])));
-                if (mate[k] == kNone) {
-                    const HalfedgeHandle b(static_cast<int>(halfedge[k] ^ 1u));
-                    m.set_vertex_handle(b, VertexHandle(static_cast<int>(vertex_of(k))));
-                    boundary_out[to] = uint32_t(b.idx());  // one open fan per vertex: one outgoing boundary halfedge
+                m.set_next_halfedge_handle(h, HalfedgeHandle(static_cast<int>(he[next])));
+                if (mate_p[k] == kNone) {
+                    const HalfedgeHandle b(static_cast<int>(he[c] ^ 1u));
+                    m.set_vertex_handle(b, VertexHandle(static_cast<int>(vertex_p[k])));
+                    m.set_next_halfedge_handle(b, HalfedgeHandle(static_cast<int>(halfedge_p[prev_corner(tail_head[k])] ^ 1u)));
                 }
+                if (!head_p[k]) continue;
+                const uint32_t v = vertex_p[k];
+                const uint32_t out_h = mate_p[3 * f + prev] == kNone ? he[prev] ^ 1u : he[c];
+                m.set_halfedge_handle(VertexHandle(static_cast<int>(v)), HalfedgeHandle(static_cast<int>(out_h)));
+                m.set_point(VertexHandle(static_cast<int>(v)), point(f, c));
+                vertex_position[v] = pos_p[k];
             }
-            m.set_halfedge_handle(fh, HalfedgeHandle(static_cast<int>(halfedge[3 * f])));
-        }
-    });
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, faces, 8192), [&](const auto& r) {
-        for (uint32_t f = r.begin(); f != r.end(); ++f) {
-            if (!attached[f]) continue;
-            for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
-                const uint32_t v = vertex_of(k);
-                if (mate[k] == kNone)
-                    m.set_next_halfedge_handle(HalfedgeHandle(static_cast<int>(halfedge[k] ^ 1u)), HalfedgeHandle(static_cast<int>(boundary_out[v])));
-                if (!fan_head[k]) continue;
-                // OpenMesh keeps a boundary vertex's halfedge on the boundary.
-                const uint32_t h = boundary_out[v] != kNone ? boundary_out[v] : halfedge[k];
-                m.set_halfedge_handle(VertexHandle(static_cast<int>(v)), HalfedgeHandle(static_cast<int>(h)));
-                m.set_point(VertexHandle(static_cast<int>(v)), point(f, k % 3));
-                out.vertex_position[v] = pos[k];
-            }
+            m.set_halfedge_handle(fh, HalfedgeHandle(static_cast<int>(he[0])));
         }
     });
     for (uint32_t d = 0; d < detached_count; ++d) {
