@@ -2,8 +2,8 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
-#include <cmath>
 #include <array>
+#include <cmath>
 #include <numeric>
 #include <unordered_map>
 
@@ -223,7 +223,7 @@ uint32_t mark_usable_scalar(const TriMesh& mesh, const uint32_t* pid, uint8_t* u
 #if defined(__x86_64__) && defined(__GNUC__)
 // The same for eight triangles at a time: the float filter of degenerate() in AVX2 lanes (the same IEEE
 // operations), the exact test only for lanes it does not clear. Needs 3 * vertex_count below 2^31.
-__attribute__((target("avx2,popcnt"))) uint32_t mark_usable_avx2(const TriMesh& mesh, const uint32_t* pid,
+__attribute__((target("avx2"))) uint32_t mark_usable_avx2(const TriMesh& mesh, const uint32_t* pid,
                                                                uint8_t* usable, size_t first, size_t last) {
     const int* const indices = reinterpret_cast<const int*>(mesh.indices.data());
     const float* const positions = mesh.positions.data();
@@ -455,8 +455,8 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     // Fans: around a position, corner k's successor is the corner at the same position in the triangle across
     // its outgoing halfedge, next_corner(mate[k]); its predecessor is mate[prev_corner(k)]. Each chain or
     // cycle of attached corners is one fan and becomes one OpenMesh vertex.
-    // fan and fan_head start as kNone and 0, written in corner order (cheaper than per position).
     const bool any_detached = !detached.empty();
+    // fan and fan_head start as kNone and 0, written in corner order (cheaper than per position).
     detail::ScratchArray<uint32_t> fan(corners);
     detail::ScratchArray<uint8_t> fan_head(corners);
     // Per corner without successor: its fan's head; in the storage of around_next (no longer read).
@@ -524,8 +524,7 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     const uint32_t detached_count = uint32_t(detached.size());
     const uint32_t vertices = attached_vertices + 3 * detached_count;
     auto is_attached = [&](uint32_t f) { return !any_detached || attached[f]; };
-    // Halfedge k opens a new edge unless its mate comes first.
-    // (kNone is above every corner.)
+    // Halfedge k opens a new edge unless its mate comes first (kNone is above every corner).
     auto opens_edge = [](const uint32_t* mate_p, uint32_t k) { return mate_p[k] > k; };
 
     // OpenMesh halfedge of each attached corner, in the storage of by_position (no longer read): one fresh
