@@ -142,8 +142,10 @@ __attribute__((target("avx2,popcnt,lzcnt"))) EdgeCounts pair_positions_avx2(cons
             _mm256_store_si256(reinterpret_cast<__m256i*>(next), nx);
             for (uint32_t i = 0; i < c.count; ++i) {
                 const __m256i b = _mm256_set1_epi32(int(next[i]));
-                const unsigned same = lanes & unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(nx, b))));
-                const unsigned opp = lanes & unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(pv, b))));
+                const unsigned same =
+                    lanes & unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(nx, b))));
+                const unsigned opp =
+                    lanes & unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(pv, b))));
                 if ((same & ~(1u << i)) == 0 && (opp & (opp - 1)) == 0) {
                     // The usual verdict: no other halfedge the same way, at most one the opposite way.
                     const uint32_t k = c.corner[i];
@@ -241,7 +243,8 @@ __attribute__((target("avx2"))) uint32_t mark_usable_avx2(const TriMesh& mesh, c
         const __m256i equal = _mm256_or_si256(_mm256_or_si256(_mm256_cmpeq_epi32(a, b), _mm256_cmpeq_epi32(b, c)),
                                               _mm256_cmpeq_epi32(a, c));
         const unsigned distinct = ~unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(equal))) & 0xffu;
-        const __m256i o0 = _mm256_add_epi32(f0, _mm256_add_epi32(f0, f0)), o1 = _mm256_add_epi32(f1, _mm256_add_epi32(f1, f1)),
+        const __m256i o0 = _mm256_add_epi32(f0, _mm256_add_epi32(f0, f0)),
+                      o1 = _mm256_add_epi32(f1, _mm256_add_epi32(f1, f1)),
                       o2 = _mm256_add_epi32(f2, _mm256_add_epi32(f2, f2));
         const __m256 px = _mm256_i32gather_ps(positions, o0, 4), py = _mm256_i32gather_ps(positions + 1, o0, 4),
                      pz = _mm256_i32gather_ps(positions + 2, o0, 4);
@@ -469,7 +472,8 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     detail::ScratchArray<uint8_t> suspect(position_count);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, position_count, 4096), [&](const auto& r) {
         // Local copies: the byte stores below could otherwise alias them and force reloads.
-        const uint32_t *const start_p = start.data(), *const by_position_p = by_position.data(), *const mate_p = mate.data();
+        const uint32_t *const start_p = start.data(), *const by_position_p = by_position.data();
+        const uint32_t* const mate_p = mate.data();
         const uint8_t* const attached_p = attached.data();
         uint32_t* const fan_p = fan.data();
         const bool detached_any = any_detached;
@@ -538,7 +542,8 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     std::vector<std::array<uint32_t, 2>> block_start(face_blocks + 1, {0, 0});  // edges, attached faces
     tbb::parallel_for(tbb::blocked_range<size_t>(0, face_blocks, 1), [&](const auto& r) {
         for (size_t block = r.begin(); block != r.end(); ++block) {
-            const uint32_t first = uint32_t(block * kBlock), last = uint32_t(std::min<size_t>(faces, first + size_t(kBlock)));
+            const uint32_t first = uint32_t(block * kBlock);
+            const uint32_t last = uint32_t(std::min<size_t>(faces, first + size_t(kBlock)));
             const uint32_t* const mate_p = mate.data();
             uint32_t block_edges = 0, block_faces_attached = 0;
             if (!any_detached) {
@@ -558,9 +563,11 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
         for (int i = 0; i < 2; ++i) block_start[block + 1][i] += block_start[block][i];
     tbb::parallel_for(tbb::blocked_range<size_t>(0, face_blocks, 1), [&](const auto& r) {
         for (size_t block = r.begin(); block != r.end(); ++block) {
-            const uint32_t first = uint32_t(block * kBlock), last = uint32_t(std::min<size_t>(faces, first + size_t(kBlock)));
+            const uint32_t first = uint32_t(block * kBlock);
+            const uint32_t last = uint32_t(std::min<size_t>(faces, first + size_t(kBlock)));
             const uint32_t *const mate_p = mate.data(), *const pos_p = pos.data(), *const base_p = vertex_base.data();
-            uint32_t *const halfedge_p = halfedge.data(), *const vertex_p = vertex.data(), *const face_p = face_index.data();
+            uint32_t *const halfedge_p = halfedge.data(), *const vertex_p = vertex.data();
+            uint32_t* const face_p = face_index.data();
             uint32_t e = block_start[block][0], face = block_start[block][1];
             for (uint32_t f = first; f != last; ++f) {
                 if (!is_attached(f)) continue;
@@ -608,7 +615,8 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     // twin of the unpaired halfedge into its head corner (OpenMesh keeps a boundary vertex's halfedge there),
     // which is also the boundary successor of the twin into its tail.
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, faces, 8192), [&](const auto& r) {
-        const uint32_t *const halfedge_p = halfedge.data(), *const vertex_p = vertex.data(), *const mate_p = mate.data();
+        const uint32_t *const halfedge_p = halfedge.data(), *const vertex_p = vertex.data();
+        const uint32_t* const mate_p = mate.data();
         const uint32_t *const face_p = face_index.data(), *const kept_p = kept.data(), *const pos_p = pos.data();
         const uint8_t* const head_p = fan_head.data();
         uint32_t *const face_triangle = out.face_triangle.data(), *const vertex_position = out.vertex_position.data();
