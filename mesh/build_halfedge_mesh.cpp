@@ -459,9 +459,10 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     // its outgoing halfedge, next_corner(mate[k]); its predecessor is mate[prev_corner(k)]. Each chain or
     // cycle of attached corners is one fan and becomes one OpenMesh vertex.
     const bool any_detached = !detached.empty();
-    // fan and fan_head start as kNone and 0, written in corner order (cheaper than per position).
-    detail::ScratchArray<uint32_t> fan(corners);
-    detail::ScratchArray<uint8_t> fan_head(corners);
+    // fan and fan_head start as kNone and 0, written in corner order (cheaper than per position). They live
+    // in the storage of around_prev and simple, no longer read: fewer fresh pages to fault in.
+    detail::ScratchArray<uint32_t>& fan = around_prev;
+    detail::ScratchArray<uint8_t>& fan_head = simple;
     // Per corner without successor: its fan's head; in the storage of around_next (no longer read).
     detail::ScratchArray<uint32_t>& tail_head = around_next;
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, corners, 65536), [&](const auto& r) {
@@ -536,8 +537,8 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     // numbered from the block's offsets; fan[k] becomes the OpenMesh vertex of corner k on the way.
     detail::ScratchArray<uint32_t>& halfedge = by_position;
     detail::ScratchArray<uint32_t>& vertex = fan;
-    // Read for attached faces only; in the storage of around_prev (no longer read, at least faces long).
-    detail::ScratchArray<uint32_t>& face_index = around_prev;
+    // Face of each attached triangle; the identity (and not stored) when no face is detached.
+    detail::ScratchArray<uint32_t> face_index(any_detached ? faces : 0);
     const size_t face_blocks = (size_t(faces) + kBlock - 1) / kBlock;
     std::vector<std::array<uint32_t, 2>> block_start(face_blocks + 1, {0, 0});  // edges, attached faces
     tbb::parallel_for(tbb::blocked_range<size_t>(0, face_blocks, 1), [&](const auto& r) {
@@ -571,7 +572,8 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
             uint32_t e = block_start[block][0], face = block_start[block][1];
             for (uint32_t f = first; f != last; ++f) {
                 if (!is_attached(f)) continue;
-                face_p[f] = face++;
+                if (any_detached) face_p[f] = face;
+                ++face;
                 for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
                     vertex_p[k] = base_p[pos_p[k]] + vertex_p[k];
                     if (!opens_edge(mate_p, k)) continue;
@@ -622,8 +624,9 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
         uint32_t *const face_triangle = out.face_triangle.data(), *const vertex_position = out.vertex_position.data();
         for (uint32_t f = r.begin(); f != r.end(); ++f) {
             if (!is_attached(f)) continue;
-            const FaceHandle fh(static_cast<int>(face_p[f]));
-            face_triangle[face_p[f]] = kept_p[f];
+            const uint32_t face = any_detached ? face_p[f] : f;
+            const FaceHandle fh(static_cast<int>(face));
+            face_triangle[face] = kept_p[f];
             const uint32_t* const he = halfedge_p + 3 * f;
 #pragma GCC unroll 3
             for (uint32_t c = 0; c < 3; ++c) {
