@@ -1,4 +1,5 @@
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
@@ -341,20 +342,36 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     });
 
     // Corners of each position, in corner order (a counting sort), with the positions of their next and
-    // previous corners beside them so that the pairing reads each position's corners contiguously.
-    std::vector<uint32_t> start(position_count + 1, 0);
-    for (uint32_t k = 0, *const start_p = start.data() + 1; k < corners; ++k) ++start_p[pos[k]];
-    std::partial_sum(start.begin(), start.end(), start.begin());
+    // previous corners beside them so that the pairing reads each position's corners contiguously. The faces
+    // are sorted in two fixed halves side by side: per position, the first half's corners come first.
+    const uint32_t half = faces / 2;
+    std::vector<uint32_t> fill[2] = {std::vector<uint32_t>(position_count, 0),
+                                     std::vector<uint32_t>(position_count, 0)};
+    auto halves = [&](auto&& body) {
+        tbb::parallel_invoke([&] { body(0u, 0u, half); }, [&] { body(1u, half, faces); });
+    };
+    halves([&](uint32_t h, uint32_t first, uint32_t last) {
+        uint32_t* const count = fill[h].data();
+        const uint32_t* const pos_p = pos.data();
+        for (uint32_t k = 3 * first; k != 3 * last; ++k) ++count[pos_p[k]];
+    });
+    std::vector<uint32_t> start(position_count + 1);
+    start[0] = 0;
+    for (uint32_t p = 0; p < position_count; ++p) {
+        const uint32_t first_half = fill[0][p];
+        start[p + 1] = start[p] + first_half + fill[1][p];
+        fill[0][p] = start[p];
+        fill[1][p] = start[p] + first_half;
+    }
     detail::ScratchArray<uint32_t> by_position(corners);
     detail::ScratchArray<uint32_t> around_next(corners + 8), around_prev(corners + 8);
     std::fill_n(around_next.data() + corners, 8, kNone);
     std::fill_n(around_prev.data() + corners, 8, kNone);
-    {
-        std::vector<uint32_t> fill(start.begin(), start.end() - 1);
-        uint32_t *const fill_p = fill.data(), *const by_position_p = by_position.data();
+    halves([&](uint32_t h, uint32_t first, uint32_t last) {
+        uint32_t *const fill_p = fill[h].data(), *const by_position_p = by_position.data();
         uint32_t *const next_p = around_next.data(), *const prev_p = around_prev.data();
         const uint32_t* const pos_p = pos.data();
-        for (uint32_t f = 0; f < faces; ++f) {
+        for (uint32_t f = first; f != last; ++f) {
             const uint32_t p[3] = {pos_p[3 * f], pos_p[3 * f + 1], pos_p[3 * f + 2]};
 #pragma GCC unroll 3
             for (uint32_t c = 0; c < 3; ++c) {
@@ -364,7 +381,7 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
                 prev_p[slot] = p[c == 0 ? 2 : c - 1];
             }
         }
-    }
+    });
 
     // Edge pairing (pair_positions), in parallel over positions.
     detail::ScratchArray<uint32_t> mate(corners);
