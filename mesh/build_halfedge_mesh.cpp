@@ -579,51 +579,60 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     });
     for (size_t block = 0; block < face_blocks; ++block)
         for (int i = 0; i < 2; ++i) block_start[block + 1][i] += block_start[block][i];
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, face_blocks, 1), [&](const auto& r) {
-        for (size_t block = r.begin(); block != r.end(); ++block) {
-            const uint32_t first = uint32_t(block * kBlock);
-            const uint32_t last = uint32_t(std::min<size_t>(faces, first + size_t(kBlock)));
-            const uint32_t *const mate_p = mate.data(), *const pos_p = pos.data(), *const base_p = vertex_base.data();
-            uint32_t *const halfedge_p = halfedge.data(), *const vertex_p = vertex.data();
-            uint32_t* const face_p = face_index.data();
-            uint32_t e = block_start[block][0], face = block_start[block][1];
-            for (uint32_t f = first; f != last; ++f) {
-                if (!is_attached(f)) continue;
-                if (any_detached) face_p[f] = face;
-                ++face;
-                for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
-                    vertex_p[k] = base_p[pos_p[k]] + vertex_p[k];
-                    if (!opens_edge(mate_p, k)) continue;
-                    halfedge_p[k] = 2 * e;
-                    if (mate_p[k] != kNone) halfedge_p[mate_p[k]] = 2 * e + 1;
-                    ++e;
-                }
-            }
-        }
-    });
     uint32_t edges = block_start[face_blocks][0];
     const uint32_t attached_faces = block_start[face_blocks][1];
     const uint32_t attached_edges = edges;
     edges += 3 * detached_count;
-
     HalfEdgeMesh& m = out.mesh;
     const uint32_t mesh_faces = attached_faces + detached_count;
-    if (vertices > 0 && edges > 0 && mesh_faces > 0) {
-        // OpenMesh value-initialises its arrays in resize, on one thread (some 60 MB for a million triangles):
-        // their storage is reserved first and hinted for huge pages, so resize faults it in 2 MiB at a time.
-        // One element of each reaches the reserved storage.
-        m.reserve(vertices, edges, mesh_faces);
-        m.resize(1, 1, 1);
-        detail::hint_huge_pages(&m.edge(EdgeHandle(0)), size_t(edges) * sizeof(m.edge(EdgeHandle(0))));
-        detail::hint_huge_pages(&m.vertex(VertexHandle(0)), size_t(vertices) * sizeof(m.vertex(VertexHandle(0))));
-        detail::hint_huge_pages(&m.face(FaceHandle(0)), size_t(mesh_faces) * sizeof(m.face(FaceHandle(0))));
-        detail::hint_huge_pages(&m.point(VertexHandle(0)), size_t(vertices) * sizeof(HalfEdgeMesh::Point));
-    }
-    m.resize(vertices, edges, mesh_faces);
-    detail::reserve_huge_pages(out.vertex_position, vertices);
-    out.vertex_position.resize(vertices);
-    detail::reserve_huge_pages(out.face_triangle, mesh_faces);
-    out.face_triangle.resize(mesh_faces);
+
+    // The OpenMesh arrays are sized beside the numbering (their sizes are known from the block totals).
+    auto resize = [&] {
+        if (vertices > 0 && edges > 0 && mesh_faces > 0) {
+            // OpenMesh value-initialises its arrays in resize, on one thread (some 60 MB for a million
+            // triangles): their storage is reserved first and hinted for huge pages, so resize faults it in
+            // 2 MiB at a time. One element of each reaches the reserved storage.
+            m.reserve(vertices, edges, mesh_faces);
+            m.resize(1, 1, 1);
+            detail::hint_huge_pages(&m.edge(EdgeHandle(0)), size_t(edges) * sizeof(m.edge(EdgeHandle(0))));
+            detail::hint_huge_pages(&m.vertex(VertexHandle(0)),
+                                    size_t(vertices) * sizeof(m.vertex(VertexHandle(0))));
+            detail::hint_huge_pages(&m.face(FaceHandle(0)), size_t(mesh_faces) * sizeof(m.face(FaceHandle(0))));
+            detail::hint_huge_pages(&m.point(VertexHandle(0)), size_t(vertices) * sizeof(HalfEdgeMesh::Point));
+        }
+        m.resize(vertices, edges, mesh_faces);
+        detail::reserve_huge_pages(out.vertex_position, vertices);
+        out.vertex_position.resize(vertices);
+        detail::reserve_huge_pages(out.face_triangle, mesh_faces);
+        out.face_triangle.resize(mesh_faces);
+    };
+    auto number = [&] {
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, face_blocks, 1), [&](const auto& r) {
+            for (size_t block = r.begin(); block != r.end(); ++block) {
+                const uint32_t first = uint32_t(block * kBlock);
+                const uint32_t last = uint32_t(std::min<size_t>(faces, first + size_t(kBlock)));
+                const uint32_t *const mate_p = mate.data(), *const pos_p = pos.data();
+                const uint32_t* const base_p = vertex_base.data();
+                uint32_t *const halfedge_p = halfedge.data(), *const vertex_p = vertex.data();
+                uint32_t* const face_p = face_index.data();
+                uint32_t e = block_start[block][0], face = block_start[block][1];
+                for (uint32_t f = first; f != last; ++f) {
+                    if (!is_attached(f)) continue;
+                    if (any_detached) face_p[f] = face;
+                    ++face;
+                    for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
+                        vertex_p[k] = base_p[pos_p[k]] + vertex_p[k];
+                        if (!opens_edge(mate_p, k)) continue;
+                        halfedge_p[k] = 2 * e;
+                        if (mate_p[k] != kNone) halfedge_p[mate_p[k]] = 2 * e + 1;
+                        ++e;
+                    }
+                }
+            }
+        });
+    };
+    tbb::parallel_invoke(resize, number);
+
     auto point = [&](uint32_t f, uint32_t c) {
         const float* x = &mesh.positions[3 * size_t(mesh.indices[3 * size_t(kept[f]) + c])];
         return HalfEdgeMesh::Point(x[0], x[1], x[2]);
