@@ -1,9 +1,10 @@
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
-#include <cmath>
 #include <array>
+#include <cmath>
 #include <numeric>
 #include <unordered_map>
 
@@ -142,8 +143,10 @@ __attribute__((target("avx2,popcnt,lzcnt"))) EdgeCounts pair_positions_avx2(cons
             _mm256_store_si256(reinterpret_cast<__m256i*>(next), nx);
             for (uint32_t i = 0; i < c.count; ++i) {
                 const __m256i b = _mm256_set1_epi32(int(next[i]));
-                const unsigned same = lanes & unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(nx, b))));
-                const unsigned opp = lanes & unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(pv, b))));
+                const unsigned same =
+                    lanes & unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(nx, b))));
+                const unsigned opp =
+                    lanes & unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(pv, b))));
                 if ((same & ~(1u << i)) == 0 && (opp & (opp - 1)) == 0) {
                     // The usual verdict: no other halfedge the same way, at most one the opposite way.
                     const uint32_t k = c.corner[i];
@@ -223,7 +226,7 @@ uint32_t mark_usable_scalar(const TriMesh& mesh, const uint32_t* pid, uint8_t* u
 #if defined(__x86_64__) && defined(__GNUC__)
 // The same for eight triangles at a time: the float filter of degenerate() in AVX2 lanes (the same IEEE
 // operations), the exact test only for lanes it does not clear. Needs 3 * vertex_count below 2^31.
-__attribute__((target("avx2,popcnt"))) uint32_t mark_usable_avx2(const TriMesh& mesh, const uint32_t* pid,
+__attribute__((target("avx2"))) uint32_t mark_usable_avx2(const TriMesh& mesh, const uint32_t* pid,
                                                                uint8_t* usable, size_t first, size_t last) {
     const int* const indices = reinterpret_cast<const int*>(mesh.indices.data());
     const float* const positions = mesh.positions.data();
@@ -241,7 +244,8 @@ __attribute__((target("avx2,popcnt"))) uint32_t mark_usable_avx2(const TriMesh& 
         const __m256i equal = _mm256_or_si256(_mm256_or_si256(_mm256_cmpeq_epi32(a, b), _mm256_cmpeq_epi32(b, c)),
                                               _mm256_cmpeq_epi32(a, c));
         const unsigned distinct = ~unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(equal))) & 0xffu;
-        const __m256i o0 = _mm256_add_epi32(f0, _mm256_add_epi32(f0, f0)), o1 = _mm256_add_epi32(f1, _mm256_add_epi32(f1, f1)),
+        const __m256i o0 = _mm256_add_epi32(f0, _mm256_add_epi32(f0, f0)),
+                      o1 = _mm256_add_epi32(f1, _mm256_add_epi32(f1, f1)),
                       o2 = _mm256_add_epi32(f2, _mm256_add_epi32(f2, f2));
         const __m256 px = _mm256_i32gather_ps(positions, o0, 4), py = _mm256_i32gather_ps(positions + 1, o0, 4),
                      pz = _mm256_i32gather_ps(positions + 2, o0, 4);
@@ -338,20 +342,36 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     });
 
     // Corners of each position, in corner order (a counting sort), with the positions of their next and
-    // previous corners beside them so that the pairing reads each position's corners contiguously.
-    std::vector<uint32_t> start(position_count + 1, 0);
-    for (uint32_t k = 0, *const start_p = start.data() + 1; k < corners; ++k) ++start_p[pos[k]];
-    std::partial_sum(start.begin(), start.end(), start.begin());
+    // previous corners beside them so that the pairing reads each position's corners contiguously. The faces
+    // are sorted in two fixed halves side by side: per position, the first half's corners come first.
+    const uint32_t half = faces / 2;
+    std::vector<uint32_t> fill[2] = {std::vector<uint32_t>(position_count, 0),
+                                     std::vector<uint32_t>(position_count, 0)};
+    auto halves = [&](auto&& body) {
+        tbb::parallel_invoke([&] { body(0u, 0u, half); }, [&] { body(1u, half, faces); });
+    };
+    halves([&](uint32_t h, uint32_t first, uint32_t last) {
+        uint32_t* const count = fill[h].data();
+        const uint32_t* const pos_p = pos.data();
+        for (uint32_t k = 3 * first; k != 3 * last; ++k) ++count[pos_p[k]];
+    });
+    std::vector<uint32_t> start(position_count + 1);
+    start[0] = 0;
+    for (uint32_t p = 0; p < position_count; ++p) {
+        const uint32_t first_half = fill[0][p];
+        start[p + 1] = start[p] + first_half + fill[1][p];
+        fill[0][p] = start[p];
+        fill[1][p] = start[p] + first_half;
+    }
     detail::ScratchArray<uint32_t> by_position(corners);
     detail::ScratchArray<uint32_t> around_next(corners + 8), around_prev(corners + 8);
     std::fill_n(around_next.data() + corners, 8, kNone);
     std::fill_n(around_prev.data() + corners, 8, kNone);
-    {
-        std::vector<uint32_t> fill(start.begin(), start.end() - 1);
-        uint32_t *const fill_p = fill.data(), *const by_position_p = by_position.data();
+    halves([&](uint32_t h, uint32_t first, uint32_t last) {
+        uint32_t *const fill_p = fill[h].data(), *const by_position_p = by_position.data();
         uint32_t *const next_p = around_next.data(), *const prev_p = around_prev.data();
         const uint32_t* const pos_p = pos.data();
-        for (uint32_t f = 0; f < faces; ++f) {
+        for (uint32_t f = first; f != last; ++f) {
             const uint32_t p[3] = {pos_p[3 * f], pos_p[3 * f + 1], pos_p[3 * f + 2]};
 #pragma GCC unroll 3
             for (uint32_t c = 0; c < 3; ++c) {
@@ -361,7 +381,7 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
                 prev_p[slot] = p[c == 0 ? 2 : c - 1];
             }
         }
-    }
+    });
 
     // Edge pairing (pair_positions), in parallel over positions.
     detail::ScratchArray<uint32_t> mate(corners);
@@ -455,10 +475,11 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     // Fans: around a position, corner k's successor is the corner at the same position in the triangle across
     // its outgoing halfedge, next_corner(mate[k]); its predecessor is mate[prev_corner(k)]. Each chain or
     // cycle of attached corners is one fan and becomes one OpenMesh vertex.
-    // fan and fan_head start as kNone and 0, written in corner order (cheaper than per position).
     const bool any_detached = !detached.empty();
-    detail::ScratchArray<uint32_t> fan(corners);
-    detail::ScratchArray<uint8_t> fan_head(corners);
+    // fan and fan_head start as kNone and 0, written in corner order (cheaper than per position). They live
+    // in the storage of around_prev and simple, no longer read: fewer fresh pages to fault in.
+    detail::ScratchArray<uint32_t>& fan = around_prev;
+    detail::ScratchArray<uint8_t>& fan_head = simple;
     // Per corner without successor: its fan's head; in the storage of around_next (no longer read).
     detail::ScratchArray<uint32_t>& tail_head = around_next;
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, corners, 65536), [&](const auto& r) {
@@ -469,7 +490,8 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     detail::ScratchArray<uint8_t> suspect(position_count);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, position_count, 4096), [&](const auto& r) {
         // Local copies: the byte stores below could otherwise alias them and force reloads.
-        const uint32_t *const start_p = start.data(), *const by_position_p = by_position.data(), *const mate_p = mate.data();
+        const uint32_t *const start_p = start.data(), *const by_position_p = by_position.data();
+        const uint32_t* const mate_p = mate.data();
         const uint8_t* const attached_p = attached.data();
         uint32_t* const fan_p = fan.data();
         const bool detached_any = any_detached;
@@ -524,8 +546,7 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     const uint32_t detached_count = uint32_t(detached.size());
     const uint32_t vertices = attached_vertices + 3 * detached_count;
     auto is_attached = [&](uint32_t f) { return !any_detached || attached[f]; };
-    // Halfedge k opens a new edge unless its mate comes first.
-    // (kNone is above every corner.)
+    // Halfedge k opens a new edge unless its mate comes first (kNone is above every corner).
     auto opens_edge = [](const uint32_t* mate_p, uint32_t k) { return mate_p[k] > k; };
 
     // OpenMesh halfedge of each attached corner, in the storage of by_position (no longer read): one fresh
@@ -533,13 +554,14 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     // numbered from the block's offsets; fan[k] becomes the OpenMesh vertex of corner k on the way.
     detail::ScratchArray<uint32_t>& halfedge = by_position;
     detail::ScratchArray<uint32_t>& vertex = fan;
-    // Read for attached faces only; in the storage of around_prev (no longer read, at least faces long).
-    detail::ScratchArray<uint32_t>& face_index = around_prev;
+    // Face of each attached triangle; the identity (and not stored) when no face is detached.
+    detail::ScratchArray<uint32_t> face_index(any_detached ? faces : 0);
     const size_t face_blocks = (size_t(faces) + kBlock - 1) / kBlock;
     std::vector<std::array<uint32_t, 2>> block_start(face_blocks + 1, {0, 0});  // edges, attached faces
     tbb::parallel_for(tbb::blocked_range<size_t>(0, face_blocks, 1), [&](const auto& r) {
         for (size_t block = r.begin(); block != r.end(); ++block) {
-            const uint32_t first = uint32_t(block * kBlock), last = uint32_t(std::min<size_t>(faces, first + size_t(kBlock)));
+            const uint32_t first = uint32_t(block * kBlock);
+            const uint32_t last = uint32_t(std::min<size_t>(faces, first + size_t(kBlock)));
             const uint32_t* const mate_p = mate.data();
             uint32_t block_edges = 0, block_faces_attached = 0;
             if (!any_detached) {
@@ -557,48 +579,60 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     });
     for (size_t block = 0; block < face_blocks; ++block)
         for (int i = 0; i < 2; ++i) block_start[block + 1][i] += block_start[block][i];
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, face_blocks, 1), [&](const auto& r) {
-        for (size_t block = r.begin(); block != r.end(); ++block) {
-            const uint32_t first = uint32_t(block * kBlock), last = uint32_t(std::min<size_t>(faces, first + size_t(kBlock)));
-            const uint32_t *const mate_p = mate.data(), *const pos_p = pos.data(), *const base_p = vertex_base.data();
-            uint32_t *const halfedge_p = halfedge.data(), *const vertex_p = vertex.data(), *const face_p = face_index.data();
-            uint32_t e = block_start[block][0], face = block_start[block][1];
-            for (uint32_t f = first; f != last; ++f) {
-                if (!is_attached(f)) continue;
-                face_p[f] = face++;
-                for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
-                    vertex_p[k] = base_p[pos_p[k]] + vertex_p[k];
-                    if (!opens_edge(mate_p, k)) continue;
-                    halfedge_p[k] = 2 * e;
-                    if (mate_p[k] != kNone) halfedge_p[mate_p[k]] = 2 * e + 1;
-                    ++e;
-                }
-            }
-        }
-    });
     uint32_t edges = block_start[face_blocks][0];
     const uint32_t attached_faces = block_start[face_blocks][1];
     const uint32_t attached_edges = edges;
     edges += 3 * detached_count;
-
     HalfEdgeMesh& m = out.mesh;
     const uint32_t mesh_faces = attached_faces + detached_count;
-    if (vertices > 0 && edges > 0 && mesh_faces > 0) {
-        // OpenMesh value-initialises its arrays in resize, on one thread (some 60 MB for a million triangles):
-        // their storage is reserved first and hinted for huge pages, so resize faults it in 2 MiB at a time.
-        // One element of each reaches the reserved storage.
-        m.reserve(vertices, edges, mesh_faces);
-        m.resize(1, 1, 1);
-        detail::hint_huge_pages(&m.edge(EdgeHandle(0)), size_t(edges) * sizeof(m.edge(EdgeHandle(0))));
-        detail::hint_huge_pages(&m.vertex(VertexHandle(0)), size_t(vertices) * sizeof(m.vertex(VertexHandle(0))));
-        detail::hint_huge_pages(&m.face(FaceHandle(0)), size_t(mesh_faces) * sizeof(m.face(FaceHandle(0))));
-        detail::hint_huge_pages(&m.point(VertexHandle(0)), size_t(vertices) * sizeof(HalfEdgeMesh::Point));
-    }
-    m.resize(vertices, edges, mesh_faces);
-    detail::reserve_huge_pages(out.vertex_position, vertices);
-    out.vertex_position.resize(vertices);
-    detail::reserve_huge_pages(out.face_triangle, mesh_faces);
-    out.face_triangle.resize(mesh_faces);
+
+    // The OpenMesh arrays are sized beside the numbering (their sizes are known from the block totals).
+    auto resize = [&] {
+        if (vertices > 0 && edges > 0 && mesh_faces > 0) {
+            // OpenMesh value-initialises its arrays in resize, on one thread (some 60 MB for a million
+            // triangles): their storage is reserved first and hinted for huge pages, so resize faults it in
+            // 2 MiB at a time. One element of each reaches the reserved storage.
+            m.reserve(vertices, edges, mesh_faces);
+            m.resize(1, 1, 1);
+            detail::hint_huge_pages(&m.edge(EdgeHandle(0)), size_t(edges) * sizeof(m.edge(EdgeHandle(0))));
+            detail::hint_huge_pages(&m.vertex(VertexHandle(0)),
+                                    size_t(vertices) * sizeof(m.vertex(VertexHandle(0))));
+            detail::hint_huge_pages(&m.face(FaceHandle(0)), size_t(mesh_faces) * sizeof(m.face(FaceHandle(0))));
+            detail::hint_huge_pages(&m.point(VertexHandle(0)), size_t(vertices) * sizeof(HalfEdgeMesh::Point));
+        }
+        m.resize(vertices, edges, mesh_faces);
+        detail::reserve_huge_pages(out.vertex_position, vertices);
+        out.vertex_position.resize(vertices);
+        detail::reserve_huge_pages(out.face_triangle, mesh_faces);
+        out.face_triangle.resize(mesh_faces);
+    };
+    auto number = [&] {
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, face_blocks, 1), [&](const auto& r) {
+            for (size_t block = r.begin(); block != r.end(); ++block) {
+                const uint32_t first = uint32_t(block * kBlock);
+                const uint32_t last = uint32_t(std::min<size_t>(faces, first + size_t(kBlock)));
+                const uint32_t *const mate_p = mate.data(), *const pos_p = pos.data();
+                const uint32_t* const base_p = vertex_base.data();
+                uint32_t *const halfedge_p = halfedge.data(), *const vertex_p = vertex.data();
+                uint32_t* const face_p = face_index.data();
+                uint32_t e = block_start[block][0], face = block_start[block][1];
+                for (uint32_t f = first; f != last; ++f) {
+                    if (!is_attached(f)) continue;
+                    if (any_detached) face_p[f] = face;
+                    ++face;
+                    for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
+                        vertex_p[k] = base_p[pos_p[k]] + vertex_p[k];
+                        if (!opens_edge(mate_p, k)) continue;
+                        halfedge_p[k] = 2 * e;
+                        if (mate_p[k] != kNone) halfedge_p[mate_p[k]] = 2 * e + 1;
+                        ++e;
+                    }
+                }
+            }
+        });
+    };
+    tbb::parallel_invoke(resize, number);
+
     auto point = [&](uint32_t f, uint32_t c) {
         const float* x = &mesh.positions[3 * size_t(mesh.indices[3 * size_t(kept[f]) + c])];
         return HalfEdgeMesh::Point(x[0], x[1], x[2]);
@@ -609,14 +643,16 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     // twin of the unpaired halfedge into its head corner (OpenMesh keeps a boundary vertex's halfedge there),
     // which is also the boundary successor of the twin into its tail.
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, faces, 8192), [&](const auto& r) {
-        const uint32_t *const halfedge_p = halfedge.data(), *const vertex_p = vertex.data(), *const mate_p = mate.data();
+        const uint32_t *const halfedge_p = halfedge.data(), *const vertex_p = vertex.data();
+        const uint32_t* const mate_p = mate.data();
         const uint32_t *const face_p = face_index.data(), *const kept_p = kept.data(), *const pos_p = pos.data();
         const uint8_t* const head_p = fan_head.data();
         uint32_t *const face_triangle = out.face_triangle.data(), *const vertex_position = out.vertex_position.data();
         for (uint32_t f = r.begin(); f != r.end(); ++f) {
             if (!is_attached(f)) continue;
-            const FaceHandle fh(static_cast<int>(face_p[f]));
-            face_triangle[face_p[f]] = kept_p[f];
+            const uint32_t face = any_detached ? face_p[f] : f;
+            const FaceHandle fh(static_cast<int>(face));
+            face_triangle[face] = kept_p[f];
             const uint32_t* const he = halfedge_p + 3 * f;
 #pragma GCC unroll 3
             for (uint32_t c = 0; c < 3; ++c) {
