@@ -43,48 +43,16 @@
 
 #include "mesh/curvature.h"
 #include "mesh/curvature_frames.h"
+#include "mesh/lanes.h"
 #include "mesh/scratch_array.h"
-
-// Compilers may fuse multiplies and adds (GCC does in C++ even in ISO mode), and a fused operation rounds once
-// where the baseline version rounds twice: off, so the AVX2 versions compute the same bits.
-#if defined(__clang__)
-#pragma STDC FP_CONTRACT OFF
-#else
-#pragma GCC optimize("fp-contract=off")
-#endif
 
 namespace specbake {
 namespace {
 
 using detail::Shape2;
 
-// The hot loops are compiled twice, for AVX2 + FMA and for the baseline instruction set, and chosen once at
-// load time (GCC/Clang function multiversioning); their helpers are inlined into each version.
-#if defined(__x86_64__) && defined(__linux__)
-#define SPECBAKE_AVX2_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
-#else
-#define SPECBAKE_AVX2_CLONES
-#endif
-#define SPECBAKE_INLINE __attribute__((always_inline)) inline
-
-// Four doubles processed as one (GCC/Clang vector extension): one AVX2 register, two SSE2 registers. The
-// helpers taking or returning them are always inlined, so the ABI note GCC gives for them does not apply.
-#pragma GCC diagnostic ignored "-Wpsabi"
-typedef double v4d __attribute__((vector_size(32)));
-typedef long v4l __attribute__((vector_size(32)));  // lane masks, as v4d comparisons yield
-constexpr int kLanes = 4;
-
-SPECBAKE_INLINE v4d splat(double x) { return v4d{x, x, x, x}; }
-
-// Lane-wise square root (non-negative input): two SSE2 square roots where available.
-SPECBAKE_INLINE v4d sqrt4(v4d x) {
-#if defined(__SSE2__)
-    const __m128d lo = _mm_sqrt_pd(__m128d{x[0], x[1]}), hi = _mm_sqrt_pd(__m128d{x[2], x[3]});
-    return v4d{lo[0], lo[1], hi[0], hi[1]};
-#else
-    return v4d{std::sqrt(x[0]), std::sqrt(x[1]), std::sqrt(x[2]), std::sqrt(x[3])};
-#endif
-}
+// The hot loops are compiled for AVX2 and for the baseline instruction set (mesh/lanes.h).
+using namespace lanes;
 
 constexpr int kUnknowns = 7;  // a, b, c, alpha, beta, gamma, delta
 

@@ -39,15 +39,8 @@
 
 #include "mesh/curvature.h"
 #include "mesh/curvature_frames.h"
+#include "mesh/lanes.h"
 #include "mesh/scratch_array.h"
-
-// Compilers may fuse multiplies and adds (GCC does in C++ even in ISO mode), and a fused operation rounds once
-// where the baseline version rounds twice: off, so the AVX2 versions compute the same bits.
-#if defined(__clang__)
-#pragma STDC FP_CONTRACT OFF
-#else
-#pragma GCC optimize("fp-contract=off")
-#endif
 
 namespace specbake {
 namespace {
@@ -68,34 +61,9 @@ inline void load3(const float* x, double out[3]) {
 }
 inline double dot3(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
-// The passes over the mesh are compiled twice, for AVX2 and for the baseline instruction set, and chosen
-// once at load time; their helpers are inlined into each version.
-#if defined(__x86_64__) && defined(__linux__)
-#define SPECBAKE_AVX2_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
-#else
-#define SPECBAKE_AVX2_CLONES
-#endif
-#define SPECBAKE_INLINE __attribute__((always_inline)) inline
-
-#pragma GCC diagnostic ignored "-Wpsabi"  // v4d only crosses always-inlined functions
-typedef double v4d __attribute__((vector_size(32)));
-typedef long v4l __attribute__((vector_size(32)));  // lane masks, as v4d comparisons yield
+// The passes over the mesh are compiled for AVX2 and for the baseline instruction set (mesh/lanes.h).
+using namespace lanes;
 typedef float v4f __attribute__((vector_size(16)));
-constexpr int kLanes = 4;
-
-SPECBAKE_INLINE v4d splat(double x) { return v4d{x, x, x, x}; }
-
-// Lane-wise square root (non-negative input): two SSE2 square roots where available.
-SPECBAKE_INLINE v4d sqrt4(v4d x) {
-#if defined(__SSE2__)
-    const __m128d lo = _mm_sqrt_pd(__m128d{x[0], x[1]}), hi = _mm_sqrt_pd(__m128d{x[2], x[3]});
-    return v4d{lo[0], lo[1], hi[0], hi[1]};
-#else
-    return v4d{std::sqrt(x[0]), std::sqrt(x[1]), std::sqrt(x[2]), std::sqrt(x[3])};
-#endif
-}
-
-SPECBAKE_INLINE v4d dot4(const v4d (&a)[3], const v4d (&b)[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 SPECBAKE_INLINE void cross4(const v4d (&a)[3], const v4d (&b)[3], v4d (&out)[3]) {
     out[0] = a[1] * b[2] - a[2] * b[1];
     out[1] = a[2] * b[0] - a[0] * b[2];

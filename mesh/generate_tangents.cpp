@@ -23,35 +23,20 @@
 #endif
 
 #include "mesh/mesh_math.h"
+#include "mesh/lanes.h"
 #include "mesh/scratch_array.h"
-
-// The lane arithmetic must give the scalar results bit for bit in every compiled version: no a * b + c
-// contracted into a fused multiply-add in the AVX2 version.
-#pragma GCC optimize("fp-contract=off")
 
 namespace specbake {
 namespace {
 
-// The passes are compiled twice, for AVX2 + FMA and for the baseline instruction set, and chosen once at load
-// time (GCC/Clang function multiversioning); their helpers are inlined into each version. The corner pass
+// The passes are compiled for AVX2 and for the baseline instruction set (mesh/lanes.h). The corner pass
 // differs between the two beyond the instructions (see less()) and is chosen explicitly, once per chunk.
 #if defined(__x86_64__) && defined(__linux__)
 #define SPECBAKE_X86_VERSIONS
-#define SPECBAKE_AVX2_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
-#else
-#define SPECBAKE_AVX2_CLONES
 #endif
-#define SPECBAKE_INLINE __attribute__((always_inline)) inline
 #define SPECBAKE_INLINE_LAMBDA __attribute__((always_inline))
+using namespace lanes;
 
-// Four doubles processed as one (GCC/Clang vector extension): one AVX2 register, two SSE2 registers. The
-// helpers taking or returning them are always inlined, so the ABI note GCC gives for them does not apply.
-#pragma GCC diagnostic ignored "-Wpsabi"
-typedef double v4d __attribute__((vector_size(32)));
-typedef long v4l __attribute__((vector_size(32)));  // lane masks, as v4d comparisons yield
-constexpr int kLanes = 4;
-
-SPECBAKE_INLINE v4d splat(double x) { return v4d{x, x, x, x}; }
 SPECBAKE_INLINE v4d select(v4l mask, v4d yes, v4d no) { return mask ? yes : no; }  // yes where mask is set
 
 // The corner pass comes in two versions: kAvx2, two groups of four triangles side by side in sixteen 256-bit
@@ -85,17 +70,6 @@ SPECBAKE_INLINE v4d choose(v4l mask, v4d yes, v4d no) {
     return mask ? yes : no;
 }
 
-// Lane-wise square root (non-negative input): two SSE2 square roots where available.
-SPECBAKE_INLINE v4d sqrt4(v4d x) {
-#if defined(__SSE2__)
-    const __m128d lo = _mm_sqrt_pd(__m128d{x[0], x[1]}), hi = _mm_sqrt_pd(__m128d{x[2], x[3]});
-    return v4d{lo[0], lo[1], hi[0], hi[1]};
-#else
-    return v4d{std::sqrt(x[0]), std::sqrt(x[1]), std::sqrt(x[2]), std::sqrt(x[3])};
-#endif
-}
-
-SPECBAKE_INLINE v4d dot4(const v4d (&a)[3], const v4d (&b)[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
 // detail::corner_angle lane-wise, with its operations in its order (so the same bits): both branches are
 // computed and each lane's one selected. N vectors at once, step by step: each is a long chain of dependent
