@@ -208,9 +208,10 @@ void BM_StageImport(benchmark::State& state) {
 }
 BENCHMARK(BM_StageImport)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-// Validation with the topology report (weld + OpenMesh half-edge mesh) beside the tangent generation, as
-// the bake runs it before the curvature.
-void BM_StagePrepare(benchmark::State& state) {
+// Runs `step` (returning false on failure) on a fresh copy of the sphere's mesh per iteration, the copy
+// untimed, at the benchmark's thread count.
+template <class Step>
+void on_fresh_meshes(benchmark::State& state, Step step) {
     auto scene = io::GltfScene::load(sphere_glb());
     const TriMesh source = std::move(*scene->primitive_mesh({0, 0}));
     tbb::global_control threads(tbb::global_control::max_allowed_parallelism, size_t(state.range(0)));
@@ -218,58 +219,45 @@ void BM_StagePrepare(benchmark::State& state) {
         state.PauseTiming();
         TriMesh mesh = source;
         state.ResumeTiming();
-        auto report = prepare_mesh_for_curvature(mesh);
-        if (!report) {
-            state.SkipWithError("prepare failed");
+        if (!step(mesh)) {
+            state.SkipWithError("stage failed");
             return;
         }
         benchmark::DoNotOptimize(mesh.tangents.data());
     }
     state.counters["faces/s"] = benchmark::Counter(double(source.triangle_count()), benchmark::Counter::kIsIterationInvariantRate);
 }
+
+// Validation with the topology report (weld + OpenMesh half-edge mesh) beside the tangent generation, as
+// the bake runs it before the curvature.
+void BM_StagePrepare(benchmark::State& state) {
+    on_fresh_meshes(state, [](TriMesh& mesh) { return bool(prepare_mesh_for_curvature(mesh)); });
+}
 BENCHMARK(BM_StagePrepare)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-// Tangent generation alone (MikkTSpace-style, the sphere has none), the largest CPU cost of the preparation.
+// Tangent generation alone (MikkTSpace-style; the sphere has none).
 void BM_StageTangents(benchmark::State& state) {
-    auto scene = io::GltfScene::load(sphere_glb());
-    const TriMesh source = std::move(*scene->primitive_mesh({0, 0}));
-    tbb::global_control threads(tbb::global_control::max_allowed_parallelism, size_t(state.range(0)));
-    for (auto _ : state) {
-        state.PauseTiming();
-        TriMesh mesh = source;
-        state.ResumeTiming();
+    on_fresh_meshes(state, [](TriMesh& mesh) {
         generate_tangents(mesh);
-        benchmark::DoNotOptimize(mesh.tangents.data());
-    }
-    state.counters["faces/s"] = benchmark::Counter(double(source.triangle_count()), benchmark::Counter::kIsIterationInvariantRate);
+        return true;
+    });
 }
 BENCHMARK(BM_StageTangents)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // Preparation and curvature as the bake runs them: one weld shared by the topology report and the estimate,
 // the estimate beside the report.
 void BM_StagePrepareAndCurvature(benchmark::State& state) {
-    auto scene = io::GltfScene::load(sphere_glb());
-    const TriMesh source = std::move(*scene->primitive_mesh({0, 0}));
-    tbb::global_control threads(tbb::global_control::max_allowed_parallelism, size_t(state.range(0)));
     CurvatureOptions options;
     options.max_threads = int(state.range(0));
-    for (auto _ : state) {
-        state.PauseTiming();
-        TriMesh mesh = source;
-        state.ResumeTiming();
+    on_fresh_meshes(state, [&](TriMesh& mesh) {
         Result<VertexCurvature> curvature = make_error("not estimated");
         PrepareOptions prepare;
         prepare.weld = options.weld;
         prepare.with_frames = [&](const TriMesh& m, const WeldedTopology& welded) {
             curvature = estimate_curvature(m, welded, CurvatureEstimator::ShapeOperator, options);
         };
-        if (!prepare_mesh_for_curvature(mesh, prepare) || !curvature) {
-            state.SkipWithError("prepare or curvature failed");
-            return;
-        }
-        benchmark::DoNotOptimize(curvature->values.data());
-    }
-    state.counters["faces/s"] = benchmark::Counter(double(source.triangle_count()), benchmark::Counter::kIsIterationInvariantRate);
+        return prepare_mesh_for_curvature(mesh, prepare) && curvature;
+    });
 }
 BENCHMARK(BM_StagePrepareAndCurvature)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
