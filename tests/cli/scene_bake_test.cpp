@@ -235,16 +235,24 @@ TEST(SceneBakeCli, OnlyImageWorkLoadsTheImageModule) {
     const RunResult inspect = run_specbake({"inspect", (dir / "out" / "manifest.json").string()}, dir);
     const RunResult texture = run_specbake({"texture", "--demo", "-o", (dir / "demo").string()}, dir);
     ::unsetenv("SPECBAKE_OIIO_MODULE");
+    // The executable itself must not bring OpenImageIO in: the dynamic loader lists every library it maps.
+    ASSERT_EQ(::setenv("LD_DEBUG", "files", 1), 0);
+    const RunResult loaded = run_specbake({"--version"}, dir);
+    ::unsetenv("LD_DEBUG");
+    EXPECT_EQ(loaded.exit_code, 0) << loaded.err;
+    EXPECT_NE(loaded.err.find("libtbb"), std::string::npos) << "the loader listed no libraries";
+    EXPECT_EQ(loaded.err.find("libOpenImageIO"), std::string::npos) << "OpenImageIO is loaded at start-up";
     EXPECT_EQ(bake.exit_code, 0) << bake.err;
     EXPECT_TRUE(fs::exists(dir / "out" / "sphere.gltf"));
     EXPECT_EQ(plan.exit_code, 0) << plan.err;
     EXPECT_EQ(shader.exit_code, 0) << shader.err;
     EXPECT_EQ(inspect.exit_code, 0) << inspect.err;
-    // The demo writes its input maps as PNG: that needs the module.
+    // The demo writes its input maps as PNG: that needs the module. Nothing is written.
     EXPECT_FALSE(texture.signaled);
     EXPECT_NE(texture.exit_code, 0);
     EXPECT_NE(texture.err.find("image support (OpenImageIO) is unavailable"), std::string::npos) << texture.err;
     EXPECT_NE(texture.err.find(missing.string()), std::string::npos) << texture.err;
     EXPECT_NE(texture.err.find("SPECBAKE_OIIO_MODULE"), std::string::npos) << texture.err;
+    EXPECT_TRUE(!fs::exists(dir / "demo") || fs::is_empty(dir / "demo"));
     fs::remove_all(dir);
 }
