@@ -52,9 +52,9 @@ Result<DecodedImage> decode_image(const fs::path& path) {
         char head[8] = {};
         if (f.read(head, 8) && static_cast<uint8_t>(head[0]) == 0x89 && head[1] == 'P') {
             f.close();
-            auto bytes = read_file(path);
+            auto bytes = MappedFile::open(path);
             if (!bytes) return bytes.error();
-            return decode_image_memory(*bytes, name);  // checks the chunk structure first
+            return decode_image_memory(bytes->bytes(), name);  // checks the chunk structure first
         }
     }
     auto oiio = oiio::api();

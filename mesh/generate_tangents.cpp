@@ -42,27 +42,27 @@ SPECBAKE_INLINE v4d select(v4l mask, v4d yes, v4d no) { return mask ? yes : no; 
 // The corner pass comes in two versions: kAvx2, two groups of four triangles side by side in sixteen 256-bit
 // registers; otherwise one group, with the comparisons made on SSE2 halves (the baseline version would
 // otherwise compare element by element) and fewer values spilled from its sixteen 128-bit registers.
-template <bool kAvx2>
-SPECBAKE_INLINE v4l less(v4d a, v4d b) {
+// A lane-wise comparison; `sse2` is its SSE2 intrinsic, `op` the same comparison on whole vectors.
+template <bool kAvx2, class Sse2, class Op>
+SPECBAKE_INLINE v4l compare(v4d a, v4d b, Sse2 sse2, Op op) {
 #if defined(__SSE2__)
     if constexpr (!kAvx2) {
-        const __m128d lo = _mm_cmplt_pd(__m128d{a[0], a[1]}, __m128d{b[0], b[1]});
-        const __m128d hi = _mm_cmplt_pd(__m128d{a[2], a[3]}, __m128d{b[2], b[3]});
+        const __m128d lo = sse2(__m128d{a[0], a[1]}, __m128d{b[0], b[1]});
+        const __m128d hi = sse2(__m128d{a[2], a[3]}, __m128d{b[2], b[3]});
         return (v4l)v4d{lo[0], lo[1], hi[0], hi[1]};
     }
 #endif
-    return a < b;
+    return op(a, b);
+}
+template <bool kAvx2>
+SPECBAKE_INLINE v4l less(v4d a, v4d b) {
+    return compare<kAvx2>(a, b, [](__m128d x, __m128d y) SPECBAKE_INLINE_LAMBDA { return _mm_cmplt_pd(x, y); },
+                          [](v4d x, v4d y) SPECBAKE_INLINE_LAMBDA { return x < y; });
 }
 template <bool kAvx2>
 SPECBAKE_INLINE v4l equal(v4d a, v4d b) {
-#if defined(__SSE2__)
-    if constexpr (!kAvx2) {
-        const __m128d lo = _mm_cmpeq_pd(__m128d{a[0], a[1]}, __m128d{b[0], b[1]});
-        const __m128d hi = _mm_cmpeq_pd(__m128d{a[2], a[3]}, __m128d{b[2], b[3]});
-        return (v4l)v4d{lo[0], lo[1], hi[0], hi[1]};
-    }
-#endif
-    return a == b;
+    return compare<kAvx2>(a, b, [](__m128d x, __m128d y) SPECBAKE_INLINE_LAMBDA { return _mm_cmpeq_pd(x, y); },
+                          [](v4d x, v4d y) SPECBAKE_INLINE_LAMBDA { return x == y; });
 }
 template <bool kAvx2>
 SPECBAKE_INLINE v4d choose(v4l mask, v4d yes, v4d no) {
