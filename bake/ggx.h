@@ -4,7 +4,7 @@
 // the axis-aligned case is A = diag(alpha_x^2, alpha_y^2).
 #pragma once
 
-#include "bake/vec.h"
+#include "core/vec.h"
 
 namespace specbake {
 

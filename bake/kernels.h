@@ -5,7 +5,7 @@
 #pragma once
 
 #include "bake/isotropic_filter.h"
-#include "bake/vec.h"
+#include "core/vec.h"
 
 namespace specbake {
 

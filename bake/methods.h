@@ -4,8 +4,8 @@
 #pragma once
 
 #include "bake/constants.h"
-#include "bake/result.h"
-#include "bake/vec.h"
+#include "core/result.h"
+#include "core/vec.h"
 
 #include <span>
 #include <string_view>

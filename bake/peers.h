@@ -2,7 +2,7 @@
 // and K16's GGX rectangle integral (box-filtered GGX NDF over an axis-aligned slope-space rectangle).
 #pragma once
 
-#include "bake/vec.h"
+#include "core/vec.h"
 
 namespace specbake {
 

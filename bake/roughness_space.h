@@ -2,7 +2,7 @@
 // matrix B of the GGX NDF (TK21 Eq. 4 and 7), and the Jacobians of TK21 App. C / Sec. 3-4.1.
 #pragma once
 
-#include "bake/vec.h"
+#include "core/vec.h"
 
 namespace specbake {
 

@@ -13,7 +13,7 @@
 // into float chains (bake_texture).
 #include "bake/texture_bake.h"
 
-#include "bake/huge_pages.h"
+#include "core/huge_pages.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

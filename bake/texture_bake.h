@@ -10,9 +10,9 @@
 // output is byte-identical for any thread count. Pure computation: no file I/O.
 #pragma once
 
-#include "bake/image.h"
+#include "core/image.h"
 #include "bake/isotropic_filter.h"
-#include "bake/result.h"
+#include "core/result.h"
 
 #include <functional>
 #include <optional>
@@ -24,7 +24,6 @@ namespace specbake {
 enum class RoughnessFilterMode { Projected, Approx };  // SPEC Sec. 3: TK21 Eq. (4)-(7) closed form | Eq. (9)
 enum class NormalGreen { PlusY, MinusY };               // +Y: OpenGL/glTF (default), -Y: DirectX
 enum class ReconstructZ { Auto, Always, Never };        // Auto: two channels or constant full-scale blue
-enum class WrapMode { Repeat, Clamp, Mirror };
 enum class LeanSpace { Projected, Slope };              // SPEC Sec. 3 LEAN texture: projected (default) | slope
 
 struct TextureOutputs {

@@ -6,7 +6,7 @@
 // holds beyond the input: Assimp's own tangent step and an output GLB of the bake's size.
 //
 //   cmake --build build --target bench_scene && build/bench/bench_scene --benchmark_min_time=0.01 --benchmark_repetitions=3
-#include "cli/job_scene.h"
+#include "pipeline/scene_job.h"
 #include "io/gltf_scene.h"
 #include "io/sha256.h"
 #include "mesh/curvature.h"

@@ -3,7 +3,7 @@
 #include "cli/command.h"
 #include "cli/pipeline_options.h"
 #include "cli/scene_options.h"
-#include "cli/version.h"
+#include "pipeline/version.h"
 
 #include <cstdio>
 #include <utility>

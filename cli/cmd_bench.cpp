@@ -1,9 +1,9 @@
 // specbake bench: the accuracy/cost table of every candidate on the built-in scenes and given scene files
 // (SPEC Sec. 8).
 #include "cli/command.h"
-#include "cli/gl_context.h"
-#include "cli/job_bench.h"
-#include "cli/sim_command_options.h"
+#include "verify/gl_context.h"
+#include "verify/bench_job.h"
+#include "cli/verify_options.h"
 
 #include <cstddef>
 #include <cstdio>

@@ -1,7 +1,7 @@
 // `specbake inspect`: statistics, histograms, differences, structural checks and a contact sheet of baked
 // textures and manifests.
 #include "cli/command.h"
-#include "cli/job_inspect.h"
+#include "pipeline/inspect.h"
 
 #include <cstdio>
 #include <filesystem>

@@ -1,10 +1,10 @@
 // specbake texture: bakes one normal map (+ roughness) into filtered roughness, kernel, LEAN and
 // mean-normal mip chains (SPEC Sec. 3, 7). Only argument parsing and printing live here; the pipeline
-// is cli/job_texture.h.
+// is pipeline/texture_job.h.
 #include "cli/command.h"
-#include "cli/job_texture.h"
+#include "pipeline/texture_job.h"
 #include "cli/pipeline_options.h"
-#include "cli/version.h"
+#include "pipeline/version.h"
 
 #include <cstdio>
 #include <filesystem>

@@ -1,11 +1,11 @@
 // specbake verify: scores every specular anti-aliasing candidate against the ground truth on one scene.
 #include "cli/command.h"
-#include "cli/gl_context.h"
-#include "cli/job_pipeline.h"
-#include "cli/job_verify.h"
-#include "cli/sim_command_options.h"
-#include "cli/sim_scene_file.h"
-#include "cli/sim_strips.h"
+#include "verify/gl_context.h"
+#include "pipeline/batch.h"
+#include "verify/verify_job.h"
+#include "cli/verify_options.h"
+#include "verify/scene_file.h"
+#include "verify/strips.h"
 
 #include <cmath>
 #include <cstddef>

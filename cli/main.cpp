@@ -1,9 +1,9 @@
 // specbake: command-line entry point. Expands response files, reads --config, parses the global flags
 // and dispatches to one registered subcommand.
 #include "cli/command.h"
-#include "cli/job_config.h"
-#include "cli/job_pipeline.h"
-#include "cli/version.h"
+#include "pipeline/config.h"
+#include "pipeline/batch.h"
+#include "pipeline/version.h"
 
 #include <tbb/global_control.h>
 

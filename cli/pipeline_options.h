@@ -1,8 +1,8 @@
-// The command-line side of cli/job_pipeline.h: the flags every bake-type command offers. The global flags
+// The command-line side of pipeline/batch.h: the flags every bake-type command offers. The global flags
 // (--jobs, --quiet, --verbose, --config) are parsed by main() for every command.
 #pragma once
 
-#include "cli/job_pipeline.h"
+#include "pipeline/batch.h"
 
 #include <CLI/CLI.hpp>
 

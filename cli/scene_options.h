@@ -2,9 +2,9 @@
 // plan thresholds and the texture-bake settings passed through to the texture bake.
 #pragma once
 
-#include "cli/job_config.h"
-#include "cli/job_pipeline.h"
-#include "cli/job_scene.h"
+#include "pipeline/config.h"
+#include "pipeline/batch.h"
+#include "pipeline/scene_job.h"
 
 #include <CLI/CLI.hpp>
 

@@ -9,7 +9,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "bake/huge_pages.h"
+#include "core/huge_pages.h"
 
 namespace specbake::io {
 namespace fs = std::filesystem;

@@ -2,7 +2,7 @@
 // is renamed into place only when complete, so a failed run never leaves a half-written file.
 #pragma once
 
-#include "bake/result.h"
+#include "core/result.h"
 
 #include <cstdint>
 #include <filesystem>

@@ -4,8 +4,8 @@
 // The structural check validates a container without trusting any of its offsets.
 #pragma once
 
-#include "bake/image.h"
-#include "bake/result.h"
+#include "core/image.h"
+#include "core/result.h"
 
 #include <cstdint>
 #include <filesystem>

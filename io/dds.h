@@ -3,7 +3,7 @@
 // with alpha = 1 (RGB float32 uses DXGI_FORMAT_R32G32B32_FLOAT).
 #pragma once
 
-#include "bake/image.h"
+#include "core/image.h"
 #include "io/texel_encoding.h"
 #include "io/texture_writer.h"
 

@@ -3,7 +3,7 @@
 // action read, including files it discovered itself (textures a glTF references).
 #pragma once
 
-#include "bake/result.h"
+#include "core/result.h"
 
 #include <filesystem>
 #include <span>

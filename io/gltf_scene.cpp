@@ -2,7 +2,7 @@
 
 #include "io/atomic_file.h"
 #include "io/sha256.h"
-#include "bake/huge_pages.h"
+#include "core/huge_pages.h"
 
 // The tinygltf implementation is compiled here, from the installed header, instead of being taken from
 // Debian's libtinygltf.so: that library's TinyGLTF class does not match the layout its header declares

@@ -5,9 +5,9 @@
 // existing buffer bytes are never rewritten (a GLB output holds them in its binary chunk, unchanged). The vendor extension is described in io/SPECBAKE_EXTENSION.md.
 #pragma once
 
-#include "bake/result.h"
+#include "core/result.h"
 #include "io/mesh_import.h"
-#include "mesh/trimesh.h"
+#include "core/trimesh.h"
 
 #include <nlohmann/json.hpp>
 

@@ -3,8 +3,8 @@
 // premultiplication (normal and roughness maps are data); 8/16-bit integers are normalised to [0, 1].
 #pragma once
 
-#include "bake/image.h"
-#include "bake/result.h"
+#include "core/image.h"
+#include "core/result.h"
 
 #include <cstdint>
 #include <filesystem>

@@ -4,8 +4,8 @@
 // and level data stored smallest level first, each level aligned to lcm(texel size, 4).
 #pragma once
 
-#include "bake/image.h"
-#include "bake/result.h"
+#include "core/image.h"
+#include "core/result.h"
 #include "io/texel_encoding.h"
 #include "io/texture_writer.h"
 

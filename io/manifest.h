@@ -3,7 +3,7 @@
 // manifest's folder and use '/'. Keys are written sorted, so equal content gives byte-identical files.
 #pragma once
 
-#include "bake/result.h"
+#include "core/result.h"
 
 #include <nlohmann/json.hpp>
 

@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "bake/result.h"
-#include "mesh/trimesh.h"
+#include "core/result.h"
+#include "core/trimesh.h"
 
 namespace specbake {
 

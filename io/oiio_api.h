@@ -9,8 +9,8 @@
 // layout), then the install prefix configured at build time, then the build tree.
 #pragma once
 
-#include "bake/image.h"
-#include "bake/result.h"
+#include "core/image.h"
+#include "core/result.h"
 #include "io/container_inspect.h"
 #include "io/image_io.h"
 

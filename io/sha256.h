@@ -3,7 +3,7 @@
 // about 2 GB/s per core; elsewhere a portable implementation runs. Both give the same digest.
 #pragma once
 
-#include "bake/result.h"
+#include "core/result.h"
 
 #include <array>
 #include <cstdint>

@@ -1,7 +1,7 @@
 // Packs float texels into the bytes of a texture container, and back. Little-endian, tightly packed rows.
 #pragma once
 
-#include "bake/image.h"
+#include "core/image.h"
 #include "io/texture_writer.h"
 
 #include <cstdint>

@@ -7,7 +7,7 @@
 #include "io/sha256.h"
 #include "io/texel_encoding.h"
 
-#include "bake/huge_pages.h"
+#include "core/huge_pages.h"
 
 #include <tbb/parallel_for.h>
 

@@ -4,9 +4,8 @@
 // or one PNG (integer encodings) / EXR (float encodings) file per mip level.
 #pragma once
 
-#include "bake/image.h"
-#include "bake/result.h"
-#include "bake/texture_bake.h"
+#include "core/image.h"
+#include "core/result.h"
 #include "io/manifest.h"
 
 #include <cstdint>

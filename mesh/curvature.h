@@ -7,8 +7,8 @@
 #include <optional>
 #include <string_view>
 
-#include "bake/result.h"
-#include "mesh/trimesh.h"
+#include "core/result.h"
+#include "core/trimesh.h"
 #include "mesh/weld_by_position.h"
 
 namespace specbake {

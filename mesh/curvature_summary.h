@@ -2,7 +2,7 @@
 // shading normals actually curve"), dimensionless so one threshold fits every asset scale.
 #pragma once
 
-#include "mesh/trimesh.h"
+#include "core/trimesh.h"
 
 namespace specbake {
 

@@ -1,7 +1,7 @@
 // generate_normals: smooth vertex normals for meshes that have none.
 #pragma once
 
-#include "mesh/trimesh.h"
+#include "core/trimesh.h"
 
 namespace specbake {
 

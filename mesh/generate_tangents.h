@@ -5,7 +5,7 @@
 // of the bottom-left-origin convention MikkTSpace tools use).
 #pragma once
 
-#include "mesh/trimesh.h"
+#include "core/trimesh.h"
 
 namespace specbake {
 

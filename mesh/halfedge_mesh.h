@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "mesh/trimesh.h"
+#include "core/trimesh.h"
 #include "mesh/weld_by_position.h"
 
 namespace specbake {

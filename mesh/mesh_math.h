@@ -7,7 +7,7 @@
 #include <cmath>
 #include <cstdint>
 
-#include "mesh/trimesh.h"
+#include "core/trimesh.h"
 
 namespace specbake::detail {
 

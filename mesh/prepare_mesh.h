@@ -4,9 +4,9 @@
 
 #include <functional>
 
-#include "bake/result.h"
+#include "core/result.h"
 #include "mesh/generate_normals.h"
-#include "mesh/trimesh.h"
+#include "core/trimesh.h"
 #include "mesh/validate_mesh.h"
 #include "mesh/weld_by_position.h"
 

@@ -3,7 +3,7 @@
 // faulting them in 4 KiB pages costs about as much CPU time as the curvature arithmetic itself.
 #pragma once
 
-#include "bake/huge_pages.h"
+#include "core/huge_pages.h"
 
 #include <algorithm>
 #include <cstddef>

@@ -5,8 +5,8 @@
 #include <cstddef>
 #include <string>
 
-#include "bake/result.h"
-#include "mesh/trimesh.h"
+#include "core/result.h"
+#include "core/trimesh.h"
 #include "mesh/weld_by_position.h"
 
 namespace specbake {

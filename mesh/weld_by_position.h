@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "mesh/trimesh.h"
+#include "core/trimesh.h"
 
 namespace specbake {
 

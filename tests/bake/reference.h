@@ -2,7 +2,7 @@
 // integration, written without calling the code under test.
 #pragma once
 
-#include "bake/vec.h"
+#include "core/vec.h"
 
 #include <Eigen/Dense>
 

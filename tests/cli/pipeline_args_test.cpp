@@ -1,5 +1,5 @@
 // Response files, config files and per-material overrides.
-#include "cli/job_config.h"
+#include "pipeline/config.h"
 
 #include <gtest/gtest.h>
 

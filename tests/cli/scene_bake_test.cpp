@@ -1,7 +1,7 @@
 // Scene bake end to end: curvature of a procedural sphere read back from the output (closed form +1/R),
 // the plan's decisions (no normal map -> curvature only, rough -> none, flat -> none), the manifest, and
 // refusing to write into the input's folder.
-#include "cli/job_scene.h"
+#include "pipeline/scene_job.h"
 #include "io/manifest.h"
 #include "scene_test_util.h"
 

@@ -3,7 +3,7 @@
 // "clearcoat" object; a glossy coat over a rough base makes the primitive glossy for the curvature rule.
 // Checked on a generated sphere (the coarsest roughness mip against the closed form of SPEC Sec. 3 computed
 // here from the normal map's texels) and on the shared ClearCoatTest model.
-#include "cli/job_scene.h"
+#include "pipeline/scene_job.h"
 #include "io/image_io.h"
 #include "io/manifest.h"
 #include "scene_test_util.h"

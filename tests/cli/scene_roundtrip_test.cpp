@@ -2,7 +2,7 @@
 // every input attribute and index buffer are equal before and after, the output loads in tinygltf and in
 // Assimp, and every added float is finite. Every file of assets/nasty through `specbake bake`: a clear
 // one-line error naming the file or a bake whose outputs hold no NaN/Inf, never a crash.
-#include "cli/job_scene.h"
+#include "pipeline/scene_job.h"
 #include "scene_test_util.h"
 
 #include <assimp/Importer.hpp>

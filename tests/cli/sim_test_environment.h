@@ -4,8 +4,8 @@
 // reason when no context can be created.
 #pragma once
 
-#include "cli/gl_context.h"
-#include "cli/job_verify.h"
+#include "verify/gl_context.h"
+#include "verify/verify_job.h"
 
 #include <gtest/gtest.h>
 

@@ -1,8 +1,8 @@
 // Simulator building blocks against independent computations: metrics on synthetic images, the ground
 // truth's sample layout, the camera motion, and the built-in scenes' analytic geometry.
-#include "cli/sim_metrics.h"
-#include "cli/sim_renderer.h"
-#include "cli/sim_scene.h"
+#include "verify/metrics.h"
+#include "verify/renderer.h"
+#include "verify/scene.h"
 
 #include <gtest/gtest.h>
 

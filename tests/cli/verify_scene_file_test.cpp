@@ -3,10 +3,10 @@
 // ground truth against an independent construction: the same sphere transformed by hand and rendered as
 // a built-in-style scene, far point and spot lights against a directional light of equal irradiance,
 // texture values decoded and scaled by hand.
-#include "cli/job_verify.h"
-#include "cli/sim_renderer.h"
-#include "cli/sim_scene.h"
-#include "cli/sim_scene_file.h"
+#include "verify/verify_job.h"
+#include "verify/renderer.h"
+#include "verify/scene.h"
+#include "verify/scene_file.h"
 #include "io/image_io.h"
 
 #include "tests/cli/sim_test_environment.h"

@@ -1,9 +1,9 @@
 // The simulator on the headless OpenGL context (llvmpipe on CI), at small sizes: the ground truth
 // converges and agrees with an unfiltered render where the image has no sub-pixel detail, and the
 // accuracy claims of the papers that hold robustly in measurement (see each test for what is asserted).
-#include "cli/job_verify.h"
-#include "cli/sim_renderer.h"
-#include "cli/sim_scene.h"
+#include "verify/verify_job.h"
+#include "verify/renderer.h"
+#include "verify/scene.h"
 
 #include "tests/cli/sim_test_environment.h"
 

@@ -1,5 +1,5 @@
 // Links the installed specbake library: checks the baked manifest's hashes with the library's own reader.
-#include "cli/version.h"
+#include "pipeline/version.h"
 #include "io/manifest.h"
 #include "io/sha256.h"
 

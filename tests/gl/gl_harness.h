@@ -6,7 +6,7 @@
 #define GL_GLEXT_PROTOTYPES 1
 #include <GL/glcorearb.h>
 
-#include "cli/gl_context.h"
+#include "verify/gl_context.h"
 
 #include <array>
 #include <filesystem>

@@ -7,7 +7,7 @@
 #include <functional>
 #include <vector>
 
-#include "mesh/trimesh.h"
+#include "core/trimesh.h"
 
 namespace specbake::testing {
 

@@ -1,7 +1,7 @@
 // Small non-manifold meshes shared by the topology and preparation tests.
 #pragma once
 
-#include "mesh/trimesh.h"
+#include "core/trimesh.h"
 
 #include <cmath>
 #include <cstdint>

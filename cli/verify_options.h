@@ -1,0 +1,55 @@
+// Options `specbake verify` and `specbake bench` share: image size, ground-truth samples, frames, timing
+// repeats and the bake variants, registered once and turned into VerifyOptions once.
+#pragma once
+
+#include "cli/command.h"
+#include "verify/verify_job.h"
+
+#include <cstddef>
+#include <cstdio>
+#include <string>
+
+namespace specbake::cli {
+
+// Defined in the build-generated shader_embed.cpp (shaders/embed.cmake).
+extern const unsigned char kSpecaaGlsl[];
+extern const std::size_t kSpecaaGlslSize;
+
+struct SimCommandOptions {
+    std::string size = "128x128";
+    int spp = 256;
+    int frames = 8;
+    int repeats = 7;
+    bool no_variants = false;
+};
+
+inline void add_sim_command_options(CLI::App* sub, SimCommandOptions& o) {
+    sub->add_option("--size", o.size, "Image size WxH")->capture_default_str();
+    sub->add_option("--spp", o.spp, "Ground-truth samples per pixel (rounded to a square)")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 65536));
+    sub->add_option("--frames", o.frames, "Frames of slow sub-pixel camera motion (temporal instability)")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 1024));
+    sub->add_option("--repeats", o.repeats, "Renders per candidate for the median frame time (0: no timing)")
+        ->capture_default_str()
+        ->check(CLI::Range(0, 1000));
+    sub->add_flag("--no-variants", o.no_variants, "Leave out the bake variants");
+}
+
+// Fills `v` from `o` and the embedded runtime include. Prints the error and returns false for a bad --size.
+inline bool apply_sim_command_options(const SimCommandOptions& o, VerifyOptions& v) {
+    if (std::sscanf(o.size.c_str(), "%dx%d", &v.width, &v.height) != 2 || v.width < 2 || v.height < 2 ||
+        v.width > 8192 || v.height > 8192) {
+        print_error("--size: expected WxH between 2x2 and 8192x8192, got '" + o.size + "'");
+        return false;
+    }
+    v.include_glsl.assign(reinterpret_cast<const char*>(kSpecaaGlsl), kSpecaaGlslSize);
+    v.spp = o.spp;
+    v.frames = o.frames;
+    v.timing_repeats = o.repeats;
+    v.variants = !o.no_variants;
+    return true;
+}
+
+}  // namespace specbake::cli

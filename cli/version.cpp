@@ -1,5 +1,0 @@
-#include "cli/version.h"
-
-namespace specbake {
-const char* tool_version() { return SPECBAKE_VERSION; }
-}  // namespace specbake

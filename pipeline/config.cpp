@@ -1,0 +1,202 @@
+#include "pipeline/config.h"
+
+#include "io/atomic_file.h"
+
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <sstream>
+
+namespace specbake::cli {
+namespace {
+
+constexpr int kMaxResponseDepth = 16;
+
+Result<void> split_response_text(const std::string& text, const std::string& file, std::vector<std::string>& out) {
+    size_t i = 0;
+    const size_t n = text.size();
+    while (i < n) {
+        while (i < n && std::isspace(static_cast<unsigned char>(text[i]))) ++i;
+        if (i >= n) break;
+        if (text[i] == '#') {
+            while (i < n && text[i] != '\n') ++i;
+            continue;
+        }
+        std::string word;
+        while (i < n && !std::isspace(static_cast<unsigned char>(text[i]))) {
+            const char c = text[i];
+            if (c == '"' || c == '\'') {
+                const size_t close = text.find(c, i + 1);
+                if (close == std::string::npos) return make_error(file + ": unterminated quote in response file");
+                word.append(text, i + 1, close - i - 1);
+                i = close + 1;
+            } else {
+                word += c;
+                ++i;
+            }
+        }
+        out.push_back(std::move(word));
+    }
+    return {};
+}
+
+Result<void> expand_into(const std::vector<std::string>& args, int depth, std::vector<std::string>& out,
+                         std::vector<std::string>* files_read) {
+    for (const std::string& arg : args) {
+        if (arg.size() < 2 || arg[0] != '@') {
+            out.push_back(arg);
+            continue;
+        }
+        const std::string file = arg.substr(1);
+        if (depth >= kMaxResponseDepth)
+            return make_error(file + ": response files nested deeper than " + std::to_string(kMaxResponseDepth) +
+                              " (a file that includes itself?)");
+        auto bytes = io::read_file(file);
+        if (!bytes) return make_error(file + ": cannot read response file");
+        if (files_read) files_read->push_back(file);
+        std::vector<std::string> words;
+        auto split = split_response_text(std::string(bytes->begin(), bytes->end()), file, words);
+        if (!split) return split.error();
+        auto nested = expand_into(words, depth + 1, out, files_read);
+        if (!nested) return nested.error();
+    }
+    return {};
+}
+
+std::vector<std::string> scalar_strings(const nlohmann::json& value) {
+    auto one = [](const nlohmann::json& v) { return v.is_string() ? v.get<std::string>() : v.dump(); };
+    std::vector<std::string> out;
+    if (value.is_array()) {
+        for (const nlohmann::json& v : value) out.push_back(one(v));
+    } else {
+        out.push_back(one(value));
+    }
+    return out;
+}
+
+bool contains(std::span<const std::string> names, const std::string& name) {
+    return std::find(names.begin(), names.end(), name) != names.end();
+}
+
+Result<void> add_materials(const nlohmann::json& table, const std::string& source, MaterialOverrides& out) {
+    if (!table.is_object()) return make_error(source + ": 'materials' must be a table of material names");
+    for (auto m = table.begin(); m != table.end(); ++m) {
+        if (!m.value().is_object())
+            return make_error(source + ": materials." + m.key() + " must be a table of options");
+        for (auto kv = m.value().begin(); kv != m.value().end(); ++kv) {
+            if (kv.value().is_object())
+                return make_error(source + ": materials." + m.key() + "." + kv.key() + " must be a value");
+            out.set(m.key(), kv.key(), scalar_strings(kv.value()).front());
+        }
+    }
+    return {};
+}
+
+}  // namespace
+
+Result<std::vector<std::string>> expand_response_files(const std::vector<std::string>& args,
+                                                       std::vector<std::string>* files_read) {
+    std::vector<std::string> out;
+    auto r = expand_into(args, 0, out, files_read);
+    if (!r) return r.error();
+    return out;
+}
+
+Result<nlohmann::json> parse_config_text(const std::string& text, const std::string& source_name) {
+    const size_t first = text.find_first_not_of(" \t\r\n");
+    if (first != std::string::npos && text[first] == '{') {
+        nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
+        if (j.is_discarded() || !j.is_object()) return make_error(source_name + ": not valid JSON");
+        return j;
+    }
+    std::vector<CLI::ConfigItem> items;
+    try {
+        std::istringstream in(text);
+        items = CLI::ConfigTOML().from_config(in);
+    } catch (const CLI::Error& e) {
+        return make_error(source_name + ": not valid TOML: " + e.what());
+    }
+    nlohmann::json tree = nlohmann::json::object();
+    for (const CLI::ConfigItem& item : items) {
+        if (item.name == "++" || item.name == "--") continue;  // section open/close markers
+        nlohmann::json* node = &tree;
+        for (const std::string& parent : item.parents) {
+            if (node->contains(parent) && !(*node)[parent].is_object())
+                return make_error(source_name + ": '" + parent + "' is both a value and a table");
+            node = &(*node)[parent];
+        }
+        if (item.inputs.size() == 1) {
+            (*node)[item.name] = item.inputs.front();
+        } else {
+            (*node)[item.name] = item.inputs;
+        }
+    }
+    return tree;
+}
+
+void MaterialOverrides::set(const std::string& material, const std::string& key, std::string value) {
+    table_[material][key] = std::move(value);
+}
+
+std::optional<std::string> MaterialOverrides::find(const std::string& material, const std::string& key) const {
+    auto m = table_.find(material);
+    if (m == table_.end()) return std::nullopt;
+    auto v = m->find(key);
+    if (v == m->end()) return std::nullopt;
+    return v->get<std::string>();
+}
+
+Result<std::optional<double>> MaterialOverrides::number(const std::string& material, const std::string& key) const {
+    const std::optional<std::string> text = find(material, key);
+    if (!text) return std::optional<double>();
+    try {
+        size_t used = 0;
+        const double v = std::stod(*text, &used);
+        if (used == text->size()) return std::optional<double>(v);
+    } catch (const std::exception&) {
+    }
+    return make_error("materials." + material + "." + key + ": '" + *text + "' is not a number");
+}
+
+MaterialOverrides& material_overrides() {
+    static MaterialOverrides overrides;
+    return overrides;
+}
+
+Result<SplitConfig> split_config(const nlohmann::json& tree, const std::string& command,
+                                 std::span<const std::string> global_options,
+                                 std::span<const std::string> subcommands, const std::string& source_name) {
+    SplitConfig out;
+    for (auto it = tree.begin(); it != tree.end(); ++it) {
+        const std::string& key = it.key();
+        const nlohmann::json& value = it.value();
+        if (key == "materials") {
+            auto r = add_materials(value, source_name, out.materials);
+            if (!r) return r.error();
+        } else if (!value.is_object()) {
+            if (contains(global_options, key) || command.empty()) {
+                out.entries.push_back({{}, key, scalar_strings(value)});
+            } else {
+                out.entries.push_back({{command}, key, scalar_strings(value)});
+            }
+        } else if (contains(subcommands, key)) {
+            if (key != command) continue;  // one file can configure several commands
+            for (auto sub = value.begin(); sub != value.end(); ++sub) {
+                if (sub.key() == "materials") {
+                    auto r = add_materials(sub.value(), source_name, out.materials);
+                    if (!r) return r.error();
+                } else if (sub.value().is_object()) {
+                    return make_error(source_name + ": unknown table [" + key + "." + sub.key() + "]");
+                } else {
+                    out.entries.push_back({{key}, sub.key(), scalar_strings(sub.value())});
+                }
+            }
+        } else {
+            return make_error(source_name + ": unknown table [" + key + "]");
+        }
+    }
+    return out;
+}
+
+}  // namespace specbake::cli

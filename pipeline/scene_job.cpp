@@ -1,0 +1,305 @@
+#include "pipeline/scene_job.h"
+
+#include "pipeline/version.h"
+#include "io/atomic_file.h"
+#include "io/mesh_import.h"
+#include "io/sha256.h"
+#include "mesh/generate_normals.h"
+
+#include <algorithm>
+#include <set>
+
+namespace specbake {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+std::string lower_extension(const fs::path& p) {
+    std::string e = p.extension().string();
+    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return e;
+}
+
+const char* format_of(const fs::path& p) {
+    const std::string e = lower_extension(p);
+    if (e == ".gltf") return "gltf";
+    if (e == ".glb") return "glb";
+    if (e == ".bin") return "bin";
+    if (e == ".png") return "png";
+    if (e == ".jpg" || e == ".jpeg") return "jpeg";
+    if (e == ".ktx2") return "ktx2";
+    if (e == ".webp") return "webp";
+    return "file";
+}
+
+// Removes the files a failed scene wrote, so a failure leaves nothing half done.
+void remove_files(const std::vector<fs::path>& files) {
+    std::error_code ec;
+    for (const fs::path& f : files) fs::remove(f, ec);
+}
+
+json root_extension(const SceneJob& job, bool textures) {
+    json ext = {{"version", 1},
+                {"generator", std::string("specbake ") + tool_version()},
+                {"curvature",
+                 {{"attribute", io::kCurvatureAttribute},
+                  {"layout", "k1, k2, d.x, d.y"},
+                  {"units", "1 / object-space length"},
+                  {"space", "object"},
+                  {"estimator", std::string(to_string(job.plan.estimator))}}}};
+    if (textures) ext["textures"] = texture_settings_json(job.plan.texture_settings, job.container);
+    return ext;
+}
+
+struct SceneResult {
+    std::vector<io::ManifestOutput> outputs;  // paths relative to the scene's output folder
+    std::vector<io::ManifestInput> inputs;    // hashed
+    ScenePlan plan;
+};
+
+Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, const fs::path& out_dir,
+                                   std::vector<fs::path>& written, std::vector<std::string>& warnings) {
+    auto say = [&](const std::string& s) {
+        if (job.progress) job.progress(s);
+    };
+    say("reading " + input.string());
+    auto loaded = load_scene(input);
+    if (!loaded) return loaded.error();
+    for (const std::string& n : loaded->notes) warnings.push_back(n);
+    io::GltfScene& scene = loaded->scene;
+
+    SceneResult result;
+    std::vector<fs::path> inputs{input};
+    for (const fs::path& r : scene.resource_files()) inputs.push_back(r);
+    if (auto r = io::check_output_not_input(out_dir, inputs); !r) return r.error();
+
+    // Material textures: the plan measures its statistic on the full bake and this writes each kept bake
+    // right away. Layers with identical inputs share one set of files (the first one's, by its stem).
+    std::map<std::string, std::vector<io::ManifestOutput>> files_by_stem;
+    PlanOptions options = job.plan;
+    options.texture_sink = [&](const TextureDecision& d, const TextureWork& w,
+                               TextureBakeResult&& baked) -> Result<void> {
+        say("writing " + (d.layer == "base" ? std::string() : d.layer + " ") + "textures of material " +
+            std::to_string(d.material) + " of " + input.string());
+        TextureInputs in;
+        in.normal = w.normal;
+        in.normal_name = scene.image_label(d.normal_image);
+        in.roughness = w.roughness;
+        in.roughness_name = w.roughness ? scene.image_label(d.roughness_image) : std::string();
+        in.roughness_channel = w.roughness ? w.roughness_channel : -1;
+        in.roughness_value = d.roughness_value;
+        in.normal_bits = w.normal_bits;
+        in.roughness_bits = w.roughness_bits;
+        auto out = write_texture_outputs(std::move(baked), in, job.plan.texture_settings_for(d.material_name),
+                                         job.container, out_dir, d.stem, job.progress);
+        if (!out) return out.error();
+        for (const io::ManifestOutput& o : out->outputs) written.push_back(out_dir / o.path);
+        result.outputs.insert(result.outputs.end(), out->outputs.begin(), out->outputs.end());
+        files_by_stem[d.stem] = std::move(out->outputs);
+        return {};
+    };
+    say("planning " + input.string());
+    auto plan = make_plan(scene, options, loaded->roughness_known);
+    if (!plan) return plan.error();
+    for (const std::string& n : plan->notes) warnings.push_back(n);
+
+    // Curvature, and the frame it refers to. The vectors move into the scene (the plan keeps the meshes'
+    // positions, which is all the manifest needs of them).
+    size_t baked_primitives = 0;
+    for (auto& [index, work] : plan->work) {
+        const CurvatureDecision& d = plan->primitives[index];
+        if (auto r = scene.set_vertex_attribute(d.ref, io::kCurvatureAttribute, std::move(work.curvature.values), 4); !r)
+            return r.error();
+        if (d.generates_tangents || work.report.repaired_tangents > 0)
+            if (auto r = scene.set_vertex_attribute(d.ref, "TANGENT", std::move(work.mesh.tangents), 4); !r) return r.error();
+        if (d.repairs_normals)
+            if (auto r = scene.set_vertex_attribute(d.ref, "NORMAL", std::move(work.mesh.normals), 3); !r) return r.error();
+        ++baked_primitives;
+    }
+
+    // Material extensions pointing at the files written during planning: the base layer's properties at
+    // the top of the object, the clear coat's in "clearcoat" (io/SPECBAKE_EXTENSION.md).
+    const std::vector<io::MaterialInfo> materials = scene.materials();
+    std::map<int, json> extension_of_material;
+    for (size_t i = 0; i < plan->textures.size(); ++i) {
+        const TextureDecision& d = plan->textures[i];
+        if (!d.bake) continue;
+        const size_t owner = d.same_as >= 0 ? size_t(d.same_as) : i;
+        const io::MaterialInfo& mat = materials[size_t(d.material)];
+        const bool coat = d.layer == "clearcoat";
+        const io::TextureSlot& normal = coat ? mat.clearcoat.normal : mat.normal;
+        json ext = {{"texCoord", d.texcoord},
+                    {"roughnessChannel", d.roughness_texture_used ? 1 : 0},
+                    {"source", {{coat ? "clearcoatNormalTexture" : "normalTexture", normal.texture}}}};
+        if (d.roughness_texture_used)
+            ext["source"][coat ? "clearcoatRoughnessTexture" : "metallicRoughnessTexture"] =
+                coat ? mat.clearcoat.roughness.texture : mat.metallic_roughness.texture;
+        else
+            ext["source"]["roughness"] = d.roughness_value;
+        if (!normal.transform.is_null()) ext["KHR_texture_transform"] = normal.transform;
+        const std::string& owner_name = plan->textures[owner].material_name;
+        if (job.plan.material_texture_settings.count(owner_name))  // differs from the root's "textures"
+            ext["settings"] = texture_settings_json(job.plan.texture_settings_for(owner_name), job.container);
+        ext["outputs"] = json::array();
+        for (const io::ManifestOutput& o : files_by_stem.at(d.stem))
+            ext["outputs"].push_back({{"kind", o.kind}, {"uri", o.path}, {"format", o.format}, {"width", o.width},
+                                      {"height", o.height}, {"mips", o.mips}, {"channels", o.channels}});
+        json& target = extension_of_material[d.material];
+        if (target.is_null()) target = json::object();
+        if (coat) target["clearcoat"] = std::move(ext);
+        else target.update(ext);
+    }
+    for (const auto& [material, ext] : extension_of_material) scene.set_material_extension(material, ext);
+    const bool any_texture = !extension_of_material.empty();
+    if (baked_primitives > 0 || any_texture) scene.set_root_extension(root_extension(job, any_texture));
+
+    // Hashes of the inputs, asked for only now: the scene file's is computed in the background since the
+    // load, the other files the loader read come hashed with the scene, the rest (images, files read
+    // through Assimp) are hashed together here.
+    std::vector<fs::path> unhashed;
+    for (const fs::path& in : inputs)
+        if (scene.content_hash(in).empty()) unhashed.push_back(in);
+    auto hashes = io::sha256_files(unhashed);
+    if (!hashes) return hashes.error();
+    for (size_t i = 0, next = 0; i < inputs.size(); ++i) {
+        std::string hash = scene.content_hash(inputs[i]);
+        result.inputs.push_back({inputs[i].string(), hash.empty() ? (*hashes)[next++] : std::move(hash)});
+    }
+
+    std::string ext = loaded->is_gltf && scene.source_is_binary() ? ".glb" : ".gltf";
+    if (job.format == SceneFormat::Gltf) ext = ".gltf";
+    if (job.format == SceneFormat::Glb) ext = ".glb";
+    const fs::path out_file = out_dir / (input.stem().string() + ext);
+    say("writing " + out_file.string());
+    auto files = scene.write(out_file);
+    if (!files) return files.error();
+    for (const io::GltfScene::WrittenFile& f : *files) written.push_back(f.path);
+    for (size_t i = 0; i < files->size(); ++i) {
+        const fs::path& f = (*files)[i].path;
+        io::ManifestOutput o;
+        o.sha256 = (*files)[i].sha256;
+        o.kind = i == 0 ? "scene" : (std::string(format_of(f)) == "bin" ? "buffer" : "image");
+        o.path = io::relative_path(f, out_dir);
+        o.format = format_of(f);
+        if (i == 0) {
+            size_t vertices = 0;
+            for (const auto& [index, work] : plan->work) vertices += work.mesh.vertex_count();
+            o.extra = {{"curvature_primitives", baked_primitives},
+                       {"curvature_vertices", vertices},
+                       {"curvature_space",
+                        "object: _SPECAA_CURVATURE is in 1/object-space length; a node scale s divides it by s "
+                        "in world space"},
+                       {"source_format", loaded->is_gltf ? (scene.source_is_binary() ? "glb" : "gltf")
+                                                         : lower_extension(input).substr(1)}};
+        }
+        result.outputs.push_back(std::move(o));
+    }
+    result.plan = std::move(*plan);
+    return result;
+}
+
+}  // namespace
+
+Result<LoadedScene> load_scene(const fs::path& path) {
+    LoadedScene out;
+    const std::string ext = lower_extension(path);
+    if (ext == ".gltf" || ext == ".glb") {
+        auto scene = io::GltfScene::load(path);
+        if (!scene) return scene.error();
+        out.scene = std::move(*scene);
+        out.roughness_known.assign(out.scene.materials().size(), true);
+        return out;
+    }
+    auto imported = import_mesh(path.string());
+    if (!imported) return imported.error();
+    out.is_gltf = false;
+    out.notes = imported->notes;
+    size_t generated = 0;
+    for (TriMesh& m : imported->meshes) {
+        if (m.has_normals()) continue;
+        generate_normals(m);  // Max (1999) weights, as for glTF primitives without normals
+        ++generated;
+    }
+    if (generated > 0)
+        out.notes.push_back(path.string() + ": " + std::to_string(generated) +
+                            " mesh(es) without normals: normals generated (Max weights) and written");
+    for (const ImportedMaterial& m : imported->materials)
+        out.roughness_known.push_back(m.roughness_from_file || m.roughness_factor != 1.0f);
+    auto scene = io::GltfScene::from_imported(*imported);
+    if (!scene) return scene.error();
+    out.scene = std::move(*scene);
+    return out;
+}
+
+Result<ScenePlan> plan_scene(const fs::path& path, const PlanOptions& options) {
+    auto loaded = load_scene(path);
+    if (!loaded) return loaded.error();
+    auto plan = make_plan(loaded->scene, options, loaded->roughness_known);
+    if (!plan) return plan.error();
+    plan->notes.insert(plan->notes.begin(), loaded->notes.begin(), loaded->notes.end());
+    return plan;
+}
+
+json scene_settings_json(const SceneJob& job) {
+    json s = {{"estimator", std::string(to_string(job.plan.estimator))},
+              {"format", job.format == SceneFormat::Glb    ? "glb"
+                         : job.format == SceneFormat::Gltf ? "gltf"
+                                                           : "same as input"},
+              {"textures", job.plan.textures},
+              {"check_material", job.plan.check_material},
+              {"kappa", job.plan.kappa},
+              {"min_roughness_gain", job.plan.min_roughness_gain},
+              {"min_relative_curvature", job.plan.min_relative_curvature},
+              {"curvature_space", "object (1/object-space length; node scale s divides it by s in world space)"}};
+    if (job.plan.textures) {
+        s["texture"] = texture_settings_json(job.plan.texture_settings, job.container);
+        // Per-material settings as applied, so the up-to-date check sees a changed override.
+        if (!job.plan.material_texture_settings.empty()) {
+            json materials = json::object();
+            for (const auto& [name, settings] : job.plan.material_texture_settings)
+                materials[name] = texture_settings_json(settings, job.container);
+            s["materials"] = materials;
+        }
+    }
+    return s;
+}
+
+Result<SceneJobOutcome> run_scene_job(const SceneJob& job) {
+    if (job.scenes.empty()) return make_error("no scene given");
+    SceneJobOutcome outcome;
+    outcome.manifest.version = tool_version();
+    outcome.manifest.settings = scene_settings_json(job);
+
+    std::vector<fs::path> all_inputs(job.scenes.begin(), job.scenes.end());
+    if (auto r = io::check_output_not_input(job.output_dir, all_inputs); !r) return r.error();
+    std::set<std::string> stems;
+    for (const fs::path& s : job.scenes)
+        if (!stems.insert(s.stem().string()).second && job.scenes.size() > 1)
+            return make_error(s.string() + ": another scene has the same name '" + s.stem().string() +
+                              "'; each scene gets its own folder named after it, so names must differ");
+
+    for (const fs::path& input : job.scenes) {
+        const fs::path out_dir = job.scenes.size() == 1 ? job.output_dir : job.output_dir / input.stem();
+        std::vector<fs::path> written;
+        auto result = bake_one_scene(job, input, out_dir, written, outcome.warnings);
+        if (!result) {
+            remove_files(written);
+            outcome.errors.push_back(result.error().message);
+            continue;
+        }
+        const std::string prefix = job.scenes.size() == 1 ? "" : input.stem().string() + "/";
+        for (io::ManifestOutput o : result->outputs) {
+            o.path = prefix + o.path;
+            outcome.manifest.outputs.push_back(std::move(o));
+        }
+        outcome.manifest.inputs.insert(outcome.manifest.inputs.end(), result->inputs.begin(), result->inputs.end());
+        outcome.manifest.plan.push_back(plan_to_json(result->plan));
+        outcome.plans.push_back(std::move(result->plan));
+    }
+    if (outcome.plans.empty()) return outcome;
+    if (auto r = io::write_manifest(job.output_dir, outcome.manifest); !r) return r.error();
+    return outcome;
+}
+
+}  // namespace specbake

@@ -1,0 +1,62 @@
+// The scene jobs (`specbake bake`, `specbake mesh`, `specbake plan`): read a scene (glTF/GLB through
+// tinygltf, every other format through Assimp), plan it (pipeline/plan.h), bake what the plan says
+// (per-vertex curvature, the material textures), write glTF/GLB with everything of the input kept and a
+// manifest.json that lists every output with its kind, the inputs with their hashes, the settings and the
+// plan. Curvature is stored in object space (a node scale s divides it by s in world space).
+#pragma once
+
+#include "pipeline/plan.h"
+#include "pipeline/texture_job.h"
+#include "io/gltf_scene.h"
+#include "io/manifest.h"
+#include "io/texture_writer.h"
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace specbake {
+
+enum class SceneFormat { SameAsInput, Gltf, Glb };
+
+struct SceneJob {
+    std::vector<std::filesystem::path> scenes;
+    std::filesystem::path output_dir;      // one scene: written directly into it; several: into <dir>/<stem>/
+    // Non-glTF inputs: .gltf unless Glb is asked for. A .glb holds the input's buffers and images itself.
+    SceneFormat format = SceneFormat::SameAsInput;
+    PlanOptions plan;
+    io::TextureContainer container = io::TextureContainer::Ktx2;
+    ProgressFn progress;
+};
+
+// A scene read from any supported file, with what the plan needs to know about its materials.
+struct LoadedScene {
+    io::GltfScene scene;
+    bool is_gltf = true;                   // false: imported through Assimp (a new glTF is written)
+    std::vector<bool> roughness_known;     // per material; false where the file states no roughness
+    std::vector<std::string> notes;        // import notes (dropped primitives, generated normals, ...)
+};
+
+// glTF/GLB (detected by content) through tinygltf; everything else through Assimp. Imported meshes
+// without normals get generated normals (Max weights, noted), which are written into the output.
+Result<LoadedScene> load_scene(const std::filesystem::path& path);
+
+struct SceneJobOutcome {
+    io::Manifest manifest;                 // as written (empty outputs when every scene failed)
+    std::vector<ScenePlan> plans;
+    std::vector<std::string> errors;       // one line per scene that failed (the others completed)
+    std::vector<std::string> warnings;
+};
+
+// Runs the bake of every scene. A scene that fails leaves none of its files behind; the manifest lists the
+// scenes that completed. Fails as a whole (Error) only for problems that stop every scene: the output
+// folder is (or holds) an input, or the manifest cannot be written.
+Result<SceneJobOutcome> run_scene_job(const SceneJob& job);
+
+// The plan of one scene, as `specbake plan` prints it.
+Result<ScenePlan> plan_scene(const std::filesystem::path& path, const PlanOptions& options);
+
+// The settings block of the manifest.
+nlohmann::json scene_settings_json(const SceneJob& job);
+
+}  // namespace specbake

@@ -1,0 +1,443 @@
+#include "pipeline/texture_job.h"
+
+#include "pipeline/version.h"
+#include "io/atomic_file.h"
+#include "io/image_io.h"
+#include "io/sha256.h"
+
+#include <tbb/parallel_invoke.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+namespace specbake {
+namespace fs = std::filesystem;
+
+namespace {
+
+const char* reduction_name(IsotropicReduction r) {
+    switch (r) {
+        case IsotropicReduction::Mean: return "mean";
+        case IsotropicReduction::Sum: return "sum";
+        case IsotropicReduction::Max: return "max";
+    }
+    return "mean";
+}
+
+const char* wrap_name(WrapMode w) {
+    switch (w) {
+        case WrapMode::Repeat: return "repeat";
+        case WrapMode::Clamp: return "clamp";
+        case WrapMode::Mirror: return "mirror";
+    }
+    return "repeat";
+}
+
+// Replaces the bake's "normal map: " / "roughness map: " prefix by the file's name.
+Error name_error(const Error& e, const std::string& normal_name, const std::string& roughness_name) {
+    const std::string& m = e.message;
+    if (m.rfind("normal map: ", 0) == 0) return make_error(normal_name + ": " + m.substr(12));
+    if (m.rfind("roughness map: ", 0) == 0) return make_error(roughness_name + ": " + m.substr(15));
+    return e;
+}
+
+io::TexelEncoding unorm_for_bits(int bits) {
+    return bits <= 8 ? io::TexelEncoding::Unorm8 : io::TexelEncoding::Unorm16;
+}
+
+// Channels [first, first + count) of every level.
+MipChain channel_subset(const MipChain& chain, int first, int count) {
+    MipChain out;
+    for (const Image& level : chain.levels) {
+        Image sub(level.width, level.height, count);
+        const size_t n = level.texel_count();
+        for (size_t i = 0; i < n; ++i)
+            for (int c = 0; c < count; ++c) sub.pixels[i * count + c] = level.pixels[i * level.channels + first + c];
+        out.levels.push_back(std::move(sub));
+    }
+    return out;
+}
+
+enum class Chain { Roughness, Kernel, Normal, Lean };
+
+// One output file: channels [first, first + channels) of one baked chain, stored as `encoding`.
+struct OutputFile {
+    Chain chain;
+    std::string kind, stem;
+    io::TexelEncoding encoding;
+    int first = 0, channels = 0;
+    std::vector<std::string> names;
+};
+
+// The files of settings.outputs, in the order they are written: `<stem>_roughness`, `_kernel`, `_normal`,
+// `_lean` (EXR: all five moments; containers of at most four channels: RGBA plus `_lean_xy`).
+std::vector<OutputFile> output_files(const TextureBakeShape& shape, const TextureInputs& in,
+                                     const TextureBakeSettings& settings, io::TextureContainer container,
+                                     const std::string& stem) {
+    std::vector<OutputFile> files;
+    const int roughness_bits = in.roughness ? in.roughness_bits : in.normal_bits;
+    if (settings.outputs.roughness) {
+        files.push_back({Chain::Roughness, "roughness", stem + "_roughness", unorm_for_bits(roughness_bits), 0,
+                         shape.roughness_channels,
+                         shape.roughness_channels == 3 ? std::vector<std::string>{"R", "G", "B"}
+                                                       : std::vector<std::string>{"Y"}});
+    }
+    if (settings.outputs.kernel) {
+        files.push_back({Chain::Kernel, "kernel", stem + "_kernel", io::TexelEncoding::Float16, 0, shape.kernel_channels,
+                         settings.anisotropic ? std::vector<std::string>{"xx", "yy", "xy"}
+                                              : std::vector<std::string>{"t"}});
+    }
+    if (settings.outputs.normal) {
+        files.push_back({Chain::Normal, "normal", stem + "_normal", unorm_for_bits(in.normal_bits), 0, 3,
+                         {"R", "G", "B"}});
+    }
+    if (settings.outputs.lean) {
+        // Slope-space moments are unbounded (|s| grows as 1/n.z), so they get full float precision.
+        const io::TexelEncoding enc =
+            settings.lean_space == LeanSpace::Slope ? io::TexelEncoding::Float32 : io::TexelEncoding::Float16;
+        const std::vector<std::string> names{"m.x", "m.y", "M.xx", "M.yy", "M.xy"};
+        if (container == io::TextureContainer::Exr) {
+            files.push_back({Chain::Lean, "lean", stem + "_lean", enc, 0, 5, names});
+        } else {
+            files.push_back({Chain::Lean, "lean", stem + "_lean", enc, 0, 4, {names.begin(), names.begin() + 4}});
+            files.push_back({Chain::Lean, "lean", stem + "_lean_xy", enc, 4, 1, {"M.xy"}});
+        }
+    }
+    return files;
+}
+
+MipChain& chain_of(TextureBakeResult& baked, Chain c) {
+    switch (c) {
+        case Chain::Roughness: return baked.roughness;
+        case Chain::Kernel: return baked.kernel;
+        case Chain::Normal: return baked.normal;
+        case Chain::Lean: return baked.lean;
+    }
+    return baked.roughness;
+}
+
+const float* rows_of(const TextureBakeRows& r, Chain c) {
+    switch (c) {
+        case Chain::Roughness: return r.roughness;
+        case Chain::Kernel: return r.kernel;
+        case Chain::Normal: return r.normal;
+        case Chain::Lean: return r.lean;
+    }
+    return r.roughness;
+}
+
+int chain_channels(const TextureBakeShape& shape, Chain c) {
+    switch (c) {
+        case Chain::Roughness: return shape.roughness_channels;
+        case Chain::Kernel: return shape.kernel_channels;
+        case Chain::Normal: return shape.normal_channels;
+        case Chain::Lean: return shape.lean_channels;
+    }
+    return 0;
+}
+
+int roughness_channel_of(const TextureInputs& in) {
+    if (in.roughness && in.roughness_channel < 0) return in.roughness->channels >= 3 ? 1 : 0;
+    return in.roughness_channel;
+}
+
+Result<void> append(std::vector<io::ManifestOutput>& all, Result<std::vector<io::ManifestOutput>> written) {
+    if (!written) return written.error();
+    for (io::ManifestOutput& o : *written) all.push_back(std::move(o));
+    return {};
+}
+
+// 8-bit quantisation, as the demo maps would be stored in a PNG.
+float quantise8(double v) { return float(std::lround(std::clamp(v, 0.0, 1.0) * 255.0)) / 255.0f; }
+
+// Deterministic per-texel hash in [0, 1).
+double hash01(int x, int y, uint32_t seed) {
+    uint32_t h = uint32_t(x) * 0x8da6b343u ^ uint32_t(y) * 0xd8163841u ^ seed * 0xcb1ab31fu;
+    h ^= h >> 16;
+    h *= 0x7feb352du;
+    h ^= h >> 15;
+    h *= 0x846ca68bu;
+    h ^= h >> 16;
+    return double(h) / 4294967296.0;
+}
+
+constexpr int kDemoWidth = 512, kDemoHeight = 384;
+constexpr double kPi = 3.14159265358979323846;
+
+// Height-field gradient of the demo surface: bumps on the left third, ribs along x in the middle,
+// fine noise on the right.
+void demo_gradient(int x, int y, double& gx, double& gy) {
+    const double u = (x + 0.5), v = (y + 0.5);
+    if (x < kDemoWidth / 3) {
+        const double k = 2.0 * kPi / 16.0, amp = 1.2;  // 16-texel period bumps
+        gx = amp * k * std::cos(k * u) * std::sin(k * v);
+        gy = amp * k * std::sin(k * u) * std::cos(k * v);
+    } else if (x < 2 * kDemoWidth / 3) {
+        const double k = 2.0 * kPi / 6.0, amp = 0.6;  // 6-texel ribs: all variance in x
+        gx = amp * k * std::cos(k * u);
+        gy = 0.0;
+    } else {
+        gx = 0.35 * (hash01(x, y, 1) - 0.5);
+        gy = 0.35 * (hash01(x, y, 2) - 0.5);
+    }
+}
+
+}  // namespace
+
+Image demo_normal_map() {
+    Image n(kDemoWidth, kDemoHeight, 3);
+    for (int y = 0; y < kDemoHeight; ++y) {
+        for (int x = 0; x < kDemoWidth; ++x) {
+            double gx, gy;
+            demo_gradient(x, y, gx, gy);
+            const double len = std::sqrt(gx * gx + gy * gy + 1.0);
+            float* t = n.texel(x, y);
+            t[0] = quantise8(0.5 - 0.5 * gx / len);
+            t[1] = quantise8(0.5 - 0.5 * gy / len);
+            t[2] = quantise8(0.5 + 0.5 / len);
+        }
+    }
+    return n;
+}
+
+Image demo_orm_map() {
+    Image m(kDemoWidth, kDemoHeight, 3);
+    for (int y = 0; y < kDemoHeight; ++y) {
+        for (int x = 0; x < kDemoWidth; ++x) {
+            float* t = m.texel(x, y);
+            t[0] = quantise8(1.0 - 0.3 * double(y) / kDemoHeight);                  // occlusion
+            t[1] = quantise8(0.05 + 0.45 * double(y) / (kDemoHeight - 1));          // roughness 0.05 .. 0.5
+            t[2] = ((x / 32) % 2 == 0) ? 1.0f : 0.0f;                               // metallic stripes
+        }
+    }
+    return m;
+}
+
+nlohmann::json texture_settings_json(const TextureBakeSettings& s, io::TextureContainer container) {
+    nlohmann::json j;
+    j["format"] = io::container_name(container);
+    j["isotropic"] = reduction_name(s.isotropic);
+    j["filter"] = s.filter == RoughnessFilterMode::Projected ? "projected" : "approx";
+    j["max_kernel"] = s.max_kernel ? nlohmann::json(*s.max_kernel) : nlohmann::json(nullptr);
+    j["normal_y"] = s.normal_y == NormalGreen::PlusY ? "+y" : "-y";
+    j["reconstruct_z"] = s.reconstruct_z == ReconstructZ::Auto ? "auto"
+                         : s.reconstruct_z == ReconstructZ::Always ? "always" : "never";
+    j["wrap"] = wrap_name(s.wrap);
+    j["anisotropic"] = s.anisotropic;
+    j["lean_space"] = s.lean_space == LeanSpace::Projected ? "projected" : "slope";
+    nlohmann::json outs = nlohmann::json::array();
+    if (s.outputs.roughness) outs.push_back("roughness");
+    if (s.outputs.kernel) outs.push_back("kernel");
+    if (s.outputs.lean) outs.push_back("lean");
+    if (s.outputs.normal) outs.push_back("normal");
+    j["outputs"] = outs;
+    return j;
+}
+
+Result<TextureBakeResult> bake_texture_inputs(const TextureInputs& in, const TextureBakeSettings& settings,
+                                              const ProgressFn& progress) {
+    if (!in.normal) return make_error(in.normal_name + ": no normal map given");
+    if (progress)
+        progress("baking " + std::to_string(in.normal->width) + "x" + std::to_string(in.normal->height) + " " +
+                 in.normal_name);
+    auto baked = bake_texture(*in.normal, in.roughness, roughness_channel_of(in), in.roughness_value, settings);
+    if (!baked) return name_error(baked.error(), in.normal_name, in.roughness_name);
+    return baked;
+}
+
+Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& in, const TextureBakeSettings& settings,
+                                                   io::TextureContainer container, const fs::path& dir,
+                                                   const std::string& stem, const ProgressFn& progress) {
+    if (!io::EncodedTexture::supports(container)) {
+        auto baked = bake_texture_inputs(in, settings, progress);
+        if (!baked) return baked.error();
+        return write_texture_outputs(std::move(*baked), in, settings, container, dir, stem, progress);
+    }
+    auto encoded = bake_texture_encoded(in, settings, container, stem, progress);
+    if (!encoded) return encoded.error();
+    TextureOutputsWritten result;
+    result.notes = encoded->notes;
+    result.max_roughness_change = encoded->max_roughness_change;
+    if (progress)
+        for (const io::EncodedFile& f : encoded->files) progress("writing " + f.stem);
+    auto written = io::write_encoded_textures(encoded->files, dir);
+    if (!written) return written.error();
+    result.outputs = std::move(*written);
+    return result;
+}
+
+Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, const TextureBakeSettings& settings,
+                                                   io::TextureContainer container, const std::string& stem,
+                                                   const ProgressFn& progress) {
+    if (!in.normal) return make_error(in.normal_name + ": no normal map given");
+    if (!io::EncodedTexture::supports(container))
+        return make_error(std::string("cannot encode ") + io::container_name(container) + " in memory");
+    const int channel = roughness_channel_of(in);
+    const TextureBakeShape shape = texture_bake_shape(*in.normal, in.roughness, channel, settings);
+    const std::vector<OutputFile> files = output_files(shape, in, settings, container, stem);
+    EncodedTextureOutputs out;
+    for (const OutputFile& f : files) {
+        out.textures.push_back(std::make_unique<io::EncodedTexture>(container, f.encoding, shape.width, shape.height,
+                                                                    shape.levels, f.channels));
+        out.files.push_back({out.textures.back().get(), f.stem, f.kind});
+    }
+    if (progress)
+        progress("baking " + std::to_string(in.normal->width) + "x" + std::to_string(in.normal->height) + " " +
+                 in.normal_name);
+    auto baked = bake_texture_rows(*in.normal, in.roughness, channel, in.roughness_value, settings,
+                                   [&](const TextureBakeRows& r) {
+                                       for (size_t i = 0; i < files.size(); ++i)
+                                           out.textures[i]->put_block(r.level, r.x0, r.y0, r.width, r.rows,
+                                                                      rows_of(r, files[i].chain),
+                                                                     chain_channels(shape, files[i].chain),
+                                                                     files[i].first);
+                                   });
+    if (!baked) return name_error(baked.error(), in.normal_name, in.roughness_name);
+    out.notes = baked->notes;
+    out.max_roughness_change = baked->max_roughness_change;
+    return out;
+}
+
+Result<TextureOutputsWritten> write_texture_outputs(TextureBakeResult&& baked, const TextureInputs& in,
+                                                    const TextureBakeSettings& settings,
+                                                    io::TextureContainer container, const fs::path& dir,
+                                                    const std::string& stem, const ProgressFn& progress) {
+    TextureOutputsWritten result;
+    result.notes = baked.notes;
+    result.max_roughness_change = baked.max_roughness_change;
+    TextureBakeShape shape;
+    shape.roughness_channels = baked.roughness.channels();
+    shape.kernel_channels = baked.kernel.channels();
+    shape.lean_channels = baked.lean.channels();
+    shape.normal_channels = baked.normal.channels();
+    const std::vector<OutputFile> files = output_files(shape, in, settings, container, stem);
+    for (size_t i = 0; i < files.size(); ++i) {
+        const OutputFile& f = files[i];
+        if (progress) progress("writing " + f.stem);
+        MipChain& chain = chain_of(baked, f.chain);
+        const bool whole = f.first == 0 && f.channels == chain.channels();
+        if (auto ok = append(result.outputs,
+                             io::write_texture(whole ? chain : channel_subset(chain, f.first, f.channels), f.encoding,
+                                               container, dir, f.stem, f.kind, f.names, settings.wrap));
+            !ok)
+            return ok.error();
+        // Written: release the chain before the next one is encoded, unless a later file reads it too.
+        if (i + 1 == files.size() || files[i + 1].chain != f.chain) chain = MipChain{};
+    }
+    return result;
+}
+
+Result<TextureJobOutcome> run_texture_job(const TextureJob& job) {
+    const ProgressFn& progress = job.progress;
+    std::error_code ec;
+    if (job.output_dir.empty()) return make_error("no output folder given");
+    if (fs::exists(job.output_dir, ec) && !fs::is_directory(job.output_dir, ec))
+        return make_error(job.output_dir.string() + ": exists and is not a folder");
+
+    io::Manifest manifest;
+    manifest.version = tool_version();
+    manifest.settings = texture_settings_json(job.settings, job.container);
+
+    TextureInputs in;
+    io::DecodedImage normal, roughness;
+    if (job.demo) {
+        normal.image = demo_normal_map();
+        roughness.image = demo_orm_map();
+        in.normal_name = "demo_normal.png";
+        in.roughness_name = "demo_orm.png";
+        manifest.settings["demo"] = true;
+        // The generated inputs are written beside the outputs, so the bake can be inspected and repeated
+        // with --normal/--roughness.
+        for (const auto& [image, name] : {std::pair{&normal.image, in.normal_name},
+                                          std::pair{&roughness.image, in.roughness_name}}) {
+            const fs::path path = job.output_dir / name;
+            if (auto ok = io::write_image(path, *image, 8); !ok) return ok.error();
+            auto hash = io::sha256_file(path);
+            if (!hash) return hash.error();
+            manifest.inputs.push_back({name, *hash});
+        }
+    } else {
+        std::vector<fs::path> inputs{job.normal};
+        if (job.roughness) inputs.push_back(*job.roughness);
+        if (auto ok = io::check_output_not_input(job.output_dir, inputs); !ok) return ok.error();
+        if (progress) progress("reading " + job.normal.string());
+        if (job.roughness && progress) progress("reading " + job.roughness->string());
+        // The two maps are decoded and hashed side by side, each file by one task.
+        Result<io::DecodedImage> n = make_error(""), r = make_error("");
+        Result<std::string> n_hash = make_error(""), r_hash = make_error("");
+        tbb::parallel_invoke(
+            [&] {
+                n = io::decode_image(job.normal);
+                if (n) n_hash = io::sha256_file(job.normal);
+            },
+            [&] {
+                if (!job.roughness) return;
+                r = io::decode_image(*job.roughness);
+                if (r) r_hash = io::sha256_file(*job.roughness);
+            });
+        if (!n) return n.error();
+        if (!n_hash) return n_hash.error();
+        normal = std::move(*n);
+        in.normal_name = job.normal.string();
+        manifest.inputs.push_back({job.normal.string(), *n_hash});
+        if (job.roughness) {
+            if (!r) return r.error();
+            if (!r_hash) return r_hash.error();
+            roughness = std::move(*r);
+            in.roughness_name = job.roughness->string();
+            manifest.inputs.push_back({job.roughness->string(), *r_hash});
+        }
+    }
+    const bool have_roughness = job.demo || job.roughness.has_value();
+    // Non-finite texels are reported by the bake's validation, with the file's name.
+    in.normal = &normal.image;
+    in.normal_bits = normal.info.is_float ? 16 : normal.info.bits_per_channel;
+    if (have_roughness) {
+        in.roughness = &roughness.image;
+        in.roughness_bits = roughness.info.is_float ? 16 : roughness.info.bits_per_channel;
+    }
+    in.roughness_channel = job.roughness_channel;
+    in.roughness_value = job.roughness_value;
+    if (!have_roughness) manifest.settings["roughness_value"] = job.roughness_value;
+    else manifest.settings["roughness_channel"] = job.roughness_channel;
+
+    auto written = bake_texture_outputs(in, job.settings, job.container, job.output_dir, "texture", progress);
+    if (!written) return written.error();
+
+    // The plan (SPEC Sec. 6): would the bake change roughness visibly, i.e. by half a quantisation step?
+    const int bits = (have_roughness ? in.roughness_bits : in.normal_bits) <= 8 ? 8 : 16;
+    const double half_step = 0.5 / double((1 << bits) - 1);
+    const bool visible = written->max_roughness_change >= half_step;
+    nlohmann::json decision;
+    decision["target"] = in.normal_name;
+    decision["action"] = "texture bake";
+    decision["max_roughness_change"] = written->max_roughness_change;
+    decision["half_quantisation_step"] = half_step;
+    decision["reason"] = visible ? "requested; the bake changes roughness by more than half a quantisation step"
+                                 : "requested; the bake changes roughness by less than half a quantisation step "
+                                   "(the outputs equal plain mipmapping of alpha^2 after quantisation)";
+    manifest.plan.push_back(decision);
+    const TextureBakeNotes& notes = written->notes;
+    nlohmann::json facts;
+    facts["z_reconstructed"] = notes.z_reconstructed;
+    if (notes.z_reconstructed) facts["z_reason"] = notes.z_reason;
+    facts["looks_srgb"] = notes.looks_srgb;
+    facts["roughness_is_orm"] = notes.roughness_is_orm;
+    facts["roughness_resampled"] = notes.roughness_resampled;
+    facts["normal_color_space_claimed"] = normal.info.color_space;
+    manifest.settings["input_facts"] = facts;
+
+    manifest.outputs = written->outputs;
+    if (progress) progress("writing manifest.json");
+    if (auto ok = io::write_manifest(job.output_dir, manifest); !ok) return ok.error();
+
+    TextureJobOutcome outcome;
+    outcome.manifest = std::move(manifest);
+    outcome.notes = notes;
+    outcome.max_roughness_change = written->max_roughness_change;
+    return outcome;
+}
+
+}  // namespace specbake

@@ -1,0 +1,287 @@
+#include "verify/bench_job.h"
+
+#include "verify/scene_file.h"
+#include "verify/strips.h"
+#include "core/text_format.h"
+#include "io/atomic_file.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <set>
+
+namespace specbake::cli {
+namespace {
+
+std::string scene_label(const SceneReport& s) {
+    if (s.from_file) return s.scene;
+    return s.scene + " a=" + format_double("%.3g", double(s.roughness) * double(s.roughness));
+}
+
+const CandidateReport* find_row(const SceneReport& s, const std::string& name) {
+    for (const CandidateReport& c : s.candidates)
+        if (c.name == name) return &c;
+    return nullptr;
+}
+
+// Per candidate, aggregated over the scenes it ran on.
+struct Aggregate {
+    std::string name, family;
+    double log_error = 0, log_error_linear = 0, log_flicker = 0, energy = 0, peak = 0;
+    int n = 0, n_flicker = 0;
+    std::optional<int> spirv;
+    std::vector<double> frame_rel, bake_ms;
+    double rel_error() const { return n ? std::exp(log_error / n) : 1.0; }
+    double rel_error_linear() const { return n ? std::exp(log_error_linear / n) : 1.0; }
+    double rel_flicker() const { return n_flicker ? std::exp(log_flicker / n_flicker) : 1.0; }
+};
+
+double median(std::vector<double> v) {
+    if (v.empty()) return NAN;
+    std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+    return v[v.size() / 2];
+}
+
+std::vector<Aggregate> aggregate(const BenchReport& r) {
+    std::vector<Aggregate> out;
+    std::map<std::string, size_t> index;
+    constexpr double kFloor = 1e-9;  // keeps the logarithm finite for a candidate identical to none
+    for (const SceneReport& s : r.scenes) {
+        const CandidateReport* none = find_row(s, "none");
+        if (!none) continue;
+        for (const CandidateReport& c : s.candidates) {
+            auto [it, fresh] = index.try_emplace(c.name, out.size());
+            if (fresh) {
+                out.emplace_back();
+                out.back().name = c.name;
+                out.back().family = c.family;
+            }
+            Aggregate& a = out[it->second];
+            a.log_error += std::log(std::max(c.metrics.rmse_tonemapped, kFloor) /
+                                    std::max(none->metrics.rmse_tonemapped, kFloor));
+            a.log_error_linear += std::log(std::max(c.metrics.rmse, kFloor) / std::max(none->metrics.rmse, kFloor));
+            if (none->metrics.flicker_linear > kFloor) {
+                a.log_flicker += std::log(std::max(c.metrics.flicker_linear, kFloor) / none->metrics.flicker_linear);
+                ++a.n_flicker;
+            }
+            a.energy += c.metrics.energy_ratio;
+            a.peak += c.metrics.peak_ratio;
+            ++a.n;
+            if (c.spirv_instructions) a.spirv = std::max(a.spirv.value_or(0), *c.spirv_instructions);
+            if (c.frame_relative) a.frame_rel.push_back(*c.frame_relative);
+            if (c.bake_ms) a.bake_ms.push_back(*c.bake_ms);
+        }
+    }
+    return out;
+}
+
+std::string csv_escape(const std::string& s) {
+    return s.find_first_of(",\"") == std::string::npos ? s : "\"" + s + "\"";
+}
+
+std::string opt(const std::optional<double>& v, const char* f) { return v ? format_double(f, *v) : ""; }
+
+}  // namespace
+
+Result<BenchReport> run_bench(const BenchOptions& options, const std::function<void(const std::string&)>& progress) {
+    BenchReport report;
+    report.renderer = options.renderer;
+    report.command_line = options.command_line;
+    std::vector<std::string> scenes = options.scenes;
+    if (scenes.empty() && !options.no_builtin)
+        for (auto n : builtin_scene_names()) scenes.emplace_back(n);
+    for (const std::string& name : scenes) {
+        for (float alpha : options.alpha) {
+            if (!(alpha > 0.0f && alpha <= 1.0f)) return make_error("--alpha values must be in (0, 1]");
+            auto scene = make_builtin_scene(name, std::sqrt(alpha));
+            if (!scene) return scene.error();
+            auto result = run_verify(*scene, options.verify);
+            if (!result) return make_error(name + ": " + result.error().message);
+            report.scenes.push_back(std::move(*result));
+            if (progress)
+                progress(scene_label(report.scenes.back()) + ": ground truth " +
+                         format_double("%.1f s", report.scenes.back().ground_truth_ms / 1000.0));
+        }
+    }
+    for (const std::filesystem::path& file : options.scene_files) {
+        auto scene = load_sim_scene(file);
+        if (!scene) return scene.error();
+        auto result = run_verify(*scene, options.verify);
+        if (!result) return make_error(file.string() + ": " + result.error().message);
+        report.scenes.push_back(std::move(*result));
+        if (progress)
+            progress(scene_label(report.scenes.back()) + ": ground truth " +
+                     format_double("%.1f s", report.scenes.back().ground_truth_ms / 1000.0));
+    }
+    return report;
+}
+
+std::string bench_summary_markdown(const BenchReport& r) {
+    std::string out;
+    out += "| candidate | family | RMSE vs none | RMSE (tm) vs none | flicker vs none | energy | p99 | SPIR-V | frame x "
+           "| bake ms |\n";
+    out += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    for (const Aggregate& a : aggregate(r)) {
+        const double frame = median(a.frame_rel), bake = median(a.bake_ms);
+        out += "| " + a.name + " | " + a.family + " | " + format_double("%.3f", a.rel_error_linear()) + " | " +
+               format_double("%.3f", a.rel_error()) + " | " +
+               format_double("%.3f", a.rel_flicker()) + " | " + format_double("%.2f", a.energy / a.n) + " | " +
+               format_double("%.2f", a.peak / a.n) + " | " + (a.spirv ? std::to_string(*a.spirv) : "-") + " | " +
+               (std::isnan(frame) ? "-" : format_double("%.2f", frame)) + " | " +
+               (std::isnan(bake) ? "-" : format_double("%.1f", bake)) + " |\n";
+    }
+    out += "\nBest per scene (lowest linear RMSE / lowest flicker among filtering candidates):\n\n";
+    out += "| scene | none RMSE | best RMSE | none flicker | best flicker |\n|---|---:|---|---:|---|\n";
+    for (const SceneReport& s : r.scenes) {
+        const CandidateReport* none = find_row(s, "none");
+        const CandidateReport *best_e = nullptr, *best_f = nullptr;
+        for (const CandidateReport& c : s.candidates) {
+            if (c.name == "none") continue;
+            if (!best_e || c.metrics.rmse < best_e->metrics.rmse) best_e = &c;
+            if (!best_f || c.metrics.flicker_linear < best_f->metrics.flicker_linear) best_f = &c;
+        }
+        if (!none || !best_e) continue;
+        out += "| " + scene_label(s) + " | " + format_double("%.3f", none->metrics.rmse) + " | " + best_e->name + " " +
+               format_double("%.3f", best_e->metrics.rmse) + " | " + format_double("%.3f", none->metrics.flicker_linear) + " | " +
+               best_f->name + " " + format_double("%.3f", best_f->metrics.flicker_linear) + " |\n";
+    }
+    return out;
+}
+
+std::string bench_full_markdown(const BenchReport& r) {
+    std::string out = "# specbake bench\n\n";
+    out += "Command: `" + r.command_line + "`\n\nRenderer: " + r.renderer + "\n\n";
+    if (!r.scenes.empty())
+        out += "Images " + std::to_string(r.scenes[0].width) + "x" + std::to_string(r.scenes[0].height) +
+               ", ground truth " + std::to_string(r.scenes[0].spp) + " spp (Gaussian pixel filter, sigma^2 = 1/(2 pi)), " +
+               std::to_string(r.scenes[0].frames) + " frames of camera motion.\n\n";
+    out += "## Summary (geometric mean over scenes of the ratio to no filtering; lower is better; linear "
+           "radiance unless marked tm)\n\n";
+    out += bench_summary_markdown(r);
+    for (const SceneReport& s : r.scenes) {
+        out += "\n## " + scene_label(s) +
+               (s.from_file ? std::string(" (scene file, its own materials)") : " (r = " + format_double("%.3g", s.roughness) + ")") +
+               "\n\n";
+        out += markdown_table(s);
+        for (const std::string& note : s.notes) out += "\n- " + note;
+        if (!s.notes.empty()) out += "\n";
+    }
+    out += "\nColumns: RMSE and MAE of linear radiance divided by the ground truth's mean; (tm) on x/(1+x); "
+           "flicker = mean over pixels of the temporal standard deviation of the error, divided by the ground "
+           "truth's mean; (tm) the same on x/(1+x); energy and "
+           "p99 = candidate/ground-truth ratios of total radiance and of the 99th percentile (< 1: over-blur); "
+           "SPIR-V = instructions in functions after spirv-opt -O; frame x = median frame time relative to no "
+           "filtering on this renderer; bake ms = texture bake or curvature estimate.\n";
+    return out;
+}
+
+std::string bench_csv(const BenchReport& r) {
+    std::string out =
+        "scene,alpha,roughness,width,height,spp,frames,candidate,family,source,rmse,mae,rmse_tonemapped,"
+        "mae_tonemapped,flicker,flicker_linear,energy_ratio,peak_ratio,pixels,bake_ms,spirv_instructions,frame_ms,"
+        "frame_relative\n";
+    for (const SceneReport& s : r.scenes) {
+        for (const CandidateReport& c : s.candidates) {
+            const SimMetrics& m = c.metrics;
+            // A scene file's materials have their own roughness: alpha and roughness stay empty.
+            out += s.scene + "," + (s.from_file ? "," : format_double("%.6g", double(s.roughness) * s.roughness) + "," + format_double("%.6g", s.roughness)) +
+                   "," + std::to_string(s.width) + "," + std::to_string(s.height) + "," + std::to_string(s.spp) +
+                   "," + std::to_string(s.frames) + "," + csv_escape(c.name) + "," + c.family + "," +
+                   csv_escape(c.source) + "," + format_double("%.6g", m.rmse) + "," + format_double("%.6g", m.mae) + "," +
+                   format_double("%.6g", m.rmse_tonemapped) + "," + format_double("%.6g", m.mae_tonemapped) + "," +
+                   format_double("%.6g", m.flicker) + "," + format_double("%.6g", m.flicker_linear) + "," +
+                   format_double("%.6g", m.energy_ratio) + "," + format_double("%.6g", m.peak_ratio) + "," + std::to_string(m.pixels) +
+                   "," + opt(c.bake_ms, "%.3f") + "," +
+                   (c.spirv_instructions ? std::to_string(*c.spirv_instructions) : "") + "," +
+                   opt(c.frame_ms, "%.4f") + "," + opt(c.frame_relative, "%.4f") + "\n";
+        }
+    }
+    return out;
+}
+
+std::string bench_svg(const BenchReport& r) {
+    const std::vector<Aggregate> rows = aggregate(r);
+    const int panel_w = 460, panel_h = 360, margin = 60, width = 2 * panel_w + 40, height = panel_h + 90;
+    int x_min = 1 << 30, x_max = 0;
+    for (const Aggregate& a : rows)
+        if (a.spirv) {
+            x_min = std::min(x_min, *a.spirv);
+            x_max = std::max(x_max, *a.spirv);
+        }
+    const bool have_x = x_max > 0;
+    if (!have_x) {
+        x_min = 0;
+        x_max = int(rows.size());
+    }
+    x_min -= 10;
+    x_max += 10;
+    const std::map<std::string, std::string> colours = {{"none", "#000000"},   {"derivative", "#1f77b4"},
+                                                        {"peer", "#d62728"},   {"baked", "#2ca02c"},
+                                                        {"default", "#9467bd"}, {"variant", "#8c564b"}};
+    std::string svg = "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + std::to_string(width) + "\" height=\"" +
+                      std::to_string(height) + "\" font-family=\"sans-serif\" font-size=\"10\">\n";
+    svg += "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
+    for (int panel = 0; panel < 2; ++panel) {
+        const int ox = panel * (panel_w + 40) + margin, oy = 40, pw = panel_w - margin, ph = panel_h - 40;
+        double y_max = 1.2;
+        for (const Aggregate& a : rows) y_max = std::max(y_max, panel ? a.rel_flicker() : a.rel_error_linear());
+        y_max = std::min(y_max * 1.05, 20.0);
+        const auto px = [&](double x) { return ox + (x - x_min) / double(x_max - x_min) * pw; };
+        const auto py = [&](double y) { return oy + ph - std::min(y, y_max) / y_max * ph; };
+        svg += "<text x=\"" + std::to_string(ox) + "\" y=\"24\" font-size=\"13\">" +
+               std::string(panel ? "flicker relative to no filtering" : "RMSE relative to no filtering") +
+               "</text>\n";
+        svg += "<rect x=\"" + std::to_string(ox) + "\" y=\"" + std::to_string(oy) + "\" width=\"" +
+               std::to_string(pw) + "\" height=\"" + std::to_string(ph) + "\" fill=\"none\" stroke=\"#888\"/>\n";
+        for (double t = 0; t <= y_max; t += y_max > 4 ? 1.0 : 0.25) {
+            svg += "<line x1=\"" + format_double("%.1f", double(ox)) + "\" x2=\"" + format_double("%.1f", double(ox + pw)) + "\" y1=\"" +
+                   format_double("%.1f", py(t)) + "\" y2=\"" + format_double("%.1f", py(t)) + "\" stroke=\"" +
+                   (std::abs(t - 1.0) < 1e-9 ? "#444" : "#ddd") + "\"/>\n";
+            svg += "<text x=\"" + std::to_string(ox - 6) + "\" y=\"" + format_double("%.1f", py(t) + 3) +
+                   "\" text-anchor=\"end\">" + format_double("%.2f", t) + "</text>\n";
+        }
+        svg += "<text x=\"" + format_double("%.1f", ox + pw / 2.0) + "\" y=\"" + std::to_string(oy + ph + 30) +
+               "\" text-anchor=\"middle\">" +
+               std::string(have_x ? "SPIR-V instructions (spirv-opt -O)" : "candidate") + "</text>\n";
+        for (int t = 0; t < 5; ++t) {
+            const double x = x_min + (x_max - x_min) * t / 4.0;
+            svg += "<text x=\"" + format_double("%.1f", px(x)) + "\" y=\"" + std::to_string(oy + ph + 14) +
+                   "\" text-anchor=\"middle\">" + format_double("%.0f", x) + "</text>\n";
+        }
+        for (size_t i = 0; i < rows.size(); ++i) {
+            const Aggregate& a = rows[i];
+            const double x = have_x ? (a.spirv ? double(*a.spirv) : double(x_min)) : double(i);
+            const double y = panel ? a.rel_flicker() : a.rel_error_linear();
+            auto colour = colours.count(a.family) ? colours.at(a.family) : "#555";
+            svg += "<circle cx=\"" + format_double("%.1f", px(x)) + "\" cy=\"" + format_double("%.1f", py(y)) + "\" r=\"3.5\" fill=\"" +
+                   colour + "\"/>\n";
+            svg += "<text x=\"" + format_double("%.1f", px(x) + 5) + "\" y=\"" + format_double("%.1f", py(y) - 4 - 9.0 * double(i % 2)) +
+                   "\" fill=\"" + colour + "\">" + a.name + "</text>\n";
+        }
+    }
+    svg += "<text x=\"" + std::to_string(margin) + "\" y=\"" + std::to_string(height - 12) +
+           "\">Geometric mean over " + std::to_string(r.scenes.size()) +
+           " scene/roughness pairs; below the dark line = better than no filtering. Colours: black none, blue "
+           "derivative, red peers, green baked, purple default, brown bake variants.</text>\n";
+    svg += "</svg>\n";
+    return svg;
+}
+
+Result<void> write_bench_outputs(const BenchReport& r, const std::filesystem::path& dir) {
+    if (auto w = io::write_file_atomic(dir / "bench.md", bench_full_markdown(r)); !w) return w;
+    if (auto w = io::write_file_atomic(dir / "bench.csv", bench_csv(r)); !w) return w;
+    if (auto w = io::write_file_atomic(dir / "bench.svg", bench_svg(r)); !w) return w;
+    for (const SceneReport& s : r.scenes) {
+        if (s.ground_truth.empty()) continue;
+        std::vector<StripTile> tiles;
+        for (const CandidateReport& c : s.candidates)
+            if (!c.image.empty()) tiles.push_back({c.name, &c.image});
+        const auto path = dir / "strips" / (s.from_file ? s.scene + ".png"
+                                                        : s.scene + "-a" + format_double("%.3g", double(s.roughness) * s.roughness) + ".png");
+        if (auto w = write_strip_png(make_strip(s.ground_truth, tiles), path); !w) return w;
+    }
+    return {};
+}
+
+}  // namespace specbake::cli

@@ -1,0 +1,51 @@
+// specbake bench: runs `verify` on the built-in scenes (each at several roughness values) and on any given
+// scene files (with their own materials), then prints a
+// Markdown summary and writes, into one output folder, the full per-scene tables (bench.md), every number
+// as CSV (bench.csv), error against cost as an SVG plot (bench.svg) and one PNG image strip per scene
+// (strips/<scene>-r<roughness>.png). All files are written atomically (SPEC Sec. 7-8).
+#pragma once
+
+#include "core/result.h"
+#include "verify/verify_job.h"
+
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace specbake::cli {
+
+struct BenchOptions {
+    VerifyOptions verify;
+    std::vector<std::string> scenes;   // built-in scene names; empty: all (none with `no_builtin`)
+    bool no_builtin = false;           // only the scene files
+    std::vector<std::filesystem::path> scene_files;  // glTF/GLB or other mesh files, each run once
+    // GGX alpha (= r^2) of the materials, the papers' "roughness"; r = sqrt(alpha) is what glTF stores.
+    std::vector<float> alpha{0.01f, 0.05f, 0.2f};
+    std::filesystem::path output_dir;  // empty: print only
+    std::string renderer;              // GL_RENDERER/GL_VERSION, recorded in the outputs
+    std::string command_line;          // recorded in bench.md so the table can be regenerated
+};
+
+struct BenchReport {
+    std::vector<SceneReport> scenes;
+    std::string renderer;
+    std::string command_line;
+};
+
+// Runs every scene x roughness; `progress` receives one line per finished scene.
+Result<BenchReport> run_bench(const BenchOptions& options, const std::function<void(const std::string&)>& progress);
+
+// Summary over all scenes: per candidate the geometric means (over scenes) of its RMSE (linear and
+// tone-mapped) and linear flicker relative to no filtering, the mean energy and peak ratios, and its costs.
+std::string bench_summary_markdown(const BenchReport& report);
+// One table per scene (markdown_table) with a heading, plus the summary and the command line.
+std::string bench_full_markdown(const BenchReport& report);
+std::string bench_csv(const BenchReport& report);
+// Two panels: relative linear RMSE and relative flicker against SPIR-V instructions, one point per candidate.
+std::string bench_svg(const BenchReport& report);
+
+// Writes bench.md, bench.csv, bench.svg and strips/*.png into `dir` (created when missing).
+Result<void> write_bench_outputs(const BenchReport& report, const std::filesystem::path& dir);
+
+}  // namespace specbake::cli

@@ -1,0 +1,159 @@
+#include "verify/candidates.h"
+
+#include <algorithm>
+
+namespace specbake::cli {
+namespace {
+
+// Bodies set `vec3 A` (xx, yy, xy) from: float a (material alpha^2), float alpha, vec3 hTS, vec3 n (world
+// shading normal), vec3 nGeo (world vertex normal), SpecaaSurface s, float viewDepth.
+SimCandidate derivative(const char* name, const char* source, const char* body) {
+    return {name, "derivative", source, {"", body, "exact", ""}, "", ""};
+}
+
+const char* kBakedRoughnessDefines =
+    "#define SPECAA_ROUGHNESS_TEXTURE uBakedRoughness\n#define SPECAA_ROUGHNESS_CHANNEL r\n";
+const char* kIsotropicDefault = "float f = specaa_filtered_alpha2(s); A = vec3(f, f, 0.0);";
+const char* kMatrixDefault = "A = specaa_filtered_alpha2_matrix(s);";
+
+void add_variants(std::vector<SimCandidate>& c, bool normal_mapped);
+
+}  // namespace
+
+std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool variants) {
+    const bool normal_mapped = std::any_of(scene.objects.begin(), scene.objects.end(),
+                                           [](const SimObject& o) { return o.material.normal_map >= 0; });
+    std::vector<SimCandidate> c;
+    c.push_back({"none", "none", "unfiltered GGX", {"", "A = vec3(a, a, 0.0);", "exact", ""}, "", ""});
+    c.push_back(derivative("slope", "K16, TK21 Eq. (2)", "A = specaa_slope(vec2(a), hTS);"));
+    c.push_back(derivative("slope-aa", "K16, TK21 Listing 3 in slope space",
+                           "A = vec3(specaa_slope_aa(vec2(a), hTS), 0.0);"));
+    c.push_back(derivative("projected-approx", "TK21 Eq. (9), Listing 2",
+                           "A = specaa_projected_approx(vec2(a), hTS);"));
+    c.push_back(derivative("projected-aa", "TK21 Listing 3", "A = vec3(specaa_projected_aa(vec2(a), hTS), 0.0);"));
+    c.push_back(derivative("projected", "TK21 Eq. (4)-(8), Listing 1", "A = specaa_projected(vec2(a), hTS);"));
+    c.push_back(derivative("iso-max", "TK21 Eq. (10)", "float f = specaa_iso_max(a, n); A = vec3(f, f, 0.0);"));
+    c.push_back(derivative("iso-sum", "TK21 Eq. (13), Listing 5", "float f = specaa_iso_sum(a, n); A = vec3(f, f, 0.0);"));
+    c.push_back(derivative("iso-mean", "TK21 Eq. (14)", "float f = specaa_iso_mean(a, n); A = vec3(f, f, 0.0);"));
+    // VAREF Sec. 2-4: alpha' = alpha + sigma_g^2, r' = sqrt(alpha') clamped to [0.04, 1], SCALE 50, cap 0.1.
+    c.push_back({"varef-screen", "peer", "VAREF Sec. 3A",
+                 {"",
+                  "vec3 dnx = dFdx(n); vec3 dny = dFdy(n);\n"
+                  "        float var = min(50.0 * max(dot(dnx, dnx), dot(dny, dny)), 0.1);\n"
+                  "        float r = clamp(sqrt(alpha + var), 0.04, 1.0); float f = r * r * r * r;\n"
+                  "        A = vec3(f, f, 0.0);",
+                  "exact", ""},
+                 "", ""});
+    c.push_back({"varef-curvature", "peer", "VAREF Sec. 3B",
+                 {"",
+                  "float px = specaa_pixel_footprint_from_depth(viewDepth, uTanHalfFovY, uViewportHeight);\n"
+                  "        float var = min(50.0 * (px * abs(vCurvature.x)) * (px * abs(vCurvature.x)), 0.1);\n"
+                  "        float r = clamp(sqrt(alpha + var), 0.04, 1.0); float f = r * r * r * r;\n"
+                  "        A = vec3(f, f, 0.0);",
+                  "exact", ""},
+                 "", "exact"});
+    // Filament's geometric specular AA (normalFiltering in its shading code): variance
+    // 0.15 (|dN/dx|^2 + |dN/dy|^2) of the geometric normal, kernel min(2 variance, 0.2) added to alpha^2.
+    c.push_back({"filament", "peer", "Filament normalFiltering (variance 0.15, threshold 0.2)",
+                 {"",
+                  "vec3 dnx = dFdx(nGeo); vec3 dny = dFdy(nGeo);\n"
+                  "        float f = clamp(a + min(2.0 * 0.15 * (dot(dnx, dnx) + dot(dny, dny)), 0.2), 0.0, 1.0);\n"
+                  "        A = vec3(f, f, 0.0);",
+                  "exact", ""},
+                 "", ""});
+    c.push_back({"baked-curvature", "baked", "SPEC Sec. 4-5: _SPECAA_CURVATURE kernel, TK21 Eq. (3)",
+                 {"#define SPECAA_USE_CURVATURE\n", kIsotropicDefault, "exact", ""}, "", "exact"});
+    c.push_back({"baked-curvature-matrix", "baked", "SPEC Sec. 4-5: anisotropic _SPECAA_CURVATURE kernel, TK21 Eq. (3)",
+                 {"#define SPECAA_USE_CURVATURE\n", "A = specaa_filtered_alpha2_matrix(s);", "exact", ""}, "", "exact"});
+    if (normal_mapped) {
+        c.push_back({"baked-texture", "baked", "SPEC Sec. 3 filtered roughness mips",
+                     {std::string(kBakedRoughnessDefines) + "#define SPECAA_NO_PIXEL_KERNEL\n", kIsotropicDefault,
+                      "exact", "mean-projected"},
+                     "mean-projected", ""});
+    }
+    c.push_back({"default", "default", "specaa_filtered_alpha2_matrix (baked data + anisotropic per-pixel kernel)",
+                 {normal_mapped ? kBakedRoughnessDefines : "", kMatrixDefault, "exact", "mean-projected"},
+                 normal_mapped ? "mean-projected" : "", ""});
+    c.push_back({"default-isotropic", "default", "specaa_filtered_alpha2 (isotropic form of the default)",
+                 {normal_mapped ? kBakedRoughnessDefines : "", kIsotropicDefault, "exact", "mean-projected"},
+                 normal_mapped ? "mean-projected" : "", ""});
+    c.push_back({"default+curvature", "default", "specaa_filtered_alpha2_matrix with SPECAA_USE_CURVATURE",
+                 {std::string(normal_mapped ? kBakedRoughnessDefines : "") + "#define SPECAA_USE_CURVATURE\n",
+                  kMatrixDefault, "exact", "mean-projected"},
+                 normal_mapped ? "mean-projected" : "", "exact"});
+    if (variants) add_variants(c, normal_mapped);
+    if (!has_exact_curvature(scene)) {
+        // Scene files: curvature comes from the default estimator, as `specbake bake` writes it, and is
+        // timed as that candidate's bake; its own variant row would repeat "baked-curvature".
+        std::erase_if(c, [](const SimCandidate& x) { return x.name == "baked-curvature/shape-operator"; });
+        for (SimCandidate& x : c) {
+            if (x.curvature_bake != "exact") continue;
+            x.curvature_bake = "shape-operator";
+            x.shader.curvature_source = "shape-operator";
+        }
+    }
+    return c;
+}
+
+namespace {
+
+// The bake's own variants (sim_candidates.h).
+void add_variants(std::vector<SimCandidate>& c, bool normal_mapped) {
+    if (normal_mapped) {
+        const std::pair<const char*, const char*> texture_variants[] = {
+            {"baked-texture/approx", "mean-approx"}, {"baked-texture/sum", "sum-projected"},
+            {"baked-texture/max", "max-projected"}};
+        for (const auto& [name, key] : texture_variants)
+            c.push_back({name, "variant", "SPEC Sec. 3 bake variant",
+                         {std::string(kBakedRoughnessDefines) + "#define SPECAA_NO_PIXEL_KERNEL\n",
+                          kIsotropicDefault, "exact", key},
+                         key, ""});
+        c.push_back({"baked-kernel", "variant", "SPEC Sec. 3 kernel mips (t, mean), added at run time",
+                     {"#define SPECAA_KERNEL_TEXTURE uBakedKernel\n#define SPECAA_NO_PIXEL_KERNEL\n",
+                      kIsotropicDefault, "exact", "mean-projected"},
+                     "mean-projected", ""});
+        c.push_back({"baked-lean", "variant", "SPEC Sec. 3 LEAN moments (C21 Eq. 16)",
+                     {"#define SPECAA_LEAN_TEXTURE0 uBakedLean0\n#define SPECAA_LEAN_TEXTURE1 uBakedLean1\n"
+                      "#define SPECAA_NO_PIXEL_KERNEL\n",
+                      kIsotropicDefault, "exact", "mean-projected"},
+                     "mean-projected", ""});
+    }
+    for (const char* estimator : {"shape-operator", "second-order", "jet-fitting", "normal-cone"}) {
+        c.push_back({std::string("baked-curvature/") + estimator, "variant", "SPEC Sec. 4 estimator",
+                     {"#define SPECAA_USE_CURVATURE\n", kIsotropicDefault, estimator, ""}, "", estimator});
+    }
+}
+
+}  // namespace
+
+std::vector<SimTextureBake> texture_bakes_for(const std::vector<SimCandidate>& candidates) {
+    std::vector<SimTextureBake> bakes;
+    for (const SimCandidate& c : candidates) {
+        if (c.texture_bake.empty()) continue;
+        if (std::any_of(bakes.begin(), bakes.end(), [&](const SimTextureBake& b) { return b.key == c.texture_bake; }))
+            continue;
+        TextureBakeSettings s;
+        const std::string& k = c.texture_bake;
+        s.isotropic = k.starts_with("sum") ? IsotropicReduction::Sum
+                      : k.starts_with("max") ? IsotropicReduction::Max
+                                             : IsotropicReduction::Mean;
+        s.filter = k.ends_with("approx") ? RoughnessFilterMode::Approx : RoughnessFilterMode::Projected;
+        s.outputs.normal = false;
+        bakes.push_back({k, s});
+    }
+    return bakes;
+}
+
+std::vector<SimCurvatureBake> curvature_bakes_for(const std::vector<SimCandidate>& candidates) {
+    std::vector<SimCurvatureBake> bakes;
+    for (const SimCandidate& c : candidates) {
+        const std::string& k = c.shader.curvature_source;
+        if (k == "exact" ||
+            std::any_of(bakes.begin(), bakes.end(), [&](const SimCurvatureBake& b) { return b.key == k; }))
+            continue;
+        bakes.push_back({k, parse_curvature_estimator(k)});
+    }
+    return bakes;
+}
+
+}  // namespace specbake::cli

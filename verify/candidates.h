@@ -1,0 +1,48 @@
+// The candidates the simulator scores against the ground truth (issue: verify/bench): no filtering, every
+// derivative-based method of the runtime include, the VAREF and Filament-style peers, baked texture only,
+// baked curvature only, the include's default entry point, and the bake's own variants. Each is a small
+// GLSL body on top of shaders/specaa.glsl plus the baked data it samples.
+#pragma once
+
+#include "bake/texture_bake.h"
+#include "verify/renderer.h"
+#include "verify/scene.h"
+#include "mesh/curvature.h"
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace specbake::cli {
+
+// A texture bake a candidate depends on (run once per normal map, timed as the candidate's bake cost).
+struct SimTextureBake {
+    std::string key;  // "mean-projected", "mean-approx", "sum-projected", "max-projected"
+    TextureBakeSettings settings;
+};
+
+// A curvature estimate a candidate depends on ("exact" is the analytic curvature: no bake).
+struct SimCurvatureBake {
+    std::string key;  // "exact", "shape-operator", "second-order", "jet-fitting", "normal-cone"
+    std::optional<CurvatureEstimator> estimator;
+};
+
+struct SimCandidate {
+    std::string name;    // table row, e.g. "projected-approx", "baked-texture", "default+curvature"
+    std::string family;  // "none", "derivative", "peer", "baked", "default", "variant"
+    std::string source;  // citation of the formula
+    SimShaderSpec shader;
+    std::string texture_bake;    // key of a SimTextureBake, empty when none
+    std::string curvature_bake;  // key of a SimCurvatureBake, empty when the candidate ignores curvature
+};
+
+// Candidates that apply to `scene` (baked-texture ones only when it has a normal map). With `variants`,
+// also the bake variants (approx filter, sum/max reductions, kernel and LEAN textures, curvature
+// estimators).
+std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool variants);
+
+// The texture bakes and curvature estimates the given candidates need.
+std::vector<SimTextureBake> texture_bakes_for(const std::vector<SimCandidate>& candidates);
+std::vector<SimCurvatureBake> curvature_bakes_for(const std::vector<SimCandidate>& candidates);
+
+}  // namespace specbake::cli

@@ -1,0 +1,225 @@
+#include "verify/scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <numbers>
+#include <random>
+
+namespace specbake::cli {
+namespace {
+
+constexpr float kPi = std::numbers::pi_v<float>;
+
+Float3 normalized(Float3 v) {
+    const float len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    return {v[0] / len, v[1] / len, v[2] / len};
+}
+
+// One vertex of a parametric surface: position, unit normal, unit tangent along increasing u (w = +1,
+// B = cross(N, T)) and the curvature attribute (k1, k2, d) with d in the (T, B) frame.
+struct SurfacePoint {
+    Float3 position;
+    Float3 normal;
+    Float3 tangent;
+    std::array<float, 4> curvature;
+};
+
+// Tessellates (u, v) in [0, 1]^2 into a `nu` x `nv` grid of quads (seams duplicated, so UVs stay continuous).
+SimObject tessellate(const std::string& name, int nu, int nv, const std::function<SurfacePoint(float, float)>& f) {
+    SimObject object;
+    TriMesh& m = object.mesh;
+    m.name = name;
+    for (int j = 0; j <= nv; ++j) {
+        for (int i = 0; i <= nu; ++i) {
+            const float u = float(i) / float(nu), v = float(j) / float(nv);
+            const SurfacePoint p = f(u, v);
+            m.positions.insert(m.positions.end(), p.position.begin(), p.position.end());
+            m.normals.insert(m.normals.end(), p.normal.begin(), p.normal.end());
+            m.tangents.insert(m.tangents.end(), {p.tangent[0], p.tangent[1], p.tangent[2], 1.0f});
+            m.uv0.insert(m.uv0.end(), {u, v});
+            object.exact_curvature.values.insert(object.exact_curvature.values.end(), p.curvature.begin(),
+                                                 p.curvature.end());
+        }
+    }
+    const auto index = [nu](int i, int j) { return uint32_t(j * (nu + 1) + i); };
+    for (int j = 0; j < nv; ++j) {
+        for (int i = 0; i < nu; ++i) {
+            m.indices.insert(m.indices.end(), {index(i, j), index(i, j + 1), index(i + 1, j)});
+            m.indices.insert(m.indices.end(), {index(i + 1, j), index(i, j + 1), index(i + 1, j + 1)});
+        }
+    }
+    return object;
+}
+
+// Sphere of radius R around `centre`, poles on +-Y: k1 = k2 = 1/R (SPEC Sec. 4 sign convention).
+SimObject make_sphere(float radius, Float3 centre, int nu, int nv) {
+    return tessellate("sphere", nu, nv, [=](float u, float v) {
+        const float phi = 2 * kPi * u;
+        // Keep away from the poles by half a ring so the tangent is defined at every vertex.
+        const float theta = kPi * (0.002f + 0.996f * v);
+        const Float3 n{std::sin(theta) * std::cos(phi), std::cos(theta), -std::sin(theta) * std::sin(phi)};
+        return SurfacePoint{{centre[0] + radius * n[0], centre[1] + radius * n[1], centre[2] + radius * n[2]},
+                            n,
+                            normalized({-std::sin(phi), 0.0f, -std::cos(phi)}),
+                            {1.0f / radius, 1.0f / radius, 1.0f, 0.0f}};
+    });
+}
+
+// Cylinder of radius R along X, from -L/2 to L/2: k1 = 1/R around the axis (d = +B), k2 = 0 along it.
+SimObject make_cylinder(float radius, float length, int nu, int nv) {
+    return tessellate("cylinder", nu, nv, [=](float u, float v) {
+        const float phi = 2 * kPi * v;
+        const Float3 n{0.0f, std::cos(phi), std::sin(phi)};
+        return SurfacePoint{{length * (u - 0.5f), radius * n[1], radius * n[2]}, n, {1.0f, 0.0f, 0.0f},
+                            {1.0f / radius, 0.0f, 0.0f, 1.0f}};
+    });
+}
+
+// Torus around Y with major radius R and tube radius r < R / 2. Principal directions are the tube circle
+// (k = 1/r, along B) and the big circle (k = cos(psi) / (R + r cos(psi)), along T; negative inside).
+SimObject make_torus(float major, float minor, int nu, int nv) {
+    return tessellate("torus", nu, nv, [=](float u, float v) {
+        const float phi = 2 * kPi * u, psi = 2 * kPi * v;
+        const Float3 n{std::cos(psi) * std::cos(phi), std::sin(psi), -std::cos(psi) * std::sin(phi)};
+        const float ring = major + minor * std::cos(psi);
+        return SurfacePoint{{ring * std::cos(phi), minor * std::sin(psi), -ring * std::sin(phi)},
+                            n,
+                            {-std::sin(phi), 0.0f, -std::cos(phi)},
+                            {1.0f / minor, std::cos(psi) / ring, 0.0f, 1.0f}};
+    });
+}
+
+// Tileable bump map: a sum of plane waves with integer frequencies (so it repeats exactly), amplitude
+// falling as 1/f, frequencies up to a quarter of the texel rate so every mip level loses detail.
+Image make_bump_normal_map(int size, float slope_scale, uint32_t seed) {
+    struct Wave {
+        float kx, ky, phase, amplitude;
+    };
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    std::vector<Wave> waves;
+    const int max_frequency = size / 4;
+    for (int w = 0; w < 48; ++w) {
+        const float f = 4.0f * std::pow(float(max_frequency) / 4.0f, unit(rng));
+        const float angle = 2 * kPi * unit(rng);
+        waves.push_back({std::round(f * std::cos(angle)), std::round(f * std::sin(angle)), 2 * kPi * unit(rng),
+                         1.0f / std::max(1.0f, f)});
+    }
+    Image map(size, size, 3);
+    for (int y = 0; y < size; ++y) {
+        for (int x = 0; x < size; ++x) {
+            float dhdx = 0, dhdy = 0;
+            for (const Wave& w : waves) {
+                const float arg = 2 * kPi * (w.kx * x + w.ky * y) / float(size) + w.phase;
+                // Height h = amplitude sin(arg) / (2 pi |k|); its gradient per unit UV is amplitude cos(arg) k/|k|.
+                const float k = std::max(1.0f, std::sqrt(w.kx * w.kx + w.ky * w.ky));
+                dhdx += w.amplitude * std::cos(arg) * w.kx / k;
+                dhdy += w.amplitude * std::cos(arg) * w.ky / k;
+            }
+            const Float3 n = normalized({-slope_scale * dhdx, -slope_scale * dhdy, 1.0f});
+            float* t = map.texel(x, y);
+            for (int c = 0; c < 3; ++c) t[c] = 0.5f * (n[c] + 1.0f);
+        }
+    }
+    return map;
+}
+
+SimLight directional_light(Float3 towards_light) {
+    SimLight light;
+    light.direction = towards_light;
+    return light;
+}
+
+int scaled(int n, float tessellation) { return std::max(8, int(std::lround(n * tessellation))); }
+
+}  // namespace
+
+std::span<const std::string_view> builtin_scene_names() {
+    static constexpr std::string_view names[] = {"sphere", "cylinder", "torus", "bumpy-sphere"};
+    return names;
+}
+
+Result<SimScene> make_builtin_scene(std::string_view name, float roughness, float tessellation) {
+    if (!(roughness >= 0.0f && roughness <= 1.0f))
+        return make_error("roughness must be in [0, 1], got " + std::to_string(roughness));
+    if (!(tessellation > 0.0f && tessellation <= 16.0f))
+        return make_error("tessellation must be in (0, 16], got " + std::to_string(tessellation));
+    SimScene scene;
+    scene.name = std::string(name);
+    const Float3 key_light = normalized({-0.45f, 0.65f, 0.6f});
+    if (name == "sphere" || name == "bumpy-sphere") {
+        scene.objects.push_back(make_sphere(1.0f, {0, 0, 0}, scaled(256, tessellation), scaled(128, tessellation)));
+        scene.camera = {{0.0f, 0.4f, 3.6f}, {0, 0, 0}, {0, 1, 0}, 40.0f};
+        scene.lights.push_back(directional_light(key_light));
+        scene.object_radius = 1.0f;
+        if (name == "bumpy-sphere") {
+            scene.normal_maps.push_back(make_bump_normal_map(512, 0.35f, 7));
+            scene.objects[0].material.normal_map = 0;
+            scene.objects[0].material.uv_scale = 4.0f;
+        }
+    } else if (name == "cylinder") {
+        // Seen almost along its axis from slightly above, lit from the far end: the visible highlight sits
+        // where view and light graze the surface, where slope-space derivatives blow up (TK21 Sec. 3).
+        scene.objects.push_back(make_cylinder(0.5f, 12.0f, scaled(256, tessellation), scaled(128, tessellation)));
+        scene.camera = {{5.8f, 0.75f, 0.9f}, {0.0f, 0.0f, 0.0f}, {0, 1, 0}, 40.0f};
+        scene.lights.push_back(directional_light(normalized({-1.0f, 0.35f, -0.25f})));
+        scene.object_radius = 0.5f;
+    } else if (name == "torus") {
+        scene.objects.push_back(make_torus(1.0f, 0.35f, scaled(256, tessellation), scaled(96, tessellation)));
+        scene.camera = {{0.0f, 2.2f, 3.0f}, {0, 0, 0}, {0, 1, 0}, 40.0f};
+        scene.lights.push_back(directional_light(key_light));
+        scene.object_radius = 1.35f;
+    } else {
+        std::string names;
+        for (auto n : builtin_scene_names()) names += (names.empty() ? "" : ", ") + std::string(n);
+        return make_error("unknown built-in scene '" + std::string(name) + "' (built-in scenes: " + names + ")");
+    }
+    for (auto& object : scene.objects) object.material.roughness = roughness;
+    return scene;
+}
+
+std::vector<SimTextureSet> texture_sets(const SimScene& scene, std::vector<int>* object_sets) {
+    std::vector<SimTextureSet> sets;
+    if (object_sets) object_sets->clear();
+    for (const SimObject& o : scene.objects) {
+        int index = -1;
+        if (o.material.normal_map >= 0) {
+            const SimTextureSet set{o.material.normal_map, o.material.roughness_map,
+                                    o.material.roughness_map >= 0 ? 0.0f : o.material.roughness};
+            const auto it = std::find(sets.begin(), sets.end(), set);
+            index = int(it - sets.begin());
+            if (it == sets.end()) sets.push_back(set);
+        }
+        if (object_sets) object_sets->push_back(index);
+    }
+    return sets;
+}
+
+bool has_exact_curvature(const SimScene& scene) {
+    return std::all_of(scene.objects.begin(), scene.objects.end(), [](const SimObject& o) {
+        return o.exact_curvature.values.size() == 4 * o.mesh.vertex_count();
+    });
+}
+
+SimCamera camera_at_frame(const SimScene& scene, int frame, int height) {
+    SimCamera camera = scene.camera;
+    const Float3 offset{camera.position[0] - camera.target[0], camera.position[1] - camera.target[1],
+                        camera.position[2] - camera.target[2]};
+    const float distance = std::sqrt(offset[0] * offset[0] + offset[1] * offset[1] + offset[2] * offset[2]);
+    // One pixel subtends 2 tan(fov/2) / height radians; a point at the object's radius moves by
+    // radius * angle, which on screen at `distance` is (radius / distance) * angle / pixel_angle pixels.
+    const float pixel_angle = 2.0f * std::tan(0.5f * camera.fov_y_degrees * kPi / 180.0f) / float(height);
+    const float angle = float(frame) * scene.motion_pixels * pixel_angle * distance / scene.object_radius;
+    // Rotate the offset about the up axis (Rodrigues).
+    const Float3 k = normalized(camera.up);
+    const float c = std::cos(angle), s = std::sin(angle);
+    const float kd = k[0] * offset[0] + k[1] * offset[1] + k[2] * offset[2];
+    const Float3 kx{k[1] * offset[2] - k[2] * offset[1], k[2] * offset[0] - k[0] * offset[2],
+                    k[0] * offset[1] - k[1] * offset[0]};
+    for (int i = 0; i < 3; ++i)
+        camera.position[i] = camera.target[i] + offset[i] * c + kx[i] * s + k[i] * kd * (1 - c);
+    return camera;
+}
+
+}  // namespace specbake::cli

@@ -1,0 +1,180 @@
+#include "verify/verify_job.h"
+
+#include "verify/renderer.h"
+#include "verify/spirv.h"
+#include "core/text_format.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+namespace specbake::cli {
+namespace {
+
+double ms_since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+SimBakedTextures to_textures(TextureBakeResult&& result) {
+    SimBakedTextures t;
+    t.roughness = std::move(result.roughness);
+    t.kernel = std::move(result.kernel);
+    t.lean = std::move(result.lean);
+    return t;
+}
+
+}  // namespace
+
+Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& options) {
+    if (options.frames < 1 || options.frames > 1024) return make_error("--frames must be in [1, 1024]");
+    if (options.spp < 1 || options.spp > 65536) return make_error("--spp must be in [1, 65536]");
+    auto renderer_result = SimRenderer::create(scene, options.width, options.height, options.include_glsl);
+    if (!renderer_result) return renderer_result.error();
+    SimRenderer& renderer = **renderer_result;
+
+    SceneReport report;
+    report.scene = scene.name;
+    report.roughness = scene.objects.empty() ? 0.0f : scene.objects[0].material.roughness;
+    report.from_file = scene.from_file;
+    report.notes = scene.notes;
+    report.width = options.width;
+    report.height = options.height;
+    report.spp = ground_truth_layout(options.spp, options.width, options.height).samples();
+    report.frames = options.frames;
+
+    std::vector<SimCandidate> candidates = simulator_candidates(scene, options.variants);
+    if (!options.only.empty()) {
+        for (const std::string& name : options.only) {
+            if (std::none_of(candidates.begin(), candidates.end(), [&](const SimCandidate& c) { return c.name == name; }))
+                report.notes.push_back("candidate '" + name + "' does not apply to " + scene.name);
+        }
+        std::erase_if(candidates, [&](const SimCandidate& c) {
+            return c.name != "none" && std::find(options.only.begin(), options.only.end(), c.name) == options.only.end();
+        });
+    }
+
+    // Bakes (timed): texture bakes per texture set, curvature estimates per object.
+    std::map<std::string, double> bake_ms;
+    const std::vector<SimTextureSet> sets = texture_sets(scene);
+    for (const SimTextureBake& bake : texture_bakes_for(candidates)) {
+        double total = 0;
+        for (size_t set = 0; set < sets.size(); ++set) {
+            const SimTextureSet& t = sets[set];
+            const Image* roughness_map = t.roughness_map >= 0 ? &scene.roughness_maps[size_t(t.roughness_map)] : nullptr;
+            const auto start = std::chrono::steady_clock::now();
+            auto baked = bake_texture(scene.normal_maps[size_t(t.normal_map)], roughness_map, 0, t.roughness, bake.settings);
+            total += ms_since(start);
+            if (!baked) return make_error(scene.name + ": texture bake failed: " + baked.error().message);
+            renderer.set_baked(bake.key, int(set), to_textures(std::move(*baked)));
+        }
+        bake_ms[bake.key] = total;
+    }
+    for (const SimCurvatureBake& bake : curvature_bakes_for(candidates)) {
+        double total = 0;
+        for (size_t o = 0; o < scene.objects.size(); ++o) {
+            const auto start = std::chrono::steady_clock::now();
+            auto curvature = estimate_curvature(scene.objects[o].mesh, *bake.estimator);
+            total += ms_since(start);
+            if (!curvature) return make_error(scene.name + ": curvature estimate failed: " + curvature.error().message);
+            renderer.set_curvature(bake.key, int(o), *curvature);
+        }
+        bake_ms["curvature:" + bake.key] = total;
+    }
+
+    const auto say = [&](const std::string& line) {
+        if (options.progress) options.progress(scene.name + ": " + line);
+    };
+    if (!bake_ms.empty()) {
+        std::string done;
+        for (const auto& [key, ms] : bake_ms) done += (done.empty() ? "" : ", ") + key + format_double(" %.0f ms", ms);
+        say("baked " + done);
+    }
+
+    // Compile every candidate before rendering so a shader error fails fast.
+    std::vector<int> ids;
+    for (const SimCandidate& c : candidates) {
+        auto id = renderer.compile_candidate(c.shader);
+        if (!id) return make_error("candidate '" + c.name + "': " + id.error().message);
+        ids.push_back(*id);
+    }
+
+    std::vector<SimMetricsAccumulator> accumulators(candidates.size());
+    report.candidates.resize(candidates.size());
+    double gt_total = 0;
+    for (int frame = 0; frame < options.frames; ++frame) {
+        const auto frame_start = std::chrono::steady_clock::now();
+        SimImage gt = renderer.render_ground_truth(frame, report.spp);
+        gt_total += ms_since(frame_start);
+        for (size_t i = 0; i < candidates.size(); ++i) {
+            SimImage image = renderer.render_candidate(ids[i], frame);
+            accumulators[i].add_frame(gt, image);
+            if (frame == 0 && options.keep_images) report.candidates[i].image = std::move(image);
+        }
+        if (frame == 0 && options.keep_images) report.ground_truth = std::move(gt);
+        say("frame " + std::to_string(frame + 1) + "/" + std::to_string(options.frames) + ": ground truth and " +
+            std::to_string(candidates.size()) + " candidates rendered");
+    }
+    report.ground_truth_ms = gt_total;
+
+    const bool spirv = options.spirv && spirv_tools_available();
+    if (options.spirv && !spirv)
+        report.notes.push_back("SPIR-V counts skipped: glslangValidator, spirv-opt or spirv-dis not on PATH");
+    std::optional<double> none_ms;
+    for (size_t i = 0; i < candidates.size(); ++i) {
+        const SimCandidate& c = candidates[i];
+        CandidateReport& row = report.candidates[i];
+        row.name = c.name;
+        row.family = c.family;
+        row.source = c.source;
+        row.metrics = accumulators[i].finish();
+        if (!c.texture_bake.empty()) row.bake_ms = bake_ms[c.texture_bake];
+        if (!c.curvature_bake.empty() && c.curvature_bake != "exact")
+            row.bake_ms = row.bake_ms.value_or(0.0) + bake_ms["curvature:" + c.curvature_bake];
+        if (spirv) {
+            auto count = spirv_instruction_count(renderer.candidate_source(c.shader));
+            if (count) row.spirv_instructions = *count;
+            else report.notes.push_back(c.name + ": " + count.error().message);
+        }
+    }
+    if (options.timing_repeats > 0) {
+        say("timing " + std::to_string(candidates.size()) + " candidates x " + std::to_string(options.timing_repeats));
+        // Round robin over the candidates, so load changes on a shared machine hit all of them alike;
+        // each sample is 4 back-to-back frames, the reported time the median sample per frame.
+        constexpr int kDrawsPerSample = 4;
+        std::vector<std::vector<double>> samples(candidates.size());
+        for (int rep = 0; rep < options.timing_repeats; ++rep)
+            for (size_t i = 0; i < candidates.size(); ++i)
+                samples[i].push_back(renderer.time_candidate(ids[i], kDrawsPerSample) / kDrawsPerSample);
+        for (size_t i = 0; i < candidates.size(); ++i) {
+            auto& v = samples[i];
+            std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+            report.candidates[i].frame_ms = v[v.size() / 2];
+            if (candidates[i].name == "none") none_ms = report.candidates[i].frame_ms;
+        }
+    }
+    if (none_ms && *none_ms > 0)
+        for (CandidateReport& row : report.candidates)
+            if (row.frame_ms) row.frame_relative = *row.frame_ms / *none_ms;
+    return report;
+}
+
+std::string markdown_table(const SceneReport& r) {
+    std::string out;
+    out += "| candidate | RMSE | MAE | RMSE (tm) | flicker | flicker (tm) | energy | p99 | bake ms | SPIR-V | frame x |\n";
+    out += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    for (const CandidateReport& c : r.candidates) {
+        const SimMetrics& m = c.metrics;
+        out += "| " + c.name + " | " + format_double("%.3f", m.rmse) + " | " + format_double("%.3f", m.mae) + " | " +
+               format_double("%.4f", m.rmse_tonemapped) + " | " + format_double("%.3f", m.flicker_linear) + " | " +
+               format_double("%.4f", m.flicker) + " | " +
+               format_double("%.2f", m.energy_ratio) + " | " + format_double("%.2f", m.peak_ratio) + " | " +
+               (c.bake_ms ? format_double("%.1f", *c.bake_ms) : "-") + " | " +
+               (c.spirv_instructions ? std::to_string(*c.spirv_instructions) : "-") + " | " +
+               (c.frame_relative ? format_double("%.2f", *c.frame_relative) : "-") + " |\n";
+    }
+    return out;
+}
+
+}  // namespace specbake::cli

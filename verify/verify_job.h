@@ -1,0 +1,60 @@
+// specbake verify: renders one scene's ground truth and every candidate on the headless OpenGL context,
+// and scores accuracy (sim_metrics.h) and cost (bake time, SPIR-V instructions, frame time relative to no
+// filtering) per candidate (SPEC Sec. 6 and 8). Needs a current GL context (GlContext::create()).
+#pragma once
+
+#include "core/result.h"
+#include "verify/candidates.h"
+#include "verify/metrics.h"
+#include "verify/scene.h"
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace specbake::cli {
+
+struct VerifyOptions {
+    std::string include_glsl;  // text of the runtime include shaders/specaa.glsl
+    int width = 128;
+    int height = 128;
+    int spp = 256;            // ground-truth samples per pixel (rounded to a square)
+    int frames = 8;           // K frames of slow camera motion for the temporal metric
+    int timing_repeats = 7;   // frame-time median over this many renders; 0 skips timing
+    bool spirv = true;        // count SPIR-V instructions when the tools are on PATH
+    bool variants = true;     // include the bake variants
+    std::vector<std::string> only;  // candidate names to keep ("none" is always kept); empty: all
+    bool keep_images = true;  // keep frame 0 of every image for strips
+    // Receives one line per finished stage (bakes, each ground-truth frame, timing); may be empty.
+    std::function<void(const std::string&)> progress;
+};
+
+struct CandidateReport {
+    std::string name, family, source;
+    SimMetrics metrics;
+    std::optional<double> bake_ms;        // texture bake or curvature estimate; none for run-time only
+    std::optional<int> spirv_instructions;
+    std::optional<double> frame_ms;       // median render time on this context
+    std::optional<double> frame_relative; // frame_ms / frame_ms of "none"
+    SimImage image;                       // frame 0 (when keep_images)
+};
+
+struct SceneReport {
+    std::string scene;          // e.g. "torus"
+    float roughness = 0;        // perceptual r of the scene's materials (of the first object for a file)
+    bool from_file = false;     // a scene file, whose materials keep their own roughness
+    int width = 0, height = 0, spp = 0, frames = 0;
+    double ground_truth_ms = 0; // wall time of all ground-truth frames
+    SimImage ground_truth;      // frame 0 (when keep_images)
+    std::vector<CandidateReport> candidates;
+    std::vector<std::string> notes;  // skipped candidates and why
+};
+
+// Simulates `scene` and scores every candidate that applies.
+Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& options);
+
+// The report as a Markdown table (one row per candidate).
+std::string markdown_table(const SceneReport& report);
+
+}  // namespace specbake::cli
