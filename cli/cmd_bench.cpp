@@ -14,6 +14,8 @@ namespace specbake::cli {
 
 namespace {
 
+using namespace specbake::verify;
+
 struct BenchCommandOptions {
     std::vector<std::string> files;
     bool no_builtin = false;

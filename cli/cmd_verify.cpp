@@ -17,6 +17,8 @@ namespace specbake::cli {
 
 namespace {
 
+using namespace specbake::verify;
+
 struct VerifyCommandOptions {
     std::string scene_file;
     std::string builtin;

@@ -76,6 +76,7 @@ void print_warning(const std::string& message) { std::fprintf(stderr, "specbake:
 }  // namespace specbake::cli
 
 int main(int argc, char** argv) {
+    using namespace specbake;
     using namespace specbake::cli;
     RunSettings& settings = run_settings();
     auto expanded = expand_response_files(std::vector<std::string>(argv + 1, argv + argc), &settings.option_files);

@@ -1,5 +1,5 @@
 // Options `specbake verify` and `specbake bench` share: image size, ground-truth samples, frames, timing
-// repeats and the bake variants, registered once and turned into VerifyOptions once.
+// repeats and the bake variants, registered once and turned into verify::VerifyOptions once.
 #pragma once
 
 #include "cli/command.h"
@@ -38,7 +38,7 @@ inline void add_sim_command_options(CLI::App* sub, SimCommandOptions& o) {
 }
 
 // Fills `v` from `o` and the embedded runtime include. Prints the error and returns false for a bad --size.
-inline bool apply_sim_command_options(const SimCommandOptions& o, VerifyOptions& v) {
+inline bool apply_sim_command_options(const SimCommandOptions& o, verify::VerifyOptions& v) {
     if (std::sscanf(o.size.c_str(), "%dx%d", &v.width, &v.height) != 2 || v.width < 2 || v.height < 2 ||
         v.width > 8192 || v.height > 8192) {
         print_error("--size: expected WxH between 2x2 and 8192x8192, got '" + o.size + "'");

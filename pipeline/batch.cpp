@@ -12,7 +12,7 @@
 #include <exception>
 #include <mutex>
 
-namespace specbake::cli {
+namespace specbake {
 
 RunSettings& run_settings() {
     static RunSettings settings;
@@ -161,4 +161,4 @@ bool skip_if_up_to_date(const io::FreshnessQuery& query, const PipelineFlags& fl
     return true;
 }
 
-}  // namespace specbake::cli
+}  // namespace specbake

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-namespace specbake::cli {
+namespace specbake {
 
 enum class Verbosity { quiet, normal, verbose };
 
@@ -69,4 +69,4 @@ bool skip_if_up_to_date(const io::FreshnessQuery& query, const PipelineFlags& fl
 Result<void> write_manifest_depfile(const PipelineFlags& flags, const std::filesystem::path& output_dir,
                                     const std::vector<std::string>& recorded_inputs);
 
-}  // namespace specbake::cli
+}  // namespace specbake

@@ -8,7 +8,7 @@
 #include <cctype>
 #include <sstream>
 
-namespace specbake::cli {
+namespace specbake {
 namespace {
 
 constexpr int kMaxResponseDepth = 16;
@@ -199,4 +199,4 @@ Result<SplitConfig> split_config(const nlohmann::json& tree, const std::string& 
     return out;
 }
 
-}  // namespace specbake::cli
+}  // namespace specbake

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-namespace specbake::cli {
+namespace specbake {
 
 // Replaces every argument "@FILE" by the arguments FILE holds: separated by white space, grouped by
 // "double" or 'single' quotes, '#' at the start of a word comments out the rest of the line, nested
@@ -68,4 +68,4 @@ Result<SplitConfig> split_config(const nlohmann::json& tree, const std::string& 
                                  std::span<const std::string> global_options,
                                  std::span<const std::string> subcommands, const std::string& source_name);
 
-}  // namespace specbake::cli
+}  // namespace specbake

@@ -11,7 +11,7 @@
 #include <map>
 #include <set>
 
-namespace specbake::cli {
+namespace specbake::verify {
 namespace {
 
 std::string scene_label(const SceneReport& s) {
@@ -284,4 +284,4 @@ Result<void> write_bench_outputs(const BenchReport& r, const std::filesystem::pa
     return {};
 }
 
-}  // namespace specbake::cli
+}  // namespace specbake::verify

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-namespace specbake::cli {
+namespace specbake::verify {
 
 struct BenchOptions {
     VerifyOptions verify;
@@ -48,4 +48,4 @@ std::string bench_svg(const BenchReport& report);
 // Writes bench.md, bench.csv, bench.svg and strips/*.png into `dir` (created when missing).
 Result<void> write_bench_outputs(const BenchReport& report, const std::filesystem::path& dir);
 
-}  // namespace specbake::cli
+}  // namespace specbake::verify

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-namespace specbake::cli {
+namespace specbake::verify {
 namespace {
 
 // Bodies set `vec3 A` (xx, yy, xy) from: float a (material alpha^2), float alpha, vec3 hTS, vec3 n (world
@@ -156,4 +156,4 @@ std::vector<SimCurvatureBake> curvature_bakes_for(const std::vector<SimCandidate
     return bakes;
 }
 
-}  // namespace specbake::cli
+}  // namespace specbake::verify

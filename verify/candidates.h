@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-namespace specbake::cli {
+namespace specbake::verify {
 
 // A texture bake a candidate depends on (run once per normal map, timed as the candidate's bake cost).
 struct SimTextureBake {
@@ -45,4 +45,4 @@ std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool varia
 std::vector<SimTextureBake> texture_bakes_for(const std::vector<SimCandidate>& candidates);
 std::vector<SimCurvatureBake> curvature_bakes_for(const std::vector<SimCandidate>& candidates);
 
-}  // namespace specbake::cli
+}  // namespace specbake::verify

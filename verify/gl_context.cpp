@@ -10,7 +10,7 @@
 #include <filesystem>
 #include <system_error>
 
-namespace specbake::cli {
+namespace specbake::verify {
 namespace {
 
 std::string egl_error_text(const char* what) {
@@ -120,4 +120,4 @@ Result<GLuint> link_program(GLuint vertex, GLuint fragment) {
     return make_error("shader link failed: " + log);
 }
 
-}  // namespace specbake::cli
+}  // namespace specbake::verify

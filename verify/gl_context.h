@@ -11,7 +11,7 @@
 #include <memory>
 #include <string>
 
-namespace specbake::cli {
+namespace specbake::verify {
 
 class GlContext {
 public:
@@ -38,4 +38,4 @@ Result<GLuint> compile_glsl_shader(GLenum stage, const std::string& source);
 // Links a program from two compiled stages and deletes the stages; the error carries the link log.
 Result<GLuint> link_program(GLuint vertex, GLuint fragment);
 
-}  // namespace specbake::cli
+}  // namespace specbake::verify

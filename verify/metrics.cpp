@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace specbake::cli {
+namespace specbake::verify {
 namespace {
 
 double tonemap(double x) { return x / (1.0 + x); }
@@ -80,4 +80,4 @@ SimMetrics SimMetricsAccumulator::finish() const {
     return m;
 }
 
-}  // namespace specbake::cli
+}  // namespace specbake::verify

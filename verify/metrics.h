@@ -10,7 +10,7 @@
 
 #include <vector>
 
-namespace specbake::cli {
+namespace specbake::verify {
 
 struct SimMetrics {
     double rmse = 0;            // sqrt(mean (c - g)^2) / mean(g), linear radiance
@@ -45,4 +45,4 @@ private:
 // True where the metrics score a pixel: ground-truth coverage >= 0.999 and candidate coverage > 0.5.
 bool scored_pixel(const SimImage& ground_truth, const SimImage& candidate, int x, int y);
 
-}  // namespace specbake::cli
+}  // namespace specbake::verify

@@ -6,7 +6,7 @@
 #include <cstring>
 #include <numbers>
 
-namespace specbake::cli {
+namespace specbake::verify {
 namespace {
 
 using Mat4 = std::array<float, 16>;  // column-major, as glUniformMatrix4fv expects
@@ -667,4 +667,4 @@ double SimRenderer::time_candidate(int id, int draws) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
-}  // namespace specbake::cli
+}  // namespace specbake::verify

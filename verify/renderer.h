@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-namespace specbake::cli {
+namespace specbake::verify {
 
 // Baked textures a candidate samples (uploaded with mips, trilinear, repeat), per texture set
 // (texture_sets() in sim_scene.h: a normal map with its roughness).
@@ -84,4 +84,4 @@ private:
     std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace specbake::cli
+}  // namespace specbake::verify

@@ -6,7 +6,7 @@
 #include <numbers>
 #include <random>
 
-namespace specbake::cli {
+namespace specbake::verify {
 namespace {
 
 constexpr float kPi = std::numbers::pi_v<float>;
@@ -222,4 +222,4 @@ SimCamera camera_at_frame(const SimScene& scene, int frame, int height) {
     return camera;
 }
 
-}  // namespace specbake::cli
+}  // namespace specbake::verify

@@ -14,7 +14,7 @@
 #include <string_view>
 #include <vector>
 
-namespace specbake::cli {
+namespace specbake::verify {
 
 using Float3 = std::array<float, 3>;
 
@@ -101,4 +101,4 @@ Result<SimScene> make_builtin_scene(std::string_view name, float roughness, floa
 // SimScene::motion_pixels). Frame 0 is the scene camera itself.
 SimCamera camera_at_frame(const SimScene& scene, int frame, int height);
 
-}  // namespace specbake::cli
+}  // namespace specbake::verify

@@ -17,7 +17,7 @@
 #include <numbers>
 #include <optional>
 
-namespace specbake::cli {
+namespace specbake::verify {
 namespace {
 
 namespace fs = std::filesystem;
@@ -525,4 +525,4 @@ Result<SimScene> load_sim_scene(const fs::path& path) {
     return scene;
 }
 
-}  // namespace specbake::cli
+}  // namespace specbake::verify

@@ -12,11 +12,11 @@
 
 #include <filesystem>
 
-namespace specbake::cli {
+namespace specbake::verify {
 
 // Loads `path` as world-space simulator objects. Meshes get generated normals and tangents where the file
 // has none (as the scene bake does); their curvature is unknown (SimObject::exact_curvature stays empty).
 // Errors name the file: unreadable, not a scene, no triangles, a texture that does not decode.
 Result<SimScene> load_sim_scene(const std::filesystem::path& path);
 
-}  // namespace specbake::cli
+}  // namespace specbake::verify

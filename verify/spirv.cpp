@@ -10,7 +10,7 @@
 #include <sstream>
 #include <unistd.h>
 
-namespace specbake::cli {
+namespace specbake::verify {
 namespace {
 
 bool on_path(const std::string& tool) {
@@ -104,4 +104,4 @@ Result<int> count_uncached(const std::string& source) {
 
 }  // namespace
 
-}  // namespace specbake::cli
+}  // namespace specbake::verify

@@ -7,7 +7,7 @@
 
 #include <string>
 
-namespace specbake::cli {
+namespace specbake::verify {
 
 // True when glslangValidator, spirv-opt and spirv-dis are all on PATH.
 bool spirv_tools_available();
@@ -16,4 +16,4 @@ bool spirv_tools_available();
 // fragment shader `source`. The error carries the failing tool's output.
 Result<int> spirv_instruction_count(const std::string& source);
 
-}  // namespace specbake::cli
+}  // namespace specbake::verify

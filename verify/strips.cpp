@@ -7,7 +7,7 @@
 #include <cmath>
 #include <random>
 
-namespace specbake::cli {
+namespace specbake::verify {
 namespace {
 
 // 3 x 5 pixel glyphs, one row per 3-bit value (bit 2 = left column).
@@ -137,4 +137,4 @@ Result<void> write_strip_png(const Image& strip, const std::filesystem::path& pa
     return result;
 }
 
-}  // namespace specbake::cli
+}  // namespace specbake::verify

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-namespace specbake::cli {
+namespace specbake::verify {
 
 struct StripTile {
     std::string label;
@@ -25,4 +25,4 @@ Image make_strip(const SimImage& ground_truth, const std::vector<StripTile>& can
 // Writes `strip` as an 8-bit PNG to `path` atomically.
 Result<void> write_strip_png(const Image& strip, const std::filesystem::path& path);
 
-}  // namespace specbake::cli
+}  // namespace specbake::verify

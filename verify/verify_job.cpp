@@ -10,7 +10,7 @@
 #include <cstdio>
 #include <map>
 
-namespace specbake::cli {
+namespace specbake::verify {
 namespace {
 
 double ms_since(std::chrono::steady_clock::time_point start) {
@@ -177,4 +177,4 @@ std::string markdown_table(const SceneReport& r) {
     return out;
 }
 
-}  // namespace specbake::cli
+}  // namespace specbake::verify

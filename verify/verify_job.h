@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-namespace specbake::cli {
+namespace specbake::verify {
 
 struct VerifyOptions {
     std::string include_glsl;  // text of the runtime include shaders/specaa.glsl
@@ -57,4 +57,4 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
 // The report as a Markdown table (one row per candidate).
 std::string markdown_table(const SceneReport& report);
 
-}  // namespace specbake::cli
+}  // namespace specbake::verify

@@ -8,7 +8,7 @@
 #include <unistd.h>
 
 namespace fs = std::filesystem;
-using namespace specbake::cli;
+using namespace specbake;
 
 namespace {
 

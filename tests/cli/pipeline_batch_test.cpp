@@ -7,7 +7,7 @@
 #include <atomic>
 #include <stdexcept>
 
-using namespace specbake::cli;
+using namespace specbake;
 
 namespace {
 

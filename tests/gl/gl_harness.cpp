@@ -35,7 +35,7 @@ std::string shader_log(GLuint shader) {
 }
 
 GLuint link(GLuint vs, GLuint fs, std::string& log) {
-    auto program = cli::link_program(vs, fs);
+    auto program = verify::link_program(vs, fs);
     if (!program) {
         log += program.error().message;
         return 0;
@@ -44,7 +44,7 @@ GLuint link(GLuint vs, GLuint fs, std::string& log) {
 }
 
 GLuint compile_glsl(GLenum stage, const std::string& source, std::string& log) {
-    auto shader = cli::compile_glsl_shader(stage, source);
+    auto shader = verify::compile_glsl_shader(stage, source);
     if (!shader) {
         log += shader.error().message;
         return 0;
@@ -93,7 +93,7 @@ bool gl_disabled() {
 
 std::unique_ptr<GlContext> GlContext::open(std::string& reason) {
     private_shader_cache();
-    auto context = cli::GlContext::create();
+    auto context = verify::GlContext::create();
     if (!context) {
         reason = context.error().message;
         return nullptr;

@@ -30,7 +30,7 @@ public:
 
 private:
     GlContext() = default;
-    std::unique_ptr<cli::GlContext> context_;
+    std::unique_ptr<verify::GlContext> context_;
 };
 
 // True when SPECBAKE_NO_GL=1 (GL tests skip instead of failing).

@@ -92,22 +92,22 @@ TEST(ShaderCompile, RoughnessTextureWithKernelIsRejected) {
 // driver's log, naming the stage.
 TEST(ShaderCompile, CompileAndLinkErrorsCarryTheDriversLog) {
     SPECBAKE_REQUIRE_GL(ctx);
-    auto bad = cli::compile_glsl_shader(GL_FRAGMENT_SHADER,
+    auto bad = verify::compile_glsl_shader(GL_FRAGMENT_SHADER,
                                         "#version 450 core\nvoid main() { undeclared_name = 1.0; }\n");
     ASSERT_FALSE(bad.ok());
     EXPECT_NE(bad.error().message.find("fragment shader compilation failed: "), std::string::npos);
     EXPECT_NE(bad.error().message.find("undeclared_name"), std::string::npos) << bad.error().message;
 
     // The fragment shader reads an input the vertex shader never writes: both compile, the link fails.
-    auto vertex = cli::compile_glsl_shader(GL_VERTEX_SHADER,
+    auto vertex = verify::compile_glsl_shader(GL_VERTEX_SHADER,
                                            "#version 450 core\nvoid main() { gl_Position = vec4(0.0); }\n");
-    auto fragment = cli::compile_glsl_shader(
+    auto fragment = verify::compile_glsl_shader(
         GL_FRAGMENT_SHADER,
         "#version 450 core\nlayout(location = 0) in vec4 never_written;\nout vec4 color;\n"
         "void main() { color = never_written; }\n");
     ASSERT_TRUE(vertex.ok()) << vertex.error().message;
     ASSERT_TRUE(fragment.ok()) << fragment.error().message;
-    auto linked = cli::link_program(*vertex, *fragment);
+    auto linked = verify::link_program(*vertex, *fragment);
     if (linked.ok()) GTEST_SKIP() << "this driver links an unwritten varying; the link-error path is not reached";
     EXPECT_EQ(linked.error().message.rfind("shader link failed: ", 0), 0u) << linked.error().message;
     EXPECT_GT(linked.error().message.size(), std::string("shader link failed: ").size());

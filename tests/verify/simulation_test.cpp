@@ -5,7 +5,7 @@
 #include "verify/renderer.h"
 #include "verify/scene.h"
 
-#include "tests/cli/sim_test_environment.h"
+#include "tests/verify/sim_test_environment.h"
 
 #include <gtest/gtest.h>
 
@@ -13,7 +13,7 @@
 #include <fstream>
 #include <sstream>
 
-namespace specbake::cli {
+namespace specbake::verify {
 namespace {
 
 test::SimTestEnvironment& environment() { return test::sim_environment(); }
@@ -129,4 +129,4 @@ TEST(VerifySimulation, BakedCurvatureIsAtLeastAsStableAsNormalDerivativesOnCurve
 }
 
 }  // namespace
-}  // namespace specbake::cli
+}  // namespace specbake::verify

@@ -15,7 +15,7 @@
 #include <sstream>
 #include <string>
 
-namespace specbake::cli::test {
+namespace specbake::verify::test {
 
 struct SimTestEnvironment {
     std::unique_ptr<GlContext> context;
@@ -62,12 +62,12 @@ inline VerifyOptions small_verify(int width, int height, int spp, int frames) {
     return options;
 }
 
-}  // namespace specbake::cli::test
+}  // namespace specbake::verify::test
 
 #define SPECBAKE_REQUIRE_GL()                                                                           \
     do {                                                                                                \
-        if (::specbake::cli::test::gl_disabled()) GTEST_SKIP() << "SPECBAKE_NO_GL=1: OpenGL tests disabled"; \
-        ASSERT_TRUE(::specbake::cli::test::sim_environment().error.empty())                             \
+        if (::specbake::verify::test::gl_disabled()) GTEST_SKIP() << "SPECBAKE_NO_GL=1: OpenGL tests disabled"; \
+        ASSERT_TRUE(::specbake::verify::test::sim_environment().error.empty())                             \
             << "no headless OpenGL context (set SPECBAKE_NO_GL=1 to skip): "                           \
-            << ::specbake::cli::test::sim_environment().error;                                          \
+            << ::specbake::verify::test::sim_environment().error;                                          \
     } while (false)

@@ -9,7 +9,7 @@
 #include <cmath>
 #include <numbers>
 
-namespace specbake::cli {
+namespace specbake::verify {
 namespace {
 
 SimImage constant_image(int w, int h, float value, float coverage) {
@@ -125,4 +125,4 @@ TEST(VerifyScenes, AnalyticGeometryIsConsistent) {
 }
 
 }  // namespace
-}  // namespace specbake::cli
+}  // namespace specbake::verify

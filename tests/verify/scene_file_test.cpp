@@ -9,7 +9,7 @@
 #include "verify/scene_file.h"
 #include "io/image_io.h"
 
-#include "tests/cli/sim_test_environment.h"
+#include "tests/verify/sim_test_environment.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -22,7 +22,7 @@
 #include <numbers>
 #include <sstream>
 
-namespace specbake::cli {
+namespace specbake::verify {
 namespace {
 
 namespace fs = std::filesystem;
@@ -465,4 +465,4 @@ TEST(VerifySceneFile, BadFilesGiveAnErrorNamingTheFile) {
 }
 
 }  // namespace
-}  // namespace specbake::cli
+}  // namespace specbake::verify
