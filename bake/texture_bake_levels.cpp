@@ -1,0 +1,328 @@
+// The texture bake's level scheduling and row streaming: the decoder set up from the settings, the fused
+// pass over the largest levels in column tiles, the remaining levels row by row, finished rows to the sink.
+#include "bake/texture_bake_internal.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <functional>
+
+namespace specbake::texture_bake_detail {
+namespace {
+
+// Float output rows of one block of rows of one level, interleaved as the chains; null for an
+// output that was not requested.
+struct RowBlock {
+    int width = 0;
+    int rough_ch = 0, kern_ch = 0, lean_ch = 0, nrm_ch = 0;
+    // Not zero-filled: every texel of a block is written before it is emitted.
+    std::unique_ptr<float[]> rough, kern, lean, nrm;
+
+    RowBlock(const TextureBakeShape& shape, int w, int rows)
+        : width(w),
+          rough_ch(shape.roughness_channels),
+          kern_ch(shape.kernel_channels),
+          lean_ch(shape.lean_channels),
+          nrm_ch(shape.normal_channels),
+          rough(uninitialized<float>(size_t(w) * rows * size_t(rough_ch))),
+          kern(uninitialized<float>(size_t(w) * rows * size_t(kern_ch))),
+          lean(uninitialized<float>(size_t(w) * rows * size_t(lean_ch))),
+          nrm(uninitialized<float>(size_t(w) * rows * size_t(nrm_ch))) {}
+
+    static float* row(const std::unique_ptr<float[]>& v, int ch, int width, int k) {
+        return v ? v.get() + size_t(k) * size_t(width) * size_t(ch) : nullptr;
+    }
+    float* rough_row(int k) { return row(rough, rough_ch, width, k); }
+    float* kern_row(int k) { return row(kern, kern_ch, width, k); }
+    float* lean_row(int k) { return row(lean, lean_ch, width, k); }
+    float* nrm_row(int k) { return row(nrm, nrm_ch, width, k); }
+    // The rows of row k from texel `offset` on.
+    BaseRow base_row(int k, int offset) {
+        auto from = [&](float* r, int ch) { return r ? r + size_t(offset) * size_t(ch) : nullptr; };
+        return {from(rough_row(k), rough_ch), from(kern_row(k), kern_ch), from(lean_row(k), lean_ch),
+                from(nrm_row(k), nrm_ch)};
+    }
+
+    void emit(const TextureBakeRowSink& sink, int level, int x0, int y0, int rows) const {
+        TextureBakeRows r;
+        r.level = level, r.x0 = x0, r.y0 = y0, r.rows = rows, r.width = width;
+        r.roughness = rough.get();
+        r.kernel = kern.get();
+        r.lean = lean.get();
+        r.normal = nrm.get();
+        sink(r);
+    }
+};
+
+}  // namespace
+
+// The bake proper, on validated inputs.
+Result<TextureBakeResult> bake_validated(const Image& normal, const Image* roughness, int roughness_channel,
+                                         float roughness_value, const TextureBakeSettings& settings,
+                                         const TextureBakeRowSink& sink) {
+    TextureBakeResult result;
+    TextureBakeNotes& notes = result.notes;
+    const int W = normal.width, H = normal.height;
+
+    Decoder dec(normal);
+    dec.flip_y = settings.normal_y == NormalGreen::MinusY;
+    if (normal.channels == 2) {
+        if (settings.reconstruct_z == ReconstructZ::Never)
+            return make_error("normal map: has two channels, so z must be reconstructed (reconstruct-z is 'never')");
+        dec.reconstruct = true;
+        notes.z_reason = "two-channel map";
+    } else if (settings.reconstruct_z == ReconstructZ::Always) {
+        dec.reconstruct = true;
+        notes.z_reason = "requested";
+    } else if (settings.reconstruct_z == ReconstructZ::Auto && blue_is_constant_full_scale(normal)) {
+        dec.reconstruct = true;
+        notes.z_reason = "constant full-scale blue channel";
+    }
+    notes.z_reconstructed = dec.reconstruct;
+    if (!dec.reconstruct && looks_srgb_encoded(normal)) {
+        notes.looks_srgb = true;
+        notes.warnings.push_back(
+            "normal map: values look sRGB-encoded (decoded vectors are far from unit length unless the sRGB curve "
+            "is removed first); data maps are never colour-converted, so re-export it as linear data");
+    }
+
+    Layout& layout = dec.layout;
+    if (roughness) {
+        dec.roughness = roughness;
+        dec.roughness_channel = roughness_channel;
+        dec.orm = roughness->channels >= 3 && roughness_channel == 1;
+        notes.roughness_is_orm = dec.orm;
+        if (dec.orm) {
+            layout.occlusion = layout.count++;
+            layout.metallic = layout.count++;
+        }
+        if (roughness->width != W || roughness->height != H) {
+            notes.roughness_resampled = true;
+            dec.resampled = resample_roughness(*roughness, roughness_channel, dec.orm, W, H);
+        }
+    } else {
+        const double r = roughness_value;
+        dec.constant_a = r * r * r * r;
+        dec.constant_r = float(std::sqrt(std::sqrt(std::clamp(dec.constant_a, 0.0, 1.0))));
+    }
+    const bool slope = settings.outputs.lean && settings.lean_space == LeanSpace::Slope;
+    if (slope) {
+        layout.slope = layout.count;
+        layout.count += 5;
+    }
+    const int C = layout.count;
+
+
+    const TextureBakeShape shape = texture_bake_shape(normal, roughness, roughness_channel, settings);
+    const int levels = shape.levels;
+    auto level_w = [&](int L) { return std::max(1, W >> L); };
+    auto level_h = [&](int L) { return std::max(1, H >> L); };
+    // Level L is the mean of blocks of level L-1 when both of its sizes divide level L-1's.
+    auto tiles_previous = [&](int L) {
+        return L >= 2 && level_w(L - 1) % level_w(L) == 0 && level_h(L - 1) % level_h(L) == 0;
+    };
+
+    // Means of the previous / current level, kept when the next level tiles it: row j is C planes of w.
+    // Not zero-filled: every mean of a kept level is written before the next level reads it.
+    std::unique_ptr<double[]> previous, current;
+    std::vector<double> level_change(size_t(levels), 0.0);
+    std::atomic<long long> degenerate{0};
+    const size_t row_doubles = size_t(C) * size_t(W);
+
+    // Writes the outputs of rows of level L into `block` row k from their means.
+    auto finalize_into = [&](RowBlock& block, int k, const double* means, int w) {
+        return finalize_row(means, w, layout, settings, dec.flip_y, block.rough_row(k), block.kern_row(k),
+                            block.lean_row(k), block.nrm_row(k));
+    };
+    auto base_into = [&](RowBlock& block, int k, const double* v, const float* r0, int n, int offset = 0) {
+        write_base_row(v, r0, n, layout, dec.flip_y, block.base_row(k, offset), block.kern_ch);
+    };
+    auto reduce_changes = [](const std::vector<double>& rows) {
+        double m = 0.0;
+        for (double c : rows) m = std::max(m, c);
+        return m;
+    };
+
+    // Levels 0 .. F in one pass when each of levels 1 .. F has footprints that are whole blocks of the level
+    // before (all even sizes, up to kMaxFusedLevels): every base row is decoded once, written as level 0
+    // and summed upwards. Each task owns whole rows of level F, so the finer rows under them never leave
+    // the task, and only level-F means (a 4^F-th of the base) are kept for level F + 1. Column tiles of
+    // about kTileTexels base texels keep a task's planes and float rows in the L2 cache; every output texel
+    // still sums its own footprint in the same order.
+    const bool fused = levels >= 2 && W % level_w(1) == 0 && H % level_h(1) == 0;
+    auto run_fused = [&] {
+        int F = 1;
+        while (F < kMaxFusedLevels && F + 1 < levels && tiles_previous(F + 1)) ++F;
+        std::vector<int> fx(size_t(F) + 1, 1), fy(size_t(F) + 1, 1), tile(size_t(F) + 1, 1);
+        for (int L = 1; L <= F; ++L)
+            fx[size_t(L)] = level_w(L - 1) / level_w(L), fy[size_t(L)] = level_h(L - 1) / level_h(L);
+        int span = 1;  // base texels per level-F texel along x
+        for (int L = 1; L <= F; ++L) span *= fx[size_t(L)];
+        tile[size_t(F)] = std::clamp(kTileTexels / span, 1, level_w(F));
+        for (int L = F; L >= 1; --L) tile[size_t(L) - 1] = tile[size_t(L)] * fx[size_t(L)];
+        const int wF = level_w(F), hF = level_h(F);
+        // Levels 0 and 1 straight from the decoded registers (base_and_pairs_avx2) where it applies.
+        bool pairs_in_registers = false;
+#if defined(SPECBAKE_AVX2)
+        pairs_in_registers = has_avx2() && fx[1] == 2 && fy[1] == 2 && layout.slope < 0 && dec.resampled.empty();
+#endif
+        const bool keep = F + 1 < levels && tiles_previous(F + 1);
+        current = uninitialized<double>(keep ? size_t(wF) * hF * C : 0);
+        std::vector<std::vector<double>> change(size_t(F) + 1);
+        for (int L = 1; L <= F; ++L) change[size_t(L)].assign(size_t(level_h(L)), 0.0);
+
+        tbb::parallel_for(tbb::blocked_range<int>(0, hF), [&](const tbb::blocked_range<int>& rows) {
+            // Per level: the finer rows under one row of it; its output rows are held until the rows under
+            // one row of the next level are done, and go to the sink as one block.
+            std::vector<std::unique_ptr<double[]>> fine(size_t(F) + 1);
+            std::vector<RowBlock> out;
+            for (int L = 0; L <= F; ++L) {
+                if (L >= 1) fine[size_t(L)] = uninitialized<double>(size_t(C) * tile[size_t(L) - 1] * fy[size_t(L)]);
+                out.emplace_back(shape, tile[size_t(L)], L < F ? fy[size_t(L) + 1] : 1);
+            }
+            const auto top = uninitialized<double>(size_t(C) * tile[size_t(F)]);  // means of level F
+            const auto r0 = uninitialized<float>(size_t(tile[0]));
+            long long task_degenerate = 0;
+            // Levels 0 and 1 of texels [x, x + n) of row j of level 1 (2 x 2 footprints) from registers, the
+            // last means (n not a multiple of four) through the planes in `f`.
+            auto levels_0_1 = [&](int j, int x, int n, double* m, double* f) {
+                RowBlock& base = out[0];
+                int done = 0;
+#if defined(SPECBAKE_AVX2)
+                const BaseRow rows[2] = {base.base_row(0, 0), base.base_row(1, 0)};
+                done = base_and_pairs(dec, 2 * j, 2 * x, n, rows, base.kern_ch, m, n, task_degenerate);
+#endif
+                if (done == n) return;
+                const int rest = n - done, nr = 2 * rest;
+                for (int dy = 0; dy < 2; ++dy) {
+                    double* v = f + size_t(dy) * C * nr;
+                    task_degenerate += dec.decode_span(2 * j + dy, 2 * (x + done), nr, v, r0.get());
+                    base_into(base, dy, v, r0.get(), nr, 2 * done);
+                }
+                std::array<double, 4 * 16> tail;  // C (<= 14) planes of rest (< 4) means
+                block_means(f, nr, 2, 2, C, rest, tail.data());
+                for (int c = 0; c < C; ++c) std::copy_n(tail.data() + size_t(c) * rest, rest, plane(m, c, n) + done);
+            };
+            // Means of texels [x, x + n) of row j of level L into m (C planes of n) and its outputs into row k
+            // of out[L], after the outputs of every finer level under them went to the sink.
+            std::function<void(int, int, int, int, double*, int)> block = [&](int L, int j, int x, int n, double* m,
+                                                                              int k) {
+                RowBlock& o = out[size_t(L)];
+                if (L == 0) {
+                    task_degenerate += dec.decode_span(j, x, n, m, r0.get());
+                    base_into(o, k, m, r0.get(), n);
+                    return;
+                }
+                const int fxL = fx[size_t(L)], fyL = fy[size_t(L)], nf = n * fxL;
+                double* f = fine[size_t(L)].get();
+                out[size_t(L) - 1].width = nf;
+                if (L == 1 && pairs_in_registers) {
+                    levels_0_1(j, x, n, m, f);
+                } else {
+                    for (int dy = 0; dy < fyL; ++dy)
+                        block(L - 1, j * fyL + dy, x * fxL, nf, f + size_t(dy) * C * nf, dy);
+                    block_means(f, nf, fxL, fyL, C, n, m);
+                }
+                out[size_t(L) - 1].emit(sink, L - 1, x * fxL, j * fyL, fyL);
+                double& c = change[size_t(L)][size_t(j)];
+                c = std::max(c, finalize_into(o, k, m, n));
+            };
+            for (int j = rows.begin(); j < rows.end(); ++j) {
+                for (int x = 0; x < wF; x += tile[size_t(F)]) {
+                    const int n = std::min(tile[size_t(F)], wF - x);
+                    double* m = top.get();
+                    out[size_t(F)].width = n;
+                    block(F, j, x, n, m, 0);
+                    out[size_t(F)].emit(sink, F, x, j, 1);
+                    if (keep)
+                        for (int c = 0; c < C; ++c)
+                            std::copy_n(m + size_t(c) * n, n, current.get() + (size_t(j) * C + c) * wF + x);
+                }
+            }
+            degenerate += task_degenerate;
+        });
+        for (int L = 1; L <= F; ++L) level_change[size_t(L)] = reduce_changes(change[size_t(L)]);
+        previous.swap(current);
+        return F + 1;
+    };
+
+    auto run = [&] {
+        const int first_level = fused ? run_fused() : 0;
+        for (int L = first_level; L < levels; ++L) {
+            const int w = level_w(L), h = level_h(L);
+            const bool from_previous = tiles_previous(L);
+            const bool keep = L >= 1 && L + 1 < levels && tiles_previous(L + 1);
+            current = uninitialized<double>(keep ? size_t(w) * h * C : 0);
+            std::vector<double> row_change(size_t(h), 0.0);
+            const std::vector<Span1D> spans_x = from_previous || L == 0 ? std::vector<Span1D>{} : footprint_spans(W, w);
+            const std::vector<Span1D> spans_y = from_previous || L == 0 ? std::vector<Span1D>{} : footprint_spans(H, h);
+            const double area = (double(W) / w) * (double(H) / h);
+            const int pw = L >= 1 ? level_w(L - 1) : 0;
+            const int fx = from_previous ? pw / w : 0;
+            const int fy = from_previous ? level_h(L - 1) / h : 0;
+
+            tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
+                std::vector<double> base(from_previous ? 0 : row_doubles);
+                std::vector<float> r0(from_previous ? 0 : size_t(W));
+                std::vector<double> means(size_t(C) * w);
+                RowBlock out(shape, w, 1);
+                long long task_degenerate = 0;
+                for (int j = rows.begin(); j < rows.end(); ++j) {
+                    if (L == 0) {
+                        task_degenerate += dec.decode_span(j, 0, W, base.data(), r0.data());
+                        base_into(out, 0, base.data(), r0.data(), W);
+                        out.emit(sink, 0, 0, j, 1);
+                        continue;
+                    }
+                    if (from_previous) {
+                        block_means(previous.get() + size_t(j) * fy * C * pw, pw, fx, fy, C, w, means.data());
+                    } else {
+                        std::fill(means.begin(), means.end(), 0.0);
+                        const Span1D& sy = spans_y[size_t(j)];
+                        for (size_t k = 0; k < sy.weight.size(); ++k) {
+                            const double wy = sy.weight[k];
+                            if (wy <= 0.0) continue;
+                            dec.decode_span(sy.first + int(k), 0, W, base.data(), r0.data());
+                            for (int c = 0; c < C; ++c) {
+                                double* m = plane(means.data(), c, w);
+                                const double* v = plane(base.data(), c, W);
+                                for (int i = 0; i < w; ++i) {
+                                    const Span1D& sx = spans_x[size_t(i)];
+                                    for (size_t q = 0; q < sx.weight.size(); ++q)
+                                        m[i] += wy * sx.weight[q] * v[sx.first + int(q)];
+                                }
+                            }
+                        }
+                        const double inv = 1.0 / area;
+                        for (double& m : means) m *= inv;
+                    }
+                    row_change[size_t(j)] = finalize_into(out, 0, means.data(), w);
+                    out.emit(sink, L, 0, j, 1);
+                    if (keep) std::copy(means.begin(), means.end(), current.get() + size_t(j) * w * C);
+                }
+                degenerate += task_degenerate;
+            });
+            level_change[size_t(L)] = reduce_changes(row_change);
+            previous.swap(current);
+        }
+        result.max_roughness_change = reduce_changes(level_change);
+    };
+    run_with_threads(settings.threads, run);
+
+    if (dec.normal_non_finite) return non_finite_error("normal map", normal);
+    if (dec.roughness_non_finite) return non_finite_error("roughness map", *roughness);
+    notes.degenerate_normals = degenerate;
+    if (notes.degenerate_normals > 0)
+        notes.warnings.push_back("normal map: " + std::to_string(notes.degenerate_normals) +
+                                 " texels decode to a zero-length vector; treated as +Z");
+    if (notes.roughness_resampled)
+        notes.warnings.push_back("roughness map is " + std::to_string(roughness->width) + "x" +
+                                 std::to_string(roughness->height) + ", the normal map " + std::to_string(W) + "x" +
+                                 std::to_string(H) +
+                                 "; outputs have the normal map's size, each texel reading the roughness it covers");
+    return result;
+}
+
+}  // namespace specbake::texture_bake_detail
