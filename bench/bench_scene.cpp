@@ -12,6 +12,7 @@
 #include "mesh/curvature.h"
 #include "mesh/generate_tangents.h"
 #include "mesh/prepare_mesh.h"
+#include "tests/io/procedural_gltf.h"
 
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
@@ -20,7 +21,6 @@
 #include <tbb/global_control.h>
 #include <tiny_gltf.h>
 
-#include <cmath>
 #include <filesystem>
 
 namespace fs = std::filesystem;
@@ -39,78 +39,15 @@ const fs::path& bench_dir() {
     return dir;
 }
 
-bool no_decode(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
-    return true;
-}
+using testing::append_accessor;
 
-// Appends `bytes` from `src` to buffer 0 of `m` as a new buffer view with an accessor over it;
-// returns the accessor's index.
-int append_accessor(tinygltf::Model& m, const void* src, size_t bytes, int type, int component_type, size_t count) {
-    std::vector<unsigned char>& data = m.buffers[0].data;
-    tinygltf::BufferView bv;
-    bv.buffer = 0;
-    bv.byteOffset = data.size();
-    bv.byteLength = bytes;
-    const auto* b = static_cast<const uint8_t*>(src);
-    data.insert(data.end(), b, b + bytes);
-    m.bufferViews.push_back(bv);
-    tinygltf::Accessor a;
-    a.bufferView = int(m.bufferViews.size() - 1);
-    a.componentType = component_type;
-    a.type = type;
-    a.count = count;
-    m.accessors.push_back(a);
-    return int(m.accessors.size() - 1);
-}
-
-// Writes the sphere once (tinygltf), glossy material, no tangents (the bake generates them).
+// Writes the sphere once (tinygltf), glossy metallic material, no tangents (the bake generates them).
 const fs::path& sphere_glb() {
     static const fs::path path = [] {
         const fs::path p = bench_dir() / "in" / "sphere1m.glb";
         if (fs::exists(p)) return p;
-        std::vector<uint32_t> idx;
-        std::vector<float> pos, nrm, uv;
-        for (int r = 0; r <= kRings; ++r)
-            for (int s = 0; s <= kSegments; ++s) {
-                const double th = M_PI * r / kRings, ph = 2 * M_PI * s / kSegments;
-                const float n[3] = {float(std::sin(th) * std::cos(ph)), float(std::cos(th)),
-                                    float(std::sin(th) * std::sin(ph))};
-                pos.insert(pos.end(), {n[0], n[1], n[2]});
-                nrm.insert(nrm.end(), {n[0], n[1], n[2]});
-                uv.insert(uv.end(), {float(s) / kSegments, float(r) / kRings});
-            }
-        for (int r = 0; r < kRings; ++r)
-            for (int s = 0; s < kSegments; ++s) {
-                const uint32_t a = uint32_t(r * (kSegments + 1) + s), b = a + 1, c = a + kSegments + 1, d = c + 1;
-                idx.insert(idx.end(), {a, c, b, b, c, d});
-            }
-        tinygltf::Model m;
-        m.asset.version = "2.0";
-        m.buffers.emplace_back();
-        const size_t nv = pos.size() / 3;
-        tinygltf::Primitive prim;
-        prim.mode = TINYGLTF_MODE_TRIANGLES;
-        prim.attributes["POSITION"] = append_accessor(m, pos.data(), pos.size() * 4, TINYGLTF_TYPE_VEC3, TINYGLTF_COMPONENT_TYPE_FLOAT, nv);
-        m.accessors.back().minValues = {-1, -1, -1};
-        m.accessors.back().maxValues = {1, 1, 1};
-        prim.attributes["NORMAL"] = append_accessor(m, nrm.data(), nrm.size() * 4, TINYGLTF_TYPE_VEC3, TINYGLTF_COMPONENT_TYPE_FLOAT, nv);
-        prim.attributes["TEXCOORD_0"] = append_accessor(m, uv.data(), uv.size() * 4, TINYGLTF_TYPE_VEC2, TINYGLTF_COMPONENT_TYPE_FLOAT, nv);
-        prim.indices = append_accessor(m, idx.data(), idx.size() * 4, TINYGLTF_TYPE_SCALAR, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, idx.size());
-        prim.material = 0;
-        tinygltf::Material mat;
-        mat.pbrMetallicRoughness.roughnessFactor = 0.3;
-        m.materials.push_back(mat);
-        tinygltf::Mesh mesh;
-        mesh.primitives.push_back(prim);
-        m.meshes.push_back(mesh);
-        tinygltf::Node node;
-        node.mesh = 0;
-        m.nodes.push_back(node);
-        tinygltf::Scene scene;
-        scene.nodes = {0};
-        m.scenes.push_back(scene);
-        tinygltf::TinyGLTF writer;
-        writer.WriteGltfSceneToFile(&m, p.string(), true, true, false, true);
+        testing::write_procedural_model(p, {.sphere = true, .size = 1.0, .rings = kRings, .segments = kSegments,
+                                            .roughness = 0.3, .metallic = 1.0, .minimal = true});
         return p;
     }();
     return path;

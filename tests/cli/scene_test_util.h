@@ -1,6 +1,8 @@
 // Shared pieces of the scene tests: temporary folders, running the specbake executable, reading glTF
-// accessors with tinygltf directly (independent of io/gltf_scene), and a procedural sphere/plane writer.
+// accessors with tinygltf directly (independent of io/gltf_scene), and the procedural sphere/plane models.
 #pragma once
+
+#include "tests/io/procedural_gltf.h"
 
 #include <tiny_gltf.h>
 
@@ -98,83 +100,11 @@ inline std::vector<float> float_accessor(const tinygltf::Model& m, int index) {
 }
 
 // Writes a UV sphere (radius R, outward normals, UVs, no tangents) or a flat grid as a .gltf + .bin with
-// one material of the given roughness. Written with tinygltf, independently of specbake's writer.
+// one material of the given roughness (tests/io/procedural_gltf.h).
 inline void write_test_model(const fs::path& path, bool sphere, double radius, double roughness, int rings = 48,
                              int segments = 96) {
-    std::vector<float> pos, nrm, uv;
-    std::vector<uint32_t> idx;
-    for (int r = 0; r <= rings; ++r) {
-        for (int s = 0; s <= segments; ++s) {
-            const double u = double(s) / segments, v = double(r) / rings;
-            if (sphere) {
-                const double theta = v * M_PI, phi = u * 2 * M_PI;
-                const double n[3] = {std::sin(theta) * std::cos(phi), std::cos(theta), std::sin(theta) * std::sin(phi)};
-                for (int k = 0; k < 3; ++k) pos.push_back(float(radius * n[k])), nrm.push_back(float(n[k]));
-            } else {
-                pos.insert(pos.end(), {float(u * radius), 0.0f, float(v * radius)});
-                nrm.insert(nrm.end(), {0.0f, 1.0f, 0.0f});
-            }
-            uv.insert(uv.end(), {float(u), float(v)});
-        }
-    }
-    for (int r = 0; r < rings; ++r)
-        for (int s = 0; s < segments; ++s) {
-            const uint32_t a = uint32_t(r * (segments + 1) + s), b = a + 1, c = a + uint32_t(segments + 1), d = c + 1;
-            idx.insert(idx.end(), {a, c, b, b, c, d});
-        }
-    tinygltf::Model m;
-    m.asset.version = "2.0";
-    tinygltf::Buffer buf;
-    auto add = [&](const void* p, size_t n, int type, int ctype, size_t count, int target) {
-        tinygltf::BufferView bv;
-        bv.buffer = 0;
-        bv.byteOffset = buf.data.size();
-        bv.byteLength = n;
-        bv.target = target;
-        buf.data.insert(buf.data.end(), static_cast<const uint8_t*>(p), static_cast<const uint8_t*>(p) + n);
-        m.bufferViews.push_back(bv);
-        tinygltf::Accessor a;
-        a.bufferView = int(m.bufferViews.size() - 1);
-        a.componentType = ctype;
-        a.count = count;
-        a.type = type;
-        m.accessors.push_back(a);
-        return int(m.accessors.size() - 1);
-    };
-    const size_t nv = pos.size() / 3;
-    tinygltf::Primitive prim;
-    prim.mode = TINYGLTF_MODE_TRIANGLES;
-    prim.attributes["POSITION"] = add(pos.data(), pos.size() * 4, TINYGLTF_TYPE_VEC3, TINYGLTF_COMPONENT_TYPE_FLOAT, nv,
-                                      TINYGLTF_TARGET_ARRAY_BUFFER);
-    m.accessors.back().minValues = {-radius, -radius, -radius};
-    m.accessors.back().maxValues = {radius, radius, radius};
-    prim.attributes["NORMAL"] = add(nrm.data(), nrm.size() * 4, TINYGLTF_TYPE_VEC3, TINYGLTF_COMPONENT_TYPE_FLOAT, nv,
-                                    TINYGLTF_TARGET_ARRAY_BUFFER);
-    prim.attributes["TEXCOORD_0"] = add(uv.data(), uv.size() * 4, TINYGLTF_TYPE_VEC2, TINYGLTF_COMPONENT_TYPE_FLOAT,
-                                        nv, TINYGLTF_TARGET_ARRAY_BUFFER);
-    prim.indices = add(idx.data(), idx.size() * 4, TINYGLTF_TYPE_SCALAR, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT,
-                       idx.size(), TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
-    prim.material = 0;
-    buf.uri = path.stem().string() + ".bin";
-    m.buffers.push_back(buf);
-    tinygltf::Material mat;
-    mat.name = "test";
-    mat.pbrMetallicRoughness.roughnessFactor = roughness;
-    mat.pbrMetallicRoughness.metallicFactor = 0.0;
-    m.materials.push_back(mat);
-    tinygltf::Mesh mesh;
-    mesh.name = sphere ? "sphere" : "plane";
-    mesh.primitives.push_back(prim);
-    m.meshes.push_back(mesh);
-    tinygltf::Node node;
-    node.mesh = 0;
-    m.nodes.push_back(node);
-    tinygltf::Scene scene;
-    scene.nodes = {0};
-    m.scenes.push_back(scene);
-    m.defaultScene = 0;
-    tinygltf::TinyGLTF writer;
-    writer.WriteGltfSceneToFile(&m, path.string(), false, false, true, false);
+    specbake::testing::write_procedural_model(
+        path, {.sphere = sphere, .size = radius, .rings = rings, .segments = segments, .roughness = roughness});
 }
 
 }  // namespace scene_test
