@@ -135,13 +135,14 @@ Result<OutputLock> OutputLock::acquire(const fs::path& dir, Purpose purpose,
     lock.dir_ = dir;
     if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
         return make_error(dir.string() + ": exists and is not a folder");
-    if (purpose == Purpose::write && !fs::exists(dir, ec)) {
-        lock.created_dir_ = fs::create_directories(dir, ec);
-        if (ec) return make_error(dir.string() + ": cannot create folder: " + ec.message());
-    }
     const fs::path file = dir / kLockFileName;
     bool told = false;
     for (;;) {
+        // (Again on every pass: a holder that made the folder removes it when it stays empty.)
+        if (purpose == Purpose::write && !fs::exists(dir, ec)) {
+            lock.created_dir_ = fs::create_directories(dir, ec);
+            if (ec) return make_error(dir.string() + ": cannot create folder: " + ec.message());
+        }
         int fd = ::open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
         if (fd < 0 && purpose == Purpose::check) return lock;  // a folder nobody can write into
         if (fd < 0) return make_error(dir.string() + ": cannot create the lock file " + kLockFileName + ": " + os_error(errno));
@@ -270,7 +271,7 @@ std::string OutputTransaction::final_names(const std::string& message) const {
     return out;
 }
 
-Result<void> OutputTransaction::commit(const std::vector<std::string>& previous_files) {
+Result<void> OutputTransaction::record(const std::vector<std::string>& previous_files) {
     if (done_) return make_error(dir_.string() + ": nothing staged to commit");
     const std::vector<std::string> staged = staged_files(stage_);
     const std::set<std::string> written(staged.begin(), staged.end());
@@ -289,16 +290,19 @@ Result<void> OutputTransaction::commit(const std::vector<std::string>& previous_
             if (fs::exists(fs::symlink_status(p, ec)) && !fs::is_directory(p, ec))
                 return make_error(p.string() + ": is a file; cannot put " + to.string() + " into it");
     }
-    std::unique_lock hold = hold_commit();
     if (auto ok = write_record(stage_, remove); !ok) return make_error(final_names(ok.error().message));
-    if (auto ok = finish_commit(dir_, stage_); !ok) {
-        done_ = true;  // recorded: the next run (or inspect) rolls it forward; the stage must stay
-        unregister_cleanup(stage_);
-        return make_error(final_names(ok.error().message) + " (the next specbake run into " + dir_.string() +
-                          " finishes the commit)");
-    }
+    // Recorded: from here on the stage is the commit, finished by this run or the next one, never removed.
     done_ = true;
     unregister_cleanup(stage_);
+    return {};
+}
+
+Result<void> OutputTransaction::commit(const std::vector<std::string>& previous_files) {
+    std::unique_lock hold = hold_commit();
+    if (auto ok = record(previous_files); !ok) return ok;
+    if (auto ok = finish_commit(dir_, stage_); !ok)
+        return make_error(final_names(ok.error().message) + " (the next specbake run into " + dir_.string() +
+                          " finishes the commit)");
     return {};
 }
 

@@ -81,6 +81,9 @@ public:
     // of the bake the folder held; those the stage does not hold again are removed. Paths that leave the
     // folder are ignored. Fails without changing the folder when a staged file cannot go into place.
     Result<void> commit(const std::vector<std::string>& previous_files);
+    // The commit point alone (after the checks commit() makes): commit() is record() then finish_commit().
+    // Once recorded, the stage is kept for roll-forward whatever happens to this object.
+    Result<void> record(const std::vector<std::string>& previous_files);
 
 private:
     std::filesystem::path dir_, stage_;
