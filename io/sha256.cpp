@@ -222,7 +222,7 @@ Result<std::string> sha256_file(const std::filesystem::path& path) {
     auto file = MappedFile::open(path);
     if (!file) return make_error(file.error().message + " (while hashing)");
     const std::span<const uint8_t> bytes = file->bytes();
-    constexpr size_t kWindow = size_t(16) << 20;
+    constexpr size_t kWindow = size_t(4) << 20;
     Sha256 s;
     for (size_t at = 0; at < bytes.size(); at += kWindow) {
         const size_t n = std::min(kWindow, bytes.size() - at);

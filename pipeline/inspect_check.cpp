@@ -23,7 +23,7 @@ struct FileCheck {
     uint64_t bytes = 0;
 };
 
-// One output: hashed from a mapping in 16 MiB windows (each released once hashed); KTX2/DDS headers parsed
+// One output: hashed from a mapping in 4 MiB windows (each released once hashed); KTX2/DDS headers parsed
 // from the same mapping, EXR/PNG headers through OpenImageIO.
 FileCheck check_output(const fs::path& file, const io::ManifestOutput& o) {
     FileCheck r;
@@ -42,7 +42,7 @@ FileCheck check_output(const fs::path& file, const io::ManifestOutput& o) {
         }
         shape = *s;
     }
-    constexpr size_t kWindow = size_t(16) << 20;
+    constexpr size_t kWindow = size_t(4) << 20;
     io::Sha256 sha;
     for (size_t at = 0; at < bytes.size(); at += kWindow) {
         const size_t n = std::min(kWindow, bytes.size() - at);

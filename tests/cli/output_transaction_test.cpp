@@ -429,4 +429,58 @@ TEST_F(OutputTransactionCli, UnwritableDepfileIsReportedBeforeBaking) {
     EXPECT_FALSE(fs::exists(out));
 }
 
+// `inspect --check` of a manifest checks every container from its headers and hashes (from mappings
+// streamed in windows): each kind of damage is named, and memory stays far below the outputs' size.
+TEST_F(OutputTransactionCli, InspectCheckFindsDamageWithoutCopyingFiles) {
+    write_normal_map(in("n.png"), 2048, 4);
+    auto peak_kb = [&](const fs::path& folder) {
+        const Child c = spawn({"inspect", "--check", folder.string()}, logs(), "check");
+        int status = 0;
+        rusage usage{};
+        EXPECT_EQ(::wait4(c.pid, &status, 0, &usage), c.pid);
+        EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << folder << ": " << slurp(c.err);
+        return size_t(usage.ru_maxrss);
+    };
+    for (const char* format : {"ktx2", "dds", "exr", "png"}) {
+        const fs::path out = dir_ / format, small = dir_ / (std::string(format) + "_demo");
+        ASSERT_EQ(run({"-q", "texture", "--normal", in("n.png").string(), "--format", format, "-o", out.string()},
+                      logs())
+                      .exit_code,
+                  0);
+        ASSERT_EQ(run({"-q", "texture", "--demo", "--format", format, "-o", small.string()}, logs()).exit_code, 0);
+        size_t largest = 0;
+        for (const auto& [rel, content] : tree(out)) largest = std::max(largest, content.size());
+        // Reading a whole file into memory would add at least the largest one (45 MB for the KTX2 LEAN
+        // texture) to the peak of checking the small demo bake.
+        const size_t big_kb = peak_kb(out), small_kb = peak_kb(small);
+        EXPECT_LT((big_kb - std::min(big_kb, small_kb)) * 1024, largest / 2)
+            << format << ": peak " << big_kb << " KB against " << small_kb << " KB for the demo bake";
+    }
+    nlohmann::json m = nlohmann::json::parse(slurp(dir_ / "exr" / "manifest.json"));
+    m["outputs"][0]["width"] = m["outputs"][0]["width"].get<int>() + 1;
+    std::ofstream(dir_ / "exr" / "manifest.json") << m.dump(2);
+    const Finished shape = run({"inspect", "--check", (dir_ / "exr").string()}, logs());
+    EXPECT_EQ(shape.exit_code, 1);
+    EXPECT_NE(shape.err.find("size, channels or mips differ"), std::string::npos) << shape.err;
+
+    // A truncated KTX2 whose manifest hash was updated to match (by sha256sum): the structure check sees it.
+    const fs::path lean = dir_ / "ktx2" / "texture_lean.ktx2";
+    const std::string bytes = slurp(lean);
+    std::ofstream(lean, std::ios::binary | std::ios::trunc) << bytes.substr(0, bytes.size() - 4096);
+    FILE* p = ::popen(("sha256sum " + scene_test::quote(lean.string())).c_str(), "r");
+    ASSERT_TRUE(p);
+    char digest[65] = {};
+    ASSERT_EQ(std::fread(digest, 1, 64, p), 64u);
+    ::pclose(p);
+    m = nlohmann::json::parse(slurp(dir_ / "ktx2" / "manifest.json"));
+    for (auto& o : m["outputs"])
+        if (o["path"] == "texture_lean.ktx2") o["sha256"] = std::string(digest);
+    std::ofstream(dir_ / "ktx2" / "manifest.json") << m.dump(2);
+    fs::remove(dir_ / "ktx2" / "texture_kernel.ktx2");
+    const Finished damaged = run({"inspect", "--check", (dir_ / "ktx2").string()}, logs());
+    EXPECT_EQ(damaged.exit_code, 1);
+    EXPECT_NE(damaged.err.find("texture_lean.ktx2: KTX2: level 0"), std::string::npos) << damaged.err;
+    EXPECT_NE(damaged.err.find("texture_kernel.ktx2: no such file"), std::string::npos) << damaged.err;
+}
+
 }  // namespace
