@@ -7,7 +7,7 @@
 // bake's files that the new one does not write again). Then every staged file is renamed into place,
 // the listed files are removed, manifest.json is renamed last and the stage is removed. A run killed
 // before the commit point leaves the previous bake untouched (plus its stage, removed by the next run);
-// one killed after it is rolled forward, by the next run or `inspect`, when they take the lock.
+// one killed after it is rolled forward, by the next run or `inspect --check`, when they take the lock.
 #pragma once
 
 #include "core/result.h"
