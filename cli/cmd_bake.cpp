@@ -3,6 +3,7 @@
 #include "cli/command.h"
 #include "cli/pipeline_options.h"
 #include "cli/scene_options.h"
+#include "pipeline/bake_output.h"
 #include "pipeline/version.h"
 
 #include <cstdio>
@@ -22,7 +23,14 @@ int run_scene_command(const SceneCliOptions& o, const PipelineFlags& pipe, bool 
         job.plan.check_material = false;
     }
     std::vector<std::string> scenes(job.scenes.begin(), job.scenes.end());
+    auto lock = lock_output_folder(job.output_dir, pipe.depfile);
+    if (!lock) {
+        print_error(lock.error().message);
+        return kExitFailed;
+    }
     if (skip_if_up_to_date({job.output_dir, scenes, scene_settings_json(job), tool_version(), {}}, pipe)) return kExitOk;
+    job.lock = &*lock;
+    job.replace = pipe.force;
     const bool quiet = run_settings().verbosity == Verbosity::quiet;
     if (!quiet) job.progress = [](const std::string& s) { std::fprintf(stderr, "specbake: %s\n", s.c_str()); };
     auto outcome = run_scene_job(job);

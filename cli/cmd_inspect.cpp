@@ -36,16 +36,12 @@ int run_check(const InspectOptions& o) {
         const fs::path p = resolve(f);
         std::vector<std::string> problems;
         if (is_manifest(p)) {
-            auto m = inspect_manifest(p, true);
-            if (!m) {
-                problems.push_back(m.error().message);
-            } else {
-                problems = m->problems;
-                for (const TextureReport& t : m->textures) {
-                    auto r = io::check_texture_file(t.path);
-                    if (!r) problems.push_back(r.error().message);
-                }
-            }
+            FolderCheck c = check_manifest_folder(p, [&](const std::string& line) {
+                if (!o.json) std::fprintf(stderr, "specbake: %s\n", line.c_str());
+            });
+            for (const std::string& note : c.notes)
+                if (!o.json) std::fprintf(stderr, "specbake: note: %s\n", note.c_str());
+            problems = std::move(c.problems);
         } else {
             auto r = io::check_texture_file(p);
             if (!r) problems.push_back(r.error().message);

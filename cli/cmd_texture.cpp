@@ -2,6 +2,7 @@
 // mean-normal mip chains (SPEC Sec. 3, 7). Only argument parsing and printing live here; the pipeline
 // is pipeline/texture_job.h.
 #include "cli/command.h"
+#include "pipeline/bake_output.h"
 #include "pipeline/texture_job.h"
 #include "cli/pipeline_options.h"
 #include "pipeline/version.h"
@@ -124,7 +125,14 @@ int run_texture(const TextureOptions& o, const PipelineFlags& pipe) {
     }
     if (job.demo || job.roughness) recorded["roughness_channel"] = job.roughness_channel;
     else recorded["roughness_value"] = job.roughness_value;
+    auto lock = lock_output_folder(job.output_dir, pipe.depfile);
+    if (!lock) {
+        print_error(lock.error().message);
+        return kExitFailed;
+    }
     if (skip_if_up_to_date({job.output_dir, inputs, recorded, tool_version(), {"input_facts"}}, pipe)) return kExitOk;
+    job.lock = &*lock;
+    job.replace = pipe.force;
     const bool quiet = run_settings().verbosity == Verbosity::quiet;
     if (!quiet && ::isatty(2)) job.progress = [](const std::string& line) { std::fprintf(stderr, "specbake: %s\n", line.c_str()); };
 

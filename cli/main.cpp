@@ -1,6 +1,7 @@
 // specbake: command-line entry point. Expands response files, reads --config, parses the global flags
 // and dispatches to one registered subcommand.
 #include "cli/command.h"
+#include "io/cleanup_registry.h"
 #include "pipeline/config.h"
 #include "pipeline/batch.h"
 #include "pipeline/version.h"
@@ -78,6 +79,8 @@ void print_warning(const std::string& message) { std::fprintf(stderr, "specbake:
 int main(int argc, char** argv) {
     using namespace specbake;
     using namespace specbake::cli;
+    // Before any thread starts: SIGINT, SIGTERM and SIGHUP remove this run's temporaries and staging folders.
+    io::install_interrupt_cleanup();
     RunSettings& settings = run_settings();
     auto expanded = expand_response_files(std::vector<std::string>(argv + 1, argv + argc), &settings.option_files);
     if (!expanded) {

@@ -15,7 +15,8 @@ inline void add_pipeline_options(CLI::App& sub, PipelineFlags& flags) {
                    "(scenes, the textures they reference, response and config files)");
     sub.add_flag("--force", flags.force,
                  "Bake even when manifest.json shows the outputs are up to date (same inputs by SHA-256, "
-                 "same settings and tool version, outputs unchanged)");
+                 "same settings and tool version, outputs unchanged), and replace a bake of other inputs "
+                 "that the output folder holds (refused otherwise)");
 }
 
 }  // namespace specbake::cli

@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <cstdio>
+#include <algorithm>
 #include <fstream>
 #include <system_error>
 #include <fcntl.h>
@@ -10,6 +11,10 @@
 #include <unistd.h>
 
 #include "core/huge_pages.h"
+#include "io/cleanup_registry.h"
+
+#include <cerrno>
+#include <cstring>
 
 namespace specbake::io {
 namespace fs = std::filesystem;
@@ -26,13 +31,17 @@ fs::path make_temp_path(const fs::path& final_path) {
 
 }  // namespace
 
-AtomicOutput::AtomicOutput(fs::path final_path) : final_(std::move(final_path)), temp_(make_temp_path(final_)) {}
+// The temporary is registered for removal on interruption (io/cleanup_registry.h) while it may exist.
+AtomicOutput::AtomicOutput(fs::path final_path) : final_(std::move(final_path)), temp_(make_temp_path(final_)) {
+    register_cleanup(temp_);
+}
 
 AtomicOutput::~AtomicOutput() {
     if (!committed_) {
         std::error_code ec;
         fs::remove(temp_, ec);
     }
+    unregister_cleanup(temp_);
 }
 
 Result<void> AtomicOutput::commit() {
@@ -44,19 +53,43 @@ Result<void> AtomicOutput::commit() {
     return {};
 }
 
+Result<void> write_bytes_to(const fs::path& file, const fs::path& name, std::span<const uint8_t> bytes) {
+    const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd < 0) return make_error(name.string() + ": cannot open for writing: " + std::strerror(errno));
+    size_t done = 0;
+    while (done < bytes.size()) {
+        const ssize_t n = ::write(fd, bytes.data() + done, std::min<size_t>(bytes.size() - done, size_t(1) << 30));
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) {
+            const int err = n < 0 ? errno : ENOSPC;
+            ::close(fd);
+            return make_error(name.string() + ": cannot write: " + std::strerror(err));
+        }
+        done += size_t(n);
+    }
+    if (::close(fd) != 0) return make_error(name.string() + ": cannot write: " + std::strerror(errno));
+    return {};
+}
+
 Result<void> write_file_atomic(const fs::path& path, std::span<const uint8_t> bytes) {
     std::error_code ec;
     if (path.has_parent_path()) fs::create_directories(path.parent_path(), ec);
     if (ec) return make_error(path.parent_path().string() + ": cannot create folder: " + ec.message());
     AtomicOutput out(path);
-    {
-        std::ofstream f(out.temp_path(), std::ios::binary | std::ios::trunc);
-        if (!f) return make_error(path.string() + ": cannot open for writing");
-        f.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
-        f.flush();
-        if (!f) return make_error(path.string() + ": write failed (disk full?)");
-    }
+    if (auto ok = write_bytes_to(out.temp_path(), path, bytes); !ok) return ok;
     return out.commit();
+}
+
+Result<void> check_writable(const fs::path& path) {
+    std::error_code ec;
+    if (path.has_parent_path()) fs::create_directories(path.parent_path(), ec);
+    if (ec) return make_error(path.string() + ": cannot create its folder: " + ec.message());
+    if (fs::is_directory(path, ec)) return make_error(path.string() + ": is a folder, not a file");
+    AtomicOutput probe(path);
+    const int fd = ::open(probe.temp_path().c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    if (fd < 0) return make_error(path.string() + ": cannot be written: " + std::strerror(errno));
+    ::close(fd);
+    return {};
 }
 
 Result<void> write_file_atomic(const fs::path& path, const std::string& text) {
@@ -87,7 +120,7 @@ Result<MappedFile> MappedFile::open(const fs::path& path) {
     if (!fs::exists(path, ec)) return make_error(path.string() + ": no such file");
     if (fs::is_directory(path, ec)) return make_error(path.string() + ": is a folder, not a file");
     const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0) return make_error(path.string() + ": cannot open for reading");
+    if (fd < 0) return make_error(path.string() + ": cannot open for reading: " + std::strerror(errno));
     struct stat st {};
     if (::fstat(fd, &st) != 0 || st.st_size < 0) {
         ::close(fd);
@@ -126,6 +159,14 @@ MappedFile& MappedFile::operator=(MappedFile&& other) noexcept {
         other.size_ = 0;
     }
     return *this;
+}
+
+void MappedFile::release_pages(size_t offset, size_t size) const {
+    if (!data_ || offset >= size_) return;
+    const size_t page = size_t(::sysconf(_SC_PAGESIZE));
+    const size_t begin = (offset + page - 1) / page * page;  // whole pages inside the range only
+    const size_t end = std::min(size_, offset + size) / page * page;
+    if (end > begin) ::madvise(const_cast<uint8_t*>(data_) + begin, end - begin, MADV_DONTNEED);
 }
 
 MappedFile::~MappedFile() {

@@ -32,6 +32,15 @@ private:
     bool committed_ = false;
 };
 
+// Writes `bytes` to `file` (created or truncated); errors name `name` (the final path when `file` is a
+// temporary) and give the system's reason.
+Result<void> write_bytes_to(const std::filesystem::path& file, const std::filesystem::path& name,
+                            std::span<const uint8_t> bytes);
+
+// Fails, naming `path` and the system's reason, when a file could not be written there (missing folders
+// are created): lets a command refuse before it works rather than after.
+Result<void> check_writable(const std::filesystem::path& path);
+
 // Writes `bytes` to `path` atomically. Creates missing parent folders.
 Result<void> write_file_atomic(const std::filesystem::path& path, std::span<const uint8_t> bytes);
 Result<void> write_file_atomic(const std::filesystem::path& path, const std::string& text);
@@ -52,6 +61,9 @@ public:
     MappedFile& operator=(const MappedFile&) = delete;
     ~MappedFile();
     std::span<const uint8_t> bytes() const { return data_ ? std::span<const uint8_t>(data_, size_) : std::span<const uint8_t>(read_); }
+    // Drops the pages of bytes [offset, offset + size) from this process (the page cache keeps them; a
+    // later access faults them in again): lets a reader stream through a huge file in bounded memory.
+    void release_pages(size_t offset, size_t size) const;
 
 private:
     const uint8_t* data_ = nullptr;  // the mapping, or null

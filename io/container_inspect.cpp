@@ -338,6 +338,26 @@ Result<void> check_texture_file(const std::filesystem::path& path) {
     return {};
 }
 
+Result<TextureShape> check_container_shape(std::span<const uint8_t> bytes, const std::string& name) {
+    if (has_prefix(bytes, kKtx2Magic, 12)) {
+        auto l = parse_ktx2(bytes, name);
+        if (!l) return l.error();
+        return TextureShape{"ktx2", int(l->width), int(l->height), int(l->levels), l->format->channels};
+    }
+    if (has_prefix(bytes, "DDS ", 4)) {
+        auto l = parse_dds(bytes, name);
+        if (!l) return l.error();
+        return TextureShape{"dds", int(l->width), int(l->height), int(l->levels), l->format->channels};
+    }
+    return make_error(name + ": neither KTX2 nor DDS");
+}
+
+Result<TextureShape> read_image_shape(const std::filesystem::path& path) {
+    auto api = oiio::api();
+    if (!api) return make_error(path.string() + ": " + api.error().message);
+    return (*api)->read_shape(path.string());
+}
+
 Result<void> write_png_rgb8(const std::filesystem::path& path, int width, int height, std::span<const uint8_t> rgb) {
     if (rgb.size() != size_t(width) * height * 3) return make_error(path.string() + ": image size mismatch");
     AtomicOutput out(path);

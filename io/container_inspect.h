@@ -30,6 +30,18 @@ struct InspectedTexture {
 Result<void> check_ktx2_structure(std::span<const uint8_t> bytes, const std::string& name);
 Result<void> check_dds_structure(std::span<const uint8_t> bytes, const std::string& name);
 
+// What a texture file declares: format ("ktx2", "dds", "exr", "png"), size, mip levels, channels.
+struct TextureShape {
+    std::string format;
+    int width = 0, height = 0, mips = 0, channels = 0;
+};
+// The structural check of a KTX2 or DDS file in memory (by its magic; any other content is an error), and
+// the shape it declares. Reads only the headers: the level data is not touched.
+Result<TextureShape> check_container_shape(std::span<const uint8_t> bytes, const std::string& name);
+// The shape of an EXR, PNG or other file OpenImageIO reads, from its headers alone (every MIP level opened,
+// no pixels decoded).
+Result<TextureShape> read_image_shape(const std::filesystem::path& path);
+
 // Decodes an (already checked) container in memory.
 Result<InspectedTexture> decode_ktx2_for_inspection(std::span<const uint8_t> bytes, const std::string& name);
 Result<InspectedTexture> decode_dds_for_inspection(std::span<const uint8_t> bytes, const std::string& name);

@@ -53,6 +53,8 @@ struct Api {
     Result<InspectedTexture> (*read_levels)(const std::string& name);
     Result<void> (*write_rgb8)(const std::string& temp_path, const std::string& name, int width, int height,
                                const uint8_t* rgb);
+    // Format, size, levels and channels from the headers of every MIP level, no pixels (`inspect --check`).
+    Result<TextureShape> (*read_shape)(const std::string& name);
 };
 
 // The module's entry points, loaded once (thread-safe); the error says which files were tried and why

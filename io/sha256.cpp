@@ -1,7 +1,10 @@
 #include "io/sha256.h"
 
+#include "io/atomic_file.h"
+
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <memory>
@@ -214,16 +217,18 @@ std::string sha256_hex_portable(std::span<const uint8_t> bytes) { return hash_wi
 bool sha256_uses_cpu_extensions() { return best_compress() != &compress_portable; }
 
 Result<std::string> sha256_file(const std::filesystem::path& path) {
-    std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
-    if (!f) return make_error(path.string() + ": cannot open for hashing");
+    // Hashed from a read-only mapping (no copy out of the page cache), in windows whose pages are dropped
+    // from the mapping once hashed, so a multi-GB file costs a few MB of memory.
+    auto file = MappedFile::open(path);
+    if (!file) return make_error(file.error().message + " (while hashing)");
+    const std::span<const uint8_t> bytes = file->bytes();
+    constexpr size_t kWindow = size_t(4) << 20;
     Sha256 s;
-    std::vector<uint8_t> chunk(size_t(1) << 20);
-    for (;;) {
-        const size_t got = std::fread(chunk.data(), 1, chunk.size(), f.get());
-        if (got > 0) s.update(std::span<const uint8_t>(chunk.data(), got));
-        if (got < chunk.size()) break;
+    for (size_t at = 0; at < bytes.size(); at += kWindow) {
+        const size_t n = std::min(kWindow, bytes.size() - at);
+        s.update(bytes.subspan(at, n));
+        file->release_pages(at, n);
     }
-    if (std::ferror(f.get())) return make_error(path.string() + ": read failed while hashing");
     return s.hex();
 }
 

@@ -16,7 +16,6 @@
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
-#include <fstream>
 #include <memory>
 
 
@@ -60,15 +59,6 @@ const char* wrap_name(WrapMode w) {
         case WrapMode::Mirror: return "mirror";
     }
     return "periodic";
-}
-
-Result<void> write_bytes(const fs::path& path, std::span<const uint8_t> bytes) {
-    std::ofstream f(path, std::ios::binary | std::ios::trunc);
-    if (!f) return make_error(path.string() + ": cannot open for writing");
-    f.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
-    f.flush();
-    if (!f) return make_error(path.string() + ": write failed (disk full?)");
-    return {};
 }
 
 oiio::PixelType oiio_type(TexelEncoding e) {
@@ -281,7 +271,8 @@ Result<std::vector<ManifestOutput>> write_encoded_textures(std::span<const Encod
     std::vector<std::optional<Error>> errors(files.size());
     tbb::parallel_for(size_t(0), files.size(), [&](size_t i) {
         entries[i].sha256 = sha256_hex(files[i].texture->bytes());
-        if (auto ok = write_bytes(outputs[i]->temp_path(), files[i].texture->bytes()); !ok) errors[i] = ok.error();
+        if (auto ok = write_bytes_to(outputs[i]->temp_path(), outputs[i]->final_path(), files[i].texture->bytes()); !ok)
+            errors[i] = ok.error();
     });
     for (const std::optional<Error>& e : errors)
         if (e) return *e;

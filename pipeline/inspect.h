@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <functional>
 #include <span>
 #include <string>
 #include <vector>
@@ -80,6 +81,19 @@ struct ManifestReport {
     std::vector<std::string> problems;  // missing files, hash mismatches, structure errors
 };
 Result<ManifestReport> inspect_manifest(const std::filesystem::path& manifest_path, bool check_hashes);
+
+// `inspect --check` of a manifest: every output hashed (in parallel, from read-only mappings streamed in
+// windows, never copied) and compared with the manifest; KTX2/DDS structure checked and their declared
+// shape, and EXR/PNG headers, compared with the manifest entry. Takes the folder's lock (waiting for a run
+// that writes it; `on_wait` says so), rolls an interrupted commit forward when the folder is writable
+// (io/output_folder.h; said in `notes`), and reports leftovers of interrupted runs as problems.
+struct FolderCheck {
+    std::vector<std::string> problems;
+    std::vector<std::string> notes;
+    uint64_t bytes_hashed = 0;
+};
+FolderCheck check_manifest_folder(const std::filesystem::path& manifest_path,
+                                  const std::function<void(const std::string&)>& on_wait = {});
 
 // One row per report: every mip level of the first derived quantity (else channel R) in false colour
 // (viridis; magenta for NaN/inf), scaled by nearest neighbour so small mips stay visible, the mip index

@@ -1,5 +1,6 @@
 #include "pipeline/scene_job.h"
 
+#include "pipeline/bake_output.h"
 #include "pipeline/version.h"
 #include "io/atomic_file.h"
 #include "io/mesh_import.h"
@@ -58,8 +59,10 @@ struct SceneResult {
     ScenePlan plan;
 };
 
+// Writes into `out_dir` (staged) what belongs in `final_dir`.
 Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, const fs::path& out_dir,
-                                   std::vector<fs::path>& written, std::vector<std::string>& warnings) {
+                                   const fs::path& final_dir, std::vector<fs::path>& written,
+                                   std::vector<std::string>& warnings) {
     auto say = [&](const std::string& s) {
         if (job.progress) job.progress(s);
     };
@@ -72,7 +75,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
     SceneResult result;
     std::vector<fs::path> inputs{input};
     for (const fs::path& r : scene.resource_files()) inputs.push_back(r);
-    if (auto r = io::check_output_not_input(out_dir, inputs); !r) return r.error();
+    if (auto r = io::check_output_not_input(final_dir, inputs); !r) return r.error();
 
     // Material textures: the plan measures its statistic on the full bake and this writes each kept bake
     // right away. Layers with identical inputs share one set of files (the first one's, by its stem).
@@ -171,7 +174,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
     if (job.format == SceneFormat::Gltf) ext = ".gltf";
     if (job.format == SceneFormat::Glb) ext = ".glb";
     const fs::path out_file = out_dir / (input.stem().string() + ext);
-    say("writing " + out_file.string());
+    say("writing " + (final_dir / out_file.filename()).string());
     auto files = scene.write(out_file);
     if (!files) return files.error();
     for (const io::GltfScene::WrittenFile& f : *files) written.push_back(f.path);
@@ -279,13 +282,18 @@ Result<SceneJobOutcome> run_scene_job(const SceneJob& job) {
             return make_error(s.string() + ": another scene has the same name '" + s.stem().string() +
                               "'; each scene gets its own folder named after it, so names must differ");
 
+    std::vector<std::string> identity(job.scenes.begin(), job.scenes.end());
+    auto out = BakeOutput::open(job.output_dir, job.lock, identity, job.replace, job.progress);
+    if (!out) return out.error();
     for (const fs::path& input : job.scenes) {
-        const fs::path out_dir = job.scenes.size() == 1 ? job.output_dir : job.output_dir / input.stem();
+        const bool one = job.scenes.size() == 1;
+        const fs::path out_dir = one ? out->stage() : out->stage() / input.stem();
+        const fs::path final_dir = one ? job.output_dir : job.output_dir / input.stem();
         std::vector<fs::path> written;
-        auto result = bake_one_scene(job, input, out_dir, written, outcome.warnings);
+        auto result = bake_one_scene(job, input, out_dir, final_dir, written, outcome.warnings);
         if (!result) {
             remove_files(written);
-            outcome.errors.push_back(result.error().message);
+            outcome.errors.push_back(out->final_names(result.error()).message);
             continue;
         }
         const std::string prefix = job.scenes.size() == 1 ? "" : input.stem().string() + "/";
@@ -298,7 +306,8 @@ Result<SceneJobOutcome> run_scene_job(const SceneJob& job) {
         outcome.plans.push_back(std::move(result->plan));
     }
     if (outcome.plans.empty()) return outcome;
-    if (auto r = io::write_manifest(job.output_dir, outcome.manifest); !r) return r.error();
+    if (auto r = io::write_manifest(out->stage(), outcome.manifest); !r) return out->final_names(r.error());
+    if (auto r = out->commit(); !r) return r.error();
     return outcome;
 }
 

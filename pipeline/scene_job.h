@@ -9,6 +9,7 @@
 #include "pipeline/texture_job.h"
 #include "io/gltf_scene.h"
 #include "io/manifest.h"
+#include "io/output_folder.h"
 #include "io/texture_writer.h"
 
 #include <filesystem>
@@ -27,6 +28,10 @@ struct SceneJob {
     PlanOptions plan;
     io::TextureContainer container = io::TextureContainer::Ktx2;
     ProgressFn progress;
+    // The output folder's lock when the caller already holds it (else the job takes it, pipeline/bake_output.h).
+    const io::OutputLock* lock = nullptr;
+    // Replace a bake of other scenes that output_dir holds (refused otherwise).
+    bool replace = false;
 };
 
 // A scene read from any supported file, with what the plan needs to know about its materials.
@@ -50,7 +55,8 @@ struct SceneJobOutcome {
 
 // Runs the bake of every scene. A scene that fails leaves none of its files behind; the manifest lists the
 // scenes that completed. Fails as a whole (Error) only for problems that stop every scene: the output
-// folder is (or holds) an input, or the manifest cannot be written.
+// folder is (or holds) an input or holds a bake of other scenes, or the commit fails. Everything is staged
+// and committed with the manifest (pipeline/bake_output.h); when every scene fails the folder is unchanged.
 Result<SceneJobOutcome> run_scene_job(const SceneJob& job);
 
 // The plan of one scene, as `specbake plan` prints it.

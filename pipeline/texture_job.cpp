@@ -1,5 +1,6 @@
 #include "pipeline/texture_job.h"
 
+#include "pipeline/bake_output.h"
 #include "pipeline/version.h"
 #include "io/atomic_file.h"
 #include "io/image_io.h"
@@ -336,6 +337,17 @@ Result<TextureJobOutcome> run_texture_job(const TextureJob& job) {
     if (fs::exists(job.output_dir, ec) && !fs::is_directory(job.output_dir, ec))
         return make_error(job.output_dir.string() + ": exists and is not a folder");
 
+    if (!job.demo) {
+        std::vector<fs::path> inputs{job.normal};
+        if (job.roughness) inputs.push_back(*job.roughness);
+        if (auto ok = io::check_output_not_input(job.output_dir, inputs); !ok) return ok.error();
+    }
+    auto out = BakeOutput::open(job.output_dir, job.lock,
+                                {job.demo ? std::string(kDemoIdentity) : job.normal.string()}, job.replace,
+                                progress);
+    if (!out) return out.error();
+    const fs::path& stage = out->stage();
+
     io::Manifest manifest;
     manifest.version = tool_version();
     manifest.settings = texture_settings_json(job.settings, job.container);
@@ -352,16 +364,13 @@ Result<TextureJobOutcome> run_texture_job(const TextureJob& job) {
         // with --normal/--roughness.
         for (const auto& [image, name] : {std::pair{&normal.image, in.normal_name},
                                           std::pair{&roughness.image, in.roughness_name}}) {
-            const fs::path path = job.output_dir / name;
-            if (auto ok = io::write_image(path, *image, 8); !ok) return ok.error();
+            const fs::path path = stage / name;
+            if (auto ok = io::write_image(path, *image, 8); !ok) return out->final_names(ok.error());
             auto hash = io::sha256_file(path);
             if (!hash) return hash.error();
             manifest.inputs.push_back({name, *hash});
         }
     } else {
-        std::vector<fs::path> inputs{job.normal};
-        if (job.roughness) inputs.push_back(*job.roughness);
-        if (auto ok = io::check_output_not_input(job.output_dir, inputs); !ok) return ok.error();
         if (progress) progress("reading " + job.normal.string());
         if (job.roughness && progress) progress("reading " + job.roughness->string());
         // The two maps are decoded and hashed side by side, each file by one task.
@@ -403,8 +412,8 @@ Result<TextureJobOutcome> run_texture_job(const TextureJob& job) {
     if (!have_roughness) manifest.settings["roughness_value"] = job.roughness_value;
     else manifest.settings["roughness_channel"] = job.roughness_channel;
 
-    auto written = bake_texture_outputs(in, job.settings, job.container, job.output_dir, "texture", progress);
-    if (!written) return written.error();
+    auto written = bake_texture_outputs(in, job.settings, job.container, stage, "texture", progress);
+    if (!written) return out->final_names(written.error());
 
     // The plan (SPEC Sec. 6): would the bake change roughness visibly, i.e. by half a quantisation step?
     const int bits = (have_roughness ? in.roughness_bits : in.normal_bits) <= 8 ? 8 : 16;
@@ -431,7 +440,8 @@ Result<TextureJobOutcome> run_texture_job(const TextureJob& job) {
 
     manifest.outputs = written->outputs;
     if (progress) progress("writing manifest.json");
-    if (auto ok = io::write_manifest(job.output_dir, manifest); !ok) return ok.error();
+    if (auto ok = io::write_manifest(stage, manifest); !ok) return out->final_names(ok.error());
+    if (auto ok = out->commit(); !ok) return ok.error();
 
     TextureJobOutcome outcome;
     outcome.manifest = std::move(manifest);

@@ -6,6 +6,7 @@
 
 #include "bake/texture_bake.h"
 #include "io/manifest.h"
+#include "io/output_folder.h"
 #include "io/texture_writer.h"
 
 #include <nlohmann/json.hpp>
@@ -32,6 +33,10 @@ struct TextureJob {
     io::TextureContainer container = io::TextureContainer::Ktx2;
     TextureBakeSettings settings;
     ProgressFn progress;
+    // The output folder's lock when the caller already holds it (else the job takes it, pipeline/bake_output.h).
+    const io::OutputLock* lock = nullptr;
+    // Replace a bake of another normal map that output_dir holds (refused otherwise).
+    bool replace = false;
 };
 
 struct TextureJobOutcome {
@@ -41,7 +46,8 @@ struct TextureJobOutcome {
 };
 
 // Whole pipeline. Errors are one line naming the file: unreadable or invalid input, output folder equal
-// to (or holding) an input, write failure. Nothing is left half-written on failure.
+// to (or holding) an input, a bake of other inputs in it, write failure. Every file is staged and
+// committed together with the manifest: on any failure the folder keeps the bake it held.
 Result<TextureJobOutcome> run_texture_job(const TextureJob& job);
 
 // Already-decoded inputs for bake_texture_outputs().

@@ -149,8 +149,22 @@ Result<void> write_rgb8(const std::string& temp_path, const std::string& name, i
     return {};
 }
 
+Result<TextureShape> read_shape(const std::string& name) {
+    auto in = OIIO::ImageInput::open(name);
+    if (!in) return make_error(name + ": cannot read image: " + one_line(OIIO::geterror(), "unknown format"));
+    TextureShape shape;
+    const std::string fmt = in->format_name();
+    shape.format = fmt == "openexr" ? "exr" : fmt;
+    shape.width = in->spec().width;
+    shape.height = in->spec().height;
+    shape.channels = in->spec().nchannels;
+    while (in->seek_subimage(0, shape.mips)) ++shape.mips;
+    if (shape.mips == 0) return make_error(name + ": no image data");
+    return shape;
+}
+
 const Api kApi{sizeof(Api), SPECBAKE_OIIO_API_TAG, decode_file, decode_memory, write_image,
-               write_levels, read_levels, write_rgb8};
+               write_levels, read_levels, write_rgb8, read_shape};
 
 }  // namespace
 }  // namespace specbake::io::oiio

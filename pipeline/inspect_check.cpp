@@ -1,0 +1,114 @@
+// `inspect --check` of a manifest folder (pipeline/inspect.h): hashes at disk speed, header checks, and the
+// folder's transactional state (io/output_folder.h).
+#include "pipeline/inspect.h"
+
+#include "io/atomic_file.h"
+#include "io/container_inspect.h"
+#include "io/manifest.h"
+#include "io/output_folder.h"
+#include "io/sha256.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <optional>
+
+namespace specbake {
+namespace fs = std::filesystem;
+
+namespace {
+
+struct FileCheck {
+    std::optional<std::string> problem;
+    uint64_t bytes = 0;
+};
+
+// One output: hashed from a mapping in 4 MiB windows (each released once hashed); KTX2/DDS headers parsed
+// from the same mapping, EXR/PNG headers through OpenImageIO.
+FileCheck check_output(const fs::path& file, const io::ManifestOutput& o) {
+    FileCheck r;
+    auto mapped = io::MappedFile::open(file);
+    if (!mapped) {
+        r.problem = mapped.error().message;
+        return r;
+    }
+    const std::span<const uint8_t> bytes = mapped->bytes();
+    std::optional<io::TextureShape> shape;
+    if (o.format == "ktx2" || o.format == "dds") {
+        auto s = io::check_container_shape(bytes, file.string());
+        if (!s) {
+            r.problem = s.error().message;
+            return r;
+        }
+        shape = *s;
+    }
+    constexpr size_t kWindow = size_t(4) << 20;
+    io::Sha256 sha;
+    for (size_t at = 0; at < bytes.size(); at += kWindow) {
+        const size_t n = std::min(kWindow, bytes.size() - at);
+        sha.update(bytes.subspan(at, n));
+        mapped->release_pages(at, n);
+    }
+    r.bytes = bytes.size();
+    if (sha.hex() != o.sha256) {
+        r.problem = file.string() + ": content differs from the manifest's hash";
+        return r;
+    }
+    if (!shape && (o.format == "exr" || o.format == "png")) {
+        auto s = io::read_image_shape(file);
+        if (!s) {
+            r.problem = s.error().message;
+            return r;
+        }
+        shape = *s;
+    }
+    if (shape && ((o.width && o.width != shape->width) || (o.height && o.height != shape->height) ||
+                  (o.channels && o.channels > shape->channels) ||  // DDS pads 3 channels to 4
+                  (o.mips && o.format != "png" && o.mips != shape->mips)))
+        r.problem = file.string() + ": size, channels or mips differ from the manifest entry";
+    return r;
+}
+
+}  // namespace
+
+FolderCheck check_manifest_folder(const fs::path& manifest_path, const std::function<void(const std::string&)>& on_wait) {
+    FolderCheck out;
+    const fs::path dir = manifest_path.parent_path().empty() ? fs::path(".") : manifest_path.parent_path();
+    auto lock = io::OutputLock::acquire(dir, io::OutputLock::Purpose::check, on_wait);
+    if (!lock) {
+        out.problems.push_back(lock.error().message);
+        return out;
+    }
+    if (lock->recovery().finished_commit)
+        out.notes.push_back(dir.string() + ": finished the commit of an interrupted run");
+    const io::FolderLeftovers left = io::find_leftovers(dir);
+    for (const fs::path& p : left.pending_commits)
+        out.problems.push_back(p.string() + ": commit of an interrupted run not finished (the folder is not "
+                               "writable here); the next bake into " + dir.string() + " finishes it");
+    for (const fs::path& p : left.stale)
+        out.problems.push_back(p.string() + ": left by an interrupted run; the next bake into " + dir.string() +
+                               " removes it");
+
+    auto manifest = io::read_manifest(manifest_path);
+    if (!manifest) {
+        out.problems.push_back(manifest.error().message);
+        return out;
+    }
+    const std::vector<io::ManifestOutput>& outputs = manifest->outputs;
+    std::vector<FileCheck> checks(outputs.size());
+    tbb::parallel_for(size_t(0), outputs.size(), [&](size_t i) {
+        const io::ManifestOutput& o = outputs[i];
+        if (fs::path(o.path).is_absolute() || fs::path(o.path).lexically_normal().string().rfind("..", 0) == 0) {
+            checks[i].problem = manifest_path.string() + ": output path " + o.path + " leaves the folder";
+            return;
+        }
+        checks[i] = check_output(dir / o.path, o);
+    });
+    for (const FileCheck& c : checks) {
+        if (c.problem) out.problems.push_back(*c.problem);
+        out.bytes_hashed += c.bytes;
+    }
+    return out;
+}
+
+}  // namespace specbake
