@@ -12,6 +12,7 @@
 #include "io/texture_writer.h"
 
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -26,7 +27,9 @@ struct SceneJob {
     SceneFormat format = SceneFormat::SameAsInput;
     PlanOptions plan;
     io::TextureContainer container = io::TextureContainer::Ktx2;
-    ProgressFn progress;
+    ProgressFn progress;                   // called from the threads baking the scenes
+    // Called from the baking thread when scene i is finished (error empty on success).
+    std::function<void(size_t scene, const std::string& error)> scene_finished;
 };
 
 // A scene read from any supported file, with what the plan needs to know about its materials.
@@ -48,8 +51,9 @@ struct SceneJobOutcome {
     std::vector<std::string> warnings;
 };
 
-// Runs the bake of every scene. A scene that fails leaves none of its files behind; the manifest lists the
-// scenes that completed. Fails as a whole (Error) only for problems that stop every scene: the output
+// Runs the bake of every scene, several at a time (for_each_concurrently, pipeline/batch.h). A scene that
+// fails leaves none of its files behind; the manifest lists the scenes that completed. The plans returned
+// hold the decisions only (work, texture_work and decoded_images are released once written). Fails as a whole (Error) only for problems that stop every scene: the output
 // folder is (or holds) an input, or the manifest cannot be written.
 Result<SceneJobOutcome> run_scene_job(const SceneJob& job);
 
