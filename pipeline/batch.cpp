@@ -6,12 +6,9 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <exception>
-#include <mutex>
 
 namespace specbake {
 

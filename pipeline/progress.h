@@ -4,7 +4,6 @@
 
 #include <chrono>
 #include <cstdio>
-#include <mutex>
 #include <string>
 
 namespace specbake {
