@@ -62,7 +62,8 @@ void BM_WholeBake(benchmark::State& state) {
     tbb::global_control threads(tbb::global_control::max_allowed_parallelism, size_t(state.range(0)));
     for (auto _ : state) {
         auto outcome = run_scene_job(job);
-        if (!outcome || !outcome->errors.empty() || outcome->plans[0].work.empty()) {
+        if (!outcome || !outcome->errors.empty() || outcome->manifest.outputs.empty() ||
+            outcome->manifest.outputs[0].extra.value("curvature_primitives", 0) == 0) {
             state.SkipWithError("bake failed");
             return;
         }

@@ -4,6 +4,7 @@
 #include "cli/pipeline_options.h"
 #include "cli/scene_options.h"
 #include "pipeline/bake_output.h"
+#include "pipeline/progress.h"
 #include "pipeline/version.h"
 
 #include <cstdio>
@@ -32,8 +33,14 @@ int run_scene_command(const SceneCliOptions& o, const PipelineFlags& pipe, bool 
     job.lock = &*lock;
     job.replace = pipe.force;
     const bool quiet = run_settings().verbosity == Verbosity::quiet;
-    if (!quiet) job.progress = [](const std::string& s) { std::fprintf(stderr, "specbake: %s\n", s.c_str()); };
+    // Assets done / total on a terminal; one line per finished scene otherwise (a single scene's steps).
+    ProgressDisplay display(job.scenes.size(), progress_mode(run_settings()), "scenes");
+    job.progress = [&display](const std::string& s) { display.status("", s); };
+    job.scene_finished = [&display, &job](size_t i, const std::string& error) {
+        display.finished(job.scenes[i].string(), error.empty() ? "done" : "FAILED");
+    };
     auto outcome = run_scene_job(job);
+    display.close();
     if (!outcome) {
         print_error(outcome.error().message);
         return kExitFailed;

@@ -3,6 +3,9 @@
 #include "cli/command.h"
 #include "verify/gl_context.h"
 #include "verify/bench_job.h"
+#include "verify/scene.h"
+#include "pipeline/batch.h"
+#include "pipeline/progress.h"
 #include "cli/verify_options.h"
 
 #include <cstddef>
@@ -48,7 +51,18 @@ int run_bench_command(const BenchCommandOptions& o) {
         return kExitFailed;
     }
     options.renderer = (*context)->description();
-    auto report = run_bench(options, [](const std::string& line) { std::fprintf(stderr, "specbake: %s\n", line.c_str()); });
+    // Scenes done / total (each built-in scene once per alpha, then the files) on a terminal, with the frames
+    // of the scene in work as the fraction; one line per finished scene otherwise.
+    const size_t builtin = o.scenes.empty() ? (o.no_builtin ? 0 : builtin_scene_names().size()) : o.scenes.size();
+    ProgressDisplay display(builtin * o.alpha.size() + o.files.size(), progress_mode(run_settings()), "scenes",
+                            ProgressDisplay::Lines::activity);
+    // The frame timing after the last frame takes about one frame's time: leave it its share.
+    v.frame_done = [&display](int done, int frames) { display.fraction(double(done) / double(frames + 1)); };
+    auto report = run_bench(options, [&display](const std::string& line) {
+        display.status("", line);
+        display.finished(line, "done");
+    });
+    display.close();
     if (!report) {
         print_error(report.error().message);
         return kExitFailed;

@@ -5,6 +5,7 @@
 #include "pipeline/bake_output.h"
 #include "pipeline/texture_job.h"
 #include "cli/pipeline_options.h"
+#include "pipeline/progress.h"
 #include "pipeline/version.h"
 
 #include <cstdio>
@@ -12,7 +13,6 @@
 #include <memory>
 #include <sstream>
 #include <string>
-#include <unistd.h>
 
 namespace specbake::cli {
 namespace {
@@ -134,9 +134,18 @@ int run_texture(const TextureOptions& o, const PipelineFlags& pipe) {
     job.lock = &*lock;
     job.replace = pipe.force;
     const bool quiet = run_settings().verbosity == Verbosity::quiet;
-    if (!quiet && ::isatty(2)) job.progress = [](const std::string& line) { std::fprintf(stderr, "specbake: %s\n", line.c_str()); };
+    // A bar with the fraction of texels baked on a terminal. Elsewhere the steps are printed with
+    // --verbose only, so a failed run's stderr stays its one error line.
+    ProgressMode mode = progress_mode(run_settings());
+    if (mode == ProgressMode::lines && run_settings().verbosity != Verbosity::verbose) mode = ProgressMode::off;
+    ProgressDisplay display(1, mode, "maps");
+    const std::string item = job.demo ? std::string("demo") : job.normal.string();
+    job.progress = [&display, &item](const std::string& line) { display.status(item, line); };
+    job.fraction = [&display](double f) { display.fraction(f); };
 
     auto outcome = run_texture_job(job);
+    display.finished(item, outcome ? "done" : "FAILED");
+    display.close();
     if (!outcome) {
         print_error(outcome.error().message);
         return kExitFailed;

@@ -2,6 +2,7 @@
 #include "cli/command.h"
 #include "verify/gl_context.h"
 #include "pipeline/batch.h"
+#include "pipeline/progress.h"
 #include "verify/verify_job.h"
 #include "cli/verify_options.h"
 #include "verify/scene_file.h"
@@ -32,8 +33,12 @@ int run_verify_command(const VerifyCommandOptions& o) {
     VerifyOptions options;
     if (!apply_sim_command_options(o.sim, options)) return kExitUsage;
     options.only = o.only;
-    if (run_settings().verbosity != Verbosity::quiet)
-        options.progress = [](const std::string& line) { std::fprintf(stderr, "specbake: %s\n", line.c_str()); };
+    // Frames done / total on a terminal; the stage lines as plain lines otherwise.
+    ProgressDisplay display(size_t(options.frames), progress_mode(run_settings()), "frames",
+                            ProgressDisplay::Lines::activity);
+    const std::string item = o.scene_file.empty() ? o.builtin : o.scene_file;
+    options.progress = [&display, &item](const std::string& line) { display.status(item, line); };
+    options.frame_done = [&display, &item](int, int) { display.finished(item, "done"); };
     if (o.scene_file.empty() == o.builtin.empty()) {
         print_error("give either a scene file or --builtin NAME (see specbake verify --help)");
         return kExitUsage;
@@ -43,16 +48,18 @@ int run_verify_command(const VerifyCommandOptions& o) {
         print_error(scene.error().message);
         return o.builtin.empty() ? kExitFailed : kExitUsage;
     }
-    if (!o.scene_file.empty() && options.progress)
-        std::fprintf(stderr, "specbake: %s: %zu objects, %zu normal maps, %zu roughness maps, %zu lights\n",
-                     o.scene_file.c_str(), scene->objects.size(), scene->normal_maps.size(),
-                     scene->roughness_maps.size(), scene->lights.size());
+    if (!o.scene_file.empty() && run_settings().verbosity != Verbosity::quiet)
+        print_line(stderr, "specbake: " + o.scene_file + ": " + std::to_string(scene->objects.size()) + " objects, " +
+                               std::to_string(scene->normal_maps.size()) + " normal maps, " +
+                               std::to_string(scene->roughness_maps.size()) + " roughness maps, " +
+                               std::to_string(scene->lights.size()) + " lights");
     auto context = GlContext::create();
     if (!context) {
         print_error(context.error().message);
         return kExitFailed;
     }
     auto report = run_verify(*scene, options);
+    display.close();
     if (!report) {
         print_error(report.error().message);
         return kExitFailed;

@@ -4,6 +4,7 @@
 #include "io/cleanup_registry.h"
 #include "pipeline/config.h"
 #include "pipeline/batch.h"
+#include "pipeline/progress.h"
 #include "pipeline/version.h"
 
 #include <tbb/global_control.h>
@@ -71,8 +72,8 @@ Registration::Registration(const char* name, int order, AddCommand add) {
     registry().push_back({name, order, add});
 }
 
-void print_error(const std::string& message) { std::fprintf(stderr, "specbake: error: %s\n", message.c_str()); }
-void print_warning(const std::string& message) { std::fprintf(stderr, "specbake: warning: %s\n", message.c_str()); }
+void print_error(const std::string& message) { print_line(stderr, "specbake: error: " + message); }
+void print_warning(const std::string& message) { print_line(stderr, "specbake: warning: " + message); }
 
 }  // namespace specbake::cli
 

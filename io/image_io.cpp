@@ -2,6 +2,7 @@
 
 #include "io/atomic_file.h"
 #include "io/oiio_api.h"
+#include "io/png_decode.h"
 
 #include <algorithm>
 #include <fstream>
@@ -65,6 +66,8 @@ Result<DecodedImage> decode_image(const fs::path& path) {
 Result<DecodedImage> decode_image_memory(std::span<const uint8_t> bytes, const std::string& name_for_errors) {
     if (bytes.empty()) return make_error(name_for_errors + ": no image data");
     if (auto ok = check_png_structure(bytes, name_for_errors); !ok) return ok.error();
+    // Plain PNGs (most texture libraries) without loading OpenImageIO; the same values and facts.
+    if (auto png = decode_plain_png(bytes)) return std::move(*png);
     // OpenImageIO picks the decoder from the name's extension; take it from the leading bytes instead.
     std::string probe = "image.tga";  // the one common format without a signature
     if (bytes.size() >= 4 && bytes[0] == 0x89 && bytes[1] == 'P' && bytes[2] == 'N' && bytes[3] == 'G')

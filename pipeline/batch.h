@@ -45,6 +45,15 @@ struct BatchSummary {
     int exit_code() const;
 };
 
+// Runs work(0) ... work(count - 1) on the current task arena's threads, several items at a time. Each item
+// runs isolated: its own parallel loops still use every thread, but a thread waiting inside one item never
+// starts another, so at most one item per thread is in flight (memory stays bounded). Items must not
+// depend on their order; callers collect results by index, so outputs do not depend on the thread count.
+void for_each_concurrently(size_t count, const std::function<void(size_t)>& work);
+
+// "specbake: error: INPUT: MESSAGE", without repeating INPUT when the message already starts with it.
+std::string error_line(const std::string& input, const std::string& message);
+
 // Runs `work(i)` for every input, up to settings.jobs at a time. Shows progress (a bar on a terminal,
 // plain lines otherwise, nothing with --quiet), prints one error line per failed input and a summary.
 // Exceptions escaping `work` count as a failure of that input.

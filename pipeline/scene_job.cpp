@@ -1,6 +1,7 @@
 #include "pipeline/scene_job.h"
 
 #include "pipeline/bake_output.h"
+#include "pipeline/batch.h"
 #include "pipeline/version.h"
 #include "io/atomic_file.h"
 #include "io/mesh_import.h"
@@ -285,25 +286,50 @@ Result<SceneJobOutcome> run_scene_job(const SceneJob& job) {
     std::vector<std::string> identity(job.scenes.begin(), job.scenes.end());
     auto out = BakeOutput::open(job.output_dir, job.lock, identity, job.replace, job.progress);
     if (!out) return out.error();
-    for (const fs::path& input : job.scenes) {
+    // The scenes are baked side by side (each one's own parallel loops still use every thread) into the
+    // staging folder and merged in input order, so the manifest and the messages do not depend on the
+    // thread count.
+    struct Baked {
+        Result<SceneResult> result = make_error("");
+        std::vector<std::string> warnings;
+    };
+    std::vector<Baked> baked(job.scenes.size());
+    for_each_concurrently(job.scenes.size(), [&](size_t i) {
+        const fs::path& input = job.scenes[i];
         const bool one = job.scenes.size() == 1;
         const fs::path out_dir = one ? out->stage() : out->stage() / input.stem();
         const fs::path final_dir = one ? job.output_dir : job.output_dir / input.stem();
         std::vector<fs::path> written;
-        auto result = bake_one_scene(job, input, out_dir, final_dir, written, outcome.warnings);
-        if (!result) {
+        Baked& b = baked[i];
+        b.result = bake_one_scene(job, input, out_dir, final_dir, written, b.warnings);
+        if (b.result) {
+            // What the bake computed is written; the plan keeps its decisions only, so a batch of many
+            // scenes holds the data of the scenes in work, not of every scene baked so far.
+            b.result->plan.work.clear();
+            b.result->plan.texture_work.clear();
+            b.result->plan.decoded_images.clear();
+        } else {
             remove_files(written);
-            outcome.errors.push_back(out->final_names(result.error()).message);
+        }
+        if (job.scene_finished) job.scene_finished(i, b.result ? std::string() : b.result.error().message);
+    });
+    for (size_t i = 0; i < job.scenes.size(); ++i) {
+        const fs::path& input = job.scenes[i];
+        Baked& b = baked[i];
+        outcome.warnings.insert(outcome.warnings.end(), b.warnings.begin(), b.warnings.end());
+        if (!b.result) {
+            outcome.errors.push_back(out->final_names(b.result.error()).message);
             continue;
         }
+        SceneResult& result = *b.result;
         const std::string prefix = job.scenes.size() == 1 ? "" : input.stem().string() + "/";
-        for (io::ManifestOutput o : result->outputs) {
+        for (io::ManifestOutput o : result.outputs) {
             o.path = prefix + o.path;
             outcome.manifest.outputs.push_back(std::move(o));
         }
-        outcome.manifest.inputs.insert(outcome.manifest.inputs.end(), result->inputs.begin(), result->inputs.end());
-        outcome.manifest.plan.push_back(plan_to_json(result->plan));
-        outcome.plans.push_back(std::move(result->plan));
+        outcome.manifest.inputs.insert(outcome.manifest.inputs.end(), result.inputs.begin(), result.inputs.end());
+        outcome.manifest.plan.push_back(plan_to_json(result.plan));
+        outcome.plans.push_back(std::move(result.plan));
     }
     if (outcome.plans.empty()) return outcome;
     if (auto r = io::write_manifest(out->stage(), outcome.manifest); !r) return out->final_names(r.error());

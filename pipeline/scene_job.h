@@ -13,6 +13,7 @@
 #include "io/texture_writer.h"
 
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -27,11 +28,13 @@ struct SceneJob {
     SceneFormat format = SceneFormat::SameAsInput;
     PlanOptions plan;
     io::TextureContainer container = io::TextureContainer::Ktx2;
-    ProgressFn progress;
+    ProgressFn progress;                   // called from the threads baking the scenes
     // The output folder's lock when the caller already holds it (else the job takes it, pipeline/bake_output.h).
     const io::OutputLock* lock = nullptr;
     // Replace a bake of other scenes that output_dir holds (refused otherwise).
     bool replace = false;
+    // Called from the baking thread when scene i is finished (error empty on success).
+    std::function<void(size_t scene, const std::string& error)> scene_finished;
 };
 
 // A scene read from any supported file, with what the plan needs to know about its materials.
@@ -53,10 +56,12 @@ struct SceneJobOutcome {
     std::vector<std::string> warnings;
 };
 
-// Runs the bake of every scene. A scene that fails leaves none of its files behind; the manifest lists the
-// scenes that completed. Fails as a whole (Error) only for problems that stop every scene: the output
-// folder is (or holds) an input or holds a bake of other scenes, or the commit fails. Everything is staged
-// and committed with the manifest (pipeline/bake_output.h); when every scene fails the folder is unchanged.
+// Runs the bake of every scene, several at a time (for_each_concurrently, pipeline/batch.h). A scene that
+// fails leaves none of its files behind; the manifest lists the scenes that completed. The plans returned
+// hold the decisions only (work, texture_work and decoded_images are released once written). Fails as a
+// whole (Error) only for problems that stop every scene: the output folder is (or holds) an input or holds
+// a bake of other scenes, or the commit fails. Everything is staged and committed with the manifest
+// (pipeline/bake_output.h); when every scene fails the folder is unchanged.
 Result<SceneJobOutcome> run_scene_job(const SceneJob& job);
 
 // The plan of one scene, as `specbake plan` prints it.

@@ -9,6 +9,7 @@
 #include <tbb/parallel_invoke.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -250,13 +251,14 @@ Result<TextureBakeResult> bake_texture_inputs(const TextureInputs& in, const Tex
 
 Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& in, const TextureBakeSettings& settings,
                                                    io::TextureContainer container, const fs::path& dir,
-                                                   const std::string& stem, const ProgressFn& progress) {
+                                                   const std::string& stem, const ProgressFn& progress,
+                                                   const FractionFn& fraction) {
     if (!io::EncodedTexture::supports(container)) {
         auto baked = bake_texture_inputs(in, settings, progress);
         if (!baked) return baked.error();
         return write_texture_outputs(std::move(*baked), in, settings, container, dir, stem, progress);
     }
-    auto encoded = bake_texture_encoded(in, settings, container, stem, progress);
+    auto encoded = bake_texture_encoded(in, settings, container, stem, progress, fraction);
     if (!encoded) return encoded.error();
     TextureOutputsWritten result;
     result.notes = encoded->notes;
@@ -271,7 +273,7 @@ Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& in, cons
 
 Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, const TextureBakeSettings& settings,
                                                    io::TextureContainer container, const std::string& stem,
-                                                   const ProgressFn& progress) {
+                                                   const ProgressFn& progress, const FractionFn& fraction) {
     if (!in.normal) return make_error(in.normal_name + ": no normal map given");
     if (!io::EncodedTexture::supports(container))
         return make_error(std::string("cannot encode ") + io::container_name(container) + " in memory");
@@ -287,8 +289,16 @@ Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, cons
     if (progress)
         progress("baking " + std::to_string(in.normal->width) + "x" + std::to_string(in.normal->height) + " " +
                  in.normal_name);
+    // Texels of every level, for the fraction done; the rows arrive from several threads.
+    double total_texels = 0;
+    for (int L = 0; L < shape.levels; ++L)
+        total_texels += double(std::max(1, shape.width >> L)) * double(std::max(1, shape.height >> L));
+    std::atomic<size_t> texels_done{0};
     auto baked = bake_texture_rows(*in.normal, in.roughness, channel, in.roughness_value, settings,
                                    [&](const TextureBakeRows& r) {
+                                       if (fraction)
+                                           fraction(double(texels_done += size_t(r.width) * size_t(r.rows)) /
+                                                    total_texels);
                                        for (size_t i = 0; i < files.size(); ++i)
                                            out.textures[i]->put_block(r.level, r.x0, r.y0, r.width, r.rows,
                                                                       rows_of(r, files[i].chain),
@@ -412,7 +422,7 @@ Result<TextureJobOutcome> run_texture_job(const TextureJob& job) {
     if (!have_roughness) manifest.settings["roughness_value"] = job.roughness_value;
     else manifest.settings["roughness_channel"] = job.roughness_channel;
 
-    auto written = bake_texture_outputs(in, job.settings, job.container, stage, "texture", progress);
+    auto written = bake_texture_outputs(in, job.settings, job.container, stage, "texture", progress, job.fraction);
     if (!written) return out->final_names(written.error());
 
     // The plan (SPEC Sec. 6): would the bake change roughness visibly, i.e. by half a quantisation step?

@@ -22,6 +22,8 @@ namespace specbake {
 
 // Called with short progress lines ("reading ...", "baking 4096x4096 ...", "writing ..."); may be empty.
 using ProgressFn = std::function<void(const std::string&)>;
+// Called with the fraction [0, 1] of the bake's texels done (all mips), from the baking threads; may be empty.
+using FractionFn = std::function<void(double)>;
 
 struct TextureJob {
     std::filesystem::path normal;                  // ignored when demo is set
@@ -37,6 +39,7 @@ struct TextureJob {
     const io::OutputLock* lock = nullptr;
     // Replace a bake of another normal map that output_dir holds (refused otherwise).
     bool replace = false;
+    FractionFn fraction;                           // KTX2 and DDS bakes, which run row by row
 };
 
 struct TextureJobOutcome {
@@ -73,7 +76,8 @@ struct TextureOutputsWritten {
 // settings.outputs. Does not write a manifest.
 Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& inputs, const TextureBakeSettings& settings,
                                                    io::TextureContainer container, const std::filesystem::path& dir,
-                                                   const std::string& stem, const ProgressFn& progress = {});
+                                                   const std::string& stem, const ProgressFn& progress = {},
+                                                   const FractionFn& fraction = {});
 
 // bake_texture_outputs() for KTX2 and DDS up to the write: the bake encodes every finished row straight
 // into the files' bytes (no float chain of the whole map is held). files[i] refers to textures[i].
@@ -85,7 +89,7 @@ struct EncodedTextureOutputs {
 };
 Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& inputs, const TextureBakeSettings& settings,
                                                    io::TextureContainer container, const std::string& stem,
-                                                   const ProgressFn& progress = {});
+                                                   const ProgressFn& progress = {}, const FractionFn& fraction = {});
 
 // The two steps of bake_texture_outputs(), for a caller that needs the bake before deciding to write it
 // (`specbake bake` measures the plan's statistic on the bake it writes). Errors name the input files.

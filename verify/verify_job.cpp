@@ -115,6 +115,7 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
         if (frame == 0 && options.keep_images) report.ground_truth = std::move(gt);
         say("frame " + std::to_string(frame + 1) + "/" + std::to_string(options.frames) + ": ground truth and " +
             std::to_string(candidates.size()) + " candidates rendered");
+        if (options.frame_done) options.frame_done(frame + 1, options.frames);
     }
     report.ground_truth_ms = gt_total;
 

@@ -28,6 +28,8 @@ struct VerifyOptions {
     bool keep_images = true;  // keep frame 0 of every image for strips
     // Receives one line per finished stage (bakes, each ground-truth frame, timing); may be empty.
     std::function<void(const std::string&)> progress;
+    // Called after each frame (ground truth and every candidate rendered) with (frames done, frames); may be empty.
+    std::function<void(int, int)> frame_done;
 };
 
 struct CandidateReport {

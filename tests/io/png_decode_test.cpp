@@ -1,0 +1,143 @@
+// decode_plain_png() against OpenImageIO (libpng) on PNGs written here with every row filter, every plain
+// colour type and both bit depths; files it must leave to OpenImageIO (palette, interlaced, gAMA, bad CRC).
+#include "io/png_decode.h"
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+#include <zlib.h>
+
+#include <cstdlib>
+#include <cstring>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace specbake::io {
+namespace {
+
+void put32(std::vector<uint8_t>& out, uint32_t v) {
+    for (int s = 24; s >= 0; s -= 8) out.push_back(uint8_t(v >> s));
+}
+
+void chunk(std::vector<uint8_t>& out, const char* type, const std::vector<uint8_t>& data) {
+    put32(out, uint32_t(data.size()));
+    std::vector<uint8_t> body(type, type + 4);
+    body.insert(body.end(), data.begin(), data.end());
+    out.insert(out.end(), body.begin(), body.end());
+    put32(out, uint32_t(crc32(0L, body.data(), uInt(body.size()))));
+}
+
+int paeth(int a, int b, int c) {
+    const int p = a + b - c, pa = std::abs(p - a), pb = std::abs(p - b), pc = std::abs(p - c);
+    return pa <= pb && pa <= pc ? a : pb <= pc ? b : c;
+}
+
+// A PNG of random samples; row y uses filter y % 5 (the encoder side of PNG spec Sec. 9).
+std::vector<uint8_t> make_png(int w, int h, int colour, int depth, uint32_t seed, const char* extra_chunk = nullptr,
+                              int interlace = 0) {
+    const int channels = colour == 0 ? 1 : colour == 4 ? 2 : colour == 2 ? 3 : colour == 6 ? 4 : 1;
+    const size_t bpp = size_t(channels * depth / 8), stride = size_t(w) * bpp;
+    std::mt19937 rng(seed);
+    std::vector<std::vector<uint8_t>> rows(size_t(h), std::vector<uint8_t>(stride, 0));
+    for (auto& r : rows)
+        for (auto& v : r) v = uint8_t(rng() >> 24);
+    std::vector<uint8_t> raw;
+    for (size_t y = 0; y < size_t(h); ++y) {
+        const int filter = int(y % 5);
+        raw.push_back(uint8_t(filter));
+        for (size_t i = 0; i < stride; ++i) {
+            const int x = rows[y][i];
+            const int a = i >= bpp ? rows[y][i - bpp] : 0, b = y ? rows[y - 1][i] : 0;
+            const int c = y && i >= bpp ? rows[y - 1][i - bpp] : 0;
+            const int pred = filter == 0 ? 0 : filter == 1 ? a : filter == 2 ? b : filter == 3 ? (a + b) / 2 : paeth(a, b, c);
+            raw.push_back(uint8_t(x - pred));
+        }
+    }
+    std::vector<uint8_t> z(compressBound(uLong(raw.size())));
+    uLongf zn = uLongf(z.size());
+    EXPECT_EQ(compress(z.data(), &zn, raw.data(), uLong(raw.size())), Z_OK);
+    z.resize(zn);
+    std::vector<uint8_t> png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+    std::vector<uint8_t> ihdr;
+    put32(ihdr, uint32_t(w));
+    put32(ihdr, uint32_t(h));
+    ihdr.insert(ihdr.end(), {uint8_t(depth), uint8_t(colour), 0, 0, uint8_t(interlace)});
+    chunk(png, "IHDR", ihdr);
+    chunk(png, "tEXt", {'C', 'o', 'm', 'm', 'e', 'n', 't', 0, 'x'});
+    if (extra_chunk && std::string(extra_chunk) == "gAMA") chunk(png, "gAMA", {0, 0, 0xB1, 0x8F});
+    if (colour == 3) {
+        std::vector<uint8_t> palette;
+        for (int i = 0; i < 256; ++i) palette.insert(palette.end(), {uint8_t(i), uint8_t(255 - i), uint8_t(i / 2)});
+        chunk(png, "PLTE", palette);
+    }
+    // Split into two IDAT chunks: decoders must concatenate them.
+    const size_t half = z.size() / 2;
+    chunk(png, "IDAT", std::vector<uint8_t>(z.begin(), z.begin() + long(half)));
+    chunk(png, "IDAT", std::vector<uint8_t>(z.begin() + long(half), z.end()));
+    chunk(png, "IEND", {});
+    return png;
+}
+
+// OpenImageIO's decode of the bytes, configured as specbake's image module reads data maps.
+std::vector<float> oiio_decode(std::vector<uint8_t>& png, int& channels, std::string& colour_space) {
+    OIIO::Filesystem::IOMemReader reader(png.data(), png.size());
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    void* proxy = &reader;
+    config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
+    auto in = OIIO::ImageInput::open("image.png", &config);
+    if (!in) return {};
+    const OIIO::ImageSpec& s = in->spec();
+    channels = s.nchannels;
+    colour_space = s.get_string_attribute("oiio:ColorSpace");
+    std::vector<float> px(size_t(s.width) * size_t(s.height) * size_t(s.nchannels));
+    if (!in->read_image(0, 0, 0, s.nchannels, OIIO::TypeDesc::FLOAT, px.data())) return {};
+    return px;
+}
+
+TEST(PlainPng, SameValuesAndFactsAsOpenImageIO) {
+    for (int colour : {0, 4, 2, 6}) {
+        for (int depth : {8, 16}) {
+            SCOPED_TRACE("colour type " + std::to_string(colour) + ", " + std::to_string(depth) + " bits");
+            std::vector<uint8_t> png = make_png(37, 23, colour, depth, uint32_t(colour * 100 + depth));
+            auto mine = decode_plain_png(png);
+            ASSERT_TRUE(mine.has_value());
+            int channels = 0;
+            std::string colour_space;
+            const std::vector<float> ref = oiio_decode(png, channels, colour_space);
+            ASSERT_EQ(mine->image.width, 37);
+            ASSERT_EQ(mine->image.height, 23);
+            ASSERT_EQ(mine->image.channels, channels);
+            ASSERT_EQ(mine->image.pixels.size(), ref.size());
+            EXPECT_EQ(std::memcmp(mine->image.pixels.data(), ref.data(), ref.size() * sizeof(float)), 0)
+                << "the float bits differ from OpenImageIO's";
+            EXPECT_EQ(mine->info.color_space, colour_space);
+            EXPECT_EQ(mine->info.bits_per_channel, depth);
+            EXPECT_FALSE(mine->info.is_float);
+            EXPECT_EQ(mine->info.format, "png");
+        }
+    }
+}
+
+TEST(PlainPng, EverythingElseIsLeftToOpenImageIO) {
+    EXPECT_FALSE(decode_plain_png(make_png(8, 8, 3, 8, 1)).has_value()) << "palette";
+    EXPECT_FALSE(decode_plain_png(make_png(8, 8, 2, 8, 2, "gAMA")).has_value()) << "gAMA changes the colour space";
+    EXPECT_FALSE(decode_plain_png(make_png(8, 8, 2, 8, 3, nullptr, 1)).has_value()) << "interlaced";
+    std::vector<uint8_t> bad_crc = make_png(8, 8, 2, 8, 4);
+    bad_crc[bad_crc.size() - 20] ^= 0x40;  // inside the last IDAT
+    EXPECT_FALSE(decode_plain_png(bad_crc).has_value());
+    std::vector<uint8_t> truncated = make_png(8, 8, 2, 8, 5);
+    truncated.resize(truncated.size() - 30);
+    EXPECT_FALSE(decode_plain_png(truncated).has_value());
+    const std::vector<uint8_t> not_png = {'G', 'I', 'F', '8', '9', 'a', 0, 0, 0, 0, 0, 0};
+    EXPECT_FALSE(decode_plain_png(not_png).has_value());
+    // The public decoder still reads those through OpenImageIO.
+    std::vector<uint8_t> palette = make_png(8, 8, 3, 8, 6);
+    auto decoded = decode_image_memory(palette, "palette.png");
+    ASSERT_TRUE(decoded.ok()) << decoded.error().message;
+    EXPECT_EQ(decoded->image.channels, 3);
+}
+
+}  // namespace
+}  // namespace specbake::io
