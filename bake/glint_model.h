@@ -1,0 +1,42 @@
+// C++ evaluation of the include's glint functions (shaders/src/specaa_glints.inc: C21 Eq. 3-6, 15, 18,
+// 19, 21 on the C20 cell pyramid), reading the dictionary as the GPU does: the reference for the GL tests.
+#pragma once
+
+#include "bake/glint_dictionary.h"
+
+#include <array>
+#include <cstdint>
+
+namespace specbake {
+
+struct GlintParams {
+    double log_density = 15.0;
+    double relative_area = 1.0;
+    double density_randomization = 2.0;
+    double max_anisotropy = 4.0;
+    double kernel_scale = 0.5;
+};
+
+// pcg3d (Jarzynski & Olano 2020), as in the include.
+std::array<uint32_t, 3> glint_pcg3d(std::array<uint32_t, 3> v);
+// The draws of a cell (s, t) at spatial level `level`: (r1, r2) of specaa_glint_cell.
+std::array<uint32_t, 6> glint_cell_draws(int32_t s, int32_t t, int level);
+double glint_unit(uint32_t x);  // top 24 bits / 2^24
+
+struct GlintSigmaRho {
+    double sx, sy, rho;
+};
+GlintSigmaRho glint_sigma_rho(double xx, double yy, double xy);                    // with the include's clamps
+std::array<double, 4> glint_inverse_transform(const GlintSigmaRho& s, double sigma_o);  // Eq. 18 inverse
+double glint_beckmann_p22(double mx, double my, const GlintSigmaRho& s);
+
+// Trilinear read of marginal i at level k with explicit u-gradients (gx, gy), OpenGL 4.6 Sec. 8.14:
+// lambda = log2(max(|gx|, |gy|) width), magnification (linear, mip 0) for lambda <= 0, else linear
+// between mips floor(lambda) and floor(lambda) + 1; linear filtering through texel centres, clamp to edge.
+double glint_marginal_grad(const GlintDictionary& d, int level, int marginal, double x, double gx, double gy);
+
+// The include's specaa_glint_P22 (uv, duv = (ddx uv, ddy uv), hs, dh = (ddx h.xy, ddy h.xy)).
+double glint_p22(const GlintDictionary& d, std::array<double, 2> uv, std::array<double, 4> duv,
+                 std::array<double, 2> hs, std::array<double, 4> dh, const GlintSigmaRho& s, const GlintParams& g);
+
+}  // namespace specbake
