@@ -185,5 +185,143 @@ TEST(ShaderGlints, GlslGlintPathMatchesTheCppEvaluation) {
     EXPECT_LE(off_c20, c20 / 100);
     EXPECT_LE(off_ggaa, ggaa / 100);
 }
+
+// alpha near 0 and 1, grazing half vectors, zero derivatives, densities e^0 and e^50, relative areas 0
+// and 1, rho at the clamps, large UVs: finite and non-negative on the GPU and in C++.
+TEST(ShaderGlints, HardCasesAreFinite) {
+    SPECBAKE_REQUIRE_GL(gl);
+    std::vector<Case> cases;
+    const std::array<double, 4> zero{0, 0, 0, 0}, small{1e-5, 0, 0, 1e-5}, huge{3.0, 0.0, 0.0, 5.0};
+    const GlintSigmaRho sigmas[] = {glint_sigma_rho(0.0, 0.0, 0.0), glint_sigma_rho(1e-8, 1e-8, 0.0),
+                                    glint_sigma_rho(0.5, 0.5, 0.0), glint_sigma_rho(4.0, 4.0, 3.99),
+                                    glint_sigma_rho(0.02, 0.01, 0.0141), glint_sigma_rho(0.02, 0.01, -0.0141)};
+    const std::array<double, 2> slopes[] = {{0.0, 0.0}, {1e3, -2e3}, {0.01, 0.02}, {-40.0, 0.0}};
+    int n = 0;
+    for (const GlintSigmaRho& sr : sigmas)
+        for (const std::array<double, 2>& hs : slopes)
+            for (const std::array<double, 4>& duv : {zero, small, huge})
+                for (const std::array<double, 4>& dh : {zero, small, huge})
+                    for (double density : {0.0, 50.0, 12.0})
+                        for (double area : {0.0, 1.0, 0.3}) {
+                            GlintParams g;
+                            g.log_density = density;
+                            g.relative_area = area;
+                            g.kernel_scale = n % 2 ? 0.5 : 0.0;
+                            const std::array<double, 2> uv = n % 3 == 0 ? std::array<double, 2>{1000.25, -999.5}
+                                                                        : std::array<double, 2>{0.3, 0.7};
+                            cases.push_back(make_case(uv, duv, hs, dh, sr, g, -n, n, n % 16));
+                            ++n;
+                        }
+    std::string log;
+    const std::vector<GridResult> out = run(cases, log);
+    ASSERT_EQ(out.size(), cases.size()) << log;
+    const GlintDictionary& d = dictionary();
+    int equal_beckmann = 0, density50 = 0;
+    for (size_t i = 0; i < cases.size(); ++i) {
+        const Case& c = cases[i];
+        const double expected = glint_p22(d, c.uv, c.duv, c.hs, c.dh, c.s, c.g);
+        ASSERT_TRUE(std::isfinite(expected)) << "C++ case " << i;
+        ASSERT_TRUE(std::isfinite(out[i].out[0][0]) && out[i].out[0][0] >= 0.0f) << "GL case " << i;
+        for (int k = 0; k < 4; ++k) ASSERT_TRUE(std::isfinite(out[i].out[2][size_t(k)])) << "GL case " << i;
+        if (c.g.log_density == 50.0 && c.g.relative_area == 1.0) {
+            // C21 Fig. 10: at e^50 every cell is past the last level: the smooth Beckmann SDF.
+            ++density50;
+            equal_beckmann += std::fabs(out[i].out[0][0] - out[i].out[0][1]) <= 1e-5 * out[i].out[0][1] + 1e-30;
+        }
+    }
+    EXPECT_EQ(equal_beckmann, density50);
+}
+
+// Disassembled, optimised (inlined) SPIR-V of `source`; empty on a compile failure (in `log`).
+std::string compile_spirv(const std::string& source, bool hlsl, std::string& log) {
+    TempDir dir;
+    const std::string src = (dir.path() / (hlsl ? "glint.hlsl" : "glint.frag")).string();
+    const std::string spv = (dir.path() / "glint.spv").string(), opt = (dir.path() / "opt.spv").string();
+    std::ofstream(src) << source;
+    const std::string compile = hlsl ? "glslangValidator -V -D -e main -S frag '" + src + "' -o '" + spv + "'"
+                                     : "glslangValidator -G -S frag '" + src + "' -o '" + spv + "'";
+    std::string out;
+    if (run_command(compile + " && spirv-opt -O '" + spv + "' -o '" + opt + "' && spirv-val --target-env " +
+                        (hlsl ? "vulkan1.0" : "opengl4.5") + " '" + opt + "'",
+                    out) != 0) {
+        log = out;
+        return {};
+    }
+    std::string dis;
+    run_command("spirv-dis --no-header '" + opt + "'", dis);
+    return dis;
+}
+
+// True when every derivative (OpDPdx/OpDPdy and variants, OpFwidth, implicit-LOD samples) of the
+// optimised shader sits before its first branch or merge instruction: in the entry block, which every
+// invocation of the quad executes.
+bool derivatives_in_uniform_flow(const std::string& dis, int& derivatives) {
+    std::istringstream in(dis);
+    std::string line;
+    bool branched = false, ok = true;
+    derivatives = 0;
+    while (std::getline(in, line)) {
+        if (line.find("OpSelectionMerge") != std::string::npos || line.find("OpLoopMerge") != std::string::npos ||
+            line.find("OpBranchConditional") != std::string::npos || line.find("OpSwitch") != std::string::npos)
+            branched = true;
+        const bool derivative = line.find("OpDPd") != std::string::npos || line.find("OpFwidth") != std::string::npos ||
+                                line.find("ImplicitLod") != std::string::npos;
+        if (derivative) {
+            ++derivatives;
+            ok = ok && !branched;
+        }
+    }
+    return ok;
+}
+
+std::string glint_program_glsl(bool derivative_in_branch) {
+    return std::string("#version 450\n") + read_source_file("shaders/specaa.glsl") + R"(
+layout(binding = 0) uniform sampler2DArray uDict;
+layout(location = 0) in vec2 vUv;
+layout(location = 1) in vec3 vI;
+layout(location = 2) in vec3 vO;
+layout(location = 3) in vec3 vSigma;
+layout(location = 0) out vec4 fragColor;
+void main() {
+    vec3 h = normalize(vI + vO);
+    vec4 duv = specaa_glint_derivatives(vUv);
+)" + (derivative_in_branch ? "    vec4 dh = vec4(0.0);\n    if (vI.z > 0.0) dh = specaa_glint_derivatives(h.xy);\n"
+                            : "    vec4 dh = specaa_glint_derivatives(h.xy);\n") + R"(
+    SpecaaGlintParams g = specaa_glint_default_params();
+    fragColor = vec4(specaa_glint_specular(uDict, vUv, duv, vI, vO, dh, specaa_glint_sigma_rho(vSigma), g));
+}
+)";
+}
+
+TEST(ShaderGlints, DerivativesSitOutsideConditionalBlocks) {
+    std::string log;
+    int derivatives = 0;
+    const std::string good = compile_spirv(glint_program_glsl(false), false, log);
+    ASSERT_FALSE(good.empty()) << log;
+    EXPECT_TRUE(derivatives_in_uniform_flow(good, derivatives));
+    EXPECT_EQ(derivatives, 4);  // ddx/ddy of the UV and of h.xy; the glint functions take none
+    EXPECT_NE(good.find("OpImageSampleExplicitLod"), std::string::npos);  // textureGrad
+    // The check sees a derivative inside a branch (as in C21's public shader).
+    const std::string bad = compile_spirv(glint_program_glsl(true), false, log);
+    ASSERT_FALSE(bad.empty()) << log;
+    EXPECT_FALSE(derivatives_in_uniform_flow(bad, derivatives));
+
+    const std::string hlsl = read_source_file("shaders/specaa.hlsl") + R"(
+Texture2DArray uDict : register(t0);
+SamplerState uSampler : register(s0);
+float4 main(float2 uv : TEXCOORD0, float3 i : TEXCOORD1, float3 o : TEXCOORD2, float3 sigma : TEXCOORD3) : SV_Target0 {
+    float3 h = normalize(i + o);
+    float4 duv = specaa_glint_derivatives(uv);
+    float4 dh = specaa_glint_derivatives(h.xy);
+    SpecaaGlintParams g = specaa_glint_default_params();
+    return specaa_glint_specular(uDict, uSampler, uv, duv, i, o, dh, specaa_glint_sigma_rho(sigma), g).xxxx;
+}
+)";
+    const std::string hlsl_dis = compile_spirv(hlsl, true, log);
+    ASSERT_FALSE(hlsl_dis.empty()) << log;
+    EXPECT_TRUE(derivatives_in_uniform_flow(hlsl_dis, derivatives));
+    EXPECT_EQ(derivatives, 4);
+}
+
 }  // namespace
 }  // namespace specbake::gltest
