@@ -1,5 +1,6 @@
 #include "pipeline/scene_job.h"
 
+#include "pipeline/glint_bake.h"
 #include "pipeline/version.h"
 #include "io/atomic_file.h"
 #include "io/mesh_import.h"
@@ -91,7 +92,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         in.roughness_value = d.roughness_value;
         in.normal_bits = w.normal_bits;
         in.roughness_bits = w.roughness_bits;
-        auto out = write_texture_outputs(std::move(baked), in, job.plan.texture_settings_for(d.material_name),
+        auto out = write_texture_outputs(std::move(baked), in, options.texture_settings_for(d.material_name),
                                          job.container, out_dir, d.stem, job.progress);
         if (!out) return out.error();
         for (const io::ManifestOutput& o : out->outputs) written.push_back(out_dir / o.path);
@@ -99,6 +100,8 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         files_by_stem[d.stem] = std::move(out->outputs);
         return {};
     };
+    // Materials that ask for glints get slope-space LEAN moments of their normal map (C21 Eq. 16).
+    if (auto r = add_glint_lean_settings(scene, options); !r) return r.error();
     say("planning " + input.string());
     auto plan = make_plan(scene, options, loaded->roughness_known);
     if (!plan) return plan.error();
@@ -139,8 +142,8 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
             ext["source"]["roughness"] = d.roughness_value;
         if (!normal.transform.is_null()) ext["KHR_texture_transform"] = normal.transform;
         const std::string& owner_name = plan->textures[owner].material_name;
-        if (job.plan.material_texture_settings.count(owner_name))  // differs from the root's "textures"
-            ext["settings"] = texture_settings_json(job.plan.texture_settings_for(owner_name), job.container);
+        if (options.material_texture_settings.count(owner_name))  // differs from the root's "textures"
+            ext["settings"] = texture_settings_json(options.texture_settings_for(owner_name), job.container);
         ext["outputs"] = json::array();
         for (const io::ManifestOutput& o : files_by_stem.at(d.stem))
             ext["outputs"].push_back({{"kind", o.kind}, {"uri", o.path}, {"format", o.format}, {"width", o.width},
@@ -150,6 +153,8 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         if (coat) target["clearcoat"] = std::move(ext);
         else target.update(ext);
     }
+    if (auto r = add_glint_outputs(*plan, out_dir, files_by_stem, extension_of_material, written, result.outputs); !r)
+        return r.error();
     for (const auto& [material, ext] : extension_of_material) scene.set_material_extension(material, ext);
     const bool any_texture = !extension_of_material.empty();
     if (baked_primitives > 0 || any_texture) scene.set_root_extension(root_extension(job, any_texture));
