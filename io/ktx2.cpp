@@ -204,7 +204,10 @@ Result<Ktx2Texture> read_ktx2_texture(std::span<const uint8_t> b, const std::str
     info.vk_format = get32(b, 12);
     info.type_size = get32(b, 16);
     const uint32_t width = get32(b, 20), height = get32(b, 24);
-    if (get32(b, 28) != 0 || get32(b, 32) != 0 || get32(b, 36) != 1) return fail("not a plain 2D texture");
+    if (get32(b, 28) != 0 || get32(b, 36) != 1) return fail("not a plain 2D texture or 2D array");
+    info.layer_count = get32(b, 32);
+    if (info.layer_count > 65535) return fail("bad layer count");
+    const uint32_t layers = std::max(1u, info.layer_count);
     info.level_count = get32(b, 40);
     info.supercompression = get32(b, 44);
     if (info.supercompression != 0) return fail("supercompressed data is not supported");
@@ -268,13 +271,13 @@ Result<Ktx2Texture> read_ktx2_texture(std::span<const uint8_t> b, const std::str
         const size_t at = kHeaderBytes + kLevelIndexEntry * i;
         const uint64_t off = get64(b, at), len = get64(b, at + 8), ulen = get64(b, at + 16);
         const int w = std::max(1, int(width >> i)), h = std::max(1, int(height >> i));
-        if (len != ulen || len != uint64_t(w) * uint64_t(h) * texel_bytes)
+        if (len != ulen || len != uint64_t(w) * uint64_t(h) * texel_bytes * layers)
             return fail("level " + std::to_string(i) + " has the wrong size");
         if (off % alignment != 0) return fail("level " + std::to_string(i) + " is not aligned");
         if (off + len > b.size()) return fail("truncated level " + std::to_string(i));
         info.level_offsets.push_back(off);
         info.level_lengths.push_back(len);
-        t.chain.levels.push_back(decode_texels(b.subspan(off, len), t.encoding, w, h, channels));
+        t.chain.levels.push_back(decode_texels(b.subspan(off, len), t.encoding, w, h * int(layers), channels));
     }
     return t;
 }

@@ -40,6 +40,7 @@ struct Ktx2Info {
     uint32_t vk_format = 0;
     uint32_t type_size = 0;
     uint32_t level_count = 0;
+    uint32_t layer_count = 0;  // 0: not an array
     uint32_t supercompression = 0;
     // Data format descriptor, basic block.
     uint32_t color_model = 0, color_primaries = 0, transfer = 0, flags = 0;
@@ -54,7 +55,7 @@ struct Ktx2Info {
 struct Ktx2Texture {
     Ktx2Info info;
     TexelEncoding encoding = TexelEncoding::Unorm8;
-    MipChain chain;  // decoded to float
+    MipChain chain;  // decoded to float; an array's layers one below the other (height x layers rows)
 };
 
 // Parses and validates a KTX2 file written by encode_ktx2 (uncompressed formats only): identifier,
