@@ -19,6 +19,7 @@ constexpr double kPi = std::numbers::pi;
 constexpr double kSigma2 = 1.0 / (2.0 * kPi);  // pixel filter variance, TK21 App. B
 
 double dot(V3 a, V3 b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+V3 sub(V3 a, V3 b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
 V3 cross(V3 a, V3 b) { return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]}; }
 V3 normalize(V3 a) {
     const double l = std::sqrt(dot(a, a));
@@ -36,6 +37,7 @@ struct Scene {
     bool plane = false;
     double shift = 0.0;  // motion of the current frame (UV units along u)
     V3 light = normalize({-0.4, 0.5, 1.0});
+    V3 light_position = {0.15, 1.3, -0.75};  // the plane's point light: 1.5 along the mirror direction
 
     // Screen position (x, y) in [-1, 1]^2 (orthographic, looking down -z).
     Shade at(double x, double y) const {
@@ -61,10 +63,13 @@ struct Scene {
             view = {0.0, 0.0, 1.0};
         }
         const V3 b = cross(n, t);
-        const V3 h = normalize({view[0] + light[0], view[1] + light[1], view[2] + light[2]});
+        // The plane is lit by a point light near the mirror direction, so the half vector sweeps the slope
+        // distribution across the image; the sphere by a directional light.
+        const V3 l = plane ? normalize(sub(light_position, {x, y, -std::sqrt(3.0) * y})) : light;
+        const V3 h = normalize({view[0] + l[0], view[1] + l[1], view[2] + l[2]});
         s.h = {dot(h, t), dot(h, b), dot(h, n)};
         s.o = {dot(view, t), dot(view, b), dot(view, n)};
-        s.i = {dot(light, t), dot(light, b), dot(light, n)};
+        s.i = {dot(l, t), dot(l, b), dot(l, n)};
         s.hit = true;
         return s;
     }
@@ -102,9 +107,6 @@ Result<GlintSimReport> run_glint_sim(const GlintDictionary& dict, const GlintSim
         return make_error("glint simulation: size in [4, 1024], spp >= 1 and frames >= 2");
     Scene scene;
     scene.plane = cfg.scene == "glitter-plane";
-    // The plane's light: near the mirror direction of the view about the plane normal, so the highlight
-    // (and the normal map's glints around it) lies on the plane.
-    if (scene.plane) scene.light = normalize({0.1, std::sqrt(3.0) / 2.0, -0.5});
     const double sigma = cfg.alpha / std::sqrt(2.0);
     std::vector<Candidate> candidates = {{"smooth", 0.0, -1}, {"c20", 0.0, 0}, {"ggaa", 0.5, 0}, {"ggaa-sk1", 1.0, 0}};
     if (scene.plane) {
@@ -177,7 +179,15 @@ Result<GlintSimReport> run_glint_sim(const GlintDictionary& dict, const GlintSim
                         s = glint_sigma_rho(sigma * sigma + vx, sigma * sigma + vy, cxy);
                     }
                     const std::array<double, 2> hs = slope_of(c, off);
-                    const double p22 = cand.lean < 0 ? glint_beckmann_p22(hs[0], hs[1], s) : glint_p22(dict, c.uv, duv, hs, dh, s, g);
+                    // Eq. 21 in the normal-mapped frame: without LEAN the half vector's derivatives carry the
+                    // point-sampled normal map (projected h ~ -h.z slope for the small tilts here).
+                    std::array<double, 4> dhc = dh;
+                    if (scene.plane && cand.lean == 0) {
+                        const std::array<double, 2> e = slope_of(ex, normal_map_slope(ex.uv)), w = slope_of(wx, normal_map_slope(wx.uv));
+                        const std::array<double, 2> nn = slope_of(ny, normal_map_slope(ny.uv)), ss = slope_of(sy, normal_map_slope(sy.uv));
+                        dhc = {-c.h[2] * (e[0] - w[0]), -c.h[2] * (e[1] - w[1]), -c.h[2] * (nn[0] - ss[0]), -c.h[2] * (nn[1] - ss[1])};
+                    }
+                    const double p22 = cand.lean < 0 ? glint_beckmann_p22(hs[0], hs[1], s) : glint_p22(dict, c.uv, duv, hs, dhc, s, g);
                     img[ci][size_t(frame)][at] = specular(p22, c);
                 }
             }

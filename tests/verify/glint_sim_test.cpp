@@ -1,5 +1,6 @@
 // The glint simulation (verify/glint_sim.h) on small images: the candidates the scene calls for, finite
-// metrics, and the orderings C21 reports that hold at this size (GGAA below C20 on the sphere).
+// metrics, and the orderings C21 reports that hold at this size (GGAA below C20 on the sphere, LEAN
+// with rho below LEAN without rho below no LEAN on the plane).
 #include "verify/glint_sim.h"
 
 #include <gtest/gtest.h>
@@ -39,14 +40,17 @@ TEST(GlintSim, SphereGgaaBeatsC20) {
 TEST(GlintSim, PlaneHasTheLeanCandidatesAndBadScenesFail) {
     GlintSimSettings s;
     s.scene = "glitter-plane";
-    s.size = 16;
-    s.reference_spp = 16;
+    s.size = 24;
+    s.reference_spp = 64;
     s.frames = 2;
     auto report = run_glint_sim(dictionary(), s);
     ASSERT_TRUE(report.ok()) << report.error().message;
     ASSERT_EQ(report->rows.size(), 6u);
     EXPECT_EQ(report->rows[5].candidate, "ggaa+lean");
     for (const GlintSimRow& r : report->rows) EXPECT_TRUE(std::isfinite(r.rmse_percent)) << r.candidate;
+    // C21 Fig. 7: LEAN with rho below LEAN without rho, below no LEAN (rows ggaa, +lean-norho, +lean).
+    EXPECT_LT(report->rows[5].rmse_percent, report->rows[4].rmse_percent);
+    EXPECT_LT(report->rows[4].rmse_percent, report->rows[2].rmse_percent);
     s.scene = "teapot";
     EXPECT_FALSE(run_glint_sim(dictionary(), s).ok());
 }
