@@ -52,10 +52,12 @@ double cell(const GlintDictionary& d, int s, int t, int level, double level_dist
     const double n = std::sqrt(-2.0 * std::log(1.0 - glint_unit(r[1]))) * std::cos(2.0 * kPi * glint_unit(r[2]));
     const int k = int(std::clamp(std::floor(level_dist + g.density_randomization * n + 0.5), 0.0, double(L)));
     if (k >= L) return beckmann;
+    const double e = g.ggx ? glint_cell_scale(r) : 1.0;  // E of the GGX scale mixture
     const double theta = 2.0 * kPi * glint_unit(r[3]);
     const double ct = std::cos(theta), st = std::sin(theta);
-    const std::array<double, 4> m = {ct * minv[0] + st * minv[2], ct * minv[1] + st * minv[3],
-                                     -st * minv[0] + ct * minv[2], -st * minv[1] + ct * minv[3]};
+    const double se = std::sqrt(e);
+    const std::array<double, 4> m = {se * (ct * minv[0] + st * minv[2]), se * (ct * minv[1] + st * minv[3]),
+                                     se * (-st * minv[0] + ct * minv[2]), se * (-st * minv[1] + ct * minv[3])};
     const double hox = m[0] * hs[0] + m[1] * hs[1], hoy = m[2] * hs[0] + m[3] * hs[1];
     if (std::fabs(hox) > 4.0 * sigma_o || std::fabs(hoy) > 4.0 * sigma_o) return 0.0;
     const int i = std::min(int(glint_unit(r[4]) * N), N - 1), j = std::min(int(glint_unit(r[5]) * N), N - 1);
@@ -63,7 +65,7 @@ double cell(const GlintDictionary& d, int s, int t, int level, double level_dist
     const double gxx = scale * (m[0] * dh[0] + m[1] * dh[1]), gxy = scale * (m[2] * dh[0] + m[3] * dh[1]);
     const double gyx = scale * (m[0] * dh[2] + m[1] * dh[3]), gyy = scale * (m[2] * dh[2] + m[3] * dh[3]);
     return glint_marginal_grad(d, k, i, hox, gxx, gyx) * glint_marginal_grad(d, k, j, hoy, gxy, gyy) *
-           (minv[0] * minv[3] - minv[1] * minv[2]);
+           (minv[0] * minv[3] - minv[1] * minv[2]) * e;
 }
 
 double level_sdf(const GlintDictionary& d, std::array<double, 2> uv, const std::array<double, 4>& axes, int level,
@@ -139,6 +141,20 @@ double glint_beckmann_p22(double mx, double my, const GlintSigmaRho& s) {
     return std::exp(-0.5 * (x * x - 2.0 * s.rho * x * y + y * y) / c2) / (2.0 * kPi * s.sx * s.sy * std::sqrt(c2));
 }
 
+double glint_ggx_p22(double mx, double my, const GlintSigmaRho& s) {
+    // A = 2 Sigma; m^T A^-1 m = q / 2 with q the Beckmann exponent's quadratic form.
+    const double c2 = 1.0 - s.rho * s.rho;
+    const double x = mx / s.sx, y = my / s.sy;
+    const double q = (x * x - 2.0 * s.rho * x * y + y * y) / c2;
+    const double t = 1.0 + 0.5 * q;
+    return 1.0 / (2.0 * kPi * s.sx * s.sy * std::sqrt(c2) * t * t);
+}
+
+double glint_cell_scale(const std::array<uint32_t, 6>& r) {
+    const std::array<uint32_t, 3> r3 = glint_pcg3d({r[3] ^ 0x27D4EB2Fu, r[4] ^ 0x165667B1u, r[5] ^ 0xD3A2646Cu});
+    return std::max(-std::log(1.0 - glint_unit(r3[0])), 1.0 / 64.0);
+}
+
 double glint_marginal_grad(const GlintDictionary& d, int level, int marginal, double x, double gx, double gy) {
     const double u = std::fabs(x) * 0.25 / glint_sigma_o(d.settings);
     const double rho = std::max(std::fabs(gx), std::fabs(gy)) * d.settings.width;
@@ -157,7 +173,7 @@ double glint_p22(const GlintDictionary& d, std::array<double, 2> uv, std::array<
     const int il = int(std::floor(f.level));
     const double w = f.level - il;
     const std::array<double, 4> minv = glint_inverse_transform(s, glint_sigma_o(d.settings));
-    const double beckmann = glint_beckmann_p22(hs[0], hs[1], s);
+    const double beckmann = g.ggx ? glint_ggx_p22(hs[0], hs[1], s) : glint_beckmann_p22(hs[0], hs[1], s);
     constexpr int kMaxCells = 64;  // SPECAA_GLINT_MAX_CELLS
     double p = (1.0 - w) * level_sdf(d, uv, f.axes, il, hs, dh, minv, beckmann, g, kMaxCells);
     if (w > 0.0) p += w * level_sdf(d, uv, f.axes, il + 1, hs, dh, minv, beckmann, g, kMaxCells);

@@ -15,6 +15,10 @@ struct GlintParams {
     double density_randomization = 2.0;
     double max_anisotropy = 4.0;
     double kernel_scale = 0.5;
+    // Target NDF: Beckmann (C20/C21), or GGX (SPECAA_GLINT_GGX): each cell's transform is divided by
+    // sqrt(E), E ~ Exp(1) from the cell hash (clamped at 1/64), because GGX slopes are the scale mixture
+    // N(0, Sigma / E) (a bivariate Student t with 2 degrees of freedom); the analytic fallback is GGX.
+    bool ggx = false;
 };
 
 // pcg3d (Jarzynski & Olano 2020), as in the include.
@@ -29,6 +33,10 @@ struct GlintSigmaRho {
 GlintSigmaRho glint_sigma_rho(double xx, double yy, double xy);                    // with the include's clamps
 std::array<double, 4> glint_inverse_transform(const GlintSigmaRho& s, double sigma_o);  // Eq. 18 inverse
 double glint_beckmann_p22(double mx, double my, const GlintSigmaRho& s);
+// GGX slope distribution with A = 2 Sigma: 1 / (pi sqrt(det A) (1 + m^T A^-1 m)^2).
+double glint_ggx_p22(double mx, double my, const GlintSigmaRho& s);
+// The GGX scale E of a cell from its third draw set (specaa_glint_cell with SPECAA_GLINT_GGX).
+double glint_cell_scale(const std::array<uint32_t, 6>& draws);
 
 // Trilinear read of marginal i at level k with explicit u-gradients (gx, gy), OpenGL 4.6 Sec. 8.14:
 // lambda = log2(max(|gx|, |gy|) width), magnification (linear, mip 0) for lambda <= 0, else linear

@@ -12,6 +12,12 @@ Result<GlintMaterial> parse_glint_extension(const nlohmann::json& object, const 
         const std::string& key = it.key();
         const nlohmann::json& v = it.value();
         if (key == "extensions" || key == "extras") continue;
+        if (key == "target") {
+            if (!v.is_string() || (v.get<std::string>() != "beckmann" && v.get<std::string>() != "ggx"))
+                return make_error(where + ": target must be \"beckmann\" or \"ggx\"");
+            g.target = v.get<std::string>();
+            continue;
+        }
         if (key == "texCoord") {
             if (!v.is_number_integer() || v.get<int>() < 0) return make_error(where + ": texCoord must be an integer >= 0");
             g.texcoord = v.get<int>();
@@ -40,7 +46,8 @@ nlohmann::json glint_material_json(const GlintMaterial& g) {
             {"relativeArea", g.relative_area},
             {"densityRandomization", g.density_randomization},
             {"uvScale", g.uv_scale},
-            {"texCoord", g.texcoord}};
+            {"texCoord", g.texcoord},
+            {"target", g.target}};
 }
 
 }  // namespace specbake::io

@@ -18,6 +18,7 @@ struct GlintMaterial {
     double density_randomization = 2.0;  // "densityRandomization": std of the per-cell level jitter, >= 0
     double uv_scale = 1.0;               // "uvScale": the glint UV is uv * uvScale, > 0
     int texcoord = 0;                    // "texCoord": the TEXCOORD_n set the glints use
+    std::string target = "beckmann";     // "target": NDF the glints converge to, "beckmann" or "ggx"
 };
 
 // Parses and checks the extension object; unknown keys and bad values are errors naming `where`.

@@ -38,6 +38,10 @@ Result<json> glint_object_from_config(const std::string& material, const json& k
         if (!is_glint_config_key(key)) continue;
         const std::string text = it.value().is_string() ? it.value().get<std::string>() : it.value().dump();
         const std::string where = "config: materials." + material + "." + it.key();
+        if (key == "glints_target") {
+            object["target"] = text;
+            continue;
+        }
         if (key == "glints") {
             if (text != "true" && text != "false") return make_error(where + ": must be true or false");
             asked = text == "true";

@@ -1,6 +1,6 @@
 // Glints in the plan (SPEC Sec. 6): only materials that ask for them, through the SPECBAKE_glints
 // material extension or the same keys in a config's [materials.NAME] (glints = true, glints_log_density,
-// glints_relative_area, glints_density_randomization, glints_uv_scale, glints_texcoord). A material
+// glints_relative_area, glints_density_randomization, glints_uv_scale, glints_texcoord, glints_target). A material
 // without the asked TEXCOORD_n on any primitive is skipped with the reason.
 #pragma once
 

@@ -518,6 +518,9 @@ SPECAA_FLOAT3 specaa_filtered_alpha2_matrix(SpecaaSurface s) {
 //   SPECAA_GLINT_COUNT      marginals N, default 192 (4 per RGBA texel)
 //   SPECAA_GLINT_SIGMA_O    sigma_o = alpha_dict / sqrt 2, default 0.5 / sqrt 2
 //   SPECAA_GLINT_MAX_CELLS  cells visited per level and pixel, default 64 (the weights are renormalised)
+//   SPECAA_GLINT_GGX        converge to GGX (the include's specaa_ggx_D with A = 2 Sigma) instead of
+//                           Beckmann: each cell's transform is divided by sqrt(E), E ~ Exp(1) per cell
+//                           (clamped at 1/64), as GGX slopes are the scale mixture N(0, Sigma / E)
 // The dictionary is a 2D array texture (RGBA16F), sampled with linear filtering, linear mip filtering,
 // clamp-to-edge (or mirrored) addressing in u, no anisotropic filtering.
 //
@@ -598,6 +601,14 @@ SPECAA_FLOAT4 specaa_glint_inverse_transform(SPECAA_FLOAT3 sxsyrho) {
     return SPECAA_GLINT_SIGMA_O * SPECAA_FLOAT4(1.0 / (sxsyrho.x * c), -sxsyrho.z / (sxsyrho.y * c), 0.0, 1.0 / sxsyrho.y);
 }
 
+// GGX slope distribution with A = 2 Sigma: 1 / (pi sqrt(det A) (1 + m^T A^-1 m)^2) (SPECAA_GLINT_GGX).
+float specaa_glint_ggx_P22(SPECAA_FLOAT2 m, SPECAA_FLOAT3 sxsyrho) {
+    float c2 = 1.0 - sxsyrho.z * sxsyrho.z;
+    float x = m.x / sxsyrho.x, y = m.y / sxsyrho.y;
+    float t = 1.0 + 0.5 * (x * x - 2.0 * sxsyrho.z * x * y + y * y) / c2;
+    return 1.0 / (2.0 * SPECAA_PI * sxsyrho.x * sxsyrho.y * sqrt(c2) * t * t);
+}
+
 // Correlated Beckmann slope distribution N(0, Sigma) at slope m, Sigma from (sx, sy, rho): the limit of
 // the glint SDF at high density and the coarse-level fallback (C21 Sec. 3).
 float specaa_glint_beckmann_P22(SPECAA_FLOAT2 m, SPECAA_FLOAT3 sxsyrho) {
@@ -631,9 +642,15 @@ float specaa_glint_cell(SPECAA_TEXTURE_ARRAY_PARAMS(dict, smp), int s, int t, in
     float n = sqrt(-2.0 * log(1.0 - specaa_glint_unit(r1.y))) * cos(2.0 * SPECAA_PI * specaa_glint_unit(r1.z));
     int k = int(clamp(floor(levelDist + g.densityRandomization * n + 0.5), 0.0, float(SPECAA_GLINT_LEVELS)));
     if (k >= SPECAA_GLINT_LEVELS) return beckmann;
+#if defined(SPECAA_GLINT_GGX)
+    SPECAA_UINT3 r3 = specaa_glint_pcg3d(r2 ^ SPECAA_UINT3(0x27D4EB2Fu, 0x165667B1u, 0xD3A2646Cu));
+    float e = max(-log(1.0 - specaa_glint_unit(r3.x)), 1.0 / 64.0);
+#else
+    float e = 1.0;
+#endif
     float theta = 2.0 * SPECAA_PI * specaa_glint_unit(r2.x);
-    float ct = cos(theta), st = sin(theta);
-    // R(-theta) M^-1 (Eq. 5); a rotation keeps det M^-1.
+    float ct = sqrt(e) * cos(theta), st = sqrt(e) * sin(theta);
+    // sqrt(E) R(-theta) M^-1 (Eq. 5); a rotation keeps det M^-1, the GGX scale multiplies it by E.
     SPECAA_FLOAT4 m = SPECAA_FLOAT4(ct * minv.x + st * minv.z, ct * minv.y + st * minv.w,
                                     -st * minv.x + ct * minv.z, -st * minv.y + ct * minv.w);
     SPECAA_FLOAT2 ho = SPECAA_FLOAT2(m.x * hs.x + m.y * hs.y, m.z * hs.x + m.w * hs.y);
@@ -646,7 +663,7 @@ float specaa_glint_cell(SPECAA_TEXTURE_ARRAY_PARAMS(dict, smp), int s, int t, in
     SPECAA_FLOAT2 gy = scale * SPECAA_FLOAT2(m.x * dh.z + m.y * dh.w, m.z * dh.z + m.w * dh.w);
     float px = specaa_glint_marginal(SPECAA_TEXTURE_ARRAY_ARGS(dict, smp), k, i, ho.x, gx.x, gy.x);
     float py = specaa_glint_marginal(SPECAA_TEXTURE_ARRAY_ARGS(dict, smp), k, j, ho.y, gx.y, gy.y);
-    return px * py * (minv.x * minv.w - minv.y * minv.z);
+    return px * py * (minv.x * minv.w - minv.y * minv.z) * e;
 }
 
 // Footprint of the pixel in scaled UV (C21 step 5, pbrt-v3 MIPMap::Lookup): the two axes with the minor
@@ -718,7 +735,11 @@ float specaa_glint_P22(SPECAA_TEXTURE_ARRAY_PARAMS(dict, smp), SPECAA_FLOAT2 uv,
     int il = int(floor(l));
     float w = l - float(il);
     SPECAA_FLOAT4 minv = specaa_glint_inverse_transform(sxsyrho);
+#if defined(SPECAA_GLINT_GGX)
+    float beckmann = specaa_glint_ggx_P22(hs, sxsyrho);  // the analytic fallback of the target
+#else
     float beckmann = specaa_glint_beckmann_P22(hs, sxsyrho);
+#endif
     float p = (1.0 - w) * specaa_glint_level(SPECAA_TEXTURE_ARRAY_ARGS(dict, smp), uv, axes, il, hs, dh, minv, beckmann, g);
     if (w > 0.0)
         p += w * specaa_glint_level(SPECAA_TEXTURE_ARRAY_ARGS(dict, smp), uv, axes, il + 1, hs, dh, minv, beckmann, g);

@@ -152,5 +152,37 @@ TEST(GlintModel, ManyPixelsAndHighDensityMatchTheSmoothSdf) {
     }
 }
 
+// GGX target: the per-cell scale mixture (E ~ Exp(1), Sigma / E) averages to the GGX slope distribution,
+// heavy tail included, and e^50 returns it exactly.
+TEST(GlintModel, GgxTargetConvergesToGgx) {
+    const GlintDictionary& d = small_dictionary();
+    const GlintSigmaRho s{0.2, 0.1, 0.5};
+    GlintParams g;
+    g.log_density = 31.0;
+    g.ggx = true;
+    const std::array<double, 4> duv = {1e-3, 0, 0, 1e-3};
+    std::mt19937_64 rng(8);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    // Independent check of the closed form: GGX with A = 2 Sigma, written from TK21 Eq. (1) in slopes.
+    Eigen::Matrix2d A;
+    A << 2 * s.sx * s.sx, 2 * s.rho * s.sx * s.sy, 2 * s.rho * s.sx * s.sy, 2 * s.sy * s.sy;
+    const std::array<double, 2> probes[] = {{0.0, 0.0}, {0.15, 0.05}, {-0.1, 0.08}, {0.3, 0.12}, {0.6, 0.3}};
+    for (const std::array<double, 2>& hs : probes) {
+        const Eigen::Vector2d m(hs[0], hs[1]);
+        const double q = m.dot(A.inverse() * m);
+        const double target = 1.0 / (kPi * std::sqrt(A.determinant()) * (1 + q) * (1 + q));
+        EXPECT_NEAR(glint_ggx_p22(hs[0], hs[1], s), target, 1e-12 * target);
+        double mean = 0.0;
+        const int pixels = 20000;
+        for (int p = 0; p < pixels; ++p) mean += glint_p22(d, {100 * u(rng), 100 * u(rng)}, duv, hs, {0, 0, 0, 0}, s, g) / pixels;
+        EXPECT_NEAR(mean, target, 0.03 * target) << hs[0] << " " << hs[1];
+        GlintParams dense = g;
+        dense.log_density = 50.0;
+        EXPECT_DOUBLE_EQ(glint_p22(d, {0.3, 0.4}, duv, hs, {0, 0, 0, 0}, s, dense), glint_ggx_p22(hs[0], hs[1], s));
+    }
+    // The tail probe is far above Beckmann's: the mixture is not a Gaussian.
+    EXPECT_GT(glint_ggx_p22(0.6, 0.3, s), 5.0 * glint_beckmann_p22(0.6, 0.3, s));
+}
+
 }  // namespace
 }  // namespace specbake

@@ -30,8 +30,9 @@ const GlintDictionary& dictionary() {
 
 // in0 = (uv, hs), in1 = ddx/ddy(uv), in2 = ddx/ddy(h.xy), in3 = (sx, sy, rho, logDensity),
 // in4 = (relativeArea, zeta, maxAnisotropy, kernelScale), in5 = (cell s, cell t, level).
-std::string glint_fragment() {
+std::string glint_fragment(bool ggx) {
     return "#version 450\n#define SPECAA_GLINT_COUNT " + std::to_string(kCount) + "\n" +
+           (ggx ? "#define SPECAA_GLINT_GGX\n" : "") +
            read_source_file("shaders/specaa.glsl") + R"(
 layout(binding = 3) uniform sampler2DArray uDict;
 layout(location = 0) flat in vec4 vIn0;
@@ -132,8 +133,8 @@ std::vector<Case> random_cases(int n) {
     return cases;
 }
 
-std::vector<GridResult> run(const std::vector<Case>& cases, std::string& log) {
-    const GLuint program = build_program_glsl(grid_vertex_shader(), glint_fragment(), log);
+std::vector<GridResult> run(const std::vector<Case>& cases, std::string& log, bool ggx = false) {
+    const GLuint program = build_program_glsl(grid_vertex_shader(), glint_fragment(ggx), log);
     if (!program) return {};
     const GLuint tex = upload_dictionary(dictionary());
     std::vector<GridCase> grid;
@@ -144,11 +145,12 @@ std::vector<GridResult> run(const std::vector<Case>& cases, std::string& log) {
     return out;
 }
 
-TEST(ShaderGlints, GlslGlintPathMatchesTheCppEvaluation) {
+void compare_with_cpp(bool ggx) {
     SPECBAKE_REQUIRE_GL(gl);
-    const std::vector<Case> cases = random_cases(2000);
+    std::vector<Case> cases = random_cases(2000);
+    for (Case& c : cases) c.g.ggx = ggx;
     std::string log;
-    const std::vector<GridResult> out = run(cases, log);
+    const std::vector<GridResult> out = run(cases, log, ggx);
     ASSERT_EQ(out.size(), cases.size()) << log;
     const GlintDictionary& d = dictionary();
     int nonzero = 0, off_c20 = 0, off_ggaa = 0, ggaa = 0, c20 = 0;
@@ -165,7 +167,7 @@ TEST(ShaderGlints, GlslGlintPathMatchesTheCppEvaluation) {
         for (int k = 0; k < 4; ++k) EXPECT_NEAR(out[i].out[2][size_t(k)], minv[size_t(k)], 1e-5 * std::fabs(minv[size_t(k)]) + 1e-6);
         nonzero += expected > 0.0;
         // Relative to the Beckmann peak of the case: the scale of the SDF.
-        const double scale = std::max(std::fabs(expected), glint_beckmann_p22(0, 0, c.s));
+        const double scale = std::max(std::fabs(expected), ggx ? glint_ggx_p22(0, 0, c.s) : glint_beckmann_p22(0, 0, c.s));
         const double error = std::fabs(got - expected) / scale;
         errors.push_back(error);
         if (c.g.kernel_scale == 0.0) {
@@ -177,14 +179,17 @@ TEST(ShaderGlints, GlslGlintPathMatchesTheCppEvaluation) {
         }
     }
     std::sort(errors.begin(), errors.end());
-    std::printf("glint P22: %d cases, %d nonzero, median error %.2e, p99 %.2e; C20 off %d/%d, GGAA off %d/%d (%s)\n",
-                int(cases.size()), nonzero, errors[errors.size() / 2], errors[errors.size() * 99 / 100], off_c20, c20,
+    std::printf("glint P22 (%s): %d cases, %d nonzero, median error %.2e, p99 %.2e; C20 off %d/%d, GGAA off %d/%d (%s)\n",
+                ggx ? "GGX" : "Beckmann", int(cases.size()), nonzero, errors[errors.size() / 2], errors[errors.size() * 99 / 100], off_c20, c20,
                 off_ggaa, ggaa, gl->renderer().c_str());
     EXPECT_GT(nonzero, int(cases.size()) / 2);
     // A handful may flip a rounded jittered level or a cell at the ellipse edge between float and double.
     EXPECT_LE(off_c20, c20 / 100);
     EXPECT_LE(off_ggaa, ggaa / 100);
 }
+
+TEST(ShaderGlints, GlslGlintPathMatchesTheCppEvaluation) { compare_with_cpp(false); }
+TEST(ShaderGlints, GlslGgxGlintPathMatchesTheCppEvaluation) { compare_with_cpp(true); }
 
 // alpha near 0 and 1, grazing half vectors, zero derivatives, densities e^0 and e^50, relative areas 0
 // and 1, rho at the clamps, large UVs: finite and non-negative on the GPU and in C++.
