@@ -257,6 +257,12 @@ json scene_settings_json(const SceneJob& job) {
               {"min_roughness_gain", job.plan.min_roughness_gain},
               {"min_relative_curvature", job.plan.min_relative_curvature},
               {"curvature_space", "object (1/object-space length; node scale s divides it by s in world space)"}};
+    // Glints asked through the config, so the up-to-date check sees a changed value (absent otherwise).
+    if (!job.plan.material_glints.empty()) {
+        json glints = json::object();
+        for (const auto& [name, object] : job.plan.material_glints) glints[name] = object;
+        s["material_glints"] = glints;
+    }
     if (job.plan.textures) {
         s["texture"] = texture_settings_json(job.plan.texture_settings, job.container);
         // Per-material settings as applied, so the up-to-date check sees a changed override.
