@@ -44,7 +44,8 @@ Footprint footprint(const std::array<double, 4>& duv, double max_anisotropy, int
 }
 
 double cell(const GlintDictionary& d, int s, int t, int level, double level_dist, std::array<double, 2> hs,
-            const std::array<double, 4>& dh, const std::array<double, 4>& minv, double beckmann, const GlintParams& g) {
+            const std::array<double, 4>& dh, const std::array<double, 4>& minv, double beckmann, const GlintParams& g,
+            GlintCost* cost) {
     const int L = d.settings.levels, N = d.settings.count;
     const double sigma_o = glint_sigma_o(d.settings);
     const std::array<uint32_t, 6> r = glint_cell_draws(s, t, level);
@@ -61,6 +62,7 @@ double cell(const GlintDictionary& d, int s, int t, int level, double level_dist
     const double hox = m[0] * hs[0] + m[1] * hs[1], hoy = m[2] * hs[0] + m[3] * hs[1];
     if (std::fabs(hox) > 4.0 * sigma_o || std::fabs(hoy) > 4.0 * sigma_o) return 0.0;
     const int i = std::min(int(glint_unit(r[4]) * N), N - 1), j = std::min(int(glint_unit(r[5]) * N), N - 1);
+    if (cost) cost->fetches += 2;
     const double scale = g.kernel_scale * 0.25 / sigma_o;
     const double gxx = scale * (m[0] * dh[0] + m[1] * dh[1]), gxy = scale * (m[2] * dh[0] + m[3] * dh[1]);
     const double gyx = scale * (m[0] * dh[2] + m[1] * dh[3]), gyy = scale * (m[2] * dh[2] + m[3] * dh[3]);
@@ -70,7 +72,7 @@ double cell(const GlintDictionary& d, int s, int t, int level, double level_dist
 
 double level_sdf(const GlintDictionary& d, std::array<double, 2> uv, const std::array<double, 4>& axes, int level,
                  std::array<double, 2> hs, const std::array<double, 4>& dh, const std::array<double, 4>& minv,
-                 double beckmann, const GlintParams& g, int max_cells) {
+                 double beckmann, const GlintParams& g, int max_cells, GlintCost* cost) {
     const int L = d.settings.levels;
     const double level_dist = (level - (L - 1)) + g.log_density / (2.0 * std::numbers::ln2);
     if (g.relative_area > 0.99 && std::floor(level_dist + 0.5) >= L) return beckmann;
@@ -91,11 +93,13 @@ double level_sdf(const GlintDictionary& d, std::array<double, 2> uv, const std::
     for (int t = t0; t <= t1 && visited < max_cells; ++t)
         for (int s = s0; s <= s1 && visited < max_cells; ++s) {
             ++visited;
+            if (cost) ++cost->visited;
             const double ds = s - px, dt = t - py;
             const double r2 = A * ds * ds + B * ds * dt + C * dt * dt;
             if (r2 < 1.0) {
                 const double w = std::exp(-2.0 * r2) - std::exp(-2.0);
-                sum += w * cell(d, s, t, level, level_dist, hs, dh, minv, beckmann, g);
+                if (cost) ++cost->weighted;
+                sum += w * cell(d, s, t, level, level_dist, hs, dh, minv, beckmann, g, cost);
                 weights += w;
             }
         }
@@ -168,15 +172,16 @@ double glint_marginal_grad(const GlintDictionary& d, int level, int marginal, do
 }
 
 double glint_p22(const GlintDictionary& d, std::array<double, 2> uv, std::array<double, 4> duv,
-                 std::array<double, 2> hs, std::array<double, 4> dh, const GlintSigmaRho& s, const GlintParams& g) {
+                 std::array<double, 2> hs, std::array<double, 4> dh, const GlintSigmaRho& s, const GlintParams& g,
+                 GlintCost* cost) {
     const Footprint f = footprint(duv, g.max_anisotropy, d.settings.levels);
     const int il = int(std::floor(f.level));
     const double w = f.level - il;
     const std::array<double, 4> minv = glint_inverse_transform(s, glint_sigma_o(d.settings));
     const double beckmann = g.ggx ? glint_ggx_p22(hs[0], hs[1], s) : glint_beckmann_p22(hs[0], hs[1], s);
     constexpr int kMaxCells = 64;  // SPECAA_GLINT_MAX_CELLS
-    double p = (1.0 - w) * level_sdf(d, uv, f.axes, il, hs, dh, minv, beckmann, g, kMaxCells);
-    if (w > 0.0) p += w * level_sdf(d, uv, f.axes, il + 1, hs, dh, minv, beckmann, g, kMaxCells);
+    double p = (1.0 - w) * level_sdf(d, uv, f.axes, il, hs, dh, minv, beckmann, g, kMaxCells, cost);
+    if (w > 0.0) p += w * level_sdf(d, uv, f.axes, il + 1, hs, dh, minv, beckmann, g, kMaxCells, cost);
     return p;
 }
 

@@ -43,8 +43,16 @@ double glint_cell_scale(const std::array<uint32_t, 6>& draws);
 // between mips floor(lambda) and floor(lambda) + 1; linear filtering through texel centres, clamp to edge.
 double glint_marginal_grad(const GlintDictionary& d, int level, int marginal, double x, double gx, double gy);
 
-// The include's specaa_glint_P22 (uv, duv = (ddx uv, ddy uv), hs, dh = (ddx h.xy, ddy h.xy)).
+// What one evaluation did (the run-time cost): bounding-box cells visited, cells inside the ellipse,
+// dictionary fetches.
+struct GlintCost {
+    long visited = 0, weighted = 0, fetches = 0;
+};
+
+// The include's specaa_glint_P22 (uv, duv = (ddx uv, ddy uv), hs, dh = (ddx h.xy, ddy h.xy)); adds its
+// cost to `cost` when given.
 double glint_p22(const GlintDictionary& d, std::array<double, 2> uv, std::array<double, 4> duv,
-                 std::array<double, 2> hs, std::array<double, 4> dh, const GlintSigmaRho& s, const GlintParams& g);
+                 std::array<double, 2> hs, std::array<double, 4> dh, const GlintSigmaRho& s, const GlintParams& g,
+                 GlintCost* cost = nullptr);
 
 }  // namespace specbake

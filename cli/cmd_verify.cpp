@@ -56,9 +56,10 @@ int run_glint_verify(const VerifyCommandOptions& o) {
                 "include's glint formulas\n\n",
                 settings.scene.c_str(), settings.alpha, settings.log_density, settings.size, settings.size, report->pixels,
                 settings.reference_spp, settings.frames);
-    std::printf("| candidate | RMSE %% | flicker | energy |\n|---|---:|---:|---:|\n");
+    std::printf("| candidate | RMSE %% | flicker | energy | cells / pixel | fetches / pixel |\n|---|---:|---:|---:|---:|---:|\n");
     for (const GlintSimRow& r : report->rows)
-        std::printf("| %s | %.2f | %.4f | %.3f |\n", r.candidate.c_str(), r.rmse_percent, r.flicker, r.energy);
+        std::printf("| %s | %.2f | %.4f | %.3f | %.1f | %.1f |\n", r.candidate.c_str(), r.rmse_percent, r.flicker,
+                    r.energy, r.cells, r.fetches);
     return kExitOk;
 }
 

@@ -120,7 +120,7 @@ Result<GlintSimReport> run_glint_sim(const GlintDictionary& dict, const GlintSim
     const double pixel = 2.0 / n;
     const size_t count = size_t(n) * size_t(n);
     std::vector<std::vector<double>> ref(size_t(cfg.frames), std::vector<double>(count, -1.0));
-    std::vector<std::vector<std::vector<double>>> img(candidates.size(), ref);
+    std::vector<std::vector<std::vector<double>>> img(candidates.size(), ref), cells = img, fetch = img;
 
     for (int frame = 0; frame < cfg.frames; ++frame) {
         scene.shift = frame * 0.25 * pixel * (scene.plane ? 0.5 : 1.0 / (2.0 * kPi));
@@ -187,7 +187,11 @@ Result<GlintSimReport> run_glint_sim(const GlintDictionary& dict, const GlintSim
                         const std::array<double, 2> nn = slope_of(ny, normal_map_slope(ny.uv)), ss = slope_of(sy, normal_map_slope(sy.uv));
                         dhc = {-c.h[2] * (e[0] - w[0]), -c.h[2] * (e[1] - w[1]), -c.h[2] * (nn[0] - ss[0]), -c.h[2] * (nn[1] - ss[1])};
                     }
-                    const double p22 = cand.lean < 0 ? glint_beckmann_p22(hs[0], hs[1], s) : glint_p22(dict, c.uv, duv, hs, dhc, s, g);
+                    GlintCost cost;
+                    const double p22 = cand.lean < 0 ? glint_beckmann_p22(hs[0], hs[1], s)
+                                                     : glint_p22(dict, c.uv, duv, hs, dhc, s, g, &cost);
+                    cells[ci][size_t(frame)][at] = double(cost.visited);
+                    fetch[ci][size_t(frame)][at] = double(cost.fetches);
                     img[ci][size_t(frame)][at] = specular(p22, c);
                 }
             }
@@ -204,7 +208,7 @@ Result<GlintSimReport> run_glint_sim(const GlintDictionary& dict, const GlintSim
     report.pixels = int(covered / size_t(cfg.frames));
     report.reference_mean = ref_sum / double(covered);
     for (size_t ci = 0; ci < candidates.size(); ++ci) {
-        double se = 0.0, sum = 0.0, flicker = 0.0;
+        double se = 0.0, sum = 0.0, flicker = 0.0, row_cells = 0.0, row_fetches = 0.0;
         size_t changes = 0;
         for (int f = 0; f < cfg.frames; ++f)
             for (size_t p = 0; p < count; ++p) {
@@ -212,6 +216,8 @@ Result<GlintSimReport> run_glint_sim(const GlintDictionary& dict, const GlintSim
                 const double e = img[ci][size_t(f)][p] - ref[size_t(f)][p];
                 se += e * e;
                 sum += img[ci][size_t(f)][p];
+                row_cells += cells[ci][size_t(f)][p];
+                row_fetches += fetch[ci][size_t(f)][p];
                 if (f > 0 && ref[size_t(f) - 1][p] >= 0.0) {
                     flicker += std::fabs(e - (img[ci][size_t(f) - 1][p] - ref[size_t(f) - 1][p]));
                     ++changes;
@@ -222,6 +228,8 @@ Result<GlintSimReport> run_glint_sim(const GlintDictionary& dict, const GlintSim
         row.rmse_percent = 100.0 * std::sqrt(se / double(covered)) / report.reference_mean;
         row.flicker = changes ? flicker / double(changes) / report.reference_mean : 0.0;
         row.energy = sum / ref_sum;
+        row.cells = row_cells / double(covered);
+        row.fetches = row_fetches / double(covered);
         report.rows.push_back(row);
     }
     return report;

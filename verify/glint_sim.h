@@ -28,6 +28,8 @@ struct GlintSimRow {
     double rmse_percent = 0.0;  // RMSE over the covered pixels, relative to the reference's mean, x100
     double flicker = 0.0;       // mean |frame-to-frame change of the error| relative to the reference's mean
     double energy = 0.0;        // sum of the candidate / sum of the reference
+    double cells = 0.0;         // per pixel and light: bounding-box cells visited (both levels)
+    double fetches = 0.0;       // per pixel and light: dictionary texture fetches
 };
 
 struct GlintSimReport {
