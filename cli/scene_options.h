@@ -168,14 +168,20 @@ inline Result<SceneJob> make_scene_job(const SceneCliOptions& o) {
     const nlohmann::json overrides = material_overrides().to_json();
     for (const auto& [material, keys] : overrides.items()) {
         TextureBakeSettings m = t;
+        auto glints = glint_object_from_config(material, keys);
+        if (!glints) return glints.error();
+        if (!glints->is_null()) p.material_glints[material] = *glints;
+        bool texture_keys = false;
         for (auto [key, value] : keys.items()) {
+            if (is_glint_config_key(key)) continue;
+            texture_keys = true;
             std::string name = key;
             std::replace(name.begin(), name.end(), '_', '-');  // max_kernel and max-kernel alike
             const std::string text = value.is_string() ? value.get<std::string>() : value.dump();
             if (std::string problem = set_texture_setting(m, name, text); !problem.empty())
                 return make_error("config: materials." + material + "." + key + ": " + problem);
         }
-        p.material_texture_settings[material] = m;
+        if (texture_keys || glints->is_null()) p.material_texture_settings[material] = m;
     }
     return job;
 }

@@ -61,6 +61,8 @@ std::vector<MaterialInfo> GltfScene::materials() const {
             if (normal.is_object() && normal.contains("scale") && normal["scale"].is_number())
                 c.normal_scale = normal["scale"].get<double>();
         }
+        // SPECBAKE_glints (io/glint_extension.h): kept as JSON, parsed by the plan.
+        if (auto it = mat.extensions.find("SPECBAKE_glints"); it != mat.extensions.end()) info.glints = from_value(it->second);
         out.push_back(std::move(info));
     }
     return out;

@@ -80,6 +80,7 @@ struct MaterialInfo {
     double roughness_factor = 1.0;
     double metallic_factor = 1.0;
     ClearcoatInfo clearcoat;
+    nlohmann::json glints;  // the SPECBAKE_glints object (io/glint_extension.h), null when absent
 };
 
 class GltfScene {

@@ -101,7 +101,7 @@ Ktx2Parts ktx2_parts(int levels, const std::vector<uint8_t>& dfd, const std::vec
 
 }  // namespace
 
-ContainerLayout ktx2_layout(int width, int height, int levels, TexelEncoding encoding, int channels) {
+ContainerLayout ktx2_layout(int width, int height, int levels, TexelEncoding encoding, int channels, int layers) {
     const size_t texel_bytes = size_t(channels) * size_t(encoding_bytes(encoding));
     const size_t alignment = std::lcm(texel_bytes, size_t(4));
     const Ktx2Parts parts = ktx2_parts(levels, make_dfd(encoding, channels), make_kvd());
@@ -113,14 +113,15 @@ ContainerLayout ktx2_layout(int width, int height, int levels, TexelEncoding enc
     for (int i = levels; i-- > 0;) {
         offset = align_up(offset, alignment);
         layout.level_offset[size_t(i)] = offset;
-        offset += size_t(std::max(1, width >> i)) * size_t(std::max(1, height >> i)) * texel_bytes;
+        offset += size_t(std::max(1, width >> i)) * size_t(std::max(1, height >> i)) * texel_bytes *
+                  size_t(std::max(1, layers));
     }
     layout.total = offset;
     return layout;
 }
 
 void ktx2_write_header(uint8_t* file, const ContainerLayout& layout, int width, int height, TexelEncoding encoding,
-                       int channels) {
+                       int channels, int layers) {
     const uint32_t levels = uint32_t(layout.level_offset.size());
     const size_t texel_bytes = size_t(channels) * size_t(encoding_bytes(encoding));
     const std::vector<uint8_t> dfd = make_dfd(encoding, channels);
@@ -134,7 +135,7 @@ void ktx2_write_header(uint8_t* file, const ContainerLayout& layout, int width, 
     put32(b, 20, uint32_t(width));
     put32(b, 24, uint32_t(height));
     put32(b, 28, 0);       // pixelDepth: 2D
-    put32(b, 32, 0);       // layerCount: not an array
+    put32(b, 32, uint32_t(std::max(0, layers)));  // layerCount: 0 when not an array
     put32(b, 36, 1);       // faceCount
     put32(b, 40, levels);  // levelCount
     put32(b, 44, 0);       // supercompressionScheme: none
@@ -146,7 +147,8 @@ void ktx2_write_header(uint8_t* file, const ContainerLayout& layout, int width, 
     put64(b, 72, 0);
     for (uint32_t i = 0; i < levels; ++i) {
         const size_t at = kHeaderBytes + kLevelIndexEntry * i;
-        const size_t length = size_t(std::max(1, width >> i)) * size_t(std::max(1, height >> i)) * texel_bytes;
+        const size_t length = size_t(std::max(1, width >> i)) * size_t(std::max(1, height >> i)) * texel_bytes *
+                              size_t(std::max(1, layers));
         put64(b, at, layout.level_offset[i]);
         put64(b, at + 8, length);
         put64(b, at + 16, length);
@@ -158,7 +160,8 @@ void ktx2_write_header(uint8_t* file, const ContainerLayout& layout, int width, 
     size_t end = b.size();
     for (uint32_t i = levels; i-- > 0;) {
         std::memset(file + end, 0, layout.level_offset[i] - end);
-        end = layout.level_offset[i] + size_t(std::max(1, width >> i)) * size_t(std::max(1, height >> i)) * texel_bytes;
+        end = layout.level_offset[i] + size_t(std::max(1, width >> i)) * size_t(std::max(1, height >> i)) * texel_bytes *
+                                           size_t(std::max(1, layers));
     }
 }
 
@@ -176,6 +179,22 @@ std::vector<uint8_t> encode_ktx2(const MipChain& chain, TexelEncoding encoding) 
     return b;
 }
 
+std::vector<uint8_t> encode_ktx2_array(const MipChain& stacked, int layers, TexelEncoding encoding) {
+    const int channels = stacked.channels();
+    const int levels = int(stacked.levels.size());
+    const int height = stacked.height() / layers;
+    const ContainerLayout layout = ktx2_layout(stacked.width(), height, levels, encoding, channels, layers);
+    std::vector<uint8_t> b(layout.total);
+    ktx2_write_header(b.data(), layout, stacked.width(), height, encoding, channels, layers);
+    for (int i = 0; i < levels; ++i) {
+        // KTX2 Sec. 3.9: within a level, layer after layer, each row after row: the stacked image as it is.
+        const Image& level = stacked.levels[size_t(i)];
+        encode_texels_into(level.pixels.data(), level.texel_count(), channels, 0, channels, encoding, channels, 1.0f,
+                           b.data() + layout.level_offset[size_t(i)]);
+    }
+    return b;
+}
+
 Result<Ktx2Texture> read_ktx2_texture(std::span<const uint8_t> b, const std::string& name) {
     auto fail = [&](const std::string& what) -> Result<Ktx2Texture> { return make_error(name + ": " + what); };
     if (b.size() < kHeaderBytes || std::memcmp(b.data(), kIdentifier, sizeof(kIdentifier)) != 0)
@@ -185,7 +204,10 @@ Result<Ktx2Texture> read_ktx2_texture(std::span<const uint8_t> b, const std::str
     info.vk_format = get32(b, 12);
     info.type_size = get32(b, 16);
     const uint32_t width = get32(b, 20), height = get32(b, 24);
-    if (get32(b, 28) != 0 || get32(b, 32) != 0 || get32(b, 36) != 1) return fail("not a plain 2D texture");
+    if (get32(b, 28) != 0 || get32(b, 36) != 1) return fail("not a plain 2D texture or 2D array");
+    info.layer_count = get32(b, 32);
+    if (info.layer_count > 65535) return fail("bad layer count");
+    const uint32_t layers = std::max(1u, info.layer_count);
     info.level_count = get32(b, 40);
     info.supercompression = get32(b, 44);
     if (info.supercompression != 0) return fail("supercompressed data is not supported");
@@ -249,13 +271,13 @@ Result<Ktx2Texture> read_ktx2_texture(std::span<const uint8_t> b, const std::str
         const size_t at = kHeaderBytes + kLevelIndexEntry * i;
         const uint64_t off = get64(b, at), len = get64(b, at + 8), ulen = get64(b, at + 16);
         const int w = std::max(1, int(width >> i)), h = std::max(1, int(height >> i));
-        if (len != ulen || len != uint64_t(w) * uint64_t(h) * texel_bytes)
+        if (len != ulen || len != uint64_t(w) * uint64_t(h) * texel_bytes * layers)
             return fail("level " + std::to_string(i) + " has the wrong size");
         if (off % alignment != 0) return fail("level " + std::to_string(i) + " is not aligned");
         if (off + len > b.size()) return fail("truncated level " + std::to_string(i));
         info.level_offsets.push_back(off);
         info.level_lengths.push_back(len);
-        t.chain.levels.push_back(decode_texels(b.subspan(off, len), t.encoding, w, h, channels));
+        t.chain.levels.push_back(decode_texels(b.subspan(off, len), t.encoding, w, h * int(layers), channels));
     }
     return t;
 }

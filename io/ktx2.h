@@ -1,4 +1,4 @@
-// KTX 2.0 (Khronos Texture 2.0 specification) for uncompressed 2D textures with a full mip chain:
+// KTX 2.0 (Khronos Texture 2.0 specification) for uncompressed 2D textures and 2D texture arrays with a full mip chain:
 // vkFormat R8/R16 UNORM, R16/R32 SFLOAT with 1-4 channels, a basic data format descriptor
 // (KHR_DF_MODEL_RGBSDA, BT.709 primaries, KHR_DF_TRANSFER_LINEAR), a KTXwriter key/value entry,
 // and level data stored smallest level first, each level aligned to lcm(texel size, 4).
@@ -23,18 +23,24 @@ uint32_t ktx2_vk_format(TexelEncoding encoding, int channels);
 std::vector<uint8_t> encode_ktx2(const MipChain& chain, TexelEncoding encoding);
 
 // Layout of the file encode_ktx2 writes for a width x height chain of `levels` levels.
-ContainerLayout ktx2_layout(int width, int height, int levels, TexelEncoding encoding, int channels);
+// `layers` > 0 makes it an array texture of that many layers (KTX2 layerCount), each width x height.
+ContainerLayout ktx2_layout(int width, int height, int levels, TexelEncoding encoding, int channels, int layers = 0);
 
 // Writes everything of that file except the level data into `file` (layout.total bytes): header, level
 // index, data format descriptor, key/value data, and zeroes for the alignment padding.
 void ktx2_write_header(uint8_t* file, const ContainerLayout& layout, int width, int height, TexelEncoding encoding,
-                       int channels);
+                       int channels, int layers = 0);
+
+// A 2D array texture of `layers` layers: every level of `stacked` holds its layers one below the other
+// (height = layers x layer height, layer 0 at the top), as KTX2 stores them.
+std::vector<uint8_t> encode_ktx2_array(const MipChain& stacked, int layers, TexelEncoding encoding);
 
 // What a KTX2 file holds, as parsed and checked by read_ktx2_texture.
 struct Ktx2Info {
     uint32_t vk_format = 0;
     uint32_t type_size = 0;
     uint32_t level_count = 0;
+    uint32_t layer_count = 0;  // 0: not an array
     uint32_t supercompression = 0;
     // Data format descriptor, basic block.
     uint32_t color_model = 0, color_primaries = 0, transfer = 0, flags = 0;
@@ -49,7 +55,7 @@ struct Ktx2Info {
 struct Ktx2Texture {
     Ktx2Info info;
     TexelEncoding encoding = TexelEncoding::Unorm8;
-    MipChain chain;  // decoded to float
+    MipChain chain;  // decoded to float; an array's layers one below the other (height x layers rows)
 };
 
 // Parses and validates a KTX2 file written by encode_ktx2 (uncompressed formats only): identifier,

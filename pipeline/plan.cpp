@@ -324,6 +324,9 @@ Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& optio
         }
         plan.primitives.push_back(std::move(d));
     }
+    auto glints = plan_glints(scene, options.material_glints);
+    if (!glints) return glints.error();
+    plan.glints = std::move(*glints);
     return plan;
 }
 
@@ -367,6 +370,10 @@ nlohmann::json plan_to_json(const ScenePlan& plan) {
         if (!d.mesh_report.empty()) e["mesh_report"] = d.mesh_report;
         j["primitives"].push_back(std::move(e));
     }
+    if (!plan.glints.empty()) {
+        j["glints"] = json::array();
+        for (const GlintDecision& d : plan.glints) j["glints"].push_back(glint_decision_json(d));
+    }
     j["notes"] = plan.notes;
     return j;
 }
@@ -400,6 +407,7 @@ std::string plan_to_table(const ScenePlan& plan) {
                       d.reason.c_str());
         os << line;
     }
+    os << glint_table_lines(plan.glints);
     for (const std::string& n : plan.notes) os << "  note: " << n << "\n";
     return os.str();
 }

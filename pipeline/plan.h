@@ -25,6 +25,8 @@
 //  3. it is a triangle surface (mode 4, 5 or 6) with normals (without NORMAL, glTF shades it flat).
 // Curvature is in object space: a node scale s divides it by s in world space (the run time applies the
 // node transform); the plan records each primitive's instance scales.
+//
+// Glints: only for materials that ask (pipeline/glint_plan.h); other scenes' plans have no glint entry.
 #pragma once
 
 #include "core/result.h"
@@ -33,6 +35,7 @@
 #include "mesh/curvature.h"
 #include "core/trimesh.h"
 #include "mesh/validate_mesh.h"
+#include "pipeline/glint_plan.h"
 
 #include <nlohmann/json.hpp>
 
@@ -75,6 +78,10 @@ struct PlanOptions {
     // only one material's chains are held at a time. Empty (`specbake plan`): roughness only, nothing kept.
     // An error from it ends the plan.
     TextureBakeSink texture_sink;
+
+    // Materials that ask for glints through the config ([materials.NAME] glints = true ...), by name, as
+    // SPECBAKE_glints objects (pipeline/glint_plan.h).
+    std::map<std::string, nlohmann::json> material_glints;
 };
 
 struct TextureDecision {
@@ -138,6 +145,7 @@ struct ScenePlan {
     std::vector<CurvatureDecision> primitives;    // one per primitive
     std::vector<std::string> notes;               // import notes, warnings
     std::map<size_t, PrimitiveWork> work;         // by index into `primitives`, for the ones to bake
+    std::vector<GlintDecision> glints;            // only the materials that ask for glints
     std::map<int, TextureWork> texture_work;      // by index in `textures`, for the texture bakes to run
     std::map<int, Image> decoded_images;          // image index -> decoded image
     std::map<int, int> image_bits;                // image index -> bits per channel of the file

@@ -2,6 +2,7 @@
 
 #include "pipeline/bake_output.h"
 #include "pipeline/batch.h"
+#include "pipeline/glint_bake.h"
 #include "pipeline/version.h"
 #include "io/atomic_file.h"
 #include "io/mesh_import.h"
@@ -95,7 +96,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         in.roughness_value = d.roughness_value;
         in.normal_bits = w.normal_bits;
         in.roughness_bits = w.roughness_bits;
-        auto out = write_texture_outputs(std::move(baked), in, job.plan.texture_settings_for(d.material_name),
+        auto out = write_texture_outputs(std::move(baked), in, options.texture_settings_for(d.material_name),
                                          job.container, out_dir, d.stem, job.progress);
         if (!out) return out.error();
         for (const io::ManifestOutput& o : out->outputs) written.push_back(out_dir / o.path);
@@ -103,6 +104,8 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         files_by_stem[d.stem] = std::move(out->outputs);
         return {};
     };
+    // Materials that ask for glints get slope-space LEAN moments of their normal map (C21 Eq. 16).
+    if (auto r = add_glint_lean_settings(scene, options); !r) return r.error();
     say("planning " + input.string());
     auto plan = make_plan(scene, options, loaded->roughness_known);
     if (!plan) return plan.error();
@@ -143,8 +146,8 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
             ext["source"]["roughness"] = d.roughness_value;
         if (!normal.transform.is_null()) ext["KHR_texture_transform"] = normal.transform;
         const std::string& owner_name = plan->textures[owner].material_name;
-        if (job.plan.material_texture_settings.count(owner_name))  // differs from the root's "textures"
-            ext["settings"] = texture_settings_json(job.plan.texture_settings_for(owner_name), job.container);
+        if (options.material_texture_settings.count(owner_name))  // differs from the root's "textures"
+            ext["settings"] = texture_settings_json(options.texture_settings_for(owner_name), job.container);
         ext["outputs"] = json::array();
         for (const io::ManifestOutput& o : files_by_stem.at(d.stem))
             ext["outputs"].push_back({{"kind", o.kind}, {"uri", o.path}, {"format", o.format}, {"width", o.width},
@@ -154,6 +157,8 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         if (coat) target["clearcoat"] = std::move(ext);
         else target.update(ext);
     }
+    if (auto r = add_glint_outputs(*plan, out_dir, files_by_stem, extension_of_material, written, result.outputs); !r)
+        return r.error();
     for (const auto& [material, ext] : extension_of_material) scene.set_material_extension(material, ext);
     const bool any_texture = !extension_of_material.empty();
     if (baked_primitives > 0 || any_texture) scene.set_root_extension(root_extension(job, any_texture));
@@ -256,6 +261,12 @@ json scene_settings_json(const SceneJob& job) {
               {"min_roughness_gain", job.plan.min_roughness_gain},
               {"min_relative_curvature", job.plan.min_relative_curvature},
               {"curvature_space", "object (1/object-space length; node scale s divides it by s in world space)"}};
+    // Glints asked through the config, so the up-to-date check sees a changed value (absent otherwise).
+    if (!job.plan.material_glints.empty()) {
+        json glints = json::object();
+        for (const auto& [name, object] : job.plan.material_glints) glints[name] = object;
+        s["material_glints"] = glints;
+    }
     if (job.plan.textures) {
         s["texture"] = texture_settings_json(job.plan.texture_settings, job.container);
         // Per-material settings as applied, so the up-to-date check sees a changed override.

@@ -34,6 +34,9 @@ entries=(
   "default (matrix, derivatives only)|SPECAA_COST_DEFAULT_MATRIX"
   "default (matrix) + kernel|SPECAA_COST_DEFAULT_MATRIX SPECAA_COST_TEXTURES SPECAA_KERNEL_TEXTURE=uBaked0"
   "default (matrix) + LEAN|SPECAA_COST_DEFAULT_MATRIX SPECAA_COST_TEXTURES SPECAA_LEAN_TEXTURE0=uBaked0 SPECAA_LEAN_TEXTURE1=uBaked1"
+  "glints (C21, one light)|SPECAA_COST_GLINT"
+  "glints + slope LEAN (one light)|SPECAA_COST_GLINT SPECAA_COST_TEXTURES"
+  "glints, GGX target (one light)|SPECAA_COST_GLINT SPECAA_GLINT_GGX"
 )
 
 # count LANG DEFINES -> number of instruction lines in functions after spirv-opt -O

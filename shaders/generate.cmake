@@ -1,15 +1,16 @@
-# Writes shaders/specaa.glsl and shaders/specaa.hlsl from the language prologues and the shared body in
-# shaders/src/ (one source of truth). With -DCHECK=ON it only compares and fails when a committed file
+# Writes shaders/specaa.glsl and shaders/specaa.hlsl from the language prologues and the shared body (the
+# filters, then the glints) in shaders/src/ (one source of truth). With -DCHECK=ON it only compares and fails when a committed file
 # differs from what the sources generate.
 #   cmake -P shaders/generate.cmake            regenerate
 #   cmake -DCHECK=ON -P shaders/generate.cmake check (run by the GL test suite)
 cmake_minimum_required(VERSION 3.22)
 get_filename_component(_dir "${CMAKE_CURRENT_LIST_FILE}" DIRECTORY)
 file(READ "${_dir}/src/specaa_body.inc" _body)
+file(READ "${_dir}/src/specaa_glints.inc" _glints)
 set(_stale "")
 foreach(_lang glsl hlsl)
   file(READ "${_dir}/src/prologue_${_lang}.inc" _prologue)
-  set(_text "${_prologue}${_body}")
+  set(_text "${_prologue}${_body}${_glints}")
   set(_out "${_dir}/specaa.${_lang}")
   if(CHECK)
     if(EXISTS "${_out}")

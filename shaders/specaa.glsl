@@ -14,6 +14,11 @@
 #define SPECAA_TEXTURE_PARAMS(tex, smp) sampler2D tex
 #define SPECAA_TEXTURE_ARGS(tex, smp) tex
 #define SPECAA_SAMPLE(tex, smp, uv) texture(tex, uv)
+#define SPECAA_UINT3 uvec3
+// Glint dictionary (2D texture array) parameters and its explicit-gradient read.
+#define SPECAA_TEXTURE_ARRAY_PARAMS(tex, smp) sampler2DArray tex
+#define SPECAA_TEXTURE_ARRAY_ARGS(tex, smp) tex
+#define SPECAA_SAMPLE_ARRAY_GRAD(tex, smp, uvw, gx, gy) textureGrad(tex, uvw, gx, gy)
 
 // ===================================================================================================
 // specbake runtime include: specular anti-aliasing by NDF filtering (SPEC Sec. 5).
@@ -496,6 +501,276 @@ float specaa_filtered_roughness(SpecaaSurface s) { return specaa_roughness_from_
 SPECAA_FLOAT3 specaa_filtered_alpha2_matrix(SpecaaSurface s) {
     float a = specaa_base_alpha2(s);
     return specaa_filter_projected_matrix(SPECAA_FLOAT2(a, a), specaa_baked_kernel_matrix(s) + specaa_pixel_kernel_matrix(s));
+}
+
+// ===================================================================================================
+// Glints: geometric glint anti-aliasing, C21 (Chermain et al. 2021) on the procedural glint BRDF of
+// C20, with the dictionary that `specbake glints` bakes (glint_dictionary.ktx2, see its manifest).
+//
+// The patch slope distribution (C21 Eq. 3) sums, over the cells of a virtual UV pyramid under the pixel
+// footprint, per-cell SDFs P22_M(m) = P_x(x_o) P_y(y_o) / det M (Eq. 4-6), where m_o = M^-1 m, M is the
+// slope-correlated transform of Eq. 18 times a random rotation per cell, and P_x, P_y are two marginals
+// of the dictionary picked per cell. GGAA (Eq. 15, 19, 21) filters each marginal with textureGrad using
+// the pixel derivatives of the projected half vector mapped into dictionary space.
+//
+// Configuration (define before including; they must match the dictionary's manifest):
+//   SPECAA_GLINT_LEVELS     distribution levels L, default 16
+//   SPECAA_GLINT_COUNT      marginals N, default 192 (4 per RGBA texel)
+//   SPECAA_GLINT_SIGMA_O    sigma_o = alpha_dict / sqrt 2, default 0.5 / sqrt 2
+//   SPECAA_GLINT_MAX_CELLS  cells visited per level and pixel, default 64 (the weights are renormalised)
+//   SPECAA_GLINT_GGX        converge to GGX (the include's specaa_ggx_D with A = 2 Sigma) instead of
+//                           Beckmann: each cell's transform is divided by sqrt(E), E ~ Exp(1) per cell
+//                           (clamped at 1/64), as GGX slopes are the scale mixture N(0, Sigma / E)
+// The dictionary is a 2D array texture (RGBA16F), sampled with linear filtering, linear mip filtering,
+// clamp-to-edge (or mirrored) addressing in u, no anisotropic filtering.
+//
+// Derivatives: the glint functions take no derivatives themselves. Call specaa_glint_derivatives() on
+// the UV and, per light, on the projected half vector h.xy in uniform control flow (before any
+// branch on the light or the material) and pass the results in: derivatives inside non-uniform control
+// flow are undefined in GLSL and HLSL.
+//
+// Slope covariance: (sigma_x, sigma_y, rho) from a slope covariance Sigma, e.g. slope-space LEAN
+// moments Sigma = M - m m^T, whose second moments already hold the material roughness alpha^2 / 2
+// (Olano & Baker 2010; C21 Eq. 16), or Sigma = A / 2 of a roughness matrix A.
+// ===================================================================================================
+
+#ifndef SPECAA_GLINT_LEVELS
+#define SPECAA_GLINT_LEVELS 16
+#endif
+#ifndef SPECAA_GLINT_COUNT
+#define SPECAA_GLINT_COUNT 192
+#endif
+#ifndef SPECAA_GLINT_SIGMA_O
+#define SPECAA_GLINT_SIGMA_O 0.35355339059327373
+#endif
+#ifndef SPECAA_GLINT_MAX_CELLS
+#define SPECAA_GLINT_MAX_CELLS 64
+#endif
+
+// Per-material glint parameters (the SPECBAKE_glints material extension).
+struct SpecaaGlintParams {
+    float logDensity;            // ln(microfacets per unit area of the scaled UV), e.g. 15
+    float relativeArea;          // fraction of cells that carry microfacets, in [0, 1]
+    float densityRandomization;  // std of the per-cell distribution-level jitter (C20: 2)
+    float maxAnisotropy;         // footprint eccentricity clamp (C21: 4)
+    float kernelScale;           // GGAA kernel scale s_K (C21: 0.5); 0 reads mip 0: C20 without GGAA
+};
+
+SpecaaGlintParams specaa_glint_default_params() {
+    SpecaaGlintParams g;
+    g.logDensity = 15.0;
+    g.relativeArea = 1.0;
+    g.densityRandomization = 2.0;
+    g.maxAnisotropy = 4.0;
+    g.kernelScale = 0.5;
+    return g;
+}
+
+// (ddx(v), ddy(v)) of a 2D quantity. Call in uniform control flow (see above).
+SPECAA_FLOAT4 specaa_glint_derivatives(SPECAA_FLOAT2 v) { return SPECAA_FLOAT4(SPECAA_DDX(v), SPECAA_DDY(v)); }
+
+// pcg3d (Jarzynski & Olano 2020, "Hash Functions for GPU Rendering"): three 32-bit draws per key with no
+// lattice repeat, unlike C20's seed s + 1549 t (cells (s, t) and (s + 1549, t - 1) are then equal).
+SPECAA_UINT3 specaa_glint_pcg3d(SPECAA_UINT3 v) {
+    v = v * 1664525u + SPECAA_UINT3(1013904223u, 1013904223u, 1013904223u);
+    v.x += v.y * v.z;
+    v.y += v.z * v.x;
+    v.z += v.x * v.y;
+    v = v ^ (v >> 16u);
+    v.x += v.y * v.z;
+    v.y += v.z * v.x;
+    v.z += v.x * v.y;
+    return v;
+}
+
+// Uniform in [0, 1) from the top 24 bits (exact in float).
+float specaa_glint_unit(uint x) { return float(x >> 8u) * (1.0 / 16777216.0); }
+
+// (sigma_x, sigma_y, rho) of a slope covariance (xx, yy, xy), clamped as C21's shader does:
+// sigma in [0.01, 1], rho in [-0.99, 0.99].
+SPECAA_FLOAT3 specaa_glint_sigma_rho(SPECAA_FLOAT3 sigma) {
+    float sx = clamp(sqrt(max(sigma.x, 0.0)), 0.01, 1.0);
+    float sy = clamp(sqrt(max(sigma.y, 0.0)), 0.01, 1.0);
+    return SPECAA_FLOAT3(sx, sy, clamp(sigma.z / (sx * sy), -0.99, 0.99));
+}
+
+// M^-1 of C21 Eq. 18, M = (1 / sigma_o) [[sx sqrt(1 - rho^2), rho sx], [0, sy]], as (m00, m01, m10, m11):
+// M^-1 = sigma_o [[1 / (sx sqrt(1 - rho^2)), -rho / (sy sqrt(1 - rho^2))], [0, 1 / sy]].
+SPECAA_FLOAT4 specaa_glint_inverse_transform(SPECAA_FLOAT3 sxsyrho) {
+    float c = sqrt(1.0 - sxsyrho.z * sxsyrho.z);
+    return SPECAA_GLINT_SIGMA_O * SPECAA_FLOAT4(1.0 / (sxsyrho.x * c), -sxsyrho.z / (sxsyrho.y * c), 0.0, 1.0 / sxsyrho.y);
+}
+
+// GGX slope distribution with A = 2 Sigma: 1 / (pi sqrt(det A) (1 + m^T A^-1 m)^2) (SPECAA_GLINT_GGX).
+float specaa_glint_ggx_P22(SPECAA_FLOAT2 m, SPECAA_FLOAT3 sxsyrho) {
+    float c2 = 1.0 - sxsyrho.z * sxsyrho.z;
+    float x = m.x / sxsyrho.x, y = m.y / sxsyrho.y;
+    float t = 1.0 + 0.5 * (x * x - 2.0 * sxsyrho.z * x * y + y * y) / c2;
+    return 1.0 / (2.0 * SPECAA_PI * sxsyrho.x * sxsyrho.y * sqrt(c2) * t * t);
+}
+
+// Correlated Beckmann slope distribution N(0, Sigma) at slope m, Sigma from (sx, sy, rho): the limit of
+// the glint SDF at high density and the coarse-level fallback (C21 Sec. 3).
+float specaa_glint_beckmann_P22(SPECAA_FLOAT2 m, SPECAA_FLOAT3 sxsyrho) {
+    float c2 = 1.0 - sxsyrho.z * sxsyrho.z;
+    float x = m.x / sxsyrho.x, y = m.y / sxsyrho.y;
+    float q = (x * x - 2.0 * sxsyrho.z * x * y + y * y) / c2;
+    return exp(-0.5 * q) / (2.0 * SPECAA_PI * sxsyrho.x * sxsyrho.y * sqrt(c2));
+}
+
+// One marginal of the dictionary: marginal i at distribution level k, read at dictionary-space slope x
+// with the dictionary-space kernel derivatives gx, gy (Eq. 19).
+float specaa_glint_marginal(SPECAA_TEXTURE_ARRAY_PARAMS(dict, smp), int k, int i, float x, float gx, float gy) {
+    float u = abs(x) * (0.25 / SPECAA_GLINT_SIGMA_O);
+    float layer = float(k * (SPECAA_GLINT_COUNT / 4) + i / 4);
+    SPECAA_FLOAT4 texel = SPECAA_SAMPLE_ARRAY_GRAD(dict, smp, SPECAA_FLOAT3(u, 0.5, layer), SPECAA_FLOAT2(gx, 0.0),
+                                                   SPECAA_FLOAT2(gy, 0.0));
+    int c = i - 4 * (i / 4);
+    return c == 0 ? texel.x : c == 1 ? texel.y : c == 2 ? texel.z : texel.w;
+}
+
+// SDF of cell (s, t) of spatial level `level` (C20 Alg. 3 with C21 Eq. 15 and 18). hs: half-vector
+// slope; dh: (ddx, ddy) of the projected half vector (Eq. 21); minv: Eq. 18 inverse; beckmann: the
+// analytic SDF at hs, returned by cells whose jittered level reaches L.
+float specaa_glint_cell(SPECAA_TEXTURE_ARRAY_PARAMS(dict, smp), int s, int t, int level, float levelDist,
+                        SPECAA_FLOAT2 hs, SPECAA_FLOAT4 dh, SPECAA_FLOAT4 minv, float beckmann, SpecaaGlintParams g) {
+    // Coherent index (C20 Eq. 8): a cell shares its draws with its first descendant at every finer level.
+    SPECAA_UINT3 r1 = specaa_glint_pcg3d(SPECAA_UINT3(uint(s) << uint(level), uint(t) << uint(level), 0x2545F491u));
+    SPECAA_UINT3 r2 = specaa_glint_pcg3d(r1 ^ SPECAA_UINT3(0x9E3779B9u, 0x85EBCA6Bu, 0xC2B2AE35u));
+    if (specaa_glint_unit(r1.x) >= g.relativeArea) return 0.0;
+    // Density randomisation: the distribution level jittered by a normal of std zeta (Box-Muller).
+    float n = sqrt(-2.0 * log(1.0 - specaa_glint_unit(r1.y))) * cos(2.0 * SPECAA_PI * specaa_glint_unit(r1.z));
+    int k = int(clamp(floor(levelDist + g.densityRandomization * n + 0.5), 0.0, float(SPECAA_GLINT_LEVELS)));
+    if (k >= SPECAA_GLINT_LEVELS) return beckmann;
+#if defined(SPECAA_GLINT_GGX)
+    SPECAA_UINT3 r3 = specaa_glint_pcg3d(r2 ^ SPECAA_UINT3(0x27D4EB2Fu, 0x165667B1u, 0xD3A2646Cu));
+    float e = max(-log(1.0 - specaa_glint_unit(r3.x)), 1.0 / 64.0);
+#else
+    float e = 1.0;
+#endif
+    float theta = 2.0 * SPECAA_PI * specaa_glint_unit(r2.x);
+    float ct = sqrt(e) * cos(theta), st = sqrt(e) * sin(theta);
+    // sqrt(E) R(-theta) M^-1 (Eq. 5); a rotation keeps det M^-1, the GGX scale multiplies it by E.
+    SPECAA_FLOAT4 m = SPECAA_FLOAT4(ct * minv.x + st * minv.z, ct * minv.y + st * minv.w,
+                                    -st * minv.x + ct * minv.z, -st * minv.y + ct * minv.w);
+    SPECAA_FLOAT2 ho = SPECAA_FLOAT2(m.x * hs.x + m.y * hs.y, m.z * hs.x + m.w * hs.y);
+    if (abs(ho.x) > 4.0 * SPECAA_GLINT_SIGMA_O || abs(ho.y) > 4.0 * SPECAA_GLINT_SIGMA_O) return 0.0;
+    int i = min(int(specaa_glint_unit(r2.y) * float(SPECAA_GLINT_COUNT)), SPECAA_GLINT_COUNT - 1);
+    int j = min(int(specaa_glint_unit(r2.z) * float(SPECAA_GLINT_COUNT)), SPECAA_GLINT_COUNT - 1);
+    // Kernel derivatives in texture space: s_K M^-1_cell dh / (4 sigma_o) (Eq. 19, 21).
+    float scale = g.kernelScale * 0.25 / SPECAA_GLINT_SIGMA_O;
+    SPECAA_FLOAT2 gx = scale * SPECAA_FLOAT2(m.x * dh.x + m.y * dh.y, m.z * dh.x + m.w * dh.y);
+    SPECAA_FLOAT2 gy = scale * SPECAA_FLOAT2(m.x * dh.z + m.y * dh.w, m.z * dh.z + m.w * dh.w);
+    float px = specaa_glint_marginal(SPECAA_TEXTURE_ARRAY_ARGS(dict, smp), k, i, ho.x, gx.x, gy.x);
+    float py = specaa_glint_marginal(SPECAA_TEXTURE_ARRAY_ARGS(dict, smp), k, j, ho.y, gx.y, gy.y);
+    return px * py * (minv.x * minv.w - minv.y * minv.z) * e;
+}
+
+// Footprint of the pixel in scaled UV (C21 step 5, pbrt-v3 MIPMap::Lookup): the two axes with the minor
+// one stretched to major / maxAnisotropy, and the continuous spatial level whose cell size is the minor
+// axis. Returns (major.xy, minor.xy) in `axes` and the level, clamped to [0, L - 1].
+float specaa_glint_footprint(SPECAA_FLOAT4 duv, float maxAnisotropy, out SPECAA_FLOAT4 axes) {
+    float lx = length(duv.xy), ly = length(duv.zw);
+    SPECAA_FLOAT2 major = lx >= ly ? duv.xy : duv.zw;
+    SPECAA_FLOAT2 minor = lx >= ly ? duv.zw : duv.xy;
+    float majorLength = max(lx, ly), minorLength = min(lx, ly);
+    float floorLength = majorLength / maxAnisotropy;
+    if (minorLength < floorLength) {
+        // A zero minor axis takes the direction perpendicular to the major one.
+        SPECAA_FLOAT2 direction = minorLength > 0.0 ? minor / minorLength : SPECAA_FLOAT2(-major.y, major.x) / majorLength;
+        minor = direction * floorLength;
+        minorLength = floorLength;
+    }
+    axes = SPECAA_FLOAT4(major, minor);
+    return clamp(float(SPECAA_GLINT_LEVELS - 1) + log2(max(minorLength, 1.0e-30)), 0.0, float(SPECAA_GLINT_LEVELS - 1));
+}
+
+// Mean SDF of the cells of one spatial level under the footprint, Gaussian-weighted over the EWA
+// ellipse (C20 Alg. 2): W = exp(-2 r^2) - exp(-2) inside r < 1, the ellipse at least one cell wide.
+float specaa_glint_level(SPECAA_TEXTURE_ARRAY_PARAMS(dict, smp), SPECAA_FLOAT2 uv, SPECAA_FLOAT4 axes, int level,
+                         SPECAA_FLOAT2 hs, SPECAA_FLOAT4 dh, SPECAA_FLOAT4 minv, float beckmann, SpecaaGlintParams g) {
+    // Distribution level: log4 of the expected microfacets per cell, 4^(level - (L - 1)) e^logDensity.
+    float levelDist = float(level - (SPECAA_GLINT_LEVELS - 1)) + g.logDensity * 0.72134752044448170;  // 1 / (2 ln 2)
+    // Every cell would draw the analytic level (C21 step 6).
+    if (g.relativeArea > 0.99 && floor(levelDist + 0.5) >= float(SPECAA_GLINT_LEVELS)) return beckmann;
+    float scale = exp2(float(SPECAA_GLINT_LEVELS - 1 - level));
+    SPECAA_FLOAT2 p = uv * scale - SPECAA_FLOAT2(0.5, 0.5);
+    SPECAA_FLOAT2 d0 = axes.xy * scale, d1 = axes.zw * scale;
+    float A = d0.y * d0.y + d1.y * d1.y + 1.0;
+    float B = -2.0 * (d0.x * d0.y + d1.x * d1.y);
+    float C = d0.x * d0.x + d1.x * d1.x + 1.0;
+    float F = A * C - 0.25 * B * B;
+    A /= F;
+    B /= F;
+    C /= F;
+    float det = 4.0 * A * C - B * B;
+    float halfU = 2.0 * sqrt(det * C) / det, halfV = 2.0 * sqrt(A * det) / det;
+    int s0 = int(ceil(p.x - halfU)), s1 = int(floor(p.x + halfU));
+    int t0 = int(ceil(p.y - halfV)), t1 = int(floor(p.y + halfV));
+    float sum = 0.0, weights = 0.0;
+    int visited = 0;
+    for (int t = t0; t <= t1 && visited < SPECAA_GLINT_MAX_CELLS; ++t) {
+        for (int s = s0; s <= s1 && visited < SPECAA_GLINT_MAX_CELLS; ++s) {
+            ++visited;
+            float ds = float(s) - p.x, dt = float(t) - p.y;
+            float r2 = A * ds * ds + B * ds * dt + C * dt * dt;
+            if (r2 < 1.0) {
+                float w = exp(-2.0 * r2) - 0.1353352832366127;  // exp(-2)
+                sum += w * specaa_glint_cell(SPECAA_TEXTURE_ARRAY_ARGS(dict, smp), s, t, level, levelDist, hs, dh, minv,
+                                             beckmann, g);
+                weights += w;
+            }
+        }
+    }
+    return weights > 1.0e-6 ? sum / weights : 0.0;
+}
+
+// Patch SDF P22 of the pixel (C21 Eq. 3): the two spatial levels around the footprint's level, blended
+// linearly. uv: scaled texture coordinates; duv: specaa_glint_derivatives(uv); hs: half-vector slope
+// (-h.x / h.z, -h.y / h.z); dh: specaa_glint_derivatives(h.xy); sxsyrho: specaa_glint_sigma_rho.
+float specaa_glint_P22(SPECAA_TEXTURE_ARRAY_PARAMS(dict, smp), SPECAA_FLOAT2 uv, SPECAA_FLOAT4 duv, SPECAA_FLOAT2 hs,
+                       SPECAA_FLOAT4 dh, SPECAA_FLOAT3 sxsyrho, SpecaaGlintParams g) {
+    SPECAA_FLOAT4 axes;
+    float l = specaa_glint_footprint(duv, g.maxAnisotropy, axes);
+    int il = int(floor(l));
+    float w = l - float(il);
+    SPECAA_FLOAT4 minv = specaa_glint_inverse_transform(sxsyrho);
+#if defined(SPECAA_GLINT_GGX)
+    float beckmann = specaa_glint_ggx_P22(hs, sxsyrho);  // the analytic fallback of the target
+#else
+    float beckmann = specaa_glint_beckmann_P22(hs, sxsyrho);
+#endif
+    float p = (1.0 - w) * specaa_glint_level(SPECAA_TEXTURE_ARRAY_ARGS(dict, smp), uv, axes, il, hs, dh, minv, beckmann, g);
+    if (w > 0.0)
+        p += w * specaa_glint_level(SPECAA_TEXTURE_ARRAY_ARGS(dict, smp), uv, axes, il + 1, hs, dh, minv, beckmann, g);
+    return p;
+}
+
+// Glint NDF D = P22 / h.z^4 (C21 Eq. 2) at the unit tangent-space half vector h; 0 for h.z <= 0.
+float specaa_glint_D(SPECAA_TEXTURE_ARRAY_PARAMS(dict, smp), SPECAA_FLOAT2 uv, SPECAA_FLOAT4 duv, SPECAA_FLOAT3 h,
+                     SPECAA_FLOAT4 dh, SPECAA_FLOAT3 sxsyrho, SpecaaGlintParams g) {
+    if (h.z <= 0.0) return 0.0;
+    SPECAA_FLOAT2 hs = -h.xy / h.z;
+    float z2 = h.z * h.z;
+    return specaa_glint_P22(SPECAA_TEXTURE_ARRAY_ARGS(dict, smp), uv, duv, hs, dh, sxsyrho, g) / (z2 * z2);
+}
+
+// V-cavity masking-shadowing of C20/C21: min(1, 2 h.z o.z / o.h) min(1, 2 h.z i.z / i.h); 0 when a
+// direction is below the surface or on the back of h.
+float specaa_glint_vcavity_G2(SPECAA_FLOAT3 i, SPECAA_FLOAT3 o, SPECAA_FLOAT3 h) {
+    float ih = dot(i, h), oh = dot(o, h);
+    if (i.z <= 0.0 || o.z <= 0.0 || ih <= 0.0 || oh <= 0.0) return 0.0;
+    return min(1.0, 2.0 * h.z * o.z / oh) * min(1.0, 2.0 * h.z * i.z / ih);
+}
+
+// Glint specular term times cos(i): D G2 / (4 o.z) with F = 1 (multiply by the Fresnel term), C21 Eq. 1.
+float specaa_glint_specular(SPECAA_TEXTURE_ARRAY_PARAMS(dict, smp), SPECAA_FLOAT2 uv, SPECAA_FLOAT4 duv,
+                            SPECAA_FLOAT3 i, SPECAA_FLOAT3 o, SPECAA_FLOAT4 dh, SPECAA_FLOAT3 sxsyrho,
+                            SpecaaGlintParams g) {
+    SPECAA_FLOAT3 h = normalize(i + o);
+    float G = specaa_glint_vcavity_G2(i, o, h);
+    if (G <= 0.0) return 0.0;
+    return specaa_glint_D(SPECAA_TEXTURE_ARRAY_ARGS(dict, smp), uv, duv, h, dh, sxsyrho, g) * G / (4.0 * o.z);
 }
 
 #endif  // SPECAA_INCLUDED

@@ -5,6 +5,10 @@
 layout(binding = 0) uniform sampler2D uBaked0;
 layout(binding = 1) uniform sampler2D uBaked1;
 #endif
+#if defined(SPECAA_COST_GLINT)
+layout(binding = 2) uniform sampler2DArray uGlintDictionary;
+#define SPECAA_COST_GLINT_DICTIONARY uGlintDictionary
+#endif
 #include "specaa.glsl"
 #include "cost/entries.inc"
 

@@ -5,6 +5,11 @@ Texture2D uBaked1 : register(t1);
 SamplerState uSampler : register(s0);
 #define SPECAA_SAMPLER uSampler
 #endif
+#if defined(SPECAA_COST_GLINT)
+Texture2DArray uGlintDictionary : register(t2);
+SamplerState uGlintSampler : register(s1);
+#define SPECAA_COST_GLINT_DICTIONARY uGlintDictionary, uGlintSampler
+#endif
 #include "specaa.hlsl"
 #include "cost/entries.inc"
 

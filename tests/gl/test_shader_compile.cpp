@@ -30,9 +30,10 @@ TEST(ShaderCompile, GeneratedIncludesMatchSources) {
     const int status = run_command(std::string("'") + SPECBAKE_CMAKE_COMMAND + "' -DCHECK=ON -P '" + kShaders +
                                        "/generate.cmake'", out);
     EXPECT_EQ(status, 0) << out;
-    // Both languages share the body byte for byte after their prologues.
+    // Both languages share the body (the filters, then the glints) byte for byte after their prologues.
     const std::string glsl = read_source_file("shaders/specaa.glsl"), hlsl = read_source_file("shaders/specaa.hlsl");
-    const std::string body = read_source_file("shaders/src/specaa_body.inc");
+    const std::string body =
+        read_source_file("shaders/src/specaa_body.inc") + read_source_file("shaders/src/specaa_glints.inc");
     ASSERT_FALSE(body.empty());
     EXPECT_EQ(glsl.substr(glsl.size() - body.size()), body);
     EXPECT_EQ(hlsl.substr(hlsl.size() - body.size()), body);
