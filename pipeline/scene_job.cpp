@@ -172,7 +172,10 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
     if (job.format == SceneFormat::Glb) ext = ".glb";
     const fs::path out_file = out_dir / (input.stem().string() + ext);
     say("writing " + out_file.string());
-    auto files = scene.write(out_file);
+    // Copied images never take the name of a file this bake writes: the textures, the manifest.
+    std::vector<std::string> reserved{"manifest.json"};
+    for (const io::ManifestOutput& o : result.outputs) reserved.push_back(o.path);
+    auto files = scene.write(out_file, reserved);
     if (!files) return files.error();
     for (const io::GltfScene::WrittenFile& f : *files) written.push_back(f.path);
     for (size_t i = 0; i < files->size(); ++i) {
@@ -182,6 +185,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         o.kind = i == 0 ? "scene" : (std::string(format_of(f)) == "bin" ? "buffer" : "image");
         o.path = io::relative_path(f, out_dir);
         o.format = format_of(f);
+        if (!(*files)[i].renamed_from.empty()) o.extra = {{"renamed_from", (*files)[i].renamed_from}};
         if (i == 0) {
             size_t vertices = 0;
             for (const auto& [index, work] : plan->work) vertices += work.mesh.vertex_count();
