@@ -1,4 +1,5 @@
 #include "io/container_inspect.h"
+#include "io/input_policy.h"
 
 #include "io/atomic_file.h"
 #include "io/oiio_api.h"
@@ -158,6 +159,16 @@ Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& nam
     if (kvd_length && (kvd_offset < index_end || uint64_t(kvd_offset) + kvd_length > b.size()))
         return fail("key/value data lies outside the file");
     if (sgd_offset != 0 || sgd_length != 0) return fail("supercompression global data without supercompression");
+    // Key/value entries (KTX 2.0 Sec. 3.11): each a 4-byte length, that many bytes, padding to 4; every
+    // entry inside the block.
+    for (uint64_t at = kvd_offset, end = uint64_t(kvd_offset) + kvd_length; kvd_length && at < end;) {
+        if (end - at < 4) return fail("key/value data ends inside an entry's length");
+        const uint64_t entry = u32(b, size_t(at));
+        if (entry > end - at - 4)
+            return fail("key/value entry at " + std::to_string(at) + " of length " + std::to_string(entry) +
+                        " runs past the key/value data");
+        at += 4 + (entry + 3) / 4 * 4;
+    }
 
     // Data format descriptor: the basic block (Khronos Data Format Specification 1.3, Sec. 5).
     if (dfd_length < 4 + 24) return fail("data format descriptor too short");
@@ -268,7 +279,7 @@ bool has_prefix(std::span<const uint8_t> b, const void* magic, size_t n) {
 Result<InspectedTexture> read_with_oiio(const std::filesystem::path& path) {
     auto api = oiio::api();
     if (!api) return make_error(path.string() + ": " + api.error().message);
-    return (*api)->read_levels(path.string());
+    return (*api)->read_levels(path.string(), input_policy().limits.texels);
 }
 
 }  // namespace
