@@ -116,6 +116,17 @@ constexpr uint8_t kKtx2Magic[12] = {0xAB, 'K', 'T', 'X', ' ', '2', '0', 0xBB, '\
 constexpr size_t kKtx2HeaderBytes = 80;
 constexpr size_t kKtx2LevelEntryBytes = 24;
 
+// Level 0 against the limits (io/input_policy.h) before it is decoded to float texels: its texel count
+// and its bytes in the file.
+Result<void> check_size(uint32_t w, uint32_t h, const FormatInfo& f) {
+    const InputLimits& limits = input_policy().limits;
+    if (uint64_t(w) * h > limits.texels) return make_error(std::to_string(w) + "x" + std::to_string(h) + ": " +
+                                                           over_limit("texels", uint64_t(w) * h, limits.texels) + " texels");
+    if (const uint64_t bytes = level_bytes(w, h, 0, f); bytes > limits.texture_bytes)
+        return make_error("level 0 of " + over_limit("texture-bytes", bytes, limits.texture_bytes) + " bytes");
+    return {};
+}
+
 struct Ktx2Layout {
     const FormatInfo* format = nullptr;
     uint32_t width = 0, height = 0, levels = 0;
@@ -142,7 +153,8 @@ Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& nam
     if (L.width == 0 || L.height == 0) return fail("zero width or height");
     if (depth != 0 || layers != 0 || faces != 1) return fail("only single 2D images are supported");
     if (supercompression != 0) return fail("supercompression scheme " + std::to_string(supercompression));
-    if (int(L.levels) > full_chain_levels(L.width, L.height))
+    if (auto r = check_size(L.width, L.height, f); !r) return fail(r.error().message);
+    if (L.levels > uint32_t(full_chain_levels(L.width, L.height)))
         return fail("levelCount " + std::to_string(L.levels) + " exceeds the full chain of " +
                     std::to_string(full_chain_levels(L.width, L.height)));
 
@@ -254,7 +266,7 @@ Result<DdsLayout> parse_dds(std::span<const uint8_t> b, const std::string& name)
     L.levels = (flags & 0x20000) ? std::max<uint32_t>(1, u32(b, 28)) : 1;  // DDSD_MIPMAPCOUNT
     if (L.width == 0 || L.height == 0) return fail("zero width or height");
     if ((flags & 0x800000) && depth > 1) return fail("volume textures are not supported");
-    if (int(L.levels) > full_chain_levels(L.width, L.height))
+    if (L.levels > uint32_t(full_chain_levels(L.width, L.height)))
         return fail("mip count " + std::to_string(L.levels) + " exceeds the full chain");
     if (u32(b, 76) != 32) return fail("pixel format size is not 32");
     const uint32_t pf_flags = u32(b, 80);
@@ -262,6 +274,7 @@ Result<DdsLayout> parse_dds(std::span<const uint8_t> b, const std::string& name)
     const uint32_t dxgi = u32(b, 128), dimension = u32(b, 132), misc = u32(b, 136), array = u32(b, 140);
     L.format = format_by_dxgi(dxgi);
     if (!L.format) return fail("DXGI format " + std::to_string(dxgi) + " is not an uncompressed format specbake reads");
+    if (auto r = check_size(L.width, L.height, *L.format); !r) return fail(r.error().message);
     if (dimension != 3) return fail("resource dimension " + std::to_string(dimension) + " is not TEXTURE2D");
     if (misc & 0x4) return fail("cube maps are not supported");
     if (array != 1) return fail("array size " + std::to_string(array) + " (expected 1)");

@@ -471,3 +471,28 @@ TEST(HostileInput, Ktx2KeyValueEntryRunningPastItsBlockFailsCheck) {
     EXPECT_NE((r.out + r.err).find("key/value"), std::string::npos) << r.out << r.err;
     fs::remove_all(dir);
 }
+
+TEST(HostileInput, DdsWithHugeMipCountIsRefusedAtOnce) {
+    const fs::path dir = temp_dir("dds_mips");
+    // DDS_HEADER (124 bytes after the magic) + DDS_HEADER_DXT10, 512x512 RGBA8, mip count 0xFFFFFFFF,
+    // padded to 1 MiB.
+    std::string dds = "DDS " + le32(124) + le32(0x1 | 0x2 | 0x4 | 0x1000 | 0x20000) + le32(512) + le32(512) +
+                      le32(0) + le32(0) + le32(0xFFFFFFFFu) + std::string(44, '\0') + le32(32) + le32(0x4) + "DX10" +
+                      std::string(20, '\0') + le32(0) + le32(0) + le32(0) + le32(0) + le32(0);
+    ASSERT_EQ(dds.size(), 128u);
+    dds += le32(28) + le32(3) + le32(0) + le32(1) + le32(0);  // DXGI_FORMAT_R8G8B8A8_UNORM, TEXTURE2D
+    dds.resize(1 << 20, '\0');
+    write_bytes(dir / "mips.dds", dds);
+    const Measured m = run_measured({"inspect", (dir / "mips.dds").string()}, dir);
+    expect_clean_error(m.run, "mips.dds", "mip count");
+    EXPECT_LT(m.peak_rss_kb, 200 * 1024);
+    // And a header claiming 65536^2 texels.
+    std::string big = dds;
+    big.replace(12, 8, le32(65536) + le32(65536));
+    big.replace(28, 4, le32(1));
+    write_bytes(dir / "big.dds", big);
+    const Measured b = run_measured({"inspect", (dir / "big.dds").string()}, dir);
+    expect_clean_error(b.run, "big.dds", "--limit texels");
+    EXPECT_LT(b.peak_rss_kb, 200 * 1024);
+    fs::remove_all(dir);
+}
