@@ -88,9 +88,34 @@ std::string over_limit(const char* name, uint64_t value, uint64_t limit) {
            "raises it)";
 }
 
+bool is_valid_utf8(const std::string& text) {
+    // RFC 3629: shortest forms only, no surrogates, nothing above U+10FFFF.
+    for (size_t i = 0; i < text.size();) {
+        const uint8_t c = uint8_t(text[i]);
+        size_t n = c < 0x80 ? 0 : (c >> 5) == 0x6 ? 1 : (c >> 4) == 0xE ? 2 : (c >> 3) == 0x1E ? 3 : 4;
+        if (n == 4 || i + n >= text.size()) return false;
+        uint32_t cp = n == 0 ? c : n == 1 ? c & 0x1F : n == 2 ? c & 0x0F : c & 0x07;
+        for (size_t k = 1; k <= n; ++k) {
+            const uint8_t cc = uint8_t(text[i + k]);
+            if ((cc >> 6) != 0x2) return false;
+            cp = cp << 6 | (cc & 0x3F);
+        }
+        static constexpr uint32_t kMin[4] = {0, 0x80, 0x800, 0x10000};
+        if (cp < kMin[n] || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF)) return false;
+        i += n + 1;
+    }
+    return true;
+}
+
+Result<void> check_utf8_path(const fs::path& path) {
+    if (is_valid_utf8(path.string())) return {};
+    return make_error(path.string() + ": the path is not valid UTF-8 (manifest.json records paths as UTF-8 text)");
+}
+
 Result<fs::path> resolve_in_folder(const fs::path& folder, const std::string& decoded, const InputPolicy& policy) {
     if (decoded.find('\0') != std::string::npos) return make_error("contains a NUL byte");
     if (decoded.empty()) return make_error("is empty");
+    if (!is_valid_utf8(decoded)) return make_error("is not valid UTF-8 once percent-decoded");
     const fs::path given(decoded);
     const std::string hint = " (--allow-root DIR permits reading below DIR)";
     if (given.is_absolute() || given.has_root_name() || given.has_root_directory() || decoded[0] == '\\') {

@@ -40,9 +40,14 @@ Result<void> add_allowed_root(InputPolicy& policy, const std::filesystem::path& 
 // "... exceeds the limit of N (--limit NAME=N raises it)", the tail of every limit error.
 std::string over_limit(const char* name, uint64_t value, uint64_t limit);
 
+// The path as UTF-8 text, or an error naming it: manifests and plans record paths as JSON strings, which
+// must be valid UTF-8 (checked before any work, instead of failing when the manifest is written).
+Result<void> check_utf8_path(const std::filesystem::path& path);
+bool is_valid_utf8(const std::string& text);
+
 // Resolves a decoded URI of a file in `folder` to the path that is read, hashed, copied and listed: the
 // folder joined with the decoded text, lexically normal. Refused (the reason, without the scene's name):
-// NUL bytes, absolute paths, and paths that leave `folder`, lexically or through a symbolic link, unless
+// NUL bytes, invalid UTF-8, absolute paths, and paths that leave `folder`, lexically or through a symbolic link, unless
 // they lie in one of the allowed roots.
 Result<std::filesystem::path> resolve_in_folder(const std::filesystem::path& folder, const std::string& decoded,
                                                 const InputPolicy& policy);

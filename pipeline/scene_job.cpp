@@ -2,6 +2,7 @@
 
 #include "pipeline/version.h"
 #include "io/atomic_file.h"
+#include "io/input_policy.h"
 #include "io/mesh_import.h"
 #include "io/sha256.h"
 #include "mesh/generate_normals.h"
@@ -206,6 +207,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
 }  // namespace
 
 Result<LoadedScene> load_scene(const fs::path& path) {
+    if (auto r = io::check_utf8_path(path); !r) return r.error();
     LoadedScene out;
     const std::string ext = lower_extension(path);
     if (ext == ".gltf" || ext == ".glb") {
@@ -271,6 +273,7 @@ json scene_settings_json(const SceneJob& job) {
 
 Result<SceneJobOutcome> run_scene_job(const SceneJob& job) {
     if (job.scenes.empty()) return make_error("no scene given");
+    if (auto r = io::check_utf8_path(job.output_dir); !r) return r.error();
     SceneJobOutcome outcome;
     outcome.manifest.version = tool_version();
     outcome.manifest.settings = scene_settings_json(job);

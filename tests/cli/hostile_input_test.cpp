@@ -419,14 +419,21 @@ TEST(HostileInput, CorruptPngErrorsNameTheFile) {
     fs::remove_all(dir);
 }
 
-TEST(HostileInput, InvalidUtf8IsReportedWithTheFile) {
+TEST(HostileInput, InvalidUtf8PathsAreReportedWithTheFile) {
     const fs::path dir = temp_dir("utf8");
-    std::string text = triangle_scene("").dump();
-    text.insert(text.find("\"pbrMetallicRoughness\""), "\"name\":\"bad\xff\xfe name\",");
-    write_bytes(dir / "utf8.gltf", text);
-    const RunResult r = run_specbake({"bake", (dir / "utf8.gltf").string(), "-o", (dir / "out").string()}, dir);
-    if (r.exit_code != 0) expect_clean_error(r, "utf8.gltf", "UTF-8");
-    else EXPECT_TRUE(json::accept(slurp(dir / "out" / "manifest.json")));
+    // A scene and a normal map whose names are not UTF-8, and a URI that is not once percent-decoded.
+    const fs::path scene = dir / "scene\xff.gltf";
+    write_json(scene, triangle_scene(""));
+    RunResult r = run_specbake({"bake", scene.string(), "-o", (dir / "out").string()}, dir);
+    expect_clean_error(r, scene.string(), "UTF-8");
+    const fs::path normal = dir / "normal\xfe.png";
+    write_normal_png(normal);
+    r = run_specbake({"texture", "--normal", normal.string(), "-o", (dir / "out").string()}, dir);
+    expect_clean_error(r, normal.string(), "UTF-8");
+    fs::copy_file(normal, dir / "n.png");
+    write_json(dir / "uri.gltf", triangle_scene("%ffn.png"));
+    r = run_specbake({"bake", (dir / "uri.gltf").string(), "-o", (dir / "out").string()}, dir);
+    expect_clean_error(r, "uri.gltf", "UTF-8");
     fs::remove_all(dir);
 }
 
