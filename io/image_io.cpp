@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <initializer_list>
 #include <fstream>
 #include <memory>
 #include <system_error>
@@ -33,6 +34,25 @@ uint32_t crc32(std::span<const uint8_t> bytes) {
     return c ^ 0xFFFFFFFFu;
 }
 
+// The IHDR fields libpng checks (PNG spec Sec. 11.2.2), checked first so that its complaint comes as one
+// line naming the file.
+Result<void> check_ihdr(const uint8_t* d, const std::string& name) {
+    const uint32_t w = be32(d), h = be32(d + 4);
+    const int depth = d[8], colour = d[9];
+    auto depth_in = [&](std::initializer_list<int> allowed) {
+        return std::find(allowed.begin(), allowed.end(), depth) != allowed.end();
+    };
+    const bool depth_ok = colour == 0   ? depth_in({1, 2, 4, 8, 16})
+                          : colour == 3 ? depth_in({1, 2, 4, 8})
+                          : (colour == 2 || colour == 4 || colour == 6) && depth_in({8, 16});
+    if (w > 0x7FFFFFFFu || h > 0x7FFFFFFFu || !depth_ok || d[10] != 0 || d[11] != 0 || d[12] > 1)
+        return make_error(name + ": invalid PNG header (IHDR: " + std::to_string(w) + "x" + std::to_string(h) +
+                          ", bit depth " + std::to_string(depth) + ", colour type " + std::to_string(colour) +
+                          ", compression " + std::to_string(d[10]) + ", filter " + std::to_string(d[11]) +
+                          ", interlace " + std::to_string(d[12]) + ")");
+    return {};
+}
+
 // Walks the chunks of a PNG before libpng sees it: libpng reports truncation, empty headers and CRC
 // mismatches on stderr by itself, without the file's name, and the error should be one line from
 // specbake instead. The header's size is checked against the texel limit here too, before OpenImageIO
@@ -53,6 +73,7 @@ Result<void> check_png_structure(std::span<const uint8_t> b, const std::string& 
             const uint32_t w = be32(b.data() + at + 8), h = be32(b.data() + at + 12);
             if (w == 0 || h == 0)
                 return make_error(name + ": empty image (" + std::to_string(w) + "x" + std::to_string(h) + ")");
+            if (auto r = check_ihdr(b.data() + at + 8, name); !r) return r.error();
             const uint64_t limit = input_policy().limits.texels;
             if (uint64_t(w) * h > limit)
                 return make_error(name + ": image is " + std::to_string(w) + "x" + std::to_string(h) + ": " +

@@ -411,11 +411,20 @@ TEST(HostileInput, CorruptPngErrorsNameTheFile) {
     ASSERT_NE(idat, std::string::npos);
     png[idat + 6] = char(png[idat + 6] ^ 0x5a);
     write_bytes(dir / "bad.png", png);
-    const RunResult r = run_specbake({"texture", "--normal", (dir / "bad.png").string(), "-o", (dir / "out").string()}, dir);
-    expect_clean_error(r, "bad.png", "bad.png");
-    std::istringstream lines(r.err);
-    for (std::string line; std::getline(lines, line);)
-        EXPECT_NE(line.find("bad.png"), std::string::npos) << "every line names the file: " << line;
+    // And an IHDR with a bit depth PNG does not have, its CRC correct.
+    std::string header = slurp(dir / "good.png");
+    const size_t ihdr = header.find("IHDR");
+    header[ihdr + 4 + 8] = 3;
+    const std::string crc = be32(uint32_t(crc32(0, reinterpret_cast<const Bytef*>(header.data() + ihdr), 17)));
+    header.replace(ihdr + 17, 4, crc);
+    write_bytes(dir / "depth.png", header);
+    for (const char* name : {"bad.png", "depth.png"}) {
+        const RunResult r = run_specbake({"texture", "--normal", (dir / name).string(), "-o", (dir / "out").string()}, dir);
+        expect_clean_error(r, name, name);
+        std::istringstream lines(r.err);
+        for (std::string line; std::getline(lines, line);)
+            EXPECT_NE(line.find(name), std::string::npos) << "every line names the file: " << line;
+    }
     fs::remove_all(dir);
 }
 
