@@ -2,6 +2,7 @@
 #include "io/input_policy.h"
 
 #include "io/atomic_file.h"
+#include "io/image_io.h"
 #include "io/oiio_api.h"
 
 
@@ -120,8 +121,9 @@ constexpr size_t kKtx2LevelEntryBytes = 24;
 // and its bytes in the file.
 Result<void> check_size(uint32_t w, uint32_t h, const FormatInfo& f) {
     const InputLimits& limits = input_policy().limits;
-    if (uint64_t(w) * h > limits.texels) return make_error(std::to_string(w) + "x" + std::to_string(h) + ": " +
-                                                           over_limit("texels", uint64_t(w) * h, limits.texels) + " texels");
+    if (uint64_t(w) * h > limits.texels)
+        return make_error("image is " + std::to_string(w) + "x" + std::to_string(h) + ", its texel count " +
+                          over_limit("texels", uint64_t(w) * h, limits.texels));
     if (const uint64_t bytes = level_bytes(w, h, 0, f); bytes > limits.texture_bytes)
         return make_error("level 0 of " + over_limit("texture-bytes", bytes, limits.texture_bytes) + " bytes");
     return {};
@@ -349,6 +351,7 @@ Result<InspectedTexture> read_texture_for_inspection(const std::filesystem::path
     if (!bytes) return bytes.error();
     if (has_prefix(*bytes, kKtx2Magic, 12)) return decode_ktx2_for_inspection(*bytes, path.string());
     if (has_prefix(*bytes, "DDS ", 4)) return decode_dds_for_inspection(*bytes, path.string());
+    if (auto r = check_png_structure(*bytes, path.string()); !r) return r.error();  // before OpenImageIO loads
     return read_with_oiio(path);
 }
 
@@ -357,6 +360,7 @@ Result<void> check_texture_file(const std::filesystem::path& path) {
     if (!bytes) return bytes.error();
     if (has_prefix(*bytes, kKtx2Magic, 12)) return check_ktx2_structure(*bytes, path.string());
     if (has_prefix(*bytes, "DDS ", 4)) return check_dds_structure(*bytes, path.string());
+    if (auto r = check_png_structure(*bytes, path.string()); !r) return r.error();
     auto t = read_with_oiio(path);
     if (!t) return t.error();
     return {};

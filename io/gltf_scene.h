@@ -90,6 +90,9 @@ public:
     GltfScene& operator=(GltfScene&&) noexcept;
 
     // Loads a .gltf or .glb file. Images are not decoded; their bytes and URIs are kept as they are.
+    // Refused before or right after parsing, with the file named: JSON deeper or larger than the limits,
+    // URIs the path policy refuses (io/input_policy.h), more nodes or primitives than the limits, a node
+    // hierarchy with a cycle.
     static Result<GltfScene> load(const std::filesystem::path& path);
     // A new scene from an Assimp import (io/mesh_import.h): one glTF mesh with one triangle primitive per
     // imported mesh (positions, normals, tangents, TEXCOORD_0, indices as given), the node hierarchy with

@@ -57,6 +57,8 @@ Result<void> check_ihdr(const uint8_t* d, const std::string& name) {
 // mismatches on stderr by itself, without the file's name, and the error should be one line from
 // specbake instead. The header's size is checked against the texel limit here too, before OpenImageIO
 // is even loaded.
+}  // namespace
+
 Result<void> check_png_structure(std::span<const uint8_t> b, const std::string& name) {
     static const uint8_t signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
     if (b.size() < 8 || !std::equal(signature, signature + 8, b.begin())) return {};
@@ -76,8 +78,8 @@ Result<void> check_png_structure(std::span<const uint8_t> b, const std::string& 
             if (auto r = check_ihdr(b.data() + at + 8, name); !r) return r.error();
             const uint64_t limit = input_policy().limits.texels;
             if (uint64_t(w) * h > limit)
-                return make_error(name + ": image is " + std::to_string(w) + "x" + std::to_string(h) + ": " +
-                                  over_limit("texels", uint64_t(w) * h, limit) );
+                return make_error(name + ": image is " + std::to_string(w) + "x" + std::to_string(h) +
+                                  ", its texel count " + over_limit("texels", uint64_t(w) * h, limit));
             first = false;
         }
         // PNG spec Sec. 5.3: the CRC covers the chunk type and data.
@@ -87,8 +89,6 @@ Result<void> check_png_structure(std::span<const uint8_t> b, const std::string& 
         if (type == "IEND") return {};
     }
 }
-
-}  // namespace
 
 Result<DecodedImage> decode_image(const fs::path& path) {
     const std::string name = path.string();

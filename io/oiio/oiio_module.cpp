@@ -43,9 +43,9 @@ Result<void> check_texels(const OIIO::ImageSpec& spec, uint64_t max_texels, cons
     const uint64_t texels = uint64_t(std::max(spec.width, 0)) * uint64_t(std::max(spec.height, 0)) *
                             uint64_t(std::max(spec.depth, 1));
     if (texels > max_texels)
-        return make_error(name + ": image is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + ": " +
-                          std::to_string(texels) + " texels exceeds the limit of " + std::to_string(max_texels) +
-                          " (--limit texels=N raises it)");
+        return make_error(name + ": image is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
+                          ", its texel count " + std::to_string(texels) + " exceeds the limit of " +
+                          std::to_string(max_texels) + " (--limit texels=N raises it)");
     return {};
 }
 
