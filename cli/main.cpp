@@ -2,6 +2,7 @@
 // and dispatches to one registered subcommand.
 #include "cli/command.h"
 #include "io/cleanup_registry.h"
+#include "io/input_policy.h"
 #include "pipeline/config.h"
 #include "pipeline/batch.h"
 #include "pipeline/progress.h"
@@ -41,6 +42,14 @@ public:
         : command_(std::move(command)), globals_(std::move(globals)), subcommands_(std::move(subcommands)) {}
 
     void set_option(const CLI::Option* option) { option_ = option; }
+    void set_app(const CLI::App* app) { app_ = app; }
+    // The config file and the keys it gave, to name the file when the parser refuses one of them.
+    const std::string& source() const { return source_; }
+    bool gave(const std::string& message) const {
+        for (const std::string& k : keys_)
+            if (message.find(k) != std::string::npos) return true;
+        return false;
+    }
 
     std::string to_config(const CLI::App* app, bool defaults, bool descriptions, std::string prefix) const override {
         return CLI::ConfigTOML().to_config(app, defaults, descriptions, std::move(prefix));
@@ -49,18 +58,50 @@ public:
     std::vector<CLI::ConfigItem> from_config(std::istream& input) const override {
         const std::string text{std::istreambuf_iterator<char>(input), std::istreambuf_iterator<char>()};
         const std::string name = option_ && option_->count() ? option_->results().back() : "config file";
+        source_ = name;
         auto tree = parse_config_text(text, name);
         if (!tree) throw CLI::ConfigError(tree.error().message, CLI::ExitCodes::ConfigError);
         auto split = split_config(*tree, command_, globals_, subcommands_, name);
         if (!split) throw CLI::ConfigError(split.error().message, CLI::ExitCodes::ConfigError);
         material_overrides() = split->materials;
         std::vector<CLI::ConfigItem> items;
-        for (ConfigEntry& e : split->entries) items.push_back({e.section, e.key, e.values});
+        for (ConfigEntry& e : split->entries) {
+            keys_.push_back(e.key);
+            if (auto problem = flag_problem(e); !problem.empty())
+                throw CLI::ConfigError(name + ": " + e.key + ": " + problem, CLI::ExitCodes::ConfigError);
+            items.push_back({e.section, e.key, e.values});
+        }
         return items;
     }
 
 private:
+    // A flag given a value other than true or false ("yes" is a string in TOML, not a boolean).
+    std::string flag_problem(const ConfigEntry& e) const {
+        if (!app_) return {};
+        const CLI::App* scope = app_;
+        for (const std::string& s : e.section) {
+            try {
+                scope = app_->get_subcommand(s);
+            } catch (const CLI::Error&) {
+                return {};
+            }
+        }
+        const CLI::Option* opt = nullptr;
+        try {
+            opt = scope->get_option("--" + e.key);
+        } catch (const CLI::Error&) {
+            return {};
+        }
+        if (opt->get_expected_min() != 0) return {};
+        for (const std::string& v : e.values)
+            if (v != "true" && v != "false") return "'" + v + "' is not true or false";
+        return {};
+    }
+
     std::string command_;
+    const CLI::App* app_ = nullptr;
+    mutable std::string source_;
+    mutable std::vector<std::string> keys_;
     std::vector<std::string> globals_;
     std::vector<std::string> subcommands_;
     const CLI::Option* option_ = nullptr;
@@ -103,6 +144,19 @@ int main(int argc, char** argv) {
         ->check(CLI::NonNegativeNumber);
     app.add_flag("-q,--quiet", quiet, "Print errors only");
     app.add_flag("-v,--verbose", verbose, "Print what is done and why (for example why an output is rebaked)");
+    std::vector<std::string> limits, roots;
+    app.add_option("--limit", limits,
+                   "NAME=VALUE: raise (or lower) a limit checked before allocating: texels (per image, default "
+                   "2^28), json-depth (512), json-bytes (256M), nodes (1M), primitives (65536), "
+                   "accessor-elements (64M, accessors without a bufferView), texture-bytes (4G, one KTX2/DDS "
+                   "level); K, M, G suffixes. Repeatable")
+        ->expected(1)
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    app.add_option("--allow-root", roots,
+                   "A folder that scene URIs may also resolve into (by default only the scene's own folder; "
+                   "absolute paths and ../ leaving it are refused). Repeatable")
+        ->expected(1)
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
     CLI::Option* config_option =
         app.set_config("--config", "", "Read options from a TOML or JSON file; options on the command line win");
     app.footer("Arguments @FILE are replaced by the arguments listed in FILE (response file).\n"
@@ -127,6 +181,7 @@ int main(int argc, char** argv) {
     auto formatter = std::make_shared<ConfigFile>(command == args.end() ? std::string() : *command, globals,
                                                   subcommands);
     formatter->set_option(config_option);
+    formatter->set_app(&app);
     app.config_formatter(formatter);
     app.allow_config_extras(CLI::config_extras_mode::error);  // a misspelt key is an error, not ignored
 
@@ -134,6 +189,13 @@ int main(int argc, char** argv) {
         std::vector<std::string> reversed(args.rbegin(), args.rend());
         app.parse(reversed);
     } catch (const CLI::ParseError& e) {
+        // A value from the config file the parser refused: say which file it came from.
+        const std::string what = e.what();
+        if (!formatter->source().empty() && what.find(formatter->source()) == std::string::npos &&
+            formatter->gave(what)) {
+            print_error(formatter->source() + ": " + what);
+            return kExitUsage;
+        }
         const int code = app.exit(e);
         return code == 0 ? kExitOk : kExitUsage;
     }
@@ -146,6 +208,18 @@ int main(int argc, char** argv) {
         return kExitUsage;
     }
     for (const std::string& file : config_option->results()) settings.option_files.push_back(file);
+    io::InputPolicy& policy = io::input_policy();
+    const std::string from_config = config_option->count() ? " (" + formatter->source() + " or the command line)" : "";
+    for (const std::string& l : limits)
+        if (auto r = io::set_limit(policy.limits, l); !r) {
+            print_error(r.error().message + from_config);
+            return kExitUsage;
+        }
+    for (const std::string& root : roots)
+        if (auto r = io::add_allowed_root(policy, root); !r) {
+            print_error(r.error().message + from_config);
+            return kExitUsage;
+        }
     settings.verbosity = quiet ? Verbosity::quiet : verbose ? Verbosity::verbose : Verbosity::normal;
     settings.progress_bar = !quiet && isatty(fileno(stderr));
     std::optional<tbb::global_control> thread_limit;

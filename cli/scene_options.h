@@ -9,6 +9,7 @@
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <initializer_list>
 #include <memory>
@@ -39,6 +40,20 @@ struct SceneCliOptions {
     bool json = false;
 };
 
+// Finite numbers >= 0 / > 0: CLI::NonNegativeNumber and CLI::PositiveNumber let NaN through (every
+// comparison with NaN is false) and infinity too.
+inline CLI::Validator finite_number(bool zero_allowed) {
+    return CLI::Validator(
+        [zero_allowed](std::string& text) -> std::string {
+            char* end = nullptr;
+            const double v = std::strtod(text.c_str(), &end);
+            if (text.empty() || *end != '\0' || !std::isfinite(v) || v < 0 || (!zero_allowed && v == 0))
+                return "'" + text + "' is not a finite number " + (zero_allowed ? ">= 0" : "> 0");
+            return {};
+        },
+        zero_allowed ? "FINITE >= 0" : "FINITE > 0");
+}
+
 // Curvature options (all scene subcommands).
 inline void add_curvature_options(CLI::App* sub, SceneCliOptions& o) {
     sub->add_option("--estimator", o.estimator,
@@ -49,7 +64,7 @@ inline void add_curvature_options(CLI::App* sub, SceneCliOptions& o) {
         ->capture_default_str();
     sub->add_option("--min-curvature", o.min_relative_curvature,
                     "Bake curvature only where p95(|k1|) x bounding-box diagonal reaches this (radians of normal turn)")
-        ->check(CLI::NonNegativeNumber)
+        ->check(finite_number(true))
         ->capture_default_str();
 }
 
@@ -57,10 +72,10 @@ inline void add_curvature_options(CLI::App* sub, SceneCliOptions& o) {
 inline void add_material_options(CLI::App* sub, SceneCliOptions& o) {
     sub->add_option("--min-roughness-gain", o.min_roughness_gain,
                     "Bake curvature only for materials whose lowest roughness the largest kernel raises by this much")
-        ->check(CLI::NonNegativeNumber)
+        ->check(finite_number(true))
         ->capture_default_str();
     sub->add_option("--kappa", o.kappa, "Kernel clamp of the run time (SPEC Sec. 2)")
-        ->check(CLI::PositiveNumber)
+        ->check(finite_number(false))
         ->capture_default_str();
     sub->add_option("--isotropic", o.isotropic,
                     "Kernel from the footprint covariance Sigma: mean t = tr, sum t = 2 tr, max t = 2 lambda_max")
@@ -69,7 +84,7 @@ inline void add_material_options(CLI::App* sub, SceneCliOptions& o) {
     sub->add_option("--filter", o.filter, "Roughness filter: projected (TK21 Eq. 4-7) or approx (Eq. 9)")
         ->check(CLI::IsMember({"projected", "approx"}))
         ->capture_default_str();
-    sub->add_option("--max-kernel", o.max_kernel, "Clamp of the baked kernel (0: none)")->check(CLI::NonNegativeNumber);
+    sub->add_option("--max-kernel", o.max_kernel, "Clamp of the baked kernel (0: none)")->check(finite_number(true));
     sub->add_option("--normal-y", o.normal_y, "Normal-map green convention: +y (OpenGL/glTF) or -y (DirectX)")
         ->check(CLI::IsMember({"+y", "-y"}))
         ->capture_default_str();
@@ -113,7 +128,8 @@ inline std::string set_texture_setting(TextureBakeSettings& t, const std::string
     } else if (key == "max-kernel") {
         char* end = nullptr;
         const double v = std::strtod(value.c_str(), &end);
-        if (value.empty() || *end != '\0' || !(v >= 0)) return "'" + value + "' is not a number >= 0";
+        if (value.empty() || *end != '\0' || !std::isfinite(v) || v < 0)
+            return "'" + value + "' is not a finite number >= 0";
         t.max_kernel = v > 0 ? std::optional<double>(v) : std::nullopt;
     } else if (key == "outputs") {
         TextureOutputs out{false, false, false, false};

@@ -1,6 +1,8 @@
 #include "io/container_inspect.h"
+#include "io/input_policy.h"
 
 #include "io/atomic_file.h"
+#include "io/image_io.h"
 #include "io/oiio_api.h"
 
 
@@ -115,6 +117,18 @@ constexpr uint8_t kKtx2Magic[12] = {0xAB, 'K', 'T', 'X', ' ', '2', '0', 0xBB, '\
 constexpr size_t kKtx2HeaderBytes = 80;
 constexpr size_t kKtx2LevelEntryBytes = 24;
 
+// Level 0 against the limits (io/input_policy.h) before it is decoded to float texels: its texel count
+// and its bytes in the file.
+Result<void> check_size(uint32_t w, uint32_t h, const FormatInfo& f) {
+    const InputLimits& limits = input_policy().limits;
+    if (uint64_t(w) * h > limits.texels)
+        return make_error("image is " + std::to_string(w) + "x" + std::to_string(h) + ", its texel count " +
+                          over_limit("texels", uint64_t(w) * h, limits.texels));
+    if (const uint64_t bytes = level_bytes(w, h, 0, f); bytes > limits.texture_bytes)
+        return make_error("level 0 of " + over_limit("texture-bytes", bytes, limits.texture_bytes) + " bytes");
+    return {};
+}
+
 struct Ktx2Layout {
     const FormatInfo* format = nullptr;
     uint32_t width = 0, height = 0, levels = 0;
@@ -141,7 +155,8 @@ Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& nam
     if (L.width == 0 || L.height == 0) return fail("zero width or height");
     if (depth != 0 || layers != 0 || faces != 1) return fail("only single 2D images are supported");
     if (supercompression != 0) return fail("supercompression scheme " + std::to_string(supercompression));
-    if (int(L.levels) > full_chain_levels(L.width, L.height))
+    if (auto r = check_size(L.width, L.height, f); !r) return fail(r.error().message);
+    if (L.levels > uint32_t(full_chain_levels(L.width, L.height)))
         return fail("levelCount " + std::to_string(L.levels) + " exceeds the full chain of " +
                     std::to_string(full_chain_levels(L.width, L.height)));
 
@@ -158,6 +173,16 @@ Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& nam
     if (kvd_length && (kvd_offset < index_end || uint64_t(kvd_offset) + kvd_length > b.size()))
         return fail("key/value data lies outside the file");
     if (sgd_offset != 0 || sgd_length != 0) return fail("supercompression global data without supercompression");
+    // Key/value entries (KTX 2.0 Sec. 3.11): each a 4-byte length, that many bytes, padding to 4; every
+    // entry inside the block.
+    for (uint64_t at = kvd_offset, end = uint64_t(kvd_offset) + kvd_length; kvd_length && at < end;) {
+        if (end - at < 4) return fail("key/value data ends inside an entry's length");
+        const uint64_t entry = u32(b, size_t(at));
+        if (entry > end - at - 4)
+            return fail("key/value entry at " + std::to_string(at) + " of length " + std::to_string(entry) +
+                        " runs past the key/value data");
+        at += 4 + (entry + 3) / 4 * 4;
+    }
 
     // Data format descriptor: the basic block (Khronos Data Format Specification 1.3, Sec. 5).
     if (dfd_length < 4 + 24) return fail("data format descriptor too short");
@@ -243,7 +268,7 @@ Result<DdsLayout> parse_dds(std::span<const uint8_t> b, const std::string& name)
     L.levels = (flags & 0x20000) ? std::max<uint32_t>(1, u32(b, 28)) : 1;  // DDSD_MIPMAPCOUNT
     if (L.width == 0 || L.height == 0) return fail("zero width or height");
     if ((flags & 0x800000) && depth > 1) return fail("volume textures are not supported");
-    if (int(L.levels) > full_chain_levels(L.width, L.height))
+    if (L.levels > uint32_t(full_chain_levels(L.width, L.height)))
         return fail("mip count " + std::to_string(L.levels) + " exceeds the full chain");
     if (u32(b, 76) != 32) return fail("pixel format size is not 32");
     const uint32_t pf_flags = u32(b, 80);
@@ -251,6 +276,7 @@ Result<DdsLayout> parse_dds(std::span<const uint8_t> b, const std::string& name)
     const uint32_t dxgi = u32(b, 128), dimension = u32(b, 132), misc = u32(b, 136), array = u32(b, 140);
     L.format = format_by_dxgi(dxgi);
     if (!L.format) return fail("DXGI format " + std::to_string(dxgi) + " is not an uncompressed format specbake reads");
+    if (auto r = check_size(L.width, L.height, *L.format); !r) return fail(r.error().message);
     if (dimension != 3) return fail("resource dimension " + std::to_string(dimension) + " is not TEXTURE2D");
     if (misc & 0x4) return fail("cube maps are not supported");
     if (array != 1) return fail("array size " + std::to_string(array) + " (expected 1)");
@@ -268,7 +294,7 @@ bool has_prefix(std::span<const uint8_t> b, const void* magic, size_t n) {
 Result<InspectedTexture> read_with_oiio(const std::filesystem::path& path) {
     auto api = oiio::api();
     if (!api) return make_error(path.string() + ": " + api.error().message);
-    return (*api)->read_levels(path.string());
+    return (*api)->read_levels(path.string(), input_policy().limits.texels);
 }
 
 }  // namespace
@@ -325,6 +351,7 @@ Result<InspectedTexture> read_texture_for_inspection(const std::filesystem::path
     if (!bytes) return bytes.error();
     if (has_prefix(*bytes, kKtx2Magic, 12)) return decode_ktx2_for_inspection(*bytes, path.string());
     if (has_prefix(*bytes, "DDS ", 4)) return decode_dds_for_inspection(*bytes, path.string());
+    if (auto r = check_png_structure(*bytes, path.string()); !r) return r.error();  // before OpenImageIO loads
     return read_with_oiio(path);
 }
 
@@ -333,6 +360,7 @@ Result<void> check_texture_file(const std::filesystem::path& path) {
     if (!bytes) return bytes.error();
     if (has_prefix(*bytes, kKtx2Magic, 12)) return check_ktx2_structure(*bytes, path.string());
     if (has_prefix(*bytes, "DDS ", 4)) return check_dds_structure(*bytes, path.string());
+    if (auto r = check_png_structure(*bytes, path.string()); !r) return r.error();
     auto t = read_with_oiio(path);
     if (!t) return t.error();
     return {};

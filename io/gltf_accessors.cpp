@@ -93,9 +93,12 @@ Result<StridedView> view_of(const tinygltf::Model& m, const Payloads& payloads, 
         return make_error(what + ": bufferView " + std::to_string(buffer_view) + " lies outside its buffer");
     const size_t stride = bv.byteStride ? bv.byteStride : element_stride_default;
     if (count > 0) {
-        const size_t last = byte_offset + stride * (count - 1) + element_size;
-        if (byte_offset > bv.byteLength || last > bv.byteLength || last < byte_offset)
-            return make_error(what + ": data runs past the end of bufferView " + std::to_string(buffer_view));
+        // Compared without overflow: a count near 2^64 must not wrap around into range.
+        const bool fits = byte_offset <= bv.byteLength && element_size <= bv.byteLength - byte_offset &&
+                          (count == 1 || (stride > 0 && count - 1 <= (bv.byteLength - byte_offset - element_size) / stride));
+        if (!fits)
+            return make_error(what + ": accessor count " + std::to_string(count) + " runs past the end of bufferView " +
+                              std::to_string(buffer_view) + " (" + std::to_string(bv.byteLength) + " bytes)");
     }
     return StridedView{data.data() + bv.byteOffset + byte_offset, stride};
 }
@@ -111,10 +114,18 @@ Result<std::vector<double>> read_accessor(const tinygltf::Model& m, const Payloa
     const int nc = component_count(a.type);
     const size_t cs = component_size(a.componentType);
     if (nc == 0 || cs == 0) return make_error(what + ": accessor " + std::to_string(index) + " has an unsupported type");
+    // The count is checked against the bytes of the bufferView, or against the limit when there is none
+    // (all zeros plus sparse values), before anything is allocated.
+    Result<StridedView> view = StridedView{};
+    if (a.bufferView >= 0) {
+        view = view_of(m, payloads, a.bufferView, a.byteOffset, a.count, cs * size_t(nc), cs * size_t(nc), what);
+        if (!view) return view.error();
+    } else if (const uint64_t limit = input_policy().limits.accessor_elements; a.count > limit) {
+        return make_error(what + ": accessor " + std::to_string(index) + " without a bufferView: element count " +
+                          over_limit("accessor-elements", a.count, limit));
+    }
     std::vector<double> out(a.count * size_t(nc), 0.0);
     if (a.bufferView >= 0) {
-        auto view = view_of(m, payloads, a.bufferView, a.byteOffset, a.count, cs * size_t(nc), cs * size_t(nc), what);
-        if (!view) return view.error();
         if (view->stride % cs != 0) return make_error(what + ": byteStride is not a multiple of the component size");
         if (a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT) {  // the common case, without per-component dispatch
             float f[4];
@@ -196,12 +207,12 @@ Result<std::vector<uint32_t>> read_indices(const tinygltf::Model& m, const Paylo
                                            const std::string& what) {
     const tinygltf::Accessor& a = m.accessors.at(size_t(index));
     const size_t cs = component_size(a.componentType);
-    std::vector<uint32_t> out;
-    detail::reserve_huge_pages(out, a.count);
-    out.resize(a.count);
     if (!a.sparse.isSparse && a.bufferView >= 0 && cs > 0) {
         auto view = view_of(m, payloads, a.bufferView, a.byteOffset, a.count, cs, cs, what);
-        if (!view) return view.error();
+        if (!view) return view.error();  // before allocating: the count is within the view's bytes
+        std::vector<uint32_t> out;
+        detail::reserve_huge_pages(out, a.count);
+        out.resize(a.count);
         if (cs == 4 && view->stride == 4) {
             if (!out.empty()) std::memcpy(out.data(), view->base, out.size() * 4);
         } else {
@@ -222,6 +233,7 @@ Result<std::vector<uint32_t>> read_indices(const tinygltf::Model& m, const Paylo
     }
     auto values = read_accessor(m, payloads, index, what);
     if (!values) return values.error();
+    std::vector<uint32_t> out(values->size());
     for (size_t i = 0; i < out.size(); ++i) out[i] = uint32_t((*values)[i]);
     return out;
 }

@@ -25,13 +25,29 @@ std::string mime_type_of(const fs::path& file) {
     return {};
 }
 
-bool inside_folder(const fs::path& relative) {
-    return relative.is_relative() && !relative.empty() && *relative.begin() != "..";
+// Where the copy of an image file goes, relative to the output folder: its path relative to the scene's
+// folder, or its file name when it lies outside (in an allowed root).
+fs::path copy_name(const fs::path& file, const fs::path& src_dir) {
+    const fs::path rel = file.lexically_relative(src_dir.empty() ? fs::path(".") : src_dir);
+    if (rel.empty() || *rel.begin() == ".." || rel.is_absolute()) return file.filename();
+    return rel;
+}
+
+// `wanted`, or, when the bake writes a file of that name or another file was copied there, the first of
+// NAME_1.EXT, NAME_2.EXT ... that is free (deterministic: the images are taken in their glTF order).
+fs::path free_name(const fs::path& wanted, const std::set<std::string>& used) {
+    if (!used.count(wanted.generic_string())) return wanted;
+    for (int k = 1;; ++k) {
+        fs::path candidate = wanted.parent_path() / (wanted.stem().string() + "_" + std::to_string(k) +
+                                                     wanted.extension().string());
+        if (!used.count(candidate.generic_string())) return candidate;
+    }
 }
 
 }  // namespace
 
-Result<OutputPlan> plan_output(const SceneState& scene, const fs::path& path, bool glb) {
+Result<OutputPlan> plan_output(const SceneState& scene, const fs::path& path, bool glb,
+                               const std::vector<std::string>& reserved) {
     const std::string stem = path.stem().string();
     const fs::path src_dir = scene.source.parent_path();
     const Payloads& payloads = scene.buffers;
@@ -45,8 +61,24 @@ Result<OutputPlan> plan_output(const SceneState& scene, const fs::path& path, bo
     // and appends one buffer for the new data.
     std::vector<OutBuffer>& out_buffers = plan.buffers;
     std::vector<std::vector<uint8_t>>& embedded_images = plan.embedded_images;
-    std::vector<std::pair<fs::path, fs::path>>& copies = plan.copies;
+    std::vector<ImageCopy>& copies = plan.copies;
     int& target_buffer = plan.target_buffer;
+    // Names in the output folder already taken: the files the caller writes, the scene, then the buffers
+    // and copies as they are planned.
+    std::set<std::string> used_names(reserved.begin(), reserved.end());
+    used_names.insert(path.filename().generic_string());
+    std::map<fs::path, fs::path> copy_of_file;  // an image file used twice is copied once
+    auto plan_copy = [&](tinygltf::Image& img, const fs::path& from) {
+        auto [it, is_new] = copy_of_file.try_emplace(from);
+        if (is_new) {
+            const fs::path wanted = copy_name(from, src_dir);
+            it->second = free_name(wanted, used_names);
+            used_names.insert(it->second.generic_string());
+            copies.push_back({from, it->second, it->second == wanted ? std::string() : wanted.generic_string()});
+        }
+        const std::string uri = percent_encode(it->second.generic_string());
+        if (fs::path(percent_decode(img.uri)).lexically_normal() != it->second) img.uri = uri;
+    };
 
     if (glb) {
         out_buffers.emplace_back();
@@ -61,15 +93,12 @@ Result<OutputPlan> plan_output(const SceneState& scene, const fs::path& path, bo
         std::map<fs::path, int> view_of_file;  // an image file used twice is stored once
         for (size_t i = 0; i < m.images.size(); ++i) {
             tinygltf::Image& img = m.images[i];
-            if (img.uri.empty() || is_data_uri(img.uri) || is_remote_uri(img.uri)) continue;
-            const fs::path decoded = fs::path(percent_decode(img.uri)).lexically_normal();
-            const fs::path from = src_dir / decoded;
+            if (i >= scene.image_paths.size() || scene.image_paths[i].empty()) continue;
+            const fs::path& from = scene.image_paths[i];
             const std::string mime = mime_type_of(from);
             if (mime.empty()) {
                 // Not a type glTF can name in a bufferView: it stays an external file next to the GLB.
-                const fs::path rel = inside_folder(decoded) ? decoded : decoded.filename();
-                if (!inside_folder(decoded)) img.uri = percent_encode(rel.generic_string());
-                copies.push_back({from, rel});
+                plan_copy(img, from);
                 continue;
             }
             auto [it, is_new] = view_of_file.try_emplace(from, -1);
@@ -91,7 +120,6 @@ Result<OutputPlan> plan_output(const SceneState& scene, const fs::path& path, bo
         }
         target_buffer = 0;
     } else {
-        std::set<std::string> used_names;
         for (size_t i = 0; i < payloads.size(); ++i) {
             OutBuffer b;
             b.source = int(i);
@@ -103,10 +131,8 @@ Result<OutputPlan> plan_output(const SceneState& scene, const fs::path& path, bo
                 continue;
             }
             std::string rel;
-            if (!uri.empty() && !is_remote_uri(uri)) {
-                const fs::path decoded = fs::path(percent_decode(uri)).lexically_normal();
-                rel = inside_folder(decoded) ? decoded.generic_string() : decoded.filename().string();
-            }
+            if (i < scene.buffer_paths.size() && !scene.buffer_paths[i].empty())
+                rel = copy_name(scene.buffer_paths[i], src_dir).generic_string();
             if (rel.empty() || used_names.count(rel)) {
                 const std::string base = stem + (i == 0 ? "" : "_" + std::to_string(i));
                 rel = base + ".bin";
@@ -121,6 +147,7 @@ Result<OutputPlan> plan_output(const SceneState& scene, const fs::path& path, bo
             OutBuffer b;
             std::string rel = stem + "_specaa.bin";
             for (int k = 1; used_names.count(rel); ++k) rel = stem + "_specaa_" + std::to_string(k) + ".bin";
+            used_names.insert(rel);
             b.uri = percent_encode(rel);
             b.file = rel;
             out_buffers.push_back(std::move(b));
@@ -128,17 +155,13 @@ Result<OutputPlan> plan_output(const SceneState& scene, const fs::path& path, bo
         }
         // External images are copied next to the scene, at the same relative path when it stays inside the
         // output folder, else under their file name (and the URI follows).
-        for (tinygltf::Image& img : m.images) {
-            if (img.uri.empty() || is_data_uri(img.uri) || is_remote_uri(img.uri)) continue;
-            const fs::path decoded = fs::path(percent_decode(img.uri)).lexically_normal();
-            const fs::path rel = inside_folder(decoded) ? decoded : decoded.filename();
-            if (!inside_folder(decoded)) img.uri = percent_encode(rel.generic_string());
-            copies.push_back({src_dir / decoded, rel});
-        }
+        for (size_t i = 0; i < m.images.size(); ++i)
+            if (i < scene.image_paths.size() && !scene.image_paths[i].empty()) plan_copy(m.images[i], scene.image_paths[i]);
     }
-    for (const auto& [from, rel] : copies) {
+    for (const ImageCopy& c : copies) {
         std::error_code ec;
-        if (!fs::is_regular_file(from, ec)) return make_error(from.string() + ": image referenced by the scene does not exist");
+        if (!fs::is_regular_file(c.from, ec))
+            return make_error(c.from.string() + ": image referenced by the scene does not exist");
     }
 
     // Appended vertex data. Primitives that share vertex data get equal values; they share one accessor too.

@@ -5,6 +5,7 @@
 #include "io/atomic_file.h"
 #include "io/glb_pack.h"
 #include "io/gltf_scene.h"
+#include "io/input_policy.h"
 
 // Declarations only: the implementation is compiled once, in io/tinygltf_impl.cpp.
 #include "io/tinygltf_config.h"
@@ -45,6 +46,9 @@ struct SceneState {
     std::filesystem::path source;
     bool binary = false;
     std::map<std::filesystem::path, std::string> content_hashes;  // of the files read at load
+    // The file of every image and buffer stored as an external file, resolved once by the path policy
+    // (io/input_policy.h) at load; empty for embedded and remote ones. Everything reads these.
+    std::vector<std::filesystem::path> image_paths, buffer_paths;
     // The scene file's own hash is computed in the background from its bytes (mapped until then) while the
     // caller plans and bakes; content_hash() collects it.
     MappedFile source_bytes;
@@ -63,9 +67,21 @@ struct SceneState {
     std::vector<AddedAttribute> added;
 };
 
-// io/gltf_read.cpp: tinygltf's file access through std::filesystem, hashing what it reads into `hashes`
-// (null: no hashing) and refusing to write; and the image writer that leaves every image as it is.
-tinygltf::FsCallbacks fs_callbacks(std::map<std::filesystem::path, std::string>* hashes);
+// What tinygltf's file access needs while a scene loads: the scene (for messages) and its folder, the
+// path policy, where to put the hashes of the files read (null: no hashing), the files read, and the
+// first URI the policy refused.
+struct LoadContext {
+    std::string scene;
+    std::filesystem::path folder;
+    const InputPolicy* policy = nullptr;
+    std::map<std::filesystem::path, std::string>* hashes = nullptr;
+    std::vector<std::filesystem::path> read;
+    std::string refusal;
+};
+// io/gltf_read.cpp: tinygltf's file access through std::filesystem and the path policy (`context` null:
+// paths used as given, nothing hashed), refusing to write; and the image writer that leaves every image
+// as it is.
+tinygltf::FsCallbacks fs_callbacks(LoadContext* context);
 bool keep_image_uri(const std::string*, const std::string*, const tinygltf::Image*, bool, std::string*, void*);
 // URI or "<file>: image N", for messages.
 std::string image_label(const SceneState& scene, int image);
@@ -96,16 +112,23 @@ struct OutBuffer {
     std::filesystem::path file;  // relative to the output folder; empty when nothing is written for it
     int source = -1;             // input buffer written 1:1 (name, extensions kept), -1 for a merged or new one
 };
+struct ImageCopy {
+    std::filesystem::path from;  // the resolved input file
+    std::filesystem::path to;    // relative to the output folder
+    std::string renamed_from;    // the name it would have had when that was taken; empty when not renamed
+};
 struct OutputPlan {
     tinygltf::Model model;  // the input's JSON side, with views, images and accessors set for the output
     std::vector<OutBuffer> buffers;
     std::vector<std::vector<uint8_t>> embedded_images;  // file bytes of images moved into the GLB
-    std::vector<std::pair<std::filesystem::path, std::filesystem::path>> copies;  // images: from, relative to
+    std::vector<ImageCopy> copies;
     int target_buffer = -1;                                                        // holds the appended data
 };
 // The plan for writing `scene` to `path` (a .glb when `glb`, else a .gltf); its pieces point into `scene`
-// and into the plan's own embedded images.
-Result<OutputPlan> plan_output(const SceneState& scene, const std::filesystem::path& path, bool glb);
+// and into the plan's own embedded images. `reserved`: names (relative to the output folder) the caller
+// writes there itself, which no buffer or copied image may take.
+Result<OutputPlan> plan_output(const SceneState& scene, const std::filesystem::path& path, bool glb,
+                               const std::vector<std::string>& reserved);
 
 }  // namespace gltf
 

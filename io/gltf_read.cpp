@@ -6,6 +6,7 @@
 #include "io/sha256.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cstring>
 #include <limits>
 
@@ -33,22 +34,47 @@ bool keep_image_encoded(tinygltf::Image* image, const int, std::string*, std::st
     return true;
 }
 
-// File access for tinygltf through std::filesystem (external buffers and images relative to the scene).
+// File access for tinygltf: external buffers only (images are never read by it, io/tinygltf_config.h).
+// tinygltf joins the decoded URI to the base folder it is given, which is kMarker: the part after it is
+// resolved by the path policy (io/input_policy.h), and anything else (tinygltf's fallback to the working
+// folder) is not found. A refusal is kept for the error message, which then says why instead of
+// "File not found".
+constexpr const char* kMarker = "\x01specbake-scene-folder";
+
+std::string shown(const std::string& decoded) {
+    std::string out;
+    for (char c : decoded) out += c == '\0' ? std::string("%00") : std::string(1, c);
+    return out;
+}
+
+std::string fs_expand_path(const std::string& path, void* user) {
+    if (!user) return path;
+    auto& ctx = *static_cast<LoadContext*>(user);
+    const std::string prefix = std::string(kMarker) + "/";
+    if (path.compare(0, prefix.size(), prefix) != 0) return {};
+    const std::string decoded = path.substr(prefix.size());
+    auto resolved = resolve_in_folder(ctx.folder, decoded, *ctx.policy);
+    if (!resolved) {
+        if (ctx.refusal.empty())
+            ctx.refusal = ctx.scene + ": URI '" + shown(decoded) + "' refused: " + resolved.error().message;
+        return {};
+    }
+    return resolved->string();
+}
 bool fs_file_exists(const std::string& path, void*) {
     std::error_code ec;
-    return fs::is_regular_file(path, ec);
+    return !path.empty() && fs::is_regular_file(path, ec);
 }
-std::string fs_expand_path(const std::string& path, void*) { return path; }
-// Files read while loading are hashed on the way (the manifest records every input's hash), into the
-// map passed as user data.
-bool fs_read_whole_file(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* hashes) {
+// Files read while loading are hashed on the way (the manifest records every input's hash).
+bool fs_read_whole_file(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* user) {
     auto bytes = read_file(path);
     if (!bytes) {
         if (err) *err += bytes.error().message + "\n";
         return false;
     }
-    if (hashes) (*static_cast<std::map<fs::path, std::string>*>(hashes))[fs::path(path).lexically_normal()] =
-        sha256_hex(*bytes);
+    auto* ctx = static_cast<LoadContext*>(user);
+    if (ctx) ctx->read.push_back(fs::path(path));
+    if (ctx && ctx->hashes) (*ctx->hashes)[fs::path(path).lexically_normal()] = sha256_hex(*bytes);
     *out = std::move(*bytes);
     return true;
 }
@@ -57,10 +83,121 @@ bool fs_refuse_write(std::string* err, const std::string& path, const std::vecto
     return false;
 }
 
+// The JSON's size and nesting depth, checked before tinygltf parses it: its conversion of the parsed
+// JSON recurses once per level, and some 20,000 levels overflow the stack. One pass over the bytes,
+// brackets inside strings skipped.
+Result<void> check_json_shape(std::span<const uint8_t> json, const std::string& name, const InputLimits& limits) {
+    if (json.size() > limits.json_bytes)
+        return make_error(name + ": JSON of " + over_limit("json-bytes", json.size(), limits.json_bytes) + " bytes");
+    uint64_t depth = 0;
+    bool in_string = false;
+    for (size_t i = 0; i < json.size(); ++i) {
+        const uint8_t c = json[i];
+        if (in_string) {
+            if (c == '\\') ++i;
+            else if (c == '"') in_string = false;
+        } else if (c == '"') {
+            in_string = true;
+        } else if (c == '{' || c == '[') {
+            if (++depth > limits.json_depth)
+                return make_error(name + ": JSON nesting depth " + over_limit("json-depth", depth, limits.json_depth));
+        } else if ((c == '}' || c == ']') && depth > 0) {
+            --depth;
+        }
+    }
+    return {};
+}
+
+// The JSON chunk of a GLB (glTF 2.0 Sec. 4.4), or all of a .gltf; a malformed GLB is left to tinygltf.
+std::span<const uint8_t> json_of(std::span<const uint8_t> bytes, bool binary) {
+    if (!binary) return bytes;
+    if (bytes.size() < 20) return {};
+    uint32_t length = 0;
+    std::memcpy(&length, bytes.data() + 12, 4);
+    return bytes.subspan(20, std::min<size_t>(length, bytes.size() - 20));
+}
+
+bool is_file_uri(const std::string& uri) {
+    return uri.size() >= 5 && std::tolower(uint8_t(uri[0])) == 'f' && std::tolower(uint8_t(uri[1])) == 'i' &&
+           std::tolower(uint8_t(uri[2])) == 'l' && std::tolower(uint8_t(uri[3])) == 'e' && uri[4] == ':';
+}
+
+// Every external image and buffer resolved once by the path policy; a refusal names the scene and the URI.
+Result<void> resolve_files(SceneState& scene, const LoadContext& ctx) {
+    const tinygltf::Model& m = scene.model;
+    auto resolve = [&](const std::string& uri, const char* what) -> Result<fs::path> {
+        if (uri.empty() || is_data_uri(uri)) return fs::path();
+        const std::string refused = ctx.scene + ": " + what + " URI '" + shown(uri) + "' refused: ";
+        if (is_file_uri(uri)) return make_error(refused + "file: URIs are not read (use a relative path)");
+        if (is_remote_uri(uri)) return fs::path();
+        auto path = resolve_in_folder(ctx.folder, percent_decode(uri), *ctx.policy);
+        if (!path) return make_error(refused + path.error().message);
+        return *path;
+    };
+    scene.image_paths.resize(m.images.size());
+    for (size_t i = 0; i < m.images.size(); ++i) {
+        auto p = resolve(m.images[i].uri, "image");
+        if (!p) return p.error();
+        scene.image_paths[i] = std::move(*p);
+    }
+    scene.buffer_paths.resize(m.buffers.size());
+    for (size_t i = 0; i < m.buffers.size(); ++i) {
+        auto p = resolve(m.buffers[i].uri, "buffer");
+        if (!p) return p.error();
+        // tinygltf decodes buffer URIs itself; a URI it decodes differently ('+', malformed escapes)
+        // would make the bytes read differ from the file hashed and listed.
+        if (!p->empty() && std::find(ctx.read.begin(), ctx.read.end(), *p) == ctx.read.end())
+            return make_error(ctx.scene + ": buffer URI '" + shown(m.buffers[i].uri) +
+                              "' is ambiguous ('+' and malformed %-escapes are not supported in buffer URIs)");
+        scene.buffer_paths[i] = std::move(*p);
+    }
+    return {};
+}
+
+// Node and primitive counts against the limits, and the node hierarchy a forest (glTF 2.0 Sec. 3.5.3:
+// no node is its own ancestor), checked by an iterative depth-first walk.
+Result<void> check_structure(const tinygltf::Model& m, const std::string& name, const InputLimits& limits) {
+    if (m.nodes.size() > limits.nodes)
+        return make_error(name + ": node count " + over_limit("nodes", m.nodes.size(), limits.nodes));
+    uint64_t primitives = 0;
+    for (const tinygltf::Mesh& mesh : m.meshes) primitives += mesh.primitives.size();
+    if (primitives > limits.primitives)
+        return make_error(name + ": primitive count " + over_limit("primitives", primitives, limits.primitives));
+    enum : uint8_t { unseen, open, done };
+    std::vector<uint8_t> state(m.nodes.size(), unseen);
+    std::vector<std::pair<size_t, size_t>> stack;  // node, next child
+    for (size_t root = 0; root < m.nodes.size(); ++root) {
+        if (state[root] != unseen) continue;
+        stack.push_back({root, 0});
+        state[root] = open;
+        while (!stack.empty()) {
+            auto& [node, next] = stack.back();
+            const std::vector<int>& children = m.nodes[node].children;
+            if (next == children.size()) {
+                state[node] = done;
+                stack.pop_back();
+                continue;
+            }
+            const int child = children[next++];
+            if (child < 0 || size_t(child) >= m.nodes.size())
+                return make_error(name + ": node " + std::to_string(node) + " has child " + std::to_string(child) +
+                                  ", which does not exist");
+            if (state[size_t(child)] == open)
+                return make_error(name + ": node " + std::to_string(child) +
+                                  " is its own ancestor (the node hierarchy has a cycle)");
+            if (state[size_t(child)] == unseen) {
+                state[size_t(child)] = open;
+                stack.push_back({size_t(child), 0});
+            }
+        }
+    }
+    return {};
+}
+
 }  // namespace
 
-tinygltf::FsCallbacks fs_callbacks(std::map<fs::path, std::string>* hashes) {
-    return tinygltf::FsCallbacks{&fs_file_exists, &fs_expand_path, &fs_read_whole_file, &fs_refuse_write, hashes};
+tinygltf::FsCallbacks fs_callbacks(LoadContext* context) {
+    return tinygltf::FsCallbacks{&fs_file_exists, &fs_expand_path, &fs_read_whole_file, &fs_refuse_write, context};
 }
 
 bool keep_image_uri(const std::string*, const std::string*, const tinygltf::Image*, bool, std::string*, void*) {
@@ -72,8 +209,8 @@ std::string image_label(const SceneState& scene, int image) {
     const std::string file = scene.source.string();
     if (image < 0 || size_t(image) >= m.images.size()) return file + ": image " + std::to_string(image);
     const tinygltf::Image& img = m.images[size_t(image)];
-    if (!img.uri.empty() && !is_data_uri(img.uri))
-        return (scene.source.parent_path() / percent_decode(img.uri)).string();
+    if (size_t(image) < scene.image_paths.size() && !scene.image_paths[size_t(image)].empty())
+        return scene.image_paths[size_t(image)].string();
     return file + ": image " + std::to_string(image) + (img.name.empty() ? "" : " '" + img.name + "'");
 }
 
@@ -103,13 +240,20 @@ Result<GltfScene> GltfScene::load(const fs::path& path) {
     // of reading the file again later, on another thread, beside the parse and whatever the caller does next.
     impl.source_hashing = std::make_unique<tbb::task_group>();
     impl.source_hashing->run([&impl] { impl.source_hash = sha256_hex(impl.source_bytes.bytes()); });
+    const InputPolicy& policy = input_policy();
+    if (auto shape = check_json_shape(json_of(*bytes, impl.binary), path.string(), policy.limits); !shape)
+        return shape.error();
+    LoadContext ctx;
+    ctx.scene = path.string();
+    ctx.folder = path.parent_path();
+    ctx.policy = &policy;
+    ctx.hashes = &impl.content_hashes;
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(&keep_image_encoded, nullptr);
     loader.SetImageWriter(&keep_image_uri, nullptr);
-    loader.SetFsCallbacks(fs_callbacks(&impl.content_hashes));
+    loader.SetFsCallbacks(fs_callbacks(&ctx));
     std::string err, warn;
-    std::string base_dir = path.parent_path().string();
-    if (base_dir.empty()) base_dir = ".";
+    const std::string base_dir = kMarker;
     bool ok = false;
     try {
         if (impl.binary) {
@@ -124,10 +268,13 @@ Result<GltfScene> GltfScene::load(const fs::path& path) {
     } catch (const std::exception& e) {
         return make_error(path.string() + ": not a valid glTF file: " + e.what());
     }
+    if (!ok && !ctx.refusal.empty()) return make_error(ctx.refusal);
     if (!ok) {
         const std::string reason = first_line(err.empty() ? warn : err);
         return make_error(path.string() + ": not a valid glTF file: " + (reason.empty() ? "parse error" : reason));
     }
+    if (auto r = check_structure(impl.model, path.string(), policy.limits); !r) return r.error();
+    if (auto r = resolve_files(impl, ctx); !r) return r.error();
     impl.buffers.resize(impl.model.buffers.size());
     for (size_t i = 0; i < impl.buffers.size(); ++i) impl.buffers[i].swap(impl.model.buffers[i].data);
     return scene;
@@ -141,15 +288,13 @@ std::string GltfScene::content_hash(const fs::path& file) const {
 
 std::vector<fs::path> GltfScene::resource_files() const {
     std::vector<fs::path> out;
-    const fs::path dir = impl_->source.parent_path();
-    auto add = [&](const std::string& uri) {
-        if (uri.empty() || is_data_uri(uri) || is_remote_uri(uri)) return;
-        const fs::path p = dir / percent_decode(uri);
+    auto add = [&](const fs::path& p) {
         std::error_code ec;
-        if (fs::is_regular_file(p, ec) && std::find(out.begin(), out.end(), p) == out.end()) out.push_back(p);
+        if (!p.empty() && fs::is_regular_file(p, ec) && std::find(out.begin(), out.end(), p) == out.end())
+            out.push_back(p);
     };
-    for (const tinygltf::Buffer& b : impl_->model.buffers) add(b.uri);
-    for (const tinygltf::Image& i : impl_->model.images) add(i.uri);
+    for (const fs::path& p : impl_->buffer_paths) add(p);
+    for (const fs::path& p : impl_->image_paths) add(p);
     return out;
 }
 
@@ -159,8 +304,8 @@ fs::path GltfScene::image_file(int image) const {
     const tinygltf::Model& m = impl_->model;
     if (image < 0 || size_t(image) >= m.images.size()) return {};
     const tinygltf::Image& img = m.images[size_t(image)];
-    if (img.bufferView >= 0 || img.uri.empty() || is_data_uri(img.uri) || is_remote_uri(img.uri)) return {};
-    return impl_->source.parent_path() / percent_decode(img.uri);
+    if (img.bufferView >= 0 || size_t(image) >= impl_->image_paths.size()) return {};
+    return impl_->image_paths[size_t(image)];
 }
 
 Result<std::vector<uint8_t>> GltfScene::image_bytes(int image) const {
@@ -179,8 +324,9 @@ Result<std::vector<uint8_t>> GltfScene::image_bytes(int image) const {
             return make_error(image_label(image) + ": data URI is not base64");
         return base64_decode(img.uri.substr(comma + 1));
     }
-    if (img.uri.empty() || is_remote_uri(img.uri)) return make_error(image_label(image) + ": not a local file");
-    return read_file(impl_->source.parent_path() / percent_decode(img.uri));
+    if (size_t(image) >= impl_->image_paths.size() || impl_->image_paths[size_t(image)].empty())
+        return make_error(image_label(image) + ": not a local file");
+    return read_file(impl_->image_paths[size_t(image)]);
 }
 
 }  // namespace specbake::io

@@ -91,6 +91,9 @@ public:
     GltfScene& operator=(GltfScene&&) noexcept;
 
     // Loads a .gltf or .glb file. Images are not decoded; their bytes and URIs are kept as they are.
+    // Refused before or right after parsing, with the file named: JSON deeper or larger than the limits,
+    // URIs the path policy refuses (io/input_policy.h), more nodes or primitives than the limits, a node
+    // hierarchy with a cycle.
     static Result<GltfScene> load(const std::filesystem::path& path);
     // A new scene from an Assimp import (io/mesh_import.h): one glTF mesh with one triangle primitive per
     // imported mesh (positions, normals, tangents, TEXCOORD_0, indices as given), the node hierarchy with
@@ -100,7 +103,8 @@ public:
 
     const std::filesystem::path& source() const;
     bool source_is_binary() const;
-    // The files the scene reads besides itself: external buffers and images that exist on disk.
+    // The files the scene reads besides itself: external buffers and images that exist on disk, each at the
+    // one path the path policy resolved its URI to (io/input_policy.h); the same paths are read and copied.
     std::vector<std::filesystem::path> resource_files() const;
     // SHA-256 of the scene file or of an external buffer, computed from the bytes read at load time (the
     // scene file's in the background after load() returns; the first call waits for it); empty for any
@@ -135,13 +139,18 @@ public:
     struct WrittenFile {
         std::filesystem::path path;
         std::string sha256;  // of the bytes written, hashed while writing
+        // A copied image whose own name was taken (by a file the bake writes or another copy): that name.
+        std::string renamed_from;
     };
     // Writes the scene to `path`. A .gltf gets its buffers as files beside it (the input's, plus one for
     // the appended data) and copies of its external images, so the folder is self-contained. A .glb is
     // self-contained by itself: every buffer, every external image (PNG, JPEG, KTX2, WebP, DDS) and the
     // appended data go into its binary chunk as buffer views; data-URI images stay as they are. All files
     // go to temporaries first and are renamed into place together. Returns the written files, scene first.
-    Result<std::vector<WrittenFile>> write(const std::filesystem::path& path) const;
+    // No buffer or copied image takes a name in `reserved` (relative to the output folder: the files the
+    // caller writes there), the scene's, or another copy's: it is renamed NAME_1.EXT, NAME_2.EXT, ...
+    Result<std::vector<WrittenFile>> write(const std::filesystem::path& path,
+                                           const std::vector<std::string>& reserved = {}) const;
 
 private:
     struct Impl;

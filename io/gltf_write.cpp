@@ -12,7 +12,8 @@ namespace fs = std::filesystem;
 using gltf::OutBuffer;
 using nlohmann::json;
 
-Result<std::vector<GltfScene::WrittenFile>> GltfScene::write(const fs::path& path) const {
+Result<std::vector<GltfScene::WrittenFile>> GltfScene::write(const fs::path& path,
+                                                             const std::vector<std::string>& reserved) const {
     const std::string ext = [&] {
         std::string e = path.extension().string();
         std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
@@ -22,7 +23,7 @@ Result<std::vector<GltfScene::WrittenFile>> GltfScene::write(const fs::path& pat
     const bool glb = ext == ".glb";
     const fs::path out_dir = path.parent_path().empty() ? fs::path(".") : path.parent_path();
 
-    auto planned = gltf::plan_output(*impl_, path, glb);
+    auto planned = gltf::plan_output(*impl_, path, glb, reserved);
     if (!planned) return planned.error();
     tinygltf::Model& m = planned->model;
     const std::vector<OutBuffer>& out_buffers = planned->buffers;
@@ -66,11 +67,12 @@ Result<std::vector<GltfScene::WrittenFile>> GltfScene::write(const fs::path& pat
     // Every file goes to a temporary first; all are renamed into place once all are written.
     std::vector<std::unique_ptr<AtomicOutput>> outputs;
     std::vector<WrittenFile> written;
-    auto emit = [&](const fs::path& file, const std::vector<std::span<const uint8_t>>& pieces) -> Result<void> {
+    auto emit = [&](const fs::path& file, const std::vector<std::span<const uint8_t>>& pieces,
+                    std::string renamed_from = {}) -> Result<void> {
         outputs.push_back(std::make_unique<AtomicOutput>(file));
         auto hash = gltf::write_pieces(*outputs.back(), pieces);
         if (!hash) return hash.error();
-        written.push_back({file, std::move(*hash)});
+        written.push_back({file, std::move(*hash), std::move(renamed_from)});
         return {};
     };
     const std::string text = doc.dump(glb ? -1 : 2);
@@ -88,14 +90,14 @@ Result<std::vector<GltfScene::WrittenFile>> GltfScene::write(const fs::path& pat
         if (auto r = emit(out_dir / b.file, b.bytes.pieces); !r) return r.error();
     }
     std::set<fs::path> copied;
-    for (const auto& [from, rel] : planned->copies) {
-        const fs::path dst = out_dir / rel;
+    for (const gltf::ImageCopy& c : planned->copies) {
+        const fs::path dst = out_dir / c.to;
         if (!copied.insert(dst).second) continue;
         std::error_code ec;
-        if (fs::exists(dst, ec) && fs::equivalent(from, dst, ec)) continue;
-        auto bytes = read_file(from);
+        if (fs::exists(dst, ec) && fs::equivalent(c.from, dst, ec)) continue;
+        auto bytes = read_file(c.from);
         if (!bytes) return bytes.error();
-        if (auto r = emit(dst, {std::span<const uint8_t>(*bytes)}); !r) return r.error();
+        if (auto r = emit(dst, {std::span<const uint8_t>(*bytes)}, c.renamed_from); !r) return r.error();
     }
     for (const auto& out : outputs)
         if (auto r = out->commit(); !r) return r.error();

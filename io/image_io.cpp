@@ -1,10 +1,13 @@
 #include "io/image_io.h"
 
 #include "io/atomic_file.h"
+#include "io/input_policy.h"
 #include "io/oiio_api.h"
 #include "io/png_decode.h"
 
 #include <algorithm>
+#include <array>
+#include <initializer_list>
 #include <fstream>
 #include <memory>
 #include <system_error>
@@ -16,8 +19,47 @@ namespace {
 
 uint32_t be32(const uint8_t* p) { return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3]; }
 
-// Walks the chunks of a PNG before libpng sees it: libpng reports truncation and empty headers on
-// stderr by itself, and the error should be one line from specbake instead.
+// CRC-32 of ISO 3309 / PNG Annex D, table-driven.
+uint32_t crc32(std::span<const uint8_t> bytes) {
+    static const auto table = [] {
+        std::array<uint32_t, 256> t{};
+        for (uint32_t n = 0; n < 256; ++n) {
+            uint32_t c = n;
+            for (int k = 0; k < 8; ++k) c = (c & 1) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+            t[n] = c;
+        }
+        return t;
+    }();
+    uint32_t c = 0xFFFFFFFFu;
+    for (uint8_t byte : bytes) c = table[(c ^ byte) & 0xFF] ^ (c >> 8);
+    return c ^ 0xFFFFFFFFu;
+}
+
+// The IHDR fields libpng checks (PNG spec Sec. 11.2.2), checked first so that its complaint comes as one
+// line naming the file.
+Result<void> check_ihdr(const uint8_t* d, const std::string& name) {
+    const uint32_t w = be32(d), h = be32(d + 4);
+    const int depth = d[8], colour = d[9];
+    auto depth_in = [&](std::initializer_list<int> allowed) {
+        return std::find(allowed.begin(), allowed.end(), depth) != allowed.end();
+    };
+    const bool depth_ok = colour == 0   ? depth_in({1, 2, 4, 8, 16})
+                          : colour == 3 ? depth_in({1, 2, 4, 8})
+                          : (colour == 2 || colour == 4 || colour == 6) && depth_in({8, 16});
+    if (w > 0x7FFFFFFFu || h > 0x7FFFFFFFu || !depth_ok || d[10] != 0 || d[11] != 0 || d[12] > 1)
+        return make_error(name + ": invalid PNG header (IHDR: " + std::to_string(w) + "x" + std::to_string(h) +
+                          ", bit depth " + std::to_string(depth) + ", colour type " + std::to_string(colour) +
+                          ", compression " + std::to_string(d[10]) + ", filter " + std::to_string(d[11]) +
+                          ", interlace " + std::to_string(d[12]) + ")");
+    return {};
+}
+
+// Walks the chunks of a PNG before libpng sees it: libpng reports truncation, empty headers and CRC
+// mismatches on stderr by itself, without the file's name, and the error should be one line from
+// specbake instead. The header's size is checked against the texel limit here too, before OpenImageIO
+// is even loaded.
+}  // namespace
+
 Result<void> check_png_structure(std::span<const uint8_t> b, const std::string& name) {
     static const uint8_t signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
     if (b.size() < 8 || !std::equal(signature, signature + 8, b.begin())) return {};
@@ -34,14 +76,20 @@ Result<void> check_png_structure(std::span<const uint8_t> b, const std::string& 
             const uint32_t w = be32(b.data() + at + 8), h = be32(b.data() + at + 12);
             if (w == 0 || h == 0)
                 return make_error(name + ": empty image (" + std::to_string(w) + "x" + std::to_string(h) + ")");
+            if (auto r = check_ihdr(b.data() + at + 8, name); !r) return r.error();
+            const uint64_t limit = input_policy().limits.texels;
+            if (uint64_t(w) * h > limit)
+                return make_error(name + ": image is " + std::to_string(w) + "x" + std::to_string(h) +
+                                  ", its texel count " + over_limit("texels", uint64_t(w) * h, limit));
             first = false;
         }
+        // PNG spec Sec. 5.3: the CRC covers the chunk type and data.
+        if (crc32(b.subspan(at + 4, size_t(length) + 4)) != be32(b.data() + at + 8 + length))
+            return make_error(name + ": corrupt PNG (CRC mismatch in the " + type + " chunk)");
         at += size_t(length) + 12;
         if (type == "IEND") return {};
     }
 }
-
-}  // namespace
 
 Result<DecodedImage> decode_image(const fs::path& path) {
     const std::string name = path.string();
@@ -60,7 +108,7 @@ Result<DecodedImage> decode_image(const fs::path& path) {
     }
     auto oiio = oiio::api();
     if (!oiio) return make_error(name + ": " + oiio.error().message);
-    return (*oiio)->decode_file(name);
+    return (*oiio)->decode_file(name, input_policy().limits.texels);
 }
 
 Result<DecodedImage> decode_image_memory(std::span<const uint8_t> bytes, const std::string& name_for_errors) {
@@ -81,7 +129,7 @@ Result<DecodedImage> decode_image_memory(std::span<const uint8_t> bytes, const s
         probe = "image.webp";
     auto oiio = oiio::api();
     if (!oiio) return make_error(name_for_errors + ": " + oiio.error().message);
-    return (*oiio)->decode_memory(bytes, probe, name_for_errors);
+    return (*oiio)->decode_memory(bytes, probe, name_for_errors, input_policy().limits.texels);
 }
 
 Result<Image> read_image(const fs::path& path) {

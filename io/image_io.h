@@ -34,6 +34,10 @@ Result<DecodedImage> decode_image(const std::filesystem::path& path);
 // Same, from bytes in memory (embedded GLB images); `name_for_errors` is used in place of a path.
 Result<DecodedImage> decode_image_memory(std::span<const uint8_t> bytes, const std::string& name_for_errors);
 
+// The chunk structure of a PNG (lengths, CRCs, IHDR fields) and its size against the texel limit
+// (io/input_policy.h), from the bytes alone; anything that is not a PNG passes.
+Result<void> check_png_structure(std::span<const uint8_t> bytes, const std::string& name);
+
 // Convenience forms that drop the metadata.
 Result<Image> read_image(const std::filesystem::path& path);
 Result<Image> read_image_memory(std::span<const uint8_t> bytes, const std::string& name_for_errors);

@@ -41,16 +41,17 @@ struct Api {
     uint32_t size;    // sizeof(Api) of the build the module belongs to
     const char* tag;  // that build's version and interface number; must equal the caller's
     // First subimage, level 0, as float; `name` is the path (decode_file) or the label used in errors.
-    Result<DecodedImage> (*decode_file)(const std::string& name);
+    // An image whose header claims more than `max_texels` texels is refused before its pixels are read.
+    Result<DecodedImage> (*decode_file)(const std::string& name, uint64_t max_texels);
     // `probe`: a file name whose extension selects the decoder ("image.png").
     Result<DecodedImage> (*decode_memory)(std::span<const uint8_t> bytes, const std::string& probe,
-                                          const std::string& name);
+                                          const std::string& name, uint64_t max_texels);
     // An 8- or 16-bit integer file, the format from name's extension, values clamped to [0, 1].
     Result<void> (*write_image)(const std::string& temp_path, const std::string& name, const Image& image,
                                 PixelType type);
     Result<void> (*write_levels)(const LevelsRequest& request);
     // Every MIP level of an EXR, PNG or other file OpenImageIO reads, for `inspect`.
-    Result<InspectedTexture> (*read_levels)(const std::string& name);
+    Result<InspectedTexture> (*read_levels)(const std::string& name, uint64_t max_texels);
     Result<void> (*write_rgb8)(const std::string& temp_path, const std::string& name, int width, int height,
                                const uint8_t* rgb);
     // Format, size, levels and channels from the headers of every MIP level, no pixels (`inspect --check`).

@@ -5,6 +5,7 @@
 #include "pipeline/glint_bake.h"
 #include "pipeline/version.h"
 #include "io/atomic_file.h"
+#include "io/input_policy.h"
 #include "io/mesh_import.h"
 #include "io/sha256.h"
 #include "mesh/generate_normals.h"
@@ -181,7 +182,10 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
     if (job.format == SceneFormat::Glb) ext = ".glb";
     const fs::path out_file = out_dir / (input.stem().string() + ext);
     say("writing " + (final_dir / out_file.filename()).string());
-    auto files = scene.write(out_file);
+    // Copied images never take the name of a file this bake writes: the textures, the manifest.
+    std::vector<std::string> reserved{"manifest.json"};
+    for (const io::ManifestOutput& o : result.outputs) reserved.push_back(o.path);
+    auto files = scene.write(out_file, reserved);
     if (!files) return files.error();
     for (const io::GltfScene::WrittenFile& f : *files) written.push_back(f.path);
     for (size_t i = 0; i < files->size(); ++i) {
@@ -191,6 +195,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         o.kind = i == 0 ? "scene" : (std::string(format_of(f)) == "bin" ? "buffer" : "image");
         o.path = io::relative_path(f, out_dir);
         o.format = format_of(f);
+        if (!(*files)[i].renamed_from.empty()) o.extra = {{"renamed_from", (*files)[i].renamed_from}};
         if (i == 0) {
             size_t vertices = 0;
             for (const auto& [index, work] : plan->work) vertices += work.mesh.vertex_count();
@@ -211,6 +216,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
 }  // namespace
 
 Result<LoadedScene> load_scene(const fs::path& path) {
+    if (auto r = io::check_utf8_path(path); !r) return r.error();
     LoadedScene out;
     const std::string ext = lower_extension(path);
     if (ext == ".gltf" || ext == ".glb") {
@@ -282,6 +288,7 @@ json scene_settings_json(const SceneJob& job) {
 
 Result<SceneJobOutcome> run_scene_job(const SceneJob& job) {
     if (job.scenes.empty()) return make_error("no scene given");
+    if (auto r = io::check_utf8_path(job.output_dir); !r) return r.error();
     SceneJobOutcome outcome;
     outcome.manifest.version = tool_version();
     outcome.manifest.settings = scene_settings_json(job);

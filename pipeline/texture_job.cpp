@@ -3,6 +3,7 @@
 #include "pipeline/bake_output.h"
 #include "pipeline/version.h"
 #include "io/atomic_file.h"
+#include "io/input_policy.h"
 #include "io/image_io.h"
 #include "io/sha256.h"
 
@@ -344,6 +345,8 @@ Result<TextureJobOutcome> run_texture_job(const TextureJob& job) {
     const ProgressFn& progress = job.progress;
     std::error_code ec;
     if (job.output_dir.empty()) return make_error("no output folder given");
+    for (const fs::path& p : {job.output_dir, job.demo ? fs::path() : job.normal, job.roughness.value_or(fs::path())})
+        if (auto r = io::check_utf8_path(p); !r) return r.error();
     if (fs::exists(job.output_dir, ec) && !fs::is_directory(job.output_dir, ec))
         return make_error(job.output_dir.string() + ": exists and is not a folder");
 

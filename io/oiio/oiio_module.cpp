@@ -37,8 +37,21 @@ OIIO::ImageSpec reader_config() {
     return config;
 }
 
-Result<DecodedImage> decode(OIIO::ImageInput& in, const std::string& name) {
+// The texel count of the header against the limit, before any pixel is allocated (the header alone says
+// 32768 x 32768 in 74 bytes). The wording matches io/input_policy.h's over_limit().
+Result<void> check_texels(const OIIO::ImageSpec& spec, uint64_t max_texels, const std::string& name) {
+    const uint64_t texels = uint64_t(std::max(spec.width, 0)) * uint64_t(std::max(spec.height, 0)) *
+                            uint64_t(std::max(spec.depth, 1));
+    if (texels > max_texels)
+        return make_error(name + ": image is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
+                          ", its texel count " + std::to_string(texels) + " exceeds the limit of " +
+                          std::to_string(max_texels) + " (--limit texels=N raises it)");
+    return {};
+}
+
+Result<DecodedImage> decode(OIIO::ImageInput& in, const std::string& name, uint64_t max_texels) {
     const OIIO::ImageSpec& spec = in.spec();
+    if (auto r = check_texels(spec, max_texels, name); !r) return r.error();
     if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
         return make_error(name + ": empty image (" + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
                           ")");
@@ -59,23 +72,24 @@ Result<DecodedImage> decode(OIIO::ImageInput& in, const std::string& name) {
     return out;
 }
 
-Result<DecodedImage> decode_file(const std::string& name) {
+Result<DecodedImage> decode_file(const std::string& name, uint64_t max_texels) {
     const OIIO::ImageSpec config = reader_config();
     auto in = OIIO::ImageInput::open(name, &config);
     if (!in) return make_error(name + ": cannot read as an image: " + one_line(OIIO::geterror(), "unknown decoder error"));
-    auto result = decode(*in, name);
+    auto result = decode(*in, name, max_texels);
     in->close();
     return result;
 }
 
-Result<DecodedImage> decode_memory(std::span<const uint8_t> bytes, const std::string& probe, const std::string& name) {
+Result<DecodedImage> decode_memory(std::span<const uint8_t> bytes, const std::string& probe, const std::string& name,
+                                   uint64_t max_texels) {
     OIIO::Filesystem::IOMemReader reader(const_cast<uint8_t*>(bytes.data()), bytes.size());
     OIIO::ImageSpec config = reader_config();
     void* proxy = &reader;
     config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
     auto in = OIIO::ImageInput::open(probe, &config, &reader);
     if (!in) return make_error(name + ": cannot read as an image: " + one_line(OIIO::geterror(), "unknown decoder error"));
-    auto result = decode(*in, name);
+    auto result = decode(*in, name, max_texels);
     in->close();
     return result;
 }
@@ -118,7 +132,7 @@ Result<void> write_levels(const LevelsRequest& r) {
     return {};
 }
 
-Result<InspectedTexture> read_levels(const std::string& name) {
+Result<InspectedTexture> read_levels(const std::string& name, uint64_t max_texels) {
     auto in = OIIO::ImageInput::open(name);
     if (!in) return make_error(name + ": cannot read image: " + one_line(OIIO::geterror(), "unknown format"));
     InspectedTexture t;
@@ -130,6 +144,7 @@ Result<InspectedTexture> read_levels(const std::string& name) {
     t.channel_names = spec.channelnames;
     for (int level = 0; in->seek_subimage(0, level); ++level) {
         spec = in->spec();
+        if (auto r = check_texels(spec, max_texels, name); !r) return r.error();
         Image img(spec.width, spec.height, spec.nchannels);
         if (!in->read_image(0, level, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, img.pixels.data()))
             return make_error(name + ": mip " + std::to_string(level) + ": " + one_line(in->geterror(), "unreadable"));
