@@ -97,8 +97,9 @@ int full_chain_levels(uint32_t w, uint32_t h) {
 }
 
 uint64_t level_bytes(uint32_t w, uint32_t h, int level, const FormatInfo& f) {
-    const uint64_t lw = std::max<uint32_t>(1, w >> level);
-    const uint64_t lh = std::max<uint32_t>(1, h >> level);
+    // A 2^32-wide chain has 33 levels: level 32 is 1x1 (and a shift by 32 would be undefined).
+    const uint64_t lw = level >= 32 ? 1 : std::max<uint32_t>(1, w >> level);
+    const uint64_t lh = level >= 32 ? 1 : std::max<uint32_t>(1, h >> level);
     return lw * lh * uint64_t(f.channels * f.bytes);
 }
 
@@ -141,7 +142,7 @@ Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& nam
     if (L.width == 0 || L.height == 0) return fail("zero width or height");
     if (depth != 0 || layers != 0 || faces != 1) return fail("only single 2D images are supported");
     if (supercompression != 0) return fail("supercompression scheme " + std::to_string(supercompression));
-    if (int(L.levels) > full_chain_levels(L.width, L.height))
+    if (L.levels > uint32_t(full_chain_levels(L.width, L.height)))
         return fail("levelCount " + std::to_string(L.levels) + " exceeds the full chain of " +
                     std::to_string(full_chain_levels(L.width, L.height)));
 
@@ -243,7 +244,7 @@ Result<DdsLayout> parse_dds(std::span<const uint8_t> b, const std::string& name)
     L.levels = (flags & 0x20000) ? std::max<uint32_t>(1, u32(b, 28)) : 1;  // DDSD_MIPMAPCOUNT
     if (L.width == 0 || L.height == 0) return fail("zero width or height");
     if ((flags & 0x800000) && depth > 1) return fail("volume textures are not supported");
-    if (int(L.levels) > full_chain_levels(L.width, L.height))
+    if (L.levels > uint32_t(full_chain_levels(L.width, L.height)))
         return fail("mip count " + std::to_string(L.levels) + " exceeds the full chain");
     if (u32(b, 76) != 32) return fail("pixel format size is not 32");
     const uint32_t pf_flags = u32(b, 80);
