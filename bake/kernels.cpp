@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace specbake {
 namespace {
@@ -83,6 +84,9 @@ Sym2<T> filter_projected(const Vec2<T>& roughness2, const Vec2<T>& du, const Vec
     const T d = std::max(e, bx * by);
     const T e_over_d = d > T(0) ? e / d : T(1);  // e = d = 0: singular Bbar, the ratio's limit is 1
     const T denom = std::max(e_over_d + trace(Bbar) + d, d);
+    // A finite kernel whose trace or determinant overflows is infinitely wide within the type's range:
+    // the limit is I (dividing by the infinite denominator would give 0 instead).
+    if (!(denom <= std::numeric_limits<T>::max())) return diag(T(1), T(1));
     return {(Bbar.xx + d) / denom, Bbar.xy / denom, (Bbar.yy + d) / denom};
 }
 

@@ -42,6 +42,7 @@ bool looks_srgb_encoded(const Image& n) {
         return t;
     }();
     auto linear = [](double c) {
+        if (!(c >= 0.0)) c = 0.0;  // NaN: the non-finite check reports the texel; this only decides a warning
         const double code = c * 255.0;
         const long k = long(code + 0.5);  // code >= 0: the values are clamped to [0, 1]
         return k >= 0 && k <= 255 && std::abs(code - double(k)) < 1e-4 ? table[size_t(k)] : srgb_to_linear(c);

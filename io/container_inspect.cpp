@@ -99,8 +99,9 @@ int full_chain_levels(uint32_t w, uint32_t h) {
 }
 
 uint64_t level_bytes(uint32_t w, uint32_t h, int level, const FormatInfo& f) {
-    const uint64_t lw = std::max<uint32_t>(1, w >> level);
-    const uint64_t lh = std::max<uint32_t>(1, h >> level);
+    // A 2^32-wide chain has 33 levels: level 32 is 1x1 (and a shift by 32 would be undefined).
+    const uint64_t lw = level >= 32 ? 1 : std::max<uint32_t>(1, w >> level);
+    const uint64_t lh = level >= 32 ? 1 : std::max<uint32_t>(1, h >> level);
     return lw * lh * uint64_t(f.channels * f.bytes);
 }
 

@@ -151,7 +151,9 @@ Result<std::vector<double>> read_accessor(const tinygltf::Model& m, const Payloa
         const size_t n = size_t(std::max(a.sparse.count, 0));
         const int ict = a.sparse.indices.componentType;
         const size_t ics = component_size(ict);
-        if (ics == 0 || ics > 4 || ict == TINYGLTF_COMPONENT_TYPE_BYTE || ict == TINYGLTF_COMPONENT_TYPE_SHORT)
+        // glTF 2.0 Sec. 3.6.2.3: sparse indices are unsigned byte, short or int.
+        if (ict != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && ict != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+            ict != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
             return make_error(what + ": sparse indices have an invalid component type");
         auto iv = view_of(m, payloads, a.sparse.indices.bufferView, size_t(std::max(a.sparse.indices.byteOffset, 0)), n, ics, ics, what);
         if (!iv) return iv.error();
@@ -161,8 +163,8 @@ Result<std::vector<double>> read_accessor(const tinygltf::Model& m, const Payloa
         for (size_t s = 0; s < n; ++s) {
             // Sparse index and value arrays are tightly packed (glTF 2.0 Sec. 3.6.2.3).
             const double target = decode_component(iv->base + s * ics, ict, false);
-            if (target < 0 || target >= double(a.count))
-                return make_error(what + ": sparse index " + std::to_string(size_t(target)) + " out of range");
+            if (!(target >= 0 && target < double(a.count)))
+                return make_error(what + ": sparse index " + std::to_string(target) + " out of range");
             const uint8_t* p = vv->base + s * cs * size_t(nc);
             for (int c = 0; c < nc; ++c)
                 out[size_t(target) * nc + c] = decode_component(p + c * cs, a.componentType, a.normalized);

@@ -9,6 +9,7 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 
 namespace specbake {
@@ -18,6 +19,21 @@ bool is_gltf(const std::string& path) {
     std::string ext = std::filesystem::path(path).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
     return ext == ".gltf" || ext == ".glb";
+}
+
+// Assimp 5.2's PLY reader never returns on a file whose header lacks its end_header line (it keeps
+// seeking and re-reading the file), so a PLY file (by its "ply" magic, which is what Assimp goes by) is
+// refused here unless an end_header line closes its header within the first MiB.
+Result<void> check_ply_header(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::string head(1 << 20, '\0');
+    in.read(head.data(), std::streamsize(head.size()));
+    head.resize(size_t(in.gcount()));
+    if (head.compare(0, 3, "ply") != 0) return {};
+    const size_t end = head.find("\nend_header");
+    if (end == std::string::npos || (head.compare(end + 11, 1, "\n") != 0 && head.compare(end + 11, 2, "\r\n") != 0))
+        return make_error(path + ": PLY header has no end_header line (within its first MiB)");
+    return {};
 }
 
 ImportedMaterial read_material(const aiMaterial& m) {
@@ -112,6 +128,7 @@ Result<TriMesh> read_mesh(const aiMesh& am, const std::string& path, size_t inde
 Result<ImportedScene> import_mesh(const std::string& path, const MeshImportOptions& options) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) return make_error(path + ": no such file");
+    if (auto ply = check_ply_header(path); !ply) return ply.error();
 
     Assimp::Importer importer;
     importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);

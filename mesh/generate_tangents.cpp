@@ -31,7 +31,8 @@ namespace {
 
 // The passes are compiled for AVX2 and for the baseline instruction set (mesh/lanes.h). The corner pass
 // differs between the two beyond the instructions (see less()) and is chosen explicitly, once per chunk.
-#if defined(__x86_64__) && defined(__linux__)
+// Clang builds (the sanitizer and fuzz builds) keep the baseline only, as mesh/lanes.h says why.
+#if defined(__x86_64__) && defined(__linux__) && !defined(__clang__)
 #define SPECBAKE_X86_VERSIONS
 #endif
 #define SPECBAKE_INLINE_LAMBDA __attribute__((always_inline))
@@ -114,12 +115,12 @@ SPECBAKE_INLINE int lane_bits(v4l mask) {
 
 // Rows (x, y, z, w) of four lanes to the four lanes' (x, y, z, w).
 SPECBAKE_INLINE void transpose4(const v4d (&in)[4], v4d (&out)[4]) {
-    const v4d t0 = __builtin_shuffle(in[0], in[1], v4l{0, 4, 2, 6}), t1 = __builtin_shuffle(in[0], in[1], v4l{1, 5, 3, 7});
-    const v4d t2 = __builtin_shuffle(in[2], in[3], v4l{0, 4, 2, 6}), t3 = __builtin_shuffle(in[2], in[3], v4l{1, 5, 3, 7});
-    out[0] = __builtin_shuffle(t0, t2, v4l{0, 1, 4, 5});
-    out[1] = __builtin_shuffle(t1, t3, v4l{0, 1, 4, 5});
-    out[2] = __builtin_shuffle(t0, t2, v4l{2, 3, 6, 7});
-    out[3] = __builtin_shuffle(t1, t3, v4l{2, 3, 6, 7});
+    const v4d t0 = __builtin_shufflevector(in[0], in[1], 0, 4, 2, 6), t1 = __builtin_shufflevector(in[0], in[1], 1, 5, 3, 7);
+    const v4d t2 = __builtin_shufflevector(in[2], in[3], 0, 4, 2, 6), t3 = __builtin_shufflevector(in[2], in[3], 1, 5, 3, 7);
+    out[0] = __builtin_shufflevector(t0, t2, 0, 1, 4, 5);
+    out[1] = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
+    out[2] = __builtin_shufflevector(t0, t2, 2, 3, 6, 7);
+    out[3] = __builtin_shufflevector(t1, t3, 2, 3, 6, 7);
 }
 
 // Element k of the records (stride floats each) of the four lanes' vertices.

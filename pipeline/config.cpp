@@ -41,6 +41,30 @@ Result<void> split_response_text(const std::string& text, const std::string& fil
     return {};
 }
 
+// Offset of the first byte that does not belong to well-formed UTF-8 (RFC 3629: no overlong forms, no
+// surrogates, nothing above U+10FFFF), or npos. Config values end up in JSON manifests, which need it.
+size_t invalid_utf8_at(const std::string& text) {
+    const auto* p = reinterpret_cast<const unsigned char*>(text.data());
+    const size_t n = text.size();
+    for (size_t i = 0; i < n;) {
+        const unsigned c = p[i];
+        size_t len = 0;
+        unsigned lo = 0x80, hi = 0xBF;  // allowed range of the second byte
+        if (c < 0x80) len = 1;
+        else if (c >= 0xC2 && c <= 0xDF) len = 2;
+        else if (c >= 0xE0 && c <= 0xEF) len = 3, lo = c == 0xE0 ? 0xA0 : 0x80, hi = c == 0xED ? 0x9F : 0xBF;
+        else if (c >= 0xF0 && c <= 0xF4) len = 4, lo = c == 0xF0 ? 0x90 : 0x80, hi = c == 0xF4 ? 0x8F : 0xBF;
+        else return i;
+        if (i + len > n) return i;
+        for (size_t k = 1; k < len; ++k) {
+            const unsigned b = p[i + k];
+            if (b < (k == 1 ? lo : 0x80) || b > (k == 1 ? hi : 0xBF)) return i;
+        }
+        i += len;
+    }
+    return std::string::npos;
+}
+
 Result<void> expand_into(const std::vector<std::string>& args, int depth, std::vector<std::string>& out,
                          std::vector<std::string>* files_read) {
     for (const std::string& arg : args) {
@@ -87,7 +111,9 @@ Result<void> add_materials(const nlohmann::json& table, const std::string& sourc
         for (auto kv = m.value().begin(); kv != m.value().end(); ++kv) {
             if (kv.value().is_object())
                 return make_error(source + ": materials." + m.key() + "." + kv.key() + " must be a value");
-            out.set(m.key(), kv.key(), scalar_strings(kv.value()).front());
+            const std::vector<std::string> values = scalar_strings(kv.value());
+            if (values.empty()) return make_error(source + ": materials." + m.key() + "." + kv.key() + " has no value");
+            out.set(m.key(), kv.key(), values.front());
         }
     }
     return {};
@@ -104,6 +130,8 @@ Result<std::vector<std::string>> expand_response_files(const std::vector<std::st
 }
 
 Result<nlohmann::json> parse_config_text(const std::string& text, const std::string& source_name) {
+    if (const size_t bad = invalid_utf8_at(text); bad != std::string::npos)
+        return make_error(source_name + ": not valid UTF-8 (byte " + std::to_string(bad) + ")");
     const size_t first = text.find_first_not_of(" \t\r\n");
     if (first != std::string::npos && text[first] == '{') {
         nlohmann::json j = nlohmann::json::parse(text, nullptr, false);

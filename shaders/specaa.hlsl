@@ -7,9 +7,18 @@
 #define SPECAA_FLOAT2 float2
 #define SPECAA_FLOAT3 float3
 #define SPECAA_FLOAT4 float4
+#define SPECAA_UINT2 uint2
+#define SPECAA_UINT3 uint3
+#define SPECAA_UINT4 uint4
 #define SPECAA_SATURATE(x) saturate(x)
 #define SPECAA_DDX(x) ddx(x)
+// The bits of a float as uint (the edge policy tests finiteness on them).
+#define SPECAA_AS_UINT(x) asuint(x)
 #define SPECAA_DDY(x) ddy(x)
+// Selection c ? a : b (HLSL's ?: evaluates both sides and selects).
+#define SPECAA_SELECT(c, a, b) ((c) ? (a) : (b))
+#define SPECAA_SELECT2(c, a, b) ((c) ? (a) : (b))
+#define SPECAA_SELECT3(c, a, b) ((c) ? (a) : (b))
 // Texture parameters: HLSL passes a Texture2D and its SamplerState.
 #define SPECAA_TEXTURE_PARAMS(tex, smp) Texture2D tex, SamplerState smp
 #define SPECAA_TEXTURE_ARGS(tex, smp) tex, smp
@@ -48,7 +57,13 @@
 // Textures are sampled with implicit derivatives, so the hardware selects the mip: the baked mips are
 // the footprint filter of the normal map, the per-pixel kernel adds the geometric curvature.
 //
-// Domain: unit vectors, a in [0, 1], finite derivatives. NaN inputs propagate to the result.
+// Domain: unit vectors, a in [0, 1], finite derivatives. Outside it, the derivative-based methods and the
+// default entry points follow the edge policy of the bake's filter core (bake/methods.h): a is clamped to
+// [0, 1] and a NaN a counts as 1 (fully rough); a non-finite input of a kernel (the vector whose quad
+// derivatives are taken or those derivatives, the curvature, the tangent frame, a baked texel) gives a
+// zero kernel; a kernel that overflows is infinitely wide: the clamped methods and the per-pixel kernels
+// of the default add kappa, the others give the fully rough matrix I. Their results are always finite.
+// The filters from given derivatives, the reductions and the NDFs take inputs inside the domain.
 // ===================================================================================================
 
 #ifndef SPECAA_SIGMA2
@@ -65,6 +80,43 @@
 // Kernel traces above this are treated as this: the filtered roughness is then 1 within float precision,
 // and the closed forms below stay finite.
 #define SPECAA_MAX_KERNEL 1.0e8
+
+// ---------------------------------------------------------------------------------------------------
+// Edge policy (header comment). Finiteness is read from the bits: GLSL does not require NaN support,
+// and a compiler may fold isnan() or x != x away; an exponent of all ones cannot be.
+// ---------------------------------------------------------------------------------------------------
+
+// Largest magnitude of the components as bits: at least SPECAA_NOT_FINITE exactly when one is +-inf or
+// NaN. Vector bit operations and maxima keep the tests cheap (no short-circuit branches).
+#define SPECAA_NOT_FINITE 0x7f800000u
+uint specaa_magnitude_bits(float x) { return SPECAA_AS_UINT(x) & 0x7fffffffu; }
+SPECAA_UINT3 specaa_magnitude_bits3(SPECAA_FLOAT3 v) { return SPECAA_AS_UINT(v) & 0x7fffffffu; }
+uint specaa_max_component(SPECAA_UINT3 m) { return max(max(m.x, m.y), m.z); }
+bool specaa_is_finite(float x) { return specaa_magnitude_bits(x) < SPECAA_NOT_FINITE; }
+bool specaa_is_finite3(SPECAA_FLOAT3 v) { return specaa_max_component(specaa_magnitude_bits3(v)) < SPECAA_NOT_FINITE; }
+
+// Squared roughness clamped to [0, 1]; NaN counts as fully rough.
+float specaa_sanitize_alpha2(float a) { return SPECAA_SELECT(specaa_magnitude_bits(a) > SPECAA_NOT_FINITE, 1.0, clamp(a, 0.0, 1.0)); }
+SPECAA_FLOAT2 specaa_sanitize_alpha2_2(SPECAA_FLOAT2 a) {
+    return SPECAA_FLOAT2(specaa_sanitize_alpha2(a.x), specaa_sanitize_alpha2(a.y));
+}
+
+// A derivative-based kernel clamped to kappa; an unbounded one (+inf, or NaN from inf - inf or 0 * inf)
+// is clamped to kappa too (TK21 Eq. 10: the clamp bounds the kernel whatever the derivatives).
+float specaa_clamp_kernel(float kernel) { return SPECAA_SELECT(specaa_is_finite(kernel), min(kernel, SPECAA_KAPPA), SPECAA_KAPPA); }
+
+// The vector v and its quad derivatives dx, dy are finite.
+bool specaa_usable(SPECAA_FLOAT3 v, SPECAA_FLOAT3 dx, SPECAA_FLOAT3 dy) {
+    SPECAA_UINT3 m = max(specaa_magnitude_bits3(v), max(specaa_magnitude_bits3(dx), specaa_magnitude_bits3(dy)));
+    return specaa_max_component(m) < SPECAA_NOT_FINITE;
+}
+
+// The policy around a filtered matrix r of squared roughness a: diag(a) without usable inputs (zero
+// kernel), the fully rough I when the kernel overflowed.
+SPECAA_FLOAT3 specaa_guard_matrix(bool usable, SPECAA_FLOAT2 a, SPECAA_FLOAT3 r) {
+    SPECAA_FLOAT3 filtered = SPECAA_SELECT3(specaa_is_finite3(r), r, SPECAA_FLOAT3(1.0, 1.0, 0.0));
+    return SPECAA_SELECT3(usable, filtered, SPECAA_FLOAT3(a, 0.0));
+}
 
 // ---------------------------------------------------------------------------------------------------
 // Symmetric 2x2 matrices stored as float3(xx, yy, xy).
@@ -127,8 +179,8 @@ SPECAA_FLOAT3 specaa_filter_non_axis_aligned(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT2
 // TK21 Listing 3 (K16 "More Temporal Stability"): saturate(alpha2 + min(2 sigma^2 bounds^2, kappa)).
 SPECAA_FLOAT2 specaa_filter_axis_aligned(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT2 du, SPECAA_FLOAT2 dv) {
     SPECAA_FLOAT2 bounds = abs(du) + abs(dv);
-    SPECAA_FLOAT2 kernel = min((2.0 * SPECAA_SIGMA2) * (bounds * bounds), SPECAA_FLOAT2(SPECAA_KAPPA, SPECAA_KAPPA));
-    return SPECAA_SATURATE(alpha2 + kernel);
+    SPECAA_FLOAT2 kernel = (2.0 * SPECAA_SIGMA2) * (bounds * bounds);
+    return SPECAA_SATURATE(alpha2 + SPECAA_FLOAT2(specaa_clamp_kernel(kernel.x), specaa_clamp_kernel(kernel.y)));
 }
 
 // Full projected-space filtering of an axis-aligned material, TK21 Eq. (4)-(8):
@@ -138,9 +190,12 @@ SPECAA_FLOAT2 specaa_filter_axis_aligned(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT2 du,
 // resp. 0). c det(B_bar) = a_x a_y + c B_xx K_yy + c B_yy K_xx + c det(K) is a sum of non-negative terms,
 // so det(B_bar) >= det(B) (the clamp of Listing 1) holds by construction. detK = det(K) >= 0, K PSD.
 SPECAA_FLOAT3 specaa_filter_projected_matrix_det(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT3 K, float detK) {
+    // Half the trace first: a finite K whose trace overflows still scales down to the cap (then A_bar ~ I)
+    // instead of to 0; an infinite K gives NaN here, which the callers' edge policy turns into I.
+    float halfTraceK = 0.5 * K.x + 0.5 * K.y;
     float traceK = K.x + K.y;
-    if (traceK > SPECAA_MAX_KERNEL) {
-        float scale = SPECAA_MAX_KERNEL / traceK;
+    if (halfTraceK > 0.5 * SPECAA_MAX_KERNEL) {
+        float scale = (0.5 * SPECAA_MAX_KERNEL) / halfTraceK;
         K *= scale;
         detK *= scale * scale;
         traceK = SPECAA_MAX_KERNEL;
@@ -188,7 +243,7 @@ float specaa_iso_kernel_mean(SPECAA_FLOAT3 dnU, SPECAA_FLOAT3 dnV) {
 
 // Clamped isotropic filtering, TK21 Eq. (10)/(13)/(14) as in Listing 5: saturate(a + min(t, kappa)).
 float specaa_filter_isotropic(float alpha2, float kernel) {
-    return SPECAA_SATURATE(alpha2 + min(kernel, SPECAA_KAPPA));
+    return SPECAA_SATURATE(alpha2 + specaa_clamp_kernel(kernel));
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -198,47 +253,63 @@ float specaa_filter_isotropic(float alpha2, float kernel) {
 
 // "slope": K16 slope-space non-axis-aligned filtering, R' = R + 2C (TK21 Eq. 2).
 SPECAA_FLOAT3 specaa_slope(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT3 hTS) {
+    SPECAA_FLOAT2 a = specaa_sanitize_alpha2_2(alpha2);
     SPECAA_FLOAT2 hs = specaa_slope_half_vector(hTS);
-    return specaa_filter_non_axis_aligned(alpha2, SPECAA_DDX(hs), SPECAA_DDY(hs));
+    return specaa_guard_matrix(specaa_usable(hTS, SPECAA_DDX(hTS), SPECAA_DDY(hTS)), a, specaa_filter_non_axis_aligned(a, SPECAA_DDX(hs), SPECAA_DDY(hs)));
 }
 
 // "slope-aa": K16 axis-aligned rectangle in slope space with the kappa clamp (Listing 3 with division).
 SPECAA_FLOAT2 specaa_slope_aa(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT3 hTS) {
+    SPECAA_FLOAT2 a = specaa_sanitize_alpha2_2(alpha2);
     SPECAA_FLOAT2 hs = specaa_slope_half_vector(hTS);
-    return specaa_filter_axis_aligned(alpha2, SPECAA_DDX(hs), SPECAA_DDY(hs));
+    SPECAA_FLOAT2 r = specaa_filter_axis_aligned(a, SPECAA_DDX(hs), SPECAA_DDY(hs));
+    return SPECAA_SELECT2(specaa_usable(hTS, SPECAA_DDX(hTS), SPECAA_DDY(hTS)), r, a);
 }
 
 // "projected-approx": TK21 Listing 2, Eq. (9), non-axis-aligned, projected derivatives, no clamp.
 SPECAA_FLOAT3 specaa_projected_approx(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT3 hTS) {
+    SPECAA_FLOAT2 a = specaa_sanitize_alpha2_2(alpha2);
     SPECAA_FLOAT2 hp = specaa_projected_half_vector(hTS);
-    return specaa_filter_non_axis_aligned(alpha2, SPECAA_DDX(hp), SPECAA_DDY(hp));
+    return specaa_guard_matrix(specaa_usable(hTS, SPECAA_DDX(hTS), SPECAA_DDY(hTS)), a, specaa_filter_non_axis_aligned(a, SPECAA_DDX(hp), SPECAA_DDY(hp)));
 }
 
 // "projected-aa": TK21 Listing 3, axis-aligned, projected derivatives, kappa clamp.
 SPECAA_FLOAT2 specaa_projected_aa(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT3 hTS) {
+    SPECAA_FLOAT2 a = specaa_sanitize_alpha2_2(alpha2);
     SPECAA_FLOAT2 hp = specaa_projected_half_vector(hTS);
-    return specaa_filter_axis_aligned(alpha2, SPECAA_DDX(hp), SPECAA_DDY(hp));
+    SPECAA_FLOAT2 r = specaa_filter_axis_aligned(a, SPECAA_DDX(hp), SPECAA_DDY(hp));
+    return SPECAA_SELECT2(specaa_usable(hTS, SPECAA_DDX(hTS), SPECAA_DDY(hTS)), r, a);
 }
 
 // "projected": TK21 Listing 1, full projected-space filtering (Eq. 4-8).
 SPECAA_FLOAT3 specaa_projected(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT3 hTS) {
+    SPECAA_FLOAT2 a = specaa_sanitize_alpha2_2(alpha2);
     SPECAA_FLOAT2 hp = specaa_projected_half_vector(hTS);
-    return specaa_filter_projected(alpha2, SPECAA_DDX(hp), SPECAA_DDY(hp));
+    return specaa_guard_matrix(specaa_usable(hTS, SPECAA_DDX(hTS), SPECAA_DDY(hTS)), a, specaa_filter_projected(a, SPECAA_DDX(hp), SPECAA_DDY(hp)));
 }
 
 // "iso-max": TK21 Eq. (10) from normal derivatives; returns the filtered a.
 float specaa_iso_max(float alpha2, SPECAA_FLOAT3 normal) {
-    return specaa_filter_isotropic(alpha2, specaa_iso_kernel_max(SPECAA_DDX(normal), SPECAA_DDY(normal)));
+    float a = specaa_sanitize_alpha2(alpha2);
+    SPECAA_FLOAT3 dnU = SPECAA_DDX(normal);
+    SPECAA_FLOAT3 dnV = SPECAA_DDY(normal);
+    return SPECAA_SELECT(specaa_usable(normal, dnU, dnV), specaa_filter_isotropic(a, specaa_iso_kernel_max(dnU, dnV)), a);
 }
 
 // "iso-sum": TK21 Eq. (13), Listing 5 (T19 Listing 2); returns the filtered a.
 float specaa_iso_sum(float alpha2, SPECAA_FLOAT3 normal) {
-    return specaa_filter_isotropic(alpha2, specaa_iso_kernel_sum(SPECAA_DDX(normal), SPECAA_DDY(normal)));
+    float a = specaa_sanitize_alpha2(alpha2);
+    SPECAA_FLOAT3 dnU = SPECAA_DDX(normal);
+    SPECAA_FLOAT3 dnV = SPECAA_DDY(normal);
+    return SPECAA_SELECT(specaa_usable(normal, dnU, dnV), specaa_filter_isotropic(a, specaa_iso_kernel_sum(dnU, dnV)), a);
 }
 
 // "iso-mean": TK21 Eq. (14); returns the filtered a.
 float specaa_iso_mean(float alpha2, SPECAA_FLOAT3 normal) {
-    return specaa_filter_isotropic(alpha2, specaa_iso_kernel_mean(SPECAA_DDX(normal), SPECAA_DDY(normal)));
+    float a = specaa_sanitize_alpha2(alpha2);
+    SPECAA_FLOAT3 dnU = SPECAA_DDX(normal);
+    SPECAA_FLOAT3 dnV = SPECAA_DDY(normal);
+    return SPECAA_SELECT(specaa_usable(normal, dnU, dnV), specaa_filter_isotropic(a, specaa_iso_kernel_mean(dnU, dnV)), a);
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -275,22 +346,26 @@ float specaa_sample_roughness(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv)
 }
 
 // Baked isotropic kernel mips: t in channel R.
+// A non-finite texel gives a zero kernel (edge policy).
 float specaa_sample_kernel(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
-    return max(SPECAA_SAMPLE(tex, smp, uv).r, 0.0);
+    float t = SPECAA_SAMPLE(tex, smp, uv).r;
+    return SPECAA_SELECT(specaa_is_finite(t), max(t, 0.0), 0.0);
 }
 
 // Baked anisotropic kernel mips: Sigma = (xx, yy, xy) in RGB; clamped to PSD after filtering.
 SPECAA_FLOAT3 specaa_sample_kernel_covariance(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
-    return specaa_sym_clamp_psd(SPECAA_SAMPLE(tex, smp, uv).rgb);
+    SPECAA_FLOAT3 sigma = specaa_sym_clamp_psd(SPECAA_SAMPLE(tex, smp, uv).rgb);
+    return SPECAA_SELECT3(specaa_is_finite3(sigma), sigma, SPECAA_FLOAT3(0.0, 0.0, 0.0));
 }
 
 // Covariance from LEAN moments, Sigma = M - m m^T clamped to PSD (SPEC Sec. 3; C21 Eq. 16).
 // lean0 = (m.x, m.y, M.xx, M.yy), lean1 = M.xy. Moments filter linearly, so any mip/trilinear mix of
-// them still yields the covariance of the normals in the filtered footprint.
+// them still yields the covariance of the normals in the filtered footprint. Non-finite moments give 0.
 SPECAA_FLOAT3 specaa_lean_covariance(SPECAA_FLOAT4 lean0, float lean1) {
-    return specaa_sym_clamp_psd(SPECAA_FLOAT3(lean0.z - lean0.x * lean0.x,
-                                              lean0.w - lean0.y * lean0.y,
-                                              lean1 - lean0.x * lean0.y));
+    SPECAA_FLOAT3 sigma = specaa_sym_clamp_psd(SPECAA_FLOAT3(lean0.z - lean0.x * lean0.x,
+                                                             lean0.w - lean0.y * lean0.y,
+                                                             lean1 - lean0.x * lean0.y));
+    return SPECAA_SELECT3(specaa_is_finite3(sigma), sigma, SPECAA_FLOAT3(0.0, 0.0, 0.0));
 }
 
 // LEAN lookup from the two moment textures (layout in the header comment).
@@ -427,11 +502,12 @@ struct SpecaaSurface {
 #endif
 
 // Squared roughness a of the material: the baked filtered roughness texture if bound, else r^4.
+// Clamped to [0, 1], NaN as 1 (edge policy).
 float specaa_base_alpha2(SpecaaSurface s) {
 #if defined(SPECAA_ROUGHNESS_TEXTURE)
-    return specaa_sample_roughness(SPECAA_TEXTURE_ARGS(SPECAA_ROUGHNESS_TEXTURE, SPECAA_SAMPLER), s.uv);
+    return specaa_sanitize_alpha2(specaa_sample_roughness(SPECAA_TEXTURE_ARGS(SPECAA_ROUGHNESS_TEXTURE, SPECAA_SAMPLER), s.uv));
 #else
-    return specaa_alpha2_from_roughness(s.roughness);
+    return specaa_sanitize_alpha2(specaa_alpha2_from_roughness(s.roughness));
 #endif
 }
 
@@ -451,37 +527,64 @@ SPECAA_FLOAT3 specaa_baked_kernel_matrix(SpecaaSurface s) {
 #endif
 }
 
+// Footprint of the pixel in the (T, B) frame (specaa_footprint) and whether it and the curvature are
+// usable (finite inputs and derivatives; edge policy).
+bool specaa_curvature_footprint(SpecaaSurface s, out SPECAA_FLOAT4 footprint) {
+    SPECAA_FLOAT3 dPdx = SPECAA_DDX(s.position);
+    SPECAA_FLOAT3 dPdy = SPECAA_DDY(s.position);
+    footprint = specaa_footprint_tangent(dPdx, dPdy, s.tangent, s.bitangent);
+    SPECAA_UINT3 m = max(max(specaa_magnitude_bits3(s.position), specaa_magnitude_bits3(dPdx)),
+                         max(specaa_magnitude_bits3(dPdy), specaa_magnitude_bits3(footprint.xyw)));
+    SPECAA_UINT4 c = max(SPECAA_AS_UINT(s.curvature), SPECAA_UINT4(0u, 0u, 0u, SPECAA_AS_UINT(footprint.z))) & 0x7fffffffu;
+    return max(specaa_max_component(m), max(max(c.x, c.y), max(c.z, c.w))) < SPECAA_NOT_FINITE;
+}
+
 // Per-pixel kernel matrix of the curved geometry in the (T, B) frame: from _SPECAA_CURVATURE and the
 // position footprint, or from the quad derivatives of the vertex normal projected onto T and B
-// (TK21 Sec. 5.1). Scaled so that its largest eigenvalue is at most kappa (the clamp of TK21 Eq. 10).
+// (TK21 Sec. 5.1). Scaled so that its largest eigenvalue is at most kappa (the clamp of TK21 Eq. 10);
+// an overflowing kernel is kappa I, unusable inputs give 0 (edge policy).
 SPECAA_FLOAT3 specaa_pixel_kernel_matrix(SpecaaSurface s) {
 #if defined(SPECAA_NO_PIXEL_KERNEL)
     return SPECAA_FLOAT3(0.0, 0.0, 0.0);
 #else
 #if defined(SPECAA_USE_CURVATURE)
-    SPECAA_FLOAT3 K = specaa_curvature_kernel(s.curvature, specaa_footprint(s.position, s.tangent, s.bitangent));
+    SPECAA_FLOAT4 footprint;
+    bool usable = specaa_curvature_footprint(s, footprint);
+    SPECAA_FLOAT3 K = specaa_curvature_kernel(s.curvature, footprint);
 #else
     SPECAA_FLOAT3 dnU = SPECAA_DDX(s.normal);
     SPECAA_FLOAT3 dnV = SPECAA_DDY(s.normal);
     SPECAA_FLOAT3 t = normalize(s.tangent);
     SPECAA_FLOAT3 b = normalize(s.bitangent);
+    SPECAA_UINT3 m = max(max(specaa_magnitude_bits3(s.normal), specaa_magnitude_bits3(dnU)),
+                         max(specaa_magnitude_bits3(dnV), max(specaa_magnitude_bits3(t), specaa_magnitude_bits3(b))));
+    bool usable = specaa_max_component(m) < SPECAA_NOT_FINITE;
     SPECAA_FLOAT3 K = specaa_kernel_matrix(SPECAA_FLOAT2(dot(dnU, t), dot(dnU, b)), SPECAA_FLOAT2(dot(dnV, t), dot(dnV, b)));
 #endif
     float lmax = specaa_sym_max_eigenvalue(K);
-    return lmax > SPECAA_KAPPA ? K * (SPECAA_KAPPA / lmax) : K;
+    SPECAA_FLOAT3 clamped = SPECAA_SELECT3(lmax > SPECAA_KAPPA, K * (SPECAA_KAPPA / lmax), K);
+    bool bounded = max(specaa_magnitude_bits(lmax), specaa_max_component(specaa_magnitude_bits3(clamped))) < SPECAA_NOT_FINITE;
+    return SPECAA_SELECT3(usable, SPECAA_SELECT3(bounded, clamped, SPECAA_FLOAT3(SPECAA_KAPPA, SPECAA_KAPPA, 0.0)),
+                          SPECAA_FLOAT3(0.0, 0.0, 0.0));
 #endif
 }
 
 // Per-pixel isotropic kernel t (mean reduction, TK21 Eq. 14), clamped to kappa. Tangent-free on the
-// derivative path (world-space normal derivatives).
+// derivative path (world-space normal derivatives). Edge policy as for the matrix.
 float specaa_pixel_kernel(SpecaaSurface s) {
 #if defined(SPECAA_NO_PIXEL_KERNEL)
     return 0.0;
 #elif defined(SPECAA_USE_CURVATURE)
-    SPECAA_FLOAT3 K = specaa_curvature_kernel(s.curvature, specaa_footprint(s.position, s.tangent, s.bitangent));
-    return min(0.5 * (K.x + K.y), SPECAA_KAPPA);
+    SPECAA_FLOAT4 footprint;
+    bool usable = specaa_curvature_footprint(s, footprint);
+    SPECAA_FLOAT3 K = specaa_curvature_kernel(s.curvature, footprint);
+    return SPECAA_SELECT(usable, specaa_clamp_kernel(0.5 * (K.x + K.y)), 0.0);
 #else
-    return min(specaa_iso_kernel_mean(SPECAA_DDX(s.normal), SPECAA_DDY(s.normal)), SPECAA_KAPPA);
+    SPECAA_FLOAT3 dnU = SPECAA_DDX(s.normal);
+    SPECAA_FLOAT3 dnV = SPECAA_DDY(s.normal);
+    bool usable = specaa_max_component(max(specaa_magnitude_bits3(s.normal),
+                                           max(specaa_magnitude_bits3(dnU), specaa_magnitude_bits3(dnV)))) < SPECAA_NOT_FINITE;
+    return SPECAA_SELECT(usable, specaa_clamp_kernel(specaa_iso_kernel_mean(dnU, dnV)), 0.0);
 #endif
 }
 
@@ -489,7 +592,8 @@ float specaa_pixel_kernel(SpecaaSurface s) {
 // independent footprints, so they add in projected space (TK21 Eq. 6) before mapping back (Eq. 7).
 float specaa_filtered_alpha2(SpecaaSurface s) {
     SPECAA_FLOAT3 baked = specaa_baked_kernel_matrix(s);
-    return specaa_filter_projected_isotropic(specaa_base_alpha2(s), 0.5 * (baked.x + baked.y) + specaa_pixel_kernel(s));
+    float a = specaa_filter_projected_isotropic(specaa_base_alpha2(s), 0.5 * (baked.x + baked.y) + specaa_pixel_kernel(s));
+    return SPECAA_SELECT(specaa_is_finite(a), a, 1.0);
 }
 
 // Filtered perceptual roughness r = a^(1/4): drop-in for the material's roughness.
@@ -500,7 +604,8 @@ float specaa_filtered_roughness(SpecaaSurface s) { return specaa_roughness_from_
 // kernel kept anisotropic.
 SPECAA_FLOAT3 specaa_filtered_alpha2_matrix(SpecaaSurface s) {
     float a = specaa_base_alpha2(s);
-    return specaa_filter_projected_matrix(SPECAA_FLOAT2(a, a), specaa_baked_kernel_matrix(s) + specaa_pixel_kernel_matrix(s));
+    return specaa_guard_matrix(true, SPECAA_FLOAT2(a, a),
+                               specaa_filter_projected_matrix(SPECAA_FLOAT2(a, a), specaa_baked_kernel_matrix(s) + specaa_pixel_kernel_matrix(s)));
 }
 
 // ===================================================================================================

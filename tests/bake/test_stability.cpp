@@ -165,6 +165,21 @@ void check_non_finite_policy() {
     }
 }
 
+// Found by fuzz/fuzz_filter.cpp: a finite kernel whose trace overflows float (sigma2 near FLT_MAX / 4)
+// made the full projected filter divide by an infinite denominator and return 0, below the material's
+// roughness; the limit of an infinitely wide kernel is I.
+TEST(Stability, ProjectedFilterWithOverflowingTraceIsFullyRough) {
+    FilterInput<float> in;
+    in.alpha = {0.1f, 0.0f};
+    in.h = {1.0f, 0.5f, 0.0f};
+    in.h_dx = in.h_dy = {0.0f, 1.0f, 0.0f};
+    in.sigma2 = 8.457e37f;
+    const Sym2<float> r = evaluate(*find_filter_method("projected"), in);
+    EXPECT_EQ(r.xx, 1.0f);
+    EXPECT_EQ(r.yy, 1.0f);
+    EXPECT_EQ(r.xy, 0.0f);
+}
+
 TEST(Stability, NonFiniteInputsFloat) { check_non_finite_policy<float>(); }
 TEST(Stability, NonFiniteInputsDouble) { check_non_finite_policy<double>(); }
 

@@ -296,6 +296,24 @@ TEST(InspectDds, DecodesAndChecks) {
     EXPECT_FALSE(io::check_dds_structure(mips.b, "t.dds").ok());
 }
 
+// Level counts from hostile headers (found by fuzz/fuzz_container.cpp): a count of 0xFFFFFFFF is
+// refused by the count check, where it once turned negative (DDS: the size check then walked four
+// billion levels for seconds; KTX2: the level index was reported truncated instead).
+TEST(InspectHostile, LevelCountOfAllOnesIsRefusedAsExceedingTheChain) {
+    Bytes dds{make_dds_r8(4, 2, {{0, 51, 102, 255, 204, 153, 10, 20}, {255, 0}, {128}})};
+    dds.put32(28, 0xFFFFFFFFu);
+    auto d = io::check_dds_structure(dds.b, "m.dds");
+    ASSERT_FALSE(d.ok());
+    EXPECT_NE(d.error().message.find("mip count 4294967295 exceeds the full chain"), std::string::npos)
+        << d.error().message;
+    Bytes ktx{make_ktx2_f32(4, 2, 1, kRoughness)};
+    ktx.put32(40, 0xFFFFFFFFu);
+    auto k = io::check_ktx2_structure(ktx.b, "m.ktx2");
+    ASSERT_FALSE(k.ok());
+    EXPECT_NE(k.error().message.find("levelCount 4294967295 exceeds the full chain"), std::string::npos)
+        << k.error().message;
+}
+
 TEST(InspectDiff, PerMipDifferences) {
     Files files;
     auto changed = kRoughness;

@@ -126,3 +126,22 @@ TEST(ConfigFile, UnknownTablesAndBadNumbersAreErrors) {
     ASSERT_TRUE(split.ok());
     EXPECT_FALSE(split->materials.number("M", "roughness-value").ok());
 }
+
+// Found by fuzz/fuzz_config.cpp: a material override given as an empty array (read past the end of an
+// empty list), and config text that is not UTF-8 (accepted, then fatal when the manifest is written).
+TEST(ConfigFile, EmptyMaterialValueAndInvalidUtf8AreErrorsNamingTheFile) {
+    const std::vector<std::string> globals{"jobs"};
+    const std::vector<std::string> subs{"bake"};
+    auto empty = split_config({{"materials", {{"M", {{"kappa", nlohmann::json::array()}}}}}}, "bake", globals, subs,
+                              "c.json");
+    ASSERT_FALSE(empty.ok());
+    EXPECT_NE(empty.error().message.find("c.json: materials.M.kappa has no value"), std::string::npos)
+        << empty.error().message;
+    auto bad = parse_config_text("[materials.St\xFE\xFF" "el]\nkappa = \"1\"\n", "bad.toml");
+    ASSERT_FALSE(bad.ok());
+    EXPECT_NE(bad.error().message.find("bad.toml: not valid UTF-8 (byte 13)"), std::string::npos) << bad.error().message;
+    for (const char* truncated : {"a = \"\xC3\"", "a = \"\xE2\x82\"", "a = \"\xED\xA0\x80\"", "a = \"\xC0\xAF\""})
+        EXPECT_FALSE(parse_config_text(truncated, "t.toml").ok()) << truncated;
+    auto good = parse_config_text("[materials.\"Stahl \xC3\x84 \xE2\x82\xAC \xF0\x9F\x98\x80\"]\nkappa = \"1\"\n", "ok.toml");
+    ASSERT_TRUE(good.ok()) << good.error().message;
+}

@@ -53,7 +53,7 @@ private:
 // Runs a shell command, returns its exit status and stores stdout+stderr in `output`.
 int run_command(const std::string& command, std::string& output);
 
-// Creates and binds a framebuffer with `count` (1-4) RGBA32F colour attachments of `width` x `height`,
+// Creates and binds a framebuffer with `count` (1-8) RGBA32F colour attachments of `width` x `height`,
 // written to `textures`, all set as draw buffers. Returns the framebuffer; the caller deletes both.
 GLuint create_float_targets(int count, int width, int height, GLuint* textures);
 

@@ -3,6 +3,8 @@
 // accessors read straight from the .gltf/.bin; errors name the file.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -155,6 +157,35 @@ TEST(MeshImport, ErrorsNameTheFile) {
     ASSERT_FALSE(bad.ok());
     EXPECT_NE(bad.error().message.find("specbake_import_garbage.ply"), std::string::npos);
     EXPECT_EQ(bad.error().message.find('\n'), std::string::npos);
+}
+
+// Found by fuzz/fuzz_mesh.cpp: Assimp's PLY reader never returns on a header that lacks its end_header
+// line (missing, or misspelt "end_headers"); import_mesh refuses such a file before Assimp reads it. On the
+// old code this test does not finish (ctest's timeout fails it).
+TEST(MeshImport, PlyWithoutEndHeaderLineIsRefused) {
+    const std::string header =
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+        "element face 1\nproperty list uchar int vertex_indices\n";
+    const std::string body = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    for (const std::string& closing : {std::string(), std::string("end_headers\n"), std::string("end_header_\n")}) {
+        const fs::path path = fs::temp_directory_path() / ("specbake_import_no_end_" + std::to_string(::getpid()) + ".ply");
+        std::ofstream(path, std::ios::binary) << header << closing << body;
+        Result<ImportedScene> bad = import_mesh(path.string());
+        fs::remove(path);
+        ASSERT_FALSE(bad.ok()) << "closing line '" << closing << "'";
+        EXPECT_NE(bad.error().message.find(path.filename().string() + ": PLY header has no end_header line"),
+                  std::string::npos)
+            << bad.error().message;
+    }
+    // The same file with its end_header line (also with CRLF line ends) still imports.
+    for (const std::string& closing : {std::string("end_header\n"), std::string("end_header\r\n")}) {
+        const fs::path path = fs::temp_directory_path() / ("specbake_import_end_" + std::to_string(::getpid()) + ".ply");
+        std::ofstream(path, std::ios::binary) << header << closing << body;
+        Result<ImportedScene> good = import_mesh(path.string());
+        fs::remove(path);
+        ASSERT_TRUE(good.ok()) << good.error().message;
+        EXPECT_EQ(good->meshes.at(0).triangle_count(), 1u);
+    }
 }
 
 }  // namespace

@@ -1,0 +1,430 @@
+// The include's hard cases (issue 18): the stability grid of the C++ core (tests/bake/test_stability.cpp:
+// alpha 0 ... 1 per axis, h_z from 1 to exactly 0, zero, tiny, huge and mixed derivatives) plus NaN and
+// infinities in every input, through every derivative-based method and the default entry points of the
+// include, in GLSL and in HLSL (glslangValidator -D -> SPIR-V -> GL_ARB_gl_spirv) on the GL
+// implementation (llvmpipe in CI), float32. One draw per program: each case is one 2x2 quad of a large
+// float framebuffer (tests/gl/shaders/stability_eval.inc). Every output must be finite, a symmetric
+// PSD matrix that never reduces the input roughness, and follow the edge policy of the C++ core
+// (bake/methods.h), which the core itself is evaluated on for the same float inputs.
+#include "gl/gl_harness.h"
+
+#include "bake/methods.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <iterator>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace specbake::gltest {
+namespace {
+
+constexpr int kWidth = 1024;  // pixels; 512 quads (cases) per row of quads
+constexpr int kQuadsPerRow = kWidth / 2;
+constexpr double kTol = 1e-4;  // float32 rounding relative to the matrix scale (as the C++ float grid)
+constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+using V3 = Vec3<float>;
+
+struct Case {
+    float alpha[2];   // the C++ core's alpha (slope-space roughness)
+    float alpha2[2];  // the include's input alpha^2 (NaN and +-inf passed as they are)
+    float r;          // perceptual roughness of the default entry point
+    float k1;         // curvature of the SPECAA_USE_CURVATURE run
+    V3 h, h_dx, h_dy, n, n_dx, n_dy;
+};
+
+bool finite3(const V3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+// The stability grid of the C++ core (122,880 cases), then NaN/+inf/-inf in each component of each
+// input on a smaller base grid.
+std::vector<Case> make_cases() {
+    const double alphas[] = {0, 1e-7, 1e-4, 0.01, 0.1, 0.5, 0.999, 1};
+    const double elevations[] = {1, 0.99, 0.9, 0.5, 0.1, 1e-2, 1e-4, 1e-7, 1e-20, 0};
+    const double azimuths[] = {0.0, 0.8, 2.5};
+    const Vec3<double> deltas[] = {{0, 0, 0},         {1e-9, 0, 0},     {1e-3, -2e-3, 1e-3}, {0.1, 0.05, -0.1},
+                                   {0.5, -0.7, 0.3}, {1e6, 3e5, -1e6}, {1e20, -1e19, 1e20}, {1e-9, 1e6, 0}};
+    auto make = [](double ax, double ay, double hz, double phi, const Vec3<double>& du, const Vec3<double>& dv) {
+        Case c{};
+        c.alpha[0] = float(ax), c.alpha[1] = float(ay);
+        c.alpha2[0] = c.alpha[0] * c.alpha[0], c.alpha2[1] = c.alpha[1] * c.alpha[1];
+        c.r = std::sqrt(float(ax));
+        c.k1 = float(10.0 * length(dv));
+        const double s = std::sqrt(1 - hz * hz);
+        c.h = {float(s * std::cos(phi)), float(s * std::sin(phi)), float(hz)};
+        c.h_dx = {float(c.h.x + du.x), float(c.h.y + du.y), float(c.h.z + du.z)};
+        c.h_dy = {float(c.h.x + dv.x), float(c.h.y + dv.y), float(c.h.z + dv.z)};
+        c.n = c.h, c.n_dx = c.h_dx, c.n_dy = c.h_dy;
+        return c;
+    };
+    std::vector<Case> cases;
+    for (double ax : alphas)
+        for (double ay : alphas)
+            for (double hz : elevations)
+                for (double phi : azimuths)
+                    for (const auto& du : deltas)
+                        for (const auto& dv : deltas) cases.push_back(make(ax, ay, hz, phi, du, dv));
+    for (double ax : alphas)
+        for (double ay : {0.01, 0.5})
+            for (double hz : {1.0, 0.5, 1e-4})
+                for (int d = 0; d < 2; ++d) {
+                    const Case base = make(ax, ay, hz, 0.8, deltas[d ? 3 : 0], deltas[d ? 2 : 0]);
+                    for (float bad : {kNan, kInf, -kInf}) {
+                        for (int field = 0; field < 6; ++field)
+                            for (int comp = 0; comp < 3; ++comp) {
+                                Case c = base;
+                                V3* v[] = {&c.h, &c.h_dx, &c.h_dy, &c.n, &c.n_dx, &c.n_dy};
+                                float* x[] = {&v[field]->x, &v[field]->y, &v[field]->z};
+                                *x[comp] = bad;
+                                cases.push_back(c);
+                            }
+                        for (int axis = 0; axis < 2; ++axis) {
+                            Case c = base;
+                            c.alpha[axis] = c.alpha2[axis] = bad;
+                            cases.push_back(c);
+                        }
+                        Case c = base;
+                        c.r = bad;
+                        cases.push_back(c);
+                        c = base;
+                        c.k1 = bad;
+                        cases.push_back(c);
+                    }
+                }
+    return cases;
+}
+
+const char* kVertex = R"(#version 450
+layout(location = 0) in vec4 aIn0;
+layout(location = 1) in vec4 aIn1;
+layout(location = 2) in vec4 aIn2;
+layout(location = 3) in vec4 aIn3;
+layout(location = 4) in vec4 aIn4;
+layout(location = 5) in vec4 aIn5;
+layout(location = 6) in vec4 aIn6;
+layout(location = 7) in vec2 aQuad;   // quad centre in clip space
+layout(location = 0) flat out vec4 vIn0;
+layout(location = 1) flat out vec4 vIn1;
+layout(location = 2) flat out vec4 vIn2;
+layout(location = 3) flat out vec4 vIn3;
+layout(location = 4) flat out vec4 vIn4;
+layout(location = 5) flat out vec4 vIn5;
+layout(location = 6) flat out vec4 vIn6;
+void main() {
+    vIn0 = aIn0; vIn1 = aIn1; vIn2 = aIn2; vIn3 = aIn3; vIn4 = aIn4; vIn5 = aIn5; vIn6 = aIn6;
+    gl_Position = vec4(aQuad, 0.0, 1.0);
+    gl_PointSize = 2.0;
+}
+)";
+
+std::string defines(const std::string& group) {
+    return group == "METHODS" ? "#define SPECAA_TEST_METHODS\n"
+           : group == "DEFAULT" ? "#define SPECAA_TEST_DEFAULT\n"
+                                : "#define SPECAA_TEST_DEFAULT\n#define SPECAA_USE_CURVATURE\n";
+}
+
+std::string fragment_glsl(const std::string& group) {
+    return "#version 450\n" + defines(group) + read_source_file("shaders/specaa.glsl") +
+           read_source_file("tests/gl/shaders/stability_eval.inc") + R"(
+layout(location = 0) flat in vec4 vIn0;
+layout(location = 1) flat in vec4 vIn1;
+layout(location = 2) flat in vec4 vIn2;
+layout(location = 3) flat in vec4 vIn3;
+layout(location = 4) flat in vec4 vIn4;
+layout(location = 5) flat in vec4 vIn5;
+layout(location = 6) flat in vec4 vIn6;
+layout(location = 0) out vec4 o0;
+layout(location = 1) out vec4 o1;
+layout(location = 2) out vec4 o2;
+layout(location = 3) out vec4 o3;
+layout(location = 4) out vec4 o4;
+void main() { specaa_test_stability(gl_FragCoord.xy, vIn0, vIn1, vIn2, vIn3, vIn4, vIn5, vIn6, o0, o1, o2, o3, o4); }
+)";
+}
+
+// HLSL's SV_Position has y down: the wrapper turns it back into GL window coordinates.
+std::string fragment_hlsl(const std::string& group, int height) {
+    return defines(group) + read_source_file("shaders/specaa.hlsl") +
+           read_source_file("tests/gl/shaders/stability_eval.inc") + R"(
+struct StabilityOutput {
+    float4 o0 : SV_Target0;
+    float4 o1 : SV_Target1;
+    float4 o2 : SV_Target2;
+    float4 o3 : SV_Target3;
+    float4 o4 : SV_Target4;
+};
+StabilityOutput main(float4 position : SV_Position, nointerpolation float4 in0 : TEXCOORD0,
+                     nointerpolation float4 in1 : TEXCOORD1, nointerpolation float4 in2 : TEXCOORD2,
+                     nointerpolation float4 in3 : TEXCOORD3, nointerpolation float4 in4 : TEXCOORD4,
+                     nointerpolation float4 in5 : TEXCOORD5, nointerpolation float4 in6 : TEXCOORD6) {
+    StabilityOutput r;
+    specaa_test_stability(float2(position.x, )" + std::to_string(height) + R"(.0 - position.y),
+                          in0, in1, in2, in3, in4, in5, in6, r.o0, r.o1, r.o2, r.o3, r.o4);
+    return r;
+}
+)";
+}
+
+int grid_height(size_t cases) { return 2 * int((cases + kQuadsPerRow - 1) / kQuadsPerRow); }
+
+// Draws every case as one 2x2 point and returns, per case, the 20 outputs of its lower-left pixel.
+std::vector<std::array<float, 20>> render(GLuint program, const std::vector<Case>& cases, std::string& log) {
+    const int height = grid_height(cases.size());
+    std::vector<float> vertices;
+    vertices.reserve(cases.size() * 30);
+    for (size_t i = 0; i < cases.size(); ++i) {
+        const Case& c = cases[i];
+        const float in[28] = {c.alpha2[0], c.alpha2[1], c.r,      c.k1,     c.h.x,    c.h.y,    c.h.z,
+                              0,           c.h_dx.x,    c.h_dx.y, c.h_dx.z, 0,        c.h_dy.x, c.h_dy.y,
+                              c.h_dy.z,    0,           c.n.x,    c.n.y,    c.n.z,    0,        c.n_dx.x,
+                              c.n_dx.y,    c.n_dx.z,    0,        c.n_dy.x, c.n_dy.y, c.n_dy.z, 0};
+        vertices.insert(vertices.end(), in, in + 28);
+        const int qx = int(i % kQuadsPerRow), qy = int(i / kQuadsPerRow);
+        vertices.push_back(float(2 * qx + 1) / kWidth * 2.0f - 1.0f);
+        vertices.push_back(float(2 * qy + 1) / float(height) * 2.0f - 1.0f);
+    }
+    GLuint vao = 0, vbo = 0, targets[5] = {};
+    glGenVertexArrays(1, &vao);
+    glBindVertexArray(vao);
+    glGenBuffers(1, &vbo);
+    glBindBuffer(GL_ARRAY_BUFFER, vbo);
+    glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(vertices.size() * sizeof(float)), vertices.data(), GL_STATIC_DRAW);
+    for (GLuint a = 0; a < 8; ++a) {
+        glEnableVertexAttribArray(a);
+        glVertexAttribPointer(a, a < 7 ? 4 : 2, GL_FLOAT, GL_FALSE, 30 * sizeof(float),
+                              reinterpret_cast<const void*>(uintptr_t(a * 4 * sizeof(float))));
+    }
+    const GLuint fbo = create_float_targets(5, kWidth, height, targets);
+    std::vector<std::array<float, 20>> results;
+    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
+        log += "float framebuffer incomplete";
+    } else {
+        glViewport(0, 0, kWidth, height);
+        const float clear[4] = {kNan, kNan, kNan, kNan};
+        for (int t = 0; t < 5; ++t) glClearBufferfv(GL_COLOR, t, clear);
+        glEnable(GL_PROGRAM_POINT_SIZE);
+        glUseProgram(program);
+        glDrawArrays(GL_POINTS, 0, GLsizei(cases.size()));
+        results.resize(cases.size());
+        std::vector<float> pixels(size_t(kWidth) * height * 4);
+        for (int t = 0; t < 5; ++t) {
+            glReadBuffer(GL_COLOR_ATTACHMENT0 + GLenum(t));
+            glReadPixels(0, 0, kWidth, height, GL_RGBA, GL_FLOAT, pixels.data());
+            for (size_t i = 0; i < cases.size(); ++i) {
+                const size_t qx = i % kQuadsPerRow, qy = i / kQuadsPerRow;
+                const float* p = &pixels[((2 * qy) * kWidth + 2 * qx) * 4];
+                std::copy(p, p + 4, results[i].begin() + 4 * t);
+            }
+        }
+        if (GLenum error = glGetError(); error != GL_NO_ERROR) {
+            log += "GL error " + std::to_string(error);
+            results.clear();
+        }
+    }
+    glDeleteTextures(5, targets);
+    glDeleteFramebuffers(1, &fbo);
+    glDeleteBuffers(1, &vbo);
+    glDeleteVertexArrays(1, &vao);
+    return results;
+}
+
+// Smallest eigenvalue of a symmetric 2x2 matrix divided by its largest entry's magnitude.
+double min_eigenvalue_relative(double xx, double xy, double yy) {
+    const double scale = std::max({std::abs(xx), std::abs(xy), std::abs(yy)});
+    if (scale == 0.0) return 0.0;
+    xx /= scale, xy /= scale, yy /= scale;
+    return 0.5 * (xx + yy - std::sqrt((xx - yy) * (xx - yy) + 4 * xy * xy));
+}
+
+// Finite, PSD, A_bar - A PSD and det(A_bar) >= det(A) for A = diag(a_xx, a_yy); empty when all hold.
+std::string check_matrix(double xx, double xy, double yy, double a_xx, double a_yy) {
+    if (!std::isfinite(xx) || !std::isfinite(xy) || !std::isfinite(yy)) return "not finite";
+    const double scale = std::max({std::abs(xx), std::abs(xy), std::abs(yy), 1e-30});
+    if (min_eigenvalue_relative(xx, xy, yy) < -kTol) return "not positive semi-definite";
+    const double escale = std::max({std::abs(xx - a_xx), std::abs(xy), std::abs(yy - a_yy)});
+    if (min_eigenvalue_relative(xx - a_xx, xy, yy - a_yy) * escale < -kTol * scale)
+        return "below the input roughness (A_bar - A not PSD)";
+    if (xx * yy - xy * xy < a_xx * a_yy * (1 - kTol) - kTol * scale * scale) return "det(A_bar) < det(A)";
+    return {};
+}
+
+std::string describe(const Case& c) {
+    std::ostringstream s;
+    s.precision(9);
+    auto v = [&](const V3& x) { s << "(" << x.x << ", " << x.y << ", " << x.z << ") "; };
+    s << "alpha " << c.alpha[0] << "," << c.alpha[1] << " r " << c.r << " k1 " << c.k1 << " h ";
+    v(c.h), s << "h_dx ", v(c.h_dx), s << "h_dy ", v(c.h_dy), s << "n ", v(c.n), s << "n_dx ", v(c.n_dx);
+    s << "n_dy ", v(c.n_dy);
+    return s.str();
+}
+
+struct Failures {
+    size_t count = 0;
+    std::vector<std::string> shown;
+    void add(const std::string& what) {
+        if (++count <= 12) shown.push_back(what);
+    }
+};
+
+// The methods, in the order of filter_methods(), and where the include's outputs hold them.
+struct MethodSlot {
+    const char* name;
+    int xx, yy, xy;     // output indices (xy -1: axis-aligned)
+    bool uses_normals;  // iso-*: the normal field, else the half-vector field
+};
+const MethodSlot kSlots[] = {{"slope", 0, 1, 2, false},         {"slope-aa", 3, 4, -1, false},
+                             {"projected-approx", 5, 6, 7, false}, {"projected-aa", 8, 9, -1, false},
+                             {"projected", 10, 11, 12, false},     {"iso-max", 13, 14, -1, true},
+                             {"iso-sum", 15, 16, -1, true},        {"iso-mean", 17, 18, -1, true}};
+
+void check_methods(const std::vector<Case>& cases, const std::vector<std::array<float, 20>>& out, Failures& f) {
+    for (size_t i = 0; i < cases.size(); ++i) {
+        const Case& c = cases[i];
+        for (const MethodSlot& slot : kSlots) {
+            const FilterMethod* m = find_filter_method(slot.name);
+            // The C++ core on the inputs this entry point takes (the others set to a finite normal).
+            FilterInput<float> in;
+            in.alpha = {c.alpha[0], c.alpha[1]};
+            if (slot.uses_normals) {
+                in.n = c.n, in.n_dx = c.n_dx, in.n_dy = c.n_dy;
+            } else {
+                in.h = c.h, in.h_dx = c.h_dx, in.h_dy = c.h_dy;
+            }
+            const Sym2<float> core = evaluate(*m, in);
+            const double xx = out[i][size_t(slot.xx)], yy = out[i][size_t(slot.yy)];
+            const double xy = slot.xy < 0 ? 0.0 : out[i][size_t(slot.xy)];
+            auto policy_alpha = [](float a) { return std::isnan(a) ? 1.0f : std::min(std::max(a, 0.0f), 1.0f); };
+            const float ax = policy_alpha(c.alpha[0]), ay = policy_alpha(c.alpha[1]);
+            std::string e = check_matrix(xx, xy, yy, double(ax * ax), double(ay * ay));
+            const bool inputs_finite = slot.uses_normals ? finite3(c.n) && finite3(c.n_dx) && finite3(c.n_dy)
+                                                         : finite3(c.h) && finite3(c.h_dx) && finite3(c.h_dy);
+            if (e.empty() && !inputs_finite && (xx != core.xx || yy != core.yy || xy != core.xy))
+                e = "non-finite input: not the core's unfiltered result";
+            if (e.empty() && inputs_finite && !(std::isfinite(c.alpha[0]) && std::isfinite(c.alpha[1]))) {
+                const double scale = std::abs(core.xx) + std::abs(core.yy);
+                if (std::abs(xx - core.xx) > 1e-3 * scale || std::abs(yy - core.yy) > 1e-3 * scale ||
+                    std::abs(xy - core.xy) > 1e-3 * scale)
+                    e = "non-finite alpha: differs from the core";
+            }
+            // Overflow: the core saturates the unclamped methods to I (or, for the full projected filter, reaches
+            // I within float rounding); so must the include.
+            if (e.empty() && inputs_finite && core.xx == 1 && core.yy == 1 && core.xy == 0 && slot.xy >= 0 &&
+                (std::abs(xx - 1) > kTol || std::abs(yy - 1) > kTol || std::abs(xy) > kTol))
+                e = "overflow: the core gives I";
+            if (!e.empty()) {
+                std::ostringstream s;
+                s.precision(9);
+                s << slot.name << ": " << e << ": [" << xx << " " << xy << " " << yy << "], core [" << core.xx << " "
+                  << core.xy << " " << core.yy << "] for " << describe(c);
+                f.add(s.str());
+            }
+        }
+    }
+}
+
+void check_default(const std::vector<Case>& cases, const std::vector<std::array<float, 20>>& out, bool curvature,
+                   Failures& f) {
+    for (size_t i = 0; i < cases.size(); ++i) {
+        const Case& c = cases[i];
+        const float r4 = (c.r * c.r) * (c.r * c.r);
+        const float a = std::isnan(r4) ? 1.0f : std::min(std::max(r4, 0.0f), 1.0f);
+        const double alpha2 = out[i][0], rough = out[i][1], xx = out[i][2], yy = out[i][3], xy = out[i][4];
+        std::string e;
+        if (!std::isfinite(alpha2) || alpha2 < a * (1 - kTol) || alpha2 > 1 + kTol)
+            e = "filtered a not finite, below the input or above 1";
+        else if (!std::isfinite(rough) || std::abs(rough - std::pow(alpha2, 0.25)) > kTol)
+            e = "filtered r is not a^(1/4)";
+        else
+            e = check_matrix(xx, xy, yy, a, a);
+        // Non-finite kernel inputs: zero kernel, the unfiltered a (edge policy).
+        bool usable;
+        if (curvature) {
+            const V3 dx = c.h_dx - c.h, dy = c.h_dy - c.h;
+            usable = finite3(c.h) && finite3(dx) && finite3(dy) && std::isfinite(c.k1) && std::isfinite(c.n.x) &&
+                     std::isfinite(c.n.y);
+        } else {
+            usable = finite3(c.n) && finite3(c.n_dx - c.n) && finite3(c.n_dy - c.n);
+        }
+        if (e.empty() && !usable &&
+            (std::abs(alpha2 - a) > 1e-6 || std::abs(xx - a) > 1e-6 || std::abs(yy - a) > 1e-6 || xy != 0))
+            e = "non-finite input: not the unfiltered a";
+        if (!e.empty()) {
+            std::ostringstream s;
+            s.precision(9);
+            s << (curvature ? "default+curvature" : "default") << ": " << e << ": a " << alpha2 << " r " << rough
+              << " matrix [" << xx << " " << xy << " " << yy << "] for " << describe(c);
+            f.add(s.str());
+        }
+    }
+}
+
+// Runs the three programs built by `build` over the grid and checks every case.
+void run_grid(const std::string& language, const std::function<GLuint(const std::string&, int, std::string&)>& build) {
+    const std::vector<Case> cases = make_cases();
+    ASSERT_GE(cases.size(), 100000u);
+    const int height = grid_height(cases.size());
+    for (const std::string group : {"METHODS", "DEFAULT", "CURVATURE"}) {
+        std::string log;
+        const GLuint program = build(group, height, log);
+        ASSERT_NE(program, 0u) << group << ": " << log;
+        const auto out = render(program, cases, log);
+        glDeleteProgram(program);
+        ASSERT_EQ(out.size(), cases.size()) << group << ": " << log;
+        Failures f;
+        if (group == "METHODS")
+            check_methods(cases, out, f);
+        else
+            check_default(cases, out, group == "CURVATURE", f);
+        for (const auto& s : f.shown) ADD_FAILURE() << language << " " << s;
+        EXPECT_EQ(f.count, 0u) << language << " " << group << ": " << f.count << " failures";
+        std::printf("%s %s: %zu cases checked\n", language.c_str(), group.c_str(), cases.size());
+    }
+}
+
+TEST(ShaderStability, GlslGridFiniteSymmetricPsdAndPolicy) {
+    SPECBAKE_REQUIRE_GL(gl);
+    run_grid("GLSL", [](const std::string& group, int, std::string& log) {
+        return build_program_glsl(kVertex, fragment_glsl(group), log);
+    });
+}
+
+std::vector<char> read_binary(const std::filesystem::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+TEST(ShaderStability, HlslGridThroughGlSpirvFiniteSymmetricPsdAndPolicy) {
+    SPECBAKE_REQUIRE_GL(gl);
+    if (!gl->has_extension("GL_ARB_gl_spirv"))
+        GTEST_SKIP() << gl->renderer() << " lacks GL_ARB_gl_spirv: HLSL is only compile-tested (ShaderCompile)";
+    TempDir dir;
+    std::string out;
+    const auto vert = dir.path() / "stability.vert";
+    std::ofstream(vert) << kVertex;
+    ASSERT_EQ(run_command("glslangValidator -G -S vert '" + vert.string() + "' -o '" + vert.string() + ".spv'", out), 0)
+        << out;
+    const auto vertex = read_binary(vert.string() + ".spv");
+    run_grid("HLSL", [&](const std::string& group, int height, std::string& log) -> GLuint {
+        const auto src = dir.path() / (group + ".hlsl"), spv = dir.path() / (group + ".spv");
+        std::ofstream(src) << fragment_hlsl(group, height);
+        std::string text;
+        if (run_command("glslangValidator -V -D -e main -S frag '" + src.string() + "' -o '" + spv.string() +
+                            "' && spirv-val '" + spv.string() + "'",
+                        text) != 0) {
+            log += "glslangValidator/spirv-val: " + text;
+            return 0;
+        }
+        return build_program_spirv(vertex, read_binary(spv), log);
+    });
+}
+
+}  // namespace
+}  // namespace specbake::gltest
