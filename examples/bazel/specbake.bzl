@@ -25,6 +25,12 @@ def _command(name, args, config):
         cmd += " --config $(execpath %s)" % config
     return cmd + " " + args + " --force -o $(RULEDIR)/" + name
 
+def _allow_roots(files):
+    # Bazel's sandbox puts a symbolic link to each declared input in the execution root. specbake refuses a
+    # reference that leads out of the scene's folder through a link unless its target's folder is named with
+    # --allow-root, so name exactly the folders of the declared inputs' real files, and nothing else.
+    return "".join([' --allow-root "$$(dirname "$$(readlink -f $(execpath %s))")"' % f for f in files])
+
 def specbake_texture(name, normal, roughness = None, config = None, container = "ktx2", options = [], **kwargs):
     """Bakes one normal map (and roughness/ORM map) with `specbake texture`.
 
@@ -79,6 +85,7 @@ def specbake_scene(name, scene, srcs = [], baked_materials = [], config = None, 
     for material in baked_materials:
         outs += ["%s/%s_%s_%s.%s" % (name, stem, material, kind, container) for kind in _KINDS]
     args = "bake $(execpath %s) --format glb --container %s" % (scene, container)
+    args += _allow_roots([scene] + srcs)
     args += "".join([" " + o for o in options])
     native.genrule(
         name = name,
