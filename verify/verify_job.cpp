@@ -124,7 +124,7 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
 
     std::vector<SimMetricsAccumulator> accumulators(candidates.size());
     report.candidates.resize(candidates.size());
-    double gt_total = 0, glint_total = 0;
+    double gt_total = 0, glint_total = 0, glint_radiance = 0;
     for (int frame = 0; frame < options.frames; ++frame) {
         auto frame_start = std::chrono::steady_clock::now();
         SimImage gt, glint_gt;
@@ -133,6 +133,7 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
         frame_start = std::chrono::steady_clock::now();
         if (any_glint) glint_gt = renderer.render_glint_ground_truth(frame, report.spp);
         glint_total += ms_since(frame_start);
+        for (size_t k = 0; k < glint_gt.texel_count(); ++k) glint_radiance += glint_gt.pixels[2 * k];
         for (size_t i = 0; i < candidates.size(); ++i) {
             SimImage image = renderer.render_candidate(ids[i], frame);
             accumulators[i].add_frame(candidates[i].shader.glint ? glint_gt : gt, image);
@@ -146,6 +147,9 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
             std::to_string(candidates.size()) + " candidates rendered");
         if (options.frame_done) options.frame_done(frame + 1, options.frames);
     }
+    if (any_glint && !(glint_radiance > 0))
+        report.notes.push_back("the glint ground truth is black (no glint material reflects a light towards the camera): "
+                               "the glint rows score nothing");
     report.ground_truth_ms = gt_total;
     report.glint_ground_truth_ms = glint_total;
 
