@@ -80,6 +80,48 @@ TEST(SceneGlints, ExtensionAsksPlanAndBakeFollow) {
     fs::remove_all(dir);
 }
 
+// The dictionary depends on its parameters only: a rebake into the same folder copies the committed one
+// when the manifest vouches for it (same parameters and tool version, matching hash), and bakes it again
+// when the committed file was altered; both give the bytes of the first bake.
+TEST(SceneGlints, RebakeReusesTheCommittedDictionary) {
+    const fs::path dir = temp_dir("glints_reuse");
+    const fs::path gltf = write_glint_plane(dir, true, json::object());
+    const fs::path out = dir / "out";
+    ASSERT_EQ(run_specbake({"bake", gltf.string(), "-o", out.string()}, dir).exit_code, 0);
+    const std::string first = slurp(out / "glint_dictionary.ktx2");
+    const auto entry_of = [&] {
+        const json manifest = json::parse(slurp(out / "manifest.json"));
+        for (const json& o : manifest["outputs"])
+            if (o["kind"] == "glint_dictionary") return o;
+        return json();
+    };
+    const json first_entry = entry_of();
+    ASSERT_FALSE(first_entry.is_null());
+    const auto change_roughness = [&](double r) {
+        json j = json::parse(slurp(gltf));
+        j["materials"][0]["pbrMetallicRoughness"]["roughnessFactor"] = r;
+        std::ofstream(gltf) << j.dump(2);
+    };
+
+    change_roughness(0.3);  // the textures change, the dictionary does not
+    const RunResult again = run_specbake({"-v", "bake", gltf.string(), "-o", out.string()}, dir);
+    ASSERT_EQ(again.exit_code, 0) << again.err;
+    EXPECT_NE(again.err.find("glint dictionary: the committed one is reused"), std::string::npos) << again.err;
+    EXPECT_EQ(slurp(out / "glint_dictionary.ktx2"), first);
+    EXPECT_EQ(entry_of(), first_entry);
+
+    std::string altered = first;
+    altered[altered.size() - 3] ^= 0x10;
+    std::ofstream(out / "glint_dictionary.ktx2", std::ios::binary) << altered;
+    change_roughness(0.35);
+    const RunResult rebaked = run_specbake({"-v", "bake", gltf.string(), "-o", out.string()}, dir);
+    ASSERT_EQ(rebaked.exit_code, 0) << rebaked.err;
+    EXPECT_NE(rebaked.err.find("glint dictionary: baked"), std::string::npos) << rebaked.err;
+    EXPECT_EQ(slurp(out / "glint_dictionary.ktx2"), first);
+    EXPECT_EQ(entry_of(), first_entry);
+    fs::remove_all(dir);
+}
+
 bool gl_disabled() {
     const char* v = std::getenv("SPECBAKE_NO_GL");
     return v && std::string(v) == "1";
