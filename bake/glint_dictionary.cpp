@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
+#include <utility>
 
 namespace specbake {
 namespace {
@@ -191,6 +193,20 @@ Result<GlintDictionary> bake_glint_dictionary(const GlintDictionarySettings& set
         }
     });
     return d;
+}
+
+Result<std::shared_ptr<const GlintDictionary>> shared_glint_dictionary(const GlintDictionarySettings& settings) {
+    static std::mutex mutex;
+    static std::vector<std::pair<GlintDictionarySettings, std::shared_ptr<const GlintDictionary>>> baked;
+    // Held over the bake: a second caller with the same settings waits for it instead of baking again.
+    const std::lock_guard lock(mutex);
+    for (const auto& [s, d] : baked)
+        if (s == settings) return d;
+    auto d = bake_glint_dictionary(settings);
+    if (!d) return d.error();
+    auto shared = std::make_shared<const GlintDictionary>(std::move(*d));
+    baked.emplace_back(settings, shared);
+    return shared;
 }
 
 }  // namespace specbake

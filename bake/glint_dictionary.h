@@ -6,6 +6,7 @@
 #include "core/result.h"
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,7 @@ struct GlintDictionarySettings {
     double alpha_dict = 0.5;  // Beckmann roughness of the coarsest level
     double lobe_std = 0.02;   // slope standard deviation of one lobe
     uint64_t seed = 1;
+    friend bool operator==(const GlintDictionarySettings&, const GlintDictionarySettings&) = default;
 };
 
 // Validates the settings; the error names the offending parameter.
@@ -58,6 +60,11 @@ inline int glint_layer(const GlintDictionarySettings& s, int level, int marginal
 // rounded to half precision with the rounding error carried to the next texel, so the stored halves keep
 // the sum to the last texel's rounding.
 Result<GlintDictionary> bake_glint_dictionary(const GlintDictionarySettings& settings);
+
+// The dictionary of `settings`, baked once per process and then shared: it depends on nothing but its
+// settings (deterministic, see above), so `bake` over many folders, `verify` and `bench` bake it once
+// per parameter set. Thread-safe; concurrent first calls with the same settings bake it once.
+Result<std::shared_ptr<const GlintDictionary>> shared_glint_dictionary(const GlintDictionarySettings& settings);
 
 // Value of marginal i at level k, mip m, texel x.
 inline float glint_texel(const GlintDictionary& d, int level, int marginal, int mip, int x) {

@@ -24,6 +24,8 @@ struct BenchCommandOptions {
     bool no_builtin = false;
     std::vector<std::string> scenes;
     std::vector<float> alpha{0.01f, 0.05f, 0.2f};
+    float glint_alpha = 0.1f;
+    bool quick = false;
     SimCommandOptions sim;
     std::string output;
     std::string command_line;
@@ -32,7 +34,16 @@ struct BenchCommandOptions {
 int run_bench_command(const BenchCommandOptions& o) {
     BenchOptions options;
     VerifyOptions& v = options.verify;
-    if (!apply_sim_command_options(o.sim, v)) return kExitUsage;
+    SimCommandOptions sim = o.sim;
+    if (o.quick) {
+        // Small enough for CI: every scene at 32 x 32, 64 samples, 2 frames, one timing render, no variants.
+        sim.size = "32x32";
+        sim.spp = 64;
+        sim.frames = 2;
+        sim.repeats = 1;
+        sim.no_variants = true;
+    }
+    if (!apply_sim_command_options(sim, v)) return kExitUsage;
     for (const std::string& name : o.scenes) {
         if (auto scene = make_builtin_scene(name, 0.5f); !scene) {
             print_error(scene.error().message);
@@ -44,6 +55,7 @@ int run_bench_command(const BenchCommandOptions& o) {
     options.no_builtin = o.no_builtin;
     for (const std::string& f : o.files) options.scene_files.emplace_back(f);
     options.alpha = o.alpha;
+    options.glint_alpha = o.glint_alpha;
     options.command_line = o.command_line;
     auto context = GlContext::create();
     if (!context) {
@@ -53,8 +65,11 @@ int run_bench_command(const BenchCommandOptions& o) {
     options.renderer = (*context)->description();
     // Scenes done / total (each built-in scene once per alpha, then the files) on a terminal, with the frames
     // of the scene in work as the fraction; one line per finished scene otherwise.
-    const size_t builtin = o.scenes.empty() ? (o.no_builtin ? 0 : builtin_scene_names().size()) : o.scenes.size();
-    ProgressDisplay display(builtin * o.alpha.size() + o.files.size(), progress_mode(run_settings()), "scenes",
+    size_t builtin = 0;
+    if (o.scenes.empty() && !o.no_builtin)
+        builtin = builtin_scene_names().size() * o.alpha.size() + builtin_glint_scene_names().size();
+    for (const std::string& name : o.scenes) builtin += name.starts_with("glitter-") ? 1 : o.alpha.size();
+    ProgressDisplay display(builtin + o.files.size(), progress_mode(run_settings()), "scenes",
                             ProgressDisplay::Lines::activity);
     // The frame timing after the last frame takes about one frame's time: leave it its share.
     v.frame_done = [&display](int done, int frames) { display.fraction(double(done) / double(frames + 1)); };
@@ -88,17 +103,26 @@ void add_bench_command(CLI::App& app, std::function<int()>& run) {
                     "lights and camera")
         ->check(CLI::ExistingFile);
     sub->add_flag("--no-builtin", o->no_builtin, "Only the given scene files, no built-in scenes");
-    sub->add_option("--scenes", o->scenes, "Built-in scenes (default: sphere,cylinder,torus,bumpy-sphere)")
+    sub->add_option("--scenes", o->scenes,
+                    "Built-in scenes (default: sphere,cylinder,torus,bumpy-sphere and the glint scenes "
+                    "glitter-sphere,glitter-plane)")
         ->delimiter(',');
     sub->add_option("--alpha", o->alpha, "GGX alpha (= r^2) values of the materials")
         ->delimiter(',')
         ->capture_default_str()
         ->check(CLI::Range(0.0001f, 1.0f));
+    sub->add_option("--glint-alpha", o->glint_alpha, "Alpha of the glint scenes (each runs once)")
+        ->capture_default_str()
+        ->check(CLI::Range(0.0001f, 1.0f));
     add_sim_command_options(sub, o->sim);
+    sub->add_flag("--quick", o->quick,
+                  "CI setting: 32x32, 64 spp, 2 frames, 1 timing render, no variants (overrides those options)");
     sub->add_option("-o,--output", o->output, "Folder for bench.md, bench.csv, bench.svg and strips/");
     sub->footer("Examples:\n"
                 "  specbake bench -o bench-out\n"
                 "  specbake bench --no-builtin helmet.glb -o helmet-bench\n"
+                "  specbake bench --scenes glitter-sphere,glitter-plane --size 64x64 --spp 1024 --frames 4 -o glints\n"
+                "  specbake bench --quick --scenes glitter-sphere,glitter-plane\n"
                 "  specbake bench --scenes torus,cylinder --alpha 0.01 --size 256x256 --spp 1024 --frames 16 -o big\n");
     sub->callback([&run, o, sub] {
         o->command_line = "specbake bench";

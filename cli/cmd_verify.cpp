@@ -7,13 +7,13 @@
 #include "cli/verify_options.h"
 #include "verify/scene_file.h"
 #include "verify/strips.h"
-#include "verify/glint_sim.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstddef>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <string>
 
@@ -32,40 +32,7 @@ struct VerifyCommandOptions {
     std::string strip;
 };
 
-// The glint scenes (C21): simulated on the CPU with the C++ twin of the include's glint path.
-int run_glint_verify(const VerifyCommandOptions& o) {
-    GlintSimSettings settings;
-    settings.scene = o.builtin;
-    settings.size = std::atoi(o.sim.size.c_str());
-    settings.reference_spp = o.sim.spp;
-    settings.frames = std::max(2, o.sim.frames);
-    settings.alpha = o.alpha;
-    const bool quiet = run_settings().verbosity == Verbosity::quiet;
-    if (!quiet) std::fprintf(stderr, "specbake: baking the glint dictionary (specbake glints defaults)\n");
-    auto dictionary = bake_glint_dictionary(GlintDictionarySettings{});
-    if (!dictionary) {
-        print_error(dictionary.error().message);
-        return kExitFailed;
-    }
-    auto report = run_glint_sim(*dictionary, settings);
-    if (!report) {
-        print_error(report.error().message);
-        return kExitUsage;
-    }
-    std::printf("Scene %s, Beckmann alpha %.3g, logDensity %.3g, %dx%d (%d covered), reference %d spp "
-                "(Gaussian pixel filter, pixel cell footprint, no GGAA/LEAN), %d frames; CPU evaluation of the "
-                "include's glint formulas\n\n",
-                settings.scene.c_str(), settings.alpha, settings.log_density, settings.size, settings.size, report->pixels,
-                settings.reference_spp, settings.frames);
-    std::printf("| candidate | RMSE %% | flicker | energy | cells / pixel | fetches / pixel |\n|---|---:|---:|---:|---:|---:|\n");
-    for (const GlintSimRow& r : report->rows)
-        std::printf("| %s | %.2f | %.4f | %.3f | %.1f | %.1f |\n", r.candidate.c_str(), r.rmse_percent, r.flicker,
-                    r.energy, r.cells, r.fetches);
-    return kExitOk;
-}
-
 int run_verify_command(const VerifyCommandOptions& o) {
-    if (o.builtin.rfind("glitter-", 0) == 0) return run_glint_verify(o);
     VerifyOptions options;
     if (!apply_sim_command_options(o.sim, options)) return kExitUsage;
     options.only = o.only;
@@ -106,16 +73,34 @@ int run_verify_command(const VerifyCommandOptions& o) {
         std::snprintf(material, sizeof material, "roughness %.3g (alpha %.3g)", double(report->roughness),
                       double(report->roughness * report->roughness));
     std::printf("Scene %s, %s, %dx%d, ground truth %d spp (%.1f s), %d frames; %s\n\n", report->scene.c_str(),
-                material, report->width, report->height, report->spp, report->ground_truth_ms / 1000.0,
-                report->frames, (*context)->description().c_str());
+                material, report->width, report->height, report->spp,
+                (report->ground_truth_ms + report->glint_ground_truth_ms) / 1000.0, report->frames,
+                (*context)->description().c_str());
     std::fputs(markdown_table(*report).c_str(), stdout);
+    if (!report->glint_ground_truth.empty() || report->glint_ground_truth_ms > 0)
+        std::printf("\nglint-* rows: the materials with SPECBAKE_glints only, against the glint ground truth (the "
+                    "include's glint SDF without GGAA or LEAN, full-resolution maps, the cell footprint of the output "
+                    "pixel; C21 Sec. 6); their frame x is relative to glint-c20.\n");
     for (const std::string& note : report->notes) print_warning(note);
     if (!o.strip.empty()) {
-        std::vector<StripTile> tiles;
-        for (const CandidateReport& c : report->candidates) tiles.push_back({c.name, &c.image});
-        if (auto written = write_strip_png(make_strip(report->ground_truth, tiles), o.strip); !written) {
-            print_error(written.error().message);
-            return kExitFailed;
+        // One strip per ground truth: the GGX candidates', and the glint candidates' (NAME-glints.png when
+        // the scene has both).
+        std::vector<StripTile> tiles, glint_tiles;
+        for (const CandidateReport& c : report->candidates)
+            (c.family == "glint" ? glint_tiles : tiles).push_back({c.name, &c.image});
+        std::filesystem::path glint_strip = o.strip;
+        if (!tiles.empty()) {
+            glint_strip.replace_filename(glint_strip.stem().string() + "-glints" + glint_strip.extension().string());
+            if (auto written = write_strip_png(make_strip(report->ground_truth, tiles), o.strip); !written) {
+                print_error(written.error().message);
+                return kExitFailed;
+            }
+        }
+        if (!glint_tiles.empty()) {
+            if (auto written = write_strip_png(make_strip(report->glint_ground_truth, glint_tiles), glint_strip); !written) {
+                print_error(written.error().message);
+                return kExitFailed;
+            }
         }
     }
     return kExitOk;
@@ -145,7 +130,8 @@ void add_verify_command(CLI::App& app, std::function<int()>& run) {
                 "  specbake verify --builtin torus --alpha 0.01 --strip torus.png\n"
                 "  specbake verify --builtin cylinder --alpha 0.01 --spp 1024 --frames 16 --size 256x256\n"
                 "  specbake verify --builtin bumpy-sphere --only baked-texture,default\n"
-                "  specbake verify --builtin glitter-plane --alpha 0.1 --size 64x64 --spp 1024 --frames 4");
+                "  specbake verify --builtin glitter-plane --alpha 0.1 --size 64x64 --spp 1024 --frames 4\n"
+                "  specbake verify glittery.gltf   (materials with \"SPECBAKE_glints\" also get the glint candidates)");
     sub->callback([&run, o] { run = [o] { return run_verify_command(*o); }; });
 }
 

@@ -119,13 +119,15 @@ constexpr size_t kKtx2HeaderBytes = 80;
 constexpr size_t kKtx2LevelEntryBytes = 24;
 
 // Level 0 against the limits (io/input_policy.h) before it is decoded to float texels: its texel count
-// and its bytes in the file.
-Result<void> check_size(uint32_t w, uint32_t h, const FormatInfo& f) {
+// and its bytes in the file (over all `layers` of an array; 1 for a single image).
+Result<void> check_size(uint32_t w, uint32_t h, const FormatInfo& f, uint32_t layers = 1) {
     const InputLimits& limits = input_policy().limits;
-    if (uint64_t(w) * h > limits.texels)
-        return make_error("image is " + std::to_string(w) + "x" + std::to_string(h) + ", its texel count " +
-                          over_limit("texels", uint64_t(w) * h, limits.texels));
-    if (const uint64_t bytes = level_bytes(w, h, 0, f); bytes > limits.texture_bytes)
+    const uint64_t texels = uint64_t(w) * h * layers;
+    if (texels > limits.texels)
+        return make_error("image is " + std::to_string(w) + "x" + std::to_string(h) +
+                          (layers > 1 ? " x " + std::to_string(layers) + " layers" : std::string()) +
+                          ", its texel count " + over_limit("texels", texels, limits.texels));
+    if (const uint64_t bytes = level_bytes(w, h, 0, f) * layers; bytes > limits.texture_bytes)
         return make_error("level 0 of " + over_limit("texture-bytes", bytes, limits.texture_bytes) + " bytes");
     return {};
 }
@@ -133,6 +135,7 @@ Result<void> check_size(uint32_t w, uint32_t h, const FormatInfo& f) {
 struct Ktx2Layout {
     const FormatInfo* format = nullptr;
     uint32_t width = 0, height = 0, levels = 0;
+    uint32_t layers = 0;  // KTX2 layerCount: 0 for a single image, else a 2D array of that many layers
     std::vector<uint64_t> offsets;
     uint32_t transfer = 0;
 };
@@ -154,9 +157,12 @@ Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& nam
     if (type_size != uint32_t(f.bytes))
         return fail("typeSize " + std::to_string(type_size) + " does not match " + f.name);
     if (L.width == 0 || L.height == 0) return fail("zero width or height");
-    if (depth != 0 || layers != 0 || faces != 1) return fail("only single 2D images are supported");
+    // Single 2D images and 2D arrays (the glint dictionary); no volumes, cube maps or 1D textures.
+    if (depth != 0 || faces != 1) return fail("only 2D images and 2D arrays are supported");
+    L.layers = layers;
+    const uint32_t stored_layers = std::max<uint32_t>(1, layers);
     if (supercompression != 0) return fail("supercompression scheme " + std::to_string(supercompression));
-    if (auto r = check_size(L.width, L.height, f); !r) return fail(r.error().message);
+    if (auto r = check_size(L.width, L.height, f, stored_layers); !r) return fail(r.error().message);
     if (L.levels > uint32_t(full_chain_levels(L.width, L.height)))
         return fail("levelCount " + std::to_string(L.levels) + " exceeds the full chain of " +
                     std::to_string(full_chain_levels(L.width, L.height)));
@@ -230,7 +236,8 @@ Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& nam
         const size_t at = kKtx2HeaderBytes + kKtx2LevelEntryBytes * level;
         const uint64_t offset = u64(b, at), length = u64(b, at + 8), uncompressed = u64(b, at + 16);
         const std::string lv = "level " + std::to_string(level);
-        const uint64_t expected = level_bytes(L.width, L.height, int(level), f);
+        // An array level holds its layers one after another (KTX 2.0 Sec. 3.9.7).
+        const uint64_t expected = level_bytes(L.width, L.height, int(level), f) * stored_layers;
         if (length != expected || uncompressed != expected)
             return fail(lv + " holds " + std::to_string(length) + " bytes, expected " + std::to_string(expected));
         if (offset % alignment) return fail(lv + " offset " + std::to_string(offset) + " is not aligned");
@@ -321,10 +328,15 @@ Result<InspectedTexture> decode_ktx2_for_inspection(std::span<const uint8_t> byt
     t.transfer = layout->transfer == 2 ? "sRGB" : "linear";
     t.channel_names.assign({"R", "G", "B", "A"});
     t.channel_names.resize(size_t(layout->format->channels));
+    t.layers = int(layout->layers);
+    t.channel_bytes = layout->format->bytes;
+    const int stored_layers = std::max(1, t.layers);
+    // An array's layers are decoded one below the other: each level is width x (height x layers).
     for (uint32_t level = 0; level < layout->levels; ++level)
         t.mips.levels.push_back(decode_level(bytes.data() + layout->offsets[level],
                                              int(std::max<uint32_t>(1, layout->width >> level)),
-                                             int(std::max<uint32_t>(1, layout->height >> level)), *layout->format));
+                                             int(std::max<uint32_t>(1, layout->height >> level)) * stored_layers,
+                                             *layout->format));
     return t;
 }
 
@@ -334,6 +346,7 @@ Result<InspectedTexture> decode_dds_for_inspection(std::span<const uint8_t> byte
     InspectedTexture t;
     t.format = "dds";
     t.pixel_format = layout->format->name;
+    t.channel_bytes = layout->format->bytes;
     t.transfer = layout->format->numeric == Numeric::srgb ? "sRGB" : "linear";
     t.channel_names.assign({"R", "G", "B", "A"});
     t.channel_names.resize(size_t(layout->format->channels));
@@ -371,7 +384,7 @@ Result<TextureShape> check_container_shape(std::span<const uint8_t> bytes, const
     if (has_prefix(bytes, kKtx2Magic, 12)) {
         auto l = parse_ktx2(bytes, name);
         if (!l) return l.error();
-        return TextureShape{"ktx2", int(l->width), int(l->height), int(l->levels), l->format->channels};
+        return TextureShape{"ktx2", int(l->width), int(l->height), int(l->levels), l->format->channels, int(l->layers)};
     }
     if (has_prefix(bytes, "DDS ", 4)) {
         auto l = parse_dds(bytes, name);

@@ -20,7 +20,13 @@ struct InspectedTexture {
     std::string pixel_format;  // "R16G16B16A16_SFLOAT" (KTX2 vkFormat / DDS DXGI format name), "half", "uint8", ...
     std::string transfer;      // "linear" or "sRGB" (as the container states)
     std::vector<std::string> channel_names;  // from the file where it has them (EXR), else R, G, B, A
-    MipChain mips;             // values as stored: unorm normalised to [0, 1], floats as they are, no conversion
+    // Values as stored: unorm normalised to [0, 1], floats as they are, no conversion. A 2D array's layers
+    // (KTX2) sit one below the other: level L is (width >> L) x ((height >> L) x layers).
+    MipChain mips;
+    int layers = 0;            // 0: a single image; else the array's layer count
+    int channel_bytes = 0;     // bytes per stored channel (KTX2, DDS); 0 when not known (EXR, PNG)
+    // Height of one layer at level L (the level's height for a single image).
+    int layer_height(size_t level) const { return layers > 0 ? mips.levels[level].height / layers : mips.levels[level].height; }
 };
 
 // Structure of a KTX2 or DDS file held in memory: everything a reader relies on, checked against the
@@ -34,6 +40,7 @@ Result<void> check_dds_structure(std::span<const uint8_t> bytes, const std::stri
 struct TextureShape {
     std::string format;
     int width = 0, height = 0, mips = 0, channels = 0;
+    int layers = 0;  // KTX2 2D arrays: the layer count (0 for a single image); width and height are a layer's
 };
 // The structural check of a KTX2 or DDS file in memory (by its magic; any other content is an error), and
 // the shape it declares. Reads only the headers: the level data is not touched.

@@ -20,6 +20,7 @@ Result<void> add_glint_lean_settings(const io::GltfScene& scene, PlanOptions& op
 }
 
 Result<void> add_glint_outputs(const ScenePlan& plan, const std::filesystem::path& out_dir,
+                               const std::filesystem::path& final_dir, const std::function<void(const std::string&)>& say,
                                const std::map<std::string, std::vector<io::ManifestOutput>>& files_by_stem,
                                std::map<int, json>& extension_of_material, std::vector<std::filesystem::path>& written,
                                std::vector<io::ManifestOutput>& outputs) {
@@ -28,8 +29,13 @@ Result<void> add_glint_outputs(const ScenePlan& plan, const std::filesystem::pat
     for (const GlintDecision& g : plan.glints) {
         if (!g.bake) continue;
         if (!dictionary) {
-            auto entry = write_glint_dictionary(settings, out_dir);
+            bool reused = false;
+            auto entry = write_glint_dictionary(settings, out_dir, final_dir, &reused);
             if (!entry) return entry.error();
+            if (say)
+                say(std::string(reused ? "glint dictionary: the committed one is reused (same parameters and hash)"
+                                       : "glint dictionary: baked") +
+                    " for " + final_dir.string());
             written.push_back(out_dir / entry->path);
             outputs.push_back(*entry);
             dictionary = true;

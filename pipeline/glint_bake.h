@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -22,10 +23,12 @@ namespace specbake {
 // slope covariance the glints need, C21 Eq. 16) in options.material_texture_settings.
 Result<void> add_glint_lean_settings(const io::GltfScene& scene, PlanOptions& options);
 
-// When the plan bakes glints: writes out_dir/glint_dictionary.ktx2 (appended to `written` and `outputs`)
-// and sets extension_of_material[m]["glints"] of every such material: its parameters, the dictionary
-// (uri and parameters) and its slope-space LEAN outputs.
+// When the plan bakes glints: writes out_dir/glint_dictionary.ktx2 (appended to `written` and `outputs`;
+// copied from `final_dir` when a previous bake committed the same one there, else baked once per process,
+// see write_glint_dictionary; `say` tells which) and sets extension_of_material[m]["glints"] of every such
+// material: its parameters, the dictionary (uri and parameters) and its slope-space LEAN outputs.
 Result<void> add_glint_outputs(const ScenePlan& plan, const std::filesystem::path& out_dir,
+                               const std::filesystem::path& final_dir, const std::function<void(const std::string&)>& say,
                                const std::map<std::string, std::vector<io::ManifestOutput>>& files_by_stem,
                                std::map<int, nlohmann::json>& extension_of_material,
                                std::vector<std::filesystem::path>& written, std::vector<io::ManifestOutput>& outputs);

@@ -7,8 +7,11 @@
 #include "io/sha256.h"
 #include "pipeline/version.h"
 
+#include "io/manifest.h"
+
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace specbake {
 namespace fs = std::filesystem;
@@ -61,12 +64,57 @@ double glint_dictionary_max_integral_error(const GlintDictionary& d) {
     return worst;
 }
 
-Result<io::ManifestOutput> write_glint_dictionary(const GlintDictionarySettings& s, const fs::path& dir) {
-    auto dict = bake_glint_dictionary(s);
+namespace {
+
+// The dictionary a previous bake committed in `committed_dir` for the settings `s`, when it can be trusted
+// to be byte for byte what `s` bakes: listed in the folder's manifest (committed_dir/manifest.json, or a
+// batch manifest one folder up, whose paths carry the scene's folder) written by this tool version, with
+// the same parameters, and its file hashing to the listed sha256. Fills `bytes` and returns the entry.
+std::optional<io::ManifestOutput> committed_dictionary(const GlintDictionarySettings& s, const fs::path& committed_dir,
+                                                       std::vector<uint8_t>& bytes) {
+    const std::pair<fs::path, std::string> places[] = {
+        {committed_dir / "manifest.json", kGlintDictionaryFile},
+        {committed_dir.parent_path() / "manifest.json", committed_dir.filename().string() + "/" + kGlintDictionaryFile}};
+    const json parameters = glint_dictionary_parameters(s);
+    for (const auto& [manifest_path, listed] : places) {
+        std::error_code ec;
+        if (!fs::is_regular_file(manifest_path, ec)) continue;
+        auto manifest = io::read_manifest(manifest_path);
+        if (!manifest || manifest->version != tool_version()) continue;
+        for (const io::ManifestOutput& o : manifest->outputs) {
+            if (o.kind != "glint_dictionary" || o.path != listed || !o.extra.contains("parameters") ||
+                o.extra["parameters"] != parameters)
+                continue;
+            auto file = io::read_file(committed_dir / kGlintDictionaryFile);
+            if (!file || io::sha256_hex(*file) != o.sha256) return std::nullopt;
+            bytes = std::move(*file);
+            io::ManifestOutput entry = o;
+            entry.path = kGlintDictionaryFile;
+            return entry;
+        }
+    }
+    return std::nullopt;
+}
+
+}  // namespace
+
+Result<io::ManifestOutput> write_glint_dictionary(const GlintDictionarySettings& s, const fs::path& dir,
+                                                  const fs::path& committed_dir, bool* reused) {
+    if (reused) *reused = false;
+    std::vector<uint8_t> bytes;
+    if (!committed_dir.empty()) {
+        if (auto entry = committed_dictionary(s, committed_dir, bytes)) {
+            if (auto ok = io::write_file_atomic(dir / kGlintDictionaryFile, bytes); !ok) return ok.error();
+            if (reused) *reused = true;
+            return *entry;
+        }
+    }
+    auto dict = shared_glint_dictionary(s);
     if (!dict) return dict.error();
+    const GlintDictionary& d = **dict;
     MipChain stacked;
-    stacked.levels = dict->mips;
-    const std::vector<uint8_t> bytes = io::encode_ktx2_array(stacked, dict->layers, io::TexelEncoding::Float16);
+    stacked.levels = d.mips;
+    bytes = io::encode_ktx2_array(stacked, d.layers, io::TexelEncoding::Float16);
     if (auto ok = io::write_file_atomic(dir / kGlintDictionaryFile, bytes); !ok) return ok.error();
     io::ManifestOutput out;
     out.kind = "glint_dictionary";
@@ -74,13 +122,13 @@ Result<io::ManifestOutput> write_glint_dictionary(const GlintDictionarySettings&
     out.format = "ktx2";
     out.width = s.width;
     out.height = 1;
-    out.mips = dict->mip_count;
+    out.mips = d.mip_count;
     out.channels = 4;
     out.sha256 = io::sha256_hex(bytes);
-    out.extra["layers"] = dict->layers;
+    out.extra["layers"] = d.layers;
     out.extra["vkFormat"] = io::ktx2_vk_format(io::TexelEncoding::Float16, 4);
     out.extra["bytes"] = bytes.size();
-    out.extra["max_integral_error"] = glint_dictionary_max_integral_error(*dict);
+    out.extra["max_integral_error"] = glint_dictionary_max_integral_error(d);
     out.extra["parameters"] = glint_dictionary_parameters(s);
     return out;
 }

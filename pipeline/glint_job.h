@@ -21,10 +21,16 @@ nlohmann::json glint_dictionary_parameters(const GlintDictionarySettings& s);
 // lookup of the layout (2 D_m sum_x v_x, see bake_glint_dictionary).
 double glint_dictionary_max_integral_error(const GlintDictionary& d);
 
-// Bakes the dictionary and writes dir/glint_dictionary.ktx2 atomically (R16G16B16A16_SFLOAT, 2D array of
-// levels x count / 4 layers of width x 1 texels, full mip chain). Returns its manifest entry (sha256 of
-// the written bytes, the parameters and the measured integral error as extra facts).
-Result<io::ManifestOutput> write_glint_dictionary(const GlintDictionarySettings& s, const std::filesystem::path& dir);
+// Writes dir/glint_dictionary.ktx2 atomically (R16G16B16A16_SFLOAT, 2D array of levels x count / 4 layers
+// of width x 1 texels, full mip chain). Returns its manifest entry (sha256 of the written bytes, the
+// parameters and the measured integral error as extra facts). The dictionary depends on its settings
+// only, so it is baked once per process and settings (shared_glint_dictionary); with `committed_dir`
+// (the folder a staged bake commits to) a dictionary already committed there is copied instead of baked
+// when the folder's manifest lists it from this tool version with the same parameters and its bytes
+// hash to the listed sha256 (`*reused` then says so). Either way the bytes and the entry are the same.
+Result<io::ManifestOutput> write_glint_dictionary(const GlintDictionarySettings& s, const std::filesystem::path& dir,
+                                                  const std::filesystem::path& committed_dir = {},
+                                                  bool* reused = nullptr);
 
 // `specbake glints -o DIR`: the dictionary and DIR/manifest.json.
 Result<io::Manifest> run_glint_job(const GlintDictionarySettings& s, const std::filesystem::path& dir);

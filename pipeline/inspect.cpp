@@ -176,6 +176,11 @@ std::string sparkline(const std::vector<long long>& counts) {
     return out;
 }
 
+// Bytes level L takes in its container (every layer), 0 when the container's sizes are not known.
+size_t level_bytes(const io::InspectedTexture& t, size_t level) {
+    return t.mips.levels[level].texel_count() * size_t(t.mips.levels[level].channels) * size_t(t.channel_bytes);
+}
+
 }  // namespace
 
 json report_json(const TextureReport& r) {
@@ -186,15 +191,21 @@ json report_json(const TextureReport& r) {
               {"pixel_format", r.texture.pixel_format},
               {"transfer", r.texture.transfer},
               {"width", m.width()},
-              {"height", m.height()},
+              {"height", m.levels.empty() ? 0 : r.texture.layer_height(0)},
               {"mips", m.levels.size()},
               {"channels", m.channels()},
               {"channel_names", r.texture.channel_names}};
+    // A 2D array (KTX2): sizes are one layer's; the statistics cover every layer of the level.
+    if (r.texture.layers > 0) j["layers"] = r.texture.layers;
     json levels = json::array();
     for (size_t L = 0; L < m.levels.size(); ++L) {
         json q = json::object();
         for (const Quantity& quantity : r.quantities) q[quantity.name] = stats_json(quantity.stats[L]);
-        levels.push_back({{"level", L}, {"width", m.levels[L].width}, {"height", m.levels[L].height}, {"quantities", q}});
+        json level = {{"level", L}, {"width", m.levels[L].width}, {"height", r.texture.layer_height(L)}};
+        if (r.texture.channel_bytes > 0) level["bytes"] = level_bytes(r.texture, L);
+        if (r.texture.layers > 0) level["layers"] = r.texture.layers;
+        level["quantities"] = std::move(q);
+        levels.push_back(std::move(level));
     }
     j["levels"] = std::move(levels);
     return j;
@@ -202,10 +213,21 @@ json report_json(const TextureReport& r) {
 
 std::string report_text(const TextureReport& r, bool all) {
     const MipChain& m = r.texture.mips;
+    const int layers = r.texture.layers;
+    const std::string layer_text = layers > 0 ? " x " + std::to_string(layers) + " layers (2D array)" : "";
     std::string out = r.path + ": " + r.texture.format + " " + r.texture.pixel_format + " (" + r.texture.transfer +
-                      "), " + std::to_string(m.width()) + "x" + std::to_string(m.height()) + ", " +
-                      std::to_string(m.levels.size()) + " mips, " + std::to_string(m.channels()) + " channels" +
-                      (r.kind.empty() ? "" : ", kind " + r.kind) + "\n";
+                      "), " + std::to_string(m.width()) + "x" + std::to_string(m.levels.empty() ? 0 : r.texture.layer_height(0)) +
+                      layer_text + ", " + std::to_string(m.levels.size()) + " mips, " + std::to_string(m.channels()) +
+                      " channels" + (r.kind.empty() ? "" : ", kind " + r.kind) + "\n";
+    if (layers > 0) {
+        // Per-level sizes of the array: one layer's size and the level's bytes over all layers.
+        out += "  levels:";
+        for (size_t L = 0; L < m.levels.size(); ++L)
+            out += " " + std::to_string(L) + ": " + std::to_string(m.levels[L].width) + "x" +
+                   std::to_string(r.texture.layer_height(L)) + " (" +
+                   std::to_string(level_bytes(r.texture, L)) + " B)" + (L + 1 < m.levels.size() ? "," : "");
+        out += "\n";
+    }
     const bool any_derived = std::any_of(r.quantities.begin(), r.quantities.end(), [](auto& q) { return q.derived; });
     for (const Quantity& q : r.quantities) {
         if (any_derived && !q.derived && !all) continue;
@@ -215,7 +237,8 @@ std::string report_text(const TextureReport& r, bool all) {
         for (size_t L = 0; L < q.stats.size(); ++L) {
             const QuantityStats& s = q.stats[L];
             char line[256];
-            const std::string size = std::to_string(m.levels[L].width) + "x" + std::to_string(m.levels[L].height);
+            const std::string size = std::to_string(m.levels[L].width) + "x" + std::to_string(r.texture.layer_height(L)) +
+                                     (layers > 0 ? "x" + std::to_string(layers) : "");
             std::snprintf(line, sizeof line, "    %3zu  %-11s %9.4g %9.4g %9.4g %9.4g %9.4g %9.4g  |%s|%s\n", L,
                           size.c_str(), s.min, s.p05, s.p50, s.p95, s.max, s.mean, sparkline(s.histogram).c_str(),
                           s.nonfinite ? (" " + std::to_string(s.nonfinite) + " non-finite").c_str() : "");
@@ -306,7 +329,11 @@ Result<ManifestReport> inspect_manifest(const fs::path& manifest_path, bool chec
             continue;
         }
         const MipChain& m = t->texture.mips;
-        if ((o.width && o.width != m.width()) || (o.height && o.height != m.height()) ||
+        const int layers = o.extra.contains("layers") && o.extra["layers"].is_number_integer() ? o.extra["layers"].get<int>() : 0;
+        if (layers != t->texture.layers)
+            r.problems.push_back(file.string() + ": " + std::to_string(t->texture.layers) + " layers, the manifest entry says " +
+                                 std::to_string(layers));
+        if ((o.width && o.width != m.width()) || (o.height && !m.levels.empty() && o.height != t->texture.layer_height(0)) ||
             (o.channels && o.channels > m.channels()) ||  // DDS pads 3 channels to 4
             (o.mips && o.format != "png" && size_t(o.mips) != m.levels.size()))
             r.problems.push_back(file.string() + ": size, channels or mips differ from the manifest entry");

@@ -66,6 +66,11 @@ FileCheck check_output(const fs::path& file, const io::ManifestOutput& o) {
                   (o.channels && o.channels > shape->channels) ||  // DDS pads 3 channels to 4
                   (o.mips && o.format != "png" && o.mips != shape->mips)))
         r.problem = file.string() + ": size, channels or mips differ from the manifest entry";
+    // A 2D array (the glint dictionary) records its layer count as an extra fact.
+    const int layers = o.extra.contains("layers") && o.extra["layers"].is_number_integer() ? o.extra["layers"].get<int>() : 0;
+    if (shape && !r.problem && layers != shape->layers)
+        r.problem = file.string() + ": " + std::to_string(shape->layers) + " layers, the manifest entry says " +
+                    std::to_string(layers);
     return r;
 }
 

@@ -158,7 +158,9 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         if (coat) target["clearcoat"] = std::move(ext);
         else target.update(ext);
     }
-    if (auto r = add_glint_outputs(*plan, out_dir, files_by_stem, extension_of_material, written, result.outputs); !r)
+    if (auto r = add_glint_outputs(*plan, out_dir, final_dir, say, files_by_stem, extension_of_material, written,
+                                   result.outputs);
+        !r)
         return r.error();
     for (const auto& [material, ext] : extension_of_material) scene.set_material_extension(material, ext);
     const bool any_texture = !extension_of_material.empty();

@@ -48,9 +48,9 @@ std::vector<Aggregate> aggregate(const BenchReport& r) {
     std::map<std::string, size_t> index;
     constexpr double kFloor = 1e-9;  // keeps the logarithm finite for a candidate identical to none
     for (const SceneReport& s : r.scenes) {
-        const CandidateReport* none = find_row(s, "none");
-        if (!none) continue;
         for (const CandidateReport& c : s.candidates) {
+            const CandidateReport* none = find_row(s, baseline_of(c.family));
+            if (!none) continue;
             auto [it, fresh] = index.try_emplace(c.name, out.size());
             if (fresh) {
                 out.emplace_back();
@@ -89,10 +89,13 @@ Result<BenchReport> run_bench(const BenchOptions& options, const std::function<v
     report.renderer = options.renderer;
     report.command_line = options.command_line;
     std::vector<std::string> scenes = options.scenes;
-    if (scenes.empty() && !options.no_builtin)
+    if (scenes.empty() && !options.no_builtin) {
         for (auto n : builtin_scene_names()) scenes.emplace_back(n);
+        for (auto n : builtin_glint_scene_names()) scenes.emplace_back(n);
+    }
     for (const std::string& name : scenes) {
-        for (float alpha : options.alpha) {
+        const bool glint = name.starts_with("glitter-");
+        for (float alpha : glint ? std::vector<float>{options.glint_alpha} : options.alpha) {
             if (!(alpha > 0.0f && alpha <= 1.0f)) return make_error("--alpha values must be in (0, 1]");
             auto scene = make_builtin_scene(name, std::sqrt(alpha));
             if (!scene) return scene.error();
@@ -101,7 +104,7 @@ Result<BenchReport> run_bench(const BenchOptions& options, const std::function<v
             report.scenes.push_back(std::move(*result));
             if (progress)
                 progress(scene_label(report.scenes.back()) + ": ground truth " +
-                         format_double("%.1f s", report.scenes.back().ground_truth_ms / 1000.0));
+                         format_double("%.1f s", (report.scenes.back().ground_truth_ms + report.scenes.back().glint_ground_truth_ms) / 1000.0));
         }
     }
     for (const std::filesystem::path& file : options.scene_files) {
@@ -112,14 +115,14 @@ Result<BenchReport> run_bench(const BenchOptions& options, const std::function<v
         report.scenes.push_back(std::move(*result));
         if (progress)
             progress(scene_label(report.scenes.back()) + ": ground truth " +
-                     format_double("%.1f s", report.scenes.back().ground_truth_ms / 1000.0));
+                     format_double("%.1f s", (report.scenes.back().ground_truth_ms + report.scenes.back().glint_ground_truth_ms) / 1000.0));
     }
     return report;
 }
 
 std::string bench_summary_markdown(const BenchReport& r) {
     std::string out;
-    out += "| candidate | family | RMSE vs none | RMSE (tm) vs none | flicker vs none | energy | p99 | SPIR-V | frame x "
+    out += "| candidate | family | RMSE vs base | RMSE (tm) vs base | flicker vs base | energy | p99 | SPIR-V | frame x "
            "| bake ms |\n";
     out += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const Aggregate& a : aggregate(r)) {
@@ -131,13 +134,18 @@ std::string bench_summary_markdown(const BenchReport& r) {
                (std::isnan(frame) ? "-" : format_double("%.2f", frame)) + " | " +
                (std::isnan(bake) ? "-" : format_double("%.1f", bake)) + " |\n";
     }
+    out += "\nBase: none (no filtering); for the glint family glint-c20 (glints without anti-aliasing, C20), on the "
+           "glint ground truth.\n";
     out += "\nBest per scene (lowest linear RMSE / lowest flicker among filtering candidates):\n\n";
-    out += "| scene | none RMSE | best RMSE | none flicker | best flicker |\n|---|---:|---|---:|---|\n";
+    out += "| scene | base RMSE | best RMSE | base flicker | best flicker |\n|---|---:|---|---:|---|\n";
     for (const SceneReport& s : r.scenes) {
-        const CandidateReport* none = find_row(s, "none");
+        const bool glints_only = std::none_of(s.candidates.begin(), s.candidates.end(),
+                                              [](const CandidateReport& c) { return c.family != "glint"; });
+        const std::string base = glints_only ? "glint-c20" : "none";
+        const CandidateReport* none = find_row(s, base);
         const CandidateReport *best_e = nullptr, *best_f = nullptr;
         for (const CandidateReport& c : s.candidates) {
-            if (c.name == "none") continue;
+            if (c.name == base || (c.family == "glint") != glints_only) continue;
             if (!best_e || c.metrics.rmse < best_e->metrics.rmse) best_e = &c;
             if (!best_f || c.metrics.flicker_linear < best_f->metrics.flicker_linear) best_f = &c;
         }
@@ -218,7 +226,8 @@ std::string bench_svg(const BenchReport& r) {
     x_max += 10;
     const std::map<std::string, std::string> colours = {{"none", "#000000"},   {"derivative", "#1f77b4"},
                                                         {"peer", "#d62728"},   {"baked", "#2ca02c"},
-                                                        {"default", "#9467bd"}, {"variant", "#8c564b"}};
+                                                        {"default", "#9467bd"}, {"variant", "#8c564b"},
+                                                        {"glint", "#ff7f0e"}};
     std::string svg = "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + std::to_string(width) + "\" height=\"" +
                       std::to_string(height) + "\" font-family=\"sans-serif\" font-size=\"10\">\n";
     svg += "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
@@ -263,7 +272,7 @@ std::string bench_svg(const BenchReport& r) {
     svg += "<text x=\"" + std::to_string(margin) + "\" y=\"" + std::to_string(height - 12) +
            "\">Geometric mean over " + std::to_string(r.scenes.size()) +
            " scene/roughness pairs; below the dark line = better than no filtering. Colours: black none, blue "
-           "derivative, red peers, green baked, purple default, brown bake variants.</text>\n";
+           "derivative, red peers, green baked, purple default, brown bake variants, orange glints (relative to glint-c20).</text>\n";
     svg += "</svg>\n";
     return svg;
 }
@@ -273,13 +282,17 @@ Result<void> write_bench_outputs(const BenchReport& r, const std::filesystem::pa
     if (auto w = io::write_file_atomic(dir / "bench.csv", bench_csv(r)); !w) return w;
     if (auto w = io::write_file_atomic(dir / "bench.svg", bench_svg(r)); !w) return w;
     for (const SceneReport& s : r.scenes) {
-        if (s.ground_truth.empty()) continue;
-        std::vector<StripTile> tiles;
-        for (const CandidateReport& c : s.candidates)
-            if (!c.image.empty()) tiles.push_back({c.name, &c.image});
-        const auto path = dir / "strips" / (s.from_file ? s.scene + ".png"
-                                                        : s.scene + "-a" + format_double("%.3g", double(s.roughness) * s.roughness) + ".png");
-        if (auto w = write_strip_png(make_strip(s.ground_truth, tiles), path); !w) return w;
+        const std::string stem = s.from_file ? s.scene : s.scene + "-a" + format_double("%.3g", double(s.roughness) * s.roughness);
+        // One strip per ground truth: the GGX candidates' and the glint candidates' (NAME-glints.png).
+        for (const bool glint : {false, true}) {
+            const SimImage& gt = glint ? s.glint_ground_truth : s.ground_truth;
+            if (gt.empty()) continue;
+            std::vector<StripTile> tiles;
+            for (const CandidateReport& c : s.candidates)
+                if (!c.image.empty() && (c.family == "glint") == glint) tiles.push_back({c.name, &c.image});
+            const auto path = dir / "strips" / (stem + (glint ? "-glints.png" : ".png"));
+            if (auto w = write_strip_png(make_strip(gt, tiles), path); !w) return w;
+        }
     }
     return {};
 }

@@ -17,11 +17,14 @@ namespace specbake::verify {
 
 struct BenchOptions {
     VerifyOptions verify;
-    std::vector<std::string> scenes;   // built-in scene names; empty: all (none with `no_builtin`)
+    std::vector<std::string> scenes;   // built-in scene names (glint scenes too); empty: all (none with `no_builtin`)
     bool no_builtin = false;           // only the scene files
     std::vector<std::filesystem::path> scene_files;  // glTF/GLB or other mesh files, each run once
     // GGX alpha (= r^2) of the materials, the papers' "roughness"; r = sqrt(alpha) is what glTF stores.
     std::vector<float> alpha{0.01f, 0.05f, 0.2f};
+    // The glint scenes (builtin_glint_scene_names) run once each, at this alpha (C21's sphere and plane
+    // scenes are glossy: Beckmann alpha 0.05-0.16).
+    float glint_alpha = 0.1f;
     std::filesystem::path output_dir;  // empty: print only
     std::string renderer;              // GL_RENDERER/GL_VERSION, recorded in the outputs
     std::string command_line;          // recorded in bench.md so the table can be regenerated
@@ -37,7 +40,8 @@ struct BenchReport {
 Result<BenchReport> run_bench(const BenchOptions& options, const std::function<void(const std::string&)>& progress);
 
 // Summary over all scenes: per candidate the geometric means (over scenes) of its RMSE (linear and
-// tone-mapped) and linear flicker relative to no filtering, the mean energy and peak ratios, and its costs.
+// tone-mapped) and linear flicker relative to its family's baseline (baseline_of: no filtering, or for the
+// glint family glints without anti-aliasing), the mean energy and peak ratios, and its costs.
 std::string bench_summary_markdown(const BenchReport& report);
 // One table per scene (markdown_table) with a heading, plus the summary and the command line.
 std::string bench_full_markdown(const BenchReport& report);

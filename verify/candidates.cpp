@@ -126,6 +126,31 @@ void add_variants(std::vector<SimCandidate>& c, bool normal_mapped) {
 
 }  // namespace
 
+std::vector<SimCandidate> glint_candidates(const SimScene& scene) {
+    std::vector<SimCandidate> c;
+    if (!has_glints(scene)) return c;
+    const bool normal_mapped = std::any_of(scene.objects.begin(), scene.objects.end(), [](const SimObject& o) {
+        return o.material.glints.enabled && o.material.normal_map >= 0;
+    });
+    const auto glint = [](const char* name, const char* source, std::string defines, const char* bake) {
+        SimShaderSpec spec;
+        spec.defines = std::move(defines);
+        spec.glint = true;
+        spec.baked_source = bake;
+        return SimCandidate{name, "glint", source, spec, bake, ""};
+    };
+    c.push_back(glint("glint-smooth", "C20/C21 smooth BRDF: analytic SDF, V-cavity", "#define SIM_GLINT_SMOOTH\n", ""));
+    c.push_back(glint("glint-c20", "C20: glints without anti-aliasing", "#define SIM_GLINT_KERNEL_SCALE 0.0\n", ""));
+    c.push_back(glint("glint-ggaa", "C21 Eq. 15, 19, 21 (s_K = 0.5)", "#define SIM_GLINT_KERNEL_SCALE 0.5\n", ""));
+    if (normal_mapped) {
+        c.push_back(glint("glint-ggaa+lean-norho", "C21 Sec. 5, LEAN with rho = 0",
+                          "#define SIM_GLINT_KERNEL_SCALE 0.5\n#define SIM_GLINT_LEAN 1\n", "slope-lean"));
+        c.push_back(glint("glint-ggaa+lean", "C21 Sec. 5, Eq. 16, 18: slope-space LEAN with rho",
+                          "#define SIM_GLINT_KERNEL_SCALE 0.5\n#define SIM_GLINT_LEAN 2\n", "slope-lean"));
+    }
+    return c;
+}
+
 std::vector<SimTextureBake> texture_bakes_for(const std::vector<SimCandidate>& candidates) {
     std::vector<SimTextureBake> bakes;
     for (const SimCandidate& c : candidates) {
@@ -139,6 +164,8 @@ std::vector<SimTextureBake> texture_bakes_for(const std::vector<SimCandidate>& c
                                              : IsotropicReduction::Mean;
         s.filter = k.ends_with("approx") ? RoughnessFilterMode::Approx : RoughnessFilterMode::Projected;
         s.outputs.normal = false;
+        // The glint materials' LEAN (pipeline/glint_bake.h): slope space, the base roughness folded in.
+        if (k == "slope-lean") s.lean_space = LeanSpace::Slope;
         bakes.push_back({k, s});
     }
     return bakes;

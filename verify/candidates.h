@@ -41,6 +41,12 @@ struct SimCandidate {
 // estimators).
 std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool variants);
 
+// The glint candidates (C21) of a scene whose materials ask for glints (family "glint"): the smooth BRDF
+// (analytic SDF), glints without anti-aliasing (C20: s_K = 0), GGAA (C21 Eq. 15, 19, 21, s_K = 0.5) and,
+// when a glint material has a normal map, GGAA with slope-space LEAN without and with rho (Eq. 16, 18).
+// Empty for a scene without glints.
+std::vector<SimCandidate> glint_candidates(const SimScene& scene);
+
 // The texture bakes and curvature estimates the given candidates need.
 std::vector<SimTextureBake> texture_bakes_for(const std::vector<SimCandidate>& candidates);
 std::vector<SimCurvatureBake> curvature_bakes_for(const std::vector<SimCandidate>& candidates);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <numbers>
 
@@ -211,6 +212,92 @@ constexpr const char* kCandidateMainTail = R"(
 }
 )";
 
+// Glint ground truth and candidates (C21): the include's glint path for materials with uGlint set; other
+// objects write coverage 0. SIM_GLINT_REFERENCE: C21's reference (no GGAA, no LEAN, normal and roughness
+// maps at full resolution, the cell footprint frozen to the output pixel by uGlintFootprintScale).
+// Derivatives are taken before any non-uniform branch: the UV's here, the half vector's at the top of the
+// light loop, whose bound is uniform.
+constexpr const char* kGlintMain = R"(
+uniform sampler2DArray uGlintDictionary;
+uniform int uGlint;
+uniform vec4 uGlintParams;  // logDensity, relativeArea, densityRandomization, uvScale
+uniform float uGlintFootprintScale;
+#ifndef SIM_GLINT_LEAN
+#define SIM_GLINT_LEAN 0
+#endif
+#ifndef SIM_GLINT_KERNEL_SCALE
+#define SIM_GLINT_KERNEL_SCALE 0.0
+#endif
+#ifdef SIM_GLINT_REFERENCE
+#define SIM_FETCH(tex, uv) textureLod(tex, uv, 0.0)
+#else
+#define SIM_FETCH(tex, uv) texture(tex, uv)
+#endif
+void main() {
+    vec3 nGeo = normalize(vNormal);
+    vec3 t = normalize(vTangent.xyz - nGeo * dot(nGeo, vTangent.xyz));
+    vec3 b = cross(nGeo, t) * vTangent.w;
+    vec2 uvMap = vUv * uUvScale;
+    vec2 uvGlint = vUv * uGlintParams.w;
+    vec4 duv = specaa_glint_derivatives(uvGlint) * uGlintFootprintScale;
+    float r = uRoughnessMapped != 0 ? SIM_FETCH(uRoughnessMap, uvMap).r : uRoughness;
+    float alpha = r * r;
+    // Beckmann slope covariance alpha^2 / 2 per axis (sigma = alpha / sqrt 2, C21 Sec. 3).
+    vec3 sigma = vec3(0.5 * alpha * alpha, 0.5 * alpha * alpha, 0.0);
+    vec3 n = nGeo;
+#if SIM_GLINT_LEAN > 0
+    if (uNormalMapped != 0) {
+        // Slope-space LEAN moments (the base roughness folded in): Sigma = M - m m^T (C21 Eq. 16), the
+        // shading normal from the mean slope m = -n.xy / n.z.
+        vec4 m0 = texture(uBakedLean0, uvMap);
+        float mxy = texture(uBakedLean1, uvMap).r;
+        sigma = vec3(m0.z - m0.x * m0.x, m0.w - m0.y * m0.y, SIM_GLINT_LEAN == 2 ? mxy - m0.x * m0.y : 0.0);
+        n = normalize(-m0.x * t - m0.y * b + nGeo);
+    }
+#else
+    if (uNormalMapped != 0) {
+        vec3 m = SIM_FETCH(uNormalMap, uvMap).xyz * 2.0 - 1.0;
+        n = normalize(t * m.x + b * m.y + nGeo * m.z);
+    }
+#endif
+    vec3 tn = normalize(t - n * dot(n, t));
+    vec3 bn = cross(n, tn) * vTangent.w;
+    vec3 v = normalize(uCameraPosition - vPosition);
+    vec3 vTS = vec3(dot(v, tn), dot(v, bn), dot(v, n));
+    vec3 srr = specaa_glint_sigma_rho(sigma);
+    SpecaaGlintParams g;
+    g.logDensity = uGlintParams.x;
+    g.relativeArea = uGlintParams.y;
+    g.densityRandomization = uGlintParams.z;
+    g.maxAnisotropy = 4.0;
+    g.kernelScale = SIM_GLINT_KERNEL_SCALE;
+    float radiance = 0.0;
+    for (int k = 0; k < uLightCount; ++k) {
+        float E;
+        vec3 l = simLight(k, vPosition, E);
+        vec3 lTS = vec3(dot(l, tn), dot(l, bn), dot(l, n));
+        vec3 hTS = normalize(lTS + vTS);
+        vec4 dh = specaa_glint_derivatives(hTS.xy);  // Eq. 21, in the normal-mapped frame
+#ifdef SIM_GLINT_SMOOTH
+        float G = specaa_glint_vcavity_G2(lTS, vTS, hTS);
+        if (G > 0.0 && hTS.z > 0.0) {
+            vec2 hs = -hTS.xy / hTS.z;
+#ifdef SPECAA_GLINT_GGX
+            float p22 = specaa_glint_ggx_P22(hs, srr);
+#else
+            float p22 = specaa_glint_beckmann_P22(hs, srr);
+#endif
+            float z2 = hTS.z * hTS.z;
+            radiance += p22 / (z2 * z2) * G / (4.0 * vTS.z) * E;
+        }
+#else
+        radiance += specaa_glint_specular(uGlintDictionary, uvGlint, duv, lTS, vTS, dh, srr, g) * E;
+#endif
+    }
+    oColor = uGlint != 0 ? vec4(radiance, 1.0, 0.0, 1.0) : vec4(0.0);
+}
+)";
+
 Result<GLuint> compile_program(const std::string& vertex, const std::string& fragment) {
     auto vs = compile_glsl_shader(GL_VERTEX_SHADER, vertex);
     if (!vs) return vs.error();
@@ -309,6 +396,9 @@ struct SimRenderer::Impl {
     };
     std::map<std::pair<std::string, int>, Baked> baked;
     GLuint ground_truth = 0;
+    GLuint glint_ground_truth = 0;
+    GLuint glint_dictionary = 0;
+    std::string glint_defines;  // dictionary layout and target, before the include
     struct Candidate {
         GLuint program = 0;
         SimShaderSpec spec;
@@ -316,7 +406,7 @@ struct SimRenderer::Impl {
     std::vector<Candidate> candidates;
     std::string include;
 
-    void set_frame_uniforms(GLuint program, int frame, float jitter_x, float jitter_y) const {
+    void set_frame_uniforms(GLuint program, int frame, float jitter_x, float jitter_y, float footprint_scale = 1.0f) const {
         const SimCamera cam = camera_at_frame(*scene, frame, height);
         const Float3 offset = sub(cam.target, cam.position);
         const float dist = std::sqrt(dot3(offset, offset));
@@ -352,6 +442,9 @@ struct SimRenderer::Impl {
                                   "uBakedLean0", "uBakedLean1",     "uRoughnessMap"};
         for (int unit_index = 0; unit_index < 6; ++unit_index)
             glProgramUniform1i(program, glGetUniformLocation(program, samplers[unit_index]), unit_index);
+        // Glint programs only (the others have no such uniforms: location -1 is ignored).
+        glProgramUniform1i(program, glGetUniformLocation(program, "uGlintDictionary"), 6);
+        glProgramUniform1f(program, glGetUniformLocation(program, "uGlintFootprintScale"), footprint_scale);
     }
 
     // Binds object `o`'s material, curvature and baked textures for `program`.
@@ -362,6 +455,10 @@ struct SimRenderer::Impl {
         glProgramUniform1f(program, glGetUniformLocation(program, "uUvScale"), mat.uv_scale);
         glProgramUniform1i(program, glGetUniformLocation(program, "uNormalMapped"), mat.normal_map >= 0 ? 1 : 0);
         glProgramUniform1i(program, glGetUniformLocation(program, "uRoughnessMapped"), mat.roughness_map >= 0 ? 1 : 0);
+        const SimGlints& g = mat.glints;
+        glProgramUniform1i(program, glGetUniformLocation(program, "uGlint"), g.enabled ? 1 : 0);
+        glProgramUniform4f(program, glGetUniformLocation(program, "uGlintParams"), g.log_density, g.relative_area,
+                           g.density_randomization, g.uv_scale);
         GLuint textures[6] = {mat.normal_map >= 0 ? normal_maps[size_t(mat.normal_map)] : 0, 0, 0, 0, 0,
                               mat.roughness_map >= 0 ? roughness_maps[size_t(mat.roughness_map)] : 0};
         Mesh& mesh = meshes[o];
@@ -385,6 +482,7 @@ struct SimRenderer::Impl {
             }
         }
         glBindTextures(0, 6, textures);
+        if (glint_dictionary) glBindTextureUnit(6, glint_dictionary);
         glVertexArrayVertexBuffer(mesh.vao, 1, curvature, 0, 4 * sizeof(float));
         glBindVertexArray(mesh.vao);
     }
@@ -502,6 +600,8 @@ SimRenderer::~SimRenderer() {
     Impl& im = *impl_;
     for (auto& c : im.candidates) glDeleteProgram(c.program);
     glDeleteProgram(im.ground_truth);
+    if (im.glint_ground_truth) glDeleteProgram(im.glint_ground_truth);
+    if (im.glint_dictionary) glDeleteTextures(1, &im.glint_dictionary);
     for (auto& m : im.meshes) {
         glDeleteVertexArrays(1, &m.vao);
         glDeleteBuffers(1, &m.vertices);
@@ -539,7 +639,42 @@ void SimRenderer::set_baked(const std::string& key, int texture_set, const SimBa
     impl_->baked[{key, texture_set}] = b;
 }
 
+Result<void> SimRenderer::set_glint_dictionary(const GlintDictionary& d, bool ggx) {
+    Impl& im = *impl_;
+    if (im.glint_dictionary) return make_error("the glint dictionary is already set");
+    glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &im.glint_dictionary);
+    glTextureStorage3D(im.glint_dictionary, d.mip_count, GL_RGBA16F, d.settings.width, 1, d.layers);
+    for (int m = 0; m < d.mip_count; ++m)
+        glTextureSubImage3D(im.glint_dictionary, m, 0, 0, 0, d.settings.width >> m, 1, d.layers, GL_RGBA, GL_FLOAT,
+                            d.mips[size_t(m)].pixels.data());
+    // The include's addressing (shaders/src/specaa_glints.inc): linear, linear mips, clamp to edge.
+    glTextureParameteri(im.glint_dictionary, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+    glTextureParameteri(im.glint_dictionary, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTextureParameteri(im.glint_dictionary, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTextureParameteri(im.glint_dictionary, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    char sigma[64];
+    std::snprintf(sigma, sizeof sigma, "%.17g", glint_sigma_o(d.settings));
+    im.glint_defines = "#define SPECAA_GLINT_COUNT " + std::to_string(d.settings.count) + "\n#define SPECAA_GLINT_LEVELS " +
+                       std::to_string(d.settings.levels) + "\n#define SPECAA_GLINT_SIGMA_O " + sigma + "\n" +
+                       (ggx ? "#define SPECAA_GLINT_GGX\n" : "");
+    SimShaderSpec reference;
+    reference.glint = true;
+    reference.defines = "#define SIM_GLINT_REFERENCE\n";
+    auto program = compile_program(kVertexShader, candidate_source(reference));
+    if (!program) return make_error("glint ground-truth " + program.error().message);
+    im.glint_ground_truth = *program;
+    return {};
+}
+
 SimImage SimRenderer::render_ground_truth(int frame, int spp) {
+    return render_filtered(impl_->ground_truth, frame, spp, false);
+}
+
+SimImage SimRenderer::render_glint_ground_truth(int frame, int spp) {
+    return render_filtered(impl_->glint_ground_truth, frame, spp, true);
+}
+
+SimImage SimRenderer::render_filtered(unsigned program, int frame, int spp, bool freeze_footprint) {
     Impl& im = *impl_;
     const GroundTruthLayout layout = ground_truth_layout(spp, im.width, im.height);
     const int s = layout.scale, q = layout.passes_per_axis;
@@ -568,12 +703,13 @@ SimImage SimRenderer::render_ground_truth(int frame, int spp) {
             const double jy = (pj + hash01(uint32_t(frame), id, 2)) / q;
             // The texel (i, j) then samples the image at ((i + jx) / s, (j + jy) / s) in pixels (y down):
             // shift the geometry by (0.5 - jx, -(0.5 - jy)) high-resolution texels.
-            im.set_frame_uniforms(im.ground_truth, frame, float(2.0 * (0.5 - jx) / hw), float(-2.0 * (0.5 - jy) / hh));
+            im.set_frame_uniforms(program, frame, float(2.0 * (0.5 - jx) / hw), float(-2.0 * (0.5 - jy) / hh),
+                                  freeze_footprint ? float(s) : 1.0f);
             const float zero[4] = {0, 0, 0, 0};
             const float one = 1.0f;
             glClearNamedFramebufferfv(im.gt.fbo, GL_COLOR, 0, zero);
             glClearNamedFramebufferfv(im.gt.fbo, GL_DEPTH, 0, &one);
-            im.draw_all(im.ground_truth, nullptr);
+            im.draw_all(program, nullptr);
             glGetTextureImage(im.gt.color, 0, GL_RG, GL_FLOAT, GLsizei(hires.size() * sizeof(float)), hires.data());
             for (int y = 0; y < im.height; ++y) {
                 const double cy = y + 0.5;
@@ -627,11 +763,15 @@ GroundTruthLayout ground_truth_layout(int spp, int width, int height) {
 
 std::string SimRenderer::candidate_source(const SimShaderSpec& spec) const {
     const Impl& im = *impl_;
+    if (spec.glint)
+        return std::string("#version 450 core\n") + im.glint_defines + spec.defines + kFragmentInputs + im.include +
+               kGlintMain;
     return std::string("#version 450 core\n") + spec.defines + kFragmentInputs + im.include + kCandidateMainHead +
            spec.body + kCandidateMainTail;
 }
 
 Result<int> SimRenderer::compile_candidate(const SimShaderSpec& spec) {
+    if (spec.glint && !impl_->glint_dictionary) return make_error("a glint candidate needs set_glint_dictionary() first");
     auto program = compile_program(kVertexShader, candidate_source(spec));
     if (!program) return program.error();
     impl_->candidates.push_back({*program, spec});

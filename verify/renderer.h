@@ -5,6 +5,7 @@
 // Specular only: radiance = D G2 / (4 n.v) * E per light (F = 1), so the images isolate the NDF filter.
 #pragma once
 
+#include "bake/glint_dictionary.h"
 #include "core/image.h"
 #include "core/result.h"
 #include "verify/gl_context.h"
@@ -28,11 +29,15 @@ struct SimBakedTextures {
 // What one candidate shader needs besides the scene: GLSL defines placed before the include, a body that
 // sets `vec3 A` (roughness matrix (xx, yy, xy) in the shading tangent frame) from `float a`, `vec3 hTS`,
 // `vec3 n` (world shading normal) and `SpecaaSurface s`, the curvature attribute and the baked textures.
+// A glint candidate (C21; `glint` set) uses the renderer's glint main instead of `body`: `defines` choose
+// SIM_GLINT_SMOOTH (the smooth BRDF), SIM_GLINT_LEAN 0/1/2 (normal map point-sampled / slope-space LEAN
+// without / with rho) and SIM_GLINT_KERNEL_SCALE (s_K; 0 is C20 without GGAA).
 struct SimShaderSpec {
     std::string defines;
     std::string body;
     std::string curvature_source = "exact";  // key into SimRenderer::set_curvature()
     std::string baked_source;                // key into SimRenderer::set_baked(); empty: none bound
+    bool glint = false;
 };
 
 // Result image: channel 0 radiance, channel 1 coverage in [0, 1] (fraction of the pixel filter that saw
@@ -66,6 +71,16 @@ public:
     // exp(-d^2 / (2 sigma^2)), and the weighted sums are normalised by the summed weights.
     SimImage render_ground_truth(int frame, int spp);
 
+    // Uploads the glint dictionary (a 2D array with its baked mips, as a run time binds it) and compiles the
+    // glint ground truth. `ggx`: the GGX target (SPECAA_GLINT_GGX) for every glint material.
+    Result<void> set_glint_dictionary(const GlintDictionary& dictionary, bool ggx);
+    // Glint ground truth (C21 Sec. 6) of the materials that ask for glints, with the same sample layout and
+    // pixel filter as render_ground_truth: the include's glint SDF without GGAA and without LEAN, the
+    // normal map at full resolution, and the cell footprint frozen to the output pixel's (the passes'
+    // UV derivatives scaled back by the supersampling factor), so only the half vector is supersampled.
+    // Other objects occlude but are not covered (coverage 0).
+    SimImage render_glint_ground_truth(int frame, int spp);
+
     // Compiles the candidate shader; the error carries the GL info log.
     Result<int> compile_candidate(const SimShaderSpec& spec);
     // Renders compiled candidate `id` at one sample per pixel centre.
@@ -80,6 +95,7 @@ public:
 private:
     SimRenderer() = default;
     void draw_candidate(int id, int frame);
+    SimImage render_filtered(unsigned program, int frame, int spp, bool freeze_footprint);
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };

@@ -125,6 +125,31 @@ Image make_bump_normal_map(int size, float slope_scale, uint32_t seed) {
     return map;
 }
 
+// Ridge normal map of the glitter plane: slope a cos(2 pi k.uv) (k / |k|) with the integer wave vector
+// k = (35, 20) (29.7 degrees from the u axis, so it tiles), amplitude 0.3: strongly anisotropic and not
+// axis-aligned, the case where the slope correlation rho of C21 Eq. 18 matters (C21 Fig. 7).
+Image make_ridge_normal_map(int size) {
+    const float kx = 35.0f, ky = 20.0f, k = std::sqrt(kx * kx + ky * ky), amplitude = 0.3f;
+    Image map(size, size, 3);
+    for (int y = 0; y < size; ++y) {
+        for (int x = 0; x < size; ++x) {
+            const float u = (float(x) + 0.5f) / float(size), v = (float(y) + 0.5f) / float(size);
+            const float a = amplitude * std::cos(2 * kPi * (kx * u + ky * v));
+            const Float3 n = normalized({-a * kx / k, -a * ky / k, 1.0f});
+            float* t = map.texel(x, y);
+            for (int c = 0; c < 3; ++c) t[c] = 0.5f * (n[c] + 1.0f);
+        }
+    }
+    return map;
+}
+
+// Square of side `size` in the y = 0 plane, normal +Y, u along +X and v along -Z (B = cross(N, T)).
+SimObject make_plane(float size, int n) {
+    return tessellate("plane", n, n, [=](float u, float v) {
+        return SurfacePoint{{size * (u - 0.5f), 0.0f, size * (0.5f - v)}, {0, 1, 0}, {1, 0, 0}, {0, 0, 1, 0}};
+    });
+}
+
 SimLight directional_light(Float3 towards_light) {
     SimLight light;
     light.direction = towards_light;
@@ -138,6 +163,16 @@ int scaled(int n, float tessellation) { return std::max(8, int(std::lround(n * t
 std::span<const std::string_view> builtin_scene_names() {
     static constexpr std::string_view names[] = {"sphere", "cylinder", "torus", "bumpy-sphere"};
     return names;
+}
+
+std::span<const std::string_view> builtin_glint_scene_names() {
+    static constexpr std::string_view names[] = {"glitter-sphere", "glitter-plane"};
+    return names;
+}
+
+bool has_glints(const SimScene& scene) {
+    return std::any_of(scene.objects.begin(), scene.objects.end(),
+                       [](const SimObject& o) { return o.material.glints.enabled; });
 }
 
 Result<SimScene> make_builtin_scene(std::string_view name, float roughness, float tessellation) {
@@ -158,6 +193,27 @@ Result<SimScene> make_builtin_scene(std::string_view name, float roughness, floa
             scene.objects[0].material.normal_map = 0;
             scene.objects[0].material.uv_scale = 4.0f;
         }
+    } else if (name == "glitter-sphere") {
+        scene.objects.push_back(make_sphere(1.0f, {0, 0, 0}, scaled(256, tessellation), scaled(128, tessellation)));
+        scene.camera = {{0.0f, 0.4f, 3.6f}, {0, 0, 0}, {0, 1, 0}, 40.0f};
+        scene.lights.push_back(directional_light(key_light));
+        scene.object_radius = 1.0f;
+    } else if (name == "glitter-plane") {
+        // A 10 x 10 plane seen 30 degrees above it (60 degrees from its normal: anisotropic footprints),
+        // lit by a point light 1.5 from the centre along the mirror direction, so the half vector sweeps the
+        // slope distribution across the image.
+        scene.objects.push_back(make_plane(10.0f, scaled(64, tessellation)));
+        const float e = kPi / 6.0f;
+        scene.camera = {{0.0f, 2.4f * std::sin(e), 2.4f * std::cos(e)}, {0, 0, 0}, {0, 1, 0}, 40.0f};
+        SimLight light;
+        light.type = SimLight::Type::Point;
+        light.position = {0.0f, 1.5f * std::sin(e), -1.5f * std::cos(e)};
+        light.radiance = 2.25f;  // irradiance 1 at the centre, 1.5 away
+        scene.lights.push_back(light);
+        scene.object_radius = 1.0f;
+        scene.normal_maps.push_back(make_ridge_normal_map(256));
+        scene.objects[0].material.normal_map = 0;
+        scene.objects[0].material.uv_scale = 4.0f;  // 161 ridges per UV unit, about 2 pixels each at 64 x 64
     } else if (name == "cylinder") {
         // Seen almost along its axis from slightly above, lit from the far end: the visible highlight sits
         // where view and light graze the surface, where slope-space derivatives blow up (TK21 Sec. 3).
@@ -173,9 +229,14 @@ Result<SimScene> make_builtin_scene(std::string_view name, float roughness, floa
     } else {
         std::string names;
         for (auto n : builtin_scene_names()) names += (names.empty() ? "" : ", ") + std::string(n);
+        for (auto n : builtin_glint_scene_names()) names += ", " + std::string(n);
         return make_error("unknown built-in scene '" + std::string(name) + "' (built-in scenes: " + names + ")");
     }
     for (auto& object : scene.objects) object.material.roughness = roughness;
+    if (name.starts_with("glitter-")) {
+        scene.glints_only = true;
+        for (auto& object : scene.objects) object.material.glints.enabled = true;
+    }
     return scene;
 }
 

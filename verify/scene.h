@@ -18,11 +18,24 @@ namespace specbake::verify {
 
 using Float3 = std::array<float, 3>;
 
+// A material's glints (C21), from its SPECBAKE_glints extension (io/glint_extension.h): simulated only for
+// materials that ask for them. The Beckmann slope covariance is alpha^2 / 2 per axis (alpha = r^2), with
+// the normal map's LEAN moments added by the LEAN candidates.
+struct SimGlints {
+    bool enabled = false;
+    float log_density = 15.0f;           // ln(microfacets per unit area of the glint UV)
+    float relative_area = 1.0f;          // fraction of cells that carry facets
+    float density_randomization = 2.0f;  // std of the per-cell level jitter
+    float uv_scale = 1.0f;               // glint UV = TEXCOORD_0 * uv_scale
+    bool ggx = false;                    // target "ggx" (SPECAA_GLINT_GGX) instead of Beckmann
+};
+
 struct SimMaterial {
     float roughness = 0.5f;  // perceptual roughness r (SPEC Sec. 2); alpha = r^2
     int normal_map = -1;     // index into SimScene::normal_maps, -1 for none
     int roughness_map = -1;  // index into SimScene::roughness_maps (replaces `roughness`), -1 for none
     float uv_scale = 1.0f;   // the maps repeat this many times over the UV square
+    SimGlints glints;
 };
 
 struct SimObject {
@@ -71,6 +84,7 @@ struct SimScene {
     float motion_pixels = 0.35f;
     float object_radius = 1.0f;  // for the motion scale and the automatic framing
     bool from_file = false;          // read by load_sim_scene(): materials keep their own roughness
+    bool glints_only = false;        // the built-in glitter scenes: only the glint candidates are scored
     std::vector<std::string> notes;  // what a scene file contained that the simulator leaves out
 };
 
@@ -92,6 +106,13 @@ bool has_exact_curvature(const SimScene& scene);
 // Names of the built-in analytic scenes: "sphere", "cylinder" (grazing view), "torus", "bumpy-sphere"
 // (normal-mapped).
 std::span<const std::string_view> builtin_scene_names();
+// Names of the built-in glint scenes (C21): "glitter-sphere" (a glittery sphere under a directional light)
+// and "glitter-plane" (a plane tilted 60 degrees with an anisotropic, rotated ridge normal map under a
+// point light); make_builtin_scene builds them with glints on (logDensity 15).
+std::span<const std::string_view> builtin_glint_scene_names();
+
+// True when some object's material asks for glints.
+bool has_glints(const SimScene& scene);
 
 // The built-in scene `name` with every material at perceptual roughness `roughness`. `tessellation`
 // scales the mesh resolution (1 = default: a few pixels per triangle at 128 x 128).

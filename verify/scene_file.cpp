@@ -1,5 +1,6 @@
 #include "verify/scene_file.h"
 
+#include "io/glint_extension.h"
 #include "io/gltf_scene.h"
 #include "io/image_io.h"
 #include "io/mesh_import.h"
@@ -131,6 +132,7 @@ struct LoadedMaterial {
     float roughness = 1.0f;
     int normal_map = -1;
     int roughness_map = -1;
+    SimGlints glints;
 };
 
 // Decoded maps, shared by every material that references the same image.
@@ -284,6 +286,18 @@ Result<void> load_gltf(const fs::path& path, SimScene& scene, GltfContents& out)
                                                     image->channels >= 2 ? 1 : 0, mat.roughness);
         if (!error.empty()) return make_error(error);
         mat.roughness = std::max(mat.roughness, kMinRoughness);
+        if (!m.glints.is_null()) {
+            // Glints only for the materials that ask for them (SPECBAKE_glints, io/SPECBAKE_EXTENSION.md).
+            const std::string where = path.string() + ": material " + std::to_string(out.materials.size());
+            auto g = io::parse_glint_extension(m.glints, where);
+            if (!g) return g.error();
+            if (g->texcoord != 0) {
+                scene.notes.push_back(where + ": glints on TEXCOORD_" + std::to_string(g->texcoord) + ": not simulated");
+            } else {
+                mat.glints = {true, float(g->log_density), float(g->relative_area), float(g->density_randomization),
+                              float(g->uv_scale), g->target == "ggx"};
+            }
+        }
         out.materials.push_back(mat);
     }
     note_clamps(scene, file, clamped_materials, cache.clamped_texels);
@@ -463,6 +477,7 @@ Result<SimScene> load_sim_scene(const fs::path& path) {
             object.material.roughness = m.roughness;
             object.material.normal_map = object.mesh.has_uv0() ? m.normal_map : -1;
             object.material.roughness_map = m.roughness_map;
+            object.material.glints = m.glints;
         } else {
             object.material.roughness = 1.0f;  // glTF default material: roughnessFactor 1
         }

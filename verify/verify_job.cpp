@@ -44,15 +44,37 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
     report.spp = ground_truth_layout(options.spp, options.width, options.height).samples();
     report.frames = options.frames;
 
-    std::vector<SimCandidate> candidates = simulator_candidates(scene, options.variants);
+    std::vector<SimCandidate> candidates;
+    if (!scene.glints_only) candidates = simulator_candidates(scene, options.variants);
+    // Glints only where a material asks for them (SPEC Sec. 6).
+    for (SimCandidate& c : glint_candidates(scene)) candidates.push_back(std::move(c));
     if (!options.only.empty()) {
         for (const std::string& name : options.only) {
             if (std::none_of(candidates.begin(), candidates.end(), [&](const SimCandidate& c) { return c.name == name; }))
                 report.notes.push_back("candidate '" + name + "' does not apply to " + scene.name);
         }
         std::erase_if(candidates, [&](const SimCandidate& c) {
-            return c.name != "none" && std::find(options.only.begin(), options.only.end(), c.name) == options.only.end();
+            return c.name != baseline_of(c.family) &&
+                   std::find(options.only.begin(), options.only.end(), c.name) == options.only.end();
         });
+    }
+    const bool any_glint = std::any_of(candidates.begin(), candidates.end(), [](const SimCandidate& c) { return c.shader.glint; });
+    const bool any_ggx = std::any_of(candidates.begin(), candidates.end(), [](const SimCandidate& c) { return !c.shader.glint; });
+    if (any_glint) {
+        auto dictionary = shared_glint_dictionary(options.glint_dictionary);
+        if (!dictionary) return make_error(scene.name + ": glint dictionary: " + dictionary.error().message);
+        // One target per scene: the first glint material's (the include selects it at compile time).
+        bool ggx = false, first = true, mixed = false;
+        for (const SimObject& o : scene.objects) {
+            if (!o.material.glints.enabled) continue;
+            if (first) ggx = o.material.glints.ggx;
+            else mixed |= o.material.glints.ggx != ggx;
+            first = false;
+        }
+        if (mixed)
+            report.notes.push_back(std::string("glint materials with both targets: all simulated with the ") +
+                                   (ggx ? "GGX" : "Beckmann") + " target of the first");
+        if (auto set = renderer.set_glint_dictionary(**dictionary, ggx); !set) return set.error();
     }
 
     // Bakes (timed): texture bakes per texture set, curvature estimates per object.
@@ -102,27 +124,39 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
 
     std::vector<SimMetricsAccumulator> accumulators(candidates.size());
     report.candidates.resize(candidates.size());
-    double gt_total = 0;
+    double gt_total = 0, glint_total = 0, glint_radiance = 0;
     for (int frame = 0; frame < options.frames; ++frame) {
-        const auto frame_start = std::chrono::steady_clock::now();
-        SimImage gt = renderer.render_ground_truth(frame, report.spp);
+        auto frame_start = std::chrono::steady_clock::now();
+        SimImage gt, glint_gt;
+        if (any_ggx) gt = renderer.render_ground_truth(frame, report.spp);
         gt_total += ms_since(frame_start);
+        frame_start = std::chrono::steady_clock::now();
+        if (any_glint) glint_gt = renderer.render_glint_ground_truth(frame, report.spp);
+        glint_total += ms_since(frame_start);
+        for (size_t k = 0; k < glint_gt.texel_count(); ++k) glint_radiance += glint_gt.pixels[2 * k];
         for (size_t i = 0; i < candidates.size(); ++i) {
             SimImage image = renderer.render_candidate(ids[i], frame);
-            accumulators[i].add_frame(gt, image);
+            accumulators[i].add_frame(candidates[i].shader.glint ? glint_gt : gt, image);
             if (frame == 0 && options.keep_images) report.candidates[i].image = std::move(image);
         }
-        if (frame == 0 && options.keep_images) report.ground_truth = std::move(gt);
+        if (frame == 0 && options.keep_images) {
+            report.ground_truth = std::move(gt);
+            report.glint_ground_truth = std::move(glint_gt);
+        }
         say("frame " + std::to_string(frame + 1) + "/" + std::to_string(options.frames) + ": ground truth and " +
             std::to_string(candidates.size()) + " candidates rendered");
         if (options.frame_done) options.frame_done(frame + 1, options.frames);
     }
+    if (any_glint && !(glint_radiance > 0))
+        report.notes.push_back("the glint ground truth is black (no glint material reflects a light towards the camera): "
+                               "the glint rows score nothing");
     report.ground_truth_ms = gt_total;
+    report.glint_ground_truth_ms = glint_total;
 
     const bool spirv = options.spirv && spirv_tools_available();
     if (options.spirv && !spirv)
         report.notes.push_back("SPIR-V counts skipped: glslangValidator, spirv-opt or spirv-dis not on PATH");
-    std::optional<double> none_ms;
+    std::map<std::string, double> baseline_ms;
     for (size_t i = 0; i < candidates.size(); ++i) {
         const SimCandidate& c = candidates[i];
         CandidateReport& row = report.candidates[i];
@@ -152,14 +186,17 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
             auto& v = samples[i];
             std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
             report.candidates[i].frame_ms = v[v.size() / 2];
-            if (candidates[i].name == "none") none_ms = report.candidates[i].frame_ms;
+            baseline_ms[candidates[i].name] = v[v.size() / 2];
         }
     }
-    if (none_ms && *none_ms > 0)
-        for (CandidateReport& row : report.candidates)
-            if (row.frame_ms) row.frame_relative = *row.frame_ms / *none_ms;
+    for (CandidateReport& row : report.candidates) {
+        auto base = baseline_ms.find(baseline_of(row.family));
+        if (row.frame_ms && base != baseline_ms.end() && base->second > 0) row.frame_relative = *row.frame_ms / base->second;
+    }
     return report;
 }
+
+std::string baseline_of(const std::string& family) { return family == "glint" ? "glint-c20" : "none"; }
 
 std::string markdown_table(const SceneReport& r) {
     std::string out;

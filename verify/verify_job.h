@@ -26,6 +26,9 @@ struct VerifyOptions {
     bool variants = true;     // include the bake variants
     std::vector<std::string> only;  // candidate names to keep ("none" is always kept); empty: all
     bool keep_images = true;  // keep frame 0 of every image for strips
+    // The glint dictionary of scenes whose materials ask for glints (shared_glint_dictionary: baked once
+    // per process); the defaults are what `specbake glints` and `bake` write.
+    GlintDictionarySettings glint_dictionary;
     // Receives one line per finished stage (bakes, each ground-truth frame, timing); may be empty.
     std::function<void(const std::string&)> progress;
     // Called after each frame (ground truth and every candidate rendered) with (frames done, frames); may be empty.
@@ -48,12 +51,22 @@ struct SceneReport {
     bool from_file = false;     // a scene file, whose materials keep their own roughness
     int width = 0, height = 0, spp = 0, frames = 0;
     double ground_truth_ms = 0; // wall time of all ground-truth frames
-    SimImage ground_truth;      // frame 0 (when keep_images)
+    SimImage ground_truth;      // frame 0 (when keep_images); empty for a glints-only scene
+    // Scenes with glints (C21): the glint ground truth (renderer.h) the "glint" family is scored against.
+    double glint_ground_truth_ms = 0;
+    SimImage glint_ground_truth;
     std::vector<CandidateReport> candidates;
     std::vector<std::string> notes;  // skipped candidates and why
 };
 
-// Simulates `scene` and scores every candidate that applies.
+// Simulates `scene` and scores every candidate that applies: the specular anti-aliasing candidates against
+// the GGX ground truth (not for a glints-only scene) and, for the materials that ask for glints, the glint
+// candidates against the glint ground truth. Frame times are relative to "none", the glint family's to
+// "glint-c20" (glints without anti-aliasing).
+Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& options);
+
+// The row every candidate of `family` is compared with: "glint-c20" for "glint", "none" otherwise.
+std::string baseline_of(const std::string& family);
 Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& options);
 
 // The report as a Markdown table (one row per candidate).

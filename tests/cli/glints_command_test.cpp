@@ -110,6 +110,40 @@ TEST(GlintsCommand, WritesAnArrayWhoseMarginalsIntegrateToOne) {
     fs::remove_all(dir);
 }
 
+// inspect reads the dictionary's 2D array: layers, levels, format and per-level sizes as the command's
+// parameters imply them (levels x count / 4 layers of (64 >> L) x 1 RGBA16F texels); inspect --check
+// passes on the folder and fails, naming the layers, when the manifest's layer count is wrong.
+TEST(GlintsCommand, InspectReadsTheArray) {
+    const fs::path dir = temp_dir("glints_inspect");
+    const fs::path out = dir / "out";
+    ASSERT_EQ(run_specbake({"glints", "-o", out.string(), "--count", "16", "--levels", "8"}, dir).exit_code, 0);
+    const RunResult r = run_specbake({"inspect", "--json", (out / "glint_dictionary.ktx2").string()}, dir);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    nlohmann::json j = nlohmann::json::parse(r.out);
+    j = j["files"][0];
+    EXPECT_EQ(j["format"], "ktx2");
+    EXPECT_EQ(j["pixel_format"], "R16G16B16A16_SFLOAT");
+    EXPECT_EQ(j["layers"], 8 * 16 / 4);
+    EXPECT_EQ(j["width"], 64);
+    EXPECT_EQ(j["height"], 1);
+    ASSERT_EQ(j["mips"], 7);
+    for (int L = 0; L < 7; ++L) {
+        EXPECT_EQ(j["levels"][L]["width"], 64 >> L) << L;
+        EXPECT_EQ(j["levels"][L]["bytes"], (64 >> L) * 32 * 8) << L;  // 32 layers, 4 halves per texel
+    }
+    const RunResult text = run_specbake({"inspect", (out / "glint_dictionary.ktx2").string()}, dir);
+    EXPECT_NE(text.out.find("64x1 x 32 layers (2D array), 7 mips, 4 channels"), std::string::npos) << text.out;
+    const RunResult check = run_specbake({"inspect", "--check", (out / "manifest.json").string()}, dir);
+    EXPECT_EQ(check.exit_code, 0) << check.out << check.err;
+    nlohmann::json manifest = nlohmann::json::parse(slurp(out / "manifest.json"));
+    manifest["outputs"][0]["layers"] = 31;
+    std::ofstream(out / "manifest.json") << manifest.dump(2);
+    const RunResult bad = run_specbake({"inspect", "--check", (out / "manifest.json").string()}, dir);
+    EXPECT_NE(bad.exit_code, 0);
+    EXPECT_NE((bad.out + bad.err).find("32 layers, the manifest entry says 31"), std::string::npos) << bad.out << bad.err;
+    fs::remove_all(dir);
+}
+
 TEST(GlintsCommand, BadParametersFailWithOneLine) {
     const fs::path dir = temp_dir("glints_bad");
     const RunResult r = run_specbake({"glints", "-o", (dir / "out").string(), "--count", "6"}, dir);

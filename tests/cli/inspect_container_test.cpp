@@ -40,7 +40,9 @@ struct Bytes {
 // A KTX2 file of 32-bit float texels, `channels` channels, levels[L] the texel values of level L
 // (level L is max(1, w >> L) x max(1, h >> L)). Layout: header, level index, DFD, then the level data
 // smallest level first, each aligned to lcm(texel size, 4) (KTX 2.0 Sec. 3).
-std::vector<uint8_t> make_ktx2_f32(uint32_t w, uint32_t h, int channels, const std::vector<std::vector<float>>& levels) {
+// `layers` > 0 makes it a 2D array (layerCount): each level then holds its layers one after another.
+std::vector<uint8_t> make_ktx2_f32(uint32_t w, uint32_t h, int channels, const std::vector<std::vector<float>>& levels,
+                                   uint32_t layers = 0) {
     static const uint32_t vk[] = {100, 103, 106, 109};  // R32_SFLOAT .. R32G32B32A32_SFLOAT
     Bytes f;
     const uint8_t id[12] = {0xAB, 'K', 'T', 'X', ' ', '2', '0', 0xBB, '\r', '\n', 0x1A, '\n'};
@@ -50,7 +52,7 @@ std::vector<uint8_t> make_ktx2_f32(uint32_t w, uint32_t h, int channels, const s
     f.u32(w);
     f.u32(h);
     f.u32(0);  // depth
-    f.u32(0);  // layers
+    f.u32(layers);
     f.u32(1);  // faces
     f.u32(uint32_t(levels.size()));
     f.u32(0);  // supercompression
@@ -265,6 +267,51 @@ TEST(InspectKtx2, CheckRejectsCorruptedFiles) {
     Bytes bad_magic{good};
     bad_magic.b[1] = 'X';
     expect_rejected(bad_magic.b, "bad identifier");
+}
+
+// A 2D array (the glint dictionary's container): 4x1 texels, 3 layers, 3 levels, every value distinct.
+TEST(InspectKtx2, ArrayLayersLevelsAndSizes) {
+    Files files;
+    std::vector<std::vector<float>> levels(3);
+    for (int L = 0; L < 3; ++L)
+        for (int layer = 0; layer < 3; ++layer)
+            for (int x = 0; x < (4 >> L); ++x) levels[size_t(L)].push_back(float(100 * L + 10 * layer + x));
+    const std::vector<uint8_t> bytes = make_ktx2_f32(4, 1, 1, levels, 3);
+    const fs::path path = files.write("array.ktx2", bytes);
+    auto shape = io::check_container_shape(bytes, "array.ktx2");
+    ASSERT_TRUE(shape.ok()) << shape.error().message;
+    EXPECT_EQ(shape->layers, 3);
+    EXPECT_EQ(shape->width, 4);
+    EXPECT_EQ(shape->height, 1);
+    EXPECT_EQ(shape->mips, 3);
+    auto r = inspect_texture(path);
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    EXPECT_EQ(r->texture.layers, 3);
+    ASSERT_EQ(r->texture.mips.levels.size(), 3u);
+    for (int L = 0; L < 3; ++L) {
+        const Image& level = r->texture.mips.levels[size_t(L)];
+        EXPECT_EQ(level.width, 4 >> L);
+        EXPECT_EQ(r->texture.layer_height(size_t(L)), 1);
+        for (int layer = 0; layer < 3; ++layer)
+            for (int x = 0; x < (4 >> L); ++x) EXPECT_EQ(level.texel(x, layer)[0], float(100 * L + 10 * layer + x));
+    }
+    const nlohmann::json j = report_json(*r);
+    EXPECT_EQ(j["layers"], 3);
+    EXPECT_EQ(j["height"], 1);
+    EXPECT_EQ(j["levels"][1]["bytes"], 2 * 3 * 4);  // 2 texels x 3 layers x 4 bytes
+    const std::string text = report_text(*r, true);
+    EXPECT_NE(text.find("4x1 x 3 layers (2D array), 3 mips"), std::string::npos) << text;
+    EXPECT_NE(text.find("1: 2x1 (24 B)"), std::string::npos) << text;
+    // A layer count that does not match the level sizes is refused, naming the level.
+    std::vector<uint8_t> wrong = bytes;
+    wrong[32] = 2;
+    auto bad = io::check_ktx2_structure(wrong, "wrong.ktx2");
+    ASSERT_FALSE(bad.ok());
+    EXPECT_NE(bad.error().message.find("wrong.ktx2: KTX2: level 0 holds 48 bytes, expected 32"), std::string::npos)
+        << bad.error().message;
+    std::vector<uint8_t> cube = bytes;
+    cube[36] = 6;
+    EXPECT_FALSE(io::check_ktx2_structure(cube, "cube.ktx2").ok());
 }
 
 TEST(InspectDds, DecodesAndChecks) {

@@ -80,6 +80,95 @@ TEST(SceneGlints, ExtensionAsksPlanAndBakeFollow) {
     fs::remove_all(dir);
 }
 
+// The dictionary depends on its parameters only: a rebake into the same folder copies the committed one
+// when the manifest vouches for it (same parameters and tool version, matching hash), and bakes it again
+// when the committed file was altered; both give the bytes of the first bake.
+TEST(SceneGlints, RebakeReusesTheCommittedDictionary) {
+    const fs::path dir = temp_dir("glints_reuse");
+    const fs::path gltf = write_glint_plane(dir, true, json::object());
+    const fs::path out = dir / "out";
+    ASSERT_EQ(run_specbake({"bake", gltf.string(), "-o", out.string()}, dir).exit_code, 0);
+    const std::string first = slurp(out / "glint_dictionary.ktx2");
+    const auto entry_of = [&] {
+        const json manifest = json::parse(slurp(out / "manifest.json"));
+        for (const json& o : manifest["outputs"])
+            if (o["kind"] == "glint_dictionary") return o;
+        return json();
+    };
+    const json first_entry = entry_of();
+    ASSERT_FALSE(first_entry.is_null());
+    const auto change_roughness = [&](double r) {
+        json j = json::parse(slurp(gltf));
+        j["materials"][0]["pbrMetallicRoughness"]["roughnessFactor"] = r;
+        std::ofstream(gltf) << j.dump(2);
+    };
+
+    change_roughness(0.3);  // the textures change, the dictionary does not
+    const RunResult again = run_specbake({"-v", "bake", gltf.string(), "-o", out.string()}, dir);
+    ASSERT_EQ(again.exit_code, 0) << again.err;
+    EXPECT_NE(again.err.find("glint dictionary: the committed one is reused"), std::string::npos) << again.err;
+    EXPECT_EQ(slurp(out / "glint_dictionary.ktx2"), first);
+    EXPECT_EQ(entry_of(), first_entry);
+
+    std::string altered = first;
+    altered[altered.size() - 3] ^= 0x10;
+    std::ofstream(out / "glint_dictionary.ktx2", std::ios::binary) << altered;
+    change_roughness(0.35);
+    const RunResult rebaked = run_specbake({"-v", "bake", gltf.string(), "-o", out.string()}, dir);
+    ASSERT_EQ(rebaked.exit_code, 0) << rebaked.err;
+    EXPECT_NE(rebaked.err.find("glint dictionary: baked"), std::string::npos) << rebaked.err;
+    EXPECT_EQ(slurp(out / "glint_dictionary.ktx2"), first);
+    EXPECT_EQ(entry_of(), first_entry);
+    fs::remove_all(dir);
+}
+
+bool gl_disabled() {
+    const char* v = std::getenv("SPECBAKE_NO_GL");
+    return v && std::string(v) == "1";
+}
+
+// The same glTF that plans and bakes above also verifies: its normal-mapped glint material gets every
+// glint candidate, LEAN rows included, next to the specular AA rows.
+TEST(SceneGlints, ExtensionAsksVerifyFollows) {
+    if (gl_disabled()) GTEST_SKIP() << "SPECBAKE_NO_GL=1: OpenGL tests disabled";
+    const fs::path dir = temp_dir("glints_verify");
+    const fs::path gltf = write_glint_plane(dir, true, json::object());
+    // Rough enough that the default key light's highlight reaches the camera (a Beckmann lobe has no tail).
+    json j = json::parse(slurp(gltf));
+    j["materials"][0]["pbrMetallicRoughness"]["roughnessFactor"] = 0.6;
+    std::ofstream(gltf) << j.dump(2);
+    const RunResult r = run_specbake({"verify", gltf.string(), "--size", "24x24", "--spp", "16", "--frames", "2",
+                                      "--repeats", "0", "--no-variants", "--only",
+                                      "none,glint-smooth,glint-ggaa,glint-ggaa+lean-norho,glint-ggaa+lean", "--strip",
+                                      (dir / "strip.png").string()},
+                                     dir);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    for (const char* name : {"| none |", "| glint-smooth |", "| glint-c20 |", "| glint-ggaa |",
+                             "| glint-ggaa+lean-norho |", "| glint-ggaa+lean |"})
+        EXPECT_NE(r.out.find(name), std::string::npos) << name << "\n" << r.out;
+    EXPECT_EQ(r.err.find("glint ground truth is black"), std::string::npos) << r.err;
+    EXPECT_TRUE(fs::exists(dir / "strip.png"));
+    EXPECT_TRUE(fs::exists(dir / "strip-glints.png"));
+    fs::remove_all(dir);
+}
+
+// `bench --quick` runs the glint scenes: their rows, the glint family in the summary, their strips.
+TEST(SceneGlints, BenchQuickRunsTheGlintScenes) {
+    if (gl_disabled()) GTEST_SKIP() << "SPECBAKE_NO_GL=1: OpenGL tests disabled";
+    const fs::path dir = temp_dir("glints_bench");
+    const RunResult r =
+        run_specbake({"bench", "--quick", "--scenes", "glitter-sphere,glitter-plane", "-o", (dir / "b").string()}, dir);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find("| glint-ggaa | glint |"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("| glint-c20 | glint | 1.000 |"), std::string::npos) << r.out;  // the family's base
+    const std::string csv = slurp(dir / "b" / "bench.csv");
+    EXPECT_NE(csv.find("glitter-plane,0.1,"), std::string::npos) << csv;
+    EXPECT_NE(csv.find(",glint-ggaa+lean,glint,"), std::string::npos) << csv;
+    EXPECT_TRUE(fs::exists(dir / "b" / "strips" / "glitter-sphere-a0.1-glints.png"));
+    EXPECT_TRUE(fs::exists(dir / "b" / "strips" / "glitter-plane-a0.1-glints.png"));
+    fs::remove_all(dir);
+}
+
 TEST(SceneGlints, NoAskNoGlints) {
     const fs::path dir = temp_dir("plain_noask");
     const fs::path gltf = write_glint_plane(dir, false, json());
