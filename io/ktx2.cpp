@@ -170,39 +170,58 @@ void ktx2_write_header(uint8_t* file, const ContainerLayout& layout, int width, 
     }
 }
 
-Result<std::vector<uint8_t>> ktx2_zstd(std::span<const uint8_t> raw, const ContainerLayout& layout, int zstd_level) {
+std::vector<std::span<const uint8_t>> Ktx2Pieces::pieces() const {
+    std::vector<std::span<const uint8_t>> p{std::span<const uint8_t>(header)};
+    for (size_t i = level_size.size(); i-- > 0;) p.emplace_back(level_data[i].get(), level_size[i]);
+    return p;
+}
+
+size_t Ktx2Pieces::size() const {
+    size_t n = header.size();
+    for (size_t s : level_size) n += s;
+    return n;
+}
+
+Result<Ktx2Pieces> ktx2_zstd_pieces(std::span<const uint8_t> raw, const ContainerLayout& layout, int zstd_level) {
     const size_t levels = layout.level_offset.size();
-    std::vector<std::vector<uint8_t>> packed(levels);
+    Ktx2Pieces out;
+    out.level_data.resize(levels);
+    out.level_size.resize(levels);
     std::vector<size_t> raw_length(levels);
     std::vector<std::string> errors(levels);
     for (size_t i = 0; i < levels; ++i) raw_length[i] = size_t(get64(raw, kHeaderBytes + kLevelIndexEntry * i + 8));
     tbb::parallel_for(size_t(0), levels, [&](size_t i) {
-        std::vector<uint8_t>& out = packed[i];
-        out.resize(ZSTD_compressBound(raw_length[i]));
-        const size_t n = ZSTD_compress(out.data(), out.size(), raw.data() + layout.level_offset[i], raw_length[i],
-                                       zstd_level);
+        const size_t bound = ZSTD_compressBound(raw_length[i]);
+        out.level_data[i].reset(new uint8_t[bound]);
+        const size_t n = ZSTD_compress(out.level_data[i].get(), bound, raw.data() + layout.level_offset[i],
+                                       raw_length[i], zstd_level);
         if (ZSTD_isError(n)) errors[i] = ZSTD_getErrorName(n);
-        else out.resize(n);
+        else out.level_size[i] = n;
     });
     for (const std::string& e : errors)
         if (!e.empty()) return make_error("zstd: " + e);
     // Header, index, descriptor and key/value data (the last part before the levels; no global data);
     // the alignment padding of the uncompressed layout is dropped.
     const size_t header_end = size_t(get32(raw, 56)) + get32(raw, 60);
-    size_t total = header_end;
-    for (const auto& p : packed) total += p.size();
-    std::vector<uint8_t> file(total);
-    std::memcpy(file.data(), raw.data(), header_end);
-    put32(file, 44, 2);  // supercompressionScheme: Zstandard
+    out.header.assign(raw.begin(), raw.begin() + long(header_end));
+    put32(out.header, 44, 2);  // supercompressionScheme: Zstandard
     size_t at = header_end;
     for (size_t i = levels; i-- > 0;) {
         const size_t entry = kHeaderBytes + kLevelIndexEntry * i;
-        put64(file, entry, at);
-        put64(file, entry + 8, packed[i].size());
-        put64(file, entry + 16, raw_length[i]);
-        std::memcpy(file.data() + at, packed[i].data(), packed[i].size());
-        at += packed[i].size();
+        put64(out.header, entry, at);
+        put64(out.header, entry + 8, out.level_size[i]);
+        put64(out.header, entry + 16, raw_length[i]);
+        at += out.level_size[i];
     }
+    return out;
+}
+
+Result<std::vector<uint8_t>> ktx2_zstd(std::span<const uint8_t> raw, const ContainerLayout& layout, int zstd_level) {
+    auto packed = ktx2_zstd_pieces(raw, layout, zstd_level);
+    if (!packed) return packed.error();
+    std::vector<uint8_t> file;
+    file.reserve(packed->size());
+    for (std::span<const uint8_t> p : packed->pieces()) file.insert(file.end(), p.begin(), p.end());
     return file;
 }
 

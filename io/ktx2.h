@@ -10,6 +10,7 @@
 #include "io/texture_writer.h"
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -43,6 +44,18 @@ std::vector<uint8_t> encode_ktx2_array(const MipChain& stacked, int layers, Texe
 // keeps the texel size, KDFS issue 27). Levels are compressed in parallel, each by one single-threaded
 // zstd call, so the bytes do not depend on the thread count.
 Result<std::vector<uint8_t>> ktx2_zstd(std::span<const uint8_t> raw, const ContainerLayout& layout, int zstd_level);
+
+// The same file as ktx2_zstd, as pieces in file order (header through key/value data, then the compressed
+// levels smallest first) that are written one after the other: nothing is copied into one buffer, and the
+// compressed levels' buffers are not zero-filled (only the pages zstd writes are touched).
+struct Ktx2Pieces {
+    std::vector<uint8_t> header;
+    std::vector<std::unique_ptr<uint8_t[]>> level_data;  // level i's compressed bytes
+    std::vector<size_t> level_size;
+    std::vector<std::span<const uint8_t>> pieces() const;
+    size_t size() const;
+};
+Result<Ktx2Pieces> ktx2_zstd_pieces(std::span<const uint8_t> raw, const ContainerLayout& layout, int zstd_level);
 
 // What a KTX2 file holds, as parsed and checked by read_ktx2_texture.
 struct Ktx2Info {

@@ -325,22 +325,26 @@ Result<std::vector<ManifestOutput>> write_encoded_textures(std::span<const Encod
     std::vector<std::optional<Error>> errors(files.size());
     tbb::parallel_for(size_t(0), files.size(), [&](size_t i) {
         const EncodedTexture& t = *files[i].texture;
-        std::vector<uint8_t> packed;
+        Ktx2Pieces packed;
+        std::vector<std::span<const uint8_t>> pieces{t.bytes()};
         if (t.supercompressed()) {
-            auto z = ktx2_zstd(t.bytes(), t.layout(), t.supercompression().zstd_level);
+            auto z = ktx2_zstd_pieces(t.bytes(), t.layout(), t.supercompression().zstd_level);
             if (!z) {
                 errors[i] = make_error(outputs[i]->final_path().string() + ": " + z.error().message);
                 return;
             }
             packed = std::move(*z);
+            pieces = packed.pieces();
         }
-        const std::span<const uint8_t> bytes = t.supercompressed() ? std::span<const uint8_t>(packed) : t.bytes();
-        entries[i].sha256 = sha256_hex(bytes);
-        entries[i].extra["bytes"] = bytes.size();
+        Sha256 hash;
+        size_t size = 0;
+        for (std::span<const uint8_t> p : pieces) hash.update(p), size += p.size();
+        entries[i].sha256 = hash.hex();
+        entries[i].extra["bytes"] = size;
         entries[i].extra["uncompressed_bytes"] = t.bytes().size();
         entries[i].extra["supercompression"] = t.supercompressed() ? "zstd" : "none";
         if (t.supercompressed()) entries[i].extra["zstd_level"] = t.supercompression().zstd_level;
-        if (auto ok = write_bytes_to(outputs[i]->temp_path(), outputs[i]->final_path(), bytes); !ok)
+        if (auto ok = write_pieces_to(outputs[i]->temp_path(), outputs[i]->final_path(), pieces); !ok)
             errors[i] = ok.error();
     });
     for (const std::optional<Error>& e : errors)

@@ -435,8 +435,24 @@ Result<TextureJobOutcome> run_texture_job(const TextureJob& job) {
     if (!have_roughness) manifest.settings["roughness_value"] = job.roughness_value;
     else manifest.settings["roughness_channel"] = job.roughness_channel;
 
-    auto written = bake_texture_outputs(in, job.settings, job.container, stage, "texture", progress, job.fraction,
-                                        job.supercompression);
+    Result<TextureOutputsWritten> written = make_error("");
+    if (io::EncodedTexture::supports(job.container)) {
+        // KTX2 and DDS: the decoded inputs are released once baked, before the files are packed and written,
+        // so the inputs, the encoded files and the packed files are never all held at once.
+        auto encoded = bake_texture_encoded(in, job.settings, job.container, "texture", progress, job.fraction,
+                                            job.supercompression);
+        if (!encoded) return out->final_names(encoded.error());
+        normal.image = Image{};
+        roughness.image = Image{};
+        if (progress)
+            for (const io::EncodedFile& f : encoded->files) progress("writing " + f.stem);
+        auto files = io::write_encoded_textures(encoded->files, stage);
+        if (!files) return out->final_names(files.error());
+        written = TextureOutputsWritten{std::move(*files), encoded->notes, encoded->max_roughness_change};
+    } else {
+        written = bake_texture_outputs(in, job.settings, job.container, stage, "texture", progress, job.fraction,
+                                       job.supercompression);
+    }
     if (!written) return out->final_names(written.error());
 
     // The plan (SPEC Sec. 6): would the bake change roughness visibly, i.e. by half a quantisation step?
