@@ -24,6 +24,8 @@ struct TextureOptions {
     std::optional<float> roughness_value;
     std::string output;
     std::string format = "ktx2";
+    std::string supercompression = "zstd";
+    int zstd_level = 3;
     std::string isotropic = "mean";
     std::string filter = "projected";
     std::optional<double> max_kernel;
@@ -96,6 +98,8 @@ int run_texture(const TextureOptions& o, const PipelineFlags& pipe) {
     if (o.roughness_value) job.roughness_value = *o.roughness_value;
     job.output_dir = o.output;
     job.container = *io::parse_container(o.format);
+    job.supercompression.zstd = o.supercompression == "zstd";
+    job.supercompression.zstd_level = o.zstd_level;
     TextureBakeSettings& s = job.settings;
     s.isotropic = o.isotropic == "sum" ? IsotropicReduction::Sum
                   : o.isotropic == "max" ? IsotropicReduction::Max : IsotropicReduction::Mean;
@@ -115,6 +119,8 @@ int run_texture(const TextureOptions& o, const PipelineFlags& pipe) {
     // The settings and inputs exactly as run_texture_job records them in the manifest ("input_facts" is
     // derived from the inputs, which their hashes cover).
     nlohmann::json recorded = texture_settings_json(job.settings, job.container);
+    if (job.container == io::TextureContainer::Ktx2)
+        recorded["supercompression"] = supercompression_json(job.supercompression);
     std::vector<std::string> inputs;
     if (job.demo) {
         recorded["demo"] = true;
@@ -187,6 +193,11 @@ void add_texture_command(CLI::App& app, std::function<int()>& run) {
     sub->add_option("--format", o->format, "Container: ktx2 (default), dds, exr (tiled, mipmapped) or png "
                                            "(one file per mip; float data as EXR)")
         ->check(CLI::IsMember({"ktx2", "dds", "exr", "png"}));
+    sub->add_option("--supercompression", o->supercompression,
+                    "KTX2 level compression: zstd (default; KTX2 supercompression scheme 2) or none")
+        ->check(CLI::IsMember({"zstd", "none"}));
+    sub->add_option("--zstd-level", o->zstd_level, "Zstandard level for KTX2, 1 (fastest) to 22 (default 3)")
+        ->check(CLI::Range(1, 22));
     sub->add_option("--isotropic", o->isotropic,
                     "Kernel from the footprint covariance Sigma: mean t = tr (default), sum t = 2 tr, "
                     "max t = 2 lambda_max")
@@ -214,8 +225,8 @@ void add_texture_command(CLI::App& app, std::function<int()>& run) {
                   "Bake the built-in 512x384 procedural normal map (bumps, ribs, noise) and ORM map; they are "
                   "written to the output folder as demo_normal.png and demo_orm.png");
     sub->footer(
-        "Outputs (in the output folder): texture_roughness, texture_kernel, texture_lean (+ texture_lean_xy\n"
-        "for KTX2/DDS/PNG, which hold at most 4 channels), texture_normal, and manifest.json.\n"
+        "Outputs (in the output folder): texture_roughness, texture_kernel, texture_lean + texture_lean_xy,\n"
+        "texture_normal (1, 2 or 4 channels each, the same layout in every format), and manifest.json.\n"
         "\nExamples:\n"
         "  specbake texture --demo -o out/demo\n"
         "  specbake texture --normal rock_n.png --roughness rock_orm.png -o out/rock\n"

@@ -53,22 +53,30 @@ Result<void> AtomicOutput::commit() {
     return {};
 }
 
-Result<void> write_bytes_to(const fs::path& file, const fs::path& name, std::span<const uint8_t> bytes) {
+Result<void> write_pieces_to(const fs::path& file, const fs::path& name,
+                             std::span<const std::span<const uint8_t>> pieces) {
     const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
     if (fd < 0) return make_error(name.string() + ": cannot open for writing: " + std::strerror(errno));
-    size_t done = 0;
-    while (done < bytes.size()) {
-        const ssize_t n = ::write(fd, bytes.data() + done, std::min<size_t>(bytes.size() - done, size_t(1) << 30));
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) {
-            const int err = n < 0 ? errno : ENOSPC;
-            ::close(fd);
-            return make_error(name.string() + ": cannot write: " + std::strerror(err));
+    for (std::span<const uint8_t> bytes : pieces) {
+        size_t done = 0;
+        while (done < bytes.size()) {
+            const ssize_t n = ::write(fd, bytes.data() + done, std::min<size_t>(bytes.size() - done, size_t(1) << 30));
+            if (n < 0 && errno == EINTR) continue;
+            if (n <= 0) {
+                const int err = n < 0 ? errno : ENOSPC;
+                ::close(fd);
+                return make_error(name.string() + ": cannot write: " + std::strerror(err));
+            }
+            done += size_t(n);
         }
-        done += size_t(n);
     }
     if (::close(fd) != 0) return make_error(name.string() + ": cannot write: " + std::strerror(errno));
     return {};
+}
+
+Result<void> write_bytes_to(const fs::path& file, const fs::path& name, std::span<const uint8_t> bytes) {
+    const std::span<const uint8_t> one[] = {bytes};
+    return write_pieces_to(file, name, one);
 }
 
 Result<void> write_file_atomic(const fs::path& path, std::span<const uint8_t> bytes) {

@@ -36,6 +36,9 @@ private:
 // temporary) and give the system's reason.
 Result<void> write_bytes_to(const std::filesystem::path& file, const std::filesystem::path& name,
                             std::span<const uint8_t> bytes);
+// The same for a file made of `pieces` written one after the other.
+Result<void> write_pieces_to(const std::filesystem::path& file, const std::filesystem::path& name,
+                             std::span<const std::span<const uint8_t>> pieces);
 
 // Fails, naming `path` and the system's reason, when a file could not be written there (missing folders
 // are created): lets a command refuse before it works rather than after.

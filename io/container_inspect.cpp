@@ -6,6 +6,8 @@
 #include "io/oiio_api.h"
 
 
+#include <zstd.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -138,9 +140,12 @@ struct Ktx2Layout {
     uint32_t layers = 0;  // KTX2 layerCount: 0 for a single image, else a 2D array of that many layers
     std::vector<uint64_t> offsets;
     uint32_t transfer = 0;
+    std::vector<std::vector<uint8_t>> inflated;  // zstd: every level decompressed (and checked)
 };
 
-Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& name) {
+// `inflate`: zstd levels are decompressed (and kept for decoding); otherwise only each level's zstd frame
+// header is read, whose content size must equal uncompressedByteLength (the check reads headers alone).
+Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& name, bool inflate = true) {
     auto fail = [&](const std::string& what) { return make_error(name + ": KTX2: " + what); };
     if (b.size() < kKtx2HeaderBytes) return fail("truncated header (" + std::to_string(b.size()) + " bytes)");
     if (std::memcmp(b.data(), kKtx2Magic, 12) != 0) return fail("bad identifier");
@@ -161,7 +166,10 @@ Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& nam
     if (depth != 0 || faces != 1) return fail("only 2D images and 2D arrays are supported");
     L.layers = layers;
     const uint32_t stored_layers = std::max<uint32_t>(1, layers);
-    if (supercompression != 0) return fail("supercompression scheme " + std::to_string(supercompression));
+    // Scheme 2 is Zstandard (KTX 2.0 Sec. 3.9.2); BasisLZ (1) and ZLIB (3) are not written by specbake.
+    if (supercompression != 0 && supercompression != 2)
+        return fail("supercompression scheme " + std::to_string(supercompression) + " (specbake reads none and zstd)");
+    const bool zstd = supercompression == 2;
     if (auto r = check_size(L.width, L.height, f, stored_layers); !r) return fail(r.error().message);
     if (L.levels > uint32_t(full_chain_levels(L.width, L.height)))
         return fail("levelCount " + std::to_string(L.levels) + " exceeds the full chain of " +
@@ -179,7 +187,7 @@ Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& nam
     if (dfd_offset % 4) return fail("data format descriptor is not 4-byte aligned");
     if (kvd_length && (kvd_offset < index_end || uint64_t(kvd_offset) + kvd_length > b.size()))
         return fail("key/value data lies outside the file");
-    if (sgd_offset != 0 || sgd_length != 0) return fail("supercompression global data without supercompression");
+    if (sgd_offset != 0 || sgd_length != 0) return fail("supercompression global data, which zstd does not use");
     // Key/value entries (KTX 2.0 Sec. 3.11): each a 4-byte length, that many bytes, padding to 4; every
     // entry inside the block.
     for (uint64_t at = kvd_offset, end = uint64_t(kvd_offset) + kvd_length; kvd_length && at < end;) {
@@ -229,7 +237,9 @@ Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& nam
     }
 
     // Level index: sizes exact, aligned, inside the file, clear of the metadata, smallest level first.
-    const uint64_t alignment = std::lcm(uint64_t(f.channels * f.bytes), uint64_t(4));
+    // Supercompressed levels have no alignment (mipPadding is align(1)) and any byteLength; they must
+    // inflate to exactly uncompressedByteLength.
+    const uint64_t alignment = zstd ? 1 : std::lcm(uint64_t(f.channels * f.bytes), uint64_t(4));
     const uint64_t metadata_end =
         std::max<uint64_t>(uint64_t(dfd_offset) + dfd_length, kvd_length ? uint64_t(kvd_offset) + kvd_length : 0);
     for (uint32_t level = 0; level < L.levels; ++level) {
@@ -238,8 +248,10 @@ Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& nam
         const std::string lv = "level " + std::to_string(level);
         // An array level holds its layers one after another (KTX 2.0 Sec. 3.9.7).
         const uint64_t expected = level_bytes(L.width, L.height, int(level), f) * stored_layers;
-        if (length != expected || uncompressed != expected)
-            return fail(lv + " holds " + std::to_string(length) + " bytes, expected " + std::to_string(expected));
+        if ((!zstd && length != expected) || uncompressed != expected)
+            return fail(lv + " holds " + std::to_string(zstd ? uncompressed : length) + " bytes, expected " +
+                        std::to_string(expected));
+        if (zstd && length == 0) return fail(lv + " has no compressed data");
         if (offset % alignment) return fail(lv + " offset " + std::to_string(offset) + " is not aligned");
         if (offset < metadata_end) return fail(lv + " offset " + std::to_string(offset) + " overlaps the metadata");
         if (offset > b.size() || length > b.size() - offset)
@@ -249,6 +261,19 @@ Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& nam
             return fail(lv + " is not stored before level " + std::to_string(level - 1) +
                         " (levels are stored smallest first, without overlap)");
         L.offsets.push_back(offset);
+        if (zstd && !inflate) {
+            const unsigned long long content = ZSTD_getFrameContentSize(b.data() + offset, length);
+            if (content == ZSTD_CONTENTSIZE_ERROR) return fail(lv + " is not a zstd frame");
+            if (content != ZSTD_CONTENTSIZE_UNKNOWN && content != expected)
+                return fail(lv + " declares " + std::to_string(content) + " bytes, expected " + std::to_string(expected));
+        } else if (zstd) {
+            std::vector<uint8_t> level_bytes_out(expected);
+            const size_t n = ZSTD_decompress(level_bytes_out.data(), level_bytes_out.size(), b.data() + offset, length);
+            if (ZSTD_isError(n)) return fail(lv + ": zstd: " + ZSTD_getErrorName(n));
+            if (n != expected)
+                return fail(lv + " inflates to " + std::to_string(n) + " bytes, expected " + std::to_string(expected));
+            L.inflated.push_back(std::move(level_bytes_out));
+        }
     }
     return L;
 }
@@ -259,11 +284,12 @@ constexpr size_t kDx10HeaderBytes = 20;
 struct DdsLayout {
     const FormatInfo* format = nullptr;
     uint32_t width = 0, height = 0, levels = 0;
+    size_t data_start = 0;  // after the legacy header, or after the DX10 header
 };
 
 Result<DdsLayout> parse_dds(std::span<const uint8_t> b, const std::string& name) {
     auto fail = [&](const std::string& what) { return make_error(name + ": DDS: " + what); };
-    if (b.size() < kDdsHeaderBytes + kDx10HeaderBytes) return fail("truncated header");
+    if (b.size() < kDdsHeaderBytes) return fail("truncated header");
     if (std::memcmp(b.data(), "DDS ", 4) != 0) return fail("bad magic");
     if (u32(b, 4) != 124) return fail("header size is not 124");
     const uint32_t flags = u32(b, 8);
@@ -280,15 +306,35 @@ Result<DdsLayout> parse_dds(std::span<const uint8_t> b, const std::string& name)
         return fail("mip count " + std::to_string(L.levels) + " exceeds the full chain");
     if (u32(b, 76) != 32) return fail("pixel format size is not 32");
     const uint32_t pf_flags = u32(b, 80);
-    if (!(pf_flags & 0x4) || std::memcmp(b.data() + 84, "DX10", 4) != 0) return fail("no DX10 header");
-    const uint32_t dxgi = u32(b, 128), dimension = u32(b, 132), misc = u32(b, 136), array = u32(b, 140);
-    L.format = format_by_dxgi(dxgi);
-    if (!L.format) return fail("DXGI format " + std::to_string(dxgi) + " is not an uncompressed format specbake reads");
+    L.data_start = kDdsHeaderBytes;
+    if ((pf_flags & 0x4) && std::memcmp(b.data() + 84, "DX10", 4) == 0) {
+        if (b.size() < kDdsHeaderBytes + kDx10HeaderBytes) return fail("truncated DX10 header");
+        L.data_start += kDx10HeaderBytes;
+        const uint32_t dxgi = u32(b, 128), dimension = u32(b, 132), misc = u32(b, 136), array = u32(b, 140);
+        L.format = format_by_dxgi(dxgi);
+        if (!L.format)
+            return fail("DXGI format " + std::to_string(dxgi) + " is not an uncompressed format specbake reads");
+        if (dimension != 3) return fail("resource dimension " + std::to_string(dimension) + " is not TEXTURE2D");
+        if (misc & 0x4) return fail("cube maps are not supported");
+        if (array != 1) return fail("array size " + std::to_string(array) + " (expected 1)");
+    } else {
+        // Legacy pixel formats, mapped to DXGI as Microsoft's DDS reference does (L8, A8L8, A8B8G8R8,
+        // L16, G16R16, FourCC 36 = A16B16G16R16).
+        const uint32_t fourcc = u32(b, 84), bits = u32(b, 88);
+        const std::array<uint32_t, 4> m{u32(b, 92), u32(b, 96), u32(b, 100), u32(b, 104)};
+        auto masks = [&](uint32_t r, uint32_t g, uint32_t bl, uint32_t a) { return m == std::array{r, g, bl, a}; };
+        uint32_t dxgi = 0;
+        if (pf_flags & 0x4) dxgi = fourcc == 36 ? 11 : 0;
+        else if ((pf_flags & 0x20000) && bits == 8 && masks(0xFF, 0, 0, 0)) dxgi = 61;
+        else if ((pf_flags & 0x20000) && bits == 16 && masks(0xFF, 0, 0, 0xFF00)) dxgi = 49;
+        else if ((pf_flags & 0x20000) && bits == 16 && masks(0xFFFF, 0, 0, 0)) dxgi = 56;
+        else if ((pf_flags & 0x40) && bits == 32 && masks(0xFF, 0xFF00, 0xFF0000, 0xFF000000u)) dxgi = 28;
+        else if ((pf_flags & 0x40) && bits == 32 && masks(0xFFFF, 0xFFFF0000u, 0, 0)) dxgi = 35;
+        L.format = format_by_dxgi(dxgi);
+        if (!L.format) return fail("legacy pixel format is not one specbake reads");
+    }
     if (auto r = check_size(L.width, L.height, *L.format); !r) return fail(r.error().message);
-    if (dimension != 3) return fail("resource dimension " + std::to_string(dimension) + " is not TEXTURE2D");
-    if (misc & 0x4) return fail("cube maps are not supported");
-    if (array != 1) return fail("array size " + std::to_string(array) + " (expected 1)");
-    uint64_t expected = kDdsHeaderBytes + kDx10HeaderBytes;
+    uint64_t expected = L.data_start;
     for (uint32_t level = 0; level < L.levels; ++level) expected += level_bytes(L.width, L.height, int(level), *L.format);
     if (b.size() != expected)
         return fail("file holds " + std::to_string(b.size()) + " bytes, header implies " + std::to_string(expected));
@@ -333,7 +379,8 @@ Result<InspectedTexture> decode_ktx2_for_inspection(std::span<const uint8_t> byt
     const int stored_layers = std::max(1, t.layers);
     // An array's layers are decoded one below the other: each level is width x (height x layers).
     for (uint32_t level = 0; level < layout->levels; ++level)
-        t.mips.levels.push_back(decode_level(bytes.data() + layout->offsets[level],
+        t.mips.levels.push_back(decode_level(layout->inflated.empty() ? bytes.data() + layout->offsets[level]
+                                                                      : layout->inflated[level].data(),
                                              int(std::max<uint32_t>(1, layout->width >> level)),
                                              int(std::max<uint32_t>(1, layout->height >> level)) * stored_layers,
                                              *layout->format));
@@ -350,7 +397,7 @@ Result<InspectedTexture> decode_dds_for_inspection(std::span<const uint8_t> byte
     t.transfer = layout->format->numeric == Numeric::srgb ? "sRGB" : "linear";
     t.channel_names.assign({"R", "G", "B", "A"});
     t.channel_names.resize(size_t(layout->format->channels));
-    size_t at = kDdsHeaderBytes + kDx10HeaderBytes;
+    size_t at = layout->data_start;
     for (uint32_t level = 0; level < layout->levels; ++level) {
         const int w = int(std::max<uint32_t>(1, layout->width >> level));
         const int h = int(std::max<uint32_t>(1, layout->height >> level));
@@ -382,7 +429,7 @@ Result<void> check_texture_file(const std::filesystem::path& path) {
 
 Result<TextureShape> check_container_shape(std::span<const uint8_t> bytes, const std::string& name) {
     if (has_prefix(bytes, kKtx2Magic, 12)) {
-        auto l = parse_ktx2(bytes, name);
+        auto l = parse_ktx2(bytes, name, false);
         if (!l) return l.error();
         return TextureShape{"ktx2", int(l->width), int(l->height), int(l->levels), l->format->channels, int(l->layers)};
     }

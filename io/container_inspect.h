@@ -1,6 +1,6 @@
 // Reading baked textures back for inspection, independently of the writers (io/ktx2.h, io/dds.h): KTX2
 // and DDS are parsed here from the specifications (KTX 2.0, Khronos Data Format 1.3, DDS with the DX10
-// header), so reading a written file is a cross-check of the writer. EXR and PNG go through OpenImageIO.
+// header or the legacy pixel formats specbake writes), so reading a written file is a cross-check of the writer. EXR and PNG go through OpenImageIO.
 // The structural check validates a container without trusting any of its offsets.
 #pragma once
 
@@ -31,7 +31,7 @@ struct InspectedTexture {
 
 // Structure of a KTX2 or DDS file held in memory: everything a reader relies on, checked against the
 // file size and against itself (KTX2: header, level index offsets/lengths/alignment and order, DFD block
-// against the vkFormat; DDS: magic, header sizes and flags, DX10 format and dimension, data size).
+// against the vkFormat, zstd levels decompressed to their exact uncompressedByteLength; DDS: magic, header sizes and flags, DX10 format and dimension, data size).
 // The error names `name` and the first problem found.
 Result<void> check_ktx2_structure(std::span<const uint8_t> bytes, const std::string& name);
 Result<void> check_dds_structure(std::span<const uint8_t> bytes, const std::string& name);
@@ -43,7 +43,8 @@ struct TextureShape {
     int layers = 0;  // KTX2 2D arrays: the layer count (0 for a single image); width and height are a layer's
 };
 // The structural check of a KTX2 or DDS file in memory (by its magic; any other content is an error), and
-// the shape it declares. Reads only the headers: the level data is not touched.
+// the shape it declares. Reads only the headers: the level data is not touched (of a zstd level only its frame
+// header, whose content size must match the level index).
 Result<TextureShape> check_container_shape(std::span<const uint8_t> bytes, const std::string& name);
 // The shape of an EXR, PNG or other file OpenImageIO reads, from its headers alone (every MIP level opened,
 // no pixels decoded).

@@ -2,6 +2,9 @@
 
 #include "io/texel_encoding.h"
 
+#include <tbb/parallel_for.h>
+#include <zstd.h>
+
 #include <algorithm>
 #include <cstring>
 #include <numeric>
@@ -101,7 +104,8 @@ Ktx2Parts ktx2_parts(int levels, const std::vector<uint8_t>& dfd, const std::vec
 
 }  // namespace
 
-ContainerLayout ktx2_layout(int width, int height, int levels, TexelEncoding encoding, int channels, int layers) {
+ContainerLayout ktx2_layout(int width, int height, int levels, TexelEncoding encoding, int data_channels, int layers) {
+    const int channels = gpu_channels(data_channels);
     const size_t texel_bytes = size_t(channels) * size_t(encoding_bytes(encoding));
     const size_t alignment = std::lcm(texel_bytes, size_t(4));
     const Ktx2Parts parts = ktx2_parts(levels, make_dfd(encoding, channels), make_kvd());
@@ -121,7 +125,8 @@ ContainerLayout ktx2_layout(int width, int height, int levels, TexelEncoding enc
 }
 
 void ktx2_write_header(uint8_t* file, const ContainerLayout& layout, int width, int height, TexelEncoding encoding,
-                       int channels, int layers) {
+                       int data_channels, int layers) {
+    const int channels = gpu_channels(data_channels);
     const uint32_t levels = uint32_t(layout.level_offset.size());
     const size_t texel_bytes = size_t(channels) * size_t(encoding_bytes(encoding));
     const std::vector<uint8_t> dfd = make_dfd(encoding, channels);
@@ -165,6 +170,61 @@ void ktx2_write_header(uint8_t* file, const ContainerLayout& layout, int width, 
     }
 }
 
+std::vector<std::span<const uint8_t>> Ktx2Pieces::pieces() const {
+    std::vector<std::span<const uint8_t>> p{std::span<const uint8_t>(header)};
+    for (size_t i = level_size.size(); i-- > 0;) p.emplace_back(level_data[i].get(), level_size[i]);
+    return p;
+}
+
+size_t Ktx2Pieces::size() const {
+    size_t n = header.size();
+    for (size_t s : level_size) n += s;
+    return n;
+}
+
+Result<Ktx2Pieces> ktx2_zstd_pieces(std::span<const uint8_t> raw, const ContainerLayout& layout, int zstd_level) {
+    const size_t levels = layout.level_offset.size();
+    Ktx2Pieces out;
+    out.level_data.resize(levels);
+    out.level_size.resize(levels);
+    std::vector<size_t> raw_length(levels);
+    std::vector<std::string> errors(levels);
+    for (size_t i = 0; i < levels; ++i) raw_length[i] = size_t(get64(raw, kHeaderBytes + kLevelIndexEntry * i + 8));
+    tbb::parallel_for(size_t(0), levels, [&](size_t i) {
+        const size_t bound = ZSTD_compressBound(raw_length[i]);
+        out.level_data[i].reset(new uint8_t[bound]);
+        const size_t n = ZSTD_compress(out.level_data[i].get(), bound, raw.data() + layout.level_offset[i],
+                                       raw_length[i], zstd_level);
+        if (ZSTD_isError(n)) errors[i] = ZSTD_getErrorName(n);
+        else out.level_size[i] = n;
+    });
+    for (const std::string& e : errors)
+        if (!e.empty()) return make_error("zstd: " + e);
+    // Header, index, descriptor and key/value data (the last part before the levels; no global data);
+    // the alignment padding of the uncompressed layout is dropped.
+    const size_t header_end = size_t(get32(raw, 56)) + get32(raw, 60);
+    out.header.assign(raw.begin(), raw.begin() + long(header_end));
+    put32(out.header, 44, 2);  // supercompressionScheme: Zstandard
+    size_t at = header_end;
+    for (size_t i = levels; i-- > 0;) {
+        const size_t entry = kHeaderBytes + kLevelIndexEntry * i;
+        put64(out.header, entry, at);
+        put64(out.header, entry + 8, out.level_size[i]);
+        put64(out.header, entry + 16, raw_length[i]);
+        at += out.level_size[i];
+    }
+    return out;
+}
+
+Result<std::vector<uint8_t>> ktx2_zstd(std::span<const uint8_t> raw, const ContainerLayout& layout, int zstd_level) {
+    auto packed = ktx2_zstd_pieces(raw, layout, zstd_level);
+    if (!packed) return packed.error();
+    std::vector<uint8_t> file;
+    file.reserve(packed->size());
+    for (std::span<const uint8_t> p : packed->pieces()) file.insert(file.end(), p.begin(), p.end());
+    return file;
+}
+
 std::vector<uint8_t> encode_ktx2(const MipChain& chain, TexelEncoding encoding) {
     const int channels = chain.channels();
     const int levels = int(chain.levels.size());
@@ -173,8 +233,8 @@ std::vector<uint8_t> encode_ktx2(const MipChain& chain, TexelEncoding encoding) 
     ktx2_write_header(b.data(), layout, chain.width(), chain.height(), encoding, channels);
     for (int i = 0; i < levels; ++i) {
         const Image& level = chain.levels[size_t(i)];
-        encode_texels_into(level.pixels.data(), level.texel_count(), channels, 0, channels, encoding, channels, 1.0f,
-                           b.data() + layout.level_offset[size_t(i)]);
+        encode_texels_into(level.pixels.data(), level.texel_count(), channels, 0, channels, encoding,
+                           layout.stored_channels, 1.0f, b.data() + layout.level_offset[size_t(i)]);
     }
     return b;
 }
@@ -189,8 +249,8 @@ std::vector<uint8_t> encode_ktx2_array(const MipChain& stacked, int layers, Texe
     for (int i = 0; i < levels; ++i) {
         // KTX2 Sec. 3.9: within a level, layer after layer, each row after row: the stacked image as it is.
         const Image& level = stacked.levels[size_t(i)];
-        encode_texels_into(level.pixels.data(), level.texel_count(), channels, 0, channels, encoding, channels, 1.0f,
-                           b.data() + layout.level_offset[size_t(i)]);
+        encode_texels_into(level.pixels.data(), level.texel_count(), channels, 0, channels, encoding,
+                           layout.stored_channels, 1.0f, b.data() + layout.level_offset[size_t(i)]);
     }
     return b;
 }
@@ -210,7 +270,8 @@ Result<Ktx2Texture> read_ktx2_texture(std::span<const uint8_t> b, const std::str
     const uint32_t layers = std::max(1u, info.layer_count);
     info.level_count = get32(b, 40);
     info.supercompression = get32(b, 44);
-    if (info.supercompression != 0) return fail("supercompressed data is not supported");
+    if (info.supercompression != 0 && info.supercompression != 2)
+        return fail("supercompression scheme " + std::to_string(info.supercompression) + " is not supported (only zstd)");
     if (width == 0 || height == 0 || width > (1u << 15) || height > (1u << 15)) return fail("bad size");
     if (info.level_count == 0 || info.level_count > 16) return fail("bad level count");
 
@@ -266,18 +327,28 @@ Result<Ktx2Texture> read_ktx2_texture(std::span<const uint8_t> b, const std::str
 
     // Levels.
     if (kHeaderBytes + kLevelIndexEntry * info.level_count > b.size()) return fail("truncated level index");
-    const size_t alignment = std::lcm(texel_bytes, size_t(4));
+    const bool zstd = info.supercompression == 2;
+    const size_t alignment = zstd ? 1 : std::lcm(texel_bytes, size_t(4));
     for (uint32_t i = 0; i < info.level_count; ++i) {
         const size_t at = kHeaderBytes + kLevelIndexEntry * i;
         const uint64_t off = get64(b, at), len = get64(b, at + 8), ulen = get64(b, at + 16);
         const int w = std::max(1, int(width >> i)), h = std::max(1, int(height >> i));
-        if (len != ulen || len != uint64_t(w) * uint64_t(h) * texel_bytes * layers)
-            return fail("level " + std::to_string(i) + " has the wrong size");
-        if (off % alignment != 0) return fail("level " + std::to_string(i) + " is not aligned");
-        if (off + len > b.size()) return fail("truncated level " + std::to_string(i));
+        const std::string level = "level " + std::to_string(i);
+        const uint64_t level_bytes = uint64_t(w) * uint64_t(h) * texel_bytes * layers;
+        if (ulen != level_bytes || (!zstd && len != ulen)) return fail(level + " has the wrong size");
+        if (off % alignment != 0) return fail(level + " is not aligned");
+        if (off > b.size() || len > b.size() - off) return fail("truncated " + level);
         info.level_offsets.push_back(off);
         info.level_lengths.push_back(len);
-        t.chain.levels.push_back(decode_texels(b.subspan(off, len), t.encoding, w, h * int(layers), channels));
+        if (!zstd) {
+            t.chain.levels.push_back(decode_texels(b.subspan(off, len), t.encoding, w, h * int(layers), channels));
+            continue;
+        }
+        std::vector<uint8_t> inflated(ulen);
+        const size_t n = ZSTD_decompress(inflated.data(), inflated.size(), b.data() + off, len);
+        if (ZSTD_isError(n)) return fail(level + ": zstd: " + ZSTD_getErrorName(n));
+        if (n != ulen) return fail(level + " inflates to " + std::to_string(n) + " bytes, not " + std::to_string(ulen));
+        t.chain.levels.push_back(decode_texels(inflated, t.encoding, w, h * int(layers), channels));
     }
     return t;
 }

@@ -32,6 +32,7 @@ struct LevelsRequest {
     PixelType type = PixelType::Float;
     bool mipmapped = false;
     std::vector<std::string> channel_names;
+    std::string channel_meaning;  // comma-separated meaning of each channel: EXR attribute "specbake:channels"
     std::string wrap;       // OpenImageIO wrap mode name, for mipmapped files
     std::string date_time;  // DateTime written into EXR headers (reproducible outputs)
 };
@@ -50,7 +51,8 @@ struct Api {
     Result<void> (*write_image)(const std::string& temp_path, const std::string& name, const Image& image,
                                 PixelType type);
     Result<void> (*write_levels)(const LevelsRequest& request);
-    // Every MIP level of an EXR, PNG or other file OpenImageIO reads, for `inspect`.
+    // Every MIP level of an EXR, PNG or other file OpenImageIO reads, for `inspect`; channel_names from
+    // the "specbake:channels" attribute where the file has it.
     Result<InspectedTexture> (*read_levels)(const std::string& name, uint64_t max_texels);
     Result<void> (*write_rgb8)(const std::string& temp_path, const std::string& name, int width, int height,
                                const uint8_t* rgb);

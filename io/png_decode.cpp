@@ -16,8 +16,9 @@ namespace {
 uint32_t be32(const uint8_t* p) { return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3]; }
 
 // Ancillary chunks that change neither the pixels nor the colour space OpenImageIO reports.
+// oFFs is a page-layout position (OpenImageIO's writer adds a zero one), nothing a texture reader uses.
 bool harmless_chunk(std::string_view type) {
-    return type == "pHYs" || type == "tIME" || type == "tEXt" || type == "zTXt" || type == "iTXt";
+    return type == "pHYs" || type == "oFFs" || type == "tIME" || type == "tEXt" || type == "zTXt" || type == "iTXt";
 }
 
 int paeth(int a, int b, int c) {

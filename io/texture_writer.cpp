@@ -22,6 +22,17 @@
 namespace specbake::io {
 namespace fs = std::filesystem;
 
+int gpu_channels(int channels) { return channels == 3 ? 4 : channels; }
+
+std::string gpu_format_name(TexelEncoding encoding, int channels) {
+    static const char* rgba[] = {"R", "G", "B", "A"};
+    const char* bits = encoding == TexelEncoding::Unorm8 ? "8" : encoding == TexelEncoding::Float32 ? "32" : "16";
+    std::string name;
+    for (int c = 0; c < channels && c < 4; ++c) name += std::string(rgba[c]) + bits;
+    const bool is_float = encoding == TexelEncoding::Float16 || encoding == TexelEncoding::Float32;
+    return name + (is_float ? "_SFLOAT" : "_UNORM");
+}
+
 const char* container_name(TextureContainer c) {
     switch (c) {
         case TextureContainer::Ktx2: return "ktx2";
@@ -71,14 +82,43 @@ oiio::PixelType oiio_type(TexelEncoding e) {
     return oiio::PixelType::Float;
 }
 
-std::vector<std::string> names_for(int channels, const std::vector<std::string>& given) {
-    static const char* defaults[] = {"R", "G", "B", "A"};
-    std::vector<std::string> names;
-    for (int c = 0; c < channels; ++c) {
-        if (size_t(c) < given.size()) names.push_back(given[size_t(c)]);
-        else names.push_back(c < 4 ? defaults[c] : "C" + std::to_string(c));
+// EXR channel names common readers load (three.js EXRLoader, OpenImageIO, Pillow-free tools): Y alone,
+// else R, G, B, A in the KTX2/DDS order. What the channels mean goes into "specbake:channels".
+std::vector<std::string> exr_names(int channels) {
+    if (channels == 1) return {"Y"};
+    static const char* rgba[] = {"R", "G", "B", "A"};
+    return {rgba, rgba + channels};
+}
+
+// `given` meanings, padded with the defaults (R, G, B; "1" for the A = 1 of padded 3-channel data).
+std::vector<std::string> meaning_for(int data_channels, int stored, const std::vector<std::string>& given) {
+    std::vector<std::string> names = exr_names(stored);
+    for (int c = 0; c < stored; ++c) {
+        if (size_t(c) < given.size()) names[size_t(c)] = given[size_t(c)];
+        else if (c >= data_channels) names[size_t(c)] = "1";
     }
     return names;
+}
+
+std::string joined(const std::vector<std::string>& names) {
+    std::string s;
+    for (const std::string& n : names) s += (s.empty() ? "" : ",") + n;
+    return s;
+}
+
+// `chain` with 3 channels widened to RGBA, A = 1 (other counts are returned as they are).
+const MipChain& gpu_chain(const MipChain& chain, MipChain& storage) {
+    if (chain.channels() != 3) return chain;
+    for (const Image& level : chain.levels) {
+        Image wide(level.width, level.height, 4);
+        const size_t n = level.texel_count();
+        for (size_t i = 0; i < n; ++i) {
+            for (int c = 0; c < 3; ++c) wide.pixels[i * 4 + size_t(c)] = level.pixels[i * 3 + size_t(c)];
+            wide.pixels[i * 4 + 3] = 1.0f;
+        }
+        storage.levels.push_back(std::move(wide));
+    }
+    return storage;
 }
 
 // The DateTime written into EXR headers: SOURCE_DATE_EPOCH (the reproducible-builds convention) when it is
@@ -100,7 +140,8 @@ std::string reproducible_date_time() {
 
 // One OpenImageIO file: all levels as a tiled MIP-mapped EXR, or a single level (PNG / EXR).
 Result<void> write_oiio(const fs::path& temp, const fs::path& final_path, const std::vector<const Image*>& levels,
-                        oiio::PixelType type, bool mipmapped, const std::vector<std::string>& names, WrapMode wrap) {
+                        oiio::PixelType type, bool mipmapped, const std::vector<std::string>& meaning,
+                        WrapMode wrap) {
     auto api = oiio::api();
     if (!api) return make_error(final_path.string() + ": " + api.error().message);
     oiio::LevelsRequest request;
@@ -109,7 +150,8 @@ Result<void> write_oiio(const fs::path& temp, const fs::path& final_path, const 
     request.levels = levels;
     request.type = type;
     request.mipmapped = mipmapped;
-    request.channel_names = names;
+    request.channel_names = exr_names(levels.front()->channels);
+    request.channel_meaning = joined(meaning);
     request.wrap = wrap_name(wrap);
     request.date_time = reproducible_date_time();
     return (*api)->write_levels(request);
@@ -117,13 +159,15 @@ Result<void> write_oiio(const fs::path& temp, const fs::path& final_path, const 
 
 }  // namespace
 
-Result<std::vector<ManifestOutput>> write_texture(const MipChain& chain, TexelEncoding encoding,
+Result<std::vector<ManifestOutput>> write_texture(const MipChain& data, TexelEncoding encoding,
                                                   TextureContainer container, const fs::path& dir,
                                                   const std::string& stem, const std::string& kind,
-                                                  const std::vector<std::string>& channel_names, WrapMode wrap) {
-    if (chain.levels.empty() || chain.channels() < 1) return make_error((dir / stem).string() + ": nothing to write");
-    if (chain.channels() > 4 && container != TextureContainer::Exr)
-        return make_error((dir / stem).string() + ": " + container_name(container) + " holds at most 4 channels");
+                                                  const std::vector<std::string>& channel_names, WrapMode wrap,
+                                                  const Supercompression& supercompression) {
+    if (data.levels.empty() || data.channels() < 1) return make_error((dir / stem).string() + ": nothing to write");
+    if (data.channels() > 4)
+        return make_error((dir / stem).string() + ": " + std::to_string(data.channels()) +
+                          " channels; a texture holds at most 4");
     std::error_code ec;
     fs::create_directories(dir, ec);
     if (ec) return make_error(dir.string() + ": cannot create folder: " + ec.message());
@@ -132,6 +176,20 @@ Result<std::vector<ManifestOutput>> write_texture(const MipChain& chain, TexelEn
         std::unique_ptr<AtomicOutput> file;
         ManifestOutput entry;
     };
+    const int mips = int(data.levels.size());
+    const std::vector<std::string> names = meaning_for(data.channels(), gpu_channels(data.channels()), channel_names);
+
+    if (EncodedTexture::supports(container)) {
+        EncodedTexture t(container, encoding, data.width(), data.height(), mips, data.channels(), supercompression);
+        for (int L = 0; L < mips; ++L) {
+            const Image& level = data.levels[size_t(L)];
+            t.put_block(L, 0, 0, level.width, level.height, level.pixels.data(), level.channels, 0);
+        }
+        const EncodedFile file{&t, stem, kind, names};
+        return write_encoded_textures({&file, 1}, dir);
+    }
+    MipChain widened;
+    const MipChain& chain = gpu_chain(data, widened);
     std::vector<Pending> pending;
     auto add = [&](const std::string& filename, int width, int height, int mips) -> Pending& {
         Pending p;
@@ -144,28 +202,20 @@ Result<std::vector<ManifestOutput>> write_texture(const MipChain& chain, TexelEn
         p.entry.mips = mips;
         p.entry.channels = chain.channels();
         p.entry.extra["encoding"] = encoding_name(encoding);
+        p.entry.extra["gpu_format"] = gpu_format_name(encoding, chain.channels());
+        p.entry.extra["channel_meaning"] = names;
+        p.entry.extra["channel_names"] = exr_names(chain.channels());
         pending.push_back(std::move(p));
         return pending.back();
     };
-    const std::vector<std::string> names = names_for(chain.channels(), channel_names);
-    const int mips = int(chain.levels.size());
-
     switch (container) {
         case TextureContainer::Ktx2:
-        case TextureContainer::Dds: {
-            EncodedTexture t(container, encoding, chain.width(), chain.height(), mips, chain.channels());
-            for (int L = 0; L < mips; ++L) {
-                const Image& level = chain.levels[size_t(L)];
-                t.put_block(L, 0, 0, level.width, level.height, level.pixels.data(), level.channels, 0);
-            }
-            const EncodedFile file{&t, stem, kind};
-            return write_encoded_textures({&file, 1}, dir);
-        }
+        case TextureContainer::Dds: break;  // written above
         case TextureContainer::Exr: {
             Pending& p = add(stem + ".exr", chain.width(), chain.height(), mips);
             const TexelEncoding stored = encoding == TexelEncoding::Float32 ? encoding : TexelEncoding::Float16;
             p.entry.extra["encoding"] = encoding_name(stored);
-            p.entry.extra["channel_names"] = names;
+            p.entry.extra["gpu_format"] = gpu_format_name(stored, chain.channels());
             std::vector<const Image*> levels;
             for (const Image& l : chain.levels) levels.push_back(&l);
             if (auto ok = write_oiio(p.file->temp_path(), p.file->final_path(), levels, oiio_type(stored), true,
@@ -209,8 +259,9 @@ bool EncodedTexture::supports(TextureContainer container) {
 }
 
 EncodedTexture::EncodedTexture(TextureContainer container, TexelEncoding encoding, int width, int height, int levels,
-                               int channels)
-    : container_(container), encoding_(encoding), width_(width), height_(height), channels_(channels) {
+                               int channels, const Supercompression& supercompression)
+    : container_(container), encoding_(encoding), width_(width), height_(height), channels_(channels),
+      supercompression_(supercompression) {
     layout_ = container == TextureContainer::Ktx2 ? ktx2_layout(width, height, levels, encoding, channels)
                                                   : dds_layout(width, height, levels, encoding, channels);
     data_.reset(new uint8_t[layout_.total]);
@@ -244,14 +295,14 @@ ManifestOutput EncodedTexture::entry(const std::string& filename, const std::str
     e.width = width_;
     e.height = height_;
     e.mips = int(layout_.level_offset.size());
-    e.channels = channels_;
+    e.channels = layout_.stored_channels;
     e.extra["encoding"] = encoding_name(encoding_);
-    if (container_ == TextureContainer::Ktx2) {
-        e.extra["vkFormat"] = ktx2_vk_format(encoding_, channels_);
-    } else {
-        int stored = 0;
-        e.extra["dxgiFormat"] = dds_dxgi_format(encoding_, channels_, &stored);
-        e.extra["stored_channels"] = stored;
+    e.extra["gpu_format"] = gpu_format_name(encoding_, layout_.stored_channels);
+    if (container_ == TextureContainer::Ktx2) e.extra["vkFormat"] = ktx2_vk_format(encoding_, layout_.stored_channels);
+    else {
+        e.extra["dxgiFormat"] = dds_dxgi_format(encoding_, channels_, nullptr);
+        const auto legacy = dds_legacy_pixel_format(encoding_, channels_);
+        e.extra["dds_header"] = legacy ? std::string("legacy ") + legacy->name : std::string("dx10");
     }
     return e;
 }
@@ -266,12 +317,34 @@ Result<std::vector<ManifestOutput>> write_encoded_textures(std::span<const Encod
         const std::string filename = f.stem + '.' + container_name(f.texture->container());
         outputs.push_back(std::make_unique<AtomicOutput>(dir / filename));
         entries.push_back(f.texture->entry(filename, f.kind));
+        entries.back().extra["channel_meaning"] =
+            meaning_for(f.texture->channels(), gpu_channels(f.texture->channels()), f.channel_meaning);
     }
-    // Each file is hashed from memory and written by one task; the first error in file order is reported.
+    // Each file is supercompressed (its levels in parallel), hashed from memory and written by one task;
+    // the first error in file order is reported.
     std::vector<std::optional<Error>> errors(files.size());
     tbb::parallel_for(size_t(0), files.size(), [&](size_t i) {
-        entries[i].sha256 = sha256_hex(files[i].texture->bytes());
-        if (auto ok = write_bytes_to(outputs[i]->temp_path(), outputs[i]->final_path(), files[i].texture->bytes()); !ok)
+        const EncodedTexture& t = *files[i].texture;
+        Ktx2Pieces packed;
+        std::vector<std::span<const uint8_t>> pieces{t.bytes()};
+        if (t.supercompressed()) {
+            auto z = ktx2_zstd_pieces(t.bytes(), t.layout(), t.supercompression().zstd_level);
+            if (!z) {
+                errors[i] = make_error(outputs[i]->final_path().string() + ": " + z.error().message);
+                return;
+            }
+            packed = std::move(*z);
+            pieces = packed.pieces();
+        }
+        Sha256 hash;
+        size_t size = 0;
+        for (std::span<const uint8_t> p : pieces) hash.update(p), size += p.size();
+        entries[i].sha256 = hash.hex();
+        entries[i].extra["bytes"] = size;
+        entries[i].extra["uncompressed_bytes"] = t.bytes().size();
+        entries[i].extra["supercompression"] = t.supercompressed() ? "zstd" : "none";
+        if (t.supercompressed()) entries[i].extra["zstd_level"] = t.supercompression().zstd_level;
+        if (auto ok = write_pieces_to(outputs[i]->temp_path(), outputs[i]->final_path(), pieces); !ok)
             errors[i] = ok.error();
     });
     for (const std::optional<Error>& e : errors)

@@ -1,7 +1,8 @@
 // Writes a MipChain with its full mip chain to a texture container, atomically (temporary file + rename),
-// and describes what it wrote as manifest entries (SPEC Sec. 7). Containers: KTX2 (uncompressed, see
-// io/ktx2.h), DDS with the DX10 header (io/dds.h), tiled mipmapped OpenEXR (OpenImageIO, "Plain Texture"),
-// or one PNG (integer encodings) / EXR (float encodings) file per mip level.
+// and describes what it wrote as manifest entries (SPEC Sec. 7). Containers: KTX2 (io/ktx2.h), DDS
+// (io/dds.h), tiled mipmapped OpenEXR (OpenImageIO, "Plain Texture"), or one PNG (integer encodings) / EXR
+// (float encodings) file per mip level. Every container stores 1, 2 or 4 channels (formats GPUs sample:
+// D3D has no 3-channel 8/16-bit formats and Vulkan makes them optional): 3-channel data gets A = 1.
 #pragma once
 
 #include "core/image.h"
@@ -31,29 +32,48 @@ struct ContainerLayout {
     int stored_channels = 0;
 };
 
+// Channels a container stores for `channels` of data: 3 becomes 4 (RGBA, A = 1), the others stay.
+int gpu_channels(int channels);
+
+// The GPU format name of `channels` stored channels as `encoding`: "R8_UNORM", "R16G16_SFLOAT",
+// "R8G8B8A8_UNORM", ... (Vulkan / DXGI spelling without the prefix).
+std::string gpu_format_name(TexelEncoding encoding, int channels);
+
+// KTX2 supercompression (io/ktx2.h, ktx2_zstd): Zstandard, supercompressionScheme 2, on by default.
+// Other containers ignore it.
+struct Supercompression {
+    bool zstd = true;
+    int zstd_level = 3;  // 1 (fastest) .. 22; 3 is zstd's own default
+};
+
 const char* container_name(TextureContainer c);      // "ktx2", "dds", "exr", "png"
 const char* encoding_name(TexelEncoding e);          // "unorm8", "unorm16", "float16", "float32"
 std::optional<TextureContainer> parse_container(const std::string& name);
 
-// Writes `chain` (1-4 channels; EXR also more) as `dir/<stem>.<ext>` (per-mip: `dir/<stem>_mip<L>.<ext>`).
-// `channel_names` name the channels inside EXR files (defaults R, G, B, A). `wrap` is recorded where the
-// container has a place for it (EXR "wrapmodes"). Returns one entry per file, `path` relative to `dir`,
+// Writes `chain` (1-4 channels) as `dir/<stem>.<ext>` (per-mip: `dir/<stem>_mip<L>.<ext>`), 3 channels
+// stored as RGBA with A = 1. `channel_names` say what each stored channel means (e.g. "m.x"); they go to
+// the manifest ("channel_meaning") and to the EXR header attribute "specbake:channels", while EXR
+// channels are named as common readers expect: Y for one channel, R, G (, B, A) otherwise, in the same
+// order as the KTX2/DDS channels. `wrap` is recorded where the container has a place for it (EXR
+// "wrapmodes"). Returns one entry per file, `path` relative to `dir`,
 // kind `kind`, sha256 filled. Creates `dir` when missing; the error names the file. All files of the call
 // are written to temporary names first and renamed only when every one succeeded.
 Result<std::vector<ManifestOutput>> write_texture(const MipChain& chain, TexelEncoding encoding,
                                                   TextureContainer container, const std::filesystem::path& dir,
                                                   const std::string& stem, const std::string& kind,
                                                   const std::vector<std::string>& channel_names = {},
-                                                  WrapMode wrap = WrapMode::Repeat);
+                                                  WrapMode wrap = WrapMode::Repeat,
+                                                  const Supercompression& supercompression = {});
 
 // A KTX2 or DDS file assembled in memory, level by level and row by row, so a producer can encode rows
 // as it finishes them instead of holding float chains. put_block() may run on several threads at once
-// for disjoint blocks; the file is complete once every texel of every level was put.
+// for disjoint blocks; the file is complete once every texel of every level was put. bytes() is the file
+// without supercompression; write_encoded_textures applies `supercompression` to KTX2 files as it writes.
 class EncodedTexture {
 public:
     static bool supports(TextureContainer container);  // KTX2 and DDS
     EncodedTexture(TextureContainer container, TexelEncoding encoding, int width, int height, int levels,
-                   int channels);
+                   int channels, const Supercompression& supercompression = {});
 
     // Encodes the texels [x0, x0 + width) x [y0, y0 + rows) of `level` from `rows` rows of `width`
     // interleaved floats with `src_channels` per texel, taking channels [first, first + channels()).
@@ -62,6 +82,10 @@ public:
     std::span<const uint8_t> bytes() const { return {data_.get(), layout_.total}; }
     int channels() const { return channels_; }
     TextureContainer container() const { return container_; }
+    const ContainerLayout& layout() const { return layout_; }
+    // True when the written file is supercompressed (KTX2 with zstd on).
+    bool supercompressed() const { return container_ == TextureContainer::Ktx2 && supercompression_.zstd; }
+    const Supercompression& supercompression() const { return supercompression_; }
     // The manifest entry of this file as `filename` (sha256 left empty; the writer fills it).
     ManifestOutput entry(const std::string& filename, const std::string& kind) const;
 
@@ -69,16 +93,19 @@ private:
     TextureContainer container_;
     TexelEncoding encoding_;
     int width_, height_, channels_;
+    Supercompression supercompression_;
     ContainerLayout layout_;
     std::unique_ptr<uint8_t[]> data_;  // not zero-filled: every byte is written by the header or a row
 };
 
-// Writes `files` (each `dir/<stem>.<ext>`, `kind` as given) atomically: all are hashed and written to
-// temporary names in parallel, and renamed only when every one succeeded. Returns their manifest entries.
+// Writes `files` (each `dir/<stem>.<ext>`, `kind` as given) atomically: all are supercompressed where
+// asked, hashed and written to temporary names in parallel, and renamed only when every one succeeded.
+// Returns their manifest entries, with "bytes" (file size), "uncompressed_bytes" and "supercompression".
 struct EncodedFile {
     const EncodedTexture* texture = nullptr;
     std::string stem;
     std::string kind;
+    std::vector<std::string> channel_meaning;  // what each stored channel holds (manifest), may be empty
 };
 Result<std::vector<ManifestOutput>> write_encoded_textures(std::span<const EncodedFile> files,
                                                            const std::filesystem::path& dir);

@@ -74,39 +74,37 @@ struct OutputFile {
     std::vector<std::string> names;
 };
 
-// The files of settings.outputs, in the order they are written: `<stem>_roughness`, `_kernel`, `_normal`,
-// `_lean` (EXR: all five moments; containers of at most four channels: RGBA plus `_lean_xy`).
+// The files of settings.outputs, in the order they are written, each in a layout GPUs sample (1, 2 or 4
+// channels, the same in every container; README "Output layouts"): `<stem>_roughness` (Y = r, or the ORM
+// map as RGBA with G = r and A = 1), `_kernel` (Y = t, or RGBA = xx, yy, xy, 1), `_normal` (RGBA = normalised
+// mean normal as (n + 1) / 2, A = 1: a drop-in for glTF normalTexture and engine shaders that read .xyz;
+// zstd removes the constant A almost entirely, and the two-channel form belongs to BC5),
+// `_lean` (RGBA = m.x, m.y, M.xx, M.yy) plus `_lean_xy` (Y = M.xy). `names` are the channels' meanings.
 std::vector<OutputFile> output_files(const TextureBakeShape& shape, const TextureInputs& in,
-                                     const TextureBakeSettings& settings, io::TextureContainer container,
-                                     const std::string& stem) {
+                                     const TextureBakeSettings& settings, const std::string& stem) {
     std::vector<OutputFile> files;
     const int roughness_bits = in.roughness ? in.roughness_bits : in.normal_bits;
     if (settings.outputs.roughness) {
         files.push_back({Chain::Roughness, "roughness", stem + "_roughness", unorm_for_bits(roughness_bits), 0,
                          shape.roughness_channels,
-                         shape.roughness_channels == 3 ? std::vector<std::string>{"R", "G", "B"}
-                                                       : std::vector<std::string>{"Y"}});
+                         shape.roughness_channels == 3 ? std::vector<std::string>{"input.r", "r", "input.b", "1"}
+                                                       : std::vector<std::string>{"r"}});
     }
     if (settings.outputs.kernel) {
         files.push_back({Chain::Kernel, "kernel", stem + "_kernel", io::TexelEncoding::Float16, 0, shape.kernel_channels,
-                         settings.anisotropic ? std::vector<std::string>{"xx", "yy", "xy"}
+                         settings.anisotropic ? std::vector<std::string>{"xx", "yy", "xy", "1"}
                                               : std::vector<std::string>{"t"}});
     }
     if (settings.outputs.normal) {
         files.push_back({Chain::Normal, "normal", stem + "_normal", unorm_for_bits(in.normal_bits), 0, 3,
-                         {"R", "G", "B"}});
+                         {"n.x", "n.y", "n.z", "1"}});
     }
     if (settings.outputs.lean) {
         // Slope-space moments are unbounded (|s| grows as 1/n.z), so they get full float precision.
         const io::TexelEncoding enc =
             settings.lean_space == LeanSpace::Slope ? io::TexelEncoding::Float32 : io::TexelEncoding::Float16;
-        const std::vector<std::string> names{"m.x", "m.y", "M.xx", "M.yy", "M.xy"};
-        if (container == io::TextureContainer::Exr) {
-            files.push_back({Chain::Lean, "lean", stem + "_lean", enc, 0, 5, names});
-        } else {
-            files.push_back({Chain::Lean, "lean", stem + "_lean", enc, 0, 4, {names.begin(), names.begin() + 4}});
-            files.push_back({Chain::Lean, "lean", stem + "_lean_xy", enc, 4, 1, {"M.xy"}});
-        }
+        files.push_back({Chain::Lean, "lean", stem + "_lean", enc, 0, 4, {"m.x", "m.y", "M.xx", "M.yy"}});
+        files.push_back({Chain::Lean, "lean", stem + "_lean_xy", enc, 4, 1, {"M.xy"}});
     }
     return files;
 }
@@ -250,16 +248,23 @@ Result<TextureBakeResult> bake_texture_inputs(const TextureInputs& in, const Tex
     return baked;
 }
 
+nlohmann::json supercompression_json(const io::Supercompression& s) {
+    if (!s.zstd) return {{"scheme", "none"}};
+    return {{"scheme", "zstd"}, {"zstd_level", s.zstd_level}};
+}
+
 Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& in, const TextureBakeSettings& settings,
                                                    io::TextureContainer container, const fs::path& dir,
                                                    const std::string& stem, const ProgressFn& progress,
-                                                   const FractionFn& fraction) {
+                                                   const FractionFn& fraction,
+                                                   const io::Supercompression& supercompression) {
     if (!io::EncodedTexture::supports(container)) {
         auto baked = bake_texture_inputs(in, settings, progress);
         if (!baked) return baked.error();
-        return write_texture_outputs(std::move(*baked), in, settings, container, dir, stem, progress);
+        return write_texture_outputs(std::move(*baked), in, settings, container, dir, stem, progress,
+                                     supercompression);
     }
-    auto encoded = bake_texture_encoded(in, settings, container, stem, progress, fraction);
+    auto encoded = bake_texture_encoded(in, settings, container, stem, progress, fraction, supercompression);
     if (!encoded) return encoded.error();
     TextureOutputsWritten result;
     result.notes = encoded->notes;
@@ -274,18 +279,19 @@ Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& in, cons
 
 Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, const TextureBakeSettings& settings,
                                                    io::TextureContainer container, const std::string& stem,
-                                                   const ProgressFn& progress, const FractionFn& fraction) {
+                                                   const ProgressFn& progress, const FractionFn& fraction,
+                                                   const io::Supercompression& supercompression) {
     if (!in.normal) return make_error(in.normal_name + ": no normal map given");
     if (!io::EncodedTexture::supports(container))
         return make_error(std::string("cannot encode ") + io::container_name(container) + " in memory");
     const int channel = roughness_channel_of(in);
     const TextureBakeShape shape = texture_bake_shape(*in.normal, in.roughness, channel, settings);
-    const std::vector<OutputFile> files = output_files(shape, in, settings, container, stem);
+    const std::vector<OutputFile> files = output_files(shape, in, settings, stem);
     EncodedTextureOutputs out;
     for (const OutputFile& f : files) {
         out.textures.push_back(std::make_unique<io::EncodedTexture>(container, f.encoding, shape.width, shape.height,
-                                                                    shape.levels, f.channels));
-        out.files.push_back({out.textures.back().get(), f.stem, f.kind});
+                                                                    shape.levels, f.channels, supercompression));
+        out.files.push_back({out.textures.back().get(), f.stem, f.kind, f.names});
     }
     if (progress)
         progress("baking " + std::to_string(in.normal->width) + "x" + std::to_string(in.normal->height) + " " +
@@ -315,7 +321,8 @@ Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, cons
 Result<TextureOutputsWritten> write_texture_outputs(TextureBakeResult&& baked, const TextureInputs& in,
                                                     const TextureBakeSettings& settings,
                                                     io::TextureContainer container, const fs::path& dir,
-                                                    const std::string& stem, const ProgressFn& progress) {
+                                                    const std::string& stem, const ProgressFn& progress,
+                                                    const io::Supercompression& supercompression) {
     TextureOutputsWritten result;
     result.notes = baked.notes;
     result.max_roughness_change = baked.max_roughness_change;
@@ -324,7 +331,7 @@ Result<TextureOutputsWritten> write_texture_outputs(TextureBakeResult&& baked, c
     shape.kernel_channels = baked.kernel.channels();
     shape.lean_channels = baked.lean.channels();
     shape.normal_channels = baked.normal.channels();
-    const std::vector<OutputFile> files = output_files(shape, in, settings, container, stem);
+    const std::vector<OutputFile> files = output_files(shape, in, settings, stem);
     for (size_t i = 0; i < files.size(); ++i) {
         const OutputFile& f = files[i];
         if (progress) progress("writing " + f.stem);
@@ -332,7 +339,8 @@ Result<TextureOutputsWritten> write_texture_outputs(TextureBakeResult&& baked, c
         const bool whole = f.first == 0 && f.channels == chain.channels();
         if (auto ok = append(result.outputs,
                              io::write_texture(whole ? chain : channel_subset(chain, f.first, f.channels), f.encoding,
-                                               container, dir, f.stem, f.kind, f.names, settings.wrap));
+                                               container, dir, f.stem, f.kind, f.names, settings.wrap,
+                                               supercompression));
             !ok)
             return ok.error();
         // Written: release the chain before the next one is encoded, unless a later file reads it too.
@@ -364,6 +372,8 @@ Result<TextureJobOutcome> run_texture_job(const TextureJob& job) {
     io::Manifest manifest;
     manifest.version = tool_version();
     manifest.settings = texture_settings_json(job.settings, job.container);
+    if (job.container == io::TextureContainer::Ktx2)
+        manifest.settings["supercompression"] = supercompression_json(job.supercompression);
 
     TextureInputs in;
     io::DecodedImage normal, roughness;
@@ -425,7 +435,24 @@ Result<TextureJobOutcome> run_texture_job(const TextureJob& job) {
     if (!have_roughness) manifest.settings["roughness_value"] = job.roughness_value;
     else manifest.settings["roughness_channel"] = job.roughness_channel;
 
-    auto written = bake_texture_outputs(in, job.settings, job.container, stage, "texture", progress, job.fraction);
+    Result<TextureOutputsWritten> written = make_error("");
+    if (io::EncodedTexture::supports(job.container)) {
+        // KTX2 and DDS: the decoded inputs are released once baked, before the files are packed and written,
+        // so the inputs, the encoded files and the packed files are never all held at once.
+        auto encoded = bake_texture_encoded(in, job.settings, job.container, "texture", progress, job.fraction,
+                                            job.supercompression);
+        if (!encoded) return out->final_names(encoded.error());
+        normal.image = Image{};
+        roughness.image = Image{};
+        if (progress)
+            for (const io::EncodedFile& f : encoded->files) progress("writing " + f.stem);
+        auto files = io::write_encoded_textures(encoded->files, stage);
+        if (!files) return out->final_names(files.error());
+        written = TextureOutputsWritten{std::move(*files), encoded->notes, encoded->max_roughness_change};
+    } else {
+        written = bake_texture_outputs(in, job.settings, job.container, stage, "texture", progress, job.fraction,
+                                       job.supercompression);
+    }
     if (!written) return out->final_names(written.error());
 
     // The plan (SPEC Sec. 6): would the bake change roughness visibly, i.e. by half a quantisation step?

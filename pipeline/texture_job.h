@@ -33,6 +33,7 @@ struct TextureJob {
     bool demo = false;                             // bake the built-in procedural normal + ORM maps instead
     std::filesystem::path output_dir;
     io::TextureContainer container = io::TextureContainer::Ktx2;
+    io::Supercompression supercompression;         // KTX2 only: zstd on by default
     TextureBakeSettings settings;
     ProgressFn progress;
     // The output folder's lock when the caller already holds it (else the job takes it, pipeline/bake_output.h).
@@ -41,6 +42,9 @@ struct TextureJob {
     bool replace = false;
     FractionFn fraction;                           // KTX2 and DDS bakes, which run row by row
 };
+
+// The manifest's "supercompression" setting: {"scheme": "zstd", "zstd_level": N} or {"scheme": "none"}.
+nlohmann::json supercompression_json(const io::Supercompression& s);
 
 struct TextureJobOutcome {
     io::Manifest manifest;                         // as written to output_dir/manifest.json
@@ -71,13 +75,14 @@ struct TextureOutputsWritten {
     double max_roughness_change = 0.0;
 };
 
-// Bakes and writes `dir/<stem>_roughness.<ext>`, `_kernel`, `_lean` (KTX2/DDS/PNG: `_lean` RGBA =
-// (m.x, m.y, M.xx, M.yy) plus `_lean_xy` R = M.xy; EXR: one 5-channel file), `_normal`, as selected in
-// settings.outputs. Does not write a manifest.
+// Bakes and writes `dir/<stem>_roughness.<ext>`, `_kernel`, `_lean` (RGBA = (m.x, m.y, M.xx, M.yy)
+// plus `_lean_xy` Y = M.xy), `_normal`, as selected in settings.outputs, 1, 2 or 4 channels each, the
+// same layout in every container (README "Output layouts"). Does not write a manifest.
 Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& inputs, const TextureBakeSettings& settings,
                                                    io::TextureContainer container, const std::filesystem::path& dir,
                                                    const std::string& stem, const ProgressFn& progress = {},
-                                                   const FractionFn& fraction = {});
+                                                   const FractionFn& fraction = {},
+                                                   const io::Supercompression& supercompression = {});
 
 // bake_texture_outputs() for KTX2 and DDS up to the write: the bake encodes every finished row straight
 // into the files' bytes (no float chain of the whole map is held). files[i] refers to textures[i].
@@ -89,7 +94,8 @@ struct EncodedTextureOutputs {
 };
 Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& inputs, const TextureBakeSettings& settings,
                                                    io::TextureContainer container, const std::string& stem,
-                                                   const ProgressFn& progress = {}, const FractionFn& fraction = {});
+                                                   const ProgressFn& progress = {}, const FractionFn& fraction = {},
+                                                   const io::Supercompression& supercompression = {});
 
 // The two steps of bake_texture_outputs(), for a caller that needs the bake before deciding to write it
 // (`specbake bake` measures the plan's statistic on the bake it writes). Errors name the input files.
@@ -101,7 +107,8 @@ Result<TextureBakeResult> bake_texture_inputs(const TextureInputs& inputs, const
 Result<TextureOutputsWritten> write_texture_outputs(TextureBakeResult&& baked, const TextureInputs& inputs,
                                                     const TextureBakeSettings& settings,
                                                     io::TextureContainer container, const std::filesystem::path& dir,
-                                                    const std::string& stem, const ProgressFn& progress = {});
+                                                    const std::string& stem, const ProgressFn& progress = {},
+                                                    const io::Supercompression& supercompression = {});
 
 // The settings as recorded in manifests.
 nlohmann::json texture_settings_json(const TextureBakeSettings& settings, io::TextureContainer container);

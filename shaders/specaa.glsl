@@ -44,12 +44,17 @@
 //   SPECAA_KAPPA    clamp of derivative-based kernels, default 0.18 (TK21 Eq. 10, K16).
 //   Baked data for the default entry point (at most one of the roughness texture and kernel/LEAN):
 //   SPECAA_ROUGHNESS_TEXTURE name   baked filtered roughness mips (perceptual r), channel
-//                                   SPECAA_ROUGHNESS_CHANNEL (default g: glTF metallicRoughness / ORM).
-//   SPECAA_KERNEL_TEXTURE name      baked projected-space kernel mips: R = t (isotropic mean) or,
-//                                   with SPECAA_KERNEL_ANISOTROPIC, RGB = Sigma (xx, yy, xy).
+//                                   SPECAA_ROUGHNESS_CHANNEL (default g: the RGBA ORM layout, A = 1;
+//                                   define it as r for the one-channel R8/R16 file).
+//   SPECAA_KERNEL_TEXTURE name      baked projected-space kernel mips: R = t (isotropic mean, R16_SFLOAT)
+//                                   or, with SPECAA_KERNEL_ANISOTROPIC, RGBA = (xx, yy, xy, 1) of Sigma
+//                                   (R16G16B16A16_SFLOAT; A unused).
 //   SPECAA_LEAN_TEXTURE0 name       LEAN moments, projected space (SPEC Sec. 3), in two textures:
 //   SPECAA_LEAN_TEXTURE1 name         TEXTURE0 RGBA = (m.x, m.y, M.xx, M.yy), TEXTURE1 R = M.xy
 //                                     (at least 16-bit float, trilinear filtering).
+//   Every baked file has 1, 2 or 4 channels in the same order in KTX2, DDS, EXR and PNG (README
+//   "Output layouts"); bind them with linear mip filtering (LINEAR_MIPMAP_LINEAR): loaders such as
+//   three.js KTX2Loader default to nearest.
 //   SPECAA_SAMPLER name             HLSL only: the SamplerState used with the textures above.
 //   SPECAA_USE_CURVATURE            per-pixel kernel from _SPECAA_CURVATURE (SPEC Sec. 4) and the
 //                                   position derivatives instead of normal derivatives.
@@ -352,7 +357,7 @@ float specaa_sample_kernel(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
     return SPECAA_SELECT(specaa_is_finite(t), max(t, 0.0), 0.0);
 }
 
-// Baked anisotropic kernel mips: Sigma = (xx, yy, xy) in RGB; clamped to PSD after filtering.
+// Baked anisotropic kernel mips: Sigma = (xx, yy, xy) in RGB (A = 1 unused); clamped to PSD after filtering.
 SPECAA_FLOAT3 specaa_sample_kernel_covariance(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
     SPECAA_FLOAT3 sigma = specaa_sym_clamp_psd(SPECAA_SAMPLE(tex, smp, uv).rgb);
     return SPECAA_SELECT3(specaa_is_finite3(sigma), sigma, SPECAA_FLOAT3(0.0, 0.0, 0.0));

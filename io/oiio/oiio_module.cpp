@@ -123,7 +123,10 @@ Result<void> write_levels(const LevelsRequest& r) {
         if (r.type == PixelType::Half || r.type == PixelType::Float) spec.attribute("compression", "zip");
         spec.attribute("oiio:ColorSpace", "Linear");
         spec.attribute("Software", "specbake");
-        if (std::strcmp(out->format_name(), "openexr") == 0) spec.attribute("DateTime", r.date_time);
+        if (std::strcmp(out->format_name(), "openexr") == 0) {
+            spec.attribute("DateTime", r.date_time);
+            if (!r.channel_meaning.empty()) spec.attribute("specbake:channels", r.channel_meaning);
+        }
         const auto mode = i == 0 ? OIIO::ImageOutput::Create : OIIO::ImageOutput::AppendMIPLevel;
         if (!out->open(r.temp_path, spec, mode) || !out->write_image(OIIO::TypeDesc::FLOAT, level.pixels.data()))
             return make_error(r.name + ": cannot write: " + one_line(out->geterror(), "unknown writer error"));
@@ -142,6 +145,16 @@ Result<InspectedTexture> read_levels(const std::string& name, uint64_t max_texel
     t.pixel_format = spec.format.c_str();
     t.transfer = spec.get_string_attribute("oiio:ColorSpace", "linear");
     t.channel_names = spec.channelnames;
+    // The meaning recorded by the writer, when it matches the channel count.
+    if (const std::string meaning = spec.get_string_attribute("specbake:channels"); !meaning.empty()) {
+        std::vector<std::string> names;
+        for (size_t at = 0; at <= meaning.size();) {
+            const size_t comma = std::min(meaning.find(',', at), meaning.size());
+            names.push_back(meaning.substr(at, comma - at));
+            at = comma + 1;
+        }
+        if (int(names.size()) == spec.nchannels) t.channel_names = names;
+    }
     for (int level = 0; in->seek_subimage(0, level); ++level) {
         spec = in->spec();
         if (auto r = check_texels(spec, max_texels, name); !r) return r.error();

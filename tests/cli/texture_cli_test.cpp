@@ -113,8 +113,14 @@ TEST_F(TextureCli, DemoWritesContainersAndManifestDeterministically) {
     const std::vector<uint8_t> bytes{std::istreambuf_iterator<char>(f), {}};
     auto rough = io::read_ktx2_texture(bytes, "r");
     ASSERT_TRUE(rough.ok());
-    ASSERT_EQ(rough->chain.levels[0].pixels.size(), orm->pixels.size());
-    for (size_t i = 0; i < orm->pixels.size(); ++i) ASSERT_NEAR(rough->chain.levels[0].pixels[i], orm->pixels[i], 1e-6);
+    // The ORM roughness is stored as RGBA with A = 1 (README "Output layouts").
+    ASSERT_EQ(rough->chain.channels(), 4);
+    ASSERT_EQ(rough->chain.levels[0].texel_count(), orm->texel_count());
+    for (size_t i = 0; i < orm->texel_count(); ++i) {
+        for (int c = 0; c < 3; ++c)
+            ASSERT_NEAR(rough->chain.levels[0].pixels[i * 4 + size_t(c)], orm->pixels[i * 3 + size_t(c)], 1e-6);
+        ASSERT_EQ(rough->chain.levels[0].pixels[i * 4 + 3], 1.0f);
+    }
 }
 
 TEST_F(TextureCli, EveryFormatFromTheCommandLine) {
@@ -215,7 +221,7 @@ TEST_F(TextureCli, SharedNormalMaps) {
         ASSERT_TRUE(k.ok());
         float max_xx = 0, max_yy = 0;
         for (const Image& L : k->chain.levels)
-            for (size_t i = 0; i < L.texel_count(); ++i) max_xx = std::max(max_xx, L.pixels[3 * i]), max_yy = std::max(max_yy, L.pixels[3 * i + 1]);
+            for (size_t i = 0; i < L.texel_count(); ++i) max_xx = std::max(max_xx, L.pixels[4 * i]), max_yy = std::max(max_yy, L.pixels[4 * i + 1]);
         EXPECT_GT(max_xx, 0.01f);
         EXPECT_LT(max_yy, 1e-4f);
     }
@@ -225,6 +231,7 @@ TEST_F(TextureCli, SharedNormalMaps) {
                           root_ / "scratch");
         ASSERT_EQ(r.code, 0) << r.err;
         EXPECT_TRUE(fs::exists(root_ / "wrap" / "texture_lean.exr"));
+        EXPECT_TRUE(fs::exists(root_ / "wrap" / "texture_lean_xy.exr"));
     }
     {
         const RunResult r = run("texture -q --normal '" + tangent.string() + "' --roughness '" + tangent_orm.string() +
@@ -233,7 +240,7 @@ TEST_F(TextureCli, SharedNormalMaps) {
         ASSERT_EQ(r.code, 0) << r.err;
         auto m = io::read_manifest(root_ / "tangent" / "manifest.json");
         ASSERT_TRUE(m.ok());
-        EXPECT_EQ(m->outputs[0].channels, 3);  // ORM carried through
+        EXPECT_EQ(m->outputs[0].channels, 4);  // ORM carried through, as RGBA with A = 1
         EXPECT_EQ(m->outputs[0].mips, 12);
     }
 }

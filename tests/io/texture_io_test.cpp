@@ -9,6 +9,7 @@
 #include <Imath/half.h>
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
+#include <zstd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -91,7 +92,8 @@ TEST(Ktx2, RoundTripAndStructureEveryFormat) {
         for (int channels = 1; channels <= 4; ++channels) {
             SCOPED_TRACE(std::string(encoding_name(e)) + " x" + std::to_string(channels));
             const MipChain chain = random_chain(13, 6, channels, unsigned(channels) * 7 + unsigned(e));
-            auto written = write_texture(chain, e, TextureContainer::Ktx2, dir, "t", "kernel");
+            auto written = write_texture(chain, e, TextureContainer::Ktx2, dir, "t", "kernel", {}, WrapMode::Repeat,
+                                         Supercompression{false, 3});
             ASSERT_TRUE(written.ok()) << written.error().message;
             ASSERT_EQ(written->size(), 1u);
             const std::vector<uint8_t> b = slurp(dir / "t.ktx2");
@@ -99,7 +101,9 @@ TEST(Ktx2, RoundTripAndStructureEveryFormat) {
             const uint8_t id[12] = {0xAB, 'K', 'T', 'X', ' ', '2', '0', 0xBB, '\r', '\n', 0x1A, '\n'};
             ASSERT_EQ(std::memcmp(b.data(), id, 12), 0);
             const int bytes = e == TexelEncoding::Unorm8 ? 1 : e == TexelEncoding::Float32 ? 4 : 2;
-            EXPECT_EQ(u32(b, 12), expected_vk(e, channels));
+            // Formats GPUs sample: three channels are stored as RGBA with A = 1.
+            const int stored = channels == 3 ? 4 : channels;
+            EXPECT_EQ(u32(b, 12), expected_vk(e, stored));
             EXPECT_EQ(u32(b, 16), uint32_t(bytes));  // typeSize
             EXPECT_EQ(u32(b, 20), 13u);
             EXPECT_EQ(u32(b, 24), 6u);
@@ -109,7 +113,7 @@ TEST(Ktx2, RoundTripAndStructureEveryFormat) {
             EXPECT_EQ(u32(b, 40), 4u);  // 13x6 -> 6x3 -> 3x1 -> 1x1
             EXPECT_EQ(u32(b, 44), 0u);
             // Level index: sizes, alignment to lcm(texel size, 4), smallest level stored first, no overlap.
-            const size_t texel = size_t(bytes) * channels;
+            const size_t texel = size_t(bytes) * stored;
             const size_t align = std::lcm(texel, size_t(4));
             uint64_t previous_offset = 0;
             for (int L = 3; L >= 0; --L) {
@@ -127,13 +131,13 @@ TEST(Ktx2, RoundTripAndStructureEveryFormat) {
             // DFD: basic block, RGBSDA, linear transfer, one sample per channel.
             const uint32_t dfd = u32(b, 48), dfd_len = u32(b, 52);
             EXPECT_EQ(u32(b, dfd), dfd_len);
-            EXPECT_EQ(dfd_len, 4u + 24u + 16u * uint32_t(channels));
+            EXPECT_EQ(dfd_len, 4u + 24u + 16u * uint32_t(stored));
             EXPECT_EQ(u32(b, dfd + 4), 0u);
-            EXPECT_EQ(u32(b, dfd + 8) >> 16, 24u + 16u * uint32_t(channels));
+            EXPECT_EQ(u32(b, dfd + 8) >> 16, 24u + 16u * uint32_t(stored));
             EXPECT_EQ(b[dfd + 12], 1u);      // KHR_DF_MODEL_RGBSDA
             EXPECT_EQ(b[dfd + 12 + 2], 1u);  // KHR_DF_TRANSFER_LINEAR
             EXPECT_EQ(b[dfd + 20], texel);   // bytesPlane0
-            for (int c = 0; c < channels; ++c) {
+            for (int c = 0; c < stored; ++c) {
                 const size_t s = dfd + 28 + 16 * size_t(c);
                 EXPECT_EQ(u32(b, s) & 0xFFFF, uint32_t(c * bytes * 8));      // bitOffset
                 EXPECT_EQ(b[s + 2], uint32_t(bytes * 8 - 1));                  // bitLength - 1
@@ -147,7 +151,12 @@ TEST(Ktx2, RoundTripAndStructureEveryFormat) {
             EXPECT_EQ(back->info.writer, "specbake");
             EXPECT_EQ(back->info.transfer, 1u);
             expect_chain_near(back->chain, chain, channels, tolerance(e));
-            EXPECT_EQ((*written)[0].extra["vkFormat"], expected_vk(e, channels));
+            ASSERT_EQ(back->chain.channels(), stored);
+            if (stored != channels)
+                for (const Image& level : back->chain.levels)
+                    for (size_t i = 0; i < level.texel_count(); ++i) ASSERT_EQ(level.pixels[i * 4 + 3], 1.0f);
+            EXPECT_EQ((*written)[0].extra["vkFormat"], expected_vk(e, stored));
+            EXPECT_EQ((*written)[0].channels, stored);
         }
     }
     fs::remove_all(dir);
@@ -169,6 +178,7 @@ TEST(Ktx2, ReaderRejectsDamage) {
 // DDS parsed here from the documented layout: "DDS ", DDS_HEADER (124 bytes), DDS_HEADER_DXT10.
 struct ParsedDds {
     uint32_t width, height, mips, dxgi, dimension, array_size, flags, caps, fourcc;
+    uint32_t pf_flags, bit_count, masks[4];
     size_t data_offset;
 };
 ParsedDds parse_dds(const std::vector<uint8_t>& b) {
@@ -180,12 +190,18 @@ ParsedDds parse_dds(const std::vector<uint8_t>& b) {
     p.width = u32(b, 16);
     p.mips = u32(b, 28);
     EXPECT_EQ(u32(b, 76), 32u);
+    p.pf_flags = u32(b, 80);
     p.fourcc = u32(b, 84);
+    p.bit_count = u32(b, 88);
+    for (int k = 0; k < 4; ++k) p.masks[k] = u32(b, 92 + 4 * size_t(k));
     p.caps = u32(b, 108);
-    p.dxgi = u32(b, 128);
-    p.dimension = u32(b, 132);
-    p.array_size = u32(b, 140);
-    p.data_offset = 148;
+    p.data_offset = 128;
+    if (p.fourcc == 0x30315844u) {  // "DX10"
+        p.dxgi = u32(b, 128);
+        p.dimension = u32(b, 132);
+        p.array_size = u32(b, 140);
+        p.data_offset = 148;
+    }
     return p;
 }
 
@@ -224,6 +240,70 @@ TEST(TexelEncoding, UnormRoundingMatchesLround) {
         EXPECT_EQ(u8[i], uint8_t(std::lround(c * 255.0f))) << values[i];
         EXPECT_EQ(uint32_t(u16[2 * i] | u16[2 * i + 1] << 8), uint32_t(std::lround(c * 65535.0f))) << values[i];
     }
+}
+
+// zstd supercompression (KTX 2.0 Sec. 3.9.2, scheme 2): every level inflates, by the zstd library
+// directly, to exactly the bytes of the uncompressed file's level; the index holds byteLength and
+// uncompressedByteLength; levels follow each other smallest first without padding; the header, DFD and
+// key/value data are those of the uncompressed file apart from the scheme.
+TEST(Ktx2, ZstdLevelsInflateToTheUncompressedFile) {
+    const fs::path dir = fresh_dir("ktx2_zstd");
+    for (TexelEncoding e : {TexelEncoding::Unorm8, TexelEncoding::Unorm16, TexelEncoding::Float16}) {
+        for (int channels = 1; channels <= 4; ++channels) {
+            SCOPED_TRACE(std::string(encoding_name(e)) + " x" + std::to_string(channels));
+            const MipChain chain = random_chain(37, 21, channels, unsigned(channels) * 3 + unsigned(e));
+            const std::vector<uint8_t> plain = encode_ktx2(chain, e);
+            auto written = write_texture(chain, e, TextureContainer::Ktx2, dir, "z", "kernel", {}, WrapMode::Repeat,
+                                         Supercompression{true, 5});
+            ASSERT_TRUE(written.ok()) << written.error().message;
+            const std::vector<uint8_t> z = slurp(dir / "z.ktx2");
+            EXPECT_EQ(u32(z, 44), 2u);
+            EXPECT_EQ(u32(plain, 44), 0u);
+            EXPECT_TRUE(std::equal(z.begin(), z.begin() + 44, plain.begin()));
+            const size_t meta_end = size_t(u32(plain, 56)) + u32(plain, 60);
+            const size_t index_end = 80 + 24 * size_t(u32(plain, 40));
+            EXPECT_TRUE(std::equal(z.begin() + 48, z.begin() + 80, plain.begin() + 48));
+            EXPECT_TRUE(std::equal(z.begin() + long(index_end), z.begin() + long(meta_end),
+                                   plain.begin() + long(index_end)));
+            size_t expected_offset = meta_end;
+            for (int L = int(u32(z, 40)) - 1; L >= 0; --L) {
+                const size_t at = 80 + 24 * size_t(L);
+                const uint64_t off = u64(z, at), len = u64(z, at + 8), ulen = u64(z, at + 16);
+                EXPECT_EQ(off, expected_offset) << "level " << L;
+                EXPECT_EQ(ulen, u64(plain, at + 8));
+                std::vector<uint8_t> inflated(ulen + 1);
+                const size_t n = ZSTD_decompress(inflated.data(), inflated.size(), z.data() + off, len);
+                ASSERT_FALSE(ZSTD_isError(n)) << ZSTD_getErrorName(n);
+                ASSERT_EQ(n, ulen);
+                EXPECT_TRUE(std::equal(inflated.begin(), inflated.begin() + long(n), plain.begin() + long(u64(plain, at))));
+                expected_offset = off + len;
+            }
+            EXPECT_EQ(expected_offset, z.size());
+            const ManifestOutput& entry = (*written)[0];
+            EXPECT_EQ(entry.extra["supercompression"], "zstd");
+            EXPECT_EQ(entry.extra["zstd_level"], 5);
+            EXPECT_EQ(entry.extra["bytes"], z.size());
+            EXPECT_EQ(entry.extra["uncompressed_bytes"], plain.size());
+            auto back = read_ktx2_texture(z, "z.ktx2");
+            ASSERT_TRUE(back.ok()) << back.error().message;
+            expect_chain_near(back->chain, chain, channels, tolerance(e));
+            // A level that claims another uncompressed size is refused.
+            std::vector<uint8_t> bad = z;
+            const uint64_t wrong = u64(z, 80 + 16) + 4;
+            std::memcpy(bad.data() + 80 + 16, &wrong, 8);
+            EXPECT_FALSE(read_ktx2_texture(bad, "bad.ktx2").ok());
+        }
+    }
+    // The same chain gives the same bytes every time (levels are compressed independently).
+    const MipChain chain = random_chain(300, 200, 4, 77);
+    std::vector<std::vector<uint8_t>> runs;
+    for (int run = 0; run < 2; ++run) {
+        ASSERT_TRUE(write_texture(chain, TexelEncoding::Float16, TextureContainer::Ktx2, dir, "d", "lean").ok());
+        runs.push_back(slurp(dir / "d.ktx2"));
+    }
+    EXPECT_EQ(runs[0], runs[1]);
+    EXPECT_EQ(u32(runs[0], 44), 2u);  // zstd is the default
+    fs::remove_all(dir);
 }
 
 // A container filled block by block (whole rows and column blocks), in scrambled order and with channels
@@ -270,13 +350,21 @@ TEST(EncodedTexture, BlocksInAnyOrderGiveTheWholeChainFile) {
     }
 }
 
-TEST(Dds, Dx10HeaderAndLevels) {
+// 8/16-bit unorm data get the legacy header (the D3D9 pixel formats Microsoft's DDS reference maps to
+// DXGI: L8, A8L8, A8B8G8R8 masks, L16, FourCC 36); R16G16 and float data the DX10 header.
+TEST(Dds, LegacyHeaderWhereOneExistsElseDx10) {
     const fs::path dir = fresh_dir("dds");
-    struct Case { TexelEncoding e; int channels; uint32_t dxgi; int stored; };
-    // DXGI_FORMAT_R8_UNORM 61, R8G8B8A8_UNORM 28, R16_UNORM 56, R16G16B16A16_FLOAT 10, R32G32B32_FLOAT 6.
-    for (const Case& c : {Case{TexelEncoding::Unorm8, 1, 61, 1}, Case{TexelEncoding::Unorm8, 3, 28, 4},
-                          Case{TexelEncoding::Unorm16, 1, 56, 1}, Case{TexelEncoding::Float16, 4, 10, 4},
-                          Case{TexelEncoding::Float32, 3, 6, 3}}) {
+    struct Case { TexelEncoding e; int channels; uint32_t dxgi; int stored; uint32_t pf_flags, fourcc, bits, m[4]; };
+    constexpr uint32_t lum = 0x20000, alpha = 0x1, rgb = 0x40, four = 0x4;
+    // DXGI_FORMAT_R16G16B16A16_FLOAT 10, R32G32B32A32_FLOAT 2 (three channels stored as four, A = 1).
+    for (const Case& c : {Case{TexelEncoding::Unorm8, 1, 0, 1, lum, 0, 8, {0xFF, 0, 0, 0}},
+                          Case{TexelEncoding::Unorm8, 2, 0, 2, lum | alpha, 0, 16, {0xFF, 0, 0, 0xFF00}},
+                          Case{TexelEncoding::Unorm8, 3, 0, 4, rgb | alpha, 0, 32, {0xFF, 0xFF00, 0xFF0000, 0xFF000000u}},
+                          Case{TexelEncoding::Unorm16, 1, 0, 1, lum, 0, 16, {0xFFFF, 0, 0, 0}},
+                          Case{TexelEncoding::Unorm16, 2, 35, 2, four, 0x30315844u, 0, {0, 0, 0, 0}},
+                          Case{TexelEncoding::Unorm16, 4, 0, 4, four, 36, 0, {0, 0, 0, 0}},
+                          Case{TexelEncoding::Float16, 4, 10, 4, four, 0x30315844u, 0, {0, 0, 0, 0}},
+                          Case{TexelEncoding::Float32, 3, 2, 4, four, 0x30315844u, 0, {0, 0, 0, 0}}}) {
         SCOPED_TRACE(std::string(encoding_name(c.e)) + " x" + std::to_string(c.channels));
         const MipChain chain = random_chain(10, 4, c.channels, 5);
         auto written = write_texture(chain, c.e, TextureContainer::Dds, dir, "t", "roughness");
@@ -286,12 +374,17 @@ TEST(Dds, Dx10HeaderAndLevels) {
         EXPECT_EQ(p.width, 10u);
         EXPECT_EQ(p.height, 4u);
         EXPECT_EQ(p.mips, 4u);
-        EXPECT_EQ(p.fourcc, 0x30315844u);  // "DX10"
+        EXPECT_EQ(p.pf_flags, c.pf_flags);
+        EXPECT_EQ(p.fourcc, c.fourcc);
+        EXPECT_EQ(p.bit_count, c.bits);
+        for (int k = 0; k < 4; ++k) EXPECT_EQ(p.masks[k], c.m[k]) << "mask " << k;
         EXPECT_NE(p.flags & 0x20000u, 0u);  // DDSD_MIPMAPCOUNT
         EXPECT_NE(p.caps & 0x400000u, 0u);  // DDSCAPS_MIPMAP
-        EXPECT_EQ(p.dxgi, c.dxgi);
-        EXPECT_EQ(p.dimension, 3u);
-        EXPECT_EQ(p.array_size, 1u);
+        if (c.dxgi) {
+            EXPECT_EQ(p.dxgi, c.dxgi);
+            EXPECT_EQ(p.dimension, 3u);
+            EXPECT_EQ(p.array_size, 1u);
+        }
         const int bytes = c.e == TexelEncoding::Unorm8 ? 1 : c.e == TexelEncoding::Float32 ? 4 : 2;
         size_t at = p.data_offset;
         for (const Image& level : chain.levels) {
@@ -314,12 +407,13 @@ TEST(Dds, Dx10HeaderAndLevels) {
             }
         }
         EXPECT_EQ(at, b.size());
-        // OpenImageIO reads DX10 DDS files from 2.5 on; where it can, it must agree.
+        // OpenImageIO reads the legacy forms (and DX10 files from 2.5 on); where it can, it must agree.
+        // OpenImageIO 2.4 returns 16-bit legacy data at 8-bit precision.
         auto in = OIIO::ImageInput::open((dir / "t.dds").string());
         if (in) {
             std::vector<float> px(size_t(10) * 4 * size_t(in->spec().nchannels));
             ASSERT_TRUE(in->read_image(0, 0, 0, in->spec().nchannels, OIIO::TypeDesc::FLOAT, px.data()));
-            EXPECT_NEAR(px[0], chain.levels[0].pixels[0], tolerance(c.e));
+            EXPECT_NEAR(px[0], chain.levels[0].pixels[0], c.e == TexelEncoding::Unorm16 ? 1.0 / 255 : tolerance(c.e));
         } else {
             (void)OIIO::geterror();
         }
@@ -352,25 +446,32 @@ TEST(Exr, SameChainSameBytesAtAnyTime) {
     fs::remove_all(dir);
 }
 
+// EXR channels carry the names common readers load (R, G, B, A in the KTX2/DDS order) and their meaning
+// in the "specbake:channels" header attribute; more than four channels are refused (every container has
+// the same 1, 2 or 4 channel layout).
 TEST(Exr, MipmappedTiledPlainTextureThroughOpenImageIO) {
     const fs::path dir = fresh_dir("exr");
-    const MipChain chain = random_chain(70, 33, 5, 9, -2.0f, 2.0f);
+    const MipChain chain = random_chain(70, 33, 4, 9, -2.0f, 2.0f);
     auto written = write_texture(chain, TexelEncoding::Float32, TextureContainer::Exr, dir, "lean", "lean",
-                                 {"m.x", "m.y", "M.xx", "M.yy", "M.xy"}, WrapMode::Clamp);
+                                 {"m.x", "m.y", "M.xx", "M.yy"}, WrapMode::Clamp);
     ASSERT_TRUE(written.ok()) << written.error().message;
+    EXPECT_EQ((*written)[0].extra["channel_meaning"], (std::vector<std::string>{"m.x", "m.y", "M.xx", "M.yy"}));
+    EXPECT_EQ((*written)[0].extra["gpu_format"], "R32G32B32A32_SFLOAT");
     auto in = OIIO::ImageInput::open((dir / "lean.exr").string());
     ASSERT_TRUE(in);
     const OIIO::ImageSpec spec0 = in->spec(0, 0);
     EXPECT_EQ(spec0.get_string_attribute("textureformat"), "Plain Texture");
     EXPECT_EQ(spec0.get_string_attribute("wrapmodes"), "clamp,clamp");
+    EXPECT_EQ(spec0.get_string_attribute("specbake:channels"), "m.x,m.y,M.xx,M.yy");
     EXPECT_GT(spec0.tile_width, 0);
-    // OpenEXR stores channels sorted by name; find each written channel by its name.
-    const std::vector<std::string> names{"m.x", "m.y", "M.xx", "M.yy", "M.xy"};
-    std::vector<int> column(5, -1);
-    for (int c = 0; c < 5; ++c)
+    // OpenEXR stores channels sorted by name; find each by its name.
+    const std::vector<std::string> names{"R", "G", "B", "A"};
+    ASSERT_EQ(spec0.nchannels, 4);
+    std::vector<int> column(4, -1);
+    for (int c = 0; c < 4; ++c)
         for (int k = 0; k < spec0.nchannels; ++k)
             if (spec0.channelnames[size_t(k)] == names[size_t(c)]) column[size_t(c)] = k;
-    for (int c = 0; c < 5; ++c) ASSERT_GE(column[size_t(c)], 0) << names[size_t(c)];
+    for (int c = 0; c < 4; ++c) ASSERT_GE(column[size_t(c)], 0) << names[size_t(c)];
     int levels = 0;
     for (int L = 0;; ++L) {
         OIIO::ImageSpec spec = in->spec_dimensions(0, L);
@@ -380,11 +481,23 @@ TEST(Exr, MipmappedTiledPlainTextureThroughOpenImageIO) {
         ASSERT_EQ(spec.width, want.width);
         ASSERT_EQ(spec.height, want.height);
         std::vector<float> px(want.pixels.size());
-        ASSERT_TRUE(in->read_image(0, L, 0, 5, OIIO::TypeDesc::FLOAT, px.data()));
+        ASSERT_TRUE(in->read_image(0, L, 0, 4, OIIO::TypeDesc::FLOAT, px.data()));
         for (size_t i = 0; i < want.texel_count(); ++i)
-            for (int c = 0; c < 5; ++c) ASSERT_EQ(px[i * 5 + size_t(column[size_t(c)])], want.pixels[i * 5 + size_t(c)]);
+            for (int c = 0; c < 4; ++c) ASSERT_EQ(px[i * 4 + size_t(column[size_t(c)])], want.pixels[i * 4 + size_t(c)]);
     }
     EXPECT_EQ(levels, int(chain.levels.size()));
+    // One channel is Y; five channels are refused with the file's name.
+    auto one = write_texture(random_chain(8, 8, 1, 2), TexelEncoding::Float16, TextureContainer::Exr, dir, "t",
+                             "kernel", {"t"});
+    ASSERT_TRUE(one.ok()) << one.error().message;
+    auto in1 = OIIO::ImageInput::open((dir / "t.exr").string());
+    ASSERT_TRUE(in1);
+    EXPECT_EQ(in1->spec().channelnames, std::vector<std::string>{"Y"});
+    auto five = write_texture(random_chain(8, 8, 5, 2), TexelEncoding::Float16, TextureContainer::Exr, dir, "five",
+                              "lean");
+    ASSERT_FALSE(five.ok());
+    EXPECT_NE(five.error().message.find("five"), std::string::npos);
+    EXPECT_FALSE(fs::exists(dir / "five.exr"));
     fs::remove_all(dir);
 }
 
@@ -399,6 +512,8 @@ TEST(PngPerMip, OneFilePerLevel) {
         auto d = decode_image(p);
         ASSERT_TRUE(d.ok()) << d.error().message;
         EXPECT_EQ(d->info.bits_per_channel, 16);
+        ASSERT_EQ(d->image.channels, 4);  // RGB data as RGBA, A = 1
+        for (size_t i = 0; i < d->image.texel_count(); ++i) ASSERT_EQ(d->image.pixels[i * 4 + 3], 1.0f);
         MipChain one, want;
         one.levels.push_back(d->image);
         want.levels.push_back(chain.levels[L]);
