@@ -147,6 +147,43 @@ Result<void> check_png_image_data(std::span<const uint8_t> b, const std::string&
     return {};
 }
 
+Result<void> check_jpeg_markers(std::span<const uint8_t> b, const std::string& name) {
+    if (b.size() < 3 || b[0] != 0xFF || b[1] != 0xD8) return {};
+    auto corrupt = [&](const std::string& what) -> Result<void> { return make_error(name + ": corrupt JPEG (" + what + ")"); };
+    for (size_t at = 2; at + 4 <= b.size();) {
+        if (b[at] != 0xFF) return {};  // not a marker: libjpeg reports it
+        const uint8_t marker = b[at + 1];
+        if (marker == 0xFF) {  // fill byte
+            ++at;
+            continue;
+        }
+        if (marker == 0x01 || marker == 0xD8 || (marker >= 0xD0 && marker <= 0xD7)) {  // no length field
+            at += 2;
+            continue;
+        }
+        if (marker == 0xD9 || marker == 0xDA) return {};  // the markers OpenImageIO reads all come before the scan
+        const size_t length = size_t(b[at + 2]) << 8 | b[at + 3];
+        if (length < 2 || length > b.size() - at - 2) return {};  // truncated: libjpeg reports it
+        const std::span<const uint8_t> data = b.subspan(at + 4, length - 2);
+        if (marker == 0xE1 || marker == 0xE2 || marker == 0xED) {
+            const auto nul = std::find(data.begin(), data.end(), uint8_t(0));
+            if (nul == data.end())
+                return corrupt("APP" + std::to_string(marker - 0xE0) + " segment at byte " + std::to_string(at) +
+                               " without a terminated identifier");
+            const std::string id(data.begin(), nul);
+            if (marker == 0xE1 && id == "Exif" && data.size() < 6) return corrupt("Exif segment shorter than its header");
+            if (marker == 0xE2 && id == "ICC_PROFILE" && data.size() < 14)
+                return corrupt("ICC profile segment shorter than its header");
+            // "Photoshop 3.0\0", "8BIM", type, 4 padding bytes, then a 2-byte size of what follows.
+            if (marker == 0xED && id == "Photoshop 3.0" &&
+                (data.size() < 26 || 26 + (size_t(data[24]) << 8 | data[25]) > data.size()))
+                return corrupt("Photoshop segment shorter than the sizes it states");
+        }
+        at += 2 + length;
+    }
+    return {};
+}
+
 Result<DecodedImage> decode_image(const fs::path& path) {
     const std::string name = path.string();
     std::error_code ec;
@@ -155,11 +192,16 @@ Result<DecodedImage> decode_image(const fs::path& path) {
     {
         std::ifstream f(path, std::ios::binary);
         char head[8] = {};
-        if (f.read(head, 8) && static_cast<uint8_t>(head[0]) == 0x89 && head[1] == 'P') {
+        // PNG and JPEG are checked from their bytes before a decoder sees them (check_png_structure,
+        // check_jpeg_markers), so they are decoded from memory like embedded images.
+        const bool read = bool(f.read(head, 8));
+        const bool png = static_cast<uint8_t>(head[0]) == 0x89 && head[1] == 'P';
+        const bool jpeg = static_cast<uint8_t>(head[0]) == 0xFF && static_cast<uint8_t>(head[1]) == 0xD8;
+        if (read && (png || jpeg)) {
             f.close();
             auto bytes = MappedFile::open(path);
             if (!bytes) return bytes.error();
-            return decode_image_memory(bytes->bytes(), name);  // checks the chunk structure first
+            return decode_image_memory(bytes->bytes(), name);
         }
     }
     auto oiio = oiio::api();
@@ -173,6 +215,7 @@ Result<DecodedImage> decode_image_memory(std::span<const uint8_t> bytes, const s
     // Plain PNGs (most texture libraries) without loading OpenImageIO; the same values and facts.
     if (auto png = decode_plain_png(bytes)) return std::move(*png);
     if (auto ok = check_png_image_data(bytes, name_for_errors); !ok) return ok.error();
+    if (auto ok = check_jpeg_markers(bytes, name_for_errors); !ok) return ok.error();
     // OpenImageIO picks the decoder from the name's extension; take it from the leading bytes instead.
     std::string probe = "image.tga";  // the one common format without a signature
     if (bytes.size() >= 4 && bytes[0] == 0x89 && bytes[1] == 'P' && bytes[2] == 'N' && bytes[3] == 'G')

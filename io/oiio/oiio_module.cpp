@@ -103,10 +103,11 @@ private:
     int64_t run_start_ = 0;
 };
 
-// Sets a CheckedFile on `out` when its format takes one; finish() then closes it and reports its failure.
+// Sets a CheckedFile on an output whose format takes one; finish() then closes it and reports its failure.
+// Declared before the ImageOutput, so that the writer (whose destructor may still write) goes first.
 class CheckedTarget {
 public:
-    CheckedTarget(OIIO::ImageOutput& out, const std::string& path) {
+    void attach(OIIO::ImageOutput& out, const std::string& path) {
         if (out.supports("ioproxy")) {
             file_ = std::make_unique<CheckedFile>(path);
             if (!out.set_ioproxy(file_.get())) file_.reset();
@@ -200,25 +201,28 @@ Result<DecodedImage> decode_memory(std::span<const uint8_t> bytes, const std::st
 }
 
 Result<void> write_image(const std::string& temp_path, const std::string& name, const Image& image, PixelType type) {
+    CheckedTarget target;
     auto out = OIIO::ImageOutput::create(name);
     if (!out) return make_error(name + ": no writer for this extension: " + one_line(OIIO::geterror(), "unknown format"));
     OIIO::ImageSpec spec(image.width, image.height, image.channels, type_of(type));
     spec.attribute("oiio:UnassociatedAlpha", 1);  // data, not premultiplied colour: store as given
-    CheckedTarget target(*out, temp_path);
+    target.attach(*out, temp_path);
     errno = 0;
     if (!out->open(temp_path, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data()) || !out->close()) {
         const int err = target.error_number() ? target.error_number() : errno;
         return make_error(name + ": cannot write: " + write_failure(out->geterror(), err));
     }
+    out.reset();
     return target.finish(name);
 }
 
 Result<void> write_levels(const LevelsRequest& r) {
+    CheckedTarget target;
     auto out = OIIO::ImageOutput::create(r.temp_path);
     if (!out) return make_error(r.name + ": no writer: " + one_line(OIIO::geterror(), "unknown format"));
     if (r.mipmapped && !out->supports("mipmap")) return make_error(r.name + ": the format cannot hold MIP levels");
     const OIIO::TypeDesc type = type_of(r.type);
-    CheckedTarget target(*out, r.temp_path);
+    target.attach(*out, r.temp_path);
     errno = 0;
     for (size_t i = 0; i < r.levels.size(); ++i) {
         const Image& level = *r.levels[i];
@@ -245,6 +249,7 @@ Result<void> write_levels(const LevelsRequest& r) {
         const int err = target.error_number() ? target.error_number() : errno;
         return make_error(r.name + ": cannot write: " + write_failure(out->geterror(), err));
     }
+    out.reset();
     return target.finish(r.name);
 }
 
@@ -272,15 +277,17 @@ Result<InspectedTexture> read_levels(const std::string& name, uint64_t max_texel
 
 Result<void> write_rgb8(const std::string& temp_path, const std::string& name, int width, int height,
                         const uint8_t* rgb) {
+    CheckedTarget target;
     auto file = OIIO::ImageOutput::create(temp_path);
     if (!file) return make_error(name + ": cannot write PNG: " + one_line(OIIO::geterror(), "no PNG writer"));
     OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
-    CheckedTarget target(*file, temp_path);
+    target.attach(*file, temp_path);
     errno = 0;
     if (!file->open(temp_path, spec) || !file->write_image(OIIO::TypeDesc::UINT8, rgb) || !file->close()) {
         const int err = target.error_number() ? target.error_number() : errno;
         return make_error(name + ": cannot write PNG: " + write_failure(file->geterror(), err));
     }
+    file.reset();
     return target.finish(name);
 }
 

@@ -715,3 +715,37 @@ TEST(HostileInput, WriteErrorsGiveTheFileAndTheOsReason) {
     }
     fs::remove_all(dir);
 }
+
+TEST(HostileInput, JpegMetadataSegmentsAreCheckedBeforeTheDecoder) {
+    const fs::path dir = temp_dir("jpeg_markers");
+    // A valid 8x8 JPEG from OpenImageIO, then APP segments inserted after its SOI marker.
+    const fs::path good = dir / "good.jpg";
+    {
+        fs::create_directories(dir);
+        std::vector<uint8_t> px(8 * 8 * 3, 128);
+        auto out = OIIO::ImageOutput::create(good.string());
+        ASSERT_TRUE(out);
+        ASSERT_TRUE(out->open(good.string(), OIIO::ImageSpec(8, 8, 3, OIIO::TypeDesc::UINT8)));
+        ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT8, px.data()));
+        out->close();
+    }
+    const std::string jpeg = slurp(good);
+    auto with_segment = [&](uint8_t marker, const std::string& data) {
+        const uint16_t n = uint16_t(data.size() + 2);
+        return jpeg.substr(0, 2) + std::string{char(0xFF), char(marker), char(n >> 8), char(n & 0xFF)} + data +
+               jpeg.substr(2);
+    };
+    // An APP1 whose identifier has no NUL (OpenImageIO strcmp()s it), an Exif header shorter than its
+    // 6 bytes (OpenImageIO takes length - 6), an ICC header without its sequence bytes.
+    write_bytes(dir / "app1.jpg", with_segment(0xE1, "\x04\x04"));
+    write_bytes(dir / "exif.jpg", with_segment(0xE1, std::string("Exif\0", 5)));
+    write_bytes(dir / "icc.jpg", with_segment(0xE2, std::string("ICC_PROFILE\0", 12)));
+    for (const char* name : {"app1.jpg", "exif.jpg", "icc.jpg"}) {
+        const RunResult r = run_specbake({"texture", "--normal", (dir / name).string(), "-o", (dir / "out").string()}, dir);
+        expect_clean_error(r, name, "corrupt JPEG");
+    }
+    // A well-formed Exif segment (header only) is fine.
+    write_bytes(dir / "ok.jpg", with_segment(0xE1, std::string("Exif\0\0", 6)));
+    EXPECT_EQ(run_specbake({"texture", "--normal", (dir / "ok.jpg").string(), "-o", (dir / "ok").string()}, dir).exit_code, 0);
+    fs::remove_all(dir);
+}
