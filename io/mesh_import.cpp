@@ -33,11 +33,18 @@ bool is_gltf(const std::string& path) {
 // and against the bytes after the header (every instance takes at least one byte).
 Result<void> check_ply_header(const std::string& path, const io::InputLimits& limits) {
     std::ifstream in(path, std::ios::binary);
-    std::string head(1 << 20, '\0');
-    in.read(head.data(), std::streamsize(head.size()));
-    head.resize(size_t(in.gcount()));
+    // Read in 4 KiB steps until the header's end is in (a header is a few hundred bytes; a whole MiB
+    // zeroed for every file was most of the cost of a small import).
+    std::string head;
+    size_t end = std::string::npos;
+    for (char block[4096]; head.size() < (size_t(1) << 20) && in.read(block, sizeof block).gcount() > 0;) {
+        head.append(block, size_t(in.gcount()));
+        if (head.size() >= 3 && head.compare(0, 3, "ply") != 0) return {};
+        end = head.find("\nend_header");
+        if (end != std::string::npos && head.size() >= end + 13) break;
+    }
     if (head.compare(0, 3, "ply") != 0) return {};
-    const size_t end = head.find("\nend_header");
+    end = head.find("\nend_header");
     if (end == std::string::npos || (head.compare(end + 11, 1, "\n") != 0 && head.compare(end + 11, 2, "\r\n") != 0))
         return make_error(path + ": PLY header has no end_header line (within its first MiB)");
     std::error_code ec;
@@ -171,7 +178,28 @@ Result<ImportedScene> import_mesh(const std::string& path, const MeshImportOptio
 
     const aiScene* scene = nullptr;
     try {
-        scene = importer.ReadFile(path, flags);
+        // Read and validated first, post-processed second: Assimp's PLY reader turns a broken face list
+        // into faces without indices, which its validation lets through and its triangulation stops the
+        // process on (an assertion). Such a file is refused in between, and the primitive types are
+        // recomputed from the faces (the steps run in Assimp's own order either way).
+        scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
+        if (scene) {
+            for (unsigned i = 0; i < scene->mNumMeshes; ++i) {
+                aiMesh& am = *scene->mMeshes[i];
+                unsigned types = 0;
+                for (unsigned f = 0; f < am.mNumFaces; ++f) {
+                    const unsigned n = am.mFaces[f].mNumIndices;
+                    if (n == 0)
+                        return make_error(path + ": face " + std::to_string(f) + " of mesh " + std::to_string(i) +
+                                          " has no vertex indices");
+                    types |= n == 1 ? aiPrimitiveType_POINT : n == 2 ? aiPrimitiveType_LINE
+                             : n == 3                ? aiPrimitiveType_TRIANGLE
+                                                     : aiPrimitiveType_POLYGON;
+                }
+                am.mPrimitiveTypes = types;
+            }
+            scene = importer.ApplyPostProcessing(flags & ~unsigned(aiProcess_ValidateDataStructure));
+        }
     } catch (const std::exception& e) {
         return make_error(path + ": " + e.what());
     }

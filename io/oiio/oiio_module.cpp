@@ -193,7 +193,18 @@ Result<DecodedImage> decode_memory(std::span<const uint8_t> bytes, const std::st
     OIIO::ImageSpec config = reader_config();
     void* proxy = &reader;
     config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
-    auto in = OIIO::ImageInput::open(probe, &config, &reader);
+    // A format recognised by its signature (every probe but TGA's, which has none) is opened by its own
+    // reader only: ImageInput::open() would try every other reader on a damaged file (LibRaw's among them,
+    // which zeroes about a megabyte to start), and their messages are not about this file's format.
+    std::unique_ptr<OIIO::ImageInput> in;
+    if (probe != "image.tga") {
+        in = OIIO::ImageInput::create(probe, false, &config, &reader);
+        OIIO::ImageSpec spec;
+        if (in && !in->open(probe, spec, config))
+            return make_error(name + ": cannot read as an image: " + one_line(in->geterror(), "unknown decoder error"));
+    } else {
+        in = OIIO::ImageInput::open(probe, &config, &reader);
+    }
     if (!in) return make_error(name + ": cannot read as an image: " + one_line(OIIO::geterror(), "unknown decoder error"));
     auto result = decode(*in, name, max_texels);
     in->close();

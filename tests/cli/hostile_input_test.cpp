@@ -749,3 +749,15 @@ TEST(HostileInput, JpegMetadataSegmentsAreCheckedBeforeTheDecoder) {
     EXPECT_EQ(run_specbake({"texture", "--normal", (dir / "ok.jpg").string(), "-o", (dir / "ok").string()}, dir).exit_code, 0);
     fs::remove_all(dir);
 }
+
+TEST(HostileInput, PlyFaceListWithoutIndicesIsRefusedWithoutAbort) {
+    const fs::path dir = temp_dir("ply_faces");
+    // A misspelt face property makes Assimp's PLY reader produce faces with no indices; its triangulation
+    // then aborted the process on an assertion.
+    write_bytes(dir / "faces.ply", "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                                   "property float z\nelement face 2\nproperty list uchar int vertex_indices\n"
+                                   "end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\nx 4\nprope 0 2 3 1\n");
+    const RunResult r = run_specbake({"bake", (dir / "faces.ply").string(), "-o", (dir / "out").string()}, dir);
+    expect_clean_error(r, "faces.ply", "no vertex indices");
+    fs::remove_all(dir);
+}
