@@ -151,7 +151,10 @@ Result<void> check_jpeg_markers(std::span<const uint8_t> b, const std::string& n
     if (b.size() < 3 || b[0] != 0xFF || b[1] != 0xD8) return {};
     auto corrupt = [&](const std::string& what) -> Result<void> { return make_error(name + ": corrupt JPEG (" + what + ")"); };
     for (size_t at = 2; at + 4 <= b.size();) {
-        if (b[at] != 0xFF) return {};  // not a marker: libjpeg reports it
+        if (b[at] != 0xFF) {  // libjpeg skips stray bytes up to the next marker (with a warning): so does this
+            ++at;
+            continue;
+        }
         const uint8_t marker = b[at + 1];
         if (marker == 0xFF) {  // fill byte
             ++at;

@@ -740,7 +740,10 @@ TEST(HostileInput, JpegMetadataSegmentsAreCheckedBeforeTheDecoder) {
     write_bytes(dir / "app1.jpg", with_segment(0xE1, "\x04\x04"));
     write_bytes(dir / "exif.jpg", with_segment(0xE1, std::string("Exif\0", 5)));
     write_bytes(dir / "icc.jpg", with_segment(0xE2, std::string("ICC_PROFILE\0", 12)));
-    for (const char* name : {"app1.jpg", "exif.jpg", "icc.jpg"}) {
+    // The same APP1 after stray bytes, which libjpeg skips to reach it.
+    const std::string app1 = with_segment(0xE1, "\x04\x04");
+    write_bytes(dir / "stray.jpg", app1.substr(0, 2) + "\x01\x02" + app1.substr(2));
+    for (const char* name : {"app1.jpg", "exif.jpg", "icc.jpg", "stray.jpg"}) {
         const RunResult r = run_specbake({"texture", "--normal", (dir / name).string(), "-o", (dir / "out").string()}, dir);
         expect_clean_error(r, name, "corrupt JPEG");
     }
