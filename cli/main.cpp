@@ -149,7 +149,8 @@ int main(int argc, char** argv) {
                    "NAME=VALUE: raise (or lower) a limit checked before allocating: texels (per image, default "
                    "2^28), json-depth (512), json-bytes (256M), nodes (1M), primitives (65536), "
                    "accessor-elements (64M, accessors without a bufferView), texture-bytes (4G, one KTX2/DDS "
-                   "level); K, M, G suffixes. Repeatable")
+                   "level), vertices and faces (64M each, a scene read through Assimp); K, M, G suffixes. "
+                   "Repeatable")
         ->expected(1)
         ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
     app.add_option("--allow-root", roots,

@@ -3,7 +3,8 @@
 # the saved regressions, in a build configured with -DSPECBAKE_BUILD_FUZZ=ON. A run that stops on a
 # finding is resumed from the grown corpus (at most 5 times a target) until RUNS executions are done.
 # Prints one line per target: executions, coverage (libFuzzer's cov / ft), findings (inputs in
-# BUILD/fuzz-findings). Usage: fuzz/run_long.sh [BUILD_DIR] [TARGET...]; env RUNS, JOBS (parallel targets).
+# BUILD/fuzz-findings). Usage: fuzz/run_long.sh [BUILD_DIR] [TARGET...]; env RUNS, JOBS (parallel targets),
+# MAX_SECONDS (a cap per target: the run stops there with the executions done so far).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 # Absolute paths: the config target works inside its scratch folder.
@@ -11,6 +12,7 @@ BUILD=$(cd "${1:-build-asan}" && pwd)
 shift || true
 RUNS=${RUNS:-1000000}
 JOBS=${JOBS:-1}
+MAX_SECONDS=${MAX_SECONDS:-0}
 source fuzz/fuzz_env.sh
 scratch_root=$( [ -d /dev/shm ] && echo /dev/shm || echo "${TMPDIR:-/tmp}" )
 export SPECBAKE_FUZZ_SCRATCH="$scratch_root/specbake-fuzz-run-$$"
@@ -28,10 +30,15 @@ one_target() {
   : >"$log"
   local done_runs=0 found=0 attempt=0 start=$SECONDS
   while [ "$done_runs" -lt "$RUNS" ] && [ "$attempt" -lt 6 ]; do
+    local left=0
+    if [ "$MAX_SECONDS" -gt 0 ]; then
+      left=$((MAX_SECONDS - (SECONDS - start)))
+      [ "$left" -le 0 ] && break
+    fi
     attempt=$((attempt + 1))
     local part="$log.$attempt"
     "$exe" $(fuzz_flags "$target") -artifact_prefix="$findings/$target-" -runs=$((RUNS - done_runs)) \
-      -print_final_stats=1 "$corpus" "$seeds/$target" >"$part" 2>&1
+      -max_total_time="$left" -print_final_stats=1 "$corpus" "$seeds/$target" >"$part" 2>&1
     local rc=$?
     cat "$part" >>"$log"
     local n
@@ -50,7 +57,7 @@ one_target() {
 }
 
 export -f one_target fuzz_flags
-export BUILD RUNS findings seeds
+export BUILD RUNS MAX_SECONDS findings seeds
 if [ "$JOBS" -gt 1 ]; then
   printf '%s\n' $targets | xargs -P "$JOBS" -I{} bash -c 'one_target {}'
 else

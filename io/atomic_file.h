@@ -67,6 +67,9 @@ public:
     // Drops the pages of bytes [offset, offset + size) from this process (the page cache keeps them; a
     // later access faults them in again): lets a reader stream through a huge file in bounded memory.
     void release_pages(size_t offset, size_t size) const;
+    // Asks the kernel to start reading [offset, offset + size) of a mapping now (MADV_WILLNEED), so that a
+    // reader hashing one window while the next is read keeps the disk busy; no-op for a file read into memory.
+    void prefetch(size_t offset, size_t size) const;
 
 private:
     const uint8_t* data_ = nullptr;  // the mapping, or null

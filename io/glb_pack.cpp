@@ -4,9 +4,10 @@
 
 #include "io/sha256.h"
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <limits>
-#include <memory>
 
 #include <tbb/task_group.h>
 
@@ -34,8 +35,8 @@ Result<std::string> write_pieces(AtomicOutput& out, const std::vector<std::span<
     const fs::path& final_path = out.final_path();
     if (final_path.has_parent_path()) fs::create_directories(final_path.parent_path(), ec);
     if (ec) return make_error(final_path.parent_path().string() + ": cannot create folder: " + ec.message());
-    std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(out.temp_path().c_str(), "wb"), &std::fclose);
-    if (!f) return make_error(final_path.string() + ": cannot open for writing");
+    std::FILE* f = std::fopen(out.temp_path().c_str(), "wb");
+    if (!f) return make_error(final_path.string() + ": cannot open for writing: " + std::strerror(errno));
     std::string hash;
     tbb::task_group hashing;
     hashing.run([&] {
@@ -43,11 +44,14 @@ Result<std::string> write_pieces(AtomicOutput& out, const std::vector<std::span<
         for (std::span<const uint8_t> p : pieces) sha.update(p);
         hash = sha.hex();
     });
-    bool ok = true;
-    for (std::span<const uint8_t> p : pieces) ok = ok && std::fwrite(p.data(), 1, p.size(), f.get()) == p.size();
-    ok = std::fflush(f.get()) == 0 && ok;
+    // The first failing call's errno is the reason (ENOSPC, EFBIG, EIO ...); fclose reports a delayed one.
+    int err = 0;
+    for (std::span<const uint8_t> p : pieces)
+        if (!err && std::fwrite(p.data(), 1, p.size(), f) != p.size()) err = errno ? errno : EIO;
+    if (std::fflush(f) != 0 && !err) err = errno ? errno : EIO;
+    if (std::fclose(f) != 0 && !err) err = errno ? errno : EIO;
     hashing.wait();
-    if (!ok) return make_error(final_path.string() + ": write failed (disk full?)");
+    if (err) return make_error(final_path.string() + ": cannot write: " + std::strerror(err));
     return hash;
 }
 

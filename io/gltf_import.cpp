@@ -12,6 +12,7 @@ using gltf::kModeTriangles;
 Result<GltfScene> GltfScene::from_imported(const ImportedScene& imported) {
     GltfScene scene;
     scene.impl_->source = imported.path;
+    scene.impl_->other_files = imported.files;
     tinygltf::Model& m = scene.impl_->model;
     m.asset.version = "2.0";
     m.asset.generator = "specbake (imported through Assimp)";

@@ -49,6 +49,8 @@ struct SceneState {
     // The file of every image and buffer stored as an external file, resolved once by the path policy
     // (io/input_policy.h) at load; empty for embedded and remote ones. Everything reads these.
     std::vector<std::filesystem::path> image_paths, buffer_paths;
+    // Other files the scene was read from: what Assimp opened besides the asset (an OBJ's .mtl).
+    std::vector<std::filesystem::path> other_files;
     // The scene file's own hash is computed in the background from its bytes (mapped until then) while the
     // caller plans and bakes; content_hash() collects it.
     MappedFile source_bytes;

@@ -295,6 +295,7 @@ std::vector<fs::path> GltfScene::resource_files() const {
     };
     for (const fs::path& p : impl_->buffer_paths) add(p);
     for (const fs::path& p : impl_->image_paths) add(p);
+    for (const fs::path& p : impl_->other_files) add(p);
     return out;
 }
 

@@ -105,6 +105,7 @@ public:
     bool source_is_binary() const;
     // The files the scene reads besides itself: external buffers and images that exist on disk, each at the
     // one path the path policy resolved its URI to (io/input_policy.h); the same paths are read and copied.
+    // For a scene built from an import: the files Assimp read besides the asset (an OBJ's .mtl).
     std::vector<std::filesystem::path> resource_files() const;
     // SHA-256 of the scene file or of an external buffer, computed from the bytes read at load time (the
     // scene file's in the background after load() returns; the first call waits for it); empty for any

@@ -5,12 +5,16 @@
 #include "io/oiio_api.h"
 #include "io/png_decode.h"
 
+#include <zlib.h>
+
 #include <algorithm>
 #include <array>
 #include <initializer_list>
 #include <fstream>
 #include <memory>
+#include <string_view>
 #include <system_error>
+#include <vector>
 
 namespace specbake::io {
 namespace fs = std::filesystem;
@@ -91,6 +95,98 @@ Result<void> check_png_structure(std::span<const uint8_t> b, const std::string& 
     }
 }
 
+Result<void> check_png_image_data(std::span<const uint8_t> b, const std::string& name) {
+    static const uint8_t signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+    if (b.size() < 33 || !std::equal(signature, signature + 8, b.begin())) return {};
+    const uint8_t* ihdr = b.data() + 16;
+    const uint64_t w = be32(ihdr), h = be32(ihdr + 4);
+    const int depth = ihdr[8], colour = ihdr[9];
+    const uint64_t samples = colour == 2 ? 3 : colour == 4 ? 2 : colour == 6 ? 4 : 1;
+    // One filter byte per row of each (non-empty) pass; Adam7's passes start at (x0, y0) with steps (dx, dy).
+    auto pass_bytes = [&](uint64_t x0, uint64_t y0, uint64_t dx, uint64_t dy) -> uint64_t {
+        const uint64_t pw = w > x0 ? (w - x0 + dx - 1) / dx : 0, ph = h > y0 ? (h - y0 + dy - 1) / dy : 0;
+        return pw == 0 || ph == 0 ? 0 : ph * (1 + (pw * samples * uint64_t(depth) + 7) / 8);
+    };
+    uint64_t expected = 0;
+    if (ihdr[12] == 0) {
+        expected = pass_bytes(0, 0, 1, 1);
+    } else {
+        static const uint64_t adam7[7][4] = {{0, 0, 8, 8}, {4, 0, 8, 8}, {0, 4, 4, 8}, {2, 0, 4, 4},
+                                             {0, 2, 2, 4}, {1, 0, 2, 2}, {0, 1, 1, 2}};
+        for (const auto& p : adam7) expected += pass_bytes(p[0], p[1], p[2], p[3]);
+    }
+    z_stream z{};
+    if (inflateInit(&z) != Z_OK) return make_error(name + ": cannot check the PNG image data (zlib)");
+    std::vector<uint8_t> scratch(size_t(1) << 16);
+    uint64_t produced = 0;
+    int status = Z_OK;
+    for (size_t at = 8; at + 12 <= b.size() && status == Z_OK && produced < expected;) {
+        const uint32_t length = be32(b.data() + at);
+        const std::string_view type(reinterpret_cast<const char*>(b.data() + at + 4), 4);
+        if (type == "IEND") break;
+        if (type == "IDAT") {
+            z.next_in = const_cast<Bytef*>(b.data() + at + 8);
+            z.avail_in = length;
+            while (status == Z_OK && z.avail_in > 0 && produced < expected) {
+                z.next_out = scratch.data();
+                z.avail_out = uInt(scratch.size());
+                status = inflate(&z, Z_NO_FLUSH);
+                produced += scratch.size() - z.avail_out;
+                if (status == Z_BUF_ERROR) status = Z_OK;  // no progress possible yet: the next chunk goes on
+            }
+        }
+        at += size_t(length) + 12;
+    }
+    const std::string why = z.msg ? z.msg : "";
+    inflateEnd(&z);
+    if (status != Z_OK && status != Z_STREAM_END)
+        return make_error(name + ": corrupt PNG image data (zlib: " + (why.empty() ? "error " + std::to_string(status) : why) + ")");
+    if (produced < expected)
+        return make_error(name + ": PNG image data ends early (" + std::to_string(produced) + " of " +
+                          std::to_string(expected) + " bytes once inflated)");
+    return {};
+}
+
+Result<void> check_jpeg_markers(std::span<const uint8_t> b, const std::string& name) {
+    if (b.size() < 3 || b[0] != 0xFF || b[1] != 0xD8) return {};
+    auto corrupt = [&](const std::string& what) -> Result<void> { return make_error(name + ": corrupt JPEG (" + what + ")"); };
+    for (size_t at = 2; at + 4 <= b.size();) {
+        if (b[at] != 0xFF) {  // libjpeg skips stray bytes up to the next marker (with a warning): so does this
+            ++at;
+            continue;
+        }
+        const uint8_t marker = b[at + 1];
+        if (marker == 0xFF) {  // fill byte
+            ++at;
+            continue;
+        }
+        if (marker == 0x01 || marker == 0xD8 || (marker >= 0xD0 && marker <= 0xD7)) {  // no length field
+            at += 2;
+            continue;
+        }
+        if (marker == 0xD9 || marker == 0xDA) return {};  // the markers OpenImageIO reads all come before the scan
+        const size_t length = size_t(b[at + 2]) << 8 | b[at + 3];
+        if (length < 2 || length > b.size() - at - 2) return {};  // truncated: libjpeg reports it
+        const std::span<const uint8_t> data = b.subspan(at + 4, length - 2);
+        if (marker == 0xE1 || marker == 0xE2 || marker == 0xED) {
+            const auto nul = std::find(data.begin(), data.end(), uint8_t(0));
+            if (nul == data.end())
+                return corrupt("APP" + std::to_string(marker - 0xE0) + " segment at byte " + std::to_string(at) +
+                               " without a terminated identifier");
+            const std::string id(data.begin(), nul);
+            if (marker == 0xE1 && id == "Exif" && data.size() < 6) return corrupt("Exif segment shorter than its header");
+            if (marker == 0xE2 && id == "ICC_PROFILE" && data.size() < 14)
+                return corrupt("ICC profile segment shorter than its header");
+            // "Photoshop 3.0\0", "8BIM", type, 4 padding bytes, then a 2-byte size of what follows.
+            if (marker == 0xED && id == "Photoshop 3.0" &&
+                (data.size() < 26 || 26 + (size_t(data[24]) << 8 | data[25]) > data.size()))
+                return corrupt("Photoshop segment shorter than the sizes it states");
+        }
+        at += 2 + length;
+    }
+    return {};
+}
+
 Result<DecodedImage> decode_image(const fs::path& path) {
     const std::string name = path.string();
     std::error_code ec;
@@ -99,11 +195,16 @@ Result<DecodedImage> decode_image(const fs::path& path) {
     {
         std::ifstream f(path, std::ios::binary);
         char head[8] = {};
-        if (f.read(head, 8) && static_cast<uint8_t>(head[0]) == 0x89 && head[1] == 'P') {
+        // PNG and JPEG are checked from their bytes before a decoder sees them (check_png_structure,
+        // check_jpeg_markers), so they are decoded from memory like embedded images.
+        const bool read = bool(f.read(head, 8));
+        const bool png = static_cast<uint8_t>(head[0]) == 0x89 && head[1] == 'P';
+        const bool jpeg = static_cast<uint8_t>(head[0]) == 0xFF && static_cast<uint8_t>(head[1]) == 0xD8;
+        if (read && (png || jpeg)) {
             f.close();
             auto bytes = MappedFile::open(path);
             if (!bytes) return bytes.error();
-            return decode_image_memory(bytes->bytes(), name);  // checks the chunk structure first
+            return decode_image_memory(bytes->bytes(), name);
         }
     }
     auto oiio = oiio::api();
@@ -116,6 +217,8 @@ Result<DecodedImage> decode_image_memory(std::span<const uint8_t> bytes, const s
     if (auto ok = check_png_structure(bytes, name_for_errors); !ok) return ok.error();
     // Plain PNGs (most texture libraries) without loading OpenImageIO; the same values and facts.
     if (auto png = decode_plain_png(bytes)) return std::move(*png);
+    if (auto ok = check_png_image_data(bytes, name_for_errors); !ok) return ok.error();
+    if (auto ok = check_jpeg_markers(bytes, name_for_errors); !ok) return ok.error();
     // OpenImageIO picks the decoder from the name's extension; take it from the leading bytes instead.
     std::string probe = "image.tga";  // the one common format without a signature
     if (bytes.size() >= 4 && bytes[0] == 0x89 && bytes[1] == 'P' && bytes[2] == 'N' && bytes[3] == 'G')

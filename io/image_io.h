@@ -37,6 +37,16 @@ Result<DecodedImage> decode_image_memory(std::span<const uint8_t> bytes, const s
 // The chunk structure of a PNG (lengths, CRCs, IHDR fields) and its size against the texel limit
 // (io/input_policy.h), from the bytes alone; anything that is not a PNG passes.
 Result<void> check_png_structure(std::span<const uint8_t> bytes, const std::string& name);
+// The image data of a PNG whose structure passed check_png_structure: its IDAT chunks inflate without a
+// zlib error to at least the bytes the header's size, depth, colour type and interlacing need (PNG spec
+// Sec. 10, Sec. 8.2), so that libpng never has to report a broken stream itself (on stderr, without the
+// file's name). Inflates into a small buffer; anything that is not a PNG passes.
+Result<void> check_png_image_data(std::span<const uint8_t> bytes, const std::string& name);
+// The metadata segments of a JPEG that OpenImageIO reads before the scan (APP1 Exif/XMP, APP2 ICC, APP13
+// Photoshop): each identifier NUL-terminated inside its segment and each header as long as it says, since
+// OpenImageIO compares them with strcmp and reads the headers' fields without checking the length.
+// Anything that is not a JPEG, or is truncated before its scan (libjpeg reports that), passes.
+Result<void> check_jpeg_markers(std::span<const uint8_t> bytes, const std::string& name);
 
 // Convenience forms that drop the metadata.
 Result<Image> read_image(const std::filesystem::path& path);

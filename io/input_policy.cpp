@@ -21,6 +21,8 @@ constexpr NamedLimit kLimits[] = {
     {"primitives", &InputLimits::primitives},
     {"accessor-elements", &InputLimits::accessor_elements},
     {"texture-bytes", &InputLimits::texture_bytes},
+    {"vertices", &InputLimits::vertices},
+    {"faces", &InputLimits::faces},
 };
 
 bool starts_with(const fs::path& path, const fs::path& prefix) {

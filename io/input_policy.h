@@ -20,6 +20,10 @@ struct InputLimits {
     uint64_t primitives = uint64_t(1) << 16;         // primitives of one scene
     uint64_t accessor_elements = uint64_t(1) << 26;  // elements of an accessor without a bufferView
     uint64_t texture_bytes = uint64_t(1) << 32;      // one level of a KTX2/DDS file (4 GiB)
+    // A scene read through Assimp (OBJ, FBX, PLY, ...): vertices and faces of all its meshes together
+    // (a glTF's are bounded by its accessors and their buffers instead).
+    uint64_t vertices = uint64_t(1) << 26;
+    uint64_t faces = uint64_t(1) << 26;
 };
 
 struct InputPolicy {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,9 @@ struct ImportedMaterial {
     std::string normal_texture;       // as referenced by the file ("*N" = embedded texture N); empty when none
     bool has_roughness_texture = false;
     std::string roughness_texture;    // glTF: the metallicRoughness texture (roughness in G)
+    // The files of those references, resolved by the path policy (io/input_policy.h) relative to the
+    // asset's folder; empty for embedded textures.
+    std::filesystem::path normal_texture_file, roughness_texture_file;
     // Perceptual roughness r (SPEC Sec. 2). glTF: roughnessFactor; other formats: the file's roughness
     // when it has one, else from the Phong exponent Ns as r = (2 / (Ns + 2))^(1/4) (Beckmann-Phong match);
     // 1 when the file says nothing.
@@ -37,6 +41,7 @@ struct ImportedScene {
     std::vector<ImportedMaterial> materials;   // TriMesh::material indexes this
     std::vector<ImportedNode> nodes;           // nodes[0] is the root
     std::vector<std::string> notes;            // what was dropped or changed on the way in (points/lines, ...)
+    std::vector<std::filesystem::path> files;  // the files Assimp read besides `path` (an OBJ's .mtl, ...)
 };
 
 enum class VertexJoin {
@@ -54,7 +59,10 @@ struct MeshImportOptions {
 // convention (origin top-left; Assimp's loaders deliver v up, so v is flipped). Fails with one line naming
 // the file for: unreadable file, empty scene, no triangles, out-of-range indices, inf/NaN positions.
 // Assimp's own loaders may drop broken faces first (its glTF loader skips a triangle whose index is out of
-// range), so a glTF read with another library must still go through validate_mesh. The default material
+// range), so a glTF read with another library must still go through validate_mesh. Every file Assimp opens
+// and every texture reference is resolved by the path policy (io/input_policy.h) relative to the asset's
+// folder, and refused outside it; the limits on primitives, vertices, faces and nodes apply (a PLY
+// header's counts before Assimp parses, the others right after import). The default material
 // Assimp appends (for glTF always) is removed: primitives without a material in the file get -1.
 Result<ImportedScene> import_mesh(const std::string& path, const MeshImportOptions& options = {});
 

@@ -12,6 +12,16 @@ namespace specbake {
 namespace {
 
 constexpr int kMaxResponseDepth = 16;
+// Nesting alone does not bound the work: a file naming the next one ten times, sixteen levels deep, is
+// 10^16 reads. The files read and the arguments they give are bounded as a whole (pipeline/config.h).
+constexpr size_t kMaxResponseReads = 4096;
+constexpr size_t kMaxResponseArguments = size_t(1) << 20;
+constexpr size_t kMaxResponseBytes = size_t(64) << 20;
+
+struct ExpansionBudget {
+    size_t reads = 0;
+    size_t bytes = 0;
+};
 
 Result<void> split_response_text(const std::string& text, const std::string& file, std::vector<std::string>& out) {
     size_t i = 0;
@@ -66,7 +76,7 @@ size_t invalid_utf8_at(const std::string& text) {
 }
 
 Result<void> expand_into(const std::vector<std::string>& args, int depth, std::vector<std::string>& out,
-                         std::vector<std::string>* files_read) {
+                         std::vector<std::string>* files_read, ExpansionBudget& budget) {
     for (const std::string& arg : args) {
         if (arg.size() < 2 || arg[0] != '@') {
             out.push_back(arg);
@@ -76,14 +86,25 @@ Result<void> expand_into(const std::vector<std::string>& args, int depth, std::v
         if (depth >= kMaxResponseDepth)
             return make_error(file + ": response files nested deeper than " + std::to_string(kMaxResponseDepth) +
                               " (a file that includes itself?)");
+        if (++budget.reads > kMaxResponseReads)
+            return make_error(file + ": response files name other response files more than " +
+                              std::to_string(kMaxResponseReads) + " times in all (nested @FILE repeated?)");
         auto bytes = io::read_file(file);
         if (!bytes) return make_error(file + ": cannot read response file");
-        if (files_read) files_read->push_back(file);
+        budget.bytes += bytes->size();
+        if (budget.bytes > kMaxResponseBytes)
+            return make_error(file + ": response files hold more than " + std::to_string(kMaxResponseBytes >> 20) +
+                              " MiB in all");
+        if (files_read && std::find(files_read->begin(), files_read->end(), file) == files_read->end())
+            files_read->push_back(file);
         std::vector<std::string> words;
         auto split = split_response_text(std::string(bytes->begin(), bytes->end()), file, words);
         if (!split) return split.error();
-        auto nested = expand_into(words, depth + 1, out, files_read);
+        auto nested = expand_into(words, depth + 1, out, files_read, budget);
         if (!nested) return nested.error();
+        if (out.size() > kMaxResponseArguments)
+            return make_error(file + ": response files expand to more than " + std::to_string(kMaxResponseArguments) +
+                              " arguments");
     }
     return {};
 }
@@ -124,7 +145,8 @@ Result<void> add_materials(const nlohmann::json& table, const std::string& sourc
 Result<std::vector<std::string>> expand_response_files(const std::vector<std::string>& args,
                                                        std::vector<std::string>* files_read) {
     std::vector<std::string> out;
-    auto r = expand_into(args, 0, out, files_read);
+    ExpansionBudget budget;
+    auto r = expand_into(args, 0, out, files_read, budget);
     if (!r) return r.error();
     return out;
 }

@@ -405,12 +405,13 @@ Result<void> load_imported(const fs::path& path, SimScene& scene, GltfContents& 
         mat.roughness = std::clamp(m.roughness_factor, 0.0f, 1.0f);
         if (mat.roughness < kMinRoughness) ++clamped_materials;
         mat.roughness = std::max(mat.roughness, kMinRoughness);
-        const auto read = [&](const std::string& ref) -> Result<Image> {
-            if (ref.starts_with("*")) return make_error("embedded texture " + ref);
-            return io::read_image(path.parent_path() / ref);
+        // The files were resolved by the path policy at import (io/mesh_import.h).
+        const auto read = [&](const std::string& ref, const fs::path& file) -> Result<Image> {
+            if (file.empty()) return make_error("embedded texture " + ref);
+            return io::read_image(file);
         };
         if (m.has_normal_texture) {
-            auto image = read(m.normal_texture);
+            auto image = read(m.normal_texture, m.normal_texture_file);
             if (!image) {
                 scene.notes.push_back(m.name + ": normal texture not simulated (" + image.error().message + ")");
             } else {
@@ -420,7 +421,7 @@ Result<void> load_imported(const fs::path& path, SimScene& scene, GltfContents& 
             }
         }
         if (m.has_roughness_texture) {
-            auto image = read(m.roughness_texture);
+            auto image = read(m.roughness_texture, m.roughness_texture_file);
             if (!image) scene.notes.push_back(m.name + ": roughness texture not simulated (" + image.error().message + ")");
             else mat.roughness_map = cache.roughness_map(m.roughness_texture, *image, image->channels >= 2 ? 1 : 0, mat.roughness);
         }

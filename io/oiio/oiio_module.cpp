@@ -5,8 +5,15 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cstring>
+#include <memory>
+#include <vector>
 
 namespace specbake::io::oiio {
 namespace {
@@ -19,6 +26,105 @@ std::string one_line(std::string s, const char* if_empty) {
     while (!s.empty() && (s.back() == ' ' || s.back() == '\r')) s.pop_back();
     return s.empty() ? std::string(if_empty) : s;
 }
+
+// A writer's failure with the operating system's reason: OpenImageIO's message rarely carries it, but the
+// failing call (fopen, fwrite, fclose through libpng or OpenEXR) leaves it in errno, which is cleared before
+// each write sequence. The reason is added unless the message already says it.
+std::string write_failure(const std::string& message, int err) {
+    std::string text = one_line(message, "unknown writer error");
+    if (err != 0) {
+        const std::string reason = std::strerror(err);
+        if (text.find(reason) == std::string::npos) text += " (" + reason + ")";
+    }
+    return text;
+}
+
+// OpenImageIO's PNG and OpenEXR writers do not report every failed write (a full disk leaves a short file
+// after a "successful" close), so where the format takes an IOProxy the bytes go through this one: a
+// descriptor of its own, writes gathered into 64 KiB runs, every call checked, and the first failure's
+// errno kept for the message. Formats without proxy support write the file themselves.
+class CheckedFile final : public OIIO::Filesystem::IOProxy {
+public:
+    explicit CheckedFile(const std::string& path) : IOProxy(path, Write) {
+        fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+        if (fd_ < 0) err_ = errno, m_mode = Closed;
+    }
+    ~CheckedFile() override { close(); }
+    const char* proxytype() const override { return "specbake-checked"; }
+    size_t write(const void* buf, size_t size) override {
+        if (!run_.empty() && m_pos != run_start_ + int64_t(run_.size())) flush_run();
+        if (run_.empty()) run_start_ = m_pos;
+        const auto* p = static_cast<const unsigned char*>(buf);
+        run_.insert(run_.end(), p, p + size);
+        m_pos += int64_t(size);
+        if (run_.size() >= (size_t(1) << 16)) flush_run();
+        return err_ ? 0 : size;
+    }
+    size_t pwrite(const void* buf, size_t size, int64_t offset) override {
+        flush_run();
+        return put(static_cast<const unsigned char*>(buf), size, offset) ? size : 0;
+    }
+    size_t size() const override {
+        const_cast<CheckedFile*>(this)->flush_run();
+        struct stat st {};
+        return fd_ >= 0 && ::fstat(fd_, &st) == 0 ? size_t(st.st_size) : 0;
+    }
+    void flush() const override { const_cast<CheckedFile*>(this)->flush_run(); }
+    void close() override {
+        if (fd_ < 0) return;
+        flush_run();
+        if (::close(fd_) != 0 && !err_) err_ = errno;
+        fd_ = -1;
+        m_mode = Closed;
+    }
+    int error_number() const { return err_; }
+
+private:
+    bool put(const unsigned char* p, size_t n, int64_t offset) {
+        while (n > 0 && !err_ && fd_ >= 0) {
+            const ssize_t w = ::pwrite(fd_, p, n, offset);
+            if (w < 0 && errno == EINTR) continue;
+            if (w <= 0) {
+                err_ = w < 0 ? errno : ENOSPC;
+                break;
+            }
+            p += w, n -= size_t(w), offset += w;
+        }
+        return !err_ && fd_ >= 0;
+    }
+    void flush_run() {
+        if (run_.empty()) return;
+        put(run_.data(), run_.size(), run_start_);
+        run_.clear();
+    }
+    int fd_ = -1;
+    int err_ = 0;
+    std::vector<unsigned char> run_;
+    int64_t run_start_ = 0;
+};
+
+// Sets a CheckedFile on an output whose format takes one; finish() then closes it and reports its failure.
+// Declared before the ImageOutput, so that the writer (whose destructor may still write) goes first.
+class CheckedTarget {
+public:
+    void attach(OIIO::ImageOutput& out, const std::string& path) {
+        if (out.supports("ioproxy")) {
+            file_ = std::make_unique<CheckedFile>(path);
+            if (!out.set_ioproxy(file_.get())) file_.reset();
+        }
+    }
+    Result<void> finish(const std::string& name) {
+        if (!file_) return {};
+        file_->close();
+        if (const int err = file_->error_number(); err != 0)
+            return make_error(name + ": cannot write: " + std::strerror(err));
+        return {};
+    }
+    int error_number() const { return file_ ? file_->error_number() : 0; }
+
+private:
+    std::unique_ptr<CheckedFile> file_;
+};
 
 OIIO::TypeDesc type_of(PixelType t) {
     switch (t) {
@@ -87,7 +193,18 @@ Result<DecodedImage> decode_memory(std::span<const uint8_t> bytes, const std::st
     OIIO::ImageSpec config = reader_config();
     void* proxy = &reader;
     config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
-    auto in = OIIO::ImageInput::open(probe, &config, &reader);
+    // A format recognised by its signature (every probe but TGA's, which has none) is opened by its own
+    // reader only: ImageInput::open() would try every other reader on a damaged file (LibRaw's among them,
+    // which zeroes about a megabyte to start), and their messages are not about this file's format.
+    std::unique_ptr<OIIO::ImageInput> in;
+    if (probe != "image.tga") {
+        in = OIIO::ImageInput::create(probe, false, &config, &reader);
+        OIIO::ImageSpec spec;
+        if (in && !in->open(probe, spec, config))
+            return make_error(name + ": cannot read as an image: " + one_line(in->geterror(), "unknown decoder error"));
+    } else {
+        in = OIIO::ImageInput::open(probe, &config, &reader);
+    }
     if (!in) return make_error(name + ": cannot read as an image: " + one_line(OIIO::geterror(), "unknown decoder error"));
     auto result = decode(*in, name, max_texels);
     in->close();
@@ -95,20 +212,29 @@ Result<DecodedImage> decode_memory(std::span<const uint8_t> bytes, const std::st
 }
 
 Result<void> write_image(const std::string& temp_path, const std::string& name, const Image& image, PixelType type) {
+    CheckedTarget target;
     auto out = OIIO::ImageOutput::create(name);
     if (!out) return make_error(name + ": no writer for this extension: " + one_line(OIIO::geterror(), "unknown format"));
     OIIO::ImageSpec spec(image.width, image.height, image.channels, type_of(type));
     spec.attribute("oiio:UnassociatedAlpha", 1);  // data, not premultiplied colour: store as given
-    if (!out->open(temp_path, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data()) || !out->close())
-        return make_error(name + ": cannot write: " + one_line(out->geterror(), "unknown writer error"));
-    return {};
+    target.attach(*out, temp_path);
+    errno = 0;
+    if (!out->open(temp_path, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data()) || !out->close()) {
+        const int err = target.error_number() ? target.error_number() : errno;
+        return make_error(name + ": cannot write: " + write_failure(out->geterror(), err));
+    }
+    out.reset();
+    return target.finish(name);
 }
 
 Result<void> write_levels(const LevelsRequest& r) {
+    CheckedTarget target;
     auto out = OIIO::ImageOutput::create(r.temp_path);
     if (!out) return make_error(r.name + ": no writer: " + one_line(OIIO::geterror(), "unknown format"));
     if (r.mipmapped && !out->supports("mipmap")) return make_error(r.name + ": the format cannot hold MIP levels");
     const OIIO::TypeDesc type = type_of(r.type);
+    target.attach(*out, r.temp_path);
+    errno = 0;
     for (size_t i = 0; i < r.levels.size(); ++i) {
         const Image& level = *r.levels[i];
         OIIO::ImageSpec spec(level.width, level.height, level.channels, type);
@@ -128,11 +254,17 @@ Result<void> write_levels(const LevelsRequest& r) {
             if (!r.channel_meaning.empty()) spec.attribute("specbake:channels", r.channel_meaning);
         }
         const auto mode = i == 0 ? OIIO::ImageOutput::Create : OIIO::ImageOutput::AppendMIPLevel;
-        if (!out->open(r.temp_path, spec, mode) || !out->write_image(OIIO::TypeDesc::FLOAT, level.pixels.data()))
-            return make_error(r.name + ": cannot write: " + one_line(out->geterror(), "unknown writer error"));
+        if (!out->open(r.temp_path, spec, mode) || !out->write_image(OIIO::TypeDesc::FLOAT, level.pixels.data())) {
+            const int err = target.error_number() ? target.error_number() : errno;
+            return make_error(r.name + ": cannot write: " + write_failure(out->geterror(), err));
+        }
     }
-    if (!out->close()) return make_error(r.name + ": cannot write: " + one_line(out->geterror(), "unknown writer error"));
-    return {};
+    if (!out->close()) {
+        const int err = target.error_number() ? target.error_number() : errno;
+        return make_error(r.name + ": cannot write: " + write_failure(out->geterror(), err));
+    }
+    out.reset();
+    return target.finish(r.name);
 }
 
 Result<InspectedTexture> read_levels(const std::string& name, uint64_t max_texels) {
@@ -169,12 +301,18 @@ Result<InspectedTexture> read_levels(const std::string& name, uint64_t max_texel
 
 Result<void> write_rgb8(const std::string& temp_path, const std::string& name, int width, int height,
                         const uint8_t* rgb) {
+    CheckedTarget target;
     auto file = OIIO::ImageOutput::create(temp_path);
     if (!file) return make_error(name + ": cannot write PNG: " + one_line(OIIO::geterror(), "no PNG writer"));
     OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
-    if (!file->open(temp_path, spec) || !file->write_image(OIIO::TypeDesc::UINT8, rgb) || !file->close())
-        return make_error(name + ": cannot write PNG: " + one_line(file->geterror(), "unknown writer error"));
-    return {};
+    target.attach(*file, temp_path);
+    errno = 0;
+    if (!file->open(temp_path, spec) || !file->write_image(OIIO::TypeDesc::UINT8, rgb) || !file->close()) {
+        const int err = target.error_number() ? target.error_number() : errno;
+        return make_error(name + ": cannot write PNG: " + write_failure(file->geterror(), err));
+    }
+    file.reset();
+    return target.finish(name);
 }
 
 Result<TextureShape> read_shape(const std::string& name) {

@@ -14,6 +14,8 @@
 #include <unistd.h>
 #include <zlib.h>
 
+#include <cerrno>
+#include <csignal>
 #include <cstring>
 #include <functional>
 #include <set>
@@ -526,5 +528,239 @@ TEST(HostileInput, DdsWithHugeMipCountIsRefusedAtOnce) {
     const Measured b = run_measured({"inspect", (dir / "big.dds").string()}, dir);
     expect_clean_error(b.run, "big.dds", "--limit texels");
     EXPECT_LT(b.peak_rss_kb, kPeakRssLimitKb);
+    fs::remove_all(dir);
+}
+
+namespace {
+
+// One triangle as an OBJ that names `mtllib` (none when empty) and uses its material "m".
+std::string obj_triangle(const std::string& mtllib) {
+    std::string obj = mtllib.empty() ? "" : "mtllib " + mtllib + "\nusemtl m\n";
+    return obj + "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\n";
+}
+
+bool manifest_lists_input(const fs::path& manifest, const std::string& file_name) {
+    const json doc = json::parse(slurp(manifest));
+    for (const json& in : doc["inputs"])
+        if (fs::path(in["path"].get<std::string>()).filename() == file_name) return true;
+    return false;
+}
+
+}  // namespace
+
+TEST(HostileInput, MeshFilesReadThroughAssimpFollowThePathPolicy) {
+    const fs::path dir = temp_dir("assimp_policy");
+    write_bytes(dir / "outside" / "secret.mtl", "newmtl m\nNs 30\n");
+    write_bytes(dir / "scene" / "inside.mtl", "newmtl m\nNs 30\n");
+    // An .mtl outside the scene's folder, relative or through a symbolic link: refused, naming the reference.
+    write_bytes(dir / "scene" / "rel.obj", obj_triangle("../outside/secret.mtl"));
+    fs::create_symlink(dir / "outside" / "secret.mtl", dir / "scene" / "link.mtl");
+    write_bytes(dir / "scene" / "link.obj", obj_triangle("link.mtl"));
+    for (const auto& [name, ref] : {std::pair<std::string, std::string>{"rel.obj", "../outside/secret.mtl"},
+                                    {"link.obj", "link.mtl"}}) {
+        const RunResult r = run_specbake({"bake", (dir / "scene" / name).string(), "-o", (dir / "out").string()}, dir);
+        expect_clean_error(r, name, "refused");
+        EXPECT_NE(r.err.find("'" + ref + "'"), std::string::npos) << r.err;
+        EXPECT_FALSE(fs::exists(dir / "out" / "manifest.json"));
+    }
+    // A texture reference leaving the folder, in an .mtl inside it: refused too.
+    write_bytes(dir / "scene" / "tex.mtl", "newmtl m\nNs 30\nmap_Bump ../outside/normal.png\n");
+    write_normal_png(dir / "outside" / "normal.png");
+    write_bytes(dir / "scene" / "tex.obj", obj_triangle("tex.mtl"));
+    const RunResult t = run_specbake({"bake", (dir / "scene" / "tex.obj").string(), "-o", (dir / "outt").string()}, dir);
+    expect_clean_error(t, "tex.obj", "refused");
+    EXPECT_NE(t.err.find("../outside/normal.png"), std::string::npos) << t.err;
+    // --allow-root permits the folder; the .mtl read is listed among the manifest's inputs.
+    const RunResult ok = run_specbake({"--allow-root", (dir / "outside").string(), "bake",
+                                       (dir / "scene" / "rel.obj").string(), "-o", (dir / "outok").string()},
+                                      dir);
+    ASSERT_EQ(ok.exit_code, 0) << ok.err;
+    EXPECT_TRUE(manifest_lists_input(dir / "outok" / "manifest.json", "secret.mtl"));
+    // An .mtl beside the scene is read and listed as well.
+    write_bytes(dir / "scene" / "plain.obj", obj_triangle("inside.mtl"));
+    const RunResult plain =
+        run_specbake({"bake", (dir / "scene" / "plain.obj").string(), "-o", (dir / "outplain").string()}, dir);
+    ASSERT_EQ(plain.exit_code, 0) << plain.err;
+    EXPECT_TRUE(manifest_lists_input(dir / "outplain" / "manifest.json", "inside.mtl"));
+    fs::remove_all(dir);
+}
+
+TEST(HostileInput, MeshFilesReadThroughAssimpAreLimited) {
+    const fs::path dir = temp_dir("assimp_limits");
+    // Two triangles (4 vertices) as OBJ: the vertex, face and primitive limits apply after import.
+    write_bytes(dir / "quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n");
+    const std::string quad = (dir / "quad.obj").string();
+    expect_clean_error(run_specbake({"--limit", "vertices=3", "bake", quad, "-o", (dir / "o1").string()}, dir),
+                       "quad.obj", "--limit vertices");
+    expect_clean_error(run_specbake({"--limit", "faces=1", "bake", quad, "-o", (dir / "o2").string()}, dir),
+                       "quad.obj", "--limit faces");
+    EXPECT_EQ(run_specbake({"bake", quad, "-o", (dir / "o3").string()}, dir).exit_code, 0);
+    // A PLY header claiming 2^31 vertices in a few bytes: refused from the header, before Assimp allocates.
+    const std::string ply_head = "ply\nformat binary_little_endian 1.0\nelement vertex 2147483648\n"
+                                 "property float x\nproperty float y\nproperty float z\n"
+                                 "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    write_bytes(dir / "huge.ply", ply_head + std::string(64, '\0'));
+    const Measured h = run_measured({"bake", (dir / "huge.ply").string(), "-o", (dir / "o4").string()}, dir);
+    expect_clean_error(h.run, "huge.ply", "--limit vertices");
+    EXPECT_LT(h.peak_rss_kb, kPeakRssLimitKb) << "peak RSS in KiB";
+    // Within the limit but more instances than bytes after the header: refused the same way.
+    write_bytes(dir / "short.ply", "ply\nformat ascii 1.0\nelement vertex 1000000\nproperty float x\n"
+                                   "property float y\nproperty float z\nend_header\n0 0 0\n");
+    const Measured s = run_measured({"bake", (dir / "short.ply").string(), "-o", (dir / "o5").string()}, dir);
+    expect_clean_error(s.run, "short.ply", "bytes follow");
+    fs::remove_all(dir);
+}
+
+TEST(HostileInput, CorruptPngImageDataIsOneLineNamingTheFile) {
+    const fs::path dir = temp_dir("png_zlib");
+    // 8x8 RGB8 rows whose zlib stream is broken while every CRC is right: a stored block whose length
+    // and its complement disagree, garbage after a valid header, and a stream that ends too early.
+    const std::string ihdr = be32(8) + be32(8) + std::string("\x08\x02\x00\x00\x00", 5);
+    const std::string ihdr_interlaced = be32(8) + be32(8) + std::string("\x08\x02\x00\x00\x01", 5);
+    std::string rows(8 * (1 + 8 * 3), '\x40');
+    for (size_t y = 0; y < 8; ++y) rows[y * 25] = 0;
+    std::string deflated(compressBound(uLong(rows.size())), '\0');
+    uLongf size = uLongf(deflated.size());
+    ASSERT_EQ(compress(reinterpret_cast<Bytef*>(deflated.data()), &size, reinterpret_cast<const Bytef*>(rows.data()),
+                       uLong(rows.size())),
+              Z_OK);
+    deflated.resize(size);
+    const std::string garbage = std::string("\x78\x9c", 2) + std::string(40, '\xff');
+    const std::string short_stream = [&] {
+        std::string half(rows.substr(0, rows.size() / 2)), out(compressBound(uLong(half.size())), '\0');
+        uLongf n = uLongf(out.size());
+        compress(reinterpret_cast<Bytef*>(out.data()), &n, reinterpret_cast<const Bytef*>(half.data()), uLong(half.size()));
+        return out.substr(0, n);
+    }();
+    auto png = [&](const std::string& header, const std::string& idat) {
+        return std::string("\x89PNG\r\n\x1a\n", 8) + png_chunk("IHDR", header) + png_chunk("IDAT", idat) +
+               png_chunk("IEND", "");
+    };
+    write_bytes(dir / "garbage.png", png(ihdr, garbage));
+    write_bytes(dir / "garbage_interlaced.png", png(ihdr_interlaced, garbage));
+    write_bytes(dir / "short.png", png(ihdr, short_stream));
+    write_bytes(dir / "good.png", png(ihdr, deflated));
+    for (const char* name : {"garbage.png", "garbage_interlaced.png", "short.png"}) {
+        const RunResult r = run_specbake({"texture", "--normal", (dir / name).string(), "-o", (dir / "out").string()}, dir);
+        expect_clean_error(r, name, "PNG image data");
+        EXPECT_EQ(r.err.find("libpng"), std::string::npos) << r.err;
+        std::istringstream lines(r.err);
+        int n = 0;
+        for (std::string line; std::getline(lines, line); ++n)
+            EXPECT_NE(line.find(name), std::string::npos) << "every line names the file: " << line;
+        EXPECT_EQ(n, 1) << r.err;
+    }
+    // The intact stream decodes (the check measures the inflated size the header asks for).
+    EXPECT_EQ(run_specbake({"texture", "--normal", (dir / "good.png").string(), "-o", (dir / "og").string()}, dir).exit_code, 0);
+    fs::remove_all(dir);
+}
+
+namespace {
+
+// Runs specbake in a child whose files may not grow past `max_bytes` (RLIMIT_FSIZE; SIGXFSZ ignored, so
+// the write fails with EFBIG): a full disk without privileges (a read-only folder does not stop root, and
+// /dev/full cannot be an output: outputs are renamed into place). Its stdout and stderr, together, in err.
+RunResult run_with_file_size_limit(const std::vector<std::string>& args, rlim_t max_bytes) {
+    // The messages go through a pipe: a file would be cut at the limit too.
+    int fds[2];
+    if (pipe(fds) != 0) return {};
+    const pid_t pid = fork();
+    if (pid == 0) {
+        std::vector<char*> argv{const_cast<char*>(SPECBAKE_EXE)};
+        for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+        argv.push_back(nullptr);
+        close(fds[0]);
+        if (dup2(fds[1], 1) < 0 || dup2(fds[1], 2) < 0) _exit(127);
+        signal(SIGXFSZ, SIG_IGN);
+        const rlimit fsize{max_bytes, max_bytes};
+        setrlimit(RLIMIT_FSIZE, &fsize);
+        execv(SPECBAKE_EXE, argv.data());
+        _exit(127);
+    }
+    close(fds[1]);
+    RunResult r;
+    char buffer[4096];
+    for (ssize_t n; (n = read(fds[0], buffer, sizeof buffer)) > 0;) r.err.append(buffer, size_t(n));
+    close(fds[0]);
+    int status = 0;
+    waitpid(pid, &status, 0);
+    r.signaled = WIFSIGNALED(status);
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return r;
+}
+
+}  // namespace
+
+TEST(HostileInput, WriteErrorsGiveTheFileAndTheOsReason) {
+    const fs::path dir = temp_dir("write_errors");
+    write_json(dir / "tri.gltf", triangle_scene(""));
+    write_normal_png(dir / "n.png");
+    const std::string reason = std::strerror(EFBIG);
+    struct Case {
+        std::vector<std::string> args;
+        std::string file;  // the output the error names
+    };
+    const std::vector<Case> cases = {
+        {{"bake", (dir / "tri.gltf").string(), "-o", (dir / "o1").string()}, (dir / "o1" / "tri").string()},
+        {{"bake", (dir / "tri.gltf").string(), "--format", "glb", "-o", (dir / "o2").string()}, (dir / "o2" / "tri").string()},
+        {{"texture", "--normal", (dir / "n.png").string(), "--format", "ktx2", "-o", (dir / "o3").string()}, ".ktx2"},
+        {{"texture", "--normal", (dir / "n.png").string(), "--format", "png", "-o", (dir / "o4").string()}, ".png"},
+        {{"texture", "--normal", (dir / "n.png").string(), "--format", "exr", "-o", (dir / "o5").string()}, ".exr"},
+    };
+    for (const Case& c : cases) {
+        const RunResult r = run_with_file_size_limit(c.args, 64);
+        expect_clean_error(r, c.file, reason);
+        EXPECT_EQ(r.err.find("disk full?"), std::string::npos) << r.err;
+        EXPECT_EQ(r.err.find(".tmp"), std::string::npos) << "names the output, not its temporary: " << r.err;
+    }
+    fs::remove_all(dir);
+}
+
+TEST(HostileInput, JpegMetadataSegmentsAreCheckedBeforeTheDecoder) {
+    const fs::path dir = temp_dir("jpeg_markers");
+    // A valid 8x8 JPEG from OpenImageIO, then APP segments inserted after its SOI marker.
+    const fs::path good = dir / "good.jpg";
+    {
+        fs::create_directories(dir);
+        std::vector<uint8_t> px(8 * 8 * 3, 128);
+        auto out = OIIO::ImageOutput::create(good.string());
+        ASSERT_TRUE(out);
+        ASSERT_TRUE(out->open(good.string(), OIIO::ImageSpec(8, 8, 3, OIIO::TypeDesc::UINT8)));
+        ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT8, px.data()));
+        out->close();
+    }
+    const std::string jpeg = slurp(good);
+    auto with_segment = [&](uint8_t marker, const std::string& data) {
+        const uint16_t n = uint16_t(data.size() + 2);
+        return jpeg.substr(0, 2) + std::string{char(0xFF), char(marker), char(n >> 8), char(n & 0xFF)} + data +
+               jpeg.substr(2);
+    };
+    // An APP1 whose identifier has no NUL (OpenImageIO strcmp()s it), an Exif header shorter than its
+    // 6 bytes (OpenImageIO takes length - 6), an ICC header without its sequence bytes.
+    write_bytes(dir / "app1.jpg", with_segment(0xE1, "\x04\x04"));
+    write_bytes(dir / "exif.jpg", with_segment(0xE1, std::string("Exif\0", 5)));
+    write_bytes(dir / "icc.jpg", with_segment(0xE2, std::string("ICC_PROFILE\0", 12)));
+    // The same APP1 after stray bytes, which libjpeg skips to reach it.
+    const std::string app1 = with_segment(0xE1, "\x04\x04");
+    write_bytes(dir / "stray.jpg", app1.substr(0, 2) + "\x01\x02" + app1.substr(2));
+    for (const char* name : {"app1.jpg", "exif.jpg", "icc.jpg", "stray.jpg"}) {
+        const RunResult r = run_specbake({"texture", "--normal", (dir / name).string(), "-o", (dir / "out").string()}, dir);
+        expect_clean_error(r, name, "corrupt JPEG");
+    }
+    // A well-formed Exif segment (header only) is fine.
+    write_bytes(dir / "ok.jpg", with_segment(0xE1, std::string("Exif\0\0", 6)));
+    EXPECT_EQ(run_specbake({"texture", "--normal", (dir / "ok.jpg").string(), "-o", (dir / "ok").string()}, dir).exit_code, 0);
+    fs::remove_all(dir);
+}
+
+TEST(HostileInput, PlyFaceListWithoutIndicesIsRefusedWithoutAbort) {
+    const fs::path dir = temp_dir("ply_faces");
+    // A misspelt face property makes Assimp's PLY reader produce faces with no indices; its triangulation
+    // then aborted the process on an assertion.
+    write_bytes(dir / "faces.ply", "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                                   "property float z\nelement face 2\nproperty list uchar int vertex_indices\n"
+                                   "end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\nx 4\nprope 0 2 3 1\n");
+    const RunResult r = run_specbake({"bake", (dir / "faces.ply").string(), "-o", (dir / "out").string()}, dir);
+    expect_clean_error(r, "faces.ply", "no vertex indices");
     fs::remove_all(dir);
 }

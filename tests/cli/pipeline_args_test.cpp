@@ -145,3 +145,31 @@ TEST(ConfigFile, EmptyMaterialValueAndInvalidUtf8AreErrorsNamingTheFile) {
     auto good = parse_config_text("[materials.\"Stahl \xC3\x84 \xE2\x82\xAC \xF0\x9F\x98\x80\"]\nkappa = \"1\"\n", "ok.toml");
     ASSERT_TRUE(good.ok()) << good.error().message;
 }
+
+TEST(ResponseFile, NestedExpansionIsBoundedAsAWhole) {
+    TempDir dir;
+    // Six levels, each naming the one below ten times: 10^6 reads without a bound, refused at once.
+    std::vector<fs::path> levels{dir.write("level0.txt", "a.gltf\n")};
+    for (int level = 1; level <= 6; ++level) {
+        std::string text;
+        for (int k = 0; k < 10; ++k) text += "@" + levels.back().string() + "\n";
+        levels.push_back(dir.write("level" + std::to_string(level) + ".txt", text));
+    }
+    auto fan = expand_response_files({"@" + levels.back().string()});
+    ASSERT_FALSE(fan.ok());
+    EXPECT_NE(fan.error().message.find("level"), std::string::npos) << fan.error().message;
+    EXPECT_NE(fan.error().message.find("4096"), std::string::npos) << fan.error().message;
+    // Two levels of ten are fine, and each file is listed once for the depfile.
+    std::vector<std::string> files;
+    auto small = expand_response_files({"@" + levels[2].string()}, &files);
+    ASSERT_TRUE(small.ok()) << small.error().message;
+    EXPECT_EQ(small->size(), 100u);
+    EXPECT_EQ(files.size(), 3u);
+    // One file whose words exceed the argument bound.
+    std::string many;
+    for (size_t i = 0; i < (size_t(1) << 20) + 1; ++i) many += "a ";
+    auto wide = expand_response_files({"@" + dir.write("wide.txt", many).string()});
+    ASSERT_FALSE(wide.ok());
+    EXPECT_NE(wide.error().message.find("wide.txt"), std::string::npos) << wide.error().message;
+    EXPECT_NE(wide.error().message.find("arguments"), std::string::npos) << wide.error().message;
+}
