@@ -49,6 +49,12 @@ struct SceneState {
     // The file of every image and buffer stored as an external file, resolved once by the path policy
     // (io/input_policy.h) at load; empty for embedded and remote ones. Everything reads these.
     std::vector<std::filesystem::path> image_paths, buffer_paths;
+    // Files the bake wrote that a GLB output carries as images (GltfScene::embed_baked_image).
+    struct BakedImage {
+        std::filesystem::path file;
+        std::string mime_type, name;  // the name goes on the buffer view
+    };
+    std::vector<BakedImage> baked_images;
     // The scene file's own hash is computed in the background from its bytes (mapped until then) while the
     // caller plans and bakes; content_hash() collects it.
     MappedFile source_bytes;
@@ -122,6 +128,7 @@ struct OutputPlan {
     std::vector<OutBuffer> buffers;
     std::vector<std::vector<uint8_t>> embedded_images;  // file bytes of images moved into the GLB
     std::vector<ImageCopy> copies;
+    std::vector<int> baked_views;  // GLB: the buffer view of every SceneState::baked_images entry
     int target_buffer = -1;                                                        // holds the appended data
 };
 // The plan for writing `scene` to `path` (a .glb when `glb`, else a .gltf); its pieces point into `scene`
