@@ -65,8 +65,11 @@ void bc1_block(const uint8_t* t, int stride, uint8_t* out) {
         cov[0] += d[0] * d[0], cov[1] += d[0] * d[1], cov[2] += d[0] * d[2];
         cov[3] += d[1] * d[1], cov[4] += d[1] * d[2], cov[5] += d[2] * d[2];
     }
-    float axis[3] = {1.0f, 1.0f, 1.0f};
-    for (int it = 0; it < 8; ++it) {  // power iteration towards the principal axis
+    // Power iteration towards the principal axis, from the axis of the channel with the largest variance
+    // (a start orthogonal to the principal axis, as (1, 1, 1) is for anti-correlated channels, would stall).
+    const int start = cov[0] >= cov[3] && cov[0] >= cov[5] ? 0 : cov[3] >= cov[5] ? 1 : 2;
+    float axis[3] = {start == 0 ? 1.0f : 0.0f, start == 1 ? 1.0f : 0.0f, start == 2 ? 1.0f : 0.0f};
+    for (int it = 0; it < 8; ++it) {
         const float n[3] = {cov[0] * axis[0] + cov[1] * axis[1] + cov[2] * axis[2],
                             cov[1] * axis[0] + cov[3] * axis[1] + cov[4] * axis[2],
                             cov[2] * axis[0] + cov[4] * axis[1] + cov[5] * axis[2]};
