@@ -8,6 +8,8 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <set>
+#include <vector>
 #include <cmath>
 #include <cstring>
 #include <cstdlib>
@@ -52,6 +54,35 @@ inline std::string missing_node_packages(std::initializer_list<const char*> pack
     return {};
 }
 
+struct Sample {
+    int level = 0;       // of the reference chain
+    int x = 0, y = 0;    // in the reference level, row 0 = the file's first row
+    int read_level = 0;  // level of the loaded texture to sample (0 for one-file-per-mip and EXRLoader)
+    int read_y = 0;      // row of the read-back (EXRLoader returns rows bottom-up)
+};
+
+// Levels 0, 1, the middle and the last; per level both corners and 12 fixed pseudo-random texels.
+inline std::vector<Sample> pick_samples(int width, int height, int mips, bool all_levels) {
+    std::set<int> levels = {0};
+    if (all_levels) levels = {0, std::min(1, mips - 1), mips / 2, mips - 1};
+    std::vector<Sample> out;
+    uint32_t state = 12345;
+    auto next = [&](int n) {
+        state = state * 1664525u + 1013904223u;
+        return int((state >> 8) % uint32_t(n));
+    };
+    for (int L : levels) {
+        const int w = std::max(1, width >> L), h = std::max(1, height >> L);
+        out.push_back({L, 0, 0, L, 0});
+        out.push_back({L, w - 1, h - 1, L, h - 1});
+        for (int i = 0; i < 12; ++i) {
+            const int x = next(w), y = next(h);
+            out.push_back({L, x, y, L, y});
+        }
+    }
+    return out;
+}
+
 // A scratch folder per test, removed afterwards.
 class ConsumerTest : public ::testing::Test {
 protected:
@@ -69,6 +100,26 @@ protected:
         std::string err;
         ASSERT_EQ(shell(quote(SPECBAKE_EXE) + " " + args, root_ / "scratch", nullptr, &err), 0)
             << "specbake " << args << ": " << err;
+    }
+
+    // Runs browser_page.mjs in headless Chromium on `job` (files under `data`); false after a skip or a
+    // fatal failure (already reported), else the page's report in `result`.
+    bool run_browser(const nlohmann::json& job, const fs::path& data, nlohmann::json* result) {
+        std::ofstream(root_ / "job.json") << job.dump();
+        std::string err;
+        const int rc = shell("timeout 170 node " + quote(consumers_dir() / "browser_check.mjs") + " " +
+                                 quote(root_ / "job.json") + " " + quote(data) + " " + quote(root_ / "result.json") +
+                                 " 150",
+                             root_ / "scratch", nullptr, &err);
+        if (rc == 3) {
+            [&] { GTEST_SKIP() << err; }();
+            return false;
+        }
+        EXPECT_EQ(rc, 0) << "headless Chromium run failed: " << err;
+        if (rc != 0) return false;
+        *result = nlohmann::json::parse(slurp(root_ / "result.json"));
+        EXPECT_FALSE(result->contains("fatal")) << (*result)["fatal"];
+        return !result->contains("fatal");
     }
 
     fs::path root_;

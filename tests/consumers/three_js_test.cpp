@@ -21,13 +21,6 @@
 namespace specbake::consumers {
 namespace {
 
-struct Sample {
-    int level = 0;       // of the reference chain
-    int x = 0, y = 0;    // in the reference level, row 0 = the file's first row
-    int read_level = 0;  // level of the loaded texture to sample (0 for one-file-per-mip and EXRLoader)
-    int read_y = 0;      // row of the read-back (EXRLoader returns rows bottom-up)
-};
-
 struct FileCheck {
     std::string id;           // path relative to the data folder
     std::string loader;
@@ -40,28 +33,6 @@ struct FileCheck {
     const TextureBakeResult* reference = nullptr;
     std::vector<Sample> samples;
 };
-
-// Levels 0, 1, the middle and the last; per level both corners and 12 fixed pseudo-random texels.
-std::vector<Sample> pick_samples(int width, int height, int mips, bool all_levels) {
-    std::set<int> levels = {0};
-    if (all_levels) levels = {0, std::min(1, mips - 1), mips / 2, mips - 1};
-    std::vector<Sample> out;
-    uint32_t state = 12345;
-    auto next = [&](int n) {
-        state = state * 1664525u + 1013904223u;
-        return int((state >> 8) % uint32_t(n));
-    };
-    for (int L : levels) {
-        const int w = std::max(1, width >> L), h = std::max(1, height >> L);
-        out.push_back({L, 0, 0, L, 0});
-        out.push_back({L, w - 1, h - 1, L, h - 1});
-        for (int i = 0; i < 12; ++i) {
-            const int x = next(w), y = next(h);
-            out.push_back({L, x, y, L, y});
-        }
-    }
-    return out;
-}
 
 struct Container {
     const char* label;
@@ -202,15 +173,8 @@ TEST_F(ThreeJs, LoadersDecodeEveryTextureOutputWithItsMipsAndTexels) {
         for (const Sample& s : f.samples) samples.push_back({{"level", s.read_level}, {"x", s.x}, {"y", s.read_y}});
         job["entries"].push_back({{"id", f.id}, {"path", f.id}, {"loader", f.loader}, {"samples", samples}});
     }
-    std::ofstream(root_ / "job.json") << job.dump();
-    std::string err;
-    const int rc = shell("timeout 170 node " + quote(consumers_dir() / "browser_check.mjs") + " " +
-                             quote(root_ / "job.json") + " " + quote(data) + " " + quote(root_ / "result.json") + " 150",
-                         root_ / "scratch", nullptr, &err);
-    if (rc == 3) GTEST_SKIP() << err;
-    ASSERT_EQ(rc, 0) << "headless Chromium run failed: " << err;
-    const nlohmann::json result = nlohmann::json::parse(slurp(root_ / "result.json"));
-    ASSERT_FALSE(result.contains("fatal")) << result["fatal"];
+    nlohmann::json result;
+    if (!run_browser(job, data, &result)) return;
     std::printf("three.js r%s on %s, %s\n", result.value("three", "?").c_str(), result.value("webgl", "?").c_str(),
                 result.value("renderer", "?").c_str());
     // WebGL 2 samples 16-bit unorm textures only through EXT_texture_norm16, which Chromium does not offer
