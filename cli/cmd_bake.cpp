@@ -92,6 +92,14 @@ void add_bake_command(CLI::App& app, std::function<int()>& run) {
     sub->add_option("--container", o->container, "Texture container: ktx2, dds, exr or png (one file per mip)")
         ->check(CLI::IsMember({"ktx2", "dds", "exr", "png"}))
         ->capture_default_str();
+    sub->add_option("--gltf-mode", o->gltf_mode,
+                    "sidecar: baked textures in the SPECBAKE_specular_aa extension only; replace: also put the baked "
+                    "roughness and mean-normal mips into the material's metallicRoughnessTexture and normalTexture "
+                    "as KTX2 (UASTC) through KHR_texture_basisu, so any glTF viewer shows them (needs basisu)")
+        ->check(CLI::IsMember({"sidecar", "replace"}))
+        ->capture_default_str();
+    sub->add_option("--basisu", o->basisu,
+                    "Basis Universal encoder for --gltf-mode replace (default: $SPECBAKE_BASISU, else basisu on the PATH)");
     add_curvature_options(sub, *o);
     add_material_options(sub, *o);
     auto pipe = std::make_shared<PipelineFlags>();
@@ -107,7 +115,8 @@ void add_bake_command(CLI::App& app, std::function<int()>& run) {
         "  specbake bake chair.fbx table.obj --estimator jet-fitting -o baked/\n"
         "  specbake bake brick.glb --normal-y -y --container dds -o out/\n"
         "  specbake bake scene.gltf --config materials.toml -o out/   ([materials.NAME] tables: per material)\n"
-        "  specbake bake cloth.gltf --isotropic max --outputs roughness,kernel -o out/");
+        "  specbake bake cloth.gltf --isotropic max --outputs roughness,kernel -o out/\n"
+        "  specbake bake Helmet.gltf --gltf-mode replace --basisu /path/to/basisu -o out/");
     sub->callback([&run, o, pipe] { run = [o, pipe] { return run_bake(*o, *pipe); }; });
 }
 

@@ -26,6 +26,8 @@ struct SceneCliOptions {
     std::string estimator = "shape-operator";
     std::string format = "same";
     std::string container = "ktx2";
+    std::string gltf_mode = "sidecar";
+    std::string basisu;
     std::string isotropic = "mean";
     std::string filter = "projected";
     double max_kernel = 0.0;
@@ -161,6 +163,8 @@ inline Result<SceneJob> make_scene_job(const SceneCliOptions& o) {
     job.output_dir = o.output_dir;
     job.format = o.format == "gltf" ? SceneFormat::Gltf : o.format == "glb" ? SceneFormat::Glb : SceneFormat::SameAsInput;
     job.container = io::parse_container(o.container).value_or(io::TextureContainer::Ktx2);
+    job.gltf_mode = o.gltf_mode == "replace" ? GltfMode::Replace : GltfMode::Sidecar;
+    job.basisu = o.basisu;
     PlanOptions& p = job.plan;
     p.estimator = parse_curvature_estimator(o.estimator).value_or(CurvatureEstimator::ShapeOperator);
     p.min_roughness_gain = o.min_roughness_gain;

@@ -133,6 +133,18 @@ public:
     // Sets the vendor extension object on a material (replacing an earlier one) and lists the extension
     // in extensionsUsed (never extensionsRequired).
     void set_material_extension(int material, const nlohmann::json& extension);
+    // glTF-valid replacement (`bake --gltf-mode replace`): the material's normalTexture and
+    // metallicRoughnessTexture become new textures whose KHR_texture_basisu source is the given KTX2 file
+    // (UASTC), with a fallback `source` (the texture's old image, or `*_fallback_uri` as PNG), a trilinear
+    // sampler (the old sampler's wrapping), the baked textures' texCoord and transform; normal scale and
+    // roughnessFactor become 1 (the bake applied them). An empty URI leaves that slot alone.
+    struct BasisuTextures {
+        std::string normal_uri, roughness_uri;
+        std::string normal_fallback_uri, roughness_fallback_uri;  // used when the slot had no image
+        int texcoord = 0;
+        nlohmann::json transform;  // KHR_texture_transform of the baked textures, null when none
+    };
+    void use_basisu_textures(int material, const BasisuTextures& textures);
     // Sets the vendor extension object at the root of the glTF (tool version, settings).
     void set_root_extension(const nlohmann::json& extension);
     // A file the bake wrote (a KTX2, DDS or PNG texture) carried inside a .glb output, on a buffer view of

@@ -1,5 +1,8 @@
 #include "pipeline/scene_job.h"
 
+#include "pipeline/gltf_replace.h"
+#include "pipeline/uastc_encode.h"
+
 #include "pipeline/bake_output.h"
 #include "pipeline/batch.h"
 #include "pipeline/glint_bake.h"
@@ -83,6 +86,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
     // Material textures: the plan measures its statistic on the full bake and this writes each kept bake
     // right away. Layers with identical inputs share one set of files (the first one's, by its stem).
     std::map<std::string, std::vector<io::ManifestOutput>> files_by_stem;
+    std::map<std::string, ReplaceLayer> replace_by_stem;  // --gltf-mode replace: the chains it encodes
     PlanOptions options = job.plan;
     options.texture_sink = [&](const TextureDecision& d, const TextureWork& w,
                                TextureBakeResult&& baked) -> Result<void> {
@@ -97,6 +101,12 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         in.roughness_value = d.roughness_value;
         in.normal_bits = w.normal_bits;
         in.roughness_bits = w.roughness_bits;
+        if (job.gltf_mode == GltfMode::Replace && d.layer == "base" && options.texture_settings_for(d.material_name).outputs.normal) {
+            ReplaceLayer& r = replace_by_stem[d.stem];
+            r.stem = d.stem;
+            r.roughness = baked.roughness;
+            r.normal = baked.normal;
+        }
         auto out = write_texture_outputs(std::move(baked), in, options.texture_settings_for(d.material_name),
                                          job.container, out_dir, d.stem, job.progress);
         if (!out) return out.error();
@@ -183,6 +193,22 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
     }
     if (auto r = add_glint_outputs(*plan, out_dir, files_by_stem, extension_of_material, written, result.outputs); !r)
         return r.error();
+    if (job.gltf_mode == GltfMode::Replace) {
+        auto basisu = find_basisu(job.basisu);
+        if (!basisu) return basisu.error();
+        for (const TextureDecision& d : plan->textures) {
+            if (!d.bake || d.layer != "base" || !replace_by_stem.count(d.stem)) continue;
+            ReplaceLayer layer = replace_by_stem.at(d.stem);
+            layer.material = d.material;
+            layer.roughness_from_texture = d.roughness_texture_used;
+            layer.texcoord = d.texcoord;
+            layer.transform = materials[size_t(d.material)].normal.transform;
+            say("encoding UASTC textures of material " + std::to_string(d.material) + " of " + input.string());
+            const size_t before = result.outputs.size();
+            if (auto r = replace_with_basisu(scene, layer, *basisu, out_dir, result.outputs, warnings); !r) return r.error();
+            for (size_t k = before; k < result.outputs.size(); ++k) written.push_back(out_dir / result.outputs[k].path);
+        }
+    }
     for (const auto& [material, ext] : extension_of_material) scene.set_material_extension(material, ext);
     const bool any_texture = !extension_of_material.empty();
     if (baked_primitives > 0 || any_texture) scene.set_root_extension(root_extension(job, any_texture));
@@ -316,6 +342,7 @@ json scene_settings_json(const SceneJob& job) {
         for (const auto& [name, object] : job.plan.material_glints) glints[name] = object;
         s["material_glints"] = glints;
     }
+    if (job.gltf_mode == GltfMode::Replace) s["gltf_mode"] = "replace";
     if (job.plan.textures) {
         s["texture"] = texture_settings_json(job.plan.texture_settings, job.container);
         // Per-material settings as applied, so the up-to-date check sees a changed override.

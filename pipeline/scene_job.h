@@ -20,6 +20,7 @@
 namespace specbake {
 
 enum class SceneFormat { SameAsInput, Gltf, Glb };
+enum class GltfMode { Sidecar, Replace };  // `bake --gltf-mode`
 
 struct SceneJob {
     std::vector<std::filesystem::path> scenes;
@@ -28,6 +29,11 @@ struct SceneJob {
     SceneFormat format = SceneFormat::SameAsInput;
     PlanOptions plan;
     io::TextureContainer container = io::TextureContainer::Ktx2;
+    // Sidecar: baked textures in the SPECBAKE_specular_aa extension only. Replace: also the material's
+    // normalTexture and metallicRoughnessTexture carry the baked chains as KTX2 (UASTC) through
+    // KHR_texture_basisu (pipeline/gltf_replace.h), encoded by `basisu` (find_basisu()).
+    GltfMode gltf_mode = GltfMode::Sidecar;
+    std::filesystem::path basisu;          // empty: $SPECBAKE_BASISU or basisu on the PATH
     ProgressFn progress;                   // called from the threads baking the scenes
     // The output folder's lock when the caller already holds it (else the job takes it, pipeline/bake_output.h).
     const io::OutputLock* lock = nullptr;

@@ -1,0 +1,35 @@
+// KTX2 files of UASTC blocks (vkFormat 0, KHR_DF_MODEL_UASTC) for glTF's KHR_texture_basisu: the level of a
+// one-level file an encoder wrote, and a full mip chain assembled from one such file per level, so the
+// baked levels are kept instead of mips the encoder would regenerate.
+#pragma once
+
+#include "core/result.h"
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace specbake::io {
+
+// One level of UASTC data: ceil(w / 4) x ceil(h / 4) blocks of 16 bytes.
+struct UastcLevel {
+    int width = 0, height = 0;
+    std::vector<uint8_t> blocks;
+};
+
+// A one-level UASTC KTX2 file (no supercompression), as `basisu -uastc -ktx2 -ktx2_no_zstandard` writes it:
+// its level and its data format descriptor (kept verbatim for the assembled file). Errors name `name`.
+struct UastcFile {
+    UastcLevel level;
+    std::vector<uint8_t> dfd;  // the whole DFD (dfdTotalSize first)
+};
+Result<UastcFile> read_uastc_ktx2(std::span<const uint8_t> bytes, const std::string& name);
+
+// A KTX2 file of `levels` (level 0 first, each half the previous size, down to 1x1), no
+// supercompression, the descriptor `dfd`, KTXwriter `writer`; level data smallest level first, each
+// aligned to 16 bytes (lcm of the 16-byte block and 4), KTX 2.0 Sec. 3.
+std::vector<uint8_t> assemble_uastc_ktx2(const std::vector<UastcLevel>& levels, std::span<const uint8_t> dfd,
+                                         const std::string& writer);
+
+}  // namespace specbake::io

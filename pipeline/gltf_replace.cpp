@@ -1,0 +1,99 @@
+// The glTF-valid replacement mode: UASTC KTX2 files of the baked chains in the material's own slots.
+#include "pipeline/gltf_replace.h"
+
+#include "io/atomic_file.h"
+#include "io/image_io.h"
+#include "pipeline/uastc_encode.h"
+
+namespace specbake {
+namespace fs = std::filesystem;
+
+namespace {
+
+// The chain in glTF's metallic-roughness layout: G = r, B = metallic (1 when the input had none, so the
+// material's metallicFactor keeps its meaning), R unused by glTF (the ORM input's occlusion, else 1).
+MipChain metallic_roughness_layout(const MipChain& roughness) {
+    MipChain out;
+    for (const Image& l : roughness.levels) {
+        Image o(l.width, l.height, 3);
+        for (size_t i = 0; i < l.texel_count(); ++i) {
+            const float* p = l.pixels.data() + i * size_t(l.channels);
+            o.pixels[i * 3 + 0] = l.channels >= 3 ? p[0] : 1.0f;
+            o.pixels[i * 3 + 1] = l.channels >= 3 ? p[1] : p[0];
+            o.pixels[i * 3 + 2] = l.channels >= 3 ? p[2] : 1.0f;
+        }
+        out.levels.push_back(std::move(o));
+    }
+    return out;
+}
+
+}  // namespace
+
+Result<void> replace_with_basisu(io::GltfScene& scene, const ReplaceLayer& layer, const fs::path& basisu,
+                                 const fs::path& dir, std::vector<io::ManifestOutput>& outputs,
+                                 std::vector<std::string>& warnings) {
+    const std::vector<io::MaterialInfo> materials = scene.materials();
+    if (layer.material < 0 || size_t(layer.material) >= materials.size() || layer.normal.levels.empty()) return {};
+    const io::MaterialInfo& mat = materials[size_t(layer.material)];
+    const Image& top = layer.normal.levels.front();
+    const std::string label = "material " + std::to_string(layer.material) + (mat.name.empty() ? "" : " (" + mat.name + ")");
+    if (top.width % 4 != 0 || top.height % 4 != 0) {
+        warnings.push_back(label + ": not replaced (--gltf-mode replace): its textures are " + std::to_string(top.width) +
+                           "x" + std::to_string(top.height) + ", and KHR_texture_basisu needs sizes that are multiples of 4; "
+                           "the baked textures stay in SPECBAKE_specular_aa");
+        return {};
+    }
+    io::GltfScene::BasisuTextures t;
+    t.texcoord = layer.texcoord;
+    t.transform = layer.transform;
+    const fs::path scratch = dir / (".basisu_" + layer.stem);
+    auto write = [&](const MipChain& chain, const std::string& kind, std::string& uri) -> Result<void> {
+        const std::string name = layer.stem + "_" + kind + "_basisu.ktx2";
+        auto bytes = encode_uastc_ktx2(chain, basisu, scratch, name);
+        if (!bytes) return bytes.error();
+        if (auto w = io::write_file_atomic(dir / name, std::span<const uint8_t>(*bytes)); !w) return w.error();
+        io::ManifestOutput o;
+        o.kind = kind + "_basisu";
+        o.path = name;
+        o.format = "ktx2";
+        o.width = chain.levels.front().width;
+        o.height = chain.levels.front().height;
+        o.mips = int(chain.levels.size());
+        o.channels = 4;
+        o.extra = {{"gpu_format", "UASTC"}, {"supercompression", "none"}, {"bytes", bytes->size()},
+                   {"gltf", kind == "normal" ? "normalTexture (KHR_texture_basisu)"
+                                             : "metallicRoughnessTexture (KHR_texture_basisu)"}};
+        outputs.push_back(std::move(o));
+        uri = name;
+        return {};
+    };
+    if (auto r = write(layer.normal, "normal", t.normal_uri); !r) return r;
+    // A metallic-roughness texture mapped unlike the normal map was not filtered (the bake used a constant
+    // roughness), and replacing it would move its metallic channel into the normal map's texture space.
+    if (mat.metallic_roughness.texture >= 0 && !layer.roughness_from_texture) {
+        warnings.push_back(label + ": metallicRoughnessTexture kept (--gltf-mode replace): it is mapped unlike the "
+                           "normal texture, so the bake used a constant roughness");
+    } else {
+        const MipChain mr = metallic_roughness_layout(layer.roughness);
+        if (auto r = write(mr, "roughness", t.roughness_uri); !r) return r;
+        if (mat.metallic_roughness.image < 0) {
+            t.roughness_fallback_uri = layer.stem + "_roughness_fallback.png";
+            if (auto w = io::write_image(dir / t.roughness_fallback_uri, mr.levels.front(), 8); !w) return w.error();
+            io::ManifestOutput o;
+            o.kind = "roughness_fallback";
+            o.path = t.roughness_fallback_uri;
+            o.format = "png";
+            o.width = mr.levels.front().width;
+            o.height = mr.levels.front().height;
+            o.mips = 1;
+            o.channels = 3;
+            outputs.push_back(std::move(o));
+        }
+    }
+    std::error_code ec;
+    fs::remove_all(scratch, ec);
+    scene.use_basisu_textures(layer.material, t);
+    return {};
+}
+
+}  // namespace specbake

@@ -1,0 +1,36 @@
+// `bake --gltf-mode replace`: the baked roughness and mean-normal chains of a material's base layer as
+// KTX2 (UASTC, every baked level) in its metallicRoughnessTexture and normalTexture through
+// KHR_texture_basisu, so any glTF viewer samples the filtered roughness with no shader change.
+#pragma once
+
+#include "bake/texture_bake.h"
+#include "io/gltf_scene.h"
+#include "io/manifest.h"
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace specbake {
+
+// What the replacement needs of one baked base layer.
+struct ReplaceLayer {
+    int material = -1;
+    std::string stem;               // of the layer's baked files
+    MipChain roughness;             // 1 channel r, or 3 (occlusion, r, metallic) for an ORM input
+    MipChain normal;                // 3 channels, (n + 1) / 2
+    bool roughness_from_texture = false;  // r came from the material's metallicRoughnessTexture
+    int texcoord = 0;
+    nlohmann::json transform;       // the normal texture's KHR_texture_transform, null when none
+};
+
+// Encodes and writes `<stem>_roughness_basisu.ktx2` and `<stem>_normal_basisu.ktx2` (and a level-0 PNG
+// fallback where the slot had no image) into `dir`, points the material at them
+// (io::GltfScene::use_basisu_textures) and appends the files to `outputs` (paths relative to `dir`).
+// A layer whose size is not a multiple of 4 (KHR_texture_basisu) or whose metallic-roughness texture is
+// mapped unlike the normal map keeps that slot, with a line in `warnings`.
+Result<void> replace_with_basisu(io::GltfScene& scene, const ReplaceLayer& layer, const std::filesystem::path& basisu,
+                                 const std::filesystem::path& dir, std::vector<io::ManifestOutput>& outputs,
+                                 std::vector<std::string>& warnings);
+
+}  // namespace specbake
