@@ -73,7 +73,7 @@ Result<void> replace_with_basisu(io::GltfScene& scene, const ReplaceLayer& layer
     if (mat.metallic_roughness.texture >= 0 && !layer.roughness_from_texture) {
         warnings.push_back(label + ": metallicRoughnessTexture kept (--gltf-mode replace): it is mapped unlike the "
                            "normal texture, so the bake used a constant roughness");
-    } else {
+    } else if (!layer.roughness.levels.empty()) {  // empty when --outputs leaves roughness out
         const MipChain mr = metallic_roughness_layout(layer.roughness);
         if (auto r = write(mr, "roughness", t.roughness_uri); !r) return r;
         if (mat.metallic_roughness.image < 0) {

@@ -101,6 +101,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         in.roughness_value = d.roughness_value;
         in.normal_bits = w.normal_bits;
         in.roughness_bits = w.roughness_bits;
+        // The replacement needs the mean normal (normalTexture); without it the layer keeps its slots.
         if (job.gltf_mode == GltfMode::Replace && d.layer == "base" && options.texture_settings_for(d.material_name).outputs.normal) {
             ReplaceLayer& r = replace_by_stem[d.stem];
             r.stem = d.stem;
