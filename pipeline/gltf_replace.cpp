@@ -1,4 +1,5 @@
-// The glTF-valid replacement mode: UASTC KTX2 files of the baked chains in the material's own slots.
+// The glTF-valid replacement mode: UASTC KTX2 files of the baked chains written and put in the material's
+// own slots (metallic-roughness layout of the roughness chain, fallback PNG, manifest entries).
 #include "pipeline/gltf_replace.h"
 
 #include "io/atomic_file.h"
