@@ -118,6 +118,19 @@ Result<OutputPlan> plan_output(const SceneState& scene, const fs::path& path, bo
             img.mimeType = mime;
             img.uri.clear();
         }
+        // The bake's own textures, each on a buffer view after those of the input's images.
+        for (const SceneState::BakedImage& b : scene.baked_images) {
+            auto bytes = read_file(b.file);
+            if (!bytes) return bytes.error();
+            embedded_images.push_back(std::move(*bytes));
+            tinygltf::BufferView bv;
+            bv.buffer = 0;
+            bv.byteLength = embedded_images.back().size();
+            bv.byteOffset = out_buffers[0].bytes.append(embedded_images.back());
+            bv.name = b.name;
+            m.bufferViews.push_back(bv);
+            plan.baked_views.push_back(int(m.bufferViews.size() - 1));
+        }
         target_buffer = 0;
     } else {
         for (size_t i = 0; i < payloads.size(); ++i) {

@@ -72,4 +72,13 @@ void GltfScene::set_root_extension(const json& extension) {
     add_extension_used(impl_->model);
 }
 
+int GltfScene::embed_baked_image(const std::filesystem::path& file, const std::string& mime_type,
+                                 const std::string& name) {
+    std::vector<gltf::SceneState::BakedImage>& baked = impl_->baked_images;
+    for (size_t k = 0; k < baked.size(); ++k)
+        if (baked[k].file == file) return int(k);
+    baked.push_back({file, mime_type, name});
+    return int(baked.size() - 1);
+}
+
 }  // namespace specbake::io

@@ -51,6 +51,12 @@ struct SceneState {
     std::vector<std::filesystem::path> image_paths, buffer_paths;
     // Other files the scene was read from: what Assimp opened besides the asset (an OBJ's .mtl).
     std::vector<std::filesystem::path> other_files;
+    // Files the bake wrote that a GLB output carries as images (GltfScene::embed_baked_image).
+    struct BakedImage {
+        std::filesystem::path file;
+        std::string mime_type, name;  // the name goes on the buffer view
+    };
+    std::vector<BakedImage> baked_images;
     // The scene file's own hash is computed in the background from its bytes (mapped until then) while the
     // caller plans and bakes; content_hash() collects it.
     MappedFile source_bytes;
@@ -124,6 +130,7 @@ struct OutputPlan {
     std::vector<OutBuffer> buffers;
     std::vector<std::vector<uint8_t>> embedded_images;  // file bytes of images moved into the GLB
     std::vector<ImageCopy> copies;
+    std::vector<int> baked_views;  // GLB: the buffer view of every SceneState::baked_images entry
     int target_buffer = -1;                                                        // holds the appended data
 };
 // The plan for writing `scene` to `path` (a .glb when `glb`, else a .gltf); its pieces point into `scene`

@@ -148,6 +148,13 @@ public:
     void use_basisu_textures(int material, const BasisuTextures& textures);
     // Sets the vendor extension object at the root of the glTF (tool version, settings).
     void set_root_extension(const nlohmann::json& extension);
+    // A file the bake wrote (a KTX2, DDS or PNG texture) carried inside a .glb output, on a buffer view of
+    // the binary chunk named `name`. Returns its number k (the same file asked twice: one view); an object
+    // in a SPECBAKE_specular_aa "outputs" array that holds "embedded": k gets "bufferView": <that view> in
+    // its place when a GLB is written. Not glTF images: glTF allows image/ktx2 only for Basis Universal
+    // data (KHR_texture_basisu) and no DDS without MSFT_texture_dds, so the validator would flag them.
+    // A .gltf output ignores it (the file stays beside the scene).
+    int embed_baked_image(const std::filesystem::path& file, const std::string& mime_type, const std::string& name);
 
     struct WrittenFile {
         std::filesystem::path path;

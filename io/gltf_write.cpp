@@ -64,6 +64,30 @@ Result<std::vector<GltfScene::WrittenFile>> GltfScene::write(const fs::path& pat
         }
     }
 
+    // Baked textures carried in the GLB: "embedded": k in the vendor extension's outputs becomes the view.
+    if (glb && !planned->baked_views.empty() && doc.contains("materials")) {
+        auto resolve = [&](json& outputs) -> Result<void> {
+            if (!outputs.is_array()) return {};
+            for (json& o : outputs) {
+                if (!o.is_object() || !o.contains("embedded")) continue;
+                const int k = o["embedded"].get<int>();
+                if (k < 0 || size_t(k) >= planned->baked_views.size())
+                    return make_error(path.string() + ": embedded texture " + std::to_string(k) + " was not planned");
+                o.erase("embedded");
+                o["bufferView"] = planned->baked_views[size_t(k)];
+            }
+            return {};
+        };
+        for (json& mat : doc["materials"]) {
+            if (!mat.contains("extensions") || !mat["extensions"].contains(kSpecbakeExtension)) continue;
+            json& e = mat["extensions"][kSpecbakeExtension];
+            if (e.contains("outputs"))
+                if (auto r = resolve(e["outputs"]); !r) return r.error();
+            if (e.contains("clearcoat") && e["clearcoat"].contains("outputs"))
+                if (auto r = resolve(e["clearcoat"]["outputs"]); !r) return r.error();
+        }
+    }
+
     // Every file goes to a temporary first; all are renamed into place once all are written.
     std::vector<std::unique_ptr<AtomicOutput>> outputs;
     std::vector<WrittenFile> written;

@@ -1,6 +1,7 @@
 #include "io/texture_writer.h"
 
 #include "io/atomic_file.h"
+#include "io/block_compress.h"
 #include "io/dds.h"
 #include "io/ktx2.h"
 #include "io/oiio_api.h"
@@ -307,6 +308,55 @@ ManifestOutput EncodedTexture::entry(const std::string& filename, const std::str
     return e;
 }
 
+namespace {
+
+// The file of `t` with every level block-compressed as `format` (16-bit unorm levels rounded to 8 bits
+// first: BC endpoints hold 8 bits), zstd-supercompressed when `t` asks for it (KTX2).
+Result<BlockFile> block_compressed(const EncodedTexture& t, BlockFormat format) {
+    if (t.encoding() != TexelEncoding::Unorm8 && t.encoding() != TexelEncoding::Unorm16)
+        return make_error("block compression takes 8- or 16-bit unorm data");
+    const ContainerLayout& layout = t.layout();
+    const int channels = layout.stored_channels;
+    std::vector<std::vector<uint8_t>> levels(layout.level_offset.size());
+    tbb::parallel_for(size_t(0), levels.size(), [&](size_t L) {
+        const int w = std::max(1, t.width() >> L), h = std::max(1, t.height() >> L);
+        const uint8_t* src = t.bytes().data() + layout.level_offset[L];
+        std::vector<uint8_t> narrowed;
+        if (t.encoding() == TexelEncoding::Unorm16) {
+            narrowed.resize(size_t(w) * size_t(h) * size_t(channels));
+            for (size_t k = 0; k < narrowed.size(); ++k) {
+                uint16_t v;
+                std::memcpy(&v, src + 2 * k, 2);
+                narrowed[k] = uint8_t((uint32_t(v) * 255u + 32767u) / 65535u);
+            }
+            src = narrowed.data();
+        }
+        levels[L] = compress_level(format, src, w, h, channels);
+    });
+    return block_file(t.container(), format, t.width(), t.height(), std::move(levels),
+                      t.supercompressed() ? t.supercompression().zstd_level : 0);
+}
+
+// The manifest entry of a block-compressed file: its format names and the channels the blocks hold.
+void describe_blocks(ManifestOutput& e, const EncodedTexture& t, const EncodedFile& f) {
+    static const char* names[] = {"", "BC1_RGB_UNORM_BLOCK", "BC3_UNORM_BLOCK", "BC4_UNORM_BLOCK", "BC5_UNORM_BLOCK"};
+    e.extra["gpu_format"] = names[int(f.block)];
+    e.extra["encoding"] = "unorm8";
+    if (t.container() == TextureContainer::Ktx2) e.extra["vkFormat"] = block_vk_format(f.block);
+    else {
+        e.extra.erase("dxgiFormat");
+        e.extra["dds_header"] = std::string("legacy FourCC ") + block_fourcc(f.block);
+    }
+    if (f.block == BlockFormat::Bc4 || f.block == BlockFormat::Bc5) {
+        e.channels = block_channels(f.block);
+        std::vector<std::string> meaning = e.extra["channel_meaning"];
+        meaning.resize(size_t(e.channels));
+        e.extra["channel_meaning"] = meaning;
+    }
+}
+
+}  // namespace
+
 Result<std::vector<ManifestOutput>> write_encoded_textures(std::span<const EncodedFile> files, const fs::path& dir) {
     std::error_code ec;
     fs::create_directories(dir, ec);
@@ -326,8 +376,18 @@ Result<std::vector<ManifestOutput>> write_encoded_textures(std::span<const Encod
     tbb::parallel_for(size_t(0), files.size(), [&](size_t i) {
         const EncodedTexture& t = *files[i].texture;
         Ktx2Pieces packed;
+        BlockFile blocks;
         std::vector<std::span<const uint8_t>> pieces{t.bytes()};
-        if (t.supercompressed()) {
+        if (files[i].block != BlockFormat::None) {
+            auto b = block_compressed(t, files[i].block);
+            if (!b) {
+                errors[i] = make_error(outputs[i]->final_path().string() + ": " + b.error().message);
+                return;
+            }
+            blocks = std::move(*b);
+            pieces = blocks.pieces();
+            describe_blocks(entries[i], t, files[i]);
+        } else if (t.supercompressed()) {
             auto z = ktx2_zstd_pieces(t.bytes(), t.layout(), t.supercompression().zstd_level);
             if (!z) {
                 errors[i] = make_error(outputs[i]->final_path().string() + ": " + z.error().message);
@@ -342,6 +402,7 @@ Result<std::vector<ManifestOutput>> write_encoded_textures(std::span<const Encod
         entries[i].sha256 = hash.hex();
         entries[i].extra["bytes"] = size;
         entries[i].extra["uncompressed_bytes"] = t.bytes().size();
+        entries[i].extra["block_compression"] = block_format_name(files[i].block);
         entries[i].extra["supercompression"] = t.supercompressed() ? "zstd" : "none";
         if (t.supercompressed()) entries[i].extra["zstd_level"] = t.supercompression().zstd_level;
         if (auto ok = write_pieces_to(outputs[i]->temp_path(), outputs[i]->final_path(), pieces); !ok)

@@ -39,11 +39,16 @@ int gpu_channels(int channels);
 // "R8G8B8A8_UNORM", ... (Vulkan / DXGI spelling without the prefix).
 std::string gpu_format_name(TexelEncoding encoding, int channels);
 
-// KTX2 supercompression (io/ktx2.h, ktx2_zstd): Zstandard, supercompressionScheme 2, on by default.
-// Other containers ignore it.
+// How KTX2/DDS level data is compressed. zstd: KTX2 supercompression (io/ktx2.h, ktx2_zstd), scheme 2, on
+// by default; other containers ignore it. block: 8-bit outputs block-compressed (io/block_compress.h):
+// one channel BC4, the mean normal BC5 (x, y), four channels `rgba_block` (BC1 by default: the ORM map's
+// A is 1, which BC1's opaque mode stores exactly; BC3 adds an alpha block); float data stays float16/32.
+enum class BlockFormat;
 struct Supercompression {
     bool zstd = true;
     int zstd_level = 3;  // 1 (fastest) .. 22; 3 is zstd's own default
+    bool block = false;
+    int rgba_block = 1;  // 1: BC1, 3: BC3
 };
 
 const char* container_name(TextureContainer c);      // "ktx2", "dds", "exr", "png"
@@ -81,6 +86,9 @@ public:
 
     std::span<const uint8_t> bytes() const { return {data_.get(), layout_.total}; }
     int channels() const { return channels_; }
+    int width() const { return width_; }
+    int height() const { return height_; }
+    TexelEncoding encoding() const { return encoding_; }
     TextureContainer container() const { return container_; }
     const ContainerLayout& layout() const { return layout_; }
     // True when the written file is supercompressed (KTX2 with zstd on).
@@ -106,6 +114,7 @@ struct EncodedFile {
     std::string stem;
     std::string kind;
     std::vector<std::string> channel_meaning;  // what each stored channel holds (manifest), may be empty
+    BlockFormat block{};                       // BlockFormat::None: the texels as they are
 };
 Result<std::vector<ManifestOutput>> write_encoded_textures(std::span<const EncodedFile> files,
                                                            const std::filesystem::path& dir);

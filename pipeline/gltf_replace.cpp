@@ -1,4 +1,5 @@
-// The glTF-valid replacement mode: UASTC KTX2 files of the baked chains in the material's own slots.
+// The glTF-valid replacement mode: UASTC KTX2 files of the baked chains written and put in the material's
+// own slots (metallic-roughness layout of the roughness chain, fallback PNG, manifest entries).
 #include "pipeline/gltf_replace.h"
 
 #include "io/atomic_file.h"
@@ -73,7 +74,7 @@ Result<void> replace_with_basisu(io::GltfScene& scene, const ReplaceLayer& layer
     if (mat.metallic_roughness.texture >= 0 && !layer.roughness_from_texture) {
         warnings.push_back(label + ": metallicRoughnessTexture kept (--gltf-mode replace): it is mapped unlike the "
                            "normal texture, so the bake used a constant roughness");
-    } else {
+    } else if (!layer.roughness.levels.empty()) {  // empty when --outputs leaves roughness out
         const MipChain mr = metallic_roughness_layout(layer.roughness);
         if (auto r = write(mr, "roughness", t.roughness_uri); !r) return r;
         if (mat.metallic_roughness.image < 0) {

@@ -101,6 +101,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         in.roughness_value = d.roughness_value;
         in.normal_bits = w.normal_bits;
         in.roughness_bits = w.roughness_bits;
+        // The replacement needs the mean normal (normalTexture); without it the layer keeps its slots.
         if (job.gltf_mode == GltfMode::Replace && d.layer == "base" && options.texture_settings_for(d.material_name).outputs.normal) {
             ReplaceLayer& r = replace_by_stem[d.stem];
             r.stem = d.stem;
@@ -136,6 +137,20 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         ++baked_primitives;
     }
 
+    std::string ext = loaded->is_gltf && scene.source_is_binary() ? ".glb" : ".gltf";
+    if (job.format == SceneFormat::Gltf) ext = ".gltf";
+    if (job.format == SceneFormat::Glb) ext = ".glb";
+    const bool glb = ext == ".glb";
+    // A .glb carries the baked textures it refers to on buffer views (KTX2, DDS, PNG: the formats with a
+    // MIME type), so it is self-contained; EXR files stay beside it.
+    std::map<std::string, int> embedded;  // output path -> its number among the scene's embedded files
+    auto mime_of = [](const std::string& format) -> std::string {
+        if (format == "ktx2") return "image/ktx2";
+        if (format == "png") return "image/png";
+        if (format == "dds") return "image/vnd-ms.dds";
+        return {};
+    };
+
     // Material extensions pointing at the files written during planning: the base layer's properties at
     // the top of the object, the clear coat's in "clearcoat" (io/SPECBAKE_EXTENSION.md).
     const std::vector<io::MaterialInfo> materials = scene.materials();
@@ -160,9 +175,18 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         if (options.material_texture_settings.count(owner_name))  // differs from the root's "textures"
             ext["settings"] = texture_settings_json(options.texture_settings_for(owner_name), job.container);
         ext["outputs"] = json::array();
-        for (const io::ManifestOutput& o : files_by_stem.at(d.stem))
-            ext["outputs"].push_back({{"kind", o.kind}, {"uri", o.path}, {"format", o.format}, {"width", o.width},
-                                      {"height", o.height}, {"mips", o.mips}, {"channels", o.channels}});
+        for (const io::ManifestOutput& o : files_by_stem.at(d.stem)) {
+            json entry = {{"kind", o.kind}, {"uri", o.path}, {"format", o.format}, {"width", o.width},
+                          {"height", o.height}, {"mips", o.mips}, {"channels", o.channels}};
+            if (const std::string mime = mime_of(o.format); glb && !mime.empty()) {
+                const int k = scene.embed_baked_image(out_dir / o.path, mime, o.path);
+                embedded[o.path] = k;
+                entry.erase("uri");
+                entry["embedded"] = k;  // the scene writer puts the buffer view's index here
+                entry["mimeType"] = mime;
+            }
+            ext["outputs"].push_back(std::move(entry));
+        }
         json& target = extension_of_material[d.material];
         if (target.is_null()) target = json::object();
         if (coat) target["clearcoat"] = std::move(ext);
@@ -205,9 +229,6 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         result.inputs.push_back({inputs[i].string(), hash.empty() ? (*hashes)[next++] : std::move(hash)});
     }
 
-    std::string ext = loaded->is_gltf && scene.source_is_binary() ? ".glb" : ".gltf";
-    if (job.format == SceneFormat::Gltf) ext = ".gltf";
-    if (job.format == SceneFormat::Glb) ext = ".glb";
     const fs::path out_file = out_dir / (input.stem().string() + ext);
     say("writing " + (final_dir / out_file.filename()).string());
     // Copied images never take the name of a file this bake writes: the textures, the manifest.
@@ -215,6 +236,28 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
     for (const io::ManifestOutput& o : result.outputs) reserved.push_back(o.path);
     auto files = scene.write(out_file, reserved);
     if (!files) return files.error();
+    // The textures now inside the GLB leave the folder; the manifest lists them under the scene's entry.
+    json inside = json::array();
+    if (!embedded.empty()) {
+        std::vector<io::ManifestOutput> kept;
+        for (io::ManifestOutput& o : result.outputs) {
+            const auto it = embedded.find(o.path);
+            if (it == embedded.end()) {
+                kept.push_back(std::move(o));
+                continue;
+            }
+            std::error_code ec;
+            fs::remove(out_dir / o.path, ec);
+            if (ec) return make_error((out_dir / o.path).string() + ": cannot remove: " + ec.message());
+            written.erase(std::remove(written.begin(), written.end(), out_dir / o.path), written.end());
+            json e = {{"name", o.path}, {"mimeType", mime_of(o.format)}, {"kind", o.kind},
+                      {"format", o.format}, {"width", o.width}, {"height", o.height}, {"mips", o.mips},
+                      {"channels", o.channels}, {"sha256", o.sha256}};
+            for (const auto& [key, value] : o.extra.items()) e[key] = value;
+            inside.push_back(std::move(e));
+        }
+        result.outputs = std::move(kept);
+    }
     for (const io::GltfScene::WrittenFile& f : *files) written.push_back(f.path);
     for (size_t i = 0; i < files->size(); ++i) {
         const fs::path& f = (*files)[i].path;
@@ -234,6 +277,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
                         "in world space"},
                        {"source_format", loaded->is_gltf ? (scene.source_is_binary() ? "glb" : "gltf")
                                                          : lower_extension(input).substr(1)}};
+            if (!inside.empty()) o.extra["embedded_images"] = inside;
         }
         result.outputs.push_back(std::move(o));
     }

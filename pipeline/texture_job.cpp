@@ -3,6 +3,7 @@
 #include "pipeline/bake_output.h"
 #include "pipeline/version.h"
 #include "io/atomic_file.h"
+#include "io/block_compress.h"
 #include "io/input_policy.h"
 #include "io/image_io.h"
 #include "io/sha256.h"
@@ -107,6 +108,16 @@ std::vector<OutputFile> output_files(const TextureBakeShape& shape, const Textur
         files.push_back({Chain::Lean, "lean", stem + "_lean_xy", enc, 4, 1, {"M.xy"}});
     }
     return files;
+}
+
+// The block format of `f` when block compression is asked (io/block_compress.h): unorm data only, one
+// channel BC4, the mean normal BC5 (x, y; z = sqrt(1 - x^2 - y^2) at run time), four channels BC1 or BC3.
+io::BlockFormat block_format_of(const OutputFile& f, const io::Supercompression& s) {
+    if (!s.block || (f.encoding != io::TexelEncoding::Unorm8 && f.encoding != io::TexelEncoding::Unorm16))
+        return io::BlockFormat::None;
+    if (f.chain == Chain::Normal) return io::BlockFormat::Bc5;
+    if (f.channels == 1) return io::BlockFormat::Bc4;
+    return s.rgba_block == 3 ? io::BlockFormat::Bc3 : io::BlockFormat::Bc1;
 }
 
 MipChain& chain_of(TextureBakeResult& baked, Chain c) {
@@ -249,8 +260,10 @@ Result<TextureBakeResult> bake_texture_inputs(const TextureInputs& in, const Tex
 }
 
 nlohmann::json supercompression_json(const io::Supercompression& s) {
-    if (!s.zstd) return {{"scheme", "none"}};
-    return {{"scheme", "zstd"}, {"zstd_level", s.zstd_level}};
+    nlohmann::json j = s.zstd ? nlohmann::json{{"scheme", "zstd"}, {"zstd_level", s.zstd_level}}
+                              : nlohmann::json{{"scheme", "none"}};
+    if (s.block) j["block"] = {{"one_channel", "bc4"}, {"normal", "bc5"}, {"rgba", s.rgba_block == 3 ? "bc3" : "bc1"}};
+    return j;
 }
 
 Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& in, const TextureBakeSettings& settings,
@@ -291,7 +304,7 @@ Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, cons
     for (const OutputFile& f : files) {
         out.textures.push_back(std::make_unique<io::EncodedTexture>(container, f.encoding, shape.width, shape.height,
                                                                     shape.levels, f.channels, supercompression));
-        out.files.push_back({out.textures.back().get(), f.stem, f.kind, f.names});
+        out.files.push_back({out.textures.back().get(), f.stem, f.kind, f.names, block_format_of(f, supercompression)});
     }
     if (progress)
         progress("baking " + std::to_string(in.normal->width) + "x" + std::to_string(in.normal->height) + " " +
@@ -372,7 +385,7 @@ Result<TextureJobOutcome> run_texture_job(const TextureJob& job) {
     io::Manifest manifest;
     manifest.version = tool_version();
     manifest.settings = texture_settings_json(job.settings, job.container);
-    if (job.container == io::TextureContainer::Ktx2)
+    if (job.container == io::TextureContainer::Ktx2 || job.supercompression.block)
         manifest.settings["supercompression"] = supercompression_json(job.supercompression);
 
     TextureInputs in;

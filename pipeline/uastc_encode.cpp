@@ -1,4 +1,5 @@
-// Runs basisu once per baked level (UASTC, linear, no mip generation) and assembles the levels.
+// Runs basisu once per baked level (UASTC, linear, no mip generation; posix_spawn, output to a log the
+// error quotes) and assembles the levels into one KTX2 with the first level's descriptor.
 #include "pipeline/uastc_encode.h"
 
 #include "io/image_io.h"

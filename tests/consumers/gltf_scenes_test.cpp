@@ -28,6 +28,20 @@ nlohmann::json gltf_json(const fs::path& file) {
     return nlohmann::json::parse(bytes);
 }
 
+// The bytes of buffer view `view` of a GLB's binary chunk (empty when out of range).
+std::string glb_buffer_view(const fs::path& file, int view) {
+    const std::string bytes = slurp(file);
+    const nlohmann::json j = gltf_json(file);
+    uint32_t json_length = 0;
+    std::memcpy(&json_length, bytes.data() + 12, 4);
+    const size_t bin = 20 + json_length + 8;  // the BIN chunk's data, after its length and type
+    if (view < 0 || size_t(view) >= j["bufferViews"].size() || bin > bytes.size()) return {};
+    const auto& bv = j["bufferViews"][size_t(view)];
+    const size_t offset = bv.value("byteOffset", size_t(0)), length = bv["byteLength"];
+    if (bv.value("buffer", 0) != 0 || bin + offset + length > bytes.size()) return {};
+    return bytes.substr(bin + offset, length);
+}
+
 struct Mode {
     const char* label;
     const char* args;
@@ -216,9 +230,18 @@ TEST_F(GltfScenes, ValidatorAndThreeJsAcceptEveryBakedScene) {
             if (ext.contains("clearcoat"))
                 for (const auto& o : ext["clearcoat"].value("outputs", nlohmann::json::array())) outs.push_back(o);
             for (const auto& o : outs) {
-                if (!o.contains("uri") || o["format"] == "png") continue;
+                if (o["format"] == "png" || (!o.contains("uri") && !o.contains("bufferView"))) continue;
                 TextureFile t;
-                t.id = (s.output.parent_path() / o["uri"].get<std::string>()).string();
+                if (o.contains("uri")) {
+                    t.id = (s.output.parent_path() / o["uri"].get<std::string>()).string();
+                } else {
+                    // Carried in the GLB: the buffer view's bytes, as a file of their own for the loaders.
+                    const std::string uri = "embedded_" + std::to_string(o["bufferView"].get<int>()) + "." + o["format"].get<std::string>();
+                    t.id = (s.output.parent_path() / uri).string();
+                    auto bytes = glb_buffer_view(data / s.output, o["bufferView"].get<int>());
+                    ASSERT_FALSE(bytes.empty()) << s.output << ": buffer view " << o["bufferView"] << " of " << o.dump();
+                    std::ofstream(data / t.id, std::ios::binary) << bytes;
+                }
                 const std::string ext_name = fs::path(t.id).extension().string();
                 t.loader = ext_name == ".ktx2" ? "KTX2Loader" : ext_name == ".dds" ? "DDSLoader" : "EXRLoader";
                 t.width = o["width"];
@@ -256,8 +279,15 @@ TEST_F(GltfScenes, ValidatorAndThreeJsAcceptEveryBakedScene) {
                 t.id = (s.output.parent_path() / uri).string();
                 t.loader = "KTX2Loader";
                 t.uastc = true;
-                std::string plain = uri;
-                plain.replace(plain.rfind("_basisu"), 7, "");
+                // The uncompressed chain of the same kind the extension lists (beside the scene, or carried in
+                // a GLB and written out by the loop above).
+                std::string plain;
+                const auto& aa = mat.value("extensions", nlohmann::json::object()).value("SPECBAKE_specular_aa", nlohmann::json::object());
+                for (const auto& o : aa.value("outputs", nlohmann::json::array()))
+                    if (o["kind"] == (normal ? "normal" : "roughness") && o["format"] == "ktx2")
+                        plain = o.contains("uri") ? o["uri"].get<std::string>()
+                                                  : "embedded_" + std::to_string(o["bufferView"].get<int>()) + ".ktx2";
+                ASSERT_FALSE(plain.empty()) << s.output << ": no uncompressed " << (normal ? "normal" : "roughness") << " output";
                 auto ref = io::read_texture_for_inspection(data / s.output.parent_path() / plain);
                 ASSERT_TRUE(ref.ok()) << plain << ": " << (ref.ok() ? "" : ref.error().message);
                 t.reference = std::move(*ref);
