@@ -60,20 +60,17 @@ def specbake_texture(name, normal, roughness = None, config = None, container = 
         **kwargs
     )
 
-def specbake_scene(name, scene, srcs = [], baked_materials = [], config = None, container = "ktx2", options = [],
-                   **kwargs):
+def specbake_scene(name, scene, srcs = [], config = None, container = "ktx2", options = [], **kwargs):
     """Bakes one glTF/GLB scene with `specbake bake --format glb` (a self-contained GLB out).
 
-    Outputs: NAME/<scene stem>.glb, NAME/manifest.json and, for every material the plan bakes,
-    NAME/<scene stem>_<material>_{roughness,kernel,lean,lean_xy,normal}.CONTAINER.
+    Outputs: NAME/<scene stem>.glb (carrying the baked textures of every material the plan bakes) and
+    NAME/manifest.json.
 
     Args:
       name: target name and output folder.
       scene: the .gltf or .glb file.
       srcs: every file the scene references (buffers, textures). A file left out is not in the sandbox,
         and the bake fails naming it.
-      baked_materials: the materials whose textures the plan bakes, as "mat<index>_<name>"
-        (`specbake plan SCENE` lists them); their files are the action's outputs.
       config: a specbake TOML/JSON config file (optional).
       container: "ktx2" or "dds".
       options: more `specbake bake` options, e.g. ["--estimator", "second-order"].
@@ -82,8 +79,6 @@ def specbake_scene(name, scene, srcs = [], baked_materials = [], config = None, 
     _check_container(container)
     stem = scene.split(":")[-1].split("/")[-1].rsplit(".", 1)[0]
     outs = [name + "/" + stem + ".glb", name + "/manifest.json"]
-    for material in baked_materials:
-        outs += ["%s/%s_%s_%s.%s" % (name, stem, material, kind, container) for kind in _KINDS]
     args = "bake $(execpath %s) --format glb --container %s" % (scene, container)
     args += _allow_roots([scene] + srcs)
     args += "".join([" " + o for o in options])

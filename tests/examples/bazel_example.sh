@@ -34,7 +34,6 @@ specbake_scene(
     name = "tile_without_orm",
     scene = "@assets//:tile.gltf",
     srcs = ["@assets//:quad.bin", "@assets//:tile_n.png"],
-    baked_materials = ["mat0_tile"],
 )
 BUILD
 if log=$(bz build "${flags[@]}" //undeclared:tile_without_orm 2>&1); then fail "built without a declared input: $log"; fi
