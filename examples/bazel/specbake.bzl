@@ -31,14 +31,6 @@ def _allow_roots(files):
     # --allow-root, so name exactly the folders of the declared inputs' real files, and nothing else.
     return "".join([' --allow-root "$$(dirname "$$(readlink -f $(execpath %s))")"' % f for f in files])
 
-def _check_outputs(name, scene):
-    # Bazel keeps only the declared outputs and fails on a declared one that was not written, but it drops
-    # an undeclared one silently: a material left out of baked_materials would leave the scene pointing at
-    # textures that are not there. So any file the bake wrote that is not declared fails the action.
-    return (' && for f in $(RULEDIR)/%s/*; do case " $(OUTS) " in *" $$f "*) ;; *) ' % name +
-            'echo "specbake_scene(%s): the bake wrote $$(basename $$f), which is not a declared output:' % name +
-            ' add its material to baked_materials (specbake plan $(execpath %s) lists them)" >&2; exit 1;; esac; done' % scene)
-
 def specbake_texture(name, normal, roughness = None, config = None, container = "ktx2", options = [], **kwargs):
     """Bakes one normal map (and roughness/ORM map) with `specbake texture`.
 
@@ -68,21 +60,17 @@ def specbake_texture(name, normal, roughness = None, config = None, container = 
         **kwargs
     )
 
-def specbake_scene(name, scene, srcs = [], baked_materials = [], config = None, container = "ktx2", options = [],
-                   **kwargs):
+def specbake_scene(name, scene, srcs = [], config = None, container = "ktx2", options = [], **kwargs):
     """Bakes one glTF/GLB scene with `specbake bake --format glb` (a self-contained GLB out).
 
-    Outputs: NAME/<scene stem>.glb, NAME/manifest.json and, for every material the plan bakes,
-    NAME/<scene stem>_<material>_{roughness,kernel,lean,lean_xy,normal}.CONTAINER.
+    Outputs: NAME/<scene stem>.glb (carrying the baked textures of every material the plan bakes) and
+    NAME/manifest.json.
 
     Args:
       name: target name and output folder.
       scene: the .gltf or .glb file.
       srcs: every file the scene references (buffers, textures). A file left out is not in the sandbox,
         and the bake fails naming it.
-      baked_materials: the materials whose textures the plan bakes, as "mat<index>_<name>"
-        (`specbake plan SCENE` lists them); their files are the action's outputs. The action fails,
-        naming the file, if the bake writes a texture of a material not listed here.
       config: a specbake TOML/JSON config file (optional).
       container: "ktx2" or "dds".
       options: more `specbake bake` options, e.g. ["--estimator", "second-order"].
@@ -91,8 +79,6 @@ def specbake_scene(name, scene, srcs = [], baked_materials = [], config = None, 
     _check_container(container)
     stem = scene.split(":")[-1].split("/")[-1].rsplit(".", 1)[0]
     outs = [name + "/" + stem + ".glb", name + "/manifest.json"]
-    for material in baked_materials:
-        outs += ["%s/%s_%s_%s.%s" % (name, stem, material, kind, container) for kind in _KINDS]
     args = "bake $(execpath %s) --format glb --container %s" % (scene, container)
     args += _allow_roots([scene] + srcs)
     args += "".join([" " + o for o in options])
@@ -100,7 +86,7 @@ def specbake_scene(name, scene, srcs = [], baked_materials = [], config = None, 
         name = name,
         srcs = [scene] + srcs + ([config] if config else []),
         outs = outs,
-        cmd = _command(name, args, config) + _check_outputs(name, scene),
+        cmd = _command(name, args, config),
         tools = [_TOOL, _MODULE],
         **kwargs
     )
