@@ -11,14 +11,13 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <random>
 #include <sstream>
 
 namespace specbake::gltest {
 namespace {
-
-constexpr int kGridWidth = 256;
 
 // Mesa's shader cache goes to a folder of this process, removed at exit, so tests never touch $HOME.
 void private_shader_cache() {
@@ -178,121 +177,160 @@ GLuint build_program_spirv(const std::vector<char>& vertex, const std::vector<ch
     return link_both(vs, fs, log);
 }
 
-std::string grid_vertex_shader() {
-    return R"(#version 450
-layout(location = 0) in vec4 aIn0;
-layout(location = 1) in vec4 aIn1;
-layout(location = 2) in vec4 aIn2;
-layout(location = 3) in vec4 aIn3;
-layout(location = 4) in vec4 aIn4;
-layout(location = 5) in vec4 aIn5;
-layout(location = 6) in vec2 aPixel;   // pixel centre in clip space
-layout(location = 0) flat out vec4 vIn0;
-layout(location = 1) flat out vec4 vIn1;
-layout(location = 2) flat out vec4 vIn2;
-layout(location = 3) flat out vec4 vIn3;
-layout(location = 4) flat out vec4 vIn4;
-layout(location = 5) flat out vec4 vIn5;
-void main() {
-    vIn0 = aIn0; vIn1 = aIn1; vIn2 = aIn2; vIn3 = aIn3; vIn4 = aIn4; vIn5 = aIn5;
-    gl_Position = vec4(aPixel, 0.0, 1.0);
-    gl_PointSize = 1.0;
-}
-)";
+std::vector<char> read_binary(const std::filesystem::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-std::string grid_fragment_glsl(const std::string& test_case) {
-    return "#version 450\n#define SPECAA_TEST_" + test_case + "\n" + read_source_file("shaders/specaa.glsl") +
-           read_source_file("tests/gl/shaders/grid_eval.inc") + R"(
-layout(location = 0) flat in vec4 vIn0;
-layout(location = 1) flat in vec4 vIn1;
-layout(location = 2) flat in vec4 vIn2;
-layout(location = 3) flat in vec4 vIn3;
-layout(location = 4) flat in vec4 vIn4;
-layout(location = 5) flat in vec4 vIn5;
-layout(location = 0) out vec4 o0;
-layout(location = 1) out vec4 o1;
-layout(location = 2) out vec4 o2;
-layout(location = 3) out vec4 o3;
-void main() { specaa_test_eval(vIn0, vIn1, vIn2, vIn3, vIn4, vIn5, o0, o1, o2, o3); }
-)";
-}
-
-std::string grid_fragment_hlsl(const std::string& test_case) {
-    return "#define SPECAA_TEST_" + test_case + "\n" + read_source_file("shaders/specaa.hlsl") +
-           read_source_file("tests/gl/shaders/grid_eval.inc") + R"(
-struct GridOutput {
-    float4 o0 : SV_Target0;
-    float4 o1 : SV_Target1;
-    float4 o2 : SV_Target2;
-    float4 o3 : SV_Target3;
-};
-GridOutput main(nointerpolation float4 in0 : TEXCOORD0, nointerpolation float4 in1 : TEXCOORD1,
-                nointerpolation float4 in2 : TEXCOORD2, nointerpolation float4 in3 : TEXCOORD3,
-                nointerpolation float4 in4 : TEXCOORD4, nointerpolation float4 in5 : TEXCOORD5) {
-    GridOutput r;
-    specaa_test_eval(in0, in1, in2, in3, in4, in5, r.o0, r.o1, r.o2, r.o3);
-    return r;
-}
-)";
-}
-
-std::vector<GridResult> evaluate_grid(GLuint program, const std::vector<GridCase>& cases, std::string& log) {
-    const int count = static_cast<int>(cases.size());
-    const int width = kGridWidth;
-    const int height = (count + width - 1) / width;
-
-    // Interleaved vertices: six vec4 inputs and the pixel centre.
-    std::vector<float> vertices;
-    vertices.reserve(cases.size() * 26);
-    for (int i = 0; i < count; ++i) {
-        for (const Vec4& v : cases[static_cast<size_t>(i)].in) vertices.insert(vertices.end(), v.begin(), v.end());
-        vertices.push_back((static_cast<float>(i % width) + 0.5f) / static_cast<float>(width) * 2.0f - 1.0f);
-        vertices.push_back((static_cast<float>(i / width) + 0.5f) / static_cast<float>(height) * 2.0f - 1.0f);
+std::string pass_through_vertex_shader(int inputs, int point_size) {
+    std::string decl, out, copy;
+    for (int i = 0; i < inputs; ++i) {
+        const std::string n = std::to_string(i);
+        decl += "layout(location = " + n + ") in vec4 aIn" + n + ";\n";
+        out += "layout(location = " + n + ") flat out vec4 vIn" + n + ";\n";
+        copy += "    vIn" + n + " = aIn" + n + ";\n";
     }
-    GLuint vao = 0, vbo = 0, fbo = 0;
-    std::array<GLuint, 4> targets{};
+    return "#version 450\n" + decl + "layout(location = " + std::to_string(inputs) +
+           ") in vec2 aCell;   // cell centre in clip space\n" + out + "void main() {\n" + copy +
+           "    gl_Position = vec4(aCell, 0.0, 1.0);\n    gl_PointSize = " + std::to_string(point_size) + ".0;\n}\n";
+}
+
+std::string glsl_fragment_wrapper(int inputs, int outputs, const std::string& body) {
+    std::string s = "\n";
+    for (int i = 0; i < inputs; ++i)
+        s += "layout(location = " + std::to_string(i) + ") flat in vec4 vIn" + std::to_string(i) + ";\n";
+    for (int i = 0; i < outputs; ++i)
+        s += "layout(location = " + std::to_string(i) + ") out vec4 o" + std::to_string(i) + ";\n";
+    return s + "void main() {\n" + body + "\n}\n";
+}
+
+std::string hlsl_fragment_wrapper(int inputs, int outputs, const std::string& leading, const std::string& body) {
+    std::string s = "\nstruct FragmentOutput {\n";
+    for (int i = 0; i < outputs; ++i) s += "    float4 o" + std::to_string(i) + " : SV_Target" + std::to_string(i) + ";\n";
+    s += "};\nFragmentOutput main(" + leading;
+    for (int i = 0; i < inputs; ++i)
+        s += (i ? ", " : "") + std::string("nointerpolation float4 in") + std::to_string(i) + " : TEXCOORD" +
+             std::to_string(i);
+    return s + ") {\n    FragmentOutput r;\n" + body + "\n    return r;\n}\n";
+}
+
+std::vector<char> compile_vertex_spirv(const std::string& source, const std::filesystem::path& path, std::string& log) {
+    std::ofstream(path) << source;
+    const std::string spv = path.string() + ".spv";
+    std::string out;
+    if (run_command("glslangValidator -G -S vert '" + path.string() + "' -o '" + spv + "'", out) != 0) {
+        log += "glslangValidator: " + out;
+        return {};
+    }
+    return read_binary(spv);
+}
+
+GLuint build_program_hlsl_spirv(const std::vector<char>& vertex, const std::string& source,
+                                const std::filesystem::path& stem, std::string& log) {
+    const std::string src = stem.string() + ".hlsl", spv = stem.string() + ".spv";
+    std::ofstream(src) << source;
+    std::string text;
+    if (run_command("glslangValidator -V -D -e main -S frag '" + src + "' -o '" + spv + "' && spirv-val '" + spv + "'",
+                    text) != 0) {
+        log += "glslangValidator/spirv-val: " + text;
+        return 0;
+    }
+    return build_program_spirv(vertex, read_binary(spv), log);
+}
+
+int point_grid_height(const PointGrid& grid, size_t count) {
+    const size_t per_row = size_t(grid.width / grid.cell);
+    return grid.cell * int((count + per_row - 1) / per_row);
+}
+
+std::vector<float> evaluate_points(GLuint program, const std::vector<float>& inputs, const PointGrid& grid, std::string& log) {
+    const size_t floats_in = size_t(4 * grid.inputs), floats_out = size_t(4 * grid.outputs);
+    const size_t count = inputs.size() / floats_in;
+    const size_t per_row = size_t(grid.width / grid.cell);
+    const int width = grid.width, height = point_grid_height(grid, count);
+
+    // Interleaved vertices: the vec4 inputs and the cell centre.
+    std::vector<float> vertices;
+    vertices.reserve(count * (floats_in + 2));
+    for (size_t i = 0; i < count; ++i) {
+        vertices.insert(vertices.end(), inputs.begin() + std::ptrdiff_t(i * floats_in),
+                        inputs.begin() + std::ptrdiff_t((i + 1) * floats_in));
+        const int qx = int(i % per_row), qy = int(i / per_row);
+        vertices.push_back((float(grid.cell * qx) + 0.5f * float(grid.cell)) / float(width) * 2.0f - 1.0f);
+        vertices.push_back((float(grid.cell * qy) + 0.5f * float(grid.cell)) / float(height) * 2.0f - 1.0f);
+    }
+    GLuint vao = 0, vbo = 0;
+    std::array<GLuint, 8> targets{};
     glGenVertexArrays(1, &vao);
     glBindVertexArray(vao);
     glGenBuffers(1, &vbo);
     glBindBuffer(GL_ARRAY_BUFFER, vbo);
-    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(float)), vertices.data(), GL_STATIC_DRAW);
-    const GLsizei stride = 26 * sizeof(float);
-    for (GLuint a = 0; a < 7; ++a) {
+    glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(vertices.size() * sizeof(float)), vertices.data(), GL_STATIC_DRAW);
+    const GLsizei stride = GLsizei((floats_in + 2) * sizeof(float));
+    for (GLuint a = 0; a <= GLuint(grid.inputs); ++a) {
         glEnableVertexAttribArray(a);
-        glVertexAttribPointer(a, a < 6 ? 4 : 2, GL_FLOAT, GL_FALSE, stride,
-                              reinterpret_cast<const void*>(static_cast<uintptr_t>(a * 4 * sizeof(float))));
+        glVertexAttribPointer(a, a < GLuint(grid.inputs) ? 4 : 2, GL_FLOAT, GL_FALSE, stride,
+                              reinterpret_cast<const void*>(uintptr_t(a * 4 * sizeof(float))));
     }
-    fbo = create_float_targets(4, width, height, targets.data());
-    std::vector<GridResult> results;
+    const GLuint fbo = create_float_targets(grid.outputs, width, height, targets.data());
+    std::vector<float> results;
     if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
         log += "float framebuffer incomplete";
     } else {
         glViewport(0, 0, width, height);
         const float nan = std::numeric_limits<float>::quiet_NaN();
         const float clear[4] = {nan, nan, nan, nan};
-        for (int t = 0; t < 4; ++t) glClearBufferfv(GL_COLOR, t, clear);
+        for (int t = 0; t < grid.outputs; ++t) glClearBufferfv(GL_COLOR, t, clear);
+        glEnable(GL_PROGRAM_POINT_SIZE);
         glUseProgram(program);
-        glDrawArrays(GL_POINTS, 0, count);
-        std::vector<float> pixels(static_cast<size_t>(width * height * 4));
-        results.resize(cases.size());
-        for (int t = 0; t < 4; ++t) {
+        glDrawArrays(GL_POINTS, 0, GLsizei(count));
+        results.resize(count * floats_out);
+        std::vector<float> pixels(size_t(width) * size_t(height) * 4);
+        for (int t = 0; t < grid.outputs; ++t) {
             glReadBuffer(GL_COLOR_ATTACHMENT0 + GLenum(t));
             glReadPixels(0, 0, width, height, GL_RGBA, GL_FLOAT, pixels.data());
-            for (int i = 0; i < count; ++i)
-                for (int c = 0; c < 4; ++c)
-                    results[static_cast<size_t>(i)].out[static_cast<size_t>(t)][static_cast<size_t>(c)] =
-                        pixels[static_cast<size_t>(i * 4 + c)];
+            for (size_t i = 0; i < count; ++i) {
+                const size_t qx = i % per_row, qy = i / per_row;
+                const float* p = &pixels[(size_t(grid.cell) * (qy * size_t(width) + qx)) * 4];
+                std::copy(p, p + 4, results.begin() + std::ptrdiff_t(i * floats_out + 4 * size_t(t)));
+            }
         }
         if (GLenum error = glGetError(); error != GL_NO_ERROR) {
             log += "GL error " + std::to_string(error);
             results.clear();
         }
     }
-    glDeleteTextures(4, targets.data());
+    glDeleteTextures(grid.outputs, targets.data());
     glDeleteFramebuffers(1, &fbo);
     glDeleteBuffers(1, &vbo);
     glDeleteVertexArrays(1, &vao);
+    return results;
+}
+
+std::string grid_vertex_shader() { return pass_through_vertex_shader(6, 1); }
+
+std::string grid_fragment_glsl(const std::string& test_case) {
+    return "#version 450\n#define SPECAA_TEST_" + test_case + "\n" + read_source_file("shaders/specaa.glsl") +
+           read_source_file("tests/gl/shaders/grid_eval.inc") +
+           glsl_fragment_wrapper(6, 4, "specaa_test_eval(vIn0, vIn1, vIn2, vIn3, vIn4, vIn5, o0, o1, o2, o3);");
+}
+
+std::string grid_fragment_hlsl(const std::string& test_case) {
+    return "#define SPECAA_TEST_" + test_case + "\n" + read_source_file("shaders/specaa.hlsl") +
+           read_source_file("tests/gl/shaders/grid_eval.inc") +
+           hlsl_fragment_wrapper(6, 4, "", "specaa_test_eval(in0, in1, in2, in3, in4, in5, r.o0, r.o1, r.o2, r.o3);");
+}
+
+std::vector<GridResult> evaluate_grid(GLuint program, const std::vector<GridCase>& cases, std::string& log) {
+    std::vector<float> inputs;
+    inputs.reserve(cases.size() * 24);
+    for (const GridCase& c : cases)
+        for (const Vec4& v : c.in) inputs.insert(inputs.end(), v.begin(), v.end());
+    const std::vector<float> values = evaluate_points(program, inputs, PointGrid{}, log);
+    std::vector<GridResult> results(values.size() / 16);
+    for (size_t i = 0; i < results.size(); ++i)
+        for (size_t t = 0; t < 4; ++t)
+            std::copy_n(values.begin() + std::ptrdiff_t(i * 16 + t * 4), 4, results[i].out[t].begin());
     return results;
 }
 

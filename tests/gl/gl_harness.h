@@ -62,6 +62,41 @@ GLuint build_program_glsl(const std::string& vertex, const std::string& fragment
 // Linked program from SPIR-V binaries (GL_ARB_gl_spirv), entry point "main" in both; 0 and a log on failure.
 GLuint build_program_spirv(const std::vector<char>& vertex, const std::vector<char>& fragment, std::string& log);
 
+// Reads a whole binary file (a SPIR-V module); empty when missing.
+std::vector<char> read_binary(const std::filesystem::path& path);
+
+// GLSL vertex shader of a point grid: `inputs` vec4 attributes (locations 0 .. inputs-1) forwarded as flat
+// varyings vIn0 ..., the cell centre in clip space at location `inputs`, drawn as a `point_size` pixel point.
+std::string pass_through_vertex_shader(int inputs, int point_size);
+// GLSL fragment interface of a point grid: flat vec4 vIn0 ... (`inputs`), vec4 outputs o0 ... (`outputs`),
+// then `void main() { body }`. The caller puts the version, defines and include before it.
+std::string glsl_fragment_wrapper(int inputs, int outputs, const std::string& body);
+// HLSL counterpart: a struct FragmentOutput of `outputs` float4 SV_Target fields and
+// `FragmentOutput main(leading nointerpolation float4 in0 : TEXCOORD0, ...) { FragmentOutput r; body return r; }`;
+// `leading` is empty or a parameter followed by ", ".
+std::string hlsl_fragment_wrapper(int inputs, int outputs, const std::string& leading, const std::string& body);
+
+// GLSL vertex source compiled to SPIR-V by glslangValidator (-G) at `path` + ".spv"; empty and a log on failure.
+std::vector<char> compile_vertex_spirv(const std::string& source, const std::filesystem::path& path, std::string& log);
+// HLSL fragment source written to `stem` + ".hlsl", compiled to SPIR-V (glslangValidator -D, spirv-val) and linked
+// with `vertex` through GL_ARB_gl_spirv; 0 and a log on failure.
+GLuint build_program_hlsl_spirv(const std::vector<char>& vertex, const std::string& source,
+                                const std::filesystem::path& stem, std::string& log);
+
+// A grid of point cells: each case is one `cell` x `cell` point with `inputs` vec4 attributes, in rows of
+// width / cell cells, writing `outputs` (1-8) vec4 targets read back from RGBA32F attachments.
+struct PointGrid {
+    int inputs = 6;
+    int outputs = 4;
+    int width = 256;  // pixels
+    int cell = 1;     // pixels per side of a case
+};
+// Framebuffer height in pixels for `count` cases.
+int point_grid_height(const PointGrid& grid, size_t count);
+// Draws `inputs.size() / (4 * grid.inputs)` cases with `program` (pass_through_vertex_shader(grid.inputs, grid.cell))
+// and returns, per case, the `4 * grid.outputs` values of its lower-left pixel. Empty on a GL error (message in `log`).
+std::vector<float> evaluate_points(GLuint program, const std::vector<float>& inputs, const PointGrid& grid, std::string& log);
+
 // Grid evaluation: case i is one point-sized fragment at pixel i with six flat vec4 inputs
 // (locations 0-5) and four vec4 outputs (locations 0-3) read back from RGBA32F attachments.
 using Vec4 = std::array<float, 4>;

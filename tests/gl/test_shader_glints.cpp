@@ -35,17 +35,7 @@ std::string glint_fragment(bool ggx) {
            (ggx ? "#define SPECAA_GLINT_GGX\n" : "") +
            read_source_file("shaders/specaa.glsl") + R"(
 layout(binding = 3) uniform sampler2DArray uDict;
-layout(location = 0) flat in vec4 vIn0;
-layout(location = 1) flat in vec4 vIn1;
-layout(location = 2) flat in vec4 vIn2;
-layout(location = 3) flat in vec4 vIn3;
-layout(location = 4) flat in vec4 vIn4;
-layout(location = 5) flat in vec4 vIn5;
-layout(location = 0) out vec4 o0;
-layout(location = 1) out vec4 o1;
-layout(location = 2) out vec4 o2;
-layout(location = 3) out vec4 o3;
-void main() {
+)" + glsl_fragment_wrapper(6, 4, R"(
     SpecaaGlintParams g;
     g.logDensity = vIn3.w;
     g.relativeArea = vIn4.x;
@@ -59,9 +49,7 @@ void main() {
     uvec3 r2 = specaa_glint_pcg3d(r1 ^ uvec3(0x9E3779B9u, 0x85EBCA6Bu, 0xC2B2AE35u));
     o1 = vec4(specaa_glint_unit(r1.x), specaa_glint_unit(r1.y), specaa_glint_unit(r1.z), specaa_glint_unit(r2.x));
     o2 = specaa_glint_inverse_transform(vIn3.xyz);
-    o3 = vec4(specaa_glint_sigma_rho(vIn1.xyz), 0.0);
-}
-)";
+    o3 = vec4(specaa_glint_sigma_rho(vIn1.xyz), 0.0);)");
 }
 
 GLuint upload_dictionary(const GlintDictionary& d) {

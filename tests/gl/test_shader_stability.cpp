@@ -15,9 +15,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <fstream>
 #include <functional>
-#include <iterator>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -27,7 +25,6 @@ namespace specbake::gltest {
 namespace {
 
 constexpr int kWidth = 1024;  // pixels; 512 quads (cases) per row of quads
-constexpr int kQuadsPerRow = kWidth / 2;
 constexpr double kTol = 1e-4;  // float32 rounding relative to the matrix scale (as the C++ float grid)
 constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
 constexpr float kInf = std::numeric_limits<float>::infinity();
@@ -102,28 +99,7 @@ std::vector<Case> make_cases() {
     return cases;
 }
 
-const char* kVertex = R"(#version 450
-layout(location = 0) in vec4 aIn0;
-layout(location = 1) in vec4 aIn1;
-layout(location = 2) in vec4 aIn2;
-layout(location = 3) in vec4 aIn3;
-layout(location = 4) in vec4 aIn4;
-layout(location = 5) in vec4 aIn5;
-layout(location = 6) in vec4 aIn6;
-layout(location = 7) in vec2 aQuad;   // quad centre in clip space
-layout(location = 0) flat out vec4 vIn0;
-layout(location = 1) flat out vec4 vIn1;
-layout(location = 2) flat out vec4 vIn2;
-layout(location = 3) flat out vec4 vIn3;
-layout(location = 4) flat out vec4 vIn4;
-layout(location = 5) flat out vec4 vIn5;
-layout(location = 6) flat out vec4 vIn6;
-void main() {
-    vIn0 = aIn0; vIn1 = aIn1; vIn2 = aIn2; vIn3 = aIn3; vIn4 = aIn4; vIn5 = aIn5; vIn6 = aIn6;
-    gl_Position = vec4(aQuad, 0.0, 1.0);
-    gl_PointSize = 2.0;
-}
-)";
+std::string vertex_shader() { return pass_through_vertex_shader(7, 2); }
 
 std::string defines(const std::string& group) {
     return group == "METHODS" ? "#define SPECAA_TEST_METHODS\n"
@@ -133,106 +109,37 @@ std::string defines(const std::string& group) {
 
 std::string fragment_glsl(const std::string& group) {
     return "#version 450\n" + defines(group) + read_source_file("shaders/specaa.glsl") +
-           read_source_file("tests/gl/shaders/stability_eval.inc") + R"(
-layout(location = 0) flat in vec4 vIn0;
-layout(location = 1) flat in vec4 vIn1;
-layout(location = 2) flat in vec4 vIn2;
-layout(location = 3) flat in vec4 vIn3;
-layout(location = 4) flat in vec4 vIn4;
-layout(location = 5) flat in vec4 vIn5;
-layout(location = 6) flat in vec4 vIn6;
-layout(location = 0) out vec4 o0;
-layout(location = 1) out vec4 o1;
-layout(location = 2) out vec4 o2;
-layout(location = 3) out vec4 o3;
-layout(location = 4) out vec4 o4;
-void main() { specaa_test_stability(gl_FragCoord.xy, vIn0, vIn1, vIn2, vIn3, vIn4, vIn5, vIn6, o0, o1, o2, o3, o4); }
-)";
+           read_source_file("tests/gl/shaders/stability_eval.inc") +
+           glsl_fragment_wrapper(7, 5,
+                                 "specaa_test_stability(gl_FragCoord.xy, vIn0, vIn1, vIn2, vIn3, vIn4, vIn5, vIn6, "
+                                 "o0, o1, o2, o3, o4);");
 }
 
 // HLSL's SV_Position has y down: the wrapper turns it back into GL window coordinates.
 std::string fragment_hlsl(const std::string& group, int height) {
     return defines(group) + read_source_file("shaders/specaa.hlsl") +
-           read_source_file("tests/gl/shaders/stability_eval.inc") + R"(
-struct StabilityOutput {
-    float4 o0 : SV_Target0;
-    float4 o1 : SV_Target1;
-    float4 o2 : SV_Target2;
-    float4 o3 : SV_Target3;
-    float4 o4 : SV_Target4;
-};
-StabilityOutput main(float4 position : SV_Position, nointerpolation float4 in0 : TEXCOORD0,
-                     nointerpolation float4 in1 : TEXCOORD1, nointerpolation float4 in2 : TEXCOORD2,
-                     nointerpolation float4 in3 : TEXCOORD3, nointerpolation float4 in4 : TEXCOORD4,
-                     nointerpolation float4 in5 : TEXCOORD5, nointerpolation float4 in6 : TEXCOORD6) {
-    StabilityOutput r;
-    specaa_test_stability(float2(position.x, )" + std::to_string(height) + R"(.0 - position.y),
-                          in0, in1, in2, in3, in4, in5, in6, r.o0, r.o1, r.o2, r.o3, r.o4);
-    return r;
-}
-)";
+           read_source_file("tests/gl/shaders/stability_eval.inc") +
+           hlsl_fragment_wrapper(7, 5, "float4 position : SV_Position, ",
+                                 "    specaa_test_stability(float2(position.x, " + std::to_string(height) +
+                                     ".0 - position.y), in0, in1, in2, in3, in4, in5, in6, r.o0, r.o1, r.o2, r.o3, r.o4);");
 }
 
-int grid_height(size_t cases) { return 2 * int((cases + kQuadsPerRow - 1) / kQuadsPerRow); }
+constexpr PointGrid kGrid{7, 5, kWidth, 2};
 
 // Draws every case as one 2x2 point and returns, per case, the 20 outputs of its lower-left pixel.
 std::vector<std::array<float, 20>> render(GLuint program, const std::vector<Case>& cases, std::string& log) {
-    const int height = grid_height(cases.size());
-    std::vector<float> vertices;
-    vertices.reserve(cases.size() * 30);
-    for (size_t i = 0; i < cases.size(); ++i) {
-        const Case& c = cases[i];
+    std::vector<float> inputs;
+    inputs.reserve(cases.size() * 28);
+    for (const Case& c : cases) {
         const float in[28] = {c.alpha2[0], c.alpha2[1], c.r,      c.k1,     c.h.x,    c.h.y,    c.h.z,
                               0,           c.h_dx.x,    c.h_dx.y, c.h_dx.z, 0,        c.h_dy.x, c.h_dy.y,
                               c.h_dy.z,    0,           c.n.x,    c.n.y,    c.n.z,    0,        c.n_dx.x,
                               c.n_dx.y,    c.n_dx.z,    0,        c.n_dy.x, c.n_dy.y, c.n_dy.z, 0};
-        vertices.insert(vertices.end(), in, in + 28);
-        const int qx = int(i % kQuadsPerRow), qy = int(i / kQuadsPerRow);
-        vertices.push_back(float(2 * qx + 1) / kWidth * 2.0f - 1.0f);
-        vertices.push_back(float(2 * qy + 1) / float(height) * 2.0f - 1.0f);
+        inputs.insert(inputs.end(), in, in + 28);
     }
-    GLuint vao = 0, vbo = 0, targets[5] = {};
-    glGenVertexArrays(1, &vao);
-    glBindVertexArray(vao);
-    glGenBuffers(1, &vbo);
-    glBindBuffer(GL_ARRAY_BUFFER, vbo);
-    glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(vertices.size() * sizeof(float)), vertices.data(), GL_STATIC_DRAW);
-    for (GLuint a = 0; a < 8; ++a) {
-        glEnableVertexAttribArray(a);
-        glVertexAttribPointer(a, a < 7 ? 4 : 2, GL_FLOAT, GL_FALSE, 30 * sizeof(float),
-                              reinterpret_cast<const void*>(uintptr_t(a * 4 * sizeof(float))));
-    }
-    const GLuint fbo = create_float_targets(5, kWidth, height, targets);
-    std::vector<std::array<float, 20>> results;
-    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
-        log += "float framebuffer incomplete";
-    } else {
-        glViewport(0, 0, kWidth, height);
-        const float clear[4] = {kNan, kNan, kNan, kNan};
-        for (int t = 0; t < 5; ++t) glClearBufferfv(GL_COLOR, t, clear);
-        glEnable(GL_PROGRAM_POINT_SIZE);
-        glUseProgram(program);
-        glDrawArrays(GL_POINTS, 0, GLsizei(cases.size()));
-        results.resize(cases.size());
-        std::vector<float> pixels(size_t(kWidth) * height * 4);
-        for (int t = 0; t < 5; ++t) {
-            glReadBuffer(GL_COLOR_ATTACHMENT0 + GLenum(t));
-            glReadPixels(0, 0, kWidth, height, GL_RGBA, GL_FLOAT, pixels.data());
-            for (size_t i = 0; i < cases.size(); ++i) {
-                const size_t qx = i % kQuadsPerRow, qy = i / kQuadsPerRow;
-                const float* p = &pixels[((2 * qy) * kWidth + 2 * qx) * 4];
-                std::copy(p, p + 4, results[i].begin() + 4 * t);
-            }
-        }
-        if (GLenum error = glGetError(); error != GL_NO_ERROR) {
-            log += "GL error " + std::to_string(error);
-            results.clear();
-        }
-    }
-    glDeleteTextures(5, targets);
-    glDeleteFramebuffers(1, &fbo);
-    glDeleteBuffers(1, &vbo);
-    glDeleteVertexArrays(1, &vao);
+    const std::vector<float> values = evaluate_points(program, inputs, kGrid, log);
+    std::vector<std::array<float, 20>> results(values.size() / 20);
+    for (size_t i = 0; i < results.size(); ++i) std::copy_n(values.begin() + std::ptrdiff_t(i * 20), 20, results[i].begin());
     return results;
 }
 
@@ -370,7 +277,7 @@ void check_default(const std::vector<Case>& cases, const std::vector<std::array<
 void run_grid(const std::string& language, const std::function<GLuint(const std::string&, int, std::string&)>& build) {
     const std::vector<Case> cases = make_cases();
     ASSERT_GE(cases.size(), 100000u);
-    const int height = grid_height(cases.size());
+    const int height = point_grid_height(kGrid, cases.size());
     for (const std::string group : {"METHODS", "DEFAULT", "CURVATURE"}) {
         std::string log;
         const GLuint program = build(group, height, log);
@@ -392,13 +299,8 @@ void run_grid(const std::string& language, const std::function<GLuint(const std:
 TEST(ShaderStability, GlslGridFiniteSymmetricPsdAndPolicy) {
     SPECBAKE_REQUIRE_GL(gl);
     run_grid("GLSL", [](const std::string& group, int, std::string& log) {
-        return build_program_glsl(kVertex, fragment_glsl(group), log);
+        return build_program_glsl(vertex_shader(), fragment_glsl(group), log);
     });
-}
-
-std::vector<char> read_binary(const std::filesystem::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
 TEST(ShaderStability, HlslGridThroughGlSpirvFiniteSymmetricPsdAndPolicy) {
@@ -407,22 +309,10 @@ TEST(ShaderStability, HlslGridThroughGlSpirvFiniteSymmetricPsdAndPolicy) {
         GTEST_SKIP() << gl->renderer() << " lacks GL_ARB_gl_spirv: HLSL is only compile-tested (ShaderCompile)";
     TempDir dir;
     std::string out;
-    const auto vert = dir.path() / "stability.vert";
-    std::ofstream(vert) << kVertex;
-    ASSERT_EQ(run_command("glslangValidator -G -S vert '" + vert.string() + "' -o '" + vert.string() + ".spv'", out), 0)
-        << out;
-    const auto vertex = read_binary(vert.string() + ".spv");
+    const auto vertex = compile_vertex_spirv(vertex_shader(), dir.path() / "stability.vert", out);
+    ASSERT_FALSE(vertex.empty()) << out;
     run_grid("HLSL", [&](const std::string& group, int height, std::string& log) -> GLuint {
-        const auto src = dir.path() / (group + ".hlsl"), spv = dir.path() / (group + ".spv");
-        std::ofstream(src) << fragment_hlsl(group, height);
-        std::string text;
-        if (run_command("glslangValidator -V -D -e main -S frag '" + src.string() + "' -o '" + spv.string() +
-                            "' && spirv-val '" + spv.string() + "'",
-                        text) != 0) {
-            log += "glslangValidator/spirv-val: " + text;
-            return 0;
-        }
-        return build_program_spirv(vertex, read_binary(spv), log);
+        return build_program_hlsl_spirv(vertex, fragment_hlsl(group, height), dir.path() / group, log);
     });
 }
 
