@@ -41,7 +41,7 @@ using SimImage = Image;
 
 // How render_ground_truth() takes `spp` samples: (scale * passes_per_axis)^2 per pixel area.
 struct GroundTruthLayout {
-    int scale = 1;            // supersampling factor of each pass (<= 4, target <= 8192 texels a side)
+    int scale = 1;            // supersampling factor of each pass (<= 16, target <= 4096 texels a side)
     int passes_per_axis = 1;  // jittered passes along each axis
     int samples() const { return (scale * passes_per_axis) * (scale * passes_per_axis); }
 };
@@ -63,8 +63,12 @@ public:
     // Ground truth of frame `frame` with about `spp` stratified samples per pixel area (see
     // ground_truth_layout). Each pass renders the scene at `scale` x the resolution with one jittered sample
     // per texel; every sample within 3 sigma of a pixel centre enters that pixel with its Gaussian weight
-    // exp(-d^2 / (2 sigma^2)), and the weighted sums are normalised by the summed weights.
-    SimImage render_ground_truth(int frame, int spp);
+    // exp(-d^2 / (2 sigma^2)), and the weighted sums are normalised by the summed weights. `seed` picks
+    // the jitter: different seeds give independent estimates of the same integral (the bench's floor).
+    SimImage render_ground_truth(int frame, int spp, uint32_t seed = 0);
+    // With `on` (the default) each ground-truth sample integrates the highlight over its stratum
+    // analytically (renderer.cpp, kGroundTruthMain); off: point samples.
+    void set_ground_truth_footprint(bool on);
 
     // Compiles the candidate shader; the error carries the GL info log.
     Result<int> compile_candidate(const SimShaderSpec& spec);

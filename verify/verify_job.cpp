@@ -33,6 +33,7 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
     auto renderer_result = SimRenderer::create(scene, options.width, options.height, options.include_glsl);
     if (!renderer_result) return renderer_result.error();
     SimRenderer& renderer = **renderer_result;
+    renderer.set_ground_truth_footprint(options.footprint_ground_truth);
 
     SceneReport report;
     report.scene = scene.name;
@@ -101,6 +102,9 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
     }
 
     std::vector<SimMetricsAccumulator> accumulators(candidates.size());
+    SimMetricsAccumulator floor_accumulator;
+    SimImage floor_image;
+    const int floor_spp = std::max(1, report.spp / 4);
     report.candidates.resize(candidates.size());
     double gt_total = 0;
     for (int frame = 0; frame < options.frames; ++frame) {
@@ -111,6 +115,13 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
             SimImage image = renderer.render_candidate(ids[i], frame);
             accumulators[i].add_frame(gt, image);
             if (frame == 0 && options.keep_images) report.candidates[i].image = std::move(image);
+        }
+        if (options.floor) {
+            const auto floor_start = std::chrono::steady_clock::now();
+            SimImage quarter = renderer.render_ground_truth(frame, floor_spp, 1);
+            floor_accumulator.add_frame(gt, quarter);
+            if (frame == 0 && options.keep_images) floor_image = std::move(quarter);
+            gt_total += ms_since(floor_start);
         }
         if (frame == 0 && options.keep_images) report.ground_truth = std::move(gt);
         say("frame " + std::to_string(frame + 1) + "/" + std::to_string(options.frames) + ": ground truth and " +
@@ -154,6 +165,16 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
             report.candidates[i].frame_ms = v[v.size() / 2];
             if (candidates[i].name == "none") none_ms = report.candidates[i].frame_ms;
         }
+    }
+    if (options.floor) {
+        CandidateReport row;
+        row.name = "floor";
+        row.family = "floor";
+        row.source = "ground truth at " + std::to_string(ground_truth_layout(floor_spp, options.width, options.height).samples()) +
+                     " spp (independent jitter) against the full one";
+        row.metrics = floor_accumulator.finish();
+        row.image = std::move(floor_image);
+        report.candidates.push_back(std::move(row));
     }
     if (none_ms && *none_ms > 0)
         for (CandidateReport& row : report.candidates)

@@ -26,6 +26,11 @@ struct VerifyOptions {
     bool variants = true;     // include the bake variants
     std::vector<std::string> only;  // candidate names to keep ("none" is always kept); empty: all
     bool keep_images = true;  // keep frame 0 of every image for strips
+    // Also score an independent ground truth at a quarter of the samples against the full one on the same
+    // frames (row "floor"): the error and flicker no candidate can be shown to beat at this sample count.
+    bool floor = true;
+    // Ground-truth samples integrate the highlight over their stratum (false: point samples).
+    bool footprint_ground_truth = true;
     // Receives one line per finished stage (bakes, each ground-truth frame, timing); may be empty.
     std::function<void(const std::string&)> progress;
     // Called after each frame (ground truth and every candidate rendered) with (frames done, frames); may be empty.
