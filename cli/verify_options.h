@@ -23,6 +23,7 @@ struct SimCommandOptions {
     bool no_variants = false;
     std::string ground_truth = "footprint";
     bool no_floor = false;
+    bool no_limit = false;
 };
 
 inline void add_sim_command_options(CLI::App* sub, SimCommandOptions& o) {
@@ -42,6 +43,8 @@ inline void add_sim_command_options(CLI::App* sub, SimCommandOptions& o) {
                     "point (point samples)")
         ->capture_default_str()
         ->check(CLI::IsMember({"footprint", "point"}));
+    sub->add_flag("--no-limit", o.no_limit,
+                  "Skip the limit row (per pixel the best of 32 isotropic GGX lobes about the shading normal)");
     sub->add_flag("--no-floor", o.no_floor,
                   "Skip the floor row (a second ground truth at a quarter of the samples scored against the first)");
 }
@@ -60,6 +63,7 @@ inline bool apply_sim_command_options(const SimCommandOptions& o, verify::Verify
     v.variants = !o.no_variants;
     v.footprint_ground_truth = o.ground_truth == "footprint";
     v.floor = !o.no_floor;
+    v.limit = !o.no_limit;
     return true;
 }
 

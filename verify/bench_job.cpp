@@ -219,7 +219,7 @@ std::string bench_summary_markdown(const BenchReport& r) {
         const CandidateReport* none = find_row(s, "none");
         const CandidateReport *best_e = nullptr, *best_f = nullptr;
         for (const CandidateReport& c : s.candidates) {
-            if (c.name == "none" || c.family == "floor") continue;
+            if (c.name == "none" || c.family == "floor" || c.family == "limit") continue;
             if (!best_e || c.metrics.rmse < best_e->metrics.rmse) best_e = &c;
             if (!best_f || c.metrics.flicker_linear < best_f->metrics.flicker_linear) best_f = &c;
         }

@@ -26,7 +26,7 @@ struct BenchOptions {
     // Camera distances a scene file is simulated at, as factors of its own framing distance (the orbit
     // that fits the object, or its camera) with a label: near shows part of the object magnified, far
     // leaves it a few dozen pixels wide, where normal-map aliasing is strongest.
-    std::vector<std::pair<std::string, float>> distances{{"near", 0.55f}, {"mid", 1.0f}, {"far", 5.0f}};
+    std::vector<std::pair<std::string, float>> distances{{"near", 0.55f}, {"mid", 1.0f}, {"far", 3.0f}};
     // GGX alpha (= r^2) of the materials, the papers' "roughness"; r = sqrt(alpha) is what glTF stores.
     std::vector<float> alpha{0.01f, 0.05f, 0.2f};
     std::filesystem::path output_dir;  // empty: print only

@@ -240,9 +240,13 @@ void main() {
         vec3 A;
 )";
 
+// The NDF is GGX with the filtered matrix unless the candidate's defines name another (SIM_NDF).
 constexpr const char* kCandidateMainTail = R"(
+#ifndef SIM_NDF
+#define SIM_NDF(h, A, a) specaa_ggx_D(h, A, (a) * (a))
+#endif
         if (lTS.z > 0.0 && vTS.z > 0.0)
-            radiance += specaa_ggx_D(hTS, A, a * a) * specaa_ggx_G2(lTS, vTS, hTS, A) / (4.0 * vTS.z) * E;
+            radiance += SIM_NDF(hTS, A, a) * specaa_ggx_G2(lTS, vTS, hTS, A) / (4.0 * vTS.z) * E;
     }
     oColor = vec4(radiance, 1.0, 0.0, 1.0);
 }
@@ -681,6 +685,11 @@ Result<int> SimRenderer::compile_candidate(const SimShaderSpec& spec) {
     if (!program) return program.error();
     impl_->candidates.push_back({*program, spec});
     return int(impl_->candidates.size() - 1);
+}
+
+void SimRenderer::set_candidate_uniform(int id, const char* name, float value) {
+    const GLuint program = impl_->candidates[size_t(id)].program;
+    glProgramUniform1f(program, glGetUniformLocation(program, name), value);
 }
 
 void SimRenderer::draw_candidate(int id, int frame) {

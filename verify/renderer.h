@@ -72,6 +72,8 @@ public:
 
     // Compiles the candidate shader; the error carries the GL info log.
     Result<int> compile_candidate(const SimShaderSpec& spec);
+    // Sets the float uniform `name` of compiled candidate `id` (declared in its spec's defines).
+    void set_candidate_uniform(int id, const char* name, float value);
     // Renders compiled candidate `id` at one sample per pixel centre.
     SimImage render_candidate(int id, int frame);
     // Wall time in milliseconds of `draws` back-to-back renders of candidate `id` at frame 0, bounded by

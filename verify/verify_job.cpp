@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <optional>
 
 namespace specbake::verify {
 namespace {
@@ -23,6 +24,36 @@ SimBakedTextures to_textures(TextureBakeResult&& result) {
     t.kernel = std::move(result.kernel);
     t.lean = std::move(result.lean);
     return t;
+}
+
+// The limit row (issue 15, item 5). A rule that keeps one isotropic GGX lobe about the shading normal the
+// engine computes (mipped normal map, interpolated vertex normal) can only choose its roughness per pixel;
+// the best it can do is the roughness whose 1-spp radiance is closest to the ground truth. The row renders
+// the projected-space filter (TK21 Eq. 7) of the material's a with each kernel of a logarithmic grid,
+// 0 and 1e-6 .. 1, and keeps per pixel and frame the one nearest the ground truth. It bounds the isotropic
+// rules (and the matrix form where its anisotropy does not matter) from below on these frames; a lobe
+// with its own mean direction or anisotropy, or several lobes, could do better.
+constexpr int kLimitKernels = 32;
+
+float limit_kernel(int k) { return k == 0 ? 0.0f : float(std::pow(10.0, -6.0 + 6.0 * (k - 1) / (kLimitKernels - 2))); }
+
+SimShaderSpec limit_shader() {
+    SimShaderSpec spec;
+    spec.defines = "uniform float uLimitKernel;\n";
+    spec.body = "float f = specaa_filter_projected_isotropic(a, uLimitKernel); A = vec3(f, f, 0.0);";
+    return spec;
+}
+
+// Per pixel, the radiance of `candidate` nearest to `gt` (coverage from the first).
+void keep_nearest(const SimImage& gt, const SimImage& candidate, SimImage& best, bool first) {
+    if (first) {
+        best = candidate;
+        return;
+    }
+    for (size_t i = 0; i < gt.texel_count(); ++i) {
+        const float g = gt.pixels[2 * i];
+        if (std::abs(candidate.pixels[2 * i] - g) < std::abs(best.pixels[2 * i] - g)) best.pixels[2 * i] = candidate.pixels[2 * i];
+    }
 }
 
 }  // namespace
@@ -101,6 +132,15 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
         ids.push_back(*id);
     }
 
+    std::optional<int> limit_id;
+    if (options.limit) {
+        auto id = renderer.compile_candidate(limit_shader());
+        if (!id) return make_error("limit row: " + id.error().message);
+        limit_id = *id;
+    }
+    SimMetricsAccumulator limit_accumulator;
+    SimImage limit_image;
+
     std::vector<SimMetricsAccumulator> accumulators(candidates.size());
     SimMetricsAccumulator floor_accumulator;
     SimImage floor_image;
@@ -115,6 +155,15 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
             SimImage image = renderer.render_candidate(ids[i], frame);
             accumulators[i].add_frame(gt, image);
             if (frame == 0 && options.keep_images) report.candidates[i].image = std::move(image);
+        }
+        if (limit_id) {
+            SimImage best;
+            for (int k = 0; k < kLimitKernels; ++k) {
+                renderer.set_candidate_uniform(*limit_id, "uLimitKernel", limit_kernel(k));
+                keep_nearest(gt, renderer.render_candidate(*limit_id, frame), best, k == 0);
+            }
+            limit_accumulator.add_frame(gt, best);
+            if (frame == 0 && options.keep_images) limit_image = std::move(best);
         }
         if (options.floor) {
             const auto floor_start = std::chrono::steady_clock::now();
@@ -165,6 +214,16 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
             report.candidates[i].frame_ms = v[v.size() / 2];
             if (candidates[i].name == "none") none_ms = report.candidates[i].frame_ms;
         }
+    }
+    if (limit_id) {
+        CandidateReport row;
+        row.name = "limit";
+        row.family = "limit";
+        row.source = "best of " + std::to_string(kLimitKernels) +
+                     " isotropic GGX lobes about the shading normal per pixel and frame (a lower bound, verify_job.cpp)";
+        row.metrics = limit_accumulator.finish();
+        row.image = std::move(limit_image);
+        report.candidates.push_back(std::move(row));
     }
     if (options.floor) {
         CandidateReport row;

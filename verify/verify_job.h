@@ -29,6 +29,9 @@ struct VerifyOptions {
     // Also score an independent ground truth at a quarter of the samples against the full one on the same
     // frames (row "floor"): the error and flicker no candidate can be shown to beat at this sample count.
     bool floor = true;
+    // Also score the limit row: per pixel and frame the best of kLimitKernels isotropic GGX lobes about the
+    // engine's shading normal (verify_job.cpp), a lower bound for every rule that widens the lobe.
+    bool limit = true;
     // Ground-truth samples integrate the highlight over their stratum (false: point samples).
     bool footprint_ground_truth = true;
     // Receives one line per finished stage (bakes, each ground-truth frame, timing); may be empty.

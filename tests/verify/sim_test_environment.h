@@ -60,6 +60,7 @@ inline VerifyOptions small_verify(int width, int height, int spp, int frames) {
     options.variants = false;
     options.keep_images = false;
     options.floor = false;
+    options.limit = false;
     return options;
 }
 
