@@ -37,6 +37,14 @@ T beckmann_ndf(const Vec3<T>& h, const Sym2<T>& A, T tau) {
 }
 
 template <class T>
+T filtered_ndf(const Vec3<T>& h, const Sym2<T>& A, T alpha2) {
+    const T tau = alpha2 * alpha2;
+    const T w = std::clamp(T(1) - alpha2 / std::sqrt(std::max(std::max(det(A), tau), T(1e-30))), T(0), T(1));
+    const T ggx = ggx_ndf(h, A, tau);
+    return ggx + w * (beckmann_ndf(h, A, tau) - ggx);
+}
+
+template <class T>
 T ggx_lambda(const Vec3<T>& o, const Sym2<T>& A) {
     if (o.z == T(0)) return std::numeric_limits<T>::infinity();
     // TK21 App. A.3.
@@ -53,6 +61,7 @@ T ggx_g2(const Vec3<T>& i, const Vec3<T>& o, const Vec3<T>& h, const Sym2<T>& A)
 #define SPECBAKE_INSTANTIATE(T)                                                 \
     template T ggx_ndf<T>(const Vec3<T>&, const Sym2<T>&, T);                  \
     template T beckmann_ndf<T>(const Vec3<T>&, const Sym2<T>&, T);             \
+    template T filtered_ndf<T>(const Vec3<T>&, const Sym2<T>&, T);             \
     template T ggx_lambda<T>(const Vec3<T>&, const Sym2<T>&);                   \
     template T ggx_g2<T>(const Vec3<T>&, const Vec3<T>&, const Vec3<T>&, const Sym2<T>&);
 SPECBAKE_INSTANTIATE(float)

@@ -19,6 +19,13 @@ T ggx_ndf(const Vec3<T>& h, const Sym2<T>& A, T tau);
 template <class T>
 T beckmann_ndf(const Vec3<T>& h, const Sym2<T>& A, T tau);
 
+// NDF of a filtered lobe with the tail weight of the unfiltered material (TK21 Sec. 7; the include's
+// specaa_filtered_D): (1 - w) GGX(A) + w Beckmann(A), w = clamp(1 - alpha2 / sqrt(max(det A, alpha2^2)), 0, 1),
+// alpha2 = a of the unfiltered material. Far from the peak GGX(A) falls as sqrt(det A) / (pi theta^4); the
+// mixture as alpha2 / (pi theta^4), the unfiltered lobe's tail. Integrates to one (projected) like both parts.
+template <class T>
+T filtered_ndf(const Vec3<T>& h, const Sym2<T>& A, T alpha2);
+
 // GGX Smith Lambda for a non-axis-aligned roughness matrix, TK21 App. A.3:
 // Lambda(o) = -1/2 + sqrt(o_xy^T A o_xy + o_z^2) / (2 |o_z|). Returns +inf for o_z = 0.
 template <class T>

@@ -10,8 +10,10 @@
 
 #include <cstddef>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <string>
+#include <string_view>
 
 namespace specbake::cli {
 
@@ -19,31 +21,53 @@ namespace {
 
 using namespace specbake::verify;
 
+// The shared sample models next to a checkout (issue 15: the real-asset corpus).
+constexpr std::string_view kDefaultCorpus = "../shared/assets/gltf";
+
 struct BenchCommandOptions {
     std::vector<std::string> files;
     bool no_builtin = false;
     std::vector<std::string> scenes;
     std::vector<float> alpha{0.01f, 0.05f, 0.2f};
     float glint_alpha = 0.1f;
-    bool quick = false;
     SimCommandOptions sim;
+    std::string corpus = std::string(kDefaultCorpus);
+    bool no_corpus = false;
+    bool quick = false;
     std::string output;
     std::string command_line;
 };
 
-int run_bench_command(const BenchCommandOptions& o) {
+int run_bench_command(const BenchCommandOptions& given) {
+    BenchCommandOptions o = given;
+    if (o.quick) {
+        // CI size: every scene and distance, at a quarter of the pixels, samples and frames.
+        o.sim.size = "64x64";
+        o.sim.spp = 64;
+        o.sim.frames = 4;
+        o.sim.repeats = 0;
+        o.sim.no_variants = true;
+        o.alpha = {0.01f, 0.05f};
+    }
     BenchOptions options;
     VerifyOptions& v = options.verify;
-    SimCommandOptions sim = o.sim;
-    if (o.quick) {
-        // Small enough for CI: every scene at 32 x 32, 64 samples, 2 frames, one timing render, no variants.
-        sim.size = "32x32";
-        sim.spp = 64;
-        sim.frames = 2;
-        sim.repeats = 1;
-        sim.no_variants = true;
+    if (!apply_sim_command_options(o.sim, v)) return kExitUsage;
+    if (!o.no_corpus) {
+        std::error_code ec;
+        if (std::filesystem::is_directory(o.corpus, ec)) {
+            auto files = corpus_files(o.corpus);
+            if (!files) {
+                print_error(files.error().message);
+                return kExitFailed;
+            }
+            options.scene_files.insert(options.scene_files.end(), files->begin(), files->end());
+        } else if (o.corpus != kDefaultCorpus) {
+            print_error(o.corpus + ": corpus folder not found");
+            return kExitUsage;
+        } else {
+            print_warning(o.corpus + ": no real-asset corpus here (give --corpus DIR), analytic scenes and given files only");
+        }
     }
-    if (!apply_sim_command_options(sim, v)) return kExitUsage;
     for (const std::string& name : o.scenes) {
         if (auto scene = make_builtin_scene(name, 0.5f); !scene) {
             print_error(scene.error().message);
@@ -54,6 +78,7 @@ int run_bench_command(const BenchCommandOptions& o) {
     options.scenes = o.scenes;
     options.no_builtin = o.no_builtin;
     for (const std::string& f : o.files) options.scene_files.emplace_back(f);
+    const size_t file_runs = options.scene_files.size() * options.distances.size();
     options.alpha = o.alpha;
     options.glint_alpha = o.glint_alpha;
     options.command_line = o.command_line;
@@ -69,7 +94,7 @@ int run_bench_command(const BenchCommandOptions& o) {
     if (o.scenes.empty() && !o.no_builtin)
         builtin = builtin_scene_names().size() * o.alpha.size() + builtin_glint_scene_names().size();
     for (const std::string& name : o.scenes) builtin += name.starts_with("glitter-") ? 1 : o.alpha.size();
-    ProgressDisplay display(builtin + o.files.size(), progress_mode(run_settings()), "scenes",
+    ProgressDisplay display(builtin + file_runs, progress_mode(run_settings()), "scenes",
                             ProgressDisplay::Lines::activity);
     // The frame timing after the last frame takes about one frame's time: leave it its share.
     v.frame_done = [&display](int done, int frames) { display.fraction(double(done) / double(frames + 1)); };
@@ -115,8 +140,13 @@ void add_bench_command(CLI::App& app, std::function<int()>& run) {
         ->capture_default_str()
         ->check(CLI::Range(0.0001f, 1.0f));
     add_sim_command_options(sub, o->sim);
+    sub->add_option("--corpus", o->corpus,
+                    "Real-asset corpus: every .gltf/.glb in the subfolders of this folder, each at near, mid and far "
+                    "camera distances (skipped with a warning when the default folder is absent)")
+        ->capture_default_str();
+    sub->add_flag("--no-corpus", o->no_corpus, "Leave out the real-asset corpus");
     sub->add_flag("--quick", o->quick,
-                  "CI setting: 32x32, 64 spp, 2 frames, 1 timing render, no variants (overrides those options)");
+                  "Smaller run for CI: 64x64, 64 spp, 4 frames, no timing, no bake variants, alpha 0.01 and 0.05");
     sub->add_option("-o,--output", o->output, "Folder for bench.md, bench.csv, bench.svg and strips/");
     sub->footer("Examples:\n"
                 "  specbake bench -o bench-out\n"

@@ -7,6 +7,8 @@
 #include "cli/verify_options.h"
 #include "verify/scene_file.h"
 #include "verify/strips.h"
+#include "verify/bench_job.h"
+#include "core/text_format.h"
 
 #include <algorithm>
 #include <cmath>
@@ -30,6 +32,7 @@ struct VerifyCommandOptions {
     SimCommandOptions sim;
     std::vector<std::string> only;
     std::string strip;
+    float distance = 1.0f;
 };
 
 int run_verify_command(const VerifyCommandOptions& o) {
@@ -51,6 +54,7 @@ int run_verify_command(const VerifyCommandOptions& o) {
         print_error(scene.error().message);
         return o.builtin.empty() ? kExitFailed : kExitUsage;
     }
+    if (o.distance != 1.0f) *scene = at_distance(*scene, format_double("x%g", double(o.distance)), o.distance);
     if (!o.scene_file.empty() && run_settings().verbosity != Verbosity::quiet)
         print_line(stderr, "specbake: " + o.scene_file + ": " + std::to_string(scene->objects.size()) + " objects, " +
                                std::to_string(scene->normal_maps.size()) + " normal maps, " +
@@ -122,6 +126,10 @@ void add_verify_command(CLI::App& app, std::function<int()>& run) {
         ->capture_default_str()
         ->check(CLI::Range(0.0001f, 1.0f));
     add_sim_command_options(sub, o->sim);
+    sub->add_option("--distance", o->distance,
+                    "Camera distance as a factor of the scene's own (bench: near 0.55, mid 1, far 3)")
+        ->capture_default_str()
+        ->check(CLI::Range(0.05f, 100.0f));
     sub->add_option("--only", o->only, "Only these candidates (plus 'none'), e.g. --only projected,default")
         ->delimiter(',');
     sub->add_option("--strip", o->strip, "Also write the image strip (frame 0) to this PNG file");

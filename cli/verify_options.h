@@ -21,6 +21,9 @@ struct SimCommandOptions {
     int frames = 8;
     int repeats = 7;
     bool no_variants = false;
+    std::string ground_truth = "footprint";
+    bool no_floor = false;
+    bool no_limit = false;
 };
 
 inline void add_sim_command_options(CLI::App* sub, SimCommandOptions& o) {
@@ -35,6 +38,15 @@ inline void add_sim_command_options(CLI::App* sub, SimCommandOptions& o) {
         ->capture_default_str()
         ->check(CLI::Range(0, 1000));
     sub->add_flag("--no-variants", o.no_variants, "Leave out the bake variants");
+    sub->add_option("--ground-truth", o.ground_truth,
+                    "Ground-truth estimator: footprint (each sample integrates the highlight over its stratum) or "
+                    "point (point samples)")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"footprint", "point"}));
+    sub->add_flag("--no-limit", o.no_limit,
+                  "Skip the limit row (per pixel the best of 32 isotropic GGX lobes about the shading normal)");
+    sub->add_flag("--no-floor", o.no_floor,
+                  "Skip the floor row (a second ground truth at a quarter of the samples scored against the first)");
 }
 
 // Fills `v` from `o` and the embedded runtime include. Prints the error and returns false for a bad --size.
@@ -49,6 +61,9 @@ inline bool apply_sim_command_options(const SimCommandOptions& o, verify::Verify
     v.frames = o.frames;
     v.timing_repeats = o.repeats;
     v.variants = !o.no_variants;
+    v.footprint_ground_truth = o.ground_truth == "footprint";
+    v.floor = !o.no_floor;
+    v.limit = !o.no_limit;
     return true;
 }
 

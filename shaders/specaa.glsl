@@ -463,6 +463,19 @@ float specaa_beckmann_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float tau) {
            (SPECAA_PI * sqrt(detClamped) * z2 * z2);
 }
 
+// NDF of a filtered lobe with the tails of the unfiltered material (TK21 Sec. 7). Widening GGX to
+// A = a I + K also raises its tails, D ~ sqrt(det A) / (pi theta^4) far from the peak, while the
+// footprint's true NDF (GGX(a) spread by the footprint's normal distribution) keeps the tails of GGX(a),
+// ~ a / (pi theta^4). A mixture (1 - w) GGX(A) + w Beckmann(A) with w = 1 - a / sqrt(det A) keeps the
+// width of the filtered lobe, integrates to one like both parts, and has exactly the unfiltered tail
+// weight; with K = 0 it is GGX(a). `alpha2` is the unfiltered a of the material.
+float specaa_filtered_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
+    float tau = alpha2 * alpha2;
+    float w = SPECAA_SATURATE(1.0 - alpha2 / sqrt(specaa_clamped_det(A, tau)));
+    float ggx = specaa_ggx_D(h, A, tau);
+    return ggx + w * (specaa_beckmann_D(h, A, tau) - ggx);
+}
+
 // GGX Smith Lambda, TK21 App. A.3: -1/2 + sqrt(s + o.z^2) / (2 |o.z|), s = [o.x, o.y] A [o.x, o.y]^T,
 // evaluated as s / (2 |o.z| (sqrt(s + o.z^2) + |o.z|)) (same value, no cancellation for smooth A).
 // +inf at o.z = 0 with s > 0.

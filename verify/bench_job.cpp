@@ -28,14 +28,20 @@ const CandidateReport* find_row(const SceneReport& s, const std::string& name) {
 // Per candidate, aggregated over the scenes it ran on.
 struct Aggregate {
     std::string name, family;
-    double log_error = 0, log_error_linear = 0, log_flicker = 0, energy = 0, peak = 0;
-    int n = 0, n_flicker = 0;
+    double log_error = 0, log_error_linear = 0, log_flicker = 0, log_flicker_tm = 0, energy = 0, peak = 0;
+    int n = 0, n_flicker = 0, n_flicker_tm = 0;
     std::optional<int> spirv;
     std::vector<double> frame_rel, bake_ms;
     double rel_error() const { return n ? std::exp(log_error / n) : 1.0; }
     double rel_error_linear() const { return n ? std::exp(log_error_linear / n) : 1.0; }
     double rel_flicker() const { return n_flicker ? std::exp(log_flicker / n_flicker) : 1.0; }
+    double rel_flicker_tm() const { return n_flicker_tm ? std::exp(log_flicker_tm / n_flicker_tm) : 1.0; }
 };
+
+enum class Family { All, Analytic, Real };
+bool in_family(const SceneReport& s, Family f) {
+    return f == Family::All || (f == Family::Real) == s.from_file;
+}
 
 double median(std::vector<double> v) {
     if (v.empty()) return NAN;
@@ -43,11 +49,12 @@ double median(std::vector<double> v) {
     return v[v.size() / 2];
 }
 
-std::vector<Aggregate> aggregate(const BenchReport& r) {
+std::vector<Aggregate> aggregate(const BenchReport& r, Family family = Family::All) {
     std::vector<Aggregate> out;
     std::map<std::string, size_t> index;
     constexpr double kFloor = 1e-9;  // keeps the logarithm finite for a candidate identical to none
     for (const SceneReport& s : r.scenes) {
+        if (!in_family(s, family)) continue;
         for (const CandidateReport& c : s.candidates) {
             const CandidateReport* none = find_row(s, baseline_of(c.family));
             if (!none) continue;
@@ -64,6 +71,10 @@ std::vector<Aggregate> aggregate(const BenchReport& r) {
             if (none->metrics.flicker_linear > kFloor) {
                 a.log_flicker += std::log(std::max(c.metrics.flicker_linear, kFloor) / none->metrics.flicker_linear);
                 ++a.n_flicker;
+            }
+            if (none->metrics.flicker > kFloor) {
+                a.log_flicker_tm += std::log(std::max(c.metrics.flicker, kFloor) / none->metrics.flicker);
+                ++a.n_flicker_tm;
             }
             a.energy += c.metrics.energy_ratio;
             a.peak += c.metrics.peak_ratio;
@@ -107,35 +118,107 @@ Result<BenchReport> run_bench(const BenchOptions& options, const std::function<v
                          format_double("%.1f s", (report.scenes.back().ground_truth_ms + report.scenes.back().glint_ground_truth_ms) / 1000.0));
         }
     }
-    for (const std::filesystem::path& file : options.scene_files) {
+    std::vector<std::filesystem::path> files = options.scene_files;
+    if (!options.corpus_dir.empty()) {
+        auto corpus = corpus_files(options.corpus_dir);
+        if (!corpus) return corpus.error();
+        files.insert(files.end(), corpus->begin(), corpus->end());
+    }
+    for (const std::filesystem::path& file : files) {
         auto scene = load_sim_scene(file);
         if (!scene) return scene.error();
-        auto result = run_verify(*scene, options.verify);
-        if (!result) return make_error(file.string() + ": " + result.error().message);
-        report.scenes.push_back(std::move(*result));
-        if (progress)
-            progress(scene_label(report.scenes.back()) + ": ground truth " +
-                     format_double("%.1f s", (report.scenes.back().ground_truth_ms + report.scenes.back().glint_ground_truth_ms) / 1000.0));
+        for (const auto& [label, factor] : options.distances) {
+            auto result = run_verify(at_distance(*scene, label, factor), options.verify);
+            if (!result) return make_error(file.string() + " (" + label + "): " + result.error().message);
+            report.scenes.push_back(std::move(*result));
+            if (progress)
+                progress(scene_label(report.scenes.back()) + ": ground truth " +
+                         format_double("%.1f s", (report.scenes.back().ground_truth_ms +
+                                                    report.scenes.back().glint_ground_truth_ms) / 1000.0));
+        }
     }
     return report;
 }
 
-std::string bench_summary_markdown(const BenchReport& r) {
+Result<std::vector<std::filesystem::path>> corpus_files(const std::filesystem::path& dir) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    if (!fs::is_directory(dir, ec)) return make_error(dir.string() + ": corpus folder not found");
+    std::vector<fs::path> out;
+    for (const auto& model : fs::directory_iterator(dir, ec)) {
+        if (!model.is_directory()) continue;
+        for (const auto& file : fs::directory_iterator(model.path(), ec)) {
+            const std::string ext = file.path().extension().string();
+            if (file.is_regular_file() && (ext == ".gltf" || ext == ".glb")) out.push_back(file.path());
+        }
+    }
+    if (ec) return make_error(dir.string() + ": " + ec.message());
+    if (out.empty()) return make_error(dir.string() + ": no .gltf or .glb file in its subfolders");
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+SimScene at_distance(const SimScene& scene, const std::string& label, float factor) {
+    SimScene out = scene;
+    out.name = scene.name + "@" + label;
+    SimCamera& c = out.camera;
+    for (int i = 0; i < 3; ++i) c.position[i] = c.target[i] + factor * (c.position[i] - c.target[i]);
+    return out;
+}
+
+namespace {
+
+std::string aggregate_table(const BenchReport& r, Family family) {
     std::string out;
-    out += "| candidate | family | RMSE vs base | RMSE (tm) vs base | flicker vs base | energy | p99 | SPIR-V | frame x "
-           "| bake ms |\n";
-    out += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
-    for (const Aggregate& a : aggregate(r)) {
+    out += "| candidate | family | RMSE vs base | RMSE (tm) vs base | flicker vs base | flicker (tm) vs base | energy "
+           "| p99 | SPIR-V | frame x | bake ms |\n";
+    out += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    for (const Aggregate& a : aggregate(r, family)) {
         const double frame = median(a.frame_rel), bake = median(a.bake_ms);
         out += "| " + a.name + " | " + a.family + " | " + format_double("%.3f", a.rel_error_linear()) + " | " +
-               format_double("%.3f", a.rel_error()) + " | " +
-               format_double("%.3f", a.rel_flicker()) + " | " + format_double("%.2f", a.energy / a.n) + " | " +
+               format_double("%.3f", a.rel_error()) + " | " + format_double("%.3f", a.rel_flicker()) + " | " +
+               format_double("%.3f", a.rel_flicker_tm()) + " | " + format_double("%.2f", a.energy / a.n) + " | " +
                format_double("%.2f", a.peak / a.n) + " | " + (a.spirv ? std::to_string(*a.spirv) : "-") + " | " +
                (std::isnan(frame) ? "-" : format_double("%.2f", frame)) + " | " +
                (std::isnan(bake) ? "-" : format_double("%.1f", bake)) + " |\n";
     }
+    return out;
+}
+
+}  // namespace
+
+std::string bench_summary_markdown(const BenchReport& r) {
+    size_t real = 0;
+    for (const SceneReport& s : r.scenes) real += s.from_file ? 1 : 0;
+    const size_t analytic = r.scenes.size() - real;
+    std::string out = "All " + std::to_string(r.scenes.size()) + " scenes:\n\n" + aggregate_table(r, Family::All);
+    if (real > 0 && analytic > 0) {
+        out += "\nAnalytic (" + std::to_string(analytic) + " scene/roughness pairs):\n\n" + aggregate_table(r, Family::Analytic);
+        out += "\nReal assets (" + std::to_string(real) + " scene/distance pairs):\n\n" + aggregate_table(r, Family::Real);
+    }
     out += "\nBase: none (no filtering); for the glint family glint-c20 (glints without anti-aliasing, C20), on the "
            "glint ground truth.\n";
+    out += "\nDo no harm (default / none per scene; goal RMSE <= 1.02, flicker <= 1.00 linear and tone-mapped) "
+           "and the floor (ground truth at 1/4 of the samples against the full one, / none):\n\n";
+    out += "| scene | none RMSE | default RMSE x | flicker x | flicker (tm) x | holds | floor RMSE x | floor flicker x |\n"
+           "|---|---:|---:|---:|---:|---|---:|---:|\n";
+    for (const SceneReport& s : r.scenes) {
+        const CandidateReport* none = find_row(s, "none");
+        const CandidateReport* def = find_row(s, "default");
+        const CandidateReport* floor = find_row(s, "floor");
+        if (!none || !def) continue;
+        const auto ratio = [](double a, double b) { return b > 0 ? a / b : (a > 0 ? INFINITY : 1.0); };
+        const double e = ratio(def->metrics.rmse, none->metrics.rmse);
+        const double f = ratio(def->metrics.flicker_linear, none->metrics.flicker_linear);
+        const double ft = ratio(def->metrics.flicker, none->metrics.flicker);
+        const bool holds = e <= 1.02 && f <= 1.0 && ft <= 1.0;
+        out += "| " + scene_label(s) + " | " + format_double("%.3f", none->metrics.rmse) + " | " +
+               format_double("%.3f", e) + " | " + format_double("%.3f", f) + " | " + format_double("%.3f", ft) + " | " +
+               (holds ? "yes" : "**no**") + " | " +
+               (floor ? format_double("%.3f", ratio(floor->metrics.rmse, none->metrics.rmse)) : "-") + " | " +
+               (floor ? format_double("%.3f", ratio(floor->metrics.flicker_linear, none->metrics.flicker_linear)) : "-") +
+               " |\n";
+    }
     out += "\nBest per scene (lowest linear RMSE / lowest flicker among filtering candidates):\n\n";
     out += "| scene | base RMSE | best RMSE | base flicker | best flicker |\n|---|---:|---|---:|---|\n";
     for (const SceneReport& s : r.scenes) {
@@ -145,7 +228,8 @@ std::string bench_summary_markdown(const BenchReport& r) {
         const CandidateReport* none = find_row(s, base);
         const CandidateReport *best_e = nullptr, *best_f = nullptr;
         for (const CandidateReport& c : s.candidates) {
-            if (c.name == base || (c.family == "glint") != glints_only) continue;
+            if (c.name == base || c.family == "floor" || c.family == "limit" || (c.family == "glint") != glints_only)
+                continue;
             if (!best_e || c.metrics.rmse < best_e->metrics.rmse) best_e = &c;
             if (!best_f || c.metrics.flicker_linear < best_f->metrics.flicker_linear) best_f = &c;
         }

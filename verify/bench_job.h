@@ -19,7 +19,14 @@ struct BenchOptions {
     VerifyOptions verify;
     std::vector<std::string> scenes;   // built-in scene names (glint scenes too); empty: all (none with `no_builtin`)
     bool no_builtin = false;           // only the scene files
-    std::vector<std::filesystem::path> scene_files;  // glTF/GLB or other mesh files, each run once
+    std::vector<std::filesystem::path> scene_files;  // glTF/GLB or other mesh files, each at every distance
+    // Real-asset corpus: every .gltf/.glb directly inside each subfolder of this folder (the layout of the
+    // glTF sample models, e.g. ../shared/assets/gltf), added to `scene_files`; empty: none.
+    std::filesystem::path corpus_dir;
+    // Camera distances a scene file is simulated at, as factors of its own framing distance (the orbit
+    // that fits the object, or its camera) with a label: near shows part of the object magnified, far
+    // leaves it a few dozen pixels wide, where normal-map aliasing is strongest.
+    std::vector<std::pair<std::string, float>> distances{{"near", 0.55f}, {"mid", 1.0f}, {"far", 3.0f}};
     // GGX alpha (= r^2) of the materials, the papers' "roughness"; r = sqrt(alpha) is what glTF stores.
     std::vector<float> alpha{0.01f, 0.05f, 0.2f};
     // The glint scenes (builtin_glint_scene_names) run once each, at this alpha (C21's sphere and plane
@@ -39,9 +46,17 @@ struct BenchReport {
 // Runs every scene x roughness; `progress` receives one line per finished scene.
 Result<BenchReport> run_bench(const BenchOptions& options, const std::function<void(const std::string&)>& progress);
 
-// Summary over all scenes: per candidate the geometric means (over scenes) of its RMSE (linear and
-// tone-mapped) and linear flicker relative to its family's baseline (baseline_of: no filtering, or for the
-// glint family glints without anti-aliasing), the mean energy and peak ratios, and its costs.
+// The glTF/GLB files of a corpus folder (see BenchOptions::corpus_dir), sorted; an error when it has none.
+Result<std::vector<std::filesystem::path>> corpus_files(const std::filesystem::path& dir);
+
+// `scene` seen from `factor` times its camera's distance to the target, named "<name>@<label>".
+SimScene at_distance(const SimScene& scene, const std::string& label, float factor);
+
+// Summary: per candidate the geometric means (over scenes) of its RMSE (linear and tone-mapped) and
+// flicker (linear and tone-mapped) relative to its family's baseline (baseline_of: no filtering, or for the glint
+// family glints without anti-aliasing), the mean energy and peak ratios, and its
+// costs; one table over all scenes, then one per family (analytic, real assets) when both ran, then the
+// do-no-harm check of the default per scene.
 std::string bench_summary_markdown(const BenchReport& report);
 // One table per scene (markdown_table) with a heading, plus the summary and the command line.
 std::string bench_full_markdown(const BenchReport& report);

@@ -46,7 +46,7 @@ using SimImage = Image;
 
 // How render_ground_truth() takes `spp` samples: (scale * passes_per_axis)^2 per pixel area.
 struct GroundTruthLayout {
-    int scale = 1;            // supersampling factor of each pass (<= 4, target <= 8192 texels a side)
+    int scale = 1;            // supersampling factor of each pass (<= 16, target <= 4096 texels a side)
     int passes_per_axis = 1;  // jittered passes along each axis
     int samples() const { return (scale * passes_per_axis) * (scale * passes_per_axis); }
 };
@@ -68,8 +68,12 @@ public:
     // Ground truth of frame `frame` with about `spp` stratified samples per pixel area (see
     // ground_truth_layout). Each pass renders the scene at `scale` x the resolution with one jittered sample
     // per texel; every sample within 3 sigma of a pixel centre enters that pixel with its Gaussian weight
-    // exp(-d^2 / (2 sigma^2)), and the weighted sums are normalised by the summed weights.
-    SimImage render_ground_truth(int frame, int spp);
+    // exp(-d^2 / (2 sigma^2)), and the weighted sums are normalised by the summed weights. `seed` picks
+    // the jitter: different seeds give independent estimates of the same integral (the bench's floor).
+    SimImage render_ground_truth(int frame, int spp, uint32_t seed = 0);
+    // With `on` (the default) each ground-truth sample integrates the highlight over its stratum
+    // analytically (renderer.cpp, kGroundTruthMain); off: point samples.
+    void set_ground_truth_footprint(bool on);
 
     // Uploads the glint dictionary (a 2D array with its baked mips, as a run time binds it) and compiles the
     // glint ground truth. `ggx`: the GGX target (SPECAA_GLINT_GGX) for every glint material.
@@ -79,10 +83,12 @@ public:
     // normal map at full resolution, and the cell footprint frozen to the output pixel's (the passes'
     // UV derivatives scaled back by the supersampling factor), so only the half vector is supersampled.
     // Other objects occlude but are not covered (coverage 0).
-    SimImage render_glint_ground_truth(int frame, int spp);
+    SimImage render_glint_ground_truth(int frame, int spp, uint32_t seed = 0);
 
     // Compiles the candidate shader; the error carries the GL info log.
     Result<int> compile_candidate(const SimShaderSpec& spec);
+    // Sets the float uniform `name` of compiled candidate `id` (declared in its spec's defines).
+    void set_candidate_uniform(int id, const char* name, float value);
     // Renders compiled candidate `id` at one sample per pixel centre.
     SimImage render_candidate(int id, int frame);
     // Wall time in milliseconds of `draws` back-to-back renders of candidate `id` at frame 0, bounded by
@@ -95,7 +101,7 @@ public:
 private:
     SimRenderer() = default;
     void draw_candidate(int id, int frame);
-    SimImage render_filtered(unsigned program, int frame, int spp, bool freeze_footprint);
+    SimImage render_filtered(unsigned program, int frame, int spp, bool freeze_footprint, uint32_t seed);
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };

@@ -76,7 +76,10 @@ void heat(float v, float* rgb) {
 }  // namespace
 
 Image make_strip(const SimImage& gt, const std::vector<StripTile>& candidates) {
-    const int w = gt.width, h = gt.height, gap = 4;
+    // Every image pixel drawn as a zoom x zoom block: at least 2x, and about 256 pixels high for small
+    // renders, so single-pixel highlights and their errors stay visible.
+    const int zoom = std::clamp(256 / std::max(gt.height, 1), 2, 8);
+    const int w = gt.width * zoom, h = gt.height * zoom, gap = 4;
     const int columns = 1 + int(candidates.size());
     const int tile_w = w + gap, tile_h = h + kLabelHeight;
     Image strip(columns * tile_w, 2 * tile_h, 3);
@@ -93,7 +96,7 @@ Image make_strip(const SimImage& gt, const std::vector<StripTile>& candidates) {
     const auto put_image = [&](const SimImage& im, int column) {
         for (int y = 0; y < h; ++y)
             for (int x = 0; x < w; ++x)
-                std::fill_n(strip.texel(column * tile_w + x, kLabelHeight + y), 3, srgb(tone(im.texel(x, y)[0])));
+                std::fill_n(strip.texel(column * tile_w + x, kLabelHeight + y), 3, srgb(tone(im.texel(x / zoom, y / zoom)[0])));
     };
     put_image(gt, 0);
     draw_text(strip, 2, 3, "ground truth");
@@ -106,7 +109,8 @@ Image make_strip(const SimImage& gt, const std::vector<StripTile>& candidates) {
         draw_text(strip, column * tile_w + 2, 3 + kLineHeight, second);
         for (int y = 0; y < h; ++y)
             for (int x = 0; x < w; ++x) {
-                const float err = std::abs(tone(candidates[c].image->texel(x, y)[0]) - tone(gt.texel(x, y)[0]));
+                const float err = std::abs(tone(candidates[c].image->texel(x / zoom, y / zoom)[0]) -
+                                           tone(gt.texel(x / zoom, y / zoom)[0]));
                 heat(4.0f * err, strip.texel(column * tile_w + x, tile_h + kLabelHeight + y));
             }
     }

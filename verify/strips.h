@@ -19,7 +19,8 @@ struct StripTile {
     const SimImage* image = nullptr;
 };
 
-// The strip as an RGB image in [0, 1] (sRGB-encoded for display).
+// The strip as an RGB image in [0, 1] (sRGB-encoded for display), each render magnified 2x to 8x (to
+// about 256 pixels high) with its label above it.
 Image make_strip(const SimImage& ground_truth, const std::vector<StripTile>& candidates);
 
 // Writes `strip` as an 8-bit PNG to `path` atomically.

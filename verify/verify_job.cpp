@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <optional>
 
 namespace specbake::verify {
 namespace {
@@ -25,6 +26,36 @@ SimBakedTextures to_textures(TextureBakeResult&& result) {
     return t;
 }
 
+// The limit row (issue 15, item 5). A rule that keeps one isotropic GGX lobe about the shading normal the
+// engine computes (mipped normal map, interpolated vertex normal) can only choose its roughness per pixel;
+// the best it can do is the roughness whose 1-spp radiance is closest to the ground truth. The row renders
+// the projected-space filter (TK21 Eq. 7) of the material's a with each kernel of a logarithmic grid,
+// 0 and 1e-6 .. 1, and keeps per pixel and frame the one nearest the ground truth. It bounds the isotropic
+// rules (and the matrix form where its anisotropy does not matter) from below on these frames; a lobe
+// with its own mean direction or anisotropy, or several lobes, could do better.
+constexpr int kLimitKernels = 32;
+
+float limit_kernel(int k) { return k == 0 ? 0.0f : float(std::pow(10.0, -6.0 + 6.0 * (k - 1) / (kLimitKernels - 2))); }
+
+SimShaderSpec limit_shader() {
+    SimShaderSpec spec;
+    spec.defines = "uniform float uLimitKernel;\n";
+    spec.body = "float f = specaa_filter_projected_isotropic(a, uLimitKernel); A = vec3(f, f, 0.0);";
+    return spec;
+}
+
+// Per pixel, the radiance of `candidate` nearest to `gt` (coverage from the first).
+void keep_nearest(const SimImage& gt, const SimImage& candidate, SimImage& best, bool first) {
+    if (first) {
+        best = candidate;
+        return;
+    }
+    for (size_t i = 0; i < gt.texel_count(); ++i) {
+        const float g = gt.pixels[2 * i];
+        if (std::abs(candidate.pixels[2 * i] - g) < std::abs(best.pixels[2 * i] - g)) best.pixels[2 * i] = candidate.pixels[2 * i];
+    }
+}
+
 }  // namespace
 
 Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& options) {
@@ -33,6 +64,7 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
     auto renderer_result = SimRenderer::create(scene, options.width, options.height, options.include_glsl);
     if (!renderer_result) return renderer_result.error();
     SimRenderer& renderer = **renderer_result;
+    renderer.set_ground_truth_footprint(options.footprint_ground_truth);
 
     SceneReport report;
     report.scene = scene.name;
@@ -122,7 +154,19 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
         ids.push_back(*id);
     }
 
+    std::optional<int> limit_id;
+    if (options.limit) {
+        auto id = renderer.compile_candidate(limit_shader());
+        if (!id) return make_error("limit row: " + id.error().message);
+        limit_id = *id;
+    }
+    SimMetricsAccumulator limit_accumulator;
+    SimImage limit_image;
+
     std::vector<SimMetricsAccumulator> accumulators(candidates.size());
+    SimMetricsAccumulator floor_accumulator;
+    SimImage floor_image;
+    const int floor_spp = std::max(1, report.spp / 4);
     report.candidates.resize(candidates.size());
     double gt_total = 0, glint_total = 0, glint_radiance = 0;
     for (int frame = 0; frame < options.frames; ++frame) {
@@ -138,6 +182,22 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
             SimImage image = renderer.render_candidate(ids[i], frame);
             accumulators[i].add_frame(candidates[i].shader.glint ? glint_gt : gt, image);
             if (frame == 0 && options.keep_images) report.candidates[i].image = std::move(image);
+        }
+        if (limit_id && any_ggx) {
+            SimImage best;
+            for (int k = 0; k < kLimitKernels; ++k) {
+                renderer.set_candidate_uniform(*limit_id, "uLimitKernel", limit_kernel(k));
+                keep_nearest(gt, renderer.render_candidate(*limit_id, frame), best, k == 0);
+            }
+            limit_accumulator.add_frame(gt, best);
+            if (frame == 0 && options.keep_images) limit_image = std::move(best);
+        }
+        if (options.floor && any_ggx) {
+            const auto floor_start = std::chrono::steady_clock::now();
+            SimImage quarter = renderer.render_ground_truth(frame, floor_spp, 1);
+            floor_accumulator.add_frame(gt, quarter);
+            if (frame == 0 && options.keep_images) floor_image = std::move(quarter);
+            gt_total += ms_since(floor_start);
         }
         if (frame == 0 && options.keep_images) {
             report.ground_truth = std::move(gt);
@@ -188,6 +248,26 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
             report.candidates[i].frame_ms = v[v.size() / 2];
             baseline_ms[candidates[i].name] = v[v.size() / 2];
         }
+    }
+    if (limit_id && any_ggx) {
+        CandidateReport row;
+        row.name = "limit";
+        row.family = "limit";
+        row.source = "best of " + std::to_string(kLimitKernels) +
+                     " isotropic GGX lobes about the shading normal per pixel and frame (a lower bound, verify_job.cpp)";
+        row.metrics = limit_accumulator.finish();
+        row.image = std::move(limit_image);
+        report.candidates.push_back(std::move(row));
+    }
+    if (options.floor && any_ggx) {
+        CandidateReport row;
+        row.name = "floor";
+        row.family = "floor";
+        row.source = "ground truth at " + std::to_string(ground_truth_layout(floor_spp, options.width, options.height).samples()) +
+                     " spp (independent jitter) against the full one";
+        row.metrics = floor_accumulator.finish();
+        row.image = std::move(floor_image);
+        report.candidates.push_back(std::move(row));
     }
     for (CandidateReport& row : report.candidates) {
         auto base = baseline_ms.find(baseline_of(row.family));

@@ -29,6 +29,14 @@ struct VerifyOptions {
     // The glint dictionary of scenes whose materials ask for glints (shared_glint_dictionary: baked once
     // per process); the defaults are what `specbake glints` and `bake` write.
     GlintDictionarySettings glint_dictionary;
+    // Also score an independent ground truth at a quarter of the samples against the full one on the same
+    // frames (row "floor"): the error and flicker no candidate can be shown to beat at this sample count.
+    bool floor = true;
+    // Also score the limit row: per pixel and frame the best of kLimitKernels isotropic GGX lobes about the
+    // engine's shading normal (verify_job.cpp), a lower bound for every rule that widens the lobe.
+    bool limit = true;
+    // Ground-truth samples integrate the highlight over their stratum (false: point samples).
+    bool footprint_ground_truth = true;
     // Receives one line per finished stage (bakes, each ground-truth frame, timing); may be empty.
     std::function<void(const std::string&)> progress;
     // Called after each frame (ground truth and every candidate rendered) with (frames done, frames); may be empty.

@@ -48,6 +48,28 @@ TEST(Ggx, ProjectedAreaIsOne) {
     EXPECT_NEAR(beckmann, 1.0, 2e-3);
 }
 
+TEST(FilteredNdf, ProjectedAreaIsOneAndTheTailIsTheUnfilteredOne) {
+    // A filtered matrix: a = 0.05^2 widened by an anisotropic kernel.
+    const double alpha2 = 0.05 * 0.05;
+    const Sym2<double> A = sym(test::rotated_diag(alpha2 + 0.04, alpha2 + 0.01, 0.4));
+    const double area = test::integrate_hemisphere(
+        [&](const Vec3<double>& m) { return filtered_ndf(m, A, alpha2) * m.z; }, 2000, 400);
+    EXPECT_NEAR(area, 1.0, 2e-3);
+    // Far from the peak (theta = 85 deg) the mixture falls like GGX(a), written out by hand, not like the
+    // widened GGX(A), which is sqrt(det A) / a times heavier there.
+    const Sym2<double> iso{0.09, 0.0, 0.09};
+    for (double phi : {0.0, 1.0, 2.5}) {
+        const Vec3<double> h = test::spherical(85.0 * kPi / 180.0, phi);
+        const double unfiltered = ggx_axis_aligned(h, 0.05, 0.05);
+        EXPECT_NEAR(filtered_ndf(h, iso, alpha2) / unfiltered, 1.0, 0.02) << phi;
+        EXPECT_GT(ggx_ndf(h, iso, 0.0) / unfiltered, 30.0);
+    }
+    // No kernel: exactly GGX(a).
+    const Sym2<double> plain{alpha2, 0.0, alpha2};
+    const Vec3<double> h = test::spherical(0.03, 0.2);
+    EXPECT_NEAR(filtered_ndf(h, plain, alpha2), ggx_axis_aligned(h, 0.05, 0.05), 1e-9 * ggx_axis_aligned(h, 0.05, 0.05));
+}
+
 TEST(Beckmann, MatchesRotatedGaussianOfSlopes) {
     std::mt19937_64 rng(2);
     std::uniform_real_distribution<double> u(0.0, 1.0);

@@ -194,6 +194,10 @@ GridGroup ggx_group() {
             std::abs(r.out[0][1] - beckmann) > kRelTol * cond * (1.0 + exponent) * beckmann + kAbsTol)
             return describe("GGX D, Beckmann D (TK21 Eq. 1, Sec. 2.1, App. A.4)", c, {r.out[0][0], r.out[0][1]},
                             {ggx, beckmann});
+        // The tail-weighted mixture (TK21 Sec. 7) of the two, with Beckmann's tolerance.
+        const double filtered = filtered_ndf(h, A, std::sqrt(tau));
+        if (std::abs(r.out[1][0] - filtered) > kRelTol * cond * (1.0 + exponent) * filtered + kAbsTol)
+            return describe("filtered D (TK21 Sec. 7)", c, {r.out[1][0]}, {filtered});
         return {};
     };
     return g;

@@ -66,10 +66,10 @@ TEST(VerifyMetrics, EmptyMaskGivesZeroPixels) {
 
 TEST(VerifyGroundTruth, SampleLayoutCoversTheRequestedCount) {
     EXPECT_EQ(ground_truth_layout(256, 128, 128).samples(), 256);
-    EXPECT_EQ(ground_truth_layout(256, 128, 128).scale, 4);
+    EXPECT_EQ(ground_truth_layout(256, 128, 128).scale, 16);
     EXPECT_EQ(ground_truth_layout(1, 64, 64).samples(), 1);
     EXPECT_EQ(ground_truth_layout(9, 64, 64).samples(), 9);   // 3 per axis: scale 3, one pass
-    EXPECT_EQ(ground_truth_layout(25, 64, 64).samples(), 25);  // 5 per axis: scale 1, 5 passes per axis
+    EXPECT_EQ(ground_truth_layout(25, 64, 64).samples(), 25);  // 5 per axis: scale 5, one pass
     // Large images keep the supersampled target within 8192 texels.
     EXPECT_LE(ground_truth_layout(256, 4096, 4096).scale * 4096, 8192);
     EXPECT_EQ(ground_truth_layout(256, 4096, 4096).samples(), 256);

@@ -59,6 +59,8 @@ inline VerifyOptions small_verify(int width, int height, int spp, int frames) {
     options.spirv = false;
     options.variants = false;
     options.keep_images = false;
+    options.floor = false;
+    options.limit = false;
     return options;
 }
 
