@@ -2,6 +2,7 @@
 #include "io/input_policy.h"
 
 #include "io/atomic_file.h"
+#include "io/byte_order.h"
 #include "io/image_io.h"
 #include "io/oiio_api.h"
 
@@ -116,7 +117,6 @@ Image decode_level(const uint8_t* data, int w, int h, const FormatInfo& f) {
     return img;
 }
 
-constexpr uint8_t kKtx2Magic[12] = {0xAB, 'K', 'T', 'X', ' ', '2', '0', 0xBB, '\r', '\n', 0x1A, '\n'};
 constexpr size_t kKtx2HeaderBytes = 80;
 constexpr size_t kKtx2LevelEntryBytes = 24;
 
@@ -148,7 +148,7 @@ struct Ktx2Layout {
 Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& name, bool inflate = true) {
     auto fail = [&](const std::string& what) { return make_error(name + ": KTX2: " + what); };
     if (b.size() < kKtx2HeaderBytes) return fail("truncated header (" + std::to_string(b.size()) + " bytes)");
-    if (std::memcmp(b.data(), kKtx2Magic, 12) != 0) return fail("bad identifier");
+    if (std::memcmp(b.data(), kKtx2Identifier, 12) != 0) return fail("bad identifier");
     Ktx2Layout L;
     const uint32_t vk = u32(b, 12), type_size = u32(b, 16);
     L.width = u32(b, 20);
@@ -410,7 +410,7 @@ Result<InspectedTexture> decode_dds_for_inspection(std::span<const uint8_t> byte
 Result<InspectedTexture> read_texture_for_inspection(const std::filesystem::path& path) {
     auto bytes = read_file(path);
     if (!bytes) return bytes.error();
-    if (has_prefix(*bytes, kKtx2Magic, 12)) return decode_ktx2_for_inspection(*bytes, path.string());
+    if (has_prefix(*bytes, kKtx2Identifier, 12)) return decode_ktx2_for_inspection(*bytes, path.string());
     if (has_prefix(*bytes, "DDS ", 4)) return decode_dds_for_inspection(*bytes, path.string());
     if (auto r = check_png_structure(*bytes, path.string()); !r) return r.error();  // before OpenImageIO loads
     return read_with_oiio(path);
@@ -419,7 +419,7 @@ Result<InspectedTexture> read_texture_for_inspection(const std::filesystem::path
 Result<void> check_texture_file(const std::filesystem::path& path) {
     auto bytes = read_file(path);
     if (!bytes) return bytes.error();
-    if (has_prefix(*bytes, kKtx2Magic, 12)) return check_ktx2_structure(*bytes, path.string());
+    if (has_prefix(*bytes, kKtx2Identifier, 12)) return check_ktx2_structure(*bytes, path.string());
     if (has_prefix(*bytes, "DDS ", 4)) return check_dds_structure(*bytes, path.string());
     if (auto r = check_png_structure(*bytes, path.string()); !r) return r.error();
     auto t = read_with_oiio(path);
@@ -428,7 +428,7 @@ Result<void> check_texture_file(const std::filesystem::path& path) {
 }
 
 Result<TextureShape> check_container_shape(std::span<const uint8_t> bytes, const std::string& name) {
-    if (has_prefix(bytes, kKtx2Magic, 12)) {
+    if (has_prefix(bytes, kKtx2Identifier, 12)) {
         auto l = parse_ktx2(bytes, name, false);
         if (!l) return l.error();
         return TextureShape{"ktx2", int(l->width), int(l->height), int(l->levels), l->format->channels, int(l->layers)};

@@ -1,5 +1,6 @@
 #include "io/dds.h"
 
+#include "io/byte_order.h"
 #include "io/texel_encoding.h"
 
 #include <algorithm>
@@ -21,7 +22,6 @@ constexpr uint32_t kAlphaModeUnknown = 0, kAlphaModeOpaque = 3;
 constexpr size_t kLegacyHeaderBytes = 4 + 124;          // magic, DDS_HEADER
 constexpr size_t kDx10HeaderBytes = kLegacyHeaderBytes + 20;  // + DDS_HEADER_DXT10
 
-void put32(std::vector<uint8_t>& b, size_t at, uint32_t v) { std::memcpy(b.data() + at, &v, 4); }
 
 size_t header_bytes(TexelEncoding e, int channels) {
     return dds_legacy_pixel_format(e, channels) ? kLegacyHeaderBytes : kDx10HeaderBytes;

@@ -1,5 +1,6 @@
 #include "io/ktx2.h"
 
+#include "io/byte_order.h"
 #include "io/texel_encoding.h"
 
 #include <tbb/parallel_for.h>
@@ -12,7 +13,6 @@
 namespace specbake::io {
 namespace {
 
-constexpr uint8_t kIdentifier[12] = {0xAB, 'K', 'T', 'X', ' ', '2', '0', 0xBB, '\r', '\n', 0x1A, '\n'};
 constexpr size_t kHeaderBytes = 80;        // identifier + 9 header words + index (4 x u32, 2 x u64)
 constexpr size_t kLevelIndexEntry = 24;    // byteOffset, byteLength, uncompressedByteLength (u64 each)
 constexpr uint32_t kModelRgbsda = 1;       // KHR_DF_MODEL_RGBSDA
@@ -22,18 +22,6 @@ constexpr uint32_t kQualifierSigned = 0x40, kQualifierFloat = 0x80;  // KHR_DF_S
 constexpr uint32_t kChannelAlpha = 15;     // KHR_DF_CHANNEL_RGBSDA_ALPHA
 constexpr uint32_t kFloatMinusOne = 0xBF800000u, kFloatOne = 0x3F800000u;
 
-void put32(std::vector<uint8_t>& b, size_t at, uint32_t v) { std::memcpy(b.data() + at, &v, 4); }
-void put64(std::vector<uint8_t>& b, size_t at, uint64_t v) { std::memcpy(b.data() + at, &v, 8); }
-uint32_t get32(std::span<const uint8_t> b, size_t at) {
-    uint32_t v;
-    std::memcpy(&v, b.data() + at, 4);
-    return v;
-}
-uint64_t get64(std::span<const uint8_t> b, size_t at) {
-    uint64_t v;
-    std::memcpy(&v, b.data() + at, 8);
-    return v;
-}
 size_t align_up(size_t v, size_t a) { return (v + a - 1) / a * a; }
 
 bool is_float(TexelEncoding e) { return e == TexelEncoding::Float16 || e == TexelEncoding::Float32; }
@@ -134,7 +122,7 @@ void ktx2_write_header(uint8_t* file, const ContainerLayout& layout, int width, 
     const Ktx2Parts parts = ktx2_parts(int(levels), dfd, kvd);
 
     std::vector<uint8_t> b(parts.data_start, 0);
-    std::memcpy(b.data(), kIdentifier, sizeof(kIdentifier));
+    std::memcpy(b.data(), kKtx2Identifier, sizeof(kKtx2Identifier));
     put32(b, 12, ktx2_vk_format(encoding, channels));
     put32(b, 16, uint32_t(encoding_bytes(encoding)));  // typeSize
     put32(b, 20, uint32_t(width));
@@ -257,7 +245,7 @@ std::vector<uint8_t> encode_ktx2_array(const MipChain& stacked, int layers, Texe
 
 Result<Ktx2Texture> read_ktx2_texture(std::span<const uint8_t> b, const std::string& name) {
     auto fail = [&](const std::string& what) -> Result<Ktx2Texture> { return make_error(name + ": " + what); };
-    if (b.size() < kHeaderBytes || std::memcmp(b.data(), kIdentifier, sizeof(kIdentifier)) != 0)
+    if (b.size() < kHeaderBytes || std::memcmp(b.data(), kKtx2Identifier, sizeof(kKtx2Identifier)) != 0)
         return fail("not a KTX2 file");
     Ktx2Texture t;
     Ktx2Info& info = t.info;

@@ -2,33 +2,21 @@
 // (KTX 2.0 Sec. 3: header, index, level index, DFD, key/value data, levels smallest first).
 #include "io/ktx2_uastc.h"
 
+#include "io/byte_order.h"
+
 #include <cstring>
 
 namespace specbake::io {
 namespace {
 
-constexpr uint8_t kIdentifier[12] = {0xAB, 'K', 'T', 'X', ' ', '2', '0', 0xBB, '\r', '\n', 0x1A, '\n'};
 constexpr uint32_t kModelUastc = 166;  // KHR_DF_MODEL_UASTC
-
-uint32_t get32(std::span<const uint8_t> b, size_t at) {
-    uint32_t v;
-    std::memcpy(&v, b.data() + at, 4);
-    return v;
-}
-uint64_t get64(std::span<const uint8_t> b, size_t at) {
-    uint64_t v;
-    std::memcpy(&v, b.data() + at, 8);
-    return v;
-}
-void put32(std::vector<uint8_t>& b, size_t at, uint32_t v) { std::memcpy(b.data() + at, &v, 4); }
-void put64(std::vector<uint8_t>& b, size_t at, uint64_t v) { std::memcpy(b.data() + at, &v, 8); }
 
 size_t blocks_bytes(int w, int h) { return size_t((w + 3) / 4) * size_t((h + 3) / 4) * 16; }
 
 }  // namespace
 
 Result<UastcFile> read_uastc_ktx2(std::span<const uint8_t> b, const std::string& name) {
-    if (b.size() < 104 || std::memcmp(b.data(), kIdentifier, 12) != 0) return make_error(name + ": not a KTX2 file");
+    if (b.size() < 104 || std::memcmp(b.data(), kKtx2Identifier, 12) != 0) return make_error(name + ": not a KTX2 file");
     if (get32(b, 12) != 0) return make_error(name + ": vkFormat " + std::to_string(get32(b, 12)) + ", expected 0 (UASTC)");
     if (get32(b, 44) != 0) return make_error(name + ": supercompressed; expected plain UASTC levels");
     UastcFile f;
@@ -75,7 +63,7 @@ std::vector<uint8_t> assemble_uastc_ktx2(const std::vector<UastcLevel>& levels, 
         end += levels[i].blocks.size();
     }
     std::vector<uint8_t> f(end, 0);
-    std::memcpy(f.data(), kIdentifier, 12);
+    std::memcpy(f.data(), kKtx2Identifier, 12);
     put32(f, 12, 0);  // vkFormat: VK_FORMAT_UNDEFINED, the descriptor says UASTC
     put32(f, 16, 1);  // typeSize
     put32(f, 20, uint32_t(levels.front().width));
