@@ -24,20 +24,7 @@ namespace {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 
-class TempDir {
-public:
-    TempDir() {
-        path_ = fs::temp_directory_path() / ("specbake-glint-verify-" + std::to_string(::getpid()) + "-" +
-                                             std::to_string(counter_++));
-        fs::create_directories(path_);
-    }
-    ~TempDir() { fs::remove_all(path_); }
-    const fs::path& path() const { return path_; }
-
-private:
-    fs::path path_;
-    static inline int counter_ = 0;
-};
+using test::TempDir;
 
 // Two unit spheres side by side (the procedural model's mesh under two nodes), material 0 on the left
 // one, material 1 (the same roughness) on the right one. `glints`: material 0's SPECBAKE_glints object

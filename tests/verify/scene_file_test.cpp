@@ -30,20 +30,7 @@ using json = nlohmann::json;
 
 test::SimTestEnvironment& environment() { return test::sim_environment(); }
 
-class TempDir {
-public:
-    TempDir() {
-        path_ = fs::temp_directory_path() / ("specbake-verify-scene-" + std::to_string(::getpid()) + "-" +
-                                             std::to_string(counter_++));
-        fs::create_directories(path_);
-    }
-    ~TempDir() { fs::remove_all(path_); }
-    const fs::path& path() const { return path_; }
-
-private:
-    fs::path path_;
-    static inline int counter_ = 0;
-};
+using test::TempDir;
 
 constexpr double kPi = std::numbers::pi;
 constexpr float kSphereRadius = 0.5f;
