@@ -137,6 +137,7 @@ Result<OutputLock> OutputLock::acquire(const fs::path& dir, Purpose purpose,
         return make_error(dir.string() + ": exists and is not a folder");
     const fs::path file = dir / kLockFileName;
     bool told = false;
+    int vanished = 0;
     for (;;) {
         // (Again on every pass: a holder that made the folder removes it when it stays empty.)
         if (purpose == Purpose::write && !fs::exists(dir, ec)) {
@@ -144,6 +145,8 @@ Result<OutputLock> OutputLock::acquire(const fs::path& dir, Purpose purpose,
             if (ec) return make_error(dir.string() + ": cannot create folder: " + ec.message());
         }
         int fd = ::open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+        // The holder that made the folder may have removed it, empty, between our look and the open.
+        if (fd < 0 && errno == ENOENT && purpose == Purpose::write && ++vanished < 64) continue;
         if (fd < 0 && purpose == Purpose::check) return lock;  // a folder nobody can write into
         if (fd < 0) return make_error(dir.string() + ": cannot create the lock file " + kLockFileName + ": " + os_error(errno));
         if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
