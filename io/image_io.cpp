@@ -147,46 +147,6 @@ Result<void> check_png_image_data(std::span<const uint8_t> b, const std::string&
     return {};
 }
 
-Result<void> check_jpeg_markers(std::span<const uint8_t> b, const std::string& name) {
-    if (b.size() < 3 || b[0] != 0xFF || b[1] != 0xD8) return {};
-    auto corrupt = [&](const std::string& what) -> Result<void> { return make_error(name + ": corrupt JPEG (" + what + ")"); };
-    for (size_t at = 2; at + 4 <= b.size();) {
-        if (b[at] != 0xFF) {  // libjpeg skips stray bytes up to the next marker (with a warning): so does this
-            ++at;
-            continue;
-        }
-        const uint8_t marker = b[at + 1];
-        if (marker == 0xFF) {  // fill byte
-            ++at;
-            continue;
-        }
-        if (marker == 0x01 || marker == 0xD8 || (marker >= 0xD0 && marker <= 0xD7)) {  // no length field
-            at += 2;
-            continue;
-        }
-        if (marker == 0xD9 || marker == 0xDA) return {};  // the markers OpenImageIO reads all come before the scan
-        const size_t length = size_t(b[at + 2]) << 8 | b[at + 3];
-        if (length < 2 || length > b.size() - at - 2) return {};  // truncated: libjpeg reports it
-        const std::span<const uint8_t> data = b.subspan(at + 4, length - 2);
-        if (marker == 0xE1 || marker == 0xE2 || marker == 0xED) {
-            const auto nul = std::find(data.begin(), data.end(), uint8_t(0));
-            if (nul == data.end())
-                return corrupt("APP" + std::to_string(marker - 0xE0) + " segment at byte " + std::to_string(at) +
-                               " without a terminated identifier");
-            const std::string id(data.begin(), nul);
-            if (marker == 0xE1 && id == "Exif" && data.size() < 6) return corrupt("Exif segment shorter than its header");
-            if (marker == 0xE2 && id == "ICC_PROFILE" && data.size() < 14)
-                return corrupt("ICC profile segment shorter than its header");
-            // "Photoshop 3.0\0", "8BIM", type, 4 padding bytes, then a 2-byte size of what follows.
-            if (marker == 0xED && id == "Photoshop 3.0" &&
-                (data.size() < 26 || 26 + (size_t(data[24]) << 8 | data[25]) > data.size()))
-                return corrupt("Photoshop segment shorter than the sizes it states");
-        }
-        at += 2 + length;
-    }
-    return {};
-}
-
 Result<DecodedImage> decode_image(const fs::path& path) {
     const std::string name = path.string();
     std::error_code ec;

@@ -42,10 +42,11 @@ Result<void> check_png_structure(std::span<const uint8_t> bytes, const std::stri
 // Sec. 10, Sec. 8.2), so that libpng never has to report a broken stream itself (on stderr, without the
 // file's name). Inflates into a small buffer; anything that is not a PNG passes.
 Result<void> check_png_image_data(std::span<const uint8_t> bytes, const std::string& name);
-// The metadata segments of a JPEG that OpenImageIO reads before the scan (APP1 Exif/XMP, APP2 ICC, APP13
-// Photoshop): each identifier NUL-terminated inside its segment and each header as long as it says, since
-// OpenImageIO compares them with strcmp and reads the headers' fields without checking the length.
-// Anything that is not a JPEG, or is truncated before its scan (libjpeg reports that), passes.
+// The metadata segments of a JPEG that OpenImageIO reads (APP1 Exif/XMP, APP2 ICC, APP13 Photoshop), found
+// by walking the markers as libjpeg does (io/jpeg_markers.cpp says how): each identifier NUL-terminated
+// inside its segment, each segment whole and each header as long as it says, since OpenImageIO compares
+// them with strcmp and reads the headers' fields without checking the length. Anything that is not a
+// JPEG passes, and so does one that libjpeg itself stops reading before such a segment.
 Result<void> check_jpeg_markers(std::span<const uint8_t> bytes, const std::string& name);
 
 // Convenience forms that drop the metadata.
