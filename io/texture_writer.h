@@ -94,6 +94,8 @@ public:
     // True when the written file is supercompressed (KTX2 with zstd on).
     bool supercompressed() const { return container_ == TextureContainer::Ktx2 && supercompression_.zstd; }
     const Supercompression& supercompression() const { return supercompression_; }
+    // True when the level bytes hold RGBA8 texels in B, G, R, A order (DDS A8R8G8B8, io/dds.h).
+    bool bgra() const { return bgra_; }
     // The manifest entry of this file as `filename` (sha256 left empty; the writer fills it).
     ManifestOutput entry(const std::string& filename, const std::string& kind) const;
 
@@ -103,6 +105,7 @@ private:
     int width_, height_, channels_;
     Supercompression supercompression_;
     ContainerLayout layout_;
+    bool bgra_ = false;
     std::unique_ptr<uint8_t[]> data_;  // not zero-filled: every byte is written by the header or a row
 };
 
