@@ -164,7 +164,7 @@ Result<std::vector<ManifestOutput>> write_texture(const MipChain& data, TexelEnc
                                                   TextureContainer container, const fs::path& dir,
                                                   const std::string& stem, const std::string& kind,
                                                   const std::vector<std::string>& channel_names, WrapMode wrap,
-                                                  const Supercompression& supercompression) {
+                                                  const Supercompression& supercompression, BlockFormat block) {
     if (data.levels.empty() || data.channels() < 1) return make_error((dir / stem).string() + ": nothing to write");
     if (data.channels() > 4)
         return make_error((dir / stem).string() + ": " + std::to_string(data.channels()) +
@@ -186,7 +186,7 @@ Result<std::vector<ManifestOutput>> write_texture(const MipChain& data, TexelEnc
             const Image& level = data.levels[size_t(L)];
             t.put_block(L, 0, 0, level.width, level.height, level.pixels.data(), level.channels, 0);
         }
-        const EncodedFile file{&t, stem, kind, names};
+        const EncodedFile file{&t, stem, kind, names, block};
         return write_encoded_textures({&file, 1}, dir);
     }
     MipChain widened;

@@ -62,13 +62,15 @@ std::optional<TextureContainer> parse_container(const std::string& name);
 // order as the KTX2/DDS channels. `wrap` is recorded where the container has a place for it (EXR
 // "wrapmodes"). Returns one entry per file, `path` relative to `dir`,
 // kind `kind`, sha256 filled. Creates `dir` when missing; the error names the file. All files of the call
-// are written to temporary names first and renamed only when every one succeeded.
+// are written to temporary names first and renamed only when every one succeeded. `block` other than
+// BlockFormat::None block-compresses a KTX2/DDS file's levels (io/block_compress.h); EXR and PNG ignore it.
 Result<std::vector<ManifestOutput>> write_texture(const MipChain& chain, TexelEncoding encoding,
                                                   TextureContainer container, const std::filesystem::path& dir,
                                                   const std::string& stem, const std::string& kind,
                                                   const std::vector<std::string>& channel_names = {},
                                                   WrapMode wrap = WrapMode::Repeat,
-                                                  const Supercompression& supercompression = {});
+                                                  const Supercompression& supercompression = {},
+                                                  BlockFormat block = {});
 
 // A KTX2 or DDS file assembled in memory, level by level and row by row, so a producer can encode rows
 // as it finishes them instead of holding float chains. put_block() may run on several threads at once
