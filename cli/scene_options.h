@@ -28,6 +28,8 @@ struct SceneCliOptions {
     std::string container = "ktx2";
     std::string gltf_mode = "sidecar";
     std::string basisu;
+    std::string block = "none";
+    std::string block_rgba = "bc1";
     std::string isotropic = "mean";
     std::string filter = "projected";
     double max_kernel = 0.0;
@@ -165,6 +167,8 @@ inline Result<SceneJob> make_scene_job(const SceneCliOptions& o) {
     job.container = io::parse_container(o.container).value_or(io::TextureContainer::Ktx2);
     job.gltf_mode = o.gltf_mode == "replace" ? GltfMode::Replace : GltfMode::Sidecar;
     job.basisu = o.basisu;
+    job.supercompression.block = o.block == "bc";
+    job.supercompression.rgba_block = o.block_rgba == "bc3" ? 3 : 1;
     PlanOptions& p = job.plan;
     p.estimator = parse_curvature_estimator(o.estimator).value_or(CurvatureEstimator::ShapeOperator);
     p.min_roughness_gain = o.min_roughness_gain;

@@ -2,6 +2,7 @@
 #include "io/input_policy.h"
 
 #include "io/atomic_file.h"
+#include "io/bc_decode.h"
 #include "io/byte_order.h"
 #include "io/image_io.h"
 #include "io/oiio_api.h"
@@ -21,17 +22,21 @@ namespace {
 
 enum class Numeric { unorm, srgb, sfloat };
 
-// Uncompressed formats a bake can produce, by the KTX2 vkFormat (Vulkan) and DDS DXGI_FORMAT values.
+// Formats a bake can produce, by the KTX2 vkFormat (Vulkan) and DDS DXGI_FORMAT values: uncompressed, and
+// the block-compressed BC1 (RGB, opaque), BC3, BC4 and BC5 UNORM of `--block bc` (io/bc_decode.h).
 struct FormatInfo {
     uint32_t vk;
     uint32_t dxgi;  // 0: no DXGI equivalent
     const char* name;
     int channels;
-    int bytes;  // per channel
+    int bytes;  // per channel (1 for block formats: typeSize, and 8-bit endpoints)
     Numeric numeric;
+    bool block = false;
+    BcFormat bc = BcFormat::Bc1;
+    uint8_t colour_model = 1;  // KDFS 1.3 Sec. 5.6: RGBSDA 1, BC1A 128, BC3 130, BC4 131, BC5 132
 };
 
-constexpr std::array<FormatInfo, 18> kFormats{{
+constexpr std::array<FormatInfo, 22> kFormats{{
     {9, 61, "R8_UNORM", 1, 1, Numeric::unorm},
     {16, 49, "R8G8_UNORM", 2, 1, Numeric::unorm},
     {23, 0, "R8G8B8_UNORM", 3, 1, Numeric::unorm},
@@ -49,6 +54,10 @@ constexpr std::array<FormatInfo, 18> kFormats{{
     {103, 16, "R32G32_SFLOAT", 2, 4, Numeric::sfloat},
     {106, 6, "R32G32B32_SFLOAT", 3, 4, Numeric::sfloat},
     {109, 2, "R32G32B32A32_SFLOAT", 4, 4, Numeric::sfloat},
+    {131, 71, "BC1_RGB_UNORM_BLOCK", 4, 1, Numeric::unorm, true, BcFormat::Bc1, 128},
+    {137, 77, "BC3_UNORM_BLOCK", 4, 1, Numeric::unorm, true, BcFormat::Bc3, 130},
+    {139, 80, "BC4_UNORM_BLOCK", 1, 1, Numeric::unorm, true, BcFormat::Bc4, 131},
+    {141, 83, "BC5_UNORM_BLOCK", 2, 1, Numeric::unorm, true, BcFormat::Bc5, 132},
     {0, 0, "", 0, 0, Numeric::unorm},
 }};
 
@@ -105,10 +114,12 @@ uint64_t level_bytes(uint32_t w, uint32_t h, int level, const FormatInfo& f) {
     // A 2^32-wide chain has 33 levels: level 32 is 1x1 (and a shift by 32 would be undefined).
     const uint64_t lw = level >= 32 ? 1 : std::max<uint32_t>(1, w >> level);
     const uint64_t lh = level >= 32 ? 1 : std::max<uint32_t>(1, h >> level);
+    if (f.block) return bc_level_bytes(f.bc, lw, lh);
     return lw * lh * uint64_t(f.channels * f.bytes);
 }
 
 Image decode_level(const uint8_t* data, int w, int h, const FormatInfo& f) {
+    if (f.block) return decode_bc_level(f.bc, data, w, h);
     Image img(w, h, f.channels);
     const size_t texel = size_t(f.channels * f.bytes);
     for (size_t i = 0; i < img.texel_count(); ++i)
@@ -157,7 +168,7 @@ Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& nam
     L.levels = std::max<uint32_t>(1, u32(b, 40));
     const uint32_t supercompression = u32(b, 44);
     L.format = format_by_vk(vk);
-    if (!L.format) return fail("vkFormat " + std::to_string(vk) + " is not an uncompressed format specbake reads");
+    if (!L.format) return fail("vkFormat " + std::to_string(vk) + " is not a format specbake reads");
     const FormatInfo& f = *L.format;
     if (type_size != uint32_t(f.bytes))
         return fail("typeSize " + std::to_string(type_size) + " does not match " + f.name);
@@ -165,6 +176,7 @@ Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& nam
     // Single 2D images and 2D arrays (the glint dictionary); no volumes, cube maps or 1D textures.
     if (depth != 0 || faces != 1) return fail("only 2D images and 2D arrays are supported");
     L.layers = layers;
+    if (f.block && layers != 0) return fail("block-compressed 2D arrays are not supported");
     const uint32_t stored_layers = std::max<uint32_t>(1, layers);
     // Scheme 2 is Zstandard (KTX 2.0 Sec. 3.9.2); BasisLZ (1) and ZLIB (3) are not written by specbake.
     if (supercompression != 0 && supercompression != 2)
@@ -212,17 +224,35 @@ Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& nam
         return fail("descriptor block size " + std::to_string(block_size) + " is inconsistent");
     const uint8_t color_model = b[blk + 8];
     L.transfer = b[blk + 10];
-    if (color_model != 1) return fail("colour model " + std::to_string(color_model) + " (expected RGBSDA)");
-    if (b[blk + 12] | b[blk + 13] | b[blk + 14] | b[blk + 15])
-        return fail("texel block dimensions are not 1x1x1x1");
-    if (b[blk + 16] != uint32_t(f.channels * f.bytes))
+    if (color_model != f.colour_model)
+        return fail("colour model " + std::to_string(color_model) + " does not match " + f.name + " (expected " +
+                    std::to_string(f.colour_model) + ")");
+    // Texel block dimensions are stored minus one: 1x1x1x1 for plain texels, 4x4x1x1 for BC blocks.
+    const uint8_t block_side = f.block ? 3 : 0;
+    if (b[blk + 12] != block_side || b[blk + 13] != block_side || b[blk + 14] | b[blk + 15])
+        return fail(std::string("texel block dimensions are not ") + (f.block ? "4x4x1x1" : "1x1x1x1"));
+    const uint32_t plane_bytes = f.block ? uint32_t(bc_block_bytes(f.bc)) : uint32_t(f.channels * f.bytes);
+    if (b[blk + 16] != plane_bytes)
         return fail("bytesPlane0 " + std::to_string(b[blk + 16]) + " does not match " + f.name);
     const uint32_t expected_transfer = f.numeric == Numeric::srgb ? 2 : 1;
     if (L.transfer != expected_transfer)
         return fail("transfer function " + std::to_string(L.transfer) + " does not match " + f.name);
-    if (samples != uint32_t(f.channels))
+    if (f.block) {
+        // One 64-bit sample per 8 bytes of block (KDFS 1.3 Sec. 5.18): BC3 alpha (15) then colour (0), BC5
+        // red (0) then green (1), BC1 and BC4 one sample of channel 0.
+        const uint32_t want = uint32_t(bc_block_bytes(f.bc) / 8);
+        if (samples != want)
+            return fail(std::to_string(samples) + " DFD samples for " + f.name + " (expected " + std::to_string(want) + ")");
+        for (uint32_t s = 0; s < samples; ++s) {
+            const size_t at = blk + 24 + 16 * s;
+            const uint32_t channel = b[at + 3] & 0x0f;
+            const uint32_t expected = f.bc == BcFormat::Bc3 ? (s == 0 ? 15u : 0u) : s;
+            if ((b[at] | b[at + 1] << 8) != 64 * s || b[at + 2] != 63 || channel != expected)
+                return fail("DFD sample " + std::to_string(s) + " does not describe " + f.name);
+        }
+    } else if (samples != uint32_t(f.channels))
         return fail(std::to_string(samples) + " DFD samples for " + std::to_string(f.channels) + " channels");
-    for (uint32_t s = 0; s < samples; ++s) {
+    for (uint32_t s = 0; s < samples && !f.block; ++s) {
         const size_t at = blk + 24 + 16 * s;
         const uint32_t bit_offset = b[at] | b[at + 1] << 8;
         const uint32_t bit_length = b[at + 2] + 1u;
@@ -239,7 +269,8 @@ Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& nam
     // Level index: sizes exact, aligned, inside the file, clear of the metadata, smallest level first.
     // Supercompressed levels have no alignment (mipPadding is align(1)) and any byteLength; they must
     // inflate to exactly uncompressedByteLength.
-    const uint64_t alignment = zstd ? 1 : std::lcm(uint64_t(f.channels * f.bytes), uint64_t(4));
+    const uint64_t alignment =
+        zstd ? 1 : std::lcm(f.block ? uint64_t(bc_block_bytes(f.bc)) : uint64_t(f.channels * f.bytes), uint64_t(4));
     const uint64_t metadata_end =
         std::max<uint64_t>(uint64_t(dfd_offset) + dfd_length, kvd_length ? uint64_t(kvd_offset) + kvd_length : 0);
     for (uint32_t level = 0; level < L.levels; ++level) {
@@ -283,6 +314,7 @@ constexpr size_t kDx10HeaderBytes = 20;
 
 struct DdsLayout {
     const FormatInfo* format = nullptr;
+    bool bgra = false;  // A8R8G8B8: RGBA8 texels stored B, G, R, A
     uint32_t width = 0, height = 0, levels = 0;
     size_t data_start = 0;  // after the legacy header, or after the DX10 header
 };
@@ -313,22 +345,28 @@ Result<DdsLayout> parse_dds(std::span<const uint8_t> b, const std::string& name)
         const uint32_t dxgi = u32(b, 128), dimension = u32(b, 132), misc = u32(b, 136), array = u32(b, 140);
         L.format = format_by_dxgi(dxgi);
         if (!L.format)
-            return fail("DXGI format " + std::to_string(dxgi) + " is not an uncompressed format specbake reads");
+            return fail("DXGI format " + std::to_string(dxgi) + " is not a format specbake reads");
         if (dimension != 3) return fail("resource dimension " + std::to_string(dimension) + " is not TEXTURE2D");
         if (misc & 0x4) return fail("cube maps are not supported");
         if (array != 1) return fail("array size " + std::to_string(array) + " (expected 1)");
     } else {
         // Legacy pixel formats, mapped to DXGI as Microsoft's DDS reference does (L8, A8L8, A8B8G8R8,
-        // L16, G16R16, FourCC 36 = A16B16G16R16).
+        // A8R8G8B8 = B8G8R8A8, L16, G16R16, FourCC 36 = A16B16G16R16; the FourCCs DXT1 = BC1, DXT5 = BC3,
+        // ATI1 / BC4U = BC4, ATI2 / BC5U = BC5).
         const uint32_t fourcc = u32(b, 84), bits = u32(b, 88);
         const std::array<uint32_t, 4> m{u32(b, 92), u32(b, 96), u32(b, 100), u32(b, 104)};
         auto masks = [&](uint32_t r, uint32_t g, uint32_t bl, uint32_t a) { return m == std::array{r, g, bl, a}; };
         uint32_t dxgi = 0;
-        if (pf_flags & 0x4) dxgi = fourcc == 36 ? 11 : 0;
+        auto is = [&](const char* code) { return std::memcmp(b.data() + 84, code, 4) == 0; };
+        if (pf_flags & 0x4) {
+            dxgi = fourcc == 36 ? 11 : is("DXT1") ? 71 : is("DXT5") ? 77 : is("ATI1") || is("BC4U") ? 80
+                 : is("ATI2") || is("BC5U") ? 83 : 0;
+        }
         else if ((pf_flags & 0x20000) && bits == 8 && masks(0xFF, 0, 0, 0)) dxgi = 61;
         else if ((pf_flags & 0x20000) && bits == 16 && masks(0xFF, 0, 0, 0xFF00)) dxgi = 49;
         else if ((pf_flags & 0x20000) && bits == 16 && masks(0xFFFF, 0, 0, 0)) dxgi = 56;
         else if ((pf_flags & 0x40) && bits == 32 && masks(0xFF, 0xFF00, 0xFF0000, 0xFF000000u)) dxgi = 28;
+        else if ((pf_flags & 0x40) && bits == 32 && masks(0xFF0000, 0xFF00, 0xFF, 0xFF000000u)) dxgi = 28, L.bgra = true;
         else if ((pf_flags & 0x40) && bits == 32 && masks(0xFFFF, 0xFFFF0000u, 0, 0)) dxgi = 35;
         L.format = format_by_dxgi(dxgi);
         if (!L.format) return fail("legacy pixel format is not one specbake reads");
@@ -376,6 +414,7 @@ Result<InspectedTexture> decode_ktx2_for_inspection(std::span<const uint8_t> byt
     t.channel_names.resize(size_t(layout->format->channels));
     t.layers = int(layout->layers);
     t.channel_bytes = layout->format->bytes;
+    if (layout->format->block) t.block_bytes = int(bc_block_bytes(layout->format->bc));
     const int stored_layers = std::max(1, t.layers);
     // An array's layers are decoded one below the other: each level is width x (height x layers).
     for (uint32_t level = 0; level < layout->levels; ++level)
@@ -394,6 +433,7 @@ Result<InspectedTexture> decode_dds_for_inspection(std::span<const uint8_t> byte
     t.format = "dds";
     t.pixel_format = layout->format->name;
     t.channel_bytes = layout->format->bytes;
+    if (layout->format->block) t.block_bytes = int(bc_block_bytes(layout->format->bc));
     t.transfer = layout->format->numeric == Numeric::srgb ? "sRGB" : "linear";
     t.channel_names.assign({"R", "G", "B", "A"});
     t.channel_names.resize(size_t(layout->format->channels));
@@ -402,6 +442,9 @@ Result<InspectedTexture> decode_dds_for_inspection(std::span<const uint8_t> byte
         const int w = int(std::max<uint32_t>(1, layout->width >> level));
         const int h = int(std::max<uint32_t>(1, layout->height >> level));
         t.mips.levels.push_back(decode_level(bytes.data() + at, w, h, *layout->format));
+        if (layout->bgra)
+            for (size_t i = 0; i < t.mips.levels.back().texel_count(); ++i)
+                std::swap(t.mips.levels.back().pixels[4 * i], t.mips.levels.back().pixels[4 * i + 2]);
         at += level_bytes(layout->width, layout->height, int(level), *layout->format);
     }
     return t;

@@ -1,7 +1,9 @@
-// Reading baked textures back for inspection, independently of the writers (io/ktx2.h, io/dds.h): KTX2
-// and DDS are parsed here from the specifications (KTX 2.0, Khronos Data Format 1.3, DDS with the DX10
-// header or the legacy pixel formats specbake writes), so reading a written file is a cross-check of the writer. EXR and PNG go through OpenImageIO.
-// The structural check validates a container without trusting any of its offsets.
+// Reading baked textures back for inspection, independently of the writers (io/ktx2.h, io/dds.h,
+// io/block_compress.h): KTX2 and DDS are parsed here from the specifications (KTX 2.0, Khronos Data Format
+// 1.3, DDS with the DX10 header or the legacy pixel formats and FourCCs specbake writes; BC1/BC3/BC4/BC5
+// levels decoded by io/bc_decode.h), so reading a written file is a cross-check of the writer. EXR and
+// PNG go through OpenImageIO. The structural check validates a container without trusting any of its
+// offsets.
 #pragma once
 
 #include "core/image.h"
@@ -25,6 +27,7 @@ struct InspectedTexture {
     MipChain mips;
     int layers = 0;            // 0: a single image; else the array's layer count
     int channel_bytes = 0;     // bytes per stored channel (KTX2, DDS); 0 when not known (EXR, PNG)
+    int block_bytes = 0;       // block-compressed (BC1/3/4/5): bytes per 4x4 block, decoded to `mips`; else 0
     // Height of one layer at level L (the level's height for a single image).
     int layer_height(size_t level) const { return layers > 0 ? mips.levels[level].height / layers : mips.levels[level].height; }
 };

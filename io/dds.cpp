@@ -31,16 +31,18 @@ size_t header_bytes(TexelEncoding e, int channels) {
 
 std::optional<DdsLegacyPixelFormat> dds_legacy_pixel_format(TexelEncoding e, int channels) {
     // The D3D9 forms Microsoft's DDS reference (and DirectXTex's DDSTextureLoader) map to these DXGI
-    // formats: L8 -> R8_UNORM, A8L8 -> R8G8_UNORM, A8B8G8R8 masks -> R8G8B8A8_UNORM, L16 -> R16_UNORM,
-    // FourCC 36 (D3DFMT_A16B16G16R16) -> R16G16B16A16_UNORM. Float formats
+    // formats: L8 -> R8_UNORM, A8L8 -> R8G8_UNORM, A8R8G8B8 masks -> B8G8R8A8_UNORM (the same RGBA8 data
+    // in B, G, R, A byte order), L16 -> R16_UNORM, FourCC 36 (D3DFMT_A16B16G16R16) -> R16G16B16A16_UNORM.
+    // RGBA8 is stored as A8R8G8B8 rather than A8B8G8R8 because three.js DDSLoader reads only that order
+    // (its uncompressed case requires red in 0x00FF0000); Pillow and OpenImageIO read both. Float formats
     // have only numeric FourCCs (111-116) that common readers reject, so they keep the DX10 header.
     const int stored = gpu_channels(channels);
     if (e == TexelEncoding::Unorm8) {
         if (stored == 1) return DdsLegacyPixelFormat{kPixelFormatLuminance, 0, 8, 0xFF, 0, 0, 0, "L8"};
         if (stored == 2)
             return DdsLegacyPixelFormat{kPixelFormatLuminance | kPixelFormatAlpha, 0, 16, 0xFF, 0, 0, 0xFF00, "A8L8"};
-        return DdsLegacyPixelFormat{kPixelFormatRgb | kPixelFormatAlpha, 0, 32, 0xFF, 0xFF00, 0xFF0000, 0xFF000000u,
-                                    "A8B8G8R8"};
+        return DdsLegacyPixelFormat{kPixelFormatRgb | kPixelFormatAlpha, 0, 32, 0xFF0000, 0xFF00, 0xFF, 0xFF000000u,
+                                    "A8R8G8B8", true};
     }
     if (e == TexelEncoding::Unorm16) {
         if (stored == 1) return DdsLegacyPixelFormat{kPixelFormatLuminance, 0, 16, 0xFFFF, 0, 0, 0, "L16"};
@@ -52,12 +54,16 @@ std::optional<DdsLegacyPixelFormat> dds_legacy_pixel_format(TexelEncoding e, int
     return std::nullopt;
 }
 
+void dds_swap_red_blue(uint8_t* texels, size_t count) {
+    for (size_t i = 0; i < count; ++i, texels += 4) std::swap(texels[0], texels[2]);
+}
+
 uint32_t dds_dxgi_format(TexelEncoding e, int channels, int* stored_channels) {
-    // DXGI_FORMAT values: R8 61, R8G8 49, R8G8B8A8 28; R16 UNORM 56, R16G16 35, R16G16B16A16 11;
-    // R16 FLOAT 54, R16G16 34, R16G16B16A16 10; R32 FLOAT 41, R32G32 16, R32G32B32A32 2.
+    // DXGI_FORMAT values: R8 61, R8G8 49, R8G8B8A8 28 (written as the legacy A8R8G8B8, whose DXGI
+    // equivalent is B8G8R8A8 87); R16 UNORM 56, R16G16 35, R16G16B16A16 11; R16 FLOAT 54, R16G16 34, R16G16B16A16 10; R32 FLOAT 41, R32G32 16, R32G32B32A32 2.
     const int stored = gpu_channels(channels);
     if (stored_channels) *stored_channels = stored;
-    static const uint32_t table[4][4] = {{61, 49, 0, 28}, {56, 35, 0, 11}, {54, 34, 0, 10}, {41, 16, 0, 2}};
+    static const uint32_t table[4][4] = {{61, 49, 0, 87}, {56, 35, 0, 11}, {54, 34, 0, 10}, {41, 16, 0, 2}};
     const int row = e == TexelEncoding::Unorm8 ? 0 : e == TexelEncoding::Unorm16 ? 1 : e == TexelEncoding::Float16 ? 2 : 3;
     return table[row][stored - 1];
 }
@@ -122,8 +128,11 @@ std::vector<uint8_t> encode_dds(const MipChain& chain, TexelEncoding encoding) {
     dds_write_header(b.data(), layout, chain.width(), chain.height(), encoding, channels);
     for (int L = 0; L < levels; ++L) {
         const Image& level = chain.levels[size_t(L)];
+        uint8_t* dst = b.data() + layout.level_offset[size_t(L)];
         encode_texels_into(level.pixels.data(), level.texel_count(), channels, 0, channels, encoding,
-                           layout.stored_channels, 1.0f, b.data() + layout.level_offset[size_t(L)]);
+                           layout.stored_channels, 1.0f, dst);
+        if (const auto legacy = dds_legacy_pixel_format(encoding, channels); legacy && legacy->bgra)
+            dds_swap_red_blue(dst, level.texel_count());
     }
     return b;
 }

@@ -164,7 +164,7 @@ Result<std::vector<ManifestOutput>> write_texture(const MipChain& data, TexelEnc
                                                   TextureContainer container, const fs::path& dir,
                                                   const std::string& stem, const std::string& kind,
                                                   const std::vector<std::string>& channel_names, WrapMode wrap,
-                                                  const Supercompression& supercompression) {
+                                                  const Supercompression& supercompression, BlockFormat block) {
     if (data.levels.empty() || data.channels() < 1) return make_error((dir / stem).string() + ": nothing to write");
     if (data.channels() > 4)
         return make_error((dir / stem).string() + ": " + std::to_string(data.channels()) +
@@ -186,7 +186,7 @@ Result<std::vector<ManifestOutput>> write_texture(const MipChain& data, TexelEnc
             const Image& level = data.levels[size_t(L)];
             t.put_block(L, 0, 0, level.width, level.height, level.pixels.data(), level.channels, 0);
         }
-        const EncodedFile file{&t, stem, kind, names};
+        const EncodedFile file{&t, stem, kind, names, block};
         return write_encoded_textures({&file, 1}, dir);
     }
     MipChain widened;
@@ -271,6 +271,8 @@ EncodedTexture::EncodedTexture(TextureContainer container, TexelEncoding encodin
     detail::hint_huge_pages(data_.get(), layout_.total);
     if (container == TextureContainer::Ktx2) ktx2_write_header(data_.get(), layout_, width, height, encoding, channels);
     else dds_write_header(data_.get(), layout_, width, height, encoding, channels);
+    if (container == TextureContainer::Dds)
+        if (const auto legacy = dds_legacy_pixel_format(encoding, channels); legacy && legacy->bgra) bgra_ = true;
 }
 
 void EncodedTexture::put_block(int level, int x0, int y0, int width, int rows, const float* src, int src_channels,
@@ -281,11 +283,14 @@ void EncodedTexture::put_block(int level, int x0, int y0, int width, int rows, c
     if (size_t(width) == w) {  // whole rows: one run
         encode_texels_into(src, w * size_t(rows), src_channels, first, channels_, encoding_, layout_.stored_channels,
                            1.0f, dst);
+        if (bgra_) dds_swap_red_blue(dst, w * size_t(rows));
         return;
     }
-    for (int k = 0; k < rows; ++k, src += size_t(width) * size_t(src_channels), dst += w * texel_bytes)
+    for (int k = 0; k < rows; ++k, src += size_t(width) * size_t(src_channels), dst += w * texel_bytes) {
         encode_texels_into(src, size_t(width), src_channels, first, channels_, encoding_, layout_.stored_channels,
                            1.0f, dst);
+        if (bgra_) dds_swap_red_blue(dst, size_t(width));
+    }
 }
 
 ManifestOutput EncodedTexture::entry(const std::string& filename, const std::string& kind) const {
@@ -322,6 +327,11 @@ Result<BlockFile> block_compressed(const EncodedTexture& t, BlockFormat format) 
         const int w = std::max(1, t.width() >> L), h = std::max(1, t.height() >> L);
         const uint8_t* src = t.bytes().data() + layout.level_offset[L];
         std::vector<uint8_t> narrowed;
+        if (t.bgra()) {  // the DDS A8R8G8B8 byte order back to RGBA for the block encoder
+            narrowed.assign(src, src + size_t(w) * size_t(h) * 4);
+            dds_swap_red_blue(narrowed.data(), size_t(w) * size_t(h));
+            src = narrowed.data();
+        }
         if (t.encoding() == TexelEncoding::Unorm16) {
             narrowed.resize(size_t(w) * size_t(h) * size_t(channels));
             for (size_t k = 0; k < narrowed.size(); ++k) {

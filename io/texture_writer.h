@@ -62,13 +62,15 @@ std::optional<TextureContainer> parse_container(const std::string& name);
 // order as the KTX2/DDS channels. `wrap` is recorded where the container has a place for it (EXR
 // "wrapmodes"). Returns one entry per file, `path` relative to `dir`,
 // kind `kind`, sha256 filled. Creates `dir` when missing; the error names the file. All files of the call
-// are written to temporary names first and renamed only when every one succeeded.
+// are written to temporary names first and renamed only when every one succeeded. `block` other than
+// BlockFormat::None block-compresses a KTX2/DDS file's levels (io/block_compress.h); EXR and PNG ignore it.
 Result<std::vector<ManifestOutput>> write_texture(const MipChain& chain, TexelEncoding encoding,
                                                   TextureContainer container, const std::filesystem::path& dir,
                                                   const std::string& stem, const std::string& kind,
                                                   const std::vector<std::string>& channel_names = {},
                                                   WrapMode wrap = WrapMode::Repeat,
-                                                  const Supercompression& supercompression = {});
+                                                  const Supercompression& supercompression = {},
+                                                  BlockFormat block = {});
 
 // A KTX2 or DDS file assembled in memory, level by level and row by row, so a producer can encode rows
 // as it finishes them instead of holding float chains. put_block() may run on several threads at once
@@ -94,6 +96,8 @@ public:
     // True when the written file is supercompressed (KTX2 with zstd on).
     bool supercompressed() const { return container_ == TextureContainer::Ktx2 && supercompression_.zstd; }
     const Supercompression& supercompression() const { return supercompression_; }
+    // True when the level bytes hold RGBA8 texels in B, G, R, A order (DDS A8R8G8B8, io/dds.h).
+    bool bgra() const { return bgra_; }
     // The manifest entry of this file as `filename` (sha256 left empty; the writer fills it).
     ManifestOutput entry(const std::string& filename, const std::string& kind) const;
 
@@ -103,6 +107,7 @@ private:
     int width_, height_, channels_;
     Supercompression supercompression_;
     ContainerLayout layout_;
+    bool bgra_ = false;
     std::unique_ptr<uint8_t[]> data_;  // not zero-filled: every byte is written by the header or a row
 };
 

@@ -178,6 +178,8 @@ std::string sparkline(const std::vector<long long>& counts) {
 
 // Bytes level L takes in its container (every layer), 0 when the container's sizes are not known.
 size_t level_bytes(const io::InspectedTexture& t, size_t level) {
+    const Image& l = t.mips.levels[level];
+    if (t.block_bytes > 0) return size_t((l.width + 3) / 4) * size_t((l.height + 3) / 4) * size_t(t.block_bytes);
     return t.mips.levels[level].texel_count() * size_t(t.mips.levels[level].channels) * size_t(t.channel_bytes);
 }
 

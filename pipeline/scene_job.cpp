@@ -109,7 +109,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
             r.normal = baked.normal;
         }
         auto out = write_texture_outputs(std::move(baked), in, options.texture_settings_for(d.material_name),
-                                         job.container, out_dir, d.stem, job.progress);
+                                         job.container, out_dir, d.stem, job.progress, job.supercompression);
         if (!out) return out.error();
         for (const io::ManifestOutput& o : out->outputs) written.push_back(out_dir / o.path);
         result.outputs.insert(result.outputs.end(), out->outputs.begin(), out->outputs.end());
@@ -178,6 +178,8 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         for (const io::ManifestOutput& o : files_by_stem.at(d.stem)) {
             json entry = {{"kind", o.kind}, {"uri", o.path}, {"format", o.format}, {"width", o.width},
                           {"height", o.height}, {"mips", o.mips}, {"channels", o.channels}};
+            // Block-compressed (`--block bc`): the GPU format, since BC5 holds the normal's x, y only.
+            if (o.extra.value("block_compression", "none") != "none") entry["gpuFormat"] = o.extra["gpu_format"];
             if (const std::string mime = mime_of(o.format); glb && !mime.empty()) {
                 const int k = scene.embed_baked_image(out_dir / o.path, mime, o.path);
                 embedded[o.path] = k;
@@ -346,6 +348,8 @@ json scene_settings_json(const SceneJob& job) {
         s["material_glints"] = glints;
     }
     if (job.gltf_mode == GltfMode::Replace) s["gltf_mode"] = "replace";
+    // Recorded only when asked, so manifests of bakes without it stay as they were.
+    if (job.supercompression.block) s["supercompression"] = supercompression_json(job.supercompression);
     if (job.plan.textures) {
         s["texture"] = texture_settings_json(job.plan.texture_settings, job.container);
         // Per-material settings as applied, so the up-to-date check sees a changed override.

@@ -353,7 +353,7 @@ Result<TextureOutputsWritten> write_texture_outputs(TextureBakeResult&& baked, c
         if (auto ok = append(result.outputs,
                              io::write_texture(whole ? chain : channel_subset(chain, f.first, f.channels), f.encoding,
                                                container, dir, f.stem, f.kind, f.names, settings.wrap,
-                                               supercompression));
+                                               supercompression, block_format_of(f, supercompression)));
             !ok)
             return ok.error();
         // Written: release the chain before the next one is encoded, unless a later file reads it too.

@@ -1,9 +1,12 @@
 // `specbake texture --block bc`: BC4 / BC5 / BC1 levels in KTX2 and legacy-FourCC DDS, read back with the
 // spec-written decoder of tests/io/bc_decode.h and compared with the uncompressed bake of the same input,
 // level by level (sizes that are not multiples of 4 included: the demo map's 4x3, 2x1 and 1x1 levels);
-// OpenImageIO (a third-party BC decoder) must return the same level-0 texels from the DDS files.
+// OpenImageIO (a third-party BC decoder) must return the same level-0 texels from the DDS files; `inspect`
+// decodes every block-compressed file (KTX2 plain and zstd, DDS) to the texels that decoder gives.
 #include "tests/cli/scene_test_util.h"
 #include "tests/io/bc_decode.h"
+
+#include "io/container_inspect.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -71,6 +74,19 @@ protected:
                        (dir_ / "dds1").string()}),
                   0);
         ASSERT_EQ(run({"-q", "texture", "--demo", "--block", "bc", "--format", "dds", "-o", (dir_ / "dds").string()}), 0);
+    }
+    // The BC3 and zstd variants, for the inspection test.
+    void bake_more() {
+        ASSERT_EQ(run({"-q", "texture", "--demo", "--block", "bc", "--block-rgba", "bc3", "--supercompression", "none",
+                       "-o", (dir_ / "bc3").string()}),
+                  0);
+        ASSERT_EQ(run({"-q", "texture", "--demo", "--block", "bc", "--block-rgba", "bc3", "--format", "dds", "-o",
+                       (dir_ / "dds3").string()}),
+                  0);
+        ASSERT_EQ(run({"-q", "texture", "--demo", "--block", "bc", "-o", (dir_ / "bcz").string()}), 0);
+        ASSERT_EQ(run({"-q", "texture", "--normal", (dir_ / "ref" / "demo_normal.png").string(), "--block", "bc", "-o",
+                       (dir_ / "bcz1").string()}),
+                  0);
     }
     void TearDown() override { fs::remove_all(dir_); }
     int run(const std::vector<std::string>& args) {
@@ -208,6 +224,68 @@ TEST_F(BlockCompress, DdsLegacyFourCCAndOpenImageIOAgree) {
         EXPECT_EQ(differ, 0);
     }
     if (!oiio) GTEST_SKIP() << "oiiotool (openimageio-tools) is not installed: DDS decoding by OpenImageIO not checked";
+}
+
+// `inspect` reads every block-compressed output: the texels of every level of the KTX2 (plain and zstd) and
+// DDS files are those the spec-written decoder gives for the file's blocks (taken from the plain KTX2), and
+// --check and the difference of two bakes work on them.
+TEST_F(BlockCompress, InspectDecodesEveryBlockCompressedFile) {
+    bake_more();
+    ASSERT_FALSE(HasFatalFailure());
+    const struct {
+        const char* folder;   // plain KTX2 holding the blocks
+        const char* others[2];  // the same bake as zstd KTX2 and DDS
+        const char* stem;
+        const char* format;
+        const char* name;
+    } cases[] = {{"bc1", {"bcz1", "dds1"}, "texture_roughness", "bc4", "BC4_UNORM_BLOCK"},
+                 {"bc1", {"bcz1", "dds1"}, "texture_normal", "bc5", "BC5_UNORM_BLOCK"},
+                 {"bc", {"bcz", "dds"}, "texture_roughness", "bc1", "BC1_RGB_UNORM_BLOCK"},
+                 {"bc", {"bcz", "dds"}, "texture_normal", "bc5", "BC5_UNORM_BLOCK"},
+                 {"bc3", {"bc3", "dds3"}, "texture_roughness", "bc3", "BC3_UNORM_BLOCK"}};
+    for (const auto& c : cases) {
+        const fs::path plain = dir_ / c.folder / (std::string(c.stem) + ".ktx2");
+        SCOPED_TRACE(plain.string());
+        const std::vector<Level> levels = ktx2_levels(slurp(plain));
+        for (const fs::path& file : {plain, dir_ / c.others[0] / (std::string(c.stem) + ".ktx2"),
+                                     dir_ / c.others[1] / (std::string(c.stem) + ".dds")}) {
+            SCOPED_TRACE(file.string());
+            auto t = specbake::io::read_texture_for_inspection(file);
+            ASSERT_TRUE(t.ok()) << t.error().message;
+            EXPECT_EQ(t->pixel_format, c.name);
+            ASSERT_EQ(t->mips.levels.size(), levels.size());
+            for (size_t L = 0; L < levels.size(); ++L) {
+                int n = 0;
+                const auto want = bc_test::decode_level(c.format, reinterpret_cast<const uint8_t*>(levels[L].bytes.data()),
+                                                        levels[L].w, levels[L].h, &n);
+                const specbake::Image& got = t->mips.levels[L];
+                ASSERT_EQ(got.width, levels[L].w);
+                ASSERT_EQ(got.height, levels[L].h);
+                ASSERT_EQ(got.channels, n);
+                for (size_t i = 0; i < want.size(); ++i)
+                    ASSERT_NEAR(got.pixels[i], want[i], 1e-6) << "level " << L << " value " << i;
+            }
+        }
+    }
+    // The command: statistics with the format and level bytes, --check of each folder, and two bakes of the
+    // same blocks in different containers compare as identical.
+    const RunResult j = run_specbake({"inspect", "--json", (dir_ / "bcz" / "texture_normal.ktx2").string()}, dir_);
+    ASSERT_EQ(j.exit_code, 0) << j.err;
+    const nlohmann::json report = nlohmann::json::parse(j.out);
+    const nlohmann::json& r = report["files"][0];
+    EXPECT_EQ(r["pixel_format"], "BC5_UNORM_BLOCK");
+    EXPECT_EQ(r["channels"], 2);
+    EXPECT_EQ(r["levels"][0]["bytes"], 512 / 4 * 384 / 4 * 16);
+    EXPECT_EQ(r["levels"].back()["bytes"], 16);  // the 1x1 level is one block
+    for (const char* folder : {"bc", "bc1", "bc3", "bcz", "bcz1", "dds", "dds1", "dds3"}) {
+        const RunResult k = run_specbake({"inspect", "--check", (dir_ / folder / "manifest.json").string()}, dir_);
+        EXPECT_EQ(k.exit_code, 0) << folder << ": " << k.out << k.err;
+    }
+    const RunResult d = run_specbake({"inspect", (dir_ / "bcz" / "texture_roughness.ktx2").string(),
+                                      (dir_ / "dds" / "texture_roughness.dds").string()},
+                                     dir_);
+    EXPECT_EQ(d.exit_code, 0) << d.err;
+    EXPECT_NE(d.out.find("identical"), std::string::npos) << d.out;
 }
 
 }  // namespace

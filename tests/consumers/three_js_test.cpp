@@ -2,10 +2,13 @@
 // and plain), DDSLoader, EXRLoader and TextureLoader (PNG per mip) must load every file whose format the
 // loader implements with the right size and level count, and texels read back from the GPU texture at
 // several mips (textureLod into an RGBA32F target) must match the library's bake of the same inputs
-// within the stored format's tolerance. Files a loader does not implement are reported, with its reason,
-// in the results table (consumer_results.md in the test's working folder, and stdout).
+// within the stored format's tolerance. Block-compressed outputs (`--block bc`, KTX2 and DDS) are checked
+// against their own blocks decoded by the spec-written decoder of tests/io/bc_decode.h. Files a loader does
+// not implement are reported, with its reason, in the results table (consumer_results.md in the test's
+// working folder, and stdout).
 #include "consumer_harness.h"
 #include "three_js_support.h"
+#include "tests/io/bc_decode.h"
 
 #include "bake/texture_bake.h"
 #include "io/image_io.h"
@@ -18,8 +21,53 @@
 #include <set>
 #include <vector>
 
+#include <zstd.h>
+
 namespace specbake::consumers {
 namespace {
+
+// The block format of a `--block bc` output from its manifest entry ("" when not block-compressed).
+std::string bc_format_of(const nlohmann::json& o) {
+    const std::string g = o.value("gpu_format", "");
+    if (g.rfind("BC1", 0) == 0) return "bc1";
+    if (g.rfind("BC3", 0) == 0) return "bc3";
+    if (g.rfind("BC4", 0) == 0) return "bc4";
+    if (g.rfind("BC5", 0) == 0) return "bc5";
+    return "";
+}
+
+// The blocks of every level of a block-compressed KTX2 (KTX 2.0 Sec. 3.9, zstd levels inflated) or legacy
+// FourCC DDS file, level 0 first, read from the file alone.
+std::vector<std::string> block_levels(const std::string& b, const std::string& format, int width, int height,
+                                      int levels) {
+    const size_t block = format == "bc1" || format == "bc4" ? 8 : 16;
+    auto bytes_of = [&](int L) {
+        const size_t w = size_t(std::max(1, width >> L)), h = size_t(std::max(1, height >> L));
+        return (w + 3) / 4 * ((h + 3) / 4) * block;
+    };
+    std::vector<std::string> out;
+    if (b.compare(0, 4, "DDS ") == 0) {
+        size_t at = 128;
+        for (int L = 0; L < levels; ++L) out.push_back(b.substr(at, bytes_of(L))), at += bytes_of(L);
+        return out;
+    }
+    const bool zstd = le32(b, 44) == 2;
+    for (int L = 0; L < levels; ++L) {
+        uint64_t offset = 0, length = 0;
+        std::memcpy(&offset, b.data() + 80 + 24 * L, 8);
+        std::memcpy(&length, b.data() + 80 + 24 * L + 8, 8);
+        std::string level = b.substr(size_t(offset), size_t(length));
+        if (zstd) {
+            std::string raw(bytes_of(L), '\0');
+            const size_t n = ZSTD_decompress(raw.data(), raw.size(), level.data(), level.size());
+            EXPECT_FALSE(ZSTD_isError(n)) << "level " << L;
+            level = raw;
+        }
+        EXPECT_EQ(level.size(), bytes_of(L)) << "level " << L;
+        out.push_back(level);
+    }
+    return out;
+}
 
 struct FileCheck {
     std::string id;           // path relative to the data folder
@@ -32,6 +80,11 @@ struct FileCheck {
     std::string stem;         // output stem without _mipN ("texture_roughness")
     const TextureBakeResult* reference = nullptr;
     std::vector<Sample> samples;
+    // Block-compressed files: every level decoded from the file's blocks (tests/io/bc_decode.h), the texels
+    // the GPU must return; `decoded_channels` values per texel.
+    std::string block;
+    std::vector<std::vector<float>> decoded;
+    int decoded_channels = 0;
 };
 
 struct Container {
@@ -48,6 +101,7 @@ struct BakeCase {
     std::string name;       // folder name
     std::string args;       // `specbake texture` arguments before --format / -o
     std::unique_ptr<TextureBakeResult> reference;
+    bool block = false;     // `--block bc`: KTX2 and DDS only (the containers that hold blocks)
 };
 
 const char* loader_for(const std::string& ext) {
@@ -62,6 +116,8 @@ protected:
     // Bakes `c` in every container into data/<case>/<container>, and lists its files.
     void add_case(BakeCase& c, const fs::path& data, std::vector<FileCheck>& checks) {
         for (size_t k = 0; k < std::size(kContainers); ++k) {
+            if (c.block && std::string(kContainers[k].args).find("exr") != std::string::npos) continue;
+            if (c.block && std::string(kContainers[k].args).find("png") != std::string::npos) continue;
             const std::string folder = c.name + "/" + std::to_string(k);
             const fs::path out = data / folder;
             specbake("texture -q " + c.args + " " + kContainers[k].args + " -o " + quote(out));
@@ -85,6 +141,15 @@ protected:
                 f.row = std::string(kContainers[k].label) + " | " + kind + " | " + o.value("gpu_format", "?");
                 f.support = loader_supports(f.loader, slurp(out / path));
                 f.reference = c.reference.get();
+                f.block = bc_format_of(o);
+                if (!f.block.empty()) {
+                    for (const std::string& level : block_levels(slurp(out / path), f.block, f.width, f.height, f.mips)) {
+                        const int L = int(f.decoded.size());
+                        f.decoded.push_back(bc_test::decode_level(f.block, reinterpret_cast<const uint8_t*>(level.data()),
+                                                                  std::max(1, f.width >> L), std::max(1, f.height >> L),
+                                                                  &f.decoded_channels));
+                    }
+                }
                 if (f.mip_level >= 0) {
                     // One file per mip: the file's level 0 against the reference's level mip_level.
                     const int lw = f.width, lh = f.height;
@@ -132,6 +197,10 @@ TEST_F(ThreeJs, LoadersDecodeEveryTextureOutputWithItsMipsAndTexels) {
     };
     std::vector<BakeCase> cases;
     cases.push_back({"demo_orm", "--demo", bake(demo_normal, &demo_orm, 0.5f, {})});
+    // Block compression: BC1 (and BC3) ORM roughness and BC5 normal of the demo, BC4 of a one-channel roughness.
+    // The float outputs of these bakes stay float and are checked against the reference bake.
+    cases.push_back({"demo_bc", "--demo --block bc", bake(demo_normal, &demo_orm, 0.5f, {}), true});
+    cases.push_back({"demo_bc3", "--demo --block bc --block-rgba bc3", bake(demo_normal, &demo_orm, 0.5f, {}), true});
     {
         TextureBakeSettings s;
         s.anisotropic = true;
@@ -141,6 +210,8 @@ TEST_F(ThreeJs, LoadersDecodeEveryTextureOutputWithItsMipsAndTexels) {
         cases.push_back({"aniso_slope", "--normal " + quote(in / "normal8.png") +
                                             " --roughness-value 0.3 --anisotropic --lean-space slope",
                          bake(*n8, nullptr, 0.3f, s)});
+        cases.push_back({"normal_bc", "--normal " + quote(in / "normal8.png") + " --roughness-value 0.3 --block bc",
+                         bake(*n8, nullptr, 0.3f, {}), true});
         auto n16 = io::read_image(in / "normal16.png");
         ASSERT_TRUE(n16.ok());
         cases.push_back({"unorm16", "--normal " + quote(in / "normal16.png") + " --roughness-value 0.3",
@@ -215,9 +286,10 @@ TEST_F(ThreeJs, LoadersDecodeEveryTextureOutputWithItsMipsAndTexels) {
         cell.levels_seen = levels;
         cell.levels_want = f.mip_level >= 0 ? f.mips : f.mips;
         if (f.mip_level >= 0 || levels == f.mips) ++cell.all_levels;
-        // The README's filtering note: KTX2Loader hands out uncompressed textures with nearest filtering.
+        // The README's filtering note: KTX2Loader hands out uncompressed textures with nearest filtering,
+        // block-compressed ones with trilinear filtering.
         if (f.loader == "KTX2Loader")
-            EXPECT_NE(r.value("minFilter", "").find("Nearest"), std::string::npos)
+            EXPECT_NE(r.value("minFilter", "").find(f.block.empty() ? "Nearest" : "LinearMip"), std::string::npos)
                 << f.id << ": KTX2Loader's minFilter is now " << r.value("minFilter", "") << "; update the README";
         const auto& values = r["values"];
         ASSERT_EQ(values.size(), f.samples.size()) << f.id;
@@ -230,11 +302,18 @@ TEST_F(ThreeJs, LoadersDecodeEveryTextureOutputWithItsMipsAndTexels) {
                 continue;
             }
             for (int c = 0; c < f.channels; ++c) {
-                const double want = reference_value(*f.reference, f.stem, s.level, s.x, s.y, c);
+                // Block-compressed: the file's own blocks as decoded from the specification; the GPU's
+                // decoder may round the interpolated palette entries to 8 bits (and BC1's RGB565 endpoints
+                // widen by bit replication rather than by value), so one step of 8 bits is allowed.
+                const bool blocks = !f.block.empty();
+                const double want =
+                    blocks ? f.decoded[size_t(s.level)][(size_t(s.y) * size_t(std::max(1, f.width >> s.level)) + size_t(s.x)) *
+                                                            size_t(f.decoded_channels) + size_t(c)]
+                           : reference_value(*f.reference, f.stem, s.level, s.x, s.y, c);
                 const double got = values[i][size_t(c)].get<double>();
                 // Browsers decode 16-bit PNG to 8 bits.
                 const std::string enc = f.loader == "TextureLoader" && f.encoding == "unorm16" ? "unorm8" : f.encoding;
-                const double tol = tolerance(enc, want) + (enc != f.encoding ? 0.5 / 255 : 0.0);
+                const double tol = blocks ? 1.0 / 255 + 1e-6 : tolerance(enc, want) + (enc != f.encoding ? 0.5 / 255 : 0.0);
                 cell.worst = std::max(cell.worst, std::abs(got - want) / tol);
                 if (std::abs(got - want) > tol) {
                     all = false;

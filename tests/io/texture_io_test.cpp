@@ -351,7 +351,8 @@ TEST(EncodedTexture, BlocksInAnyOrderGiveTheWholeChainFile) {
 }
 
 // 8/16-bit unorm data get the legacy header (the D3D9 pixel formats Microsoft's DDS reference maps to
-// DXGI: L8, A8L8, A8B8G8R8 masks, L16, FourCC 36); R16G16 and float data the DX10 header.
+// DXGI: L8, A8L8, A8R8G8B8 masks with the texels in B, G, R, A order, L16, FourCC 36); R16G16 and float
+// data the DX10 header.
 TEST(Dds, LegacyHeaderWhereOneExistsElseDx10) {
     const fs::path dir = fresh_dir("dds");
     struct Case { TexelEncoding e; int channels; uint32_t dxgi; int stored; uint32_t pf_flags, fourcc, bits, m[4]; };
@@ -359,7 +360,7 @@ TEST(Dds, LegacyHeaderWhereOneExistsElseDx10) {
     // DXGI_FORMAT_R16G16B16A16_FLOAT 10, R32G32B32A32_FLOAT 2 (three channels stored as four, A = 1).
     for (const Case& c : {Case{TexelEncoding::Unorm8, 1, 0, 1, lum, 0, 8, {0xFF, 0, 0, 0}},
                           Case{TexelEncoding::Unorm8, 2, 0, 2, lum | alpha, 0, 16, {0xFF, 0, 0, 0xFF00}},
-                          Case{TexelEncoding::Unorm8, 3, 0, 4, rgb | alpha, 0, 32, {0xFF, 0xFF00, 0xFF0000, 0xFF000000u}},
+                          Case{TexelEncoding::Unorm8, 3, 0, 4, rgb | alpha, 0, 32, {0xFF0000, 0xFF00, 0xFF, 0xFF000000u}},
                           Case{TexelEncoding::Unorm16, 1, 0, 1, lum, 0, 16, {0xFFFF, 0, 0, 0}},
                           Case{TexelEncoding::Unorm16, 2, 35, 2, four, 0x30315844u, 0, {0, 0, 0, 0}},
                           Case{TexelEncoding::Unorm16, 4, 0, 4, four, 36, 0, {0, 0, 0, 0}},
@@ -389,7 +390,10 @@ TEST(Dds, LegacyHeaderWhereOneExistsElseDx10) {
         size_t at = p.data_offset;
         for (const Image& level : chain.levels) {
             for (size_t i = 0; i < level.texel_count(); ++i) {
-                for (int ch = 0; ch < c.stored; ++ch, at += size_t(bytes)) {
+                for (int k = 0; k < c.stored; ++k, at += size_t(bytes)) {
+                    // The masks give each byte's channel: A8R8G8B8 holds B, G, R, A.
+                    const bool bgra = c.bits == 32 && c.m[0] == 0xFF0000u;
+                    const int ch = bgra && k != 3 ? 2 - k : k;
                     const float want = ch < c.channels ? level.pixels[i * c.channels + ch] : 1.0f;
                     float got;
                     if (bytes == 1) got = b[at] / 255.0f;
@@ -414,6 +418,8 @@ TEST(Dds, LegacyHeaderWhereOneExistsElseDx10) {
             std::vector<float> px(size_t(10) * 4 * size_t(in->spec().nchannels));
             ASSERT_TRUE(in->read_image(0, 0, 0, in->spec().nchannels, OIIO::TypeDesc::FLOAT, px.data()));
             EXPECT_NEAR(px[0], chain.levels[0].pixels[0], c.e == TexelEncoding::Unorm16 ? 1.0 / 255 : tolerance(c.e));
+            if (c.bits == 32 && c.channels >= 3)  // A8R8G8B8: red and blue where the masks put them
+                EXPECT_NEAR(px[2], chain.levels[0].pixels[2], tolerance(c.e));
         } else {
             (void)OIIO::geterror();
         }
