@@ -36,8 +36,9 @@ Result<std::string> sha256_file(const std::filesystem::path& path);
 // Hashes several files at once (on TBB workers, each file by one task); results in the order given.
 Result<std::vector<std::string>> sha256_files(std::span<const std::filesystem::path> paths);
 
-// Hashes several byte ranges at once; results in the order given. The ranges are spread over the TBB
-// workers (longest first, each to the worker with the fewest bytes so far), and a worker compresses up to
+// Hashes several byte ranges at once; results in the order given. The ranges are spread over as many TBB
+// workers as there are idle cores, at least one (longest first, each to the worker with the fewest bytes
+// so far), and a worker compresses up to
 // three of its ranges in lockstep: with the SHA extensions one range alone waits on the latency of every
 // pair of rounds, three interleaved keep the unit busy (about 1.8x the bytes per CPU second). Each range
 // is hashed in windows of at most 4 MiB; `before(range, offset, size)` is called before a window is
