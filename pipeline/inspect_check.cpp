@@ -21,48 +21,42 @@ namespace {
 struct FileCheck {
     std::optional<std::string> problem;
     uint64_t bytes = 0;
+    io::MappedFile mapped;
+    std::optional<io::TextureShape> shape;
 };
 
-// One output: hashed from a mapping in 4 MiB windows (each released once hashed, the one after next read
-// ahead); KTX2/DDS headers parsed
-// from the same mapping, EXR/PNG headers through OpenImageIO.
-FileCheck check_output(const fs::path& file, const io::ManifestOutput& o) {
-    FileCheck r;
+// One output before hashing: mapped read-only (no copy), KTX2/DDS headers parsed from the mapping.
+void open_output(const fs::path& file, const io::ManifestOutput& o, FileCheck& r) {
     auto mapped = io::MappedFile::open(file);
     if (!mapped) {
         r.problem = mapped.error().message;
-        return r;
+        return;
     }
-    const std::span<const uint8_t> bytes = mapped->bytes();
-    std::optional<io::TextureShape> shape;
+    r.mapped = std::move(*mapped);
     if (o.format == "ktx2" || o.format == "dds") {
-        auto s = io::check_container_shape(bytes, file.string());
+        auto s = io::check_container_shape(r.mapped.bytes(), file.string());
         if (!s) {
             r.problem = s.error().message;
-            return r;
+            return;
         }
-        shape = *s;
+        r.shape = *s;
     }
-    constexpr size_t kWindow = size_t(4) << 20;
-    io::Sha256 sha;
-    mapped->prefetch(0, 2 * kWindow);
-    for (size_t at = 0; at < bytes.size(); at += kWindow) {
-        const size_t n = std::min(kWindow, bytes.size() - at);
-        // The window after next is read from disk while this one is hashed (cold page cache).
-        mapped->prefetch(at + 2 * kWindow, kWindow);
-        sha.update(bytes.subspan(at, n));
-        mapped->release_pages(at, n);
-    }
-    r.bytes = bytes.size();
-    if (sha.hex() != o.sha256) {
+}
+
+// One output after hashing: the digest against the manifest's, EXR/PNG headers through OpenImageIO, the
+// shape against the manifest entry.
+void finish_output(const fs::path& file, const io::ManifestOutput& o, const std::string& digest, FileCheck& r) {
+    r.bytes = r.mapped.bytes().size();
+    if (digest != o.sha256) {
         r.problem = file.string() + ": content differs from the manifest's hash";
-        return r;
+        return;
     }
+    std::optional<io::TextureShape>& shape = r.shape;
     if (!shape && (o.format == "exr" || o.format == "png")) {
         auto s = io::read_image_shape(file);
         if (!s) {
             r.problem = s.error().message;
-            return r;
+            return;
         }
         shape = *s;
     }
@@ -75,7 +69,6 @@ FileCheck check_output(const fs::path& file, const io::ManifestOutput& o) {
     if (shape && !r.problem && layers != shape->layers)
         r.problem = file.string() + ": " + std::to_string(shape->layers) + " layers, the manifest entry says " +
                     std::to_string(layers);
-    return r;
 }
 
 }  // namespace
@@ -105,13 +98,38 @@ FolderCheck check_manifest_folder(const fs::path& manifest_path, const std::func
     }
     const std::vector<io::ManifestOutput>& outputs = manifest->outputs;
     std::vector<FileCheck> checks(outputs.size());
+    std::vector<fs::path> files(outputs.size());
     tbb::parallel_for(size_t(0), outputs.size(), [&](size_t i) {
         const io::ManifestOutput& o = outputs[i];
         if (fs::path(o.path).is_absolute() || fs::path(o.path).lexically_normal().string().rfind("..", 0) == 0) {
             checks[i].problem = manifest_path.string() + ": output path " + o.path + " leaves the folder";
             return;
         }
-        checks[i] = check_output(dir / o.path, o);
+        files[i] = dir / o.path;
+        open_output(files[i], o, checks[i]);
+    });
+    // All outputs hashed together, several interleaved on each core (io::sha256_ranges), from the mappings
+    // in windows: the window after next is read from disk while one is hashed (cold page cache), and each
+    // window's pages are dropped from the mapping once hashed, so memory stays at a few windows per core.
+    std::vector<size_t> hashed;
+    std::vector<std::span<const uint8_t>> ranges;
+    for (size_t i = 0; i < checks.size(); ++i)
+        if (!checks[i].problem) {
+            hashed.push_back(i);
+            ranges.push_back(checks[i].mapped.bytes());
+        }
+    constexpr size_t kWindow = size_t(4) << 20;
+    const std::vector<std::string> digests = io::sha256_ranges(
+        ranges,
+        [&](size_t r, size_t offset, size_t) {
+            const io::MappedFile& m = checks[hashed[r]].mapped;
+            if (offset == 0) m.prefetch(0, 2 * kWindow);
+            m.prefetch(offset + 2 * kWindow, kWindow);
+        },
+        [&](size_t r, size_t offset, size_t size) { checks[hashed[r]].mapped.release_pages(offset, size); });
+    tbb::parallel_for(size_t(0), hashed.size(), [&](size_t k) {
+        const size_t i = hashed[k];
+        finish_output(files[i], outputs[i], digests[k], checks[i]);
     });
     for (const FileCheck& c : checks) {
         if (c.problem) out.problems.push_back(*c.problem);

@@ -6,6 +6,9 @@
 
 #include <filesystem>
 #include <fstream>
+#include <mutex>
+#include <span>
+#include <vector>
 
 namespace fs = std::filesystem;
 using namespace specbake::io;
@@ -49,6 +52,49 @@ TEST(Sha256, PortableAndCpuPathsAgree) {
         EXPECT_EQ(sha256_hex(part), sha256_hex_portable(part)) << n << " bytes";
     }
     if (!sha256_uses_cpu_extensions()) GTEST_SKIP() << "this CPU has no SHA extensions; only the portable path ran";
+}
+
+// Ranges hashed together, several interleaved per core, against the portable path one by one: lengths
+// around the block and padding boundaries, empty ranges, and ranges longer than a 4 MiB window, so the
+// lanes start, finish and are refilled at different points; FIPS 180-4's million 'a's as a fixed vector.
+// Every byte is inside exactly one window, and each window is announced before it is hashed.
+TEST(Sha256, RangesHashedInLanesMatchOneByOne) {
+    std::vector<uint8_t> data((size_t(9) << 20) + 777);
+    uint32_t x = 987654321;
+    for (uint8_t& b : data) b = uint8_t((x = x * 1664525u + 1013904223u) >> 24);
+    const std::string million(1000000, 'a');
+    std::vector<std::span<const uint8_t>> ranges;
+    for (size_t n : {size_t(0), size_t(1), size_t(55), size_t(64), size_t(65), size_t(129), size_t(4099),
+                     (size_t(4) << 20) + 1, data.size(), size_t(3) << 20, size_t(0), size_t(200000)})
+        ranges.push_back(std::span<const uint8_t>(data.data() + (data.size() - n) / 3, n));
+    ranges.push_back(std::span<const uint8_t>(reinterpret_cast<const uint8_t*>(million.data()), million.size()));
+    std::mutex m;
+    std::vector<std::vector<std::pair<size_t, size_t>>> announced(ranges.size()), done(ranges.size());
+    const std::vector<std::string> digests = sha256_ranges(
+        ranges,
+        [&](size_t r, size_t offset, size_t size) {
+            std::lock_guard lock(m);
+            announced[r].emplace_back(offset, size);
+        },
+        [&](size_t r, size_t offset, size_t size) {
+            std::lock_guard lock(m);
+            ASSERT_FALSE(announced[r].empty());
+            EXPECT_EQ(announced[r].back(), std::make_pair(offset, size)) << "window of range " << r << " hashed unannounced";
+            done[r].emplace_back(offset, size);
+        });
+    ASSERT_EQ(digests.size(), ranges.size());
+    for (size_t r = 0; r < ranges.size(); ++r) {
+        EXPECT_EQ(digests[r], sha256_hex_portable(ranges[r])) << "range " << r << ", " << ranges[r].size() << " bytes";
+        size_t covered = 0;
+        for (const auto& [offset, size] : done[r]) {
+            EXPECT_EQ(offset, covered) << "range " << r;
+            EXPECT_LE(size, size_t(4) << 20);
+            covered += size;
+        }
+        EXPECT_EQ(covered, ranges[r].size()) << "range " << r;
+    }
+    EXPECT_EQ(digests.back(), "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
+    EXPECT_TRUE(sha256_ranges({}).empty());
 }
 
 TEST(Sha256, FilesHashedTogetherMatchOneByOne) {
