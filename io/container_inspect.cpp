@@ -247,7 +247,7 @@ Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& nam
             const size_t at = blk + 24 + 16 * s;
             const uint32_t channel = b[at + 3] & 0x0f;
             const uint32_t expected = f.bc == BcFormat::Bc3 ? (s == 0 ? 15u : 0u) : s;
-            if ((b[at] | b[at + 1] << 8) != 64 * s || b[at + 2] != 63 || channel != expected)
+            if (uint32_t(b[at] | b[at + 1] << 8) != 64 * s || b[at + 2] != 63 || channel != expected)
                 return fail("DFD sample " + std::to_string(s) + " does not describe " + f.name);
         }
     } else if (samples != uint32_t(f.channels))

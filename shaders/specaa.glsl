@@ -55,6 +55,9 @@
 //   Every baked file has 1, 2 or 4 channels in the same order in KTX2, DDS, EXR and PNG (README
 //   "Output layouts"); bind them with linear mip filtering (LINEAR_MIPMAP_LINEAR): loaders such as
 //   three.js KTX2Loader default to nearest.
+//   SPECAA_NORMAL_TWO_CHANNEL       the baked mean normal (`*_normal`) read by specaa_sample_mean_normal
+//                                   has two channels (BC5 of `--block bc`: x, y as (n + 1) / 2); z is
+//                                   rebuilt as sqrt(max(0, 1 - x^2 - y^2)). Without it: RGBA8, (n + 1) / 2.
 //   SPECAA_SAMPLER name             HLSL only: the SamplerState used with the textures above.
 //   SPECAA_USE_CURVATURE            per-pixel kernel from _SPECAA_CURVATURE (SPEC Sec. 4) and the
 //                                   position derivatives instead of normal derivatives.
@@ -371,6 +374,29 @@ SPECAA_FLOAT3 specaa_lean_covariance(SPECAA_FLOAT4 lean0, float lean1) {
                                                              lean0.w - lean0.y * lean0.y,
                                                              lean1 - lean0.x * lean0.y));
     return SPECAA_SELECT3(specaa_is_finite3(sigma), sigma, SPECAA_FLOAT3(0.0, 0.0, 0.0));
+}
+
+// Baked mean normal (`*_normal`, README "Output layouts"), tangent space, unit length. Two-channel texels
+// (BC5 under `--block bc`) hold x, y as (n + 1) / 2: z = sqrt(max(0, 1 - x^2 - y^2)) (the mean normal lies in
+// the upper hemisphere), renormalised where filtering or quantisation put (x, y) outside the unit disc.
+// RGB texels hold (n + 1) / 2, renormalised after filtering; a zero vector gives (0, 0, 1).
+SPECAA_FLOAT3 specaa_decode_normal_xy(SPECAA_FLOAT2 texel) {
+    SPECAA_FLOAT2 xy = texel * 2.0 - 1.0;
+    SPECAA_FLOAT3 n = SPECAA_FLOAT3(xy, sqrt(max(0.0, 1.0 - dot(xy, xy))));
+    return n / sqrt(dot(n, n));  // |n| >= 1 (z = 1 at xy = 0): no division by zero
+}
+SPECAA_FLOAT3 specaa_decode_normal_rgb(SPECAA_FLOAT3 texel) {
+    SPECAA_FLOAT3 n = texel * 2.0 - 1.0;
+    float l2 = dot(n, n);
+    return SPECAA_SELECT3(l2 > 0.0, n / sqrt(max(l2, 1.0e-30)), SPECAA_FLOAT3(0.0, 0.0, 1.0));
+}
+// The baked mean normal at uv: two channels with SPECAA_NORMAL_TWO_CHANNEL (BC5), else RGB(A).
+SPECAA_FLOAT3 specaa_sample_mean_normal(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
+#if defined(SPECAA_NORMAL_TWO_CHANNEL)
+    return specaa_decode_normal_xy(SPECAA_SAMPLE(tex, smp, uv).rg);
+#else
+    return specaa_decode_normal_rgb(SPECAA_SAMPLE(tex, smp, uv).rgb);
+#endif
 }
 
 // LEAN lookup from the two moment textures (layout in the header comment).

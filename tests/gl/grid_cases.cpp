@@ -264,6 +264,51 @@ GridGroup baked_group() {
     return g;
 }
 
+// Mean-normal decoding: two-channel (BC5) texels with z rebuilt, RGB texels renormalised. Reference in
+// double from the texel as the GPU saw it. Near the rim of the unit disc 1 - x^2 - y^2 cancels in float and
+// the square root amplifies that to about sqrt(float epsilon), so the bound is absolute (unit vectors).
+GridGroup normal_group() {
+    GridGroup g{"NORMAL", {}, {}};
+    std::mt19937 rng(6);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    const int bytes[] = {0, 1, 37, 64, 127, 128, 129, 200, 230, 254, 255};
+    for (int x : bytes)
+        for (int y : bytes) {
+            GridCase c;
+            c.in[0] = v4(x / 255.0, y / 255.0);
+            c.in[1] = v4(x / 255.0, y / 255.0, bytes[size_t(x + y) % std::size(bytes)] / 255.0);
+            g.cases.push_back(c);
+        }
+    for (int k = 0; k < 200; ++k) {
+        GridCase c;
+        c.in[0] = v4(u(rng), u(rng));
+        c.in[1] = v4(u(rng), u(rng), u(rng));
+        g.cases.push_back(c);
+    }
+    GridCase gray;  // the zero vector of the RGB form
+    gray.in[1] = v4(0.5, 0.5, 0.5);
+    g.cases.push_back(gray);
+    g.check = [](const GridCase& c, const GridResult& r) -> std::string {
+        const double x = 2 * f(c.in[0][0]) - 1, y = 2 * f(c.in[0][1]) - 1;
+        const double z = std::sqrt(std::max(0.0, 1 - x * x - y * y));
+        const double l = std::sqrt(x * x + y * y + z * z);
+        const std::vector<double> xy_ref{x / l, y / l, z / l}, xy_gpu = {r.out[0][0], r.out[0][1], r.out[0][2]};
+        for (size_t k = 0; k < 3; ++k)
+            if (!(std::abs(xy_gpu[k] - xy_ref[k]) <= 1e-3))
+                return describe("two-channel normal, z = sqrt(max(0, 1 - x^2 - y^2))", c, xy_gpu, xy_ref);
+        const double n[3] = {2 * f(c.in[1][0]) - 1, 2 * f(c.in[1][1]) - 1, 2 * f(c.in[1][2]) - 1};
+        const double ln = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        const std::vector<double> rgb_ref = ln > 0 ? std::vector<double>{n[0] / ln, n[1] / ln, n[2] / ln}
+                                                   : std::vector<double>{0.0, 0.0, 1.0};
+        const std::vector<double> rgb_gpu = {r.out[1][0], r.out[1][1], r.out[1][2]};
+        for (size_t k = 0; k < 3; ++k)
+            if (!(std::abs(rgb_gpu[k] - rgb_ref[k]) <= 1e-5))
+                return describe("RGB normal (n + 1) / 2, renormalised", c, rgb_gpu, rgb_ref);
+        return {};
+    };
+    return g;
+}
+
 GridGroup matrix_group() {
     GridGroup g{"MATRIX", {}, {}};
     std::mt19937 rng(5);
@@ -335,7 +380,8 @@ GridGroup curvature_group() {
 }  // namespace
 
 std::vector<GridGroup> grid_groups() {
-    return {kernels_group(), isotropic_group(), ggx_group(), baked_group(), matrix_group(), curvature_group()};
+    return {kernels_group(), isotropic_group(), ggx_group(), baked_group(), normal_group(), matrix_group(),
+            curvature_group()};
 }
 
 std::vector<std::string> run_grid_groups(const std::function<GLuint(const std::string&, std::string&)>& build,

@@ -25,7 +25,7 @@ struct GridGroup {
     std::function<std::string(const GridCase&, const GridResult&)> check;
 };
 
-// Every group: KERNELS, ISOTROPIC, GGX, BAKED, MATRIX, CURVATURE.
+// Every group: KERNELS, ISOTROPIC, GGX, BAKED, NORMAL, MATRIX, CURVATURE.
 std::vector<GridGroup> grid_groups();
 
 // Runs every group with programs from `build` (GLSL or SPIR-V) and returns the failures (at most a few
