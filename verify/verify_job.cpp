@@ -285,9 +285,9 @@ std::string markdown_table(const SceneReport& r) {
     for (const CandidateReport& c : r.candidates) {
         const SimMetrics& m = c.metrics;
         out += "| " + c.name + " | " + format_double("%.3f", m.rmse) + " | " + format_double("%.3f", m.mae) + " | " +
-               format_double("%.4f", m.rmse_tonemapped) + " | " + format_double("%.3f", m.flicker_linear) + " | " +
-               format_double("%.4f", m.flicker) + " | " + format_double("%.3f", m.temporal_error_linear) + " | " +
-               format_double("%.4f", m.temporal_error) + " | " +
+               format_double("%.4f", m.rmse_tonemapped) + " | " + format_double("%.3g", m.flicker_linear) + " | " +
+               format_double("%.3g", m.flicker) + " | " + format_double("%.3g", m.temporal_error_linear) + " | " +
+               format_double("%.3g", m.temporal_error) + " | " +
                format_double("%.2f", m.energy_ratio) + " | " + format_double("%.2f", m.peak_ratio) + " | " +
                (c.bake_ms ? format_double("%.1f", *c.bake_ms) : "-") + " | " +
                (c.spirv_instructions ? std::to_string(*c.spirv_instructions) : "-") + " | " +
