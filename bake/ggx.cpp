@@ -39,9 +39,14 @@ T beckmann_ndf(const Vec3<T>& h, const Sym2<T>& A, T tau) {
 template <class T>
 T filtered_ndf(const Vec3<T>& h, const Sym2<T>& A, T alpha2) {
     const T tau = alpha2 * alpha2;
-    const T w = std::clamp(T(1) - alpha2 / std::sqrt(std::max(std::max(det(A), tau), T(1e-30))), T(0), T(1));
+    const T d = std::max(std::max(det(A), tau), T(1e-30));
+    // Tail weight along the direction u of h.xy: GGX(A) falls there as 1 / (pi sqrt(d) (u^T A^-1 u)^2 s^4)
+    // at slope s, the unfiltered lobe as alpha2 / (pi s^4). At h.xy = 0 the isotropic value alpha2 / sqrt(d).
+    const T r2 = h.x * h.x + h.y * h.y;
+    const T q = r2 > T(0) ? (h.x * h.x * A.yy - T(2) * h.x * h.y * A.xy + h.y * h.y * A.xx) / (d * r2) : T(1) / std::sqrt(d);
+    const T rho = std::clamp(alpha2 * std::sqrt(d) * q * q, T(0), T(1));
     const T ggx = ggx_ndf(h, A, tau);
-    return ggx + w * (beckmann_ndf(h, A, tau) - ggx);
+    return ggx + (T(1) - rho) * (beckmann_ndf(h, A, tau) - ggx);
 }
 
 template <class T>

@@ -20,9 +20,14 @@ template <class T>
 T beckmann_ndf(const Vec3<T>& h, const Sym2<T>& A, T tau);
 
 // NDF of a filtered lobe with the tail weight of the unfiltered material (TK21 Sec. 7; the include's
-// specaa_filtered_D): (1 - w) GGX(A) + w Beckmann(A), w = clamp(1 - alpha2 / sqrt(max(det A, alpha2^2)), 0, 1),
-// alpha2 = a of the unfiltered material. Far from the peak GGX(A) falls as sqrt(det A) / (pi theta^4); the
-// mixture as alpha2 / (pi theta^4), the unfiltered lobe's tail. Integrates to one (projected) like both parts.
+// specaa_filtered_D): rho GGX(A) + (1 - rho) Beckmann(A), alpha2 = a of the unfiltered material, with the
+// tail weight rho = clamp(alpha2 sqrt(d) (u^T A^-1 u)^2, 0, 1) along the direction u of h.xy
+// (d = max(det A, alpha2^2)). Far from the peak GGX(A) falls along u as 1 / (pi sqrt(d) (u^T A^-1 u)^2
+// theta^4), the mixture as alpha2 / (pi theta^4), the unfiltered lobe's tail, in every direction (a weight
+// from det A alone leaves the tail along the widened axis of an anisotropic A heavier by its anisotropy).
+// Integrates to one (projected) like both parts: both are functions of the slope's A^-1 quadratic form, so
+// along every ray of slopes their difference integrates to zero, whatever weight the ray carries.
+// rho = alpha2 / sqrt(d) at h.xy = 0 and for isotropic A.
 template <class T>
 T filtered_ndf(const Vec3<T>& h, const Sym2<T>& A, T alpha2);
 

@@ -490,16 +490,22 @@ float specaa_beckmann_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float tau) {
 }
 
 // NDF of a filtered lobe with the tails of the unfiltered material (TK21 Sec. 7). Widening GGX to
-// A = a I + K also raises its tails, D ~ sqrt(det A) / (pi theta^4) far from the peak, while the
-// footprint's true NDF (GGX(a) spread by the footprint's normal distribution) keeps the tails of GGX(a),
-// ~ a / (pi theta^4). A mixture (1 - w) GGX(A) + w Beckmann(A) with w = 1 - a / sqrt(det A) keeps the
-// width of the filtered lobe, integrates to one like both parts, and has exactly the unfiltered tail
-// weight; with K = 0 it is GGX(a). `alpha2` is the unfiltered a of the material.
+// A = a I + K also raises its tails: along the direction u of h.xy GGX(A) falls as
+// 1 / (pi sqrt(det A) (u^T A^-1 u)^2 theta^4), while the footprint's true NDF (GGX(a) spread by the
+// footprint's normal distribution) keeps the tails of GGX(a), ~ a / (pi theta^4). Along the widened axis
+// of an anisotropic A (a grazing footprint) the excess is (K/a)^(3/2), not K/a. The mixture
+// rho GGX(A) + (1 - rho) Beckmann(A) with rho = a sqrt(det A) (u^T A^-1 u)^2 (clamped to [0, 1]) keeps the
+// width of the filtered lobe, has exactly the unfiltered tail in every direction and integrates to one
+// like both parts (along each ray of slopes their difference integrates to zero); with K = 0 it is
+// GGX(a). `alpha2` is the unfiltered a of the material.
 float specaa_filtered_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
     float tau = alpha2 * alpha2;
-    float w = SPECAA_SATURATE(1.0 - alpha2 / sqrt(specaa_clamped_det(A, tau)));
+    float detClamped = specaa_clamped_det(A, tau);
+    float r2 = dot(h.xy, h.xy);
+    float q = r2 > 0.0 ? specaa_inverse_quadratic_form(A, h.xy, detClamped) / r2 : 1.0 / sqrt(detClamped);
+    float rho = SPECAA_SATURATE(alpha2 * sqrt(detClamped) * q * q);
     float ggx = specaa_ggx_D(h, A, tau);
-    return ggx + w * (specaa_beckmann_D(h, A, tau) - ggx);
+    return ggx + (1.0 - rho) * (specaa_beckmann_D(h, A, tau) - ggx);
 }
 
 // GGX Smith Lambda, TK21 App. A.3: -1/2 + sqrt(s + o.z^2) / (2 |o.z|), s = [o.x, o.y] A [o.x, o.y]^T,

@@ -28,14 +28,17 @@ const CandidateReport* find_row(const SceneReport& s, const std::string& name) {
 // Per candidate, aggregated over the scenes it ran on.
 struct Aggregate {
     std::string name, family;
-    double log_error = 0, log_error_linear = 0, log_flicker = 0, log_flicker_tm = 0, energy = 0, peak = 0;
-    int n = 0, n_flicker = 0, n_flicker_tm = 0;
+    double log_error = 0, log_error_linear = 0, log_flicker = 0, log_flicker_tm = 0, log_terr = 0, log_terr_tm = 0;
+    double energy = 0, peak = 0;
+    int n = 0, n_flicker = 0, n_flicker_tm = 0, n_terr = 0, n_terr_tm = 0;
     std::optional<int> spirv;
     std::vector<double> frame_rel, bake_ms;
     double rel_error() const { return n ? std::exp(log_error / n) : 1.0; }
     double rel_error_linear() const { return n ? std::exp(log_error_linear / n) : 1.0; }
     double rel_flicker() const { return n_flicker ? std::exp(log_flicker / n_flicker) : 1.0; }
     double rel_flicker_tm() const { return n_flicker_tm ? std::exp(log_flicker_tm / n_flicker_tm) : 1.0; }
+    double rel_terr() const { return n_terr ? std::exp(log_terr / n_terr) : 1.0; }
+    double rel_terr_tm() const { return n_terr_tm ? std::exp(log_terr_tm / n_terr_tm) : 1.0; }
 };
 
 enum class Family { All, Analytic, Real };
@@ -75,6 +78,14 @@ std::vector<Aggregate> aggregate(const BenchReport& r, Family family = Family::A
             if (none->metrics.flicker > kFloor) {
                 a.log_flicker_tm += std::log(std::max(c.metrics.flicker, kFloor) / none->metrics.flicker);
                 ++a.n_flicker_tm;
+            }
+            if (none->metrics.temporal_error_linear > kFloor) {
+                a.log_terr += std::log(std::max(c.metrics.temporal_error_linear, kFloor) / none->metrics.temporal_error_linear);
+                ++a.n_terr;
+            }
+            if (none->metrics.temporal_error > kFloor) {
+                a.log_terr_tm += std::log(std::max(c.metrics.temporal_error, kFloor) / none->metrics.temporal_error);
+                ++a.n_terr_tm;
             }
             a.energy += c.metrics.energy_ratio;
             a.peak += c.metrics.peak_ratio;
@@ -170,14 +181,15 @@ namespace {
 
 std::string aggregate_table(const BenchReport& r, Family family) {
     std::string out;
-    out += "| candidate | family | RMSE vs base | RMSE (tm) vs base | flicker vs base | flicker (tm) vs base | energy "
-           "| p99 | SPIR-V | frame x | bake ms |\n";
-    out += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    out += "| candidate | family | RMSE vs base | RMSE (tm) vs base | flicker vs base | flicker (tm) vs base | t-err vs base "
+           "| t-err (tm) vs base | energy | p99 | SPIR-V | frame x | bake ms |\n";
+    out += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const Aggregate& a : aggregate(r, family)) {
         const double frame = median(a.frame_rel), bake = median(a.bake_ms);
         out += "| " + a.name + " | " + a.family + " | " + format_double("%.3f", a.rel_error_linear()) + " | " +
                format_double("%.3f", a.rel_error()) + " | " + format_double("%.3f", a.rel_flicker()) + " | " +
-               format_double("%.3f", a.rel_flicker_tm()) + " | " + format_double("%.2f", a.energy / a.n) + " | " +
+               format_double("%.3f", a.rel_flicker_tm()) + " | " + format_double("%.3f", a.rel_terr()) + " | " +
+               format_double("%.3f", a.rel_terr_tm()) + " | " + format_double("%.2f", a.energy / a.n) + " | " +
                format_double("%.2f", a.peak / a.n) + " | " + (a.spirv ? std::to_string(*a.spirv) : "-") + " | " +
                (std::isnan(frame) ? "-" : format_double("%.2f", frame)) + " | " +
                (std::isnan(bake) ? "-" : format_double("%.1f", bake)) + " |\n";
@@ -198,10 +210,12 @@ std::string bench_summary_markdown(const BenchReport& r) {
     }
     out += "\nBase: none (no filtering); for the glint family glint-c20 (glints without anti-aliasing, C20), on the "
            "glint ground truth.\n";
-    out += "\nDo no harm (default / none per scene; goal RMSE <= 1.02, flicker <= 1.00 linear and tone-mapped) "
-           "and the floor (ground truth at 1/4 of the samples against the full one, / none):\n\n";
-    out += "| scene | none RMSE | default RMSE x | flicker x | flicker (tm) x | holds | floor RMSE x | floor flicker x |\n"
-           "|---|---:|---:|---:|---:|---|---:|---:|\n";
+    out += "\nDo no harm (default / none per scene; goal RMSE <= 1.02, flicker <= 1.00 linear and tone-mapped), "
+           "judged with the flicker (pixels scored in every frame) and with the temporal error (frame pairs), and the "
+           "floor (ground truth at 1/4 of the samples against the full one, / none):\n\n";
+    out += "| scene | none RMSE | default RMSE x | flicker x | flicker (tm) x | holds | t-err x | t-err (tm) x | holds (t-err) "
+           "| floor RMSE x | floor flicker x | floor t-err x |\n"
+           "|---|---:|---:|---:|---:|---|---:|---:|---|---:|---:|---:|\n";
     for (const SceneReport& s : r.scenes) {
         const CandidateReport* none = find_row(s, "none");
         const CandidateReport* def = find_row(s, "default");
@@ -211,12 +225,17 @@ std::string bench_summary_markdown(const BenchReport& r) {
         const double e = ratio(def->metrics.rmse, none->metrics.rmse);
         const double f = ratio(def->metrics.flicker_linear, none->metrics.flicker_linear);
         const double ft = ratio(def->metrics.flicker, none->metrics.flicker);
+        const double t = ratio(def->metrics.temporal_error_linear, none->metrics.temporal_error_linear);
+        const double tt = ratio(def->metrics.temporal_error, none->metrics.temporal_error);
         const bool holds = e <= 1.02 && f <= 1.0 && ft <= 1.0;
+        const bool holds_t = e <= 1.02 && t <= 1.0 && tt <= 1.0;
         out += "| " + scene_label(s) + " | " + format_double("%.3f", none->metrics.rmse) + " | " +
                format_double("%.3f", e) + " | " + format_double("%.3f", f) + " | " + format_double("%.3f", ft) + " | " +
-               (holds ? "yes" : "**no**") + " | " +
+               (holds ? "yes" : "**no**") + " | " + format_double("%.3f", t) + " | " + format_double("%.3f", tt) + " | " +
+               (holds_t ? "yes" : "**no**") + " | " +
                (floor ? format_double("%.3f", ratio(floor->metrics.rmse, none->metrics.rmse)) : "-") + " | " +
-               (floor ? format_double("%.3f", ratio(floor->metrics.flicker_linear, none->metrics.flicker_linear)) : "-") +
+               (floor ? format_double("%.3f", ratio(floor->metrics.flicker_linear, none->metrics.flicker_linear)) : "-") + " | " +
+               (floor ? format_double("%.3f", ratio(floor->metrics.temporal_error_linear, none->metrics.temporal_error_linear)) : "-") +
                " |\n";
     }
     out += "\nBest per scene (lowest linear RMSE / lowest flicker among filtering candidates):\n\n";
@@ -261,7 +280,10 @@ std::string bench_full_markdown(const BenchReport& r) {
     }
     out += "\nColumns: RMSE and MAE of linear radiance divided by the ground truth's mean; (tm) on x/(1+x); "
            "flicker = mean over pixels of the temporal standard deviation of the error, divided by the ground "
-           "truth's mean; (tm) the same on x/(1+x); energy and "
+           "truth's mean, over the pixels scored in every frame; t-err (temporal error) = mean over pixels of "
+           "sqrt(sum over consecutive frames both scoring the pixel of ((c1 - c0) - (g1 - g0))^2 / (2 pairs)), "
+           "divided by the ground truth's mean (equal to the flicker for an error independent from frame to "
+           "frame, near zero for a stable error moving with the image); (tm) the same on x/(1+x); energy and "
            "p99 = candidate/ground-truth ratios of total radiance and of the 99th percentile (< 1: over-blur); "
            "SPIR-V = instructions in functions after spirv-opt -O; frame x = median frame time relative to no "
            "filtering on this renderer; bake ms = texture bake or curvature estimate.\n";
@@ -272,7 +294,7 @@ std::string bench_csv(const BenchReport& r) {
     std::string out =
         "scene,alpha,roughness,width,height,spp,frames,candidate,family,source,rmse,mae,rmse_tonemapped,"
         "mae_tonemapped,flicker,flicker_linear,energy_ratio,peak_ratio,pixels,bake_ms,spirv_instructions,frame_ms,"
-        "frame_relative\n";
+        "frame_relative,temporal_error,temporal_error_linear\n";
     for (const SceneReport& s : r.scenes) {
         for (const CandidateReport& c : s.candidates) {
             const SimMetrics& m = c.metrics;
@@ -286,7 +308,8 @@ std::string bench_csv(const BenchReport& r) {
                    format_double("%.6g", m.energy_ratio) + "," + format_double("%.6g", m.peak_ratio) + "," + std::to_string(m.pixels) +
                    "," + opt(c.bake_ms, "%.3f") + "," +
                    (c.spirv_instructions ? std::to_string(*c.spirv_instructions) : "") + "," +
-                   opt(c.frame_ms, "%.4f") + "," + opt(c.frame_relative, "%.4f") + "\n";
+                   opt(c.frame_ms, "%.4f") + "," + opt(c.frame_relative, "%.4f") + "," +
+                   format_double("%.6g", m.temporal_error) + "," + format_double("%.6g", m.temporal_error_linear) + "\n";
         }
     }
     return out;

@@ -82,7 +82,7 @@ std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool varia
                   kMatrixDefault, "exact", "mean-projected"},
                  normal_mapped ? "mean-projected" : "", "exact"});
     c.push_back({"default-tails", "default",
-                 "specaa_filtered_alpha2_matrix with specaa_filtered_D (tail weight of the baked roughness, TK21 Sec. 7)",
+                 "specaa_filtered_alpha2_matrix with specaa_filtered_D (tail weight of the baked roughness along the half vector, TK21 Sec. 7)",
                  {std::string(normal_mapped ? kBakedRoughnessDefines : "") + "#define SIM_NDF(h, A, a) specaa_filtered_D(h, A, specaa_base_alpha2(s))\n",
                   kMatrixDefault, "exact", "mean-projected"},
                  normal_mapped ? "mean-projected" : "", ""});

@@ -44,6 +44,14 @@ void SimMetricsAccumulator::add_frame(const SimImage& gt, const SimImage& c) {
             h.sum_lin += d;
             h.sum_sq_lin += d * d;
             ++h.count;
+            if (h.last_frame == frames_ - 2) {
+                h.pair_sq_lin += (d - h.last_lin) * (d - h.last_lin);
+                h.pair_sq_tm += (dt - h.last_tm) * (dt - h.last_tm);
+                ++h.pairs;
+            }
+            h.last_frame = frames_ - 1;
+            h.last_lin = d;
+            h.last_tm = dt;
         }
     }
 }
@@ -62,9 +70,14 @@ SimMetrics SimMetricsAccumulator::finish() const {
     const double p_gt = percentile(gt_values_, 0.99);
     m.peak_ratio = p_gt > 0 ? percentile(candidate_values_, 0.99) / p_gt : 1.0;
     // Temporal instability over pixels scored in every frame (population std over the K frames).
-    double flicker = 0, flicker_lin = 0;
-    long long stable = 0;
+    double flicker = 0, flicker_lin = 0, terr = 0, terr_lin = 0;
+    long long stable = 0, paired = 0;
     for (const PixelHistory& h : history_) {
+        if (h.pairs > 0) {
+            terr += std::sqrt(h.pair_sq_tm / (2.0 * h.pairs));
+            terr_lin += std::sqrt(h.pair_sq_lin / (2.0 * h.pairs));
+            ++paired;
+        }
         if (h.count != frames_ || frames_ < 2) continue;
         const double k = double(h.count);
         const double var = std::max(0.0, h.sum_sq / k - (h.sum / k) * (h.sum / k));
@@ -76,6 +89,10 @@ SimMetrics SimMetricsAccumulator::finish() const {
     if (stable > 0) {
         m.flicker = flicker / double(stable);
         m.flicker_linear = flicker_lin / double(stable) * norm;
+    }
+    if (paired > 0) {
+        m.temporal_error = terr / double(paired);
+        m.temporal_error_linear = terr_lin / double(paired) * norm;
     }
     return m;
 }

@@ -1,7 +1,9 @@
 // Accuracy metrics of one candidate against the ground truth over K frames (SPEC Sec. 8): RMSE and MAE
 // on linear radiance normalised by the ground truth's mean and on tone-mapped values x / (1 + x),
 // temporal instability (per-pixel standard deviation over the frames of candidate minus ground truth,
-// averaged), and over-blur (ratios of total energy and of the 99th-percentile highlight).
+// averaged), temporal error (per-pixel frame-to-frame change of the candidate minus that of the ground
+// truth, over consecutive frames that both score the pixel), and over-blur (ratios of total energy and of
+// the 99th-percentile highlight).
 // Only pixels fully covered in the ground truth and covered by the candidate count, so silhouette
 // (geometric) aliasing, which no NDF filter addresses, does not enter the scores.
 #pragma once
@@ -19,6 +21,13 @@ struct SimMetrics {
     double mae_tonemapped = 0;
     double flicker = 0;         // mean over pixels of the temporal std of T(c) - T(g), T(x) = x / (1 + x)
     double flicker_linear = 0;  // mean over pixels of the temporal std of c - g, divided by mean(g)
+    // Temporal error: per pixel sqrt(sum over consecutive scored frame pairs of ((c1 - c0) - (g1 - g0))^2 /
+    // (2 pairs)) (the Allan deviation of the error), averaged over pixels with at least one pair. Equal to
+    // the flicker for an error independent from frame to frame; unlike it, near zero for a temporally
+    // stable error that moves with the image, and it scores pixels the object leaves or enters during the
+    // path (the flicker keeps only pixels scored in every frame, which can exclude the highlight).
+    double temporal_error = 0;         // on T(x) = x / (1 + x)
+    double temporal_error_linear = 0;  // linear radiance, divided by mean(g)
     double energy_ratio = 1;    // sum(c) / sum(g): < 1 lost highlight energy, > 1 over-bright
     double peak_ratio = 1;      // 99th percentile of c / 99th percentile of g: < 1 means over-blurred peaks
     long long pixels = 0;       // pixel-frames scored
@@ -34,6 +43,9 @@ private:
     struct PixelHistory {
         double sum = 0, sum_sq = 0, sum_lin = 0, sum_sq_lin = 0;
         int count = 0;
+        // Temporal error: the previous frame's errors when it scored this pixel, and the pair sums.
+        double last_lin = 0, last_tm = 0, pair_sq_lin = 0, pair_sq_tm = 0;
+        int last_frame = -2, pairs = 0;
     };
     std::vector<PixelHistory> history_;
     std::vector<float> gt_values_, candidate_values_;

@@ -280,13 +280,14 @@ std::string baseline_of(const std::string& family) { return family == "glint" ? 
 
 std::string markdown_table(const SceneReport& r) {
     std::string out;
-    out += "| candidate | RMSE | MAE | RMSE (tm) | flicker | flicker (tm) | energy | p99 | bake ms | SPIR-V | frame x |\n";
-    out += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    out += "| candidate | RMSE | MAE | RMSE (tm) | flicker | flicker (tm) | t-err | t-err (tm) | energy | p99 | bake ms | SPIR-V | frame x |\n";
+    out += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const CandidateReport& c : r.candidates) {
         const SimMetrics& m = c.metrics;
         out += "| " + c.name + " | " + format_double("%.3f", m.rmse) + " | " + format_double("%.3f", m.mae) + " | " +
-               format_double("%.4f", m.rmse_tonemapped) + " | " + format_double("%.3f", m.flicker_linear) + " | " +
-               format_double("%.4f", m.flicker) + " | " +
+               format_double("%.4f", m.rmse_tonemapped) + " | " + format_double("%.3g", m.flicker_linear) + " | " +
+               format_double("%.3g", m.flicker) + " | " + format_double("%.3g", m.temporal_error_linear) + " | " +
+               format_double("%.3g", m.temporal_error) + " | " +
                format_double("%.2f", m.energy_ratio) + " | " + format_double("%.2f", m.peak_ratio) + " | " +
                (c.bake_ms ? format_double("%.1f", *c.bake_ms) : "-") + " | " +
                (c.spirv_instructions ? std::to_string(*c.spirv_instructions) : "-") + " | " +

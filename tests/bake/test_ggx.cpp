@@ -70,6 +70,31 @@ TEST(FilteredNdf, ProjectedAreaIsOneAndTheTailIsTheUnfilteredOne) {
     EXPECT_NEAR(filtered_ndf(h, plain, alpha2), ggx_axis_aligned(h, 0.05, 0.05), 1e-9 * ggx_axis_aligned(h, 0.05, 0.05));
 }
 
+TEST(FilteredNdf, AnisotropicKernelKeepsTheUnfilteredTailInEveryDirection) {
+    // A grazing footprint: a = 0.01^2 widened along one rotated axis only (K = 0.004 there, 40 a), as
+    // the quad derivatives of a cylinder's normal give near its silhouette. Along the widened axis GGX(A)
+    // is (K/a)^(3/2) ~ 250 times heavier than GGX(a) far from the peak; a tail weight from det A alone
+    // (a / sqrt(det A)) leaves it ~40 times heavier. The mixture must match GGX(a), written out by hand,
+    // along both axes and in between, and still integrate to one.
+    const double alpha2 = 1e-4, phi = 0.6;
+    const Sym2<double> A = sym(test::rotated_diag(alpha2 + 0.004, alpha2, phi));
+    for (double dir : {0.0, 0.5 * kPi, 0.3, 1.2}) {
+        const Vec3<double> h = test::spherical(60.0 * kPi / 180.0, phi + dir);
+        const double unfiltered = ggx_axis_aligned(h, 0.01, 0.01);
+        const double ratio = filtered_ndf(h, A, alpha2) / unfiltered;
+        EXPECT_LE(ratio, 1.02) << dir;
+        if (dir == 0.0) {
+            EXPECT_NEAR(ratio, 1.0, 0.02);
+            EXPECT_GT(ggx_ndf(h, A, alpha2 * alpha2) / unfiltered, 200.0);
+            const double old_weight = alpha2 / std::sqrt(det(A));
+            EXPECT_GT(old_weight * ggx_ndf(h, A, alpha2 * alpha2) / unfiltered, 30.0);
+        }
+    }
+    const double area = test::integrate_hemisphere(
+        [&](const Vec3<double>& m) { return filtered_ndf(m, A, alpha2) * m.z; }, 4000, 800);
+    EXPECT_NEAR(area, 1.0, 2e-3);
+}
+
 TEST(Beckmann, MatchesRotatedGaussianOfSlopes) {
     std::mt19937_64 rng(2);
     std::uniform_real_distribution<double> u(0.0, 1.0);

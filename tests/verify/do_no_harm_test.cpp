@@ -37,6 +37,8 @@ void expect_default_no_worse(const SimScene& scene, int size = 64) {
     ASSERT_GT(none->pixels, 0) << scene.name << ": no pixel scored at the far distance";
     EXPECT_LE(def->rmse, none->rmse) << scene.name;
     EXPECT_LE(def->flicker_linear, none->flicker_linear) << scene.name;
+    // The temporal error (frame pairs, so pixels the object enters or leaves count too) as well.
+    EXPECT_LE(def->temporal_error_linear, none->temporal_error_linear) << scene.name;
 }
 
 void shared_model(const char* name, int size = 64) {

@@ -46,6 +46,59 @@ TEST(VerifyMetrics, FlickerIsTheTemporalStandardDeviation) {
     EXPECT_NEAR(acc.finish().flicker, 0.25, 1e-9);
 }
 
+TEST(VerifyMetrics, TemporalErrorEqualsTheFlickerForAnAlternatingError) {
+    // The alternating error above changes by 1/2 (tone-mapped) and 1 (linear) between every pair of frames:
+    // sqrt(d^2 / 2) = 1/(2 sqrt 2) and 1/sqrt 2. A ground truth of 0 gives no normalisation: use g = 1 and
+    // c alternating 1 and 2 (linear error 0, 1: flicker 1/2, temporal error 1/sqrt 2, both / mean(g) = 1).
+    SimMetricsAccumulator acc;
+    for (int f = 0; f < 4; ++f)
+        acc.add_frame(constant_image(2, 2, 1.0f, 1.0f), constant_image(2, 2, f % 2 ? 2.0f : 1.0f, 1.0f));
+    const SimMetrics m = acc.finish();
+    EXPECT_NEAR(m.flicker_linear, 0.5, 1e-9);
+    EXPECT_NEAR(m.temporal_error_linear, 1.0 / std::sqrt(2.0), 1e-9);
+    EXPECT_NEAR(m.temporal_error, (2.0 / 3.0 - 0.5) / std::sqrt(2.0), 1e-7);
+}
+
+// A highlight (one bright pixel) at `centre` of a row over a dark surface.
+SimImage highlight_row(int width, int centre, float peak) {
+    SimImage im = constant_image(width, 1, 0.01f, 1.0f);
+    im.texel(centre, 0)[0] += peak;
+    return im;
+}
+
+TEST(VerifyMetrics, TemporalErrorOfAFrozenCandidateIsTheGroundTruthsOwnChange) {
+    // A candidate that shows frame 0 in every frame: its error changes exactly as the ground truth does,
+    // (c1 - c0) - (g1 - g0) = -(g1 - g0). With the highlight moving one pixel per frame over 6 pixels and
+    // 4 frames, pixels 1 and 2 change by the peak in two of three pairs, pixels 0 and 3 in one.
+    SimMetricsAccumulator acc;
+    const SimImage first = highlight_row(6, 0, 1.0f);
+    double sum_g = 0;
+    for (int f = 0; f < 4; ++f) {
+        const SimImage g = highlight_row(6, f, 1.0f);
+        for (int x = 0; x < 6; ++x) sum_g += g.texel(x, 0)[0];
+        acc.add_frame(g, first);
+    }
+    const double mean_g = sum_g / 24.0;
+    const double expected = (2 * std::sqrt(1.0 / 6.0) + 2 * std::sqrt(2.0 / 6.0)) / 6.0 / mean_g;
+    EXPECT_NEAR(acc.finish().temporal_error_linear, expected, 1e-6);
+}
+
+TEST(VerifyMetrics, TemporalErrorScoresPixelsTheObjectLeaves) {
+    // Pixel 1 carries the error and is covered in frames 0-2 but not in frame 3: the flicker, which keeps
+    // only pixels scored in every frame, does not see it; the temporal error scores its two frame pairs.
+    SimMetricsAccumulator acc;
+    for (int f = 0; f < 4; ++f) {
+        SimImage g = constant_image(2, 1, 1.0f, 1.0f), c = constant_image(2, 1, 1.0f, 1.0f);
+        c.texel(1, 0)[0] = f % 2 ? 3.0f : 1.0f;
+        if (f == 3) g.texel(1, 0)[1] = 0.0f;
+        acc.add_frame(g, c);
+    }
+    const SimMetrics m = acc.finish();
+    EXPECT_NEAR(m.flicker_linear, 0.0, 1e-12);
+    // Pixel 0: no change; pixel 1: changes of 2 in both pairs -> sqrt(8 / 4) = sqrt 2; mean over 2 pixels.
+    EXPECT_NEAR(m.temporal_error_linear, std::sqrt(2.0) / 2.0, 1e-9);
+}
+
 TEST(VerifyMetrics, PartiallyCoveredPixelsAreNotScored) {
     SimImage gt = constant_image(2, 1, 1.0f, 1.0f);
     SimImage c = constant_image(2, 1, 1.0f, 1.0f);
