@@ -59,7 +59,7 @@ struct RowBlock {
 }  // namespace
 
 // The bake proper, on validated inputs.
-Result<TextureBakeResult> bake_validated(const Image& normal, const Image* roughness, int roughness_channel,
+Result<TextureBakeResult> bake_validated(const TextureMap& normal, const TextureMap* roughness, int roughness_channel,
                                          float roughness_value, const TextureBakeSettings& settings,
                                          const TextureBakeRowSink& sink) {
     TextureBakeResult result;

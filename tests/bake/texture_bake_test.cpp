@@ -435,6 +435,100 @@ TEST(TextureBake, BlocksStreamEveryTexelOnceWithTheChainValues) {
     }
 }
 
+// 8-bit codes of `image` (values rounded to k / 255) in rows padded like a PNG's inflated data (one filter
+// byte before each row), and the float image those codes decode to (float(k) * (1.0f / 255.0f)).
+struct Bytes8Map {
+    std::vector<uint8_t> bytes;
+    TextureMap map;
+    Image decoded;
+};
+Bytes8Map as_bytes8(const Image& image) {
+    Bytes8Map b;
+    const size_t row = size_t(image.width) * size_t(image.channels);
+    b.bytes.assign(size_t(image.height) * (row + 1), 0xEE);
+    b.decoded = Image(image.width, image.height, image.channels);
+    for (int y = 0; y < image.height; ++y)
+        for (size_t i = 0; i < row; ++i) {
+            const long k = std::lround(std::clamp(double(image.pixels[size_t(y) * row + i]), 0.0, 1.0) * 255.0);
+            b.bytes[size_t(y) * (row + 1) + 1 + i] = uint8_t(k);
+            b.decoded.pixels[size_t(y) * row + i] = float(k) * (1.0f / 255.0f);  // as io/ decodes 8-bit files
+        }
+    b.map = TextureMap{image.width, image.height, image.channels, row + 1, nullptr, b.bytes.data() + 1};
+    return b;
+}
+
+TEST(TextureBake, EightBitMapsBakeAsTheirDecodedFloats) {
+    struct Case {
+        int W, H, normal_channels, rough_w, rough_h, rough_channels, channel;
+    };
+    for (const Case& c : {Case{64, 32, 3, 64, 32, 3, 1}, Case{37, 23, 3, 37, 23, 1, 0}, Case{40, 24, 2, 40, 24, 3, 1},
+                          Case{48, 16, 4, 24, 8, 3, 1}, Case{1030, 6, 3, 1030, 6, 3, 1}, Case{9, 5, 3, 0, 0, 0, 0}}) {
+        SCOPED_TRACE(std::to_string(c.W) + "x" + std::to_string(c.H) + " normal channels " +
+                     std::to_string(c.normal_channels));
+        Image nm = random_normal_map(c.W, c.H, 21, 0.3);
+        if (c.normal_channels != 3) {
+            Image n(c.W, c.H, c.normal_channels);
+            for (size_t t = 0; t < n.texel_count(); ++t)
+                for (int k = 0; k < c.normal_channels; ++k)
+                    n.pixels[t * size_t(c.normal_channels) + size_t(k)] = k < 3 ? nm.pixels[t * 3 + size_t(k)] : 0.25f;
+            nm = n;
+        }
+        Image rough = c.rough_channels ? random_orm(c.rough_w, c.rough_h, 22) : Image{};
+        if (c.rough_channels == 1) {
+            Image r(c.rough_w, c.rough_h, 1);
+            for (size_t t = 0; t < r.texel_count(); ++t) r.pixels[t] = rough.pixels[t * 3 + 1];
+            rough = r;
+        }
+        const Bytes8Map n8 = as_bytes8(nm);
+        const Bytes8Map r8 = c.rough_channels ? as_bytes8(rough) : Bytes8Map{};
+        for (int threads : {1, 2}) {
+            TextureBakeSettings s;
+            s.threads = threads;
+            auto floats = bake_texture(n8.decoded, c.rough_channels ? &r8.decoded : nullptr, c.channel, 0.4f, s);
+            ASSERT_TRUE(floats.ok()) << floats.error().message;
+            std::mutex m;
+            bool equal = true;
+            auto same = [](const float* block, const MipChain& chain, const TextureBakeRows& r) {
+                if (!block) return chain.levels.empty();
+                const Image& level = chain.levels[size_t(r.level)];
+                const size_t row_floats = size_t(r.width) * size_t(level.channels);
+                for (int k = 0; k < r.rows; ++k)
+                    if (std::memcmp(block + size_t(k) * row_floats, level.texel(r.x0, r.y0 + k), row_floats * sizeof(float)))
+                        return false;
+                return true;
+            };
+            auto bytes = bake_texture_rows(n8.map, c.rough_channels ? &r8.map : nullptr, c.channel, 0.4f, s,
+                                           [&](const TextureBakeRows& r) {
+                                               std::lock_guard<std::mutex> lock(m);
+                                               equal = equal && same(r.roughness, floats->roughness, r) &&
+                                                       same(r.kernel, floats->kernel, r) &&
+                                                       same(r.lean, floats->lean, r) && same(r.normal, floats->normal, r);
+                                           });
+            ASSERT_TRUE(bytes.ok()) << bytes.error().message;
+            EXPECT_TRUE(equal);
+            EXPECT_EQ(bytes->max_roughness_change, floats->max_roughness_change);
+            EXPECT_EQ(bytes->notes.z_reconstructed, floats->notes.z_reconstructed);
+            EXPECT_EQ(bytes->notes.looks_srgb, floats->notes.looks_srgb);
+            EXPECT_EQ(bytes->notes.roughness_resampled, floats->notes.roughness_resampled);
+            EXPECT_EQ(bytes->notes.warnings, floats->notes.warnings);
+        }
+    }
+    // The notes read from the codes: a constant full-scale blue channel, and sRGB-looking values.
+    Image flat(8, 8, 3);
+    for (size_t t = 0; t < flat.texel_count(); ++t)
+        flat.pixels[t * 3] = 0.5f + 0.3f * float(t % 3) / 3.0f, flat.pixels[t * 3 + 1] = 0.5f, flat.pixels[t * 3 + 2] = 1.0f;
+    const Bytes8Map f8 = as_bytes8(flat);
+    auto rows = bake_texture_rows(f8.map, nullptr, 0, 0.5f, {}, [](const TextureBakeRows&) {});
+    ASSERT_TRUE(rows.ok());
+    EXPECT_TRUE(rows->notes.z_reconstructed);
+    Image srgb = random_normal_map(32, 32, 13, 0.2);  // pushed through the sRGB encode curve
+    for (float& v : srgb.pixels) v = v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1 / 2.4f) - 0.055f;
+    const Bytes8Map s8 = as_bytes8(srgb);
+    auto warned = bake_texture_rows(s8.map, nullptr, 0, 0.5f, {}, [](const TextureBakeRows&) {});
+    ASSERT_TRUE(warned.ok());
+    EXPECT_TRUE(warned->notes.looks_srgb);
+}
+
 TEST(TextureBake, SlopeSpaceLeanFoldsBaseRoughness) {
     // Flat normals: s = 0, so the second moments are the base lobe's slope variance alpha^2 / 2.
     Image nm(8, 8, 3);
