@@ -136,10 +136,17 @@ TextureBakeShape texture_bake_shape(const TextureMap& normal, const TextureMap* 
 Result<TextureBakeResult> bake_texture_rows(const Image& normal, const Image* roughness, int roughness_channel,
                                             float roughness_value, const TextureBakeSettings& settings,
                                             const TextureBakeRowSink& sink);
-// The same on maps in any TextureMap storage (8-bit inputs held as they were decoded).
+// Called on the bake's calling thread, between the sink's calls, once rows [0, rows) of `level` have all
+// gone to the sink; `rows` grows with each call for a level, up to the level's height. A caller can then
+// finish the data of those rows (the texture job zstd-compresses them) while the bake goes on.
+using TextureBakeRowsDone = std::function<void(int level, int rows)>;
+
+// The same on maps in any TextureMap storage (8-bit inputs held as they were decoded). With `rows_done`,
+// the largest levels are baked in bands of rows from the top down (each band on all threads), reported as
+// each band is done; the values are the same.
 Result<TextureBakeResult> bake_texture_rows(const TextureMap& normal, const TextureMap* roughness, int roughness_channel,
                                             float roughness_value, const TextureBakeSettings& settings,
-                                            const TextureBakeRowSink& sink);
+                                            const TextureBakeRowSink& sink, const TextureBakeRowsDone& rows_done = {});
 
 // Number of mip levels of a W x H chain: 1 + floor(log2(max(W, H))).
 int mip_level_count(int width, int height);

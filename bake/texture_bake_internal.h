@@ -58,6 +58,8 @@ inline bool has_avx2() {
 // and how many levels above the base it covers at most.
 constexpr int kTileTexels = 512;
 constexpr int kMaxFusedLevels = 4;
+// Base rows per band of that pass when the caller follows the rows done (TextureBakeRowsDone).
+constexpr int kBandBaseRows = 128;
 
 // Per-texel linear quantities, in this order; the ORM and slope groups are present only when needed.
 enum Channel : int { kPx, kPy, kPz, kPxx, kPyy, kPxy, kA, kCore };
@@ -197,6 +199,6 @@ void run_with_threads(int threads, Fn&& fn) {
 // The bake proper, on validated inputs (texture_bake_levels.cpp).
 Result<TextureBakeResult> bake_validated(const TextureMap& normal, const TextureMap* roughness, int roughness_channel,
                                          float roughness_value, const TextureBakeSettings& settings,
-                                         const TextureBakeRowSink& sink);
+                                         const TextureBakeRowSink& sink, const TextureBakeRowsDone& rows_done = {});
 
 }  // namespace specbake::texture_bake_detail

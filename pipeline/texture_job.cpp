@@ -8,6 +8,7 @@
 #include "io/image_io.h"
 #include "io/sha256.h"
 
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
 #include <algorithm>
@@ -15,6 +16,8 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <mutex>
+#include <optional>
 
 namespace specbake {
 namespace fs = std::filesystem;
@@ -332,6 +335,21 @@ Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, cons
     for (int L = 0; L < shape.levels; ++L)
         total_texels += double(std::max(1, shape.width >> L)) * double(std::max(1, shape.height >> L));
     std::atomic<size_t> texels_done{0};
+    // zstd-supercompressed KTX2 files compress their levels' rows as the bake finishes them, top down, so
+    // neither a whole level's raw bytes nor the raw file are held (io::EncodedTexture::compress_rows).
+    std::vector<size_t> streamed;
+    for (size_t i = 0; i < files.size(); ++i)
+        if (out.textures[i]->supercompressed() && out.files[i].block == io::BlockFormat::None) streamed.push_back(i);
+    std::optional<Error> stream_error;
+    std::mutex stream_error_lock;
+    const TextureBakeRowsDone rows_done = [&](int level, int rows) {
+        tbb::parallel_for(size_t(0), streamed.size(), [&](size_t k) {
+            if (auto ok = out.textures[streamed[k]]->compress_rows(level, rows); !ok) {
+                std::lock_guard<std::mutex> lock(stream_error_lock);
+                if (!stream_error) stream_error = make_error(files[streamed[k]].stem + ": " + ok.error().message);
+            }
+        });
+    };
     auto baked = bake_texture_rows(maps.normal, maps.roughness, channel, in.roughness_value, settings,
                                    [&](const TextureBakeRows& r) {
                                        if (fraction)
@@ -342,8 +360,10 @@ Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, cons
                                                                       rows_of(r, files[i].chain),
                                                                      chain_channels(shape, files[i].chain),
                                                                      files[i].first);
-                                   });
+                                   },
+                                   streamed.empty() ? TextureBakeRowsDone{} : rows_done);
     if (!baked) return name_error(baked.error(), in.normal_name, in.roughness_name);
+    if (stream_error) return *stream_error;
     out.notes = baked->notes;
     out.max_roughness_change = baked->max_roughness_change;
     return out;
