@@ -529,6 +529,53 @@ TEST(TextureBake, EightBitMapsBakeAsTheirDecodedFloats) {
     EXPECT_TRUE(warned->notes.looks_srgb);
 }
 
+// With a rows-done callback the rows reported done for a level have all reached the sink, the reports grow
+// to the level's height, and the values are those of the bake without it.
+TEST(TextureBake, RowsDoneFollowTheSinkTopDown) {
+    for (const auto& [W, H] : {std::pair{512, 512}, std::pair{96, 1040}, std::pair{37, 23}}) {
+        SCOPED_TRACE(std::to_string(W) + "x" + std::to_string(H));
+        const Image nm = random_normal_map(W, H, 31, 0.3);
+        const Image orm = random_orm(W, H, 32);
+        TextureBakeSettings s;
+        s.threads = 2;
+        auto chains = bake_texture(nm, &orm, 1, 0, s);
+        ASSERT_TRUE(chains.ok());
+        const int levels = mip_level_count(W, H);
+        std::mutex m;
+        auto sunk = std::vector<std::vector<char>>(size_t(levels));
+        for (int L = 0; L < levels; ++L) sunk[size_t(L)].assign(chains->roughness.levels[size_t(L)].texel_count(), 0);
+        std::vector<int> done(size_t(levels), 0);
+        bool in_order = true, complete = true, equal = true;
+        int reports = 0;
+        const TextureMap n = TextureMap::of(nm), r = TextureMap::of(orm);
+        auto rows = bake_texture_rows(
+            n, &r, 1, 0, s,
+            [&](const TextureBakeRows& b) {
+                std::lock_guard<std::mutex> lock(m);
+                const Image& level = chains->roughness.levels[size_t(b.level)];
+                for (int y = b.y0; y < b.y0 + b.rows; ++y)
+                    for (int x = b.x0; x < b.x0 + b.width; ++x) sunk[size_t(b.level)][size_t(y) * level.width + x] = 1;
+                for (int k = 0; k < b.rows; ++k)
+                    equal = equal && !std::memcmp(b.roughness + size_t(k) * b.width * 3, level.texel(b.x0, b.y0 + k),
+                                                  size_t(b.width) * 3 * sizeof(float));
+            },
+            [&](int level, int upto) {
+                ++reports;
+                in_order = in_order && upto >= done[size_t(level)];
+                done[size_t(level)] = upto;
+                const Image& l = chains->roughness.levels[size_t(level)];
+                for (size_t i = 0; i < size_t(upto) * size_t(l.width); ++i) complete = complete && sunk[size_t(level)][i];
+            });
+        ASSERT_TRUE(rows.ok());
+        EXPECT_TRUE(in_order);
+        EXPECT_TRUE(complete) << "a row was reported done before it reached the sink";
+        EXPECT_TRUE(equal);
+        for (int L = 0; L < levels; ++L) EXPECT_EQ(done[size_t(L)], std::max(1, H >> L)) << "level " << L;
+        if (H >= 512) EXPECT_GT(reports, levels) << "the largest levels come in bands";
+        EXPECT_EQ(rows->max_roughness_change, chains->max_roughness_change);
+    }
+}
+
 TEST(TextureBake, SlopeSpaceLeanFoldsBaseRoughness) {
     // Flat normals: s = 0, so the second moments are the base lobe's slope variance alpha^2 / 2.
     Image nm(8, 8, 3);
