@@ -74,9 +74,11 @@ TextureBakeShape texture_bake_shape(const Image& normal, const Image* roughness,
 
 Result<TextureBakeResult> bake_texture_rows(const TextureMap& normal, const TextureMap* roughness, int roughness_channel,
                                             float roughness_value, const TextureBakeSettings& settings,
-                                            const TextureBakeRowSink& sink, const TextureBakeRowsDone& rows_done) {
+                                            const TextureBakeRowSink& sink, const TextureBakeRowsDone& rows_done,
+                                            const TextureBakeInputsDone& inputs_done) {
     if (auto ok = validate(normal, roughness, roughness_channel, roughness_value); !ok) return ok.error();
-    return bake_validated(normal, roughness, roughness_channel, roughness_value, settings, sink, rows_done);
+    return bake_validated(normal, roughness, roughness_channel, roughness_value, settings, sink, rows_done,
+                          inputs_done);
 }
 
 Result<TextureBakeResult> bake_texture_rows(const Image& normal, const Image* roughness, int roughness_channel,

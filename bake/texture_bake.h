@@ -140,13 +140,18 @@ Result<TextureBakeResult> bake_texture_rows(const Image& normal, const Image* ro
 // gone to the sink; `rows` grows with each call for a level, up to the level's height. A caller can then
 // finish the data of those rows (the texture job zstd-compresses them) while the bake goes on.
 using TextureBakeRowsDone = std::function<void(int level, int rows)>;
+// Called there too once rows [0, rows) of the normal map, and of a roughness map of the same size, will not
+// be read again: a caller can release them (a roughness map of another size is read before the bands).
+// Only for 8-bit maps (float maps are read again to name a non-finite texel) baked with rows_done.
+using TextureBakeInputsDone = std::function<void(int rows)>;
 
 // The same on maps in any TextureMap storage (8-bit inputs held as they were decoded). With `rows_done`,
 // the largest levels are baked in bands of rows from the top down (each band on all threads), reported as
 // each band is done; the values are the same.
 Result<TextureBakeResult> bake_texture_rows(const TextureMap& normal, const TextureMap* roughness, int roughness_channel,
                                             float roughness_value, const TextureBakeSettings& settings,
-                                            const TextureBakeRowSink& sink, const TextureBakeRowsDone& rows_done = {});
+                                            const TextureBakeRowSink& sink, const TextureBakeRowsDone& rows_done = {},
+                                            const TextureBakeInputsDone& inputs_done = {});
 
 // Number of mip levels of a W x H chain: 1 + floor(log2(max(W, H))).
 int mip_level_count(int width, int height);

@@ -199,6 +199,7 @@ void run_with_threads(int threads, Fn&& fn) {
 // The bake proper, on validated inputs (texture_bake_levels.cpp).
 Result<TextureBakeResult> bake_validated(const TextureMap& normal, const TextureMap* roughness, int roughness_channel,
                                          float roughness_value, const TextureBakeSettings& settings,
-                                         const TextureBakeRowSink& sink, const TextureBakeRowsDone& rows_done = {});
+                                         const TextureBakeRowSink& sink, const TextureBakeRowsDone& rows_done = {},
+                                         const TextureBakeInputsDone& inputs_done = {});
 
 }  // namespace specbake::texture_bake_detail

@@ -9,6 +9,8 @@
 #include "io/sha256.h"
 
 #include <tbb/parallel_for.h>
+#include <sys/mman.h>
+#include <unistd.h>
 #include <tbb/parallel_invoke.h>
 
 #include <algorithm>
@@ -152,6 +154,14 @@ int chain_channels(const TextureBakeShape& shape, Chain c) {
         case Chain::Lean: return shape.lean_channels;
     }
     return 0;
+}
+
+// Returns the whole pages of [p, p + bytes) to the system (they read as zeroes afterwards).
+void release_pages(const uint8_t* p, size_t bytes) {
+    const uintptr_t page = uintptr_t(sysconf(_SC_PAGESIZE));
+    const uintptr_t from = (reinterpret_cast<uintptr_t>(p) + page - 1) & ~(page - 1);
+    const uintptr_t to = (reinterpret_cast<uintptr_t>(p) + bytes) & ~(page - 1);
+    if (to > from) madvise(reinterpret_cast<void*>(from), to - from, MADV_DONTNEED);
 }
 
 // The maps of `in` as the bake reads them: the 8-bit views where set, else the float images.
@@ -350,6 +360,12 @@ Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, cons
             }
         });
     };
+    // The 8-bit maps' rows are returned to the system once the bake is past them (the job's own buffers).
+    const TextureBakeInputsDone release_inputs = [&](int rows) {
+        if (!in.release_rows) return;
+        for (const TextureMap* m : {&maps.normal, maps.roughness})
+            if (m && m->u8 && m->height == maps.normal.height) release_pages(m->u8, size_t(rows) * m->row_stride);
+    };
     auto baked = bake_texture_rows(maps.normal, maps.roughness, channel, in.roughness_value, settings,
                                    [&](const TextureBakeRows& r) {
                                        if (fraction)
@@ -361,7 +377,7 @@ Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, cons
                                                                      chain_channels(shape, files[i].chain),
                                                                      files[i].first);
                                    },
-                                   streamed.empty() ? TextureBakeRowsDone{} : rows_done);
+                                   streamed.empty() ? TextureBakeRowsDone{} : rows_done, release_inputs);
     if (!baked) return name_error(baked.error(), in.normal_name, in.roughness_name);
     if (stream_error) return *stream_error;
     out.notes = baked->notes;
@@ -482,6 +498,7 @@ Result<TextureJobOutcome> run_texture_job(const TextureJob& job) {
     };
     in.normal = &normal.image;
     if (!normal.bytes8.empty()) in.normal = nullptr, in.normal_map = bytes_map(normal.bytes8);
+    in.release_rows = true;  // the job's own buffers, dropped after the bake
     in.normal_bits = normal.info.is_float ? 16 : normal.info.bits_per_channel;
     if (have_roughness) {
         in.roughness = &roughness.image;

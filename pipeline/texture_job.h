@@ -71,6 +71,9 @@ struct TextureInputs {
     // images' memory): used by bake_texture_encoded in place of `normal` / `roughness` when their channels
     // are set. The float-chain path (bake_texture_inputs) reads only the images.
     TextureMap normal_map, roughness_map;
+    // The caller drops the 8-bit maps after the bake: their rows may be returned to the system (read as
+    // zeroes) once the bake is past them.
+    bool release_rows = false;
 };
 
 struct TextureOutputsWritten {

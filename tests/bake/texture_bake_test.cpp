@@ -529,6 +529,43 @@ TEST(TextureBake, EightBitMapsBakeAsTheirDecodedFloats) {
     EXPECT_TRUE(warned->notes.looks_srgb);
 }
 
+// Input rows reported as no longer read can be overwritten (a caller releases them) without changing any
+// output: here they are poisoned as soon as they are reported.
+TEST(TextureBake, InputRowsReportedDoneAreNotReadAgain) {
+    for (const auto& [W, H] : {std::pair{256, 512}, std::pair{512, 96}}) {
+        SCOPED_TRACE(std::to_string(W) + "x" + std::to_string(H));
+        Bytes8Map n8 = as_bytes8(random_normal_map(W, H, 41, 0.3));
+        Bytes8Map r8 = as_bytes8(random_orm(W, H, 42));
+        TextureBakeSettings s;
+        s.threads = 2;
+        auto reference = bake_texture(n8.decoded, &r8.decoded, 1, 0, s);
+        ASSERT_TRUE(reference.ok());
+        std::mutex m;
+        bool equal = true;
+        int released = 0;
+        auto rows = bake_texture_rows(
+            n8.map, &r8.map, 1, 0, s,
+            [&](const TextureBakeRows& b) {
+                std::lock_guard<std::mutex> lock(m);
+                const Image& level = reference->lean.levels[size_t(b.level)];
+                for (int k = 0; k < b.rows; ++k)
+                    equal = equal && !std::memcmp(b.lean + size_t(k) * b.width * 5, level.texel(b.x0, b.y0 + k),
+                                                  size_t(b.width) * 5 * sizeof(float));
+            },
+            [](int, int) {},
+            [&](int upto) {
+                EXPECT_GE(upto, released);
+                for (Bytes8Map* b : {&n8, &r8})
+                    std::fill_n(b->bytes.begin(), size_t(upto) * b->map.row_stride, uint8_t(0x5A));
+                released = upto;
+            });
+        ASSERT_TRUE(rows.ok());
+        EXPECT_TRUE(equal);
+        EXPECT_EQ(released, H);
+        EXPECT_EQ(rows->max_roughness_change, reference->max_roughness_change);
+    }
+}
+
 // With a rows-done callback the rows reported done for a level have all reached the sink, the reports grow
 // to the level's height, and the values are those of the bake without it.
 TEST(TextureBake, RowsDoneFollowTheSinkTopDown) {
