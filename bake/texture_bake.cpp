@@ -44,6 +44,7 @@ void allocate_chain(MipChain& chain, int W, int H, int levels, int channels) {
 using texture_bake_detail::bake_validated;
 using texture_bake_detail::run_with_threads;
 using texture_bake_detail::validate;
+using texture_bake_detail::validate_buffers;
 
 int mip_level_count(int width, int height) {
     int n = 1;
@@ -51,7 +52,7 @@ int mip_level_count(int width, int height) {
     return n;
 }
 
-TextureBakeShape texture_bake_shape(const Image& normal, const Image* roughness, int roughness_channel,
+TextureBakeShape texture_bake_shape(const TextureMap& normal, const TextureMap* roughness, int roughness_channel,
                                     const TextureBakeSettings& settings) {
     TextureBakeShape shape;
     shape.width = normal.width, shape.height = normal.height;
@@ -65,24 +66,45 @@ TextureBakeShape texture_bake_shape(const Image& normal, const Image* roughness,
     return shape;
 }
 
+TextureBakeShape texture_bake_shape(const Image& normal, const Image* roughness, int roughness_channel,
+                                    const TextureBakeSettings& settings) {
+    const TextureMap r = roughness ? TextureMap::of(*roughness) : TextureMap{};
+    return texture_bake_shape(TextureMap::of(normal), roughness ? &r : nullptr, roughness_channel, settings);
+}
+
+Result<TextureBakeResult> bake_texture_rows(const TextureMap& normal, const TextureMap* roughness, int roughness_channel,
+                                            float roughness_value, const TextureBakeSettings& settings,
+                                            const TextureBakeRowSink& sink, const TextureBakeRowsDone& rows_done,
+                                            const TextureBakeInputsDone& inputs_done) {
+    if (auto ok = validate(normal, roughness, roughness_channel, roughness_value); !ok) return ok.error();
+    return bake_validated(normal, roughness, roughness_channel, roughness_value, settings, sink, rows_done,
+                          inputs_done);
+}
+
 Result<TextureBakeResult> bake_texture_rows(const Image& normal, const Image* roughness, int roughness_channel,
                                             float roughness_value, const TextureBakeSettings& settings,
                                             const TextureBakeRowSink& sink) {
-    if (auto ok = validate(normal, roughness, roughness_channel, roughness_value); !ok) return ok.error();
-    return bake_validated(normal, roughness, roughness_channel, roughness_value, settings, sink);
+    if (auto ok = validate_buffers(normal, roughness); !ok) return ok.error();
+    const TextureMap r = roughness ? TextureMap::of(*roughness) : TextureMap{};
+    return bake_texture_rows(TextureMap::of(normal), roughness ? &r : nullptr, roughness_channel, roughness_value,
+                             settings, sink);
 }
 
 Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughness, int roughness_channel,
                                        float roughness_value, const TextureBakeSettings& settings) {
-    if (auto ok = validate(normal, roughness, roughness_channel, roughness_value); !ok) return ok.error();
+    if (auto ok = validate_buffers(normal, roughness); !ok) return ok.error();
+    const TextureMap normal_map = TextureMap::of(normal);
+    const TextureMap roughness_map = roughness ? TextureMap::of(*roughness) : TextureMap{};
+    const TextureMap* rough = roughness ? &roughness_map : nullptr;
+    if (auto ok = validate(normal_map, rough, roughness_channel, roughness_value); !ok) return ok.error();
     const TextureBakeShape shape = texture_bake_shape(normal, roughness, roughness_channel, settings);
-    MipChain rough, kern, lean, nrm;
+    MipChain rough_chain, kern, lean, nrm;
     // The chains are allocated (and zero-filled) on two threads: LEAN, the widest, against the other three.
     run_with_threads(settings.threads, [&] {
         tbb::parallel_invoke(
             [&] { allocate_chain(lean, shape.width, shape.height, shape.levels, shape.lean_channels); },
             [&] {
-                allocate_chain(rough, shape.width, shape.height, shape.levels, shape.roughness_channels);
+                allocate_chain(rough_chain, shape.width, shape.height, shape.levels, shape.roughness_channels);
                 allocate_chain(kern, shape.width, shape.height, shape.levels, shape.kernel_channels);
                 allocate_chain(nrm, shape.width, shape.height, shape.levels, shape.normal_channels);
             });
@@ -94,15 +116,15 @@ Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughne
         for (int k = 0; k < r.rows; ++k)
             std::memcpy(level.texel(r.x0, r.y0 + k), src + size_t(k) * row_floats, row_floats * sizeof(float));
     };
-    auto baked = bake_validated(normal, roughness, roughness_channel, roughness_value, settings,
+    auto baked = bake_validated(normal_map, rough, roughness_channel, roughness_value, settings,
                                 [&](const TextureBakeRows& r) {
-                                    copy_rows(rough, r, r.roughness);
+                                    copy_rows(rough_chain, r, r.roughness);
                                     copy_rows(kern, r, r.kernel);
                                     copy_rows(lean, r, r.lean);
                                     copy_rows(nrm, r, r.normal);
                                 });
     if (!baked) return baked;
-    baked->roughness = std::move(rough);
+    baked->roughness = std::move(rough_chain);
     baked->kernel = std::move(kern);
     baked->lean = std::move(lean);
     baked->normal = std::move(nrm);

@@ -14,6 +14,8 @@
 #include "bake/isotropic_filter.h"
 #include "core/result.h"
 
+#include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <optional>
 #include <string>
@@ -57,6 +59,27 @@ struct TextureBakeNotes {
     bool roughness_resampled = false;     // roughness map resolution differs from the normal map's
     long long degenerate_normals = 0;     // texels whose decoded vector had zero length (treated as +Z)
     std::vector<std::string> warnings;    // one line each, ready to print
+};
+
+// An input map as the bake reads it: `channels` interleaved values per texel, row y starting `row_stride`
+// values after row y - 1. The values are floats, or 8-bit integers v standing for float(v) * (1.0f / 255.0f),
+// the value io/image_io.h decodes them to, so a bake of the integers equals the bake of the decoded floats
+// while holding a quarter of the memory. Exactly one of f32 and u8 is set. The memory is the caller's.
+struct TextureMap {
+    int width = 0, height = 0, channels = 0;
+    size_t row_stride = 0;
+    const float* f32 = nullptr;
+    const uint8_t* u8 = nullptr;
+
+    static TextureMap of(const Image& image) {
+        return {image.width, image.height, image.channels, size_t(image.width) * size_t(image.channels),
+                image.pixels.data(), nullptr};
+    }
+    bool empty() const { return width <= 0 || height <= 0 || channels <= 0; }
+    float value(int x, int y, int c) const {
+        const size_t i = size_t(y) * row_stride + size_t(x) * size_t(channels) + size_t(c);
+        return f32 ? f32[i] : float(u8[i]) * (1.0f / 255.0f);
+    }
 };
 
 // Mip chains, level 0 first, each as large as the normal map's chain. Empty when not requested.
@@ -105,12 +128,30 @@ struct TextureBakeShape {
 };
 TextureBakeShape texture_bake_shape(const Image& normal, const Image* roughness, int roughness_channel,
                                     const TextureBakeSettings& settings);
+TextureBakeShape texture_bake_shape(const TextureMap& normal, const TextureMap* roughness, int roughness_channel,
+                                    const TextureBakeSettings& settings);
 
 // bake_texture() without materialising the chains: every finished block of texels goes to `sink`, so a
 // caller can encode outputs straight into their containers. The returned result has empty chains.
 Result<TextureBakeResult> bake_texture_rows(const Image& normal, const Image* roughness, int roughness_channel,
                                             float roughness_value, const TextureBakeSettings& settings,
                                             const TextureBakeRowSink& sink);
+// Called on the bake's calling thread, between the sink's calls, once rows [0, rows) of `level` have all
+// gone to the sink; `rows` grows with each call for a level, up to the level's height. A caller can then
+// finish the data of those rows (the texture job zstd-compresses them) while the bake goes on.
+using TextureBakeRowsDone = std::function<void(int level, int rows)>;
+// Called there too once rows [0, rows) of the normal map, and of a roughness map of the same size, will not
+// be read again: a caller can release them (a roughness map of another size is read before the bands).
+// Only for 8-bit maps (float maps are read again to name a non-finite texel) baked with rows_done.
+using TextureBakeInputsDone = std::function<void(int rows)>;
+
+// The same on maps in any TextureMap storage (8-bit inputs held as they were decoded). With `rows_done`,
+// the largest levels are baked in bands of rows from the top down (each band on all threads), reported as
+// each band is done; the values are the same.
+Result<TextureBakeResult> bake_texture_rows(const TextureMap& normal, const TextureMap* roughness, int roughness_channel,
+                                            float roughness_value, const TextureBakeSettings& settings,
+                                            const TextureBakeRowSink& sink, const TextureBakeRowsDone& rows_done = {},
+                                            const TextureBakeInputsDone& inputs_done = {});
 
 // Number of mip levels of a W x H chain: 1 + floor(log2(max(W, H))).
 int mip_level_count(int width, int height);

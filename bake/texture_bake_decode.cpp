@@ -75,8 +75,14 @@ std::vector<Span1D> footprint_spans(int src, int n) {
     return spans;
 }
 
-void Decoder::decode_normal(int x, int y, double n[3], bool& degenerate, bool& non_finite) const {
-    const float* c = normal.texel(x, y);
+float* scratch_floats(size_t n, int which) {
+    thread_local std::vector<float> rows[2];
+    std::vector<float>& r = rows[which];
+    if (r.size() < n) r.resize(n);
+    return r.data();
+}
+
+void Decoder::decode_normal(const float* c, double n[3], bool& degenerate, bool& non_finite) const {
     if (!std::isfinite(c[0]) || !std::isfinite(c[1]) || (!reconstruct && !std::isfinite(c[2]))) non_finite = true;
     double nx = 2.0 * c[0] - 1.0;
     double ny = 2.0 * c[1] - 1.0;
@@ -102,15 +108,16 @@ long long Decoder::decode_normal_span(int y, int x0, int n, double* nx, double* 
     long long degenerate_count = 0;
     bool non_finite = false;
     int x = 0;
+    const float* row = row_floats(normal, y, x0, n, normal.f32 ? nullptr : scratch_floats(size_t(n) * normal.channels, 0));
 #if defined(SPECBAKE_AVX2)
     if (has_avx2())
-        x = decode_normals_avx2(normal.texel(x0, y), normal.channels, n, reconstruct, flip_y, nx, ny, nz, xx, yy,
-                                xy, degenerate_count, non_finite);
+        x = decode_normals_avx2(row, normal.channels, n, reconstruct, flip_y, nx, ny, nz, xx, yy, xy,
+                                degenerate_count, non_finite);
 #endif
     for (; x < n; ++x) {
         double v[3];
         bool degenerate = false;
-        decode_normal(x0 + x, y, v, degenerate, non_finite);
+        decode_normal(row + size_t(x) * size_t(normal.channels), v, degenerate, non_finite);
         degenerate_count += degenerate;
         nx[x] = v[0], ny[x] = v[1], nz[x] = v[2];
         xx[x] = v[0] * v[0], yy[x] = v[1] * v[1], xy[x] = v[0] * v[1];
@@ -138,7 +145,8 @@ long long Decoder::decode_span(int y, int x0, int W, double* v, float* r0) const
             for (int x = 0; x < W; ++x) occlusion[x] = r[3 * size_t(x) + 1], metallic[x] = r[3 * size_t(x) + 2];
     } else if (roughness) {
         const int ch = roughness->channels;
-        const float* t = roughness->texel(x0, y);
+        const float* t = row_floats(*roughness, y, x0, W,
+                                    roughness->f32 ? nullptr : scratch_floats(size_t(W) * size_t(ch), 1));
         int done = 0;
         bool non_finite = false;
 #if defined(SPECBAKE_AVX2)
@@ -175,7 +183,7 @@ long long Decoder::decode_span(int y, int x0, int W, double* v, float* r0) const
 
 // Area-weighted resampling of the roughness map onto the normal map's texel grid: each normal texel reads
 // the mean alpha^2 (and ORM R, B) of the roughness texels it covers.
-std::vector<double> resample_roughness(const Image& rough, int channel, bool orm, int W, int H) {
+std::vector<double> resample_roughness(const TextureMap& rough, int channel, bool orm, int W, int H) {
     const std::vector<Span1D> sx = footprint_spans(rough.width, W);
     const std::vector<Span1D> sy = footprint_spans(rough.height, H);
     const double area = (double(rough.width) / W) * (double(rough.height) / H);
@@ -189,10 +197,10 @@ std::vector<double> resample_roughness(const Image& rough, int channel, bool orm
                 for (size_t j = 0; j < fy.weight.size(); ++j) {
                     for (size_t i = 0; i < fx.weight.size(); ++i) {
                         const double w = fy.weight[j] * fx.weight[i];
-                        const float* t = rough.texel(fx.first + int(i), fy.first + int(j));
-                        const double r = std::clamp(double(t[channel]), 0.0, 1.0);
+                        const int tx = fx.first + int(i), ty = fy.first + int(j);
+                        const double r = std::clamp(double(rough.value(tx, ty, channel)), 0.0, 1.0);
                         acc[0] += w * (r * r) * (r * r);
-                        if (orm) acc[1] += w * t[0], acc[2] += w * t[2];
+                        if (orm) acc[1] += w * rough.value(tx, ty, 0), acc[2] += w * rough.value(tx, ty, 2);
                     }
                 }
                 double* o = out.data() + (size_t(y) * W + x) * 3;

@@ -19,20 +19,29 @@ double srgb_to_linear(double c) { return c <= 0.04045 ? c / 12.92 : std::pow((c 
 
 }  // namespace
 
-bool blue_is_constant_full_scale(const Image& n) {
+bool blue_is_constant_full_scale(const TextureMap& n) {
     if (n.channels < 3) return false;
-    const float first = n.pixels[2];
+    const float first = n.value(0, 0, 2);
     if (!(first >= 1.0f - 1.0f / 512.0f)) return false;
-    const size_t count = n.texel_count();
-    for (size_t i = 0; i < count; ++i) {
-        if (n.pixels[i * n.channels + 2] != first) return false;
+    const size_t ch = size_t(n.channels);
+    for (int y = 0; y < n.height; ++y) {
+        const size_t row = size_t(y) * n.row_stride + 2;
+        if (n.f32) {
+            for (size_t i = 0; i < size_t(n.width); ++i)
+                if (n.f32[row + i * ch] != first) return false;
+        } else {
+            // One integer code stands for one float value, so the codes are compared.
+            const uint8_t code = n.u8[2];
+            for (size_t i = 0; i < size_t(n.width); ++i)
+                if (n.u8[row + i * ch] != code) return false;
+        }
     }
     return true;
 }
 
 // A tangent-space normal map stored through an sRGB encode decodes to vectors far from unit length
 // (flat (0.5, 0.5, 1) becomes (0.735, 0.735, 1)); decoding the sRGB curve first brings them back.
-bool looks_srgb_encoded(const Image& n) {
+bool looks_srgb_encoded(const TextureMap& n) {
     if (n.channels < 3) return false;
     // Values of 8-bit inputs (most maps; within float rounding of a code k / 255) take the curve from a
     // table of the 256 codes instead of a pow() per value: this only decides a warning.
@@ -50,11 +59,12 @@ bool looks_srgb_encoded(const Image& n) {
     double dev_linear = 0.0, dev_srgb = 0.0;
     size_t samples = 0;
     auto sample = [&](size_t i) {
-        const float* c = n.pixels.data() + i * n.channels;
+        const int x = int(i % size_t(n.width)), y = int(i / size_t(n.width));
         double l2 = 0.0, s2 = 0.0;
         for (int k = 0; k < 3; ++k) {
-            const double a = 2.0 * c[k] - 1.0;
-            const double b = 2.0 * linear(std::clamp(double(c[k]), 0.0, 1.0)) - 1.0;
+            const float c = n.value(x, y, k);
+            const double a = 2.0 * c - 1.0;
+            const double b = 2.0 * linear(std::clamp(double(c), 0.0, 1.0)) - 1.0;
             l2 += a * a;
             s2 += b * b;
         }
@@ -64,7 +74,7 @@ bool looks_srgb_encoded(const Image& n) {
     };
     // At most 16384 texels, as 256 runs of 64 consecutive texels spread over the map: runs are read at the
     // speed of memory, where single texels spread as widely each cost a cache miss.
-    const size_t count = n.texel_count();
+    const size_t count = size_t(n.width) * size_t(n.height);
     constexpr size_t kRuns = 256, kRun = 64;
     if (count <= kRuns * kRun) {
         for (size_t i = 0; i < count; ++i) sample(i);
@@ -78,30 +88,47 @@ bool looks_srgb_encoded(const Image& n) {
 }
 
 // "<what>: NaN or infinite value at texel (x, y)" for the first such texel of `image`.
-Error non_finite_error(const std::string& what, const Image& image) {
-    const auto bad = find_non_finite(image);
+Error non_finite_error(const std::string& what, const TextureMap& image) {
+    std::optional<std::pair<int, int>> bad;
+    for (int y = 0; y < image.height && image.f32 && !bad; ++y) {
+        Image row(image.width, 1, image.channels);
+        std::copy_n(image.f32 + size_t(y) * image.row_stride, row.pixels.size(), row.pixels.begin());
+        if (auto at = find_non_finite(row)) bad = std::pair<int, int>(at->first, y);
+    }
     return Error{what + ": NaN or infinite value" +
                  (bad ? " at texel (" + std::to_string(bad->first) + ", " + std::to_string(bad->second) + ")" : "")};
 }
 
 // Checks of the inputs' shapes and of the parts that are not read texel by texel in the decode (which
 // checks every value it reads for NaN and infinity itself).
-Result<void> validate(const Image& normal, const Image* roughness, int channel, float value) {
+Result<void> validate_buffers(const Image& normal, const Image* roughness) {
+    if (!normal.empty() && normal.pixels.size() != normal.texel_count() * size_t(normal.channels))
+        return make_error("normal map: pixel buffer does not match its size");
+    if (roughness && !roughness->empty() && roughness->pixels.size() != roughness->texel_count() * size_t(roughness->channels))
+        return make_error("roughness map: pixel buffer does not match its size");
+    return {};
+}
+
+// Checks of the inputs' shapes and of the parts that are not read texel by texel in the decode (which
+// checks every value it reads for NaN and infinity itself).
+Result<void> validate(const TextureMap& normal, const TextureMap* roughness, int channel, float value) {
     if (normal.empty()) return make_error("normal map: empty image (0x0)");
     if (normal.channels < 2)
         return make_error("normal map: has " + std::to_string(normal.channels) +
                           " channel; a normal map needs 2 (x, y) or 3+ (x, y, z) channels");
-    if (normal.pixels.size() != normal.texel_count() * size_t(normal.channels))
-        return make_error("normal map: pixel buffer does not match its size");
     if (roughness) {
         if (roughness->empty()) return make_error("roughness map: empty image (0x0)");
-        if (roughness->pixels.size() != roughness->texel_count() * size_t(roughness->channels))
-            return make_error("roughness map: pixel buffer does not match its size");
         if (channel < 0 || channel >= roughness->channels)
             return make_error("roughness map: channel " + std::to_string(channel) + " does not exist (the map has " +
                               std::to_string(roughness->channels) + ")");
         const bool resampled = roughness->width != normal.width || roughness->height != normal.height;
-        if (resampled && find_non_finite(*roughness)) return non_finite_error("roughness map", *roughness);
+        if (resampled && roughness->f32) {  // integers are always finite
+            for (int y = 0; y < roughness->height; ++y) {
+                const float* r = roughness->f32 + size_t(y) * roughness->row_stride;
+                for (size_t i = 0; i < size_t(roughness->width) * size_t(roughness->channels); ++i)
+                    if (!std::isfinite(r[i])) return non_finite_error("roughness map", *roughness);
+            }
+        }
     } else if (!(value >= 0.0f && value <= 1.0f)) {
         return make_error("roughness value " + std::to_string(value) + " is outside [0, 1]");
     }

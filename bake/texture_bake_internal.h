@@ -58,6 +58,8 @@ inline bool has_avx2() {
 // and how many levels above the base it covers at most.
 constexpr int kTileTexels = 512;
 constexpr int kMaxFusedLevels = 4;
+// Base rows per band of that pass when the caller follows the rows done (TextureBakeRowsDone).
+constexpr int kBandBaseRows = 128;
 
 // Per-texel linear quantities, in this order; the ORM and slope groups are present only when needed.
 enum Channel : int { kPx, kPy, kPz, kPxx, kPyy, kPxy, kA, kCore };
@@ -84,13 +86,27 @@ std::vector<Span1D> footprint_spans(int src, int n);
 inline double* plane(double* row, int c, int width) { return row + size_t(c) * size_t(width); }
 inline const double* plane(const double* row, int c, int width) { return row + size_t(c) * size_t(width); }
 
+// Floats of texels [x0, x0 + n) of row y of `m`: the map's own memory for a float map, else `scratch`
+// (n * channels floats) filled with the integers' values (TextureMap).
+inline const float* row_floats(const TextureMap& m, int y, int x0, int n, float* scratch) {
+    const size_t at = size_t(y) * m.row_stride + size_t(x0) * size_t(m.channels);
+    if (m.f32) return m.f32 + at;
+    const uint8_t* s = m.u8 + at;
+    const size_t count = size_t(n) * size_t(m.channels);
+    for (size_t i = 0; i < count; ++i) scratch[i] = float(s[i]) * (1.0f / 255.0f);
+    return scratch;
+}
+
+// A per-thread scratch row of at least n floats, for row_floats.
+float* scratch_floats(size_t n, int which);
+
 struct Decoder {
-    explicit Decoder(const Image& n) : normal(n) {}
-    const Image& normal;
+    explicit Decoder(const TextureMap& n) : normal(n) {}
+    TextureMap normal;
     bool reconstruct = false;
     bool flip_y = false;
     // Roughness: either read per texel from a same-size map, or from a resampled array (a, R, B).
-    const Image* roughness = nullptr;
+    const TextureMap* roughness = nullptr;
     int roughness_channel = 0;
     bool orm = false;
     std::vector<double> resampled;  // a, R, B per normal-map texel when the sizes differ
@@ -101,8 +117,9 @@ struct Decoder {
     // fails afterwards, naming the texel).
     mutable std::atomic<bool> normal_non_finite{false}, roughness_non_finite{false};
 
-    // Unit normal of base texel (x, y) in the +Y tangent frame; zero-length vectors decode to +Z.
-    void decode_normal(int x, int y, double n[3], bool& degenerate, bool& non_finite) const;
+    // Unit normal of the base texel whose channels are at c, in the +Y tangent frame; zero-length vectors
+    // decode to +Z.
+    void decode_normal(const float* c, double n[3], bool& degenerate, bool& non_finite) const;
 
     // Unit normals of base texels [x0, x0 + n) of row y into nx, ny, nz and their products into xx, yy,
     // xy; returns the degenerate count.
@@ -118,7 +135,7 @@ struct Decoder {
 
 // Area-weighted resampling of the roughness map onto the normal map's texel grid: each normal texel reads
 // the mean alpha^2 (and ORM R, B) of the roughness texels it covers.
-std::vector<double> resample_roughness(const Image& rough, int channel, bool orm, int W, int H);
+std::vector<double> resample_roughness(const TextureMap& rough, int channel, bool orm, int W, int H);
 
 // An array of n values left uninitialised (scratch that is written before it is read).
 template <class T>
@@ -155,16 +172,18 @@ int base_and_pairs(const Decoder& dec, int y, int bx, int n, const BaseRow rows[
 #endif
 
 // "<what>: NaN or infinite value at texel (x, y)" for the first such texel of `image` (texture_bake_inputs.cpp).
-Error non_finite_error(const std::string& what, const Image& image);
+Error non_finite_error(const std::string& what, const TextureMap& image);
 
 // Input analysis (texture_bake_inputs.cpp): a constant blue channel at full scale (z to reconstruct), and
 // values that look sRGB-encoded.
-bool blue_is_constant_full_scale(const Image& n);
-bool looks_srgb_encoded(const Image& n);
+bool blue_is_constant_full_scale(const TextureMap& n);
+bool looks_srgb_encoded(const TextureMap& n);
 
 // Checks of the inputs' shapes and of the parts that are not read texel by texel in the decode (which
 // checks every value it reads for NaN and infinity itself).
-Result<void> validate(const Image& normal, const Image* roughness, int channel, float value);
+Result<void> validate(const TextureMap& normal, const TextureMap* roughness, int channel, float value);
+// The float images' own check: a pixel buffer as large as their size says.
+Result<void> validate_buffers(const Image& normal, const Image* roughness);
 
 // Runs `fn` on `threads` threads (0: the calling arena, all available).
 template <class Fn>
@@ -178,8 +197,9 @@ void run_with_threads(int threads, Fn&& fn) {
 }
 
 // The bake proper, on validated inputs (texture_bake_levels.cpp).
-Result<TextureBakeResult> bake_validated(const Image& normal, const Image* roughness, int roughness_channel,
+Result<TextureBakeResult> bake_validated(const TextureMap& normal, const TextureMap* roughness, int roughness_channel,
                                          float roughness_value, const TextureBakeSettings& settings,
-                                         const TextureBakeRowSink& sink);
+                                         const TextureBakeRowSink& sink, const TextureBakeRowsDone& rows_done = {},
+                                         const TextureBakeInputsDone& inputs_done = {});
 
 }  // namespace specbake::texture_bake_detail

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
 #include <functional>
 
 namespace specbake::texture_bake_detail {
@@ -59,9 +60,10 @@ struct RowBlock {
 }  // namespace
 
 // The bake proper, on validated inputs.
-Result<TextureBakeResult> bake_validated(const Image& normal, const Image* roughness, int roughness_channel,
+Result<TextureBakeResult> bake_validated(const TextureMap& normal, const TextureMap* roughness, int roughness_channel,
                                          float roughness_value, const TextureBakeSettings& settings,
-                                         const TextureBakeRowSink& sink) {
+                                         const TextureBakeRowSink& sink, const TextureBakeRowsDone& rows_done,
+                                         const TextureBakeInputsDone& inputs_done) {
     TextureBakeResult result;
     TextureBakeNotes& notes = result.notes;
     const int W = normal.width, H = normal.height;
@@ -173,7 +175,7 @@ Result<TextureBakeResult> bake_validated(const Image& normal, const Image* rough
         std::vector<std::vector<double>> change(size_t(F) + 1);
         for (int L = 1; L <= F; ++L) change[size_t(L)].assign(size_t(level_h(L)), 0.0);
 
-        tbb::parallel_for(tbb::blocked_range<int>(0, hF), [&](const tbb::blocked_range<int>& rows) {
+        auto band = [&](const tbb::blocked_range<int>& rows) {
             // Per level: the finer rows under one row of it; its output rows are held until the rows under
             // one row of the next level are done, and go to the sink as one block.
             std::vector<std::unique_ptr<double[]>> fine(size_t(F) + 1);
@@ -242,7 +244,23 @@ Result<TextureBakeResult> bake_validated(const Image& normal, const Image* rough
                 }
             }
             degenerate += task_degenerate;
-        });
+        };
+        if (!rows_done) {
+            tbb::parallel_for(tbb::blocked_range<int>(0, hF), band);
+        } else {
+            // Bands of about kBandBaseRows base rows, top down; the rows of every fused level under them are done.
+            // Base rows are read again after the pass only by a later level that does not tile the one before.
+            // Float maps are read again to name a non-finite texel; integer maps hold none.
+            bool base_read_later = !normal.u8 || (roughness && !roughness->u8 && dec.resampled.empty());
+            for (int L = F + 1; L < levels; ++L) base_read_later = base_read_later || !tiles_previous(L);
+            const int step = std::max(1, kBandBaseRows / std::max(1, H / hF));
+            for (int b0 = 0; b0 < hF; b0 += step) {
+                const int b1 = std::min(hF, b0 + step);
+                tbb::parallel_for(tbb::blocked_range<int>(b0, b1, 1), band);
+                for (int L = 0; L <= F; ++L) rows_done(L, int(int64_t(b1) * level_h(L) / hF));
+                if (inputs_done && !base_read_later) inputs_done(int(int64_t(b1) * H / hF));
+            }
+        }
         for (int L = 1; L <= F; ++L) level_change[size_t(L)] = reduce_changes(change[size_t(L)]);
         previous.swap(current);
         return F + 1;
@@ -306,6 +324,7 @@ Result<TextureBakeResult> bake_validated(const Image& normal, const Image* rough
             });
             level_change[size_t(L)] = reduce_changes(row_change);
             previous.swap(current);
+            if (rows_done) rows_done(L, h);
         }
         result.max_roughness_change = reduce_changes(level_change);
     };

@@ -24,9 +24,18 @@ SPECBAKE_AVX2 int base_and_pairs_avx2(const Decoder& dec, int y, int bx, int n, 
     constexpr int C = kOrm ? kCore + 2 : kCore;
     const size_t normal_stride = kRgb ? 3 : size_t(dec.normal.channels);
     const size_t rough_stride = !kMap ? 0 : kRgb ? 3 : size_t(dec.roughness->channels);
-    const float* normal_row[2] = {dec.normal.texel(bx, y), dec.normal.texel(bx, y + 1)};
-    const float* rough_row[2] = {kMap ? dec.roughness->texel(bx, y) : nullptr,
-                                 kMap ? dec.roughness->texel(bx, y + 1) : nullptr};
+    n = std::min(n, kTileTexels / 2);  // a column tile's (the rest goes through the planes)
+    // Integer maps are converted for the 2 n texels read, in scratch rows of the thread.
+    const size_t span = 2 * size_t(n);
+    float* const normal_scratch = dec.normal.f32 ? nullptr : scratch_floats(2 * span * normal_stride, 0);
+    float* const rough_scratch = kMap && !dec.roughness->f32 ? scratch_floats(2 * span * rough_stride, 1) : nullptr;
+    const float* normal_row[2] = {
+        row_floats(dec.normal, y, bx, int(span), normal_scratch),
+        row_floats(dec.normal, y + 1, bx, int(span), normal_scratch ? normal_scratch + span * normal_stride : nullptr)};
+    const float* rough_row[2] = {
+        kMap ? row_floats(*dec.roughness, y, bx, int(span), rough_scratch) : nullptr,
+        kMap ? row_floats(*dec.roughness, y + 1, bx, int(span), rough_scratch ? rough_scratch + span * rough_stride : nullptr)
+             : nullptr};
     const bool reconstruct = !kRgb && dec.reconstruct, flip_y = dec.flip_y;
     const __m256d y_sign = _mm256_set1_pd(flip_y ? -0.0 : 0.0);
     const int channel = kOrm ? 1 : dec.roughness_channel;  // ORM: roughness is G
@@ -42,7 +51,6 @@ SPECBAKE_AVX2 int base_and_pairs_avx2(const Decoder& dec, int y, int bx, int n, 
     // inverse lengths are one long chain of latency, which the out-of-order core overlaps across iterations
     // of a short loop but not across the long one below.
     alignas(32) double unit[2][3][kTileTexels];
-    n = std::min(n, kTileTexels / 2);  // a column tile's (the rest goes through the planes)
     const int n4 = n & ~3;
     for (int r = 0; r < 2; ++r)
         for (int x = 0; x < 2 * n4; x += 4) {

@@ -147,7 +147,7 @@ Result<void> check_png_image_data(std::span<const uint8_t> b, const std::string&
     return {};
 }
 
-Result<DecodedImage> decode_image(const fs::path& path) {
+Result<DecodedImage> decode_image(const fs::path& path, bool keep_8bit) {
     const std::string name = path.string();
     std::error_code ec;
     if (!fs::exists(path, ec)) return make_error(name + ": no such file");
@@ -164,7 +164,7 @@ Result<DecodedImage> decode_image(const fs::path& path) {
             f.close();
             auto bytes = MappedFile::open(path);
             if (!bytes) return bytes.error();
-            return decode_image_memory(bytes->bytes(), name);
+            return decode_image_memory(bytes->bytes(), name, keep_8bit);
         }
     }
     auto oiio = oiio::api();
@@ -172,11 +172,12 @@ Result<DecodedImage> decode_image(const fs::path& path) {
     return (*oiio)->decode_file(name, input_policy().limits.texels);
 }
 
-Result<DecodedImage> decode_image_memory(std::span<const uint8_t> bytes, const std::string& name_for_errors) {
+Result<DecodedImage> decode_image_memory(std::span<const uint8_t> bytes, const std::string& name_for_errors,
+                                         bool keep_8bit) {
     if (bytes.empty()) return make_error(name_for_errors + ": no image data");
     if (auto ok = check_png_structure(bytes, name_for_errors); !ok) return ok.error();
     // Plain PNGs (most texture libraries) without loading OpenImageIO; the same values and facts.
-    if (auto png = decode_plain_png(bytes)) return std::move(*png);
+    if (auto png = decode_plain_png(bytes, keep_8bit)) return std::move(*png);
     if (auto ok = check_png_image_data(bytes, name_for_errors); !ok) return ok.error();
     if (auto ok = check_jpeg_markers(bytes, name_for_errors); !ok) return ok.error();
     // OpenImageIO picks the decoder from the name's extension; take it from the leading bytes instead.

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <span>
 #include <string>
+#include <vector>
 
 namespace specbake::io {
 
@@ -21,18 +22,31 @@ struct ImageInfo {
     std::string color_space;    // the colour space the file claims ("sRGB", "Linear", or empty); never applied
 };
 
+// 8-bit texels as stored, for callers that convert values as they read them: width x height texels of
+// `channels` bytes each, row y at data.data() + offset + y * row_bytes; value v stands for
+// float(v) * (1.0f / 255.0f), what `image` would hold. A quarter of the float image's memory.
+struct Bytes8 {
+    std::vector<uint8_t> data;
+    int width = 0, height = 0, channels = 0;
+    size_t offset = 0, row_bytes = 0;
+    bool empty() const { return data.empty(); }
+};
+
 struct DecodedImage {
-    Image image;
+    Image image;     // empty when `bytes8` holds the texels
     ImageInfo info;
+    Bytes8 bytes8;   // only when asked for (keep_8bit) and the file is a plain 8-bit PNG
 };
 
 // Reads the first subimage, level 0. Errors name the file ("<path>: <problem>"): missing, unreadable,
 // unknown format, truncated, 0x0, more than 2^15 texels per side. Non-finite values are returned as is
-// (callers validate; see has_non_finite()).
-Result<DecodedImage> decode_image(const std::filesystem::path& path);
+// (callers validate; see has_non_finite()). keep_8bit: a plain 8-bit PNG (io/png_decode.h) comes back in
+// `bytes8`, its rows as they were inflated (no copy), `image` empty; every other file as `image`.
+Result<DecodedImage> decode_image(const std::filesystem::path& path, bool keep_8bit = false);
 
 // Same, from bytes in memory (embedded GLB images); `name_for_errors` is used in place of a path.
-Result<DecodedImage> decode_image_memory(std::span<const uint8_t> bytes, const std::string& name_for_errors);
+Result<DecodedImage> decode_image_memory(std::span<const uint8_t> bytes, const std::string& name_for_errors,
+                                         bool keep_8bit = false);
 
 // The chunk structure of a PNG (lengths, CRCs, IHDR fields) and its size against the texel limit
 // (io/input_policy.h), from the bytes alone; anything that is not a PNG passes.

@@ -188,20 +188,26 @@ Result<Ktx2Pieces> ktx2_zstd_pieces(std::span<const uint8_t> raw, const Containe
     });
     for (const std::string& e : errors)
         if (!e.empty()) return make_error("zstd: " + e);
+    out.header = ktx2_zstd_header(raw, out.level_size);
+    return out;
+}
+
+std::vector<uint8_t> ktx2_zstd_header(std::span<const uint8_t> raw, const std::vector<size_t>& level_size) {
     // Header, index, descriptor and key/value data (the last part before the levels; no global data);
     // the alignment padding of the uncompressed layout is dropped.
     const size_t header_end = size_t(get32(raw, 56)) + get32(raw, 60);
-    out.header.assign(raw.begin(), raw.begin() + long(header_end));
-    put32(out.header, 44, 2);  // supercompressionScheme: Zstandard
+    std::vector<uint8_t> header(raw.begin(), raw.begin() + long(header_end));
+    put32(header, 44, 2);  // supercompressionScheme: Zstandard
     size_t at = header_end;
-    for (size_t i = levels; i-- > 0;) {
+    for (size_t i = level_size.size(); i-- > 0;) {
         const size_t entry = kHeaderBytes + kLevelIndexEntry * i;
-        put64(out.header, entry, at);
-        put64(out.header, entry + 8, out.level_size[i]);
-        put64(out.header, entry + 16, raw_length[i]);
-        at += out.level_size[i];
+        const uint64_t raw_length = get64(raw, entry + 8);
+        put64(header, entry, at);
+        put64(header, entry + 8, level_size[i]);
+        put64(header, entry + 16, raw_length);
+        at += level_size[i];
     }
-    return out;
+    return header;
 }
 
 Result<std::vector<uint8_t>> ktx2_zstd(std::span<const uint8_t> raw, const ContainerLayout& layout, int zstd_level) {

@@ -56,6 +56,9 @@ struct Ktx2Pieces {
     size_t size() const;
 };
 Result<Ktx2Pieces> ktx2_zstd_pieces(std::span<const uint8_t> raw, const ContainerLayout& layout, int zstd_level);
+// The first piece of that file (header through key/value data) for levels compressed to `level_size` bytes
+// each (level 0 first); `raw` needs to hold only its header through the key/value data.
+std::vector<uint8_t> ktx2_zstd_header(std::span<const uint8_t> raw, const std::vector<size_t>& level_size);
 
 // What a KTX2 file holds, as parsed and checked by read_ktx2_texture.
 struct Ktx2Info {

@@ -28,7 +28,7 @@ int paeth(int a, int b, int c) {
 
 }  // namespace
 
-std::optional<DecodedImage> decode_plain_png(std::span<const uint8_t> b) {
+std::optional<DecodedImage> decode_plain_png(std::span<const uint8_t> b, bool keep_8bit) {
     static const uint8_t signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
     if (b.size() < 8 || std::memcmp(b.data(), signature, 8) != 0) return std::nullopt;
     uint32_t width = 0, height = 0;
@@ -93,6 +93,16 @@ std::optional<DecodedImage> decode_plain_png(std::span<const uint8_t> b) {
     }
 
     DecodedImage out;
+    out.info.bits_per_channel = depth;
+    out.info.is_float = false;
+    out.info.format = "png";
+    out.info.color_space = "sRGB";  // OpenImageIO's claim for a PNG without colour chunks
+    if (keep_8bit && depth == 8) {
+        out.bytes8.width = int(width), out.bytes8.height = int(height), out.bytes8.channels = channels;
+        out.bytes8.offset = 1, out.bytes8.row_bytes = stride + 1;
+        out.bytes8.data = std::move(raw);
+        return out;
+    }
     out.image = Image(int(width), int(height), channels);
     // OpenImageIO converts by multiplying with the reciprocal in float (not a division): the same bits.
     const float scale = depth == 8 ? 1.0f / 255.0f : 1.0f / 65535.0f;
@@ -105,10 +115,6 @@ std::optional<DecodedImage> decode_plain_png(std::span<const uint8_t> b) {
         else
             for (size_t i = 0; i < values; ++i) *dst++ = float(uint32_t(row[2 * i]) << 8 | row[2 * i + 1]) * scale;
     }
-    out.info.bits_per_channel = depth;
-    out.info.is_float = false;
-    out.info.format = "png";
-    out.info.color_space = "sRGB";  // OpenImageIO's claim for a PNG without colour chunks
     return out;
 }
 

@@ -14,6 +14,8 @@ namespace specbake::io {
 // alpha unassociated, colour space "sRGB", format "png"), or nothing when the file is anything else:
 // palette, interlaced, a gAMA/sRGB/iCCP/cHRM/sBIT/tRNS or unknown chunk, a CRC or zlib error, a size
 // outside 1..2^15. The caller then decodes it through OpenImageIO, which also words the errors.
-std::optional<DecodedImage> decode_plain_png(std::span<const uint8_t> bytes);
+// keep_8bit: an 8-bit file's texels stay bytes (DecodedImage::bytes8: the inflated rows, each after its
+// filter byte), `image` empty.
+std::optional<DecodedImage> decode_plain_png(std::span<const uint8_t> bytes, bool keep_8bit = false);
 
 }  // namespace specbake::io

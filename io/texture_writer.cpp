@@ -12,6 +12,10 @@
 
 #include <tbb/parallel_for.h>
 
+#define ZSTD_STATIC_LINKING_ONLY  // ZSTD_getCParams: the window the stream reads back
+#include <sys/mman.h>
+#include <zstd.h>
+
 #include <algorithm>
 #include <cstdint>
 #include <cstdlib>
@@ -293,6 +297,81 @@ void EncodedTexture::put_block(int level, int x0, int y0, int width, int rows, c
     }
 }
 
+// The zstd stream of one level (compress_rows).
+struct EncodedTexture::LevelStream {
+    ZSTD_CCtx* cctx = nullptr;
+    std::unique_ptr<uint8_t[]> out;  // compressBound bytes, touched only as far as zstd writes
+    size_t capacity = 0, in_pos = 0, out_pos = 0;
+    size_t released = 0;             // bytes from the level's start whose pages were returned
+    size_t window = 0;               // how far back zstd reads, plus a block
+    bool done = false;
+    ~LevelStream() { ZSTD_freeCCtx(cctx); }
+};
+
+EncodedTexture::~EncodedTexture() = default;
+
+Result<void> EncodedTexture::compress_rows(int level, int rows) {
+    if (!supercompressed()) return make_error("zstd streams are for zstd-supercompressed KTX2 files");
+    if (streams_.empty()) streams_.resize(layout_.level_offset.size());
+    auto& slot = streams_[size_t(level)];
+    const size_t w = size_t(std::max(1, width_ >> level)), h = size_t(std::max(1, height_ >> level));
+    const size_t row_bytes = w * size_t(layout_.stored_channels) * size_t(encoding_bytes(encoding_));
+    const size_t length = h * row_bytes;
+    if (!slot) {
+        slot = std::make_unique<LevelStream>();
+        slot->cctx = ZSTD_createCCtx();
+        if (!slot->cctx) return make_error("zstd: cannot create a compression context");
+        const int zl = supercompression_.zstd_level;
+        ZSTD_CCtx_setParameter(slot->cctx, ZSTD_c_compressionLevel, zl);
+        ZSTD_CCtx_setParameter(slot->cctx, ZSTD_c_stableInBuffer, 1);
+        ZSTD_CCtx_setParameter(slot->cctx, ZSTD_c_stableOutBuffer, 1);
+        ZSTD_CCtx_setPledgedSrcSize(slot->cctx, length);
+        slot->capacity = ZSTD_compressBound(length);
+        slot->out.reset(new uint8_t[slot->capacity]);
+        slot->window = (size_t(1) << ZSTD_getCParams(zl, length, 0).windowLog) + ZSTD_BLOCKSIZE_MAX;
+    }
+    LevelStream& z = *slot;
+    if (z.done) return {};
+    uint8_t* const start = data_.get() + layout_.level_offset[size_t(level)];
+    const size_t available = std::min(length, size_t(rows) * row_bytes);
+    const ZSTD_EndDirective mode = available == length ? ZSTD_e_end : ZSTD_e_continue;
+    ZSTD_inBuffer in{start, available, z.in_pos};
+    ZSTD_outBuffer out{z.out.get(), z.capacity, z.out_pos};
+    for (;;) {
+        const size_t left = ZSTD_compressStream2(z.cctx, &out, &in, mode);
+        if (ZSTD_isError(left)) return make_error(std::string("zstd: ") + ZSTD_getErrorName(left));
+        if (mode == ZSTD_e_continue || left == 0) break;
+    }
+    z.in_pos = in.pos, z.out_pos = out.pos;
+    if (mode == ZSTD_e_end) {
+        z.done = true;
+        ZSTD_freeCCtx(z.cctx);
+        z.cctx = nullptr;
+        return {};
+    }
+    // Whole 2 MiB pages (the huge pages the buffer was hinted for) wholly behind the window.
+    constexpr uintptr_t kPage = uintptr_t(2) << 20;
+    if (z.in_pos > z.window) {
+        const uintptr_t from = (reinterpret_cast<uintptr_t>(start) + z.released + kPage - 1) & ~(kPage - 1);
+        const uintptr_t to = (reinterpret_cast<uintptr_t>(start) + z.in_pos - z.window) & ~(kPage - 1);
+        if (to > from) {
+            madvise(reinterpret_cast<void*>(from), to - from, MADV_DONTNEED);
+            z.released = to - reinterpret_cast<uintptr_t>(start);
+        }
+    }
+    return {};
+}
+
+std::vector<std::span<const uint8_t>> EncodedTexture::streamed_levels() const {
+    std::vector<std::span<const uint8_t>> levels;
+    if (streams_.size() != layout_.level_offset.size()) return {};
+    for (const auto& z : streams_) {
+        if (!z || !z->done) return {};
+        levels.emplace_back(z->out.get(), z->out_pos);
+    }
+    return levels;
+}
+
 ManifestOutput EncodedTexture::entry(const std::string& filename, const std::string& kind) const {
     ManifestOutput e;
     e.kind = kind;
@@ -397,6 +476,13 @@ Result<std::vector<ManifestOutput>> write_encoded_textures(std::span<const Encod
             blocks = std::move(*b);
             pieces = blocks.pieces();
             describe_blocks(entries[i], t, files[i]);
+        } else if (const auto streamed = t.streamed_levels(); t.supercompressed() && !streamed.empty()) {
+            // Compressed while the bake ran (compress_rows): the header, then the levels smallest first.
+            std::vector<size_t> sizes;
+            for (std::span<const uint8_t> l : streamed) sizes.push_back(l.size());
+            packed.header = ktx2_zstd_header(t.bytes(), sizes);
+            pieces = {std::span<const uint8_t>(packed.header)};
+            for (size_t L = streamed.size(); L-- > 0;) pieces.push_back(streamed[L]);
         } else if (t.supercompressed()) {
             auto z = ktx2_zstd_pieces(t.bytes(), t.layout(), t.supercompression().zstd_level);
             if (!z) {

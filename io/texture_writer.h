@@ -101,7 +101,21 @@ public:
     // The manifest entry of this file as `filename` (sha256 left empty; the writer fills it).
     ManifestOutput entry(const std::string& filename, const std::string& kind) const;
 
+    // KTX2 with zstd: zstd-compresses rows [0, rows) of `level`, put before the call, as a stream of the
+    // level (whole zstd blocks; the rest once rows is the level's height), and returns the raw pages zstd
+    // no longer reads (older than its window) to the system, so a level's raw bytes are never all held.
+    // `rows` grows from call to call; rows below it are not put again. A level is fed by one thread at a
+    // time. The compressed levels are the bytes of ktx2_zstd's one-shot compression: zstd compresses the
+    // same blocks from the same contiguous buffer (ZSTD_c_stableInBuffer). write_encoded_textures uses them
+    // once every level was fed to its end.
+    Result<void> compress_rows(int level, int rows);
+    // The compressed bytes of every level when all were fed to their end by compress_rows, else empty.
+    std::vector<std::span<const uint8_t>> streamed_levels() const;
+    ~EncodedTexture();
+
 private:
+    struct LevelStream;
+    std::vector<std::unique_ptr<LevelStream>> streams_;
     TextureContainer container_;
     TexelEncoding encoding_;
     int width_, height_, channels_;

@@ -8,6 +8,9 @@
 #include "io/image_io.h"
 #include "io/sha256.h"
 
+#include <tbb/parallel_for.h>
+#include <sys/mman.h>
+#include <unistd.h>
 #include <tbb/parallel_invoke.h>
 
 #include <algorithm>
@@ -15,6 +18,8 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <mutex>
+#include <optional>
 
 namespace specbake {
 namespace fs = std::filesystem;
@@ -84,7 +89,8 @@ struct OutputFile {
 std::vector<OutputFile> output_files(const TextureBakeShape& shape, const TextureInputs& in,
                                      const TextureBakeSettings& settings, const std::string& stem) {
     std::vector<OutputFile> files;
-    const int roughness_bits = in.roughness ? in.roughness_bits : in.normal_bits;
+    const bool have_roughness = in.roughness || in.roughness_map.channels > 0;
+    const int roughness_bits = have_roughness ? in.roughness_bits : in.normal_bits;
     if (settings.outputs.roughness) {
         files.push_back({Chain::Roughness, "roughness", stem + "_roughness", unorm_for_bits(roughness_bits), 0,
                          shape.roughness_channels,
@@ -150,8 +156,32 @@ int chain_channels(const TextureBakeShape& shape, Chain c) {
     return 0;
 }
 
+// Returns the whole pages of [p, p + bytes) to the system (they read as zeroes afterwards).
+void release_pages(const uint8_t* p, size_t bytes) {
+    const uintptr_t page = uintptr_t(sysconf(_SC_PAGESIZE));
+    const uintptr_t from = (reinterpret_cast<uintptr_t>(p) + page - 1) & ~(page - 1);
+    const uintptr_t to = (reinterpret_cast<uintptr_t>(p) + bytes) & ~(page - 1);
+    if (to > from) madvise(reinterpret_cast<void*>(from), to - from, MADV_DONTNEED);
+}
+
+// The maps of `in` as the bake reads them: the 8-bit views where set, else the float images.
+struct InputMaps {
+    TextureMap normal, roughness_storage;
+    const TextureMap* roughness = nullptr;
+};
+InputMaps maps_of(const TextureInputs& in) {
+    InputMaps m;
+    m.normal = in.normal_map.channels > 0 ? in.normal_map : in.normal ? TextureMap::of(*in.normal) : TextureMap{};
+    if (in.roughness_map.channels > 0) m.roughness_storage = in.roughness_map;
+    else if (in.roughness) m.roughness_storage = TextureMap::of(*in.roughness);
+    if (m.roughness_storage.channels > 0 || in.roughness) m.roughness = &m.roughness_storage;
+    return m;
+}
+
 int roughness_channel_of(const TextureInputs& in) {
-    if (in.roughness && in.roughness_channel < 0) return in.roughness->channels >= 3 ? 1 : 0;
+    const bool have = in.roughness || in.roughness_map.channels > 0;
+    const int channels = in.roughness_map.channels > 0 ? in.roughness_map.channels : in.roughness ? in.roughness->channels : 0;
+    if (have && in.roughness_channel < 0) return channels >= 3 ? 1 : 0;
     return in.roughness_channel;
 }
 
@@ -294,11 +324,12 @@ Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, cons
                                                    io::TextureContainer container, const std::string& stem,
                                                    const ProgressFn& progress, const FractionFn& fraction,
                                                    const io::Supercompression& supercompression) {
-    if (!in.normal) return make_error(in.normal_name + ": no normal map given");
+    const InputMaps maps = maps_of(in);
+    if (maps.normal.channels == 0) return make_error(in.normal_name + ": no normal map given");
     if (!io::EncodedTexture::supports(container))
         return make_error(std::string("cannot encode ") + io::container_name(container) + " in memory");
     const int channel = roughness_channel_of(in);
-    const TextureBakeShape shape = texture_bake_shape(*in.normal, in.roughness, channel, settings);
+    const TextureBakeShape shape = texture_bake_shape(maps.normal, maps.roughness, channel, settings);
     const std::vector<OutputFile> files = output_files(shape, in, settings, stem);
     EncodedTextureOutputs out;
     for (const OutputFile& f : files) {
@@ -307,14 +338,35 @@ Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, cons
         out.files.push_back({out.textures.back().get(), f.stem, f.kind, f.names, block_format_of(f, supercompression)});
     }
     if (progress)
-        progress("baking " + std::to_string(in.normal->width) + "x" + std::to_string(in.normal->height) + " " +
+        progress("baking " + std::to_string(maps.normal.width) + "x" + std::to_string(maps.normal.height) + " " +
                  in.normal_name);
     // Texels of every level, for the fraction done; the rows arrive from several threads.
     double total_texels = 0;
     for (int L = 0; L < shape.levels; ++L)
         total_texels += double(std::max(1, shape.width >> L)) * double(std::max(1, shape.height >> L));
     std::atomic<size_t> texels_done{0};
-    auto baked = bake_texture_rows(*in.normal, in.roughness, channel, in.roughness_value, settings,
+    // zstd-supercompressed KTX2 files compress their levels' rows as the bake finishes them, top down, so
+    // neither a whole level's raw bytes nor the raw file are held (io::EncodedTexture::compress_rows).
+    std::vector<size_t> streamed;
+    for (size_t i = 0; i < files.size(); ++i)
+        if (out.textures[i]->supercompressed() && out.files[i].block == io::BlockFormat::None) streamed.push_back(i);
+    std::optional<Error> stream_error;
+    std::mutex stream_error_lock;
+    const TextureBakeRowsDone rows_done = [&](int level, int rows) {
+        tbb::parallel_for(size_t(0), streamed.size(), [&](size_t k) {
+            if (auto ok = out.textures[streamed[k]]->compress_rows(level, rows); !ok) {
+                std::lock_guard<std::mutex> lock(stream_error_lock);
+                if (!stream_error) stream_error = make_error(files[streamed[k]].stem + ": " + ok.error().message);
+            }
+        });
+    };
+    // The 8-bit maps' rows are returned to the system once the bake is past them (the job's own buffers).
+    const TextureBakeInputsDone release_inputs = [&](int rows) {
+        if (!in.release_rows) return;
+        for (const TextureMap* m : {&maps.normal, maps.roughness})
+            if (m && m->u8 && m->height == maps.normal.height) release_pages(m->u8, size_t(rows) * m->row_stride);
+    };
+    auto baked = bake_texture_rows(maps.normal, maps.roughness, channel, in.roughness_value, settings,
                                    [&](const TextureBakeRows& r) {
                                        if (fraction)
                                            fraction(double(texels_done += size_t(r.width) * size_t(r.rows)) /
@@ -324,8 +376,10 @@ Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, cons
                                                                       rows_of(r, files[i].chain),
                                                                      chain_channels(shape, files[i].chain),
                                                                      files[i].first);
-                                   });
+                                   },
+                                   streamed.empty() ? TextureBakeRowsDone{} : rows_done, release_inputs);
     if (!baked) return name_error(baked.error(), in.normal_name, in.roughness_name);
+    if (stream_error) return *stream_error;
     out.notes = baked->notes;
     out.max_roughness_change = baked->max_roughness_change;
     return out;
@@ -409,17 +463,19 @@ Result<TextureJobOutcome> run_texture_job(const TextureJob& job) {
     } else {
         if (progress) progress("reading " + job.normal.string());
         if (job.roughness && progress) progress("reading " + job.roughness->string());
-        // The two maps are decoded and hashed side by side, each file by one task.
+        // The two maps are decoded and hashed side by side, each file by one task. The row-streaming bake
+        // (KTX2, DDS) reads 8-bit maps as bytes, a quarter of the float images' memory.
+        const bool keep_8bit = io::EncodedTexture::supports(job.container);
         Result<io::DecodedImage> n = make_error(""), r = make_error("");
         Result<std::string> n_hash = make_error(""), r_hash = make_error("");
         tbb::parallel_invoke(
             [&] {
-                n = io::decode_image(job.normal);
+                n = io::decode_image(job.normal, keep_8bit);
                 if (n) n_hash = io::sha256_file(job.normal);
             },
             [&] {
                 if (!job.roughness) return;
-                r = io::decode_image(*job.roughness);
+                r = io::decode_image(*job.roughness, keep_8bit);
                 if (r) r_hash = io::sha256_file(*job.roughness);
             });
         if (!n) return n.error();
@@ -437,10 +493,16 @@ Result<TextureJobOutcome> run_texture_job(const TextureJob& job) {
     }
     const bool have_roughness = job.demo || job.roughness.has_value();
     // Non-finite texels are reported by the bake's validation, with the file's name.
+    auto bytes_map = [](const io::Bytes8& b) {
+        return TextureMap{b.width, b.height, b.channels, b.row_bytes, nullptr, b.data.data() + b.offset};
+    };
     in.normal = &normal.image;
+    if (!normal.bytes8.empty()) in.normal = nullptr, in.normal_map = bytes_map(normal.bytes8);
+    in.release_rows = true;  // the job's own buffers, dropped after the bake
     in.normal_bits = normal.info.is_float ? 16 : normal.info.bits_per_channel;
     if (have_roughness) {
         in.roughness = &roughness.image;
+        if (!roughness.bytes8.empty()) in.roughness = nullptr, in.roughness_map = bytes_map(roughness.bytes8);
         in.roughness_bits = roughness.info.is_float ? 16 : roughness.info.bits_per_channel;
     }
     in.roughness_channel = job.roughness_channel;
@@ -455,8 +517,8 @@ Result<TextureJobOutcome> run_texture_job(const TextureJob& job) {
         auto encoded = bake_texture_encoded(in, job.settings, job.container, "texture", progress, job.fraction,
                                             job.supercompression);
         if (!encoded) return out->final_names(encoded.error());
-        normal.image = Image{};
-        roughness.image = Image{};
+        normal.image = Image{}, normal.bytes8 = io::Bytes8{};
+        roughness.image = Image{}, roughness.bytes8 = io::Bytes8{};
         if (progress)
             for (const io::EncodedFile& f : encoded->files) progress("writing " + f.stem);
         auto files = io::write_encoded_textures(encoded->files, stage);

@@ -67,6 +67,13 @@ struct TextureInputs {
     float roughness_value = 0.5f;
     int normal_bits = 8;                           // 8 or 16 (integer files), 16/32 float: output encodings
     int roughness_bits = 8;
+    // The maps held as 8-bit texels instead (the texture job's plain PNG inputs, a quarter of the float
+    // images' memory): used by bake_texture_encoded in place of `normal` / `roughness` when their channels
+    // are set. The float-chain path (bake_texture_inputs) reads only the images.
+    TextureMap normal_map, roughness_map;
+    // The caller drops the 8-bit maps after the bake: their rows may be returned to the system (read as
+    // zeroes) once the bake is past them.
+    bool release_rows = false;
 };
 
 struct TextureOutputsWritten {

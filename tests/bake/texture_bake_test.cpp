@@ -435,6 +435,184 @@ TEST(TextureBake, BlocksStreamEveryTexelOnceWithTheChainValues) {
     }
 }
 
+// 8-bit codes of `image` (values rounded to k / 255) in rows padded like a PNG's inflated data (one filter
+// byte before each row), and the float image those codes decode to (float(k) * (1.0f / 255.0f)).
+struct Bytes8Map {
+    std::vector<uint8_t> bytes;
+    TextureMap map;
+    Image decoded;
+};
+Bytes8Map as_bytes8(const Image& image) {
+    Bytes8Map b;
+    const size_t row = size_t(image.width) * size_t(image.channels);
+    b.bytes.assign(size_t(image.height) * (row + 1), 0xEE);
+    b.decoded = Image(image.width, image.height, image.channels);
+    for (int y = 0; y < image.height; ++y)
+        for (size_t i = 0; i < row; ++i) {
+            const long k = std::lround(std::clamp(double(image.pixels[size_t(y) * row + i]), 0.0, 1.0) * 255.0);
+            b.bytes[size_t(y) * (row + 1) + 1 + i] = uint8_t(k);
+            b.decoded.pixels[size_t(y) * row + i] = float(k) * (1.0f / 255.0f);  // as io/ decodes 8-bit files
+        }
+    b.map = TextureMap{image.width, image.height, image.channels, row + 1, nullptr, b.bytes.data() + 1};
+    return b;
+}
+
+TEST(TextureBake, EightBitMapsBakeAsTheirDecodedFloats) {
+    struct Case {
+        int W, H, normal_channels, rough_w, rough_h, rough_channels, channel;
+    };
+    for (const Case& c : {Case{64, 32, 3, 64, 32, 3, 1}, Case{37, 23, 3, 37, 23, 1, 0}, Case{40, 24, 2, 40, 24, 3, 1},
+                          Case{48, 16, 4, 24, 8, 3, 1}, Case{1030, 6, 3, 1030, 6, 3, 1}, Case{9, 5, 3, 0, 0, 0, 0}}) {
+        SCOPED_TRACE(std::to_string(c.W) + "x" + std::to_string(c.H) + " normal channels " +
+                     std::to_string(c.normal_channels));
+        Image nm = random_normal_map(c.W, c.H, 21, 0.3);
+        if (c.normal_channels != 3) {
+            Image n(c.W, c.H, c.normal_channels);
+            for (size_t t = 0; t < n.texel_count(); ++t)
+                for (int k = 0; k < c.normal_channels; ++k)
+                    n.pixels[t * size_t(c.normal_channels) + size_t(k)] = k < 3 ? nm.pixels[t * 3 + size_t(k)] : 0.25f;
+            nm = n;
+        }
+        Image rough = c.rough_channels ? random_orm(c.rough_w, c.rough_h, 22) : Image{};
+        if (c.rough_channels == 1) {
+            Image r(c.rough_w, c.rough_h, 1);
+            for (size_t t = 0; t < r.texel_count(); ++t) r.pixels[t] = rough.pixels[t * 3 + 1];
+            rough = r;
+        }
+        const Bytes8Map n8 = as_bytes8(nm);
+        const Bytes8Map r8 = c.rough_channels ? as_bytes8(rough) : Bytes8Map{};
+        for (int threads : {1, 2}) {
+            TextureBakeSettings s;
+            s.threads = threads;
+            auto floats = bake_texture(n8.decoded, c.rough_channels ? &r8.decoded : nullptr, c.channel, 0.4f, s);
+            ASSERT_TRUE(floats.ok()) << floats.error().message;
+            std::mutex m;
+            bool equal = true;
+            auto same = [](const float* block, const MipChain& chain, const TextureBakeRows& r) {
+                if (!block) return chain.levels.empty();
+                const Image& level = chain.levels[size_t(r.level)];
+                const size_t row_floats = size_t(r.width) * size_t(level.channels);
+                for (int k = 0; k < r.rows; ++k)
+                    if (std::memcmp(block + size_t(k) * row_floats, level.texel(r.x0, r.y0 + k), row_floats * sizeof(float)))
+                        return false;
+                return true;
+            };
+            auto bytes = bake_texture_rows(n8.map, c.rough_channels ? &r8.map : nullptr, c.channel, 0.4f, s,
+                                           [&](const TextureBakeRows& r) {
+                                               std::lock_guard<std::mutex> lock(m);
+                                               equal = equal && same(r.roughness, floats->roughness, r) &&
+                                                       same(r.kernel, floats->kernel, r) &&
+                                                       same(r.lean, floats->lean, r) && same(r.normal, floats->normal, r);
+                                           });
+            ASSERT_TRUE(bytes.ok()) << bytes.error().message;
+            EXPECT_TRUE(equal);
+            EXPECT_EQ(bytes->max_roughness_change, floats->max_roughness_change);
+            EXPECT_EQ(bytes->notes.z_reconstructed, floats->notes.z_reconstructed);
+            EXPECT_EQ(bytes->notes.looks_srgb, floats->notes.looks_srgb);
+            EXPECT_EQ(bytes->notes.roughness_resampled, floats->notes.roughness_resampled);
+            EXPECT_EQ(bytes->notes.warnings, floats->notes.warnings);
+        }
+    }
+    // The notes read from the codes: a constant full-scale blue channel, and sRGB-looking values.
+    Image flat(8, 8, 3);
+    for (size_t t = 0; t < flat.texel_count(); ++t)
+        flat.pixels[t * 3] = 0.5f + 0.3f * float(t % 3) / 3.0f, flat.pixels[t * 3 + 1] = 0.5f, flat.pixels[t * 3 + 2] = 1.0f;
+    const Bytes8Map f8 = as_bytes8(flat);
+    auto rows = bake_texture_rows(f8.map, nullptr, 0, 0.5f, {}, [](const TextureBakeRows&) {});
+    ASSERT_TRUE(rows.ok());
+    EXPECT_TRUE(rows->notes.z_reconstructed);
+    Image srgb = random_normal_map(32, 32, 13, 0.2);  // pushed through the sRGB encode curve
+    for (float& v : srgb.pixels) v = v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1 / 2.4f) - 0.055f;
+    const Bytes8Map s8 = as_bytes8(srgb);
+    auto warned = bake_texture_rows(s8.map, nullptr, 0, 0.5f, {}, [](const TextureBakeRows&) {});
+    ASSERT_TRUE(warned.ok());
+    EXPECT_TRUE(warned->notes.looks_srgb);
+}
+
+// Input rows reported as no longer read can be overwritten (a caller releases them) without changing any
+// output: here they are poisoned as soon as they are reported.
+TEST(TextureBake, InputRowsReportedDoneAreNotReadAgain) {
+    for (const auto& [W, H] : {std::pair{256, 512}, std::pair{512, 96}}) {
+        SCOPED_TRACE(std::to_string(W) + "x" + std::to_string(H));
+        Bytes8Map n8 = as_bytes8(random_normal_map(W, H, 41, 0.3));
+        Bytes8Map r8 = as_bytes8(random_orm(W, H, 42));
+        TextureBakeSettings s;
+        s.threads = 2;
+        auto reference = bake_texture(n8.decoded, &r8.decoded, 1, 0, s);
+        ASSERT_TRUE(reference.ok());
+        std::mutex m;
+        bool equal = true;
+        int released = 0;
+        auto rows = bake_texture_rows(
+            n8.map, &r8.map, 1, 0, s,
+            [&](const TextureBakeRows& b) {
+                std::lock_guard<std::mutex> lock(m);
+                const Image& level = reference->lean.levels[size_t(b.level)];
+                for (int k = 0; k < b.rows; ++k)
+                    equal = equal && !std::memcmp(b.lean + size_t(k) * b.width * 5, level.texel(b.x0, b.y0 + k),
+                                                  size_t(b.width) * 5 * sizeof(float));
+            },
+            [](int, int) {},
+            [&](int upto) {
+                EXPECT_GE(upto, released);
+                for (Bytes8Map* b : {&n8, &r8})
+                    std::fill_n(b->bytes.begin(), size_t(upto) * b->map.row_stride, uint8_t(0x5A));
+                released = upto;
+            });
+        ASSERT_TRUE(rows.ok());
+        EXPECT_TRUE(equal);
+        EXPECT_EQ(released, H);
+        EXPECT_EQ(rows->max_roughness_change, reference->max_roughness_change);
+    }
+}
+
+// With a rows-done callback the rows reported done for a level have all reached the sink, the reports grow
+// to the level's height, and the values are those of the bake without it.
+TEST(TextureBake, RowsDoneFollowTheSinkTopDown) {
+    for (const auto& [W, H] : {std::pair{512, 512}, std::pair{96, 1040}, std::pair{37, 23}}) {
+        SCOPED_TRACE(std::to_string(W) + "x" + std::to_string(H));
+        const Image nm = random_normal_map(W, H, 31, 0.3);
+        const Image orm = random_orm(W, H, 32);
+        TextureBakeSettings s;
+        s.threads = 2;
+        auto chains = bake_texture(nm, &orm, 1, 0, s);
+        ASSERT_TRUE(chains.ok());
+        const int levels = mip_level_count(W, H);
+        std::mutex m;
+        auto sunk = std::vector<std::vector<char>>(size_t(levels));
+        for (int L = 0; L < levels; ++L) sunk[size_t(L)].assign(chains->roughness.levels[size_t(L)].texel_count(), 0);
+        std::vector<int> done(size_t(levels), 0);
+        bool in_order = true, complete = true, equal = true;
+        int reports = 0;
+        const TextureMap n = TextureMap::of(nm), r = TextureMap::of(orm);
+        auto rows = bake_texture_rows(
+            n, &r, 1, 0, s,
+            [&](const TextureBakeRows& b) {
+                std::lock_guard<std::mutex> lock(m);
+                const Image& level = chains->roughness.levels[size_t(b.level)];
+                for (int y = b.y0; y < b.y0 + b.rows; ++y)
+                    for (int x = b.x0; x < b.x0 + b.width; ++x) sunk[size_t(b.level)][size_t(y) * level.width + x] = 1;
+                for (int k = 0; k < b.rows; ++k)
+                    equal = equal && !std::memcmp(b.roughness + size_t(k) * b.width * 3, level.texel(b.x0, b.y0 + k),
+                                                  size_t(b.width) * 3 * sizeof(float));
+            },
+            [&](int level, int upto) {
+                ++reports;
+                in_order = in_order && upto >= done[size_t(level)];
+                done[size_t(level)] = upto;
+                const Image& l = chains->roughness.levels[size_t(level)];
+                for (size_t i = 0; i < size_t(upto) * size_t(l.width); ++i) complete = complete && sunk[size_t(level)][i];
+            });
+        ASSERT_TRUE(rows.ok());
+        EXPECT_TRUE(in_order);
+        EXPECT_TRUE(complete) << "a row was reported done before it reached the sink";
+        EXPECT_TRUE(equal);
+        for (int L = 0; L < levels; ++L) EXPECT_EQ(done[size_t(L)], std::max(1, H >> L)) << "level " << L;
+        if (H >= 512) EXPECT_GT(reports, levels) << "the largest levels come in bands";
+        EXPECT_EQ(rows->max_roughness_change, chains->max_roughness_change);
+    }
+}
+
 TEST(TextureBake, SlopeSpaceLeanFoldsBaseRoughness) {
     // Flat normals: s = 0, so the second moments are the base lobe's slope variance alpha^2 / 2.
     Image nm(8, 8, 3);

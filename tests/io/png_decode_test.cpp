@@ -120,6 +120,38 @@ TEST(PlainPng, SameValuesAndFactsAsOpenImageIO) {
     }
 }
 
+TEST(PlainPng, EightBitTexelsKeptAsBytesStandForOpenImageIOsFloats) {
+    for (int colour : {0, 4, 2, 6}) {
+        SCOPED_TRACE("colour type " + std::to_string(colour));
+        std::vector<uint8_t> png = make_png(37, 23, colour, 8, uint32_t(colour * 7 + 1));
+        auto mine = decode_plain_png(png, true);
+        ASSERT_TRUE(mine.has_value());
+        EXPECT_TRUE(mine->image.pixels.empty());
+        int channels = 0;
+        std::string colour_space;
+        const std::vector<float> ref = oiio_decode(png, channels, colour_space);
+        const Bytes8& b = mine->bytes8;
+        ASSERT_EQ(b.width, 37);
+        ASSERT_EQ(b.height, 23);
+        ASSERT_EQ(b.channels, channels);
+        ASSERT_GE(b.data.size(), b.offset + 22 * b.row_bytes + 37 * size_t(channels));
+        bool same = true;
+        for (int y = 0; y < 23; ++y)
+            for (size_t i = 0; i < 37 * size_t(channels); ++i)
+                same = same && float(b.data[b.offset + size_t(y) * b.row_bytes + i]) * (1.0f / 255.0f) ==
+                                   ref[size_t(y) * 37 * size_t(channels) + i];
+        EXPECT_TRUE(same) << "a byte does not stand for OpenImageIO's float";
+        EXPECT_EQ(mine->info.bits_per_channel, 8);
+        EXPECT_EQ(mine->info.color_space, colour_space);
+    }
+    // 16-bit files come back as floats.
+    std::vector<uint8_t> png16 = make_png(5, 4, 2, 16, 9);
+    auto wide = decode_plain_png(png16, true);
+    ASSERT_TRUE(wide.has_value());
+    EXPECT_TRUE(wide->bytes8.empty());
+    EXPECT_EQ(wide->image.pixels.size(), size_t(5 * 4 * 3));
+}
+
 TEST(PlainPng, EverythingElseIsLeftToOpenImageIO) {
     EXPECT_FALSE(decode_plain_png(make_png(8, 8, 3, 8, 1)).has_value()) << "palette";
     EXPECT_FALSE(decode_plain_png(make_png(8, 8, 2, 8, 2, "gAMA")).has_value()) << "gAMA changes the colour space";

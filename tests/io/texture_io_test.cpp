@@ -306,6 +306,59 @@ TEST(Ktx2, ZstdLevelsInflateToTheUncompressedFile) {
     fs::remove_all(dir);
 }
 
+// A KTX2 file whose levels were zstd-compressed band by band as their rows arrived (compress_rows, with
+// the raw pages behind zstd's window returned) is byte for byte the file of the one-shot compression of
+// the whole raw file (ktx2_zstd), at several zstd levels; and zstd decompresses it to the raw levels.
+TEST(EncodedTexture, LevelsCompressedAsTheirRowsArriveGiveTheOneShotFile) {
+    const int W = 2048, H = 1280;  // level 0: 10 MiB of RGBA8, well past a level-3 window of 2 MiB
+    const int levels = 12;
+    std::mt19937 rng(5);
+    std::vector<std::vector<float>> data(levels);
+    for (int L = 0; L < levels; ++L) {
+        const size_t n = size_t(std::max(1, W >> L)) * size_t(std::max(1, H >> L)) * 3;
+        data[size_t(L)].resize(n);
+        // Smooth ramps with noise in the low bits: compressible, but not trivially.
+        for (size_t i = 0; i < n; ++i) data[size_t(L)][i] = float((i / 3 % 4096) / 4096.0 + (rng() % 8) / 2048.0);
+    }
+    for (int zstd_level : {1, 3, 9}) {
+        SCOPED_TRACE("zstd level " + std::to_string(zstd_level));
+        Supercompression z;
+        z.zstd_level = zstd_level;
+        EncodedTexture one_shot(TextureContainer::Ktx2, TexelEncoding::Unorm8, W, H, levels, 3, z);
+        EncodedTexture streamed(TextureContainer::Ktx2, TexelEncoding::Unorm8, W, H, levels, 3, z);
+        for (int L = 0; L < levels; ++L) {
+            const int w = std::max(1, W >> L), h = std::max(1, H >> L);
+            one_shot.put_block(L, 0, 0, w, h, data[size_t(L)].data(), 3, 0);
+            const int band = std::max(1, 97 >> L);  // not a multiple of anything zstd uses
+            for (int y = 0; y < h; y += band) {
+                const int rows = std::min(band, h - y);
+                streamed.put_block(L, 0, y, w, rows, data[size_t(L)].data() + size_t(y) * size_t(w) * 3, 3, 0);
+                ASSERT_TRUE(streamed.compress_rows(L, y + rows).ok());
+            }
+        }
+        auto expected = ktx2_zstd(one_shot.bytes(), one_shot.layout(), zstd_level);
+        ASSERT_TRUE(expected.ok());
+        const fs::path dir = fresh_dir("streamed_zstd");
+        const EncodedFile file{&streamed, "t", "roughness", {}};
+        ASSERT_TRUE(write_encoded_textures({&file, 1}, dir).ok());
+        const std::vector<uint8_t> written = slurp(dir / "t.ktx2");
+        EXPECT_EQ(written.size(), expected->size());
+        EXPECT_TRUE(written == *expected) << "the streamed levels differ from the one-shot compression";
+        auto back = read_ktx2_texture(written, "t.ktx2");
+        ASSERT_TRUE(back.ok()) << back.error().message;
+        for (int L = 0; L < levels; ++L) {
+            const size_t at = one_shot.layout().level_offset[size_t(L)];
+            const size_t n = size_t(std::max(1, W >> L)) * size_t(std::max(1, H >> L)) * 4;
+            std::vector<uint8_t> level(n);
+            const size_t got = ZSTD_decompress(level.data(), n, written.data() + size_t(back->info.level_offsets[size_t(L)]),
+                                               size_t(back->info.level_lengths[size_t(L)]));
+            ASSERT_EQ(got, n) << "level " << L;
+            EXPECT_TRUE(std::equal(level.begin(), level.end(), one_shot.bytes().begin() + long(at))) << "level " << L;
+        }
+        fs::remove_all(dir);
+    }
+}
+
 // A container filled block by block (whole rows and column blocks), in scrambled order and with channels
 // taken from a wider interleaved source, is byte for byte the file encode_ktx2 / encode_dds make from the
 // whole chain.
