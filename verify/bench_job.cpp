@@ -25,20 +25,36 @@ const CandidateReport* find_row(const SceneReport& s, const std::string& name) {
     return nullptr;
 }
 
+constexpr double kFloor = 1e-9;  // keeps the logarithm finite for a candidate identical to none
+
+// Geometric mean of candidate / none over the scenes where none's value is above the floor (a scene where
+// none does not flicker at all says nothing about a candidate's flicker relative to it).
+struct RatioMean {
+    double log_sum = 0;
+    int n = 0;
+    void add(double candidate, double none) {
+        if (none <= kFloor) return;
+        log_sum += std::log(std::max(candidate, kFloor) / none);
+        ++n;
+    }
+    double value() const { return n ? std::exp(log_sum / n) : 1.0; }
+};
+
 // Per candidate, aggregated over the scenes it ran on.
 struct Aggregate {
     std::string name, family;
-    double log_error = 0, log_error_linear = 0, log_flicker = 0, log_flicker_tm = 0, log_terr = 0, log_terr_tm = 0;
+    double log_error = 0, log_error_linear = 0;
+    RatioMean flicker, flicker_tm, terr, terr_tm;
     double energy = 0, peak = 0;
-    int n = 0, n_flicker = 0, n_flicker_tm = 0, n_terr = 0, n_terr_tm = 0;
+    int n = 0;
     std::optional<int> spirv;
     std::vector<double> frame_rel, bake_ms;
     double rel_error() const { return n ? std::exp(log_error / n) : 1.0; }
     double rel_error_linear() const { return n ? std::exp(log_error_linear / n) : 1.0; }
-    double rel_flicker() const { return n_flicker ? std::exp(log_flicker / n_flicker) : 1.0; }
-    double rel_flicker_tm() const { return n_flicker_tm ? std::exp(log_flicker_tm / n_flicker_tm) : 1.0; }
-    double rel_terr() const { return n_terr ? std::exp(log_terr / n_terr) : 1.0; }
-    double rel_terr_tm() const { return n_terr_tm ? std::exp(log_terr_tm / n_terr_tm) : 1.0; }
+    double rel_flicker() const { return flicker.value(); }
+    double rel_flicker_tm() const { return flicker_tm.value(); }
+    double rel_terr() const { return terr.value(); }
+    double rel_terr_tm() const { return terr_tm.value(); }
 };
 
 enum class Family { All, Analytic, Real };
@@ -55,7 +71,6 @@ double median(std::vector<double> v) {
 std::vector<Aggregate> aggregate(const BenchReport& r, Family family = Family::All) {
     std::vector<Aggregate> out;
     std::map<std::string, size_t> index;
-    constexpr double kFloor = 1e-9;  // keeps the logarithm finite for a candidate identical to none
     for (const SceneReport& s : r.scenes) {
         if (!in_family(s, family)) continue;
         for (const CandidateReport& c : s.candidates) {
@@ -71,22 +86,10 @@ std::vector<Aggregate> aggregate(const BenchReport& r, Family family = Family::A
             a.log_error += std::log(std::max(c.metrics.rmse_tonemapped, kFloor) /
                                     std::max(none->metrics.rmse_tonemapped, kFloor));
             a.log_error_linear += std::log(std::max(c.metrics.rmse, kFloor) / std::max(none->metrics.rmse, kFloor));
-            if (none->metrics.flicker_linear > kFloor) {
-                a.log_flicker += std::log(std::max(c.metrics.flicker_linear, kFloor) / none->metrics.flicker_linear);
-                ++a.n_flicker;
-            }
-            if (none->metrics.flicker > kFloor) {
-                a.log_flicker_tm += std::log(std::max(c.metrics.flicker, kFloor) / none->metrics.flicker);
-                ++a.n_flicker_tm;
-            }
-            if (none->metrics.temporal_error_linear > kFloor) {
-                a.log_terr += std::log(std::max(c.metrics.temporal_error_linear, kFloor) / none->metrics.temporal_error_linear);
-                ++a.n_terr;
-            }
-            if (none->metrics.temporal_error > kFloor) {
-                a.log_terr_tm += std::log(std::max(c.metrics.temporal_error, kFloor) / none->metrics.temporal_error);
-                ++a.n_terr_tm;
-            }
+            a.flicker.add(c.metrics.flicker_linear, none->metrics.flicker_linear);
+            a.flicker_tm.add(c.metrics.flicker, none->metrics.flicker);
+            a.terr.add(c.metrics.temporal_error_linear, none->metrics.temporal_error_linear);
+            a.terr_tm.add(c.metrics.temporal_error, none->metrics.temporal_error);
             a.energy += c.metrics.energy_ratio;
             a.peak += c.metrics.peak_ratio;
             ++a.n;
