@@ -144,6 +144,9 @@ public:
         std::string normal_fallback_uri, roughness_fallback_uri;  // used when the slot had no image
         int texcoord = 0;
         nlohmann::json transform;  // KHR_texture_transform of the baked textures, null when none
+        // For a .glb output: the folder holding the files the URIs name. They then go on buffer views of the
+        // binary chunk when the scene is written (image/ktx2, image/png), as the input's images do.
+        std::filesystem::path embed_from;
     };
     void use_basisu_textures(int material, const BasisuTextures& textures);
     // Sets the vendor extension object at the root of the glTF (tool version, settings).

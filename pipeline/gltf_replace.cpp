@@ -31,7 +31,7 @@ MipChain metallic_roughness_layout(const MipChain& roughness) {
 }  // namespace
 
 Result<void> replace_with_basisu(io::GltfScene& scene, const ReplaceLayer& layer, const fs::path& basisu,
-                                 const fs::path& dir, std::vector<io::ManifestOutput>& outputs,
+                                 const fs::path& dir, bool embed, std::vector<io::ManifestOutput>& outputs,
                                  std::vector<std::string>& warnings) {
     const std::vector<io::MaterialInfo> materials = scene.materials();
     if (layer.material < 0 || size_t(layer.material) >= materials.size() || layer.normal.levels.empty()) return {};
@@ -47,6 +47,7 @@ Result<void> replace_with_basisu(io::GltfScene& scene, const ReplaceLayer& layer
     io::GltfScene::BasisuTextures t;
     t.texcoord = layer.texcoord;
     t.transform = layer.transform;
+    if (embed) t.embed_from = dir;
     const fs::path scratch = dir / (".basisu_" + layer.stem);
     auto write = [&](const MipChain& chain, const std::string& kind, std::string& uri) -> Result<void> {
         const std::string name = layer.stem + "_" + kind + "_basisu.ktx2";

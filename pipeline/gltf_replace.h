@@ -28,9 +28,10 @@ struct ReplaceLayer {
 // fallback where the slot had no image) into `dir`, points the material at them
 // (io::GltfScene::use_basisu_textures) and appends the files to `outputs` (paths relative to `dir`).
 // A layer whose size is not a multiple of 4 (KHR_texture_basisu) or whose metallic-roughness texture is
-// mapped unlike the normal map keeps that slot, with a line in `warnings`.
+// mapped unlike the normal map keeps that slot, with a line in `warnings`. With `embed` (a .glb output) the
+// scene carries the files on buffer views when it is written; the caller then removes them from `dir`.
 Result<void> replace_with_basisu(io::GltfScene& scene, const ReplaceLayer& layer, const std::filesystem::path& basisu,
-                                 const std::filesystem::path& dir, std::vector<io::ManifestOutput>& outputs,
+                                 const std::filesystem::path& dir, bool embed, std::vector<io::ManifestOutput>& outputs,
                                  std::vector<std::string>& warnings);
 
 }  // namespace specbake

@@ -210,8 +210,12 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
             layer.transform = materials[size_t(d.material)].normal.transform;
             say("encoding UASTC textures of material " + std::to_string(d.material) + " of " + input.string());
             const size_t before = result.outputs.size();
-            if (auto r = replace_with_basisu(scene, layer, *basisu, out_dir, result.outputs, warnings); !r) return r.error();
-            for (size_t k = before; k < result.outputs.size(); ++k) written.push_back(out_dir / result.outputs[k].path);
+            if (auto r = replace_with_basisu(scene, layer, *basisu, out_dir, glb, result.outputs, warnings); !r)
+                return r.error();
+            for (size_t k = before; k < result.outputs.size(); ++k) {
+                written.push_back(out_dir / result.outputs[k].path);
+                if (glb) embedded[result.outputs[k].path] = -1;  // on a buffer view as a glTF image
+            }
         }
     }
     for (const auto& [material, ext] : extension_of_material) scene.set_material_extension(material, ext);
