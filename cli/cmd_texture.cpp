@@ -104,6 +104,12 @@ int run_texture(const TextureOptions& o, const PipelineFlags& pipe) {
     job.supercompression.zstd_level = o.zstd_level;
     job.supercompression.block = o.block == "bc";
     job.supercompression.rgba_block = o.block_rgba == "bc3" ? 3 : 1;
+    if (job.supercompression.block && job.container != io::TextureContainer::Ktx2 &&
+        job.container != io::TextureContainer::Dds) {
+        print_error("texture: --block " + o.block + " needs --format ktx2 or dds (the containers with block formats); "
+                    "--format " + o.format + " writes its levels uncompressed");
+        return kExitUsage;
+    }
     TextureBakeSettings& s = job.settings;
     s.isotropic = o.isotropic == "sum" ? IsotropicReduction::Sum
                   : o.isotropic == "max" ? IsotropicReduction::Max : IsotropicReduction::Mean;

@@ -169,6 +169,10 @@ inline Result<SceneJob> make_scene_job(const SceneCliOptions& o) {
     job.basisu = o.basisu;
     job.supercompression.block = o.block == "bc";
     job.supercompression.rgba_block = o.block_rgba == "bc3" ? 3 : 1;
+    if (job.supercompression.block && job.container != io::TextureContainer::Ktx2 &&
+        job.container != io::TextureContainer::Dds)
+        return make_error("--block " + o.block + " needs --container ktx2 or dds (the containers with block formats); "
+                          "--container " + o.container + " writes its levels uncompressed");
     PlanOptions& p = job.plan;
     p.estimator = parse_curvature_estimator(o.estimator).value_or(CurvatureEstimator::ShapeOperator);
     p.min_roughness_gain = o.min_roughness_gain;

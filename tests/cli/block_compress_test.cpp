@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <unistd.h>
 
 namespace {
 using namespace scene_test;
@@ -286,6 +287,29 @@ TEST_F(BlockCompress, InspectDecodesEveryBlockCompressedFile) {
                                      dir_);
     EXPECT_EQ(d.exit_code, 0) << d.err;
     EXPECT_NE(d.out.find("identical"), std::string::npos) << d.out;
+}
+
+// --block with a container that has no block formats is a usage error that names both options, and
+// nothing is written; before, the option was ignored and the levels went out uncompressed.
+TEST(BlockCompressUsage, ExrAndPngContainersRefuseBlock) {
+    const fs::path dir = fs::temp_directory_path() / ("specbake_block_usage_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    for (const char* format : {"exr", "png"}) {
+        SCOPED_TRACE(format);
+        const fs::path out = dir / (std::string("t_") + format);
+        const RunResult t = run_specbake({"texture", "--demo", "--block", "bc", "--format", format, "-o", out.string()}, dir);
+        EXPECT_EQ(t.exit_code, 2) << t.err;
+        EXPECT_NE(t.err.find("--block bc needs --format ktx2 or dds"), std::string::npos) << t.err;
+        EXPECT_FALSE(fs::exists(out / "manifest.json"));
+        const fs::path scene_out = dir / (std::string("s_") + format);
+        const RunResult b = run_specbake({"bake", (fs::path(SPECBAKE_SOURCE_DIR) / "tests/consumer/quad.gltf").string(),
+                                          "--block", "bc", "--container", format, "-o", scene_out.string()},
+                                         dir);
+        EXPECT_EQ(b.exit_code, 2) << b.err;
+        EXPECT_NE(b.err.find("--block bc needs --container ktx2 or dds"), std::string::npos) << b.err;
+        EXPECT_FALSE(fs::exists(scene_out / "manifest.json"));
+    }
+    fs::remove_all(dir);
 }
 
 }  // namespace
