@@ -100,15 +100,7 @@ void add_bake_command(CLI::App& app, std::function<int()>& run) {
         ->capture_default_str();
     sub->add_option("--basisu", o->basisu,
                     "Basis Universal encoder for --gltf-mode replace (default: $SPECBAKE_BASISU, else basisu on the PATH)");
-    sub->add_option("--block", o->block,
-                    "Block compression of the baked 8/16-bit textures in KTX2 and DDS: none (default) or bc (one "
-                    "channel BC4, the mean normal BC5 with x, y only, RGBA per --block-rgba; float outputs stay float)")
-        ->check(CLI::IsMember({"none", "bc"}))
-        ->capture_default_str();
-    sub->add_option("--block-rgba", o->block_rgba,
-                    "Block format of four-channel textures (the ORM roughness): bc1 (default; A = 1 is exact) or bc3")
-        ->check(CLI::IsMember({"bc1", "bc3"}))
-        ->capture_default_str();
+    add_block_options(*sub, o->blocks, "baked textures");
     add_curvature_options(sub, *o);
     add_material_options(sub, *o);
     auto pipe = std::make_shared<PipelineFlags>();
@@ -126,7 +118,8 @@ void add_bake_command(CLI::App& app, std::function<int()>& run) {
         "  specbake bake scene.gltf --config materials.toml -o out/   ([materials.NAME] tables: per material)\n"
         "  specbake bake cloth.gltf --isotropic max --outputs roughness,kernel -o out/\n"
         "  specbake bake Helmet.gltf --gltf-mode replace --basisu /path/to/basisu -o out/\n"
-        "  specbake bake Helmet.gltf --block bc -o out/   (BC4/BC5/BC1 KTX2 with every baked mip)");
+        "  specbake bake Helmet.gltf --block bc -o out/   (BC4/BC5/BC1 KTX2 with every baked mip)\n"
+        "  specbake bake Helmet.gltf --block astc -o out/ (ASTC 4x4 KTX2 for mobile GPUs)");
     sub->callback([&run, o, pipe] { run = [o, pipe] { return run_bake(*o, *pipe); }; });
 }
 

@@ -1,6 +1,7 @@
 // specbake texture: bakes one normal map (+ roughness) into filtered roughness, kernel, LEAN and
 // mean-normal mip chains (SPEC Sec. 3, 7). Only argument parsing and printing live here; the pipeline
 // is pipeline/texture_job.h.
+#include "cli/block_options.h"
 #include "cli/command.h"
 #include "pipeline/bake_output.h"
 #include "pipeline/texture_job.h"
@@ -26,8 +27,7 @@ struct TextureOptions {
     std::string format = "ktx2";
     std::string supercompression = "zstd";
     int zstd_level = 3;
-    std::string block = "none";
-    std::string block_rgba = "bc1";
+    BlockCliOptions blocks;
     std::string isotropic = "mean";
     std::string filter = "projected";
     std::optional<double> max_kernel;
@@ -102,12 +102,8 @@ int run_texture(const TextureOptions& o, const PipelineFlags& pipe) {
     job.container = *io::parse_container(o.format);
     job.supercompression.zstd = o.supercompression == "zstd";
     job.supercompression.zstd_level = o.zstd_level;
-    job.supercompression.block = o.block == "bc";
-    job.supercompression.rgba_block = o.block_rgba == "bc3" ? 3 : 1;
-    if (job.supercompression.block && job.container != io::TextureContainer::Ktx2 &&
-        job.container != io::TextureContainer::Dds) {
-        print_error("texture: --block " + o.block + " needs --format ktx2 or dds (the containers with block formats); "
-                    "--format " + o.format + " writes its levels uncompressed");
+    if (auto ok = apply_block_options(o.blocks, job.container, "--format", job.supercompression); !ok) {
+        print_error("texture: " + ok.error().message);
         return kExitUsage;
     }
     TextureBakeSettings& s = job.settings;
@@ -129,7 +125,7 @@ int run_texture(const TextureOptions& o, const PipelineFlags& pipe) {
     // The settings and inputs exactly as run_texture_job records them in the manifest ("input_facts" is
     // derived from the inputs, which their hashes cover).
     nlohmann::json recorded = texture_settings_json(job.settings, job.container);
-    if (job.container == io::TextureContainer::Ktx2 || job.supercompression.block)
+    if (job.container == io::TextureContainer::Ktx2 || job.supercompression.block != io::BlockFamily::None)
         recorded["supercompression"] = supercompression_json(job.supercompression);
     std::vector<std::string> inputs;
     if (job.demo) {
@@ -206,13 +202,7 @@ void add_texture_command(CLI::App& app, std::function<int()>& run) {
     sub->add_option("--supercompression", o->supercompression,
                     "KTX2 level compression: zstd (default; KTX2 supercompression scheme 2) or none")
         ->check(CLI::IsMember({"zstd", "none"}));
-    sub->add_option("--block", o->block,
-                    "Block compression of 8/16-bit outputs in KTX2 and DDS: none (default) or bc (one channel BC4, "
-                    "the mean normal BC5 with x, y only, RGBA per --block-rgba; float outputs stay float)")
-        ->check(CLI::IsMember({"none", "bc"}));
-    sub->add_option("--block-rgba", o->block_rgba,
-                    "Block format of four-channel outputs (the ORM roughness): bc1 (default; A = 1 is exact) or bc3")
-        ->check(CLI::IsMember({"bc1", "bc3"}));
+    add_block_options(*sub, o->blocks, "outputs");
     sub->add_option("--zstd-level", o->zstd_level, "Zstandard level for KTX2, 1 (fastest) to 22 (default 3)")
         ->check(CLI::Range(1, 22));
     sub->add_option("--isotropic", o->isotropic,

@@ -2,6 +2,7 @@
 // plan thresholds and the texture-bake settings passed through to the texture bake.
 #pragma once
 
+#include "cli/block_options.h"
 #include "pipeline/config.h"
 #include "pipeline/batch.h"
 #include "pipeline/scene_job.h"
@@ -28,8 +29,7 @@ struct SceneCliOptions {
     std::string container = "ktx2";
     std::string gltf_mode = "sidecar";
     std::string basisu;
-    std::string block = "none";
-    std::string block_rgba = "bc1";
+    BlockCliOptions blocks;
     std::string isotropic = "mean";
     std::string filter = "projected";
     double max_kernel = 0.0;
@@ -167,12 +167,8 @@ inline Result<SceneJob> make_scene_job(const SceneCliOptions& o) {
     job.container = io::parse_container(o.container).value_or(io::TextureContainer::Ktx2);
     job.gltf_mode = o.gltf_mode == "replace" ? GltfMode::Replace : GltfMode::Sidecar;
     job.basisu = o.basisu;
-    job.supercompression.block = o.block == "bc";
-    job.supercompression.rgba_block = o.block_rgba == "bc3" ? 3 : 1;
-    if (job.supercompression.block && job.container != io::TextureContainer::Ktx2 &&
-        job.container != io::TextureContainer::Dds)
-        return make_error("--block " + o.block + " needs --container ktx2 or dds (the containers with block formats); "
-                          "--container " + o.container + " writes its levels uncompressed");
+    if (auto ok = apply_block_options(o.blocks, job.container, "--container", job.supercompression); !ok)
+        return ok.error();
     PlanOptions& p = job.plan;
     p.estimator = parse_curvature_estimator(o.estimator).value_or(CurvatureEstimator::ShapeOperator);
     p.min_roughness_gain = o.min_roughness_gain;

@@ -1,6 +1,7 @@
 // BC1/BC3/BC4/BC5 block encoders and the KTX2 / legacy-DDS files around block-compressed mip levels.
 // Block layouts: Khronos Data Format Specification 1.3 Sec. 21.1 (BC1), 21.3 (BC3), 21.4 (BC4), 21.5 (BC5).
 #include "io/block_compress.h"
+#include "io/astc_codec.h"
 
 #include <tbb/parallel_for.h>
 #include <zstd.h>
@@ -126,26 +127,55 @@ const char* block_format_name(BlockFormat f) {
         case BlockFormat::Bc3: return "bc3";
         case BlockFormat::Bc4: return "bc4";
         case BlockFormat::Bc5: return "bc5";
+        case BlockFormat::AstcR:
+        case BlockFormat::AstcRg:
+        case BlockFormat::AstcRgba: return "astc";
     }
     return "none";
+}
+
+bool is_astc(BlockFormat f) {
+    return f == BlockFormat::AstcR || f == BlockFormat::AstcRg || f == BlockFormat::AstcRgba;
 }
 
 size_t block_bytes(BlockFormat f) { return f == BlockFormat::Bc1 || f == BlockFormat::Bc4 ? 8 : 16; }
 
 int block_channels(BlockFormat f) {
     switch (f) {
-        case BlockFormat::Bc4: return 1;
-        case BlockFormat::Bc5: return 2;
+        case BlockFormat::Bc4:
+        case BlockFormat::AstcR: return 1;
+        case BlockFormat::Bc5:
+        case BlockFormat::AstcRg: return 2;
         default: return 4;
     }
 }
 
-uint32_t block_vk_format(BlockFormat f) {
+std::string block_gpu_format_name(BlockFormat f, int astc_side) {
+    switch (f) {
+        case BlockFormat::Bc1: return "BC1_RGB_UNORM_BLOCK";
+        case BlockFormat::Bc3: return "BC3_UNORM_BLOCK";
+        case BlockFormat::Bc4: return "BC4_UNORM_BLOCK";
+        case BlockFormat::Bc5: return "BC5_UNORM_BLOCK";
+        case BlockFormat::AstcR:
+        case BlockFormat::AstcRg:
+        case BlockFormat::AstcRgba: {
+            const std::string side = std::to_string(astc_side);
+            return "ASTC_" + side + "x" + side + "_UNORM_BLOCK";
+        }
+        case BlockFormat::None: break;
+    }
+    return "";
+}
+
+uint32_t block_vk_format(BlockFormat f, int astc_side) {
     switch (f) {
         case BlockFormat::Bc1: return 131;
         case BlockFormat::Bc3: return 137;
         case BlockFormat::Bc4: return 139;
         case BlockFormat::Bc5: return 141;
+        case BlockFormat::AstcR:
+        case BlockFormat::AstcRg:
+        case BlockFormat::AstcRgba: return astc_vk_format(astc_side);
         case BlockFormat::None: break;
     }
     return 0;
@@ -157,7 +187,7 @@ const char* block_fourcc(BlockFormat f) {
         case BlockFormat::Bc3: return "DXT5";
         case BlockFormat::Bc4: return "ATI1";
         case BlockFormat::Bc5: return "ATI2";
-        case BlockFormat::None: break;
+        default: break;
     }
     return "";
 }
@@ -174,7 +204,7 @@ void encode_block(BlockFormat format, const uint8_t* texels, uint8_t* out) {
             bc4_block(texels + 3, 4, out);
             bc1_block(texels, 4, out + 8);
             return;
-        case BlockFormat::None: return;
+        default: return;  // None; ASTC levels are encoded whole (astc_compress_level)
     }
 }
 
@@ -205,9 +235,22 @@ std::vector<std::span<const uint8_t>> BlockFile::pieces() const {
 
 namespace {
 
-// Basic descriptor of a block-compressed format (KDFS 1.3 Sec. 5 and 21): colour model BC1A 128, BC3 130,
-// BC4 131, BC5 132; 4x4 texel blocks; one 64-bit sample per 8 bytes of block.
-std::vector<uint8_t> block_dfd(BlockFormat f) {
+// Basic descriptor of a block-compressed format (KDFS 1.3 Sec. 5, 21 and 23): colour model BC1A 128, BC3
+// 130, BC4 131, BC5 132, ASTC 162; 4x4 texel blocks (ASTC: its footprint); one 64-bit sample per 8 bytes of
+// BC block, one 128-bit sample of channel 0 (ASTC data) for ASTC.
+std::vector<uint8_t> block_dfd(BlockFormat f, int astc_side) {
+    if (is_astc(f)) {
+        std::vector<uint8_t> d(4 + 24 + 16, 0);
+        put32(d.data(), uint32_t(d.size()));
+        put32(d.data() + 8, 2u | (40u << 16));
+        put32(d.data() + 12, 162u | (1u << 8) | (1u << 16));  // ASTC, BT.709 primaries, linear transfer
+        const uint32_t side = uint32_t(astc_side - 1);
+        put32(d.data() + 16, side | side << 8);  // footprint NxNx1x1 (stored minus one)
+        put32(d.data() + 20, 16);               // bytesPlane0
+        put32(d.data() + 28, 127u << 16);       // bit offset 0, 128 bits, channel 0 (ASTC data)
+        put32(d.data() + 40, 0xFFFFFFFFu);      // sampleUpper
+        return d;
+    }
     const int samples = f == BlockFormat::Bc3 || f == BlockFormat::Bc5 ? 2 : 1;
     const uint32_t block_size = 24 + 16 * uint32_t(samples);
     std::vector<uint8_t> d(4 + block_size, 0);
@@ -233,8 +276,11 @@ std::vector<uint8_t> block_dfd(BlockFormat f) {
 }  // namespace
 
 Result<BlockFile> block_file(TextureContainer container, BlockFormat format, int width, int height,
-                             std::vector<std::vector<uint8_t>> levels, int zstd_level) {
+                             std::vector<std::vector<uint8_t>> levels, int zstd_level, int astc_side) {
     if (format == BlockFormat::None || levels.empty()) return make_error("no block format or no levels");
+    if (is_astc(format) && container != TextureContainer::Ktx2) return make_error("ASTC is written to KTX2 only");
+    if (is_astc(format) && !astc_block_supported(astc_side))
+        return make_error("ASTC footprint " + std::to_string(astc_side) + " is not 4, 6 or 8");
     const size_t count = levels.size();
     BlockFile file;
     if (container == TextureContainer::Dds) {
@@ -271,7 +317,7 @@ Result<BlockFile> block_file(TextureContainer container, BlockFormat format, int
         for (const std::string& e : errors)
             if (!e.empty()) return make_error("zstd: " + e);
     }
-    const std::vector<uint8_t> dfd = block_dfd(format);
+    const std::vector<uint8_t> dfd = block_dfd(format, astc_side);
     static const char key[] = "KTXwriter", value[] = "specbake";
     const uint32_t kv_length = uint32_t(sizeof(key) + sizeof(value));
     const size_t kvd_bytes = (4 + kv_length + 3) / 4 * 4;
@@ -289,7 +335,7 @@ Result<BlockFile> block_file(TextureContainer container, BlockFormat format, int
     uint8_t* b = file.header.data();
     static const uint8_t kId[12] = {0xAB, 'K', 'T', 'X', ' ', '2', '0', 0xBB, '\r', '\n', 0x1A, '\n'};
     std::memcpy(b, kId, 12);
-    put32(b + 12, block_vk_format(format));
+    put32(b + 12, block_vk_format(format, astc_side));
     put32(b + 16, 1);  // typeSize of block formats
     put32(b + 20, uint32_t(width));
     put32(b + 24, uint32_t(height));

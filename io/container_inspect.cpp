@@ -1,6 +1,7 @@
 #include "io/container_inspect.h"
 #include "io/input_policy.h"
 
+#include "io/astc_codec.h"
 #include "io/atomic_file.h"
 #include "io/bc_decode.h"
 #include "io/byte_order.h"
@@ -22,8 +23,9 @@ namespace {
 
 enum class Numeric { unorm, srgb, sfloat };
 
-// Formats a bake can produce, by the KTX2 vkFormat (Vulkan) and DDS DXGI_FORMAT values: uncompressed, and
-// the block-compressed BC1 (RGB, opaque), BC3, BC4 and BC5 UNORM of `--block bc` (io/bc_decode.h).
+// Formats a bake can produce, by the KTX2 vkFormat (Vulkan) and DDS DXGI_FORMAT values: uncompressed, the
+// block-compressed BC1 (RGB, opaque), BC3, BC4 and BC5 UNORM of `--block bc` (io/bc_decode.h), and the ASTC
+// 4x4, 6x6 and 8x8 UNORM of `--block astc` (KTX2 only; decoded by astcenc, io/astc_codec.h).
 struct FormatInfo {
     uint32_t vk;
     uint32_t dxgi;  // 0: no DXGI equivalent
@@ -33,10 +35,11 @@ struct FormatInfo {
     Numeric numeric;
     bool block = false;
     BcFormat bc = BcFormat::Bc1;
-    uint8_t colour_model = 1;  // KDFS 1.3 Sec. 5.6: RGBSDA 1, BC1A 128, BC3 130, BC4 131, BC5 132
+    uint8_t colour_model = 1;  // KDFS 1.3 Sec. 5.6: RGBSDA 1, BC1A 128, BC3 130, BC4 131, BC5 132, ASTC 162
+    int astc = 0;              // ASTC footprint side; 0 for the others
 };
 
-constexpr std::array<FormatInfo, 22> kFormats{{
+constexpr std::array<FormatInfo, 25> kFormats{{
     {9, 61, "R8_UNORM", 1, 1, Numeric::unorm},
     {16, 49, "R8G8_UNORM", 2, 1, Numeric::unorm},
     {23, 0, "R8G8B8_UNORM", 3, 1, Numeric::unorm},
@@ -58,6 +61,9 @@ constexpr std::array<FormatInfo, 22> kFormats{{
     {137, 77, "BC3_UNORM_BLOCK", 4, 1, Numeric::unorm, true, BcFormat::Bc3, 130},
     {139, 80, "BC4_UNORM_BLOCK", 1, 1, Numeric::unorm, true, BcFormat::Bc4, 131},
     {141, 83, "BC5_UNORM_BLOCK", 2, 1, Numeric::unorm, true, BcFormat::Bc5, 132},
+    {157, 0, "ASTC_4x4_UNORM_BLOCK", 4, 1, Numeric::unorm, true, BcFormat::Bc1, 162, 4},
+    {165, 0, "ASTC_6x6_UNORM_BLOCK", 4, 1, Numeric::unorm, true, BcFormat::Bc1, 162, 6},
+    {171, 0, "ASTC_8x8_UNORM_BLOCK", 4, 1, Numeric::unorm, true, BcFormat::Bc1, 162, 8},
     {0, 0, "", 0, 0, Numeric::unorm},
 }};
 
@@ -71,6 +77,12 @@ const FormatInfo* format_by_dxgi(uint32_t dxgi) {
     for (const FormatInfo& f : kFormats)
         if (f.channels && f.dxgi && f.dxgi == dxgi) return &f;
     return nullptr;
+}
+
+// Texels a side of one block (1 for plain formats) and bytes a block (plain: a texel).
+int block_side(const FormatInfo& f) { return f.astc ? f.astc : f.block ? 4 : 1; }
+uint32_t block_size_bytes(const FormatInfo& f) {
+    return f.astc ? 16u : f.block ? uint32_t(bc_block_bytes(f.bc)) : uint32_t(f.channels * f.bytes);
 }
 
 uint32_t u32(std::span<const uint8_t> b, size_t at) {
@@ -114,11 +126,19 @@ uint64_t level_bytes(uint32_t w, uint32_t h, int level, const FormatInfo& f) {
     // A 2^32-wide chain has 33 levels: level 32 is 1x1 (and a shift by 32 would be undefined).
     const uint64_t lw = level >= 32 ? 1 : std::max<uint32_t>(1, w >> level);
     const uint64_t lh = level >= 32 ? 1 : std::max<uint32_t>(1, h >> level);
+    if (f.astc) return astc_level_bytes(f.astc, lw, lh);
     if (f.block) return bc_level_bytes(f.bc, lw, lh);
     return lw * lh * uint64_t(f.channels * f.bytes);
 }
 
-Image decode_level(const uint8_t* data, int w, int h, const FormatInfo& f) {
+Result<Image> decode_level(const uint8_t* data, int w, int h, const FormatInfo& f) {
+    if (f.astc) {
+        auto rgba = astc_decompress_level({data, size_t(astc_level_bytes(f.astc, uint64_t(w), uint64_t(h)))}, w, h, f.astc);
+        if (!rgba) return rgba.error();
+        Image img(w, h, 4);
+        for (size_t i = 0; i < rgba->size(); ++i) img.pixels[i] = float((*rgba)[i]) / 255.0f;
+        return img;
+    }
     if (f.block) return decode_bc_level(f.bc, data, w, h);
     Image img(w, h, f.channels);
     const size_t texel = size_t(f.channels * f.bytes);
@@ -227,17 +247,22 @@ Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& nam
     if (color_model != f.colour_model)
         return fail("colour model " + std::to_string(color_model) + " does not match " + f.name + " (expected " +
                     std::to_string(f.colour_model) + ")");
-    // Texel block dimensions are stored minus one: 1x1x1x1 for plain texels, 4x4x1x1 for BC blocks.
-    const uint8_t block_side = f.block ? 3 : 0;
-    if (b[blk + 12] != block_side || b[blk + 13] != block_side || b[blk + 14] | b[blk + 15])
-        return fail(std::string("texel block dimensions are not ") + (f.block ? "4x4x1x1" : "1x1x1x1"));
-    const uint32_t plane_bytes = f.block ? uint32_t(bc_block_bytes(f.bc)) : uint32_t(f.channels * f.bytes);
+    // Texel block dimensions are stored minus one: 1x1x1x1 for plain texels, 4x4x1x1 for BC blocks, the
+    // footprint for ASTC.
+    const int side = block_side(f);
+    if (b[blk + 12] != side - 1 || b[blk + 13] != side - 1 || b[blk + 14] | b[blk + 15])
+        return fail("texel block dimensions are not " + std::to_string(side) + "x" + std::to_string(side) + "x1x1");
+    const uint32_t plane_bytes = block_size_bytes(f);
     if (b[blk + 16] != plane_bytes)
         return fail("bytesPlane0 " + std::to_string(b[blk + 16]) + " does not match " + f.name);
     const uint32_t expected_transfer = f.numeric == Numeric::srgb ? 2 : 1;
     if (L.transfer != expected_transfer)
         return fail("transfer function " + std::to_string(L.transfer) + " does not match " + f.name);
-    if (f.block) {
+    if (f.astc) {
+        // One 128-bit sample of channel 0 (ASTC data, KDFS 1.3 Sec. 5.18).
+        if (samples != 1 || (b[blk + 24] | b[blk + 25] << 8) != 0 || b[blk + 26] != 127 || (b[blk + 27] & 0x0f) != 0)
+            return fail(std::string("DFD samples do not describe ") + f.name);
+    } else if (f.block) {
         // One 64-bit sample per 8 bytes of block (KDFS 1.3 Sec. 5.18): BC3 alpha (15) then colour (0), BC5
         // red (0) then green (1), BC1 and BC4 one sample of channel 0.
         const uint32_t want = uint32_t(bc_block_bytes(f.bc) / 8);
@@ -270,7 +295,7 @@ Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& nam
     // Supercompressed levels have no alignment (mipPadding is align(1)) and any byteLength; they must
     // inflate to exactly uncompressedByteLength.
     const uint64_t alignment =
-        zstd ? 1 : std::lcm(f.block ? uint64_t(bc_block_bytes(f.bc)) : uint64_t(f.channels * f.bytes), uint64_t(4));
+        zstd ? 1 : std::lcm(uint64_t(block_size_bytes(f)), uint64_t(4));
     const uint64_t metadata_end =
         std::max<uint64_t>(uint64_t(dfd_offset) + dfd_length, kvd_length ? uint64_t(kvd_offset) + kvd_length : 0);
     for (uint32_t level = 0; level < L.levels; ++level) {
@@ -414,15 +439,17 @@ Result<InspectedTexture> decode_ktx2_for_inspection(std::span<const uint8_t> byt
     t.channel_names.resize(size_t(layout->format->channels));
     t.layers = int(layout->layers);
     t.channel_bytes = layout->format->bytes;
-    if (layout->format->block) t.block_bytes = int(bc_block_bytes(layout->format->bc));
+    if (layout->format->block) t.block_bytes = int(block_size_bytes(*layout->format));
     const int stored_layers = std::max(1, t.layers);
     // An array's layers are decoded one below the other: each level is width x (height x layers).
-    for (uint32_t level = 0; level < layout->levels; ++level)
-        t.mips.levels.push_back(decode_level(layout->inflated.empty() ? bytes.data() + layout->offsets[level]
-                                                                      : layout->inflated[level].data(),
-                                             int(std::max<uint32_t>(1, layout->width >> level)),
-                                             int(std::max<uint32_t>(1, layout->height >> level)) * stored_layers,
-                                             *layout->format));
+    for (uint32_t level = 0; level < layout->levels; ++level) {
+        auto img = decode_level(layout->inflated.empty() ? bytes.data() + layout->offsets[level]
+                                                         : layout->inflated[level].data(),
+                                int(std::max<uint32_t>(1, layout->width >> level)),
+                                int(std::max<uint32_t>(1, layout->height >> level)) * stored_layers, *layout->format);
+        if (!img) return make_error(name + ": KTX2: level " + std::to_string(level) + ": " + img.error().message);
+        t.mips.levels.push_back(std::move(*img));
+    }
     return t;
 }
 
@@ -441,7 +468,9 @@ Result<InspectedTexture> decode_dds_for_inspection(std::span<const uint8_t> byte
     for (uint32_t level = 0; level < layout->levels; ++level) {
         const int w = int(std::max<uint32_t>(1, layout->width >> level));
         const int h = int(std::max<uint32_t>(1, layout->height >> level));
-        t.mips.levels.push_back(decode_level(bytes.data() + at, w, h, *layout->format));
+        auto img = decode_level(bytes.data() + at, w, h, *layout->format);
+        if (!img) return make_error(name + ": DDS: level " + std::to_string(level) + ": " + img.error().message);
+        t.mips.levels.push_back(std::move(*img));
         if (layout->bgra)
             for (size_t i = 0; i < t.mips.levels.back().texel_count(); ++i)
                 std::swap(t.mips.levels.back().pixels[4 * i], t.mips.levels.back().pixels[4 * i + 2]);

@@ -1,5 +1,6 @@
 #include "io/texture_writer.h"
 
+#include "io/astc_codec.h"
 #include "io/atomic_file.h"
 #include "io/block_compress.h"
 #include "io/dds.h"
@@ -64,6 +65,30 @@ std::optional<TextureContainer> parse_container(const std::string& name) {
         if (name == container_name(c)) return c;
     }
     return std::nullopt;
+}
+
+const char* block_family_name(BlockFamily f) {
+    switch (f) {
+        case BlockFamily::Bc: return "bc";
+        case BlockFamily::Astc: return "astc";
+        case BlockFamily::None: break;
+    }
+    return "none";
+}
+
+std::optional<BlockFamily> parse_block_family(const std::string& name) {
+    for (BlockFamily f : {BlockFamily::None, BlockFamily::Bc, BlockFamily::Astc})
+        if (name == block_family_name(f)) return f;
+    return std::nullopt;
+}
+
+std::string block_container_problem(TextureContainer container, BlockFamily family) {
+    if (family == BlockFamily::None || container == TextureContainer::Ktx2) return {};
+    if (container == TextureContainer::Dds && family == BlockFamily::Bc) return {};
+    if (container == TextureContainer::Dds)
+        return "ASTC is written to KTX2 only: DDS has no standard ASTC format (D3D samples none)";
+    return std::string(block_family_name(family)) + " block compression needs a ktx2 or dds container; " +
+           container_name(container) + " writes its levels uncompressed";
 }
 
 namespace {
@@ -394,49 +419,78 @@ ManifestOutput EncodedTexture::entry(const std::string& filename, const std::str
 
 namespace {
 
-// The file of `t` with every level block-compressed as `format` (16-bit unorm levels rounded to 8 bits
-// first: BC endpoints hold 8 bits), zstd-supercompressed when `t` asks for it (KTX2).
+// The level `L` of `t` as 8-bit texels in stored channel order (DDS A8R8G8B8 back to RGBA; 16-bit unorm
+// rounded to 8 bits: BC endpoints and the ASTC LDR decode hold 8 bits). `scratch` holds them when
+// they are not the level's own bytes.
+const uint8_t* level_as_unorm8(const EncodedTexture& t, size_t L, std::vector<uint8_t>& scratch) {
+    const ContainerLayout& layout = t.layout();
+    const int channels = layout.stored_channels;
+    const int w = std::max(1, t.width() >> L), h = std::max(1, t.height() >> L);
+    const uint8_t* src = t.bytes().data() + layout.level_offset[L];
+    if (t.bgra()) {  // the DDS A8R8G8B8 byte order back to RGBA for the block encoder
+        scratch.assign(src, src + size_t(w) * size_t(h) * 4);
+        dds_swap_red_blue(scratch.data(), size_t(w) * size_t(h));
+        src = scratch.data();
+    }
+    if (t.encoding() == TexelEncoding::Unorm16) {
+        std::vector<uint8_t> narrowed(size_t(w) * size_t(h) * size_t(channels));
+        for (size_t k = 0; k < narrowed.size(); ++k) {
+            uint16_t v;
+            std::memcpy(&v, src + 2 * k, 2);
+            narrowed[k] = uint8_t((uint32_t(v) * 255u + 32767u) / 65535u);
+        }
+        scratch = std::move(narrowed);
+        src = scratch.data();
+    }
+    return src;
+}
+
+// The file of `t` with every level block-compressed as `format`, zstd-supercompressed when `t` asks for it
+// (KTX2). BC levels are encoded in parallel; ASTC levels one after another, each on every thread.
 Result<BlockFile> block_compressed(const EncodedTexture& t, BlockFormat format) {
     if (t.encoding() != TexelEncoding::Unorm8 && t.encoding() != TexelEncoding::Unorm16)
         return make_error("block compression takes 8- or 16-bit unorm data");
     const ContainerLayout& layout = t.layout();
     const int channels = layout.stored_channels;
+    const int astc_side = t.supercompression().astc_block;
     std::vector<std::vector<uint8_t>> levels(layout.level_offset.size());
-    tbb::parallel_for(size_t(0), levels.size(), [&](size_t L) {
-        const int w = std::max(1, t.width() >> L), h = std::max(1, t.height() >> L);
-        const uint8_t* src = t.bytes().data() + layout.level_offset[L];
-        std::vector<uint8_t> narrowed;
-        if (t.bgra()) {  // the DDS A8R8G8B8 byte order back to RGBA for the block encoder
-            narrowed.assign(src, src + size_t(w) * size_t(h) * 4);
-            dds_swap_red_blue(narrowed.data(), size_t(w) * size_t(h));
-            src = narrowed.data();
+    if (is_astc(format)) {
+        for (size_t L = 0; L < levels.size(); ++L) {
+            std::vector<uint8_t> scratch;
+            const uint8_t* src = level_as_unorm8(t, L, scratch);
+            auto blocks = astc_compress_level(src, std::max(1, t.width() >> L), std::max(1, t.height() >> L), channels,
+                                              block_channels(format), astc_side);
+            if (!blocks) return blocks.error();
+            levels[L] = std::move(*blocks);
         }
-        if (t.encoding() == TexelEncoding::Unorm16) {
-            narrowed.resize(size_t(w) * size_t(h) * size_t(channels));
-            for (size_t k = 0; k < narrowed.size(); ++k) {
-                uint16_t v;
-                std::memcpy(&v, src + 2 * k, 2);
-                narrowed[k] = uint8_t((uint32_t(v) * 255u + 32767u) / 65535u);
-            }
-            src = narrowed.data();
-        }
-        levels[L] = compress_level(format, src, w, h, channels);
-    });
+    } else {
+        tbb::parallel_for(size_t(0), levels.size(), [&](size_t L) {
+            std::vector<uint8_t> scratch;
+            const uint8_t* src = level_as_unorm8(t, L, scratch);
+            levels[L] = compress_level(format, src, std::max(1, t.width() >> L), std::max(1, t.height() >> L), channels);
+        });
+    }
     return block_file(t.container(), format, t.width(), t.height(), std::move(levels),
-                      t.supercompressed() ? t.supercompression().zstd_level : 0);
+                      t.supercompressed() ? t.supercompression().zstd_level : 0, astc_side);
 }
 
 // The manifest entry of a block-compressed file: its format names and the channels the blocks hold.
 void describe_blocks(ManifestOutput& e, const EncodedTexture& t, const EncodedFile& f) {
-    static const char* names[] = {"", "BC1_RGB_UNORM_BLOCK", "BC3_UNORM_BLOCK", "BC4_UNORM_BLOCK", "BC5_UNORM_BLOCK"};
-    e.extra["gpu_format"] = names[int(f.block)];
+    const int side = t.supercompression().astc_block;
+    e.extra["gpu_format"] = block_gpu_format_name(f.block, side);
     e.extra["encoding"] = "unorm8";
-    if (t.container() == TextureContainer::Ktx2) e.extra["vkFormat"] = block_vk_format(f.block);
+    if (t.container() == TextureContainer::Ktx2) e.extra["vkFormat"] = block_vk_format(f.block, side);
     else {
         e.extra.erase("dxgiFormat");
         e.extra["dds_header"] = std::string("legacy FourCC ") + block_fourcc(f.block);
     }
-    if (f.block == BlockFormat::Bc4 || f.block == BlockFormat::Bc5) {
+    if (is_astc(f.block)) {
+        e.extra["astc_block"] = std::to_string(side) + "x" + std::to_string(side);
+        // What the decoded RGBA holds beyond the kept channels (io/astc_codec.h).
+        e.extra["astc_decoded_as"] = f.block == BlockFormat::AstcR ? "r, r, r, 1" : f.block == BlockFormat::AstcRg
+                                                                                      ? "x, y, 0, 1" : "r, g, b, a";
+    }
+    if (block_channels(f.block) < 4) {
         e.channels = block_channels(f.block);
         std::vector<std::string> meaning = e.extra["channel_meaning"];
         meaning.resize(size_t(e.channels));

@@ -40,16 +40,26 @@ int gpu_channels(int channels);
 std::string gpu_format_name(TexelEncoding encoding, int channels);
 
 // How KTX2/DDS level data is compressed. zstd: KTX2 supercompression (io/ktx2.h, ktx2_zstd), scheme 2, on
-// by default; other containers ignore it. block: 8-bit outputs block-compressed (io/block_compress.h):
-// one channel BC4, the mean normal BC5 (x, y), four channels `rgba_block` (BC1 by default: the ORM map's
-// A is 1, which BC1's opaque mode stores exactly; BC3 adds an alpha block); float data stays float16/32.
+// by default; other containers ignore it. block: 8-bit outputs block-compressed (io/block_compress.h).
+// Bc: one channel BC4, the mean normal BC5 (x, y), four channels `rgba_block` (BC1 by default: the ORM
+// map's A is 1, which BC1's opaque mode stores exactly; BC3 adds an alpha block). Astc: every 8-bit
+// output ASTC with an `astc_block` x `astc_block` footprint (io/astc_codec.h; the mean normal keeps x, y
+// as BC5 does), KTX2 only. Float data stays float16/32 either way.
 enum class BlockFormat;
+enum class BlockFamily { None, Bc, Astc };
 struct Supercompression {
     bool zstd = true;
     int zstd_level = 3;  // 1 (fastest) .. 22; 3 is zstd's own default
-    bool block = false;
+    BlockFamily block = BlockFamily::None;
     int rgba_block = 1;  // 1: BC1, 3: BC3
+    int astc_block = 4;  // 4, 6 or 8 texels a side
 };
+
+const char* block_family_name(BlockFamily f);  // "none", "bc", "astc"
+std::optional<BlockFamily> parse_block_family(const std::string& name);
+// Why `container` cannot hold the block formats of `family` (BC: KTX2 and DDS; ASTC: KTX2 only, as DDS
+// has no standard ASTC format), or empty when it can.
+std::string block_container_problem(TextureContainer container, BlockFamily family);
 
 const char* container_name(TextureContainer c);      // "ktx2", "dds", "exr", "png"
 const char* encoding_name(TexelEncoding e);          // "unorm8", "unorm16", "float16", "float32"

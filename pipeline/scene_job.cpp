@@ -178,7 +178,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         for (const io::ManifestOutput& o : files_by_stem.at(d.stem)) {
             json entry = {{"kind", o.kind}, {"uri", o.path}, {"format", o.format}, {"width", o.width},
                           {"height", o.height}, {"mips", o.mips}, {"channels", o.channels}};
-            // Block-compressed (`--block bc`): the GPU format, since BC5 holds the normal's x, y only.
+            // Block-compressed (`--block bc`, `--block astc`): the GPU format, since BC5 / ASTC hold the normal's x, y only.
             if (o.extra.value("block_compression", "none") != "none") entry["gpuFormat"] = o.extra["gpu_format"];
             if (const std::string mime = mime_of(o.format); glb && !mime.empty()) {
                 const int k = scene.embed_baked_image(out_dir / o.path, mime, o.path);
@@ -353,7 +353,7 @@ json scene_settings_json(const SceneJob& job) {
     }
     if (job.gltf_mode == GltfMode::Replace) s["gltf_mode"] = "replace";
     // Recorded only when asked, so manifests of bakes without it stay as they were.
-    if (job.supercompression.block) s["supercompression"] = supercompression_json(job.supercompression);
+    if (job.supercompression.block != io::BlockFamily::None) s["supercompression"] = supercompression_json(job.supercompression);
     if (job.plan.textures) {
         s["texture"] = texture_settings_json(job.plan.texture_settings, job.container);
         // Per-material settings as applied, so the up-to-date check sees a changed override.
@@ -370,6 +370,8 @@ json scene_settings_json(const SceneJob& job) {
 Result<SceneJobOutcome> run_scene_job(const SceneJob& job) {
     if (job.scenes.empty()) return make_error("no scene given");
     if (auto r = io::check_utf8_path(job.output_dir); !r) return r.error();
+    if (const std::string p = io::block_container_problem(job.container, job.supercompression.block); !p.empty())
+        return make_error(p);
     SceneJobOutcome outcome;
     outcome.manifest.version = tool_version();
     outcome.manifest.settings = scene_settings_json(job);

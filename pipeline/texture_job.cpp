@@ -52,8 +52,15 @@ Error name_error(const Error& e, const std::string& normal_name, const std::stri
     return e;
 }
 
-io::TexelEncoding unorm_for_bits(int bits) {
-    return bits <= 8 ? io::TexelEncoding::Unorm8 : io::TexelEncoding::Unorm16;
+// The encoding of the roughness and mean-normal outputs of `bits`-bit inputs: 8 bits as R8/RGBA8 UNORM;
+// deeper inputs as half floats (R16_SFLOAT, R16G16B16A16_SFLOAT: formats every GPU samples and filters,
+// 11 significant bits, which three.js and WebGL 2 load where they have no 16-bit UNORM), except as 16-bit
+// UNORM in per-mip PNGs (PNG has no float) and where block compression narrows them to 8 bits anyway.
+io::TexelEncoding encoding_for_bits(int bits, io::TextureContainer container, const io::Supercompression& s) {
+    if (bits <= 8) return io::TexelEncoding::Unorm8;
+    if (container == io::TextureContainer::PngPerMip || s.block != io::BlockFamily::None)
+        return io::TexelEncoding::Unorm16;
+    return io::TexelEncoding::Float16;
 }
 
 // Channels [first, first + count) of every level.
@@ -87,12 +94,14 @@ struct OutputFile {
 // zstd removes the constant A almost entirely, and the two-channel form belongs to BC5),
 // `_lean` (RGBA = m.x, m.y, M.xx, M.yy) plus `_lean_xy` (Y = M.xy). `names` are the channels' meanings.
 std::vector<OutputFile> output_files(const TextureBakeShape& shape, const TextureInputs& in,
-                                     const TextureBakeSettings& settings, const std::string& stem) {
+                                     const TextureBakeSettings& settings, const std::string& stem,
+                                     io::TextureContainer container, const io::Supercompression& supercompression) {
     std::vector<OutputFile> files;
     const bool have_roughness = in.roughness || in.roughness_map.channels > 0;
     const int roughness_bits = have_roughness ? in.roughness_bits : in.normal_bits;
     if (settings.outputs.roughness) {
-        files.push_back({Chain::Roughness, "roughness", stem + "_roughness", unorm_for_bits(roughness_bits), 0,
+        files.push_back({Chain::Roughness, "roughness", stem + "_roughness",
+                         encoding_for_bits(roughness_bits, container, supercompression), 0,
                          shape.roughness_channels,
                          shape.roughness_channels == 3 ? std::vector<std::string>{"input.r", "r", "input.b", "1"}
                                                        : std::vector<std::string>{"r"}});
@@ -103,7 +112,8 @@ std::vector<OutputFile> output_files(const TextureBakeShape& shape, const Textur
                                               : std::vector<std::string>{"t"}});
     }
     if (settings.outputs.normal) {
-        files.push_back({Chain::Normal, "normal", stem + "_normal", unorm_for_bits(in.normal_bits), 0, 3,
+        files.push_back({Chain::Normal, "normal", stem + "_normal",
+                         encoding_for_bits(in.normal_bits, container, supercompression), 0, 3,
                          {"n.x", "n.y", "n.z", "1"}});
     }
     if (settings.outputs.lean) {
@@ -117,12 +127,16 @@ std::vector<OutputFile> output_files(const TextureBakeShape& shape, const Textur
 }
 
 // The block format of `f` when block compression is asked (io/block_compress.h): unorm data only, one
-// channel BC4, the mean normal BC5 (x, y; z = sqrt(1 - x^2 - y^2) at run time), four channels BC1 or BC3.
+// channel BC4, the mean normal BC5 (x, y; z = sqrt(1 - x^2 - y^2) at run time), four channels BC1 or BC3;
+// ASTC keeps the same channels (io/astc_codec.h).
 io::BlockFormat block_format_of(const OutputFile& f, const io::Supercompression& s) {
-    if (!s.block || (f.encoding != io::TexelEncoding::Unorm8 && f.encoding != io::TexelEncoding::Unorm16))
+    if (s.block == io::BlockFamily::None ||
+        (f.encoding != io::TexelEncoding::Unorm8 && f.encoding != io::TexelEncoding::Unorm16))
         return io::BlockFormat::None;
-    if (f.chain == Chain::Normal) return io::BlockFormat::Bc5;
-    if (f.channels == 1) return io::BlockFormat::Bc4;
+    const bool astc = s.block == io::BlockFamily::Astc;
+    if (f.chain == Chain::Normal) return astc ? io::BlockFormat::AstcRg : io::BlockFormat::Bc5;
+    if (f.channels == 1) return astc ? io::BlockFormat::AstcR : io::BlockFormat::Bc4;
+    if (astc) return io::BlockFormat::AstcRgba;
     return s.rgba_block == 3 ? io::BlockFormat::Bc3 : io::BlockFormat::Bc1;
 }
 
@@ -292,7 +306,12 @@ Result<TextureBakeResult> bake_texture_inputs(const TextureInputs& in, const Tex
 nlohmann::json supercompression_json(const io::Supercompression& s) {
     nlohmann::json j = s.zstd ? nlohmann::json{{"scheme", "zstd"}, {"zstd_level", s.zstd_level}}
                               : nlohmann::json{{"scheme", "none"}};
-    if (s.block) j["block"] = {{"one_channel", "bc4"}, {"normal", "bc5"}, {"rgba", s.rgba_block == 3 ? "bc3" : "bc1"}};
+    if (s.block == io::BlockFamily::Bc)
+        j["block"] = {{"one_channel", "bc4"}, {"normal", "bc5"}, {"rgba", s.rgba_block == 3 ? "bc3" : "bc1"}};
+    if (s.block == io::BlockFamily::Astc) {
+        const std::string astc = "astc" + std::to_string(s.astc_block) + "x" + std::to_string(s.astc_block);
+        j["block"] = {{"one_channel", astc}, {"normal", astc}, {"rgba", astc}};
+    }
     return j;
 }
 
@@ -330,7 +349,7 @@ Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, cons
         return make_error(std::string("cannot encode ") + io::container_name(container) + " in memory");
     const int channel = roughness_channel_of(in);
     const TextureBakeShape shape = texture_bake_shape(maps.normal, maps.roughness, channel, settings);
-    const std::vector<OutputFile> files = output_files(shape, in, settings, stem);
+    const std::vector<OutputFile> files = output_files(shape, in, settings, stem, container, supercompression);
     EncodedTextureOutputs out;
     for (const OutputFile& f : files) {
         out.textures.push_back(std::make_unique<io::EncodedTexture>(container, f.encoding, shape.width, shape.height,
@@ -398,7 +417,7 @@ Result<TextureOutputsWritten> write_texture_outputs(TextureBakeResult&& baked, c
     shape.kernel_channels = baked.kernel.channels();
     shape.lean_channels = baked.lean.channels();
     shape.normal_channels = baked.normal.channels();
-    const std::vector<OutputFile> files = output_files(shape, in, settings, stem);
+    const std::vector<OutputFile> files = output_files(shape, in, settings, stem, container, supercompression);
     for (size_t i = 0; i < files.size(); ++i) {
         const OutputFile& f = files[i];
         if (progress) progress("writing " + f.stem);
@@ -420,6 +439,8 @@ Result<TextureJobOutcome> run_texture_job(const TextureJob& job) {
     const ProgressFn& progress = job.progress;
     std::error_code ec;
     if (job.output_dir.empty()) return make_error("no output folder given");
+    if (const std::string p = io::block_container_problem(job.container, job.supercompression.block); !p.empty())
+        return make_error(p);
     for (const fs::path& p : {job.output_dir, job.demo ? fs::path() : job.normal, job.roughness.value_or(fs::path())})
         if (auto r = io::check_utf8_path(p); !r) return r.error();
     if (fs::exists(job.output_dir, ec) && !fs::is_directory(job.output_dir, ec))
@@ -439,7 +460,7 @@ Result<TextureJobOutcome> run_texture_job(const TextureJob& job) {
     io::Manifest manifest;
     manifest.version = tool_version();
     manifest.settings = texture_settings_json(job.settings, job.container);
-    if (job.container == io::TextureContainer::Ktx2 || job.supercompression.block)
+    if (job.container == io::TextureContainer::Ktx2 || job.supercompression.block != io::BlockFamily::None)
         manifest.settings["supercompression"] = supercompression_json(job.supercompression);
 
     TextureInputs in;

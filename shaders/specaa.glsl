@@ -56,8 +56,9 @@
 //   "Output layouts"); bind them with linear mip filtering (LINEAR_MIPMAP_LINEAR): loaders such as
 //   three.js KTX2Loader default to nearest.
 //   SPECAA_NORMAL_TWO_CHANNEL       the baked mean normal (`*_normal`) read by specaa_sample_mean_normal
-//                                   has two channels (BC5 of `--block bc`: x, y as (n + 1) / 2); z is
-//                                   rebuilt as sqrt(max(0, 1 - x^2 - y^2)). Without it: RGBA8, (n + 1) / 2.
+//                                   has two channels (BC5 of `--block bc`, ASTC of `--block astc`: x, y as
+//                                   (n + 1) / 2); z is rebuilt as sqrt(max(0, 1 - x^2 - y^2)). Without it:
+//                                   RGBA8, (n + 1) / 2.
 //   SPECAA_SAMPLER name             HLSL only: the SamplerState used with the textures above.
 //   SPECAA_USE_CURVATURE            per-pixel kernel from _SPECAA_CURVATURE (SPEC Sec. 4) and the
 //                                   position derivatives instead of normal derivatives.
@@ -377,7 +378,7 @@ SPECAA_FLOAT3 specaa_lean_covariance(SPECAA_FLOAT4 lean0, float lean1) {
 }
 
 // Baked mean normal (`*_normal`, README "Output layouts"), tangent space, unit length. Two-channel texels
-// (BC5 under `--block bc`) hold x, y as (n + 1) / 2: z = sqrt(max(0, 1 - x^2 - y^2)) (the mean normal lies in
+// (BC5 under `--block bc`, ASTC's (x, y, 0, 1) under `--block astc`) hold x, y as (n + 1) / 2: z = sqrt(max(0, 1 - x^2 - y^2)) (the mean normal lies in
 // the upper hemisphere), renormalised where filtering or quantisation put (x, y) outside the unit disc.
 // RGB texels hold (n + 1) / 2, renormalised after filtering; a zero vector gives (0, 0, 1).
 SPECAA_FLOAT3 specaa_decode_normal_xy(SPECAA_FLOAT2 texel) {
@@ -390,7 +391,7 @@ SPECAA_FLOAT3 specaa_decode_normal_rgb(SPECAA_FLOAT3 texel) {
     float l2 = dot(n, n);
     return SPECAA_SELECT3(l2 > 0.0, n / sqrt(max(l2, 1.0e-30)), SPECAA_FLOAT3(0.0, 0.0, 1.0));
 }
-// The baked mean normal at uv: two channels with SPECAA_NORMAL_TWO_CHANNEL (BC5), else RGB(A).
+// The baked mean normal at uv: two channels with SPECAA_NORMAL_TWO_CHANNEL (BC5, ASTC), else RGB(A).
 SPECAA_FLOAT3 specaa_sample_mean_normal(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
 #if defined(SPECAA_NORMAL_TWO_CHANNEL)
     return specaa_decode_normal_xy(SPECAA_SAMPLE(tex, smp, uv).rg);

@@ -149,7 +149,18 @@ TEST_F(TextureCli, TwoChannelSixteenBitMapIsReconstructedAndSaid) {
     EXPECT_NE(r.err.find("z reconstructed"), std::string::npos) << r.err;
     auto m = io::read_manifest(root_ / "out" / "manifest.json");
     ASSERT_TRUE(m.ok());
-    EXPECT_EQ(m->outputs[0].extra["encoding"], "unorm16");
+    // A 16-bit input gives half-float roughness and normal outputs in KTX2 (R16_SFLOAT: 11 significant bits,
+    // and a format WebGL 2 samples, which it does not do for 16-bit UNORM without EXT_texture_norm16).
+    EXPECT_EQ(m->outputs[0].extra["encoding"], "float16");
+    EXPECT_EQ(m->outputs[0].extra["gpu_format"], "R16_SFLOAT");
+    // Per-mip PNGs keep 16-bit UNORM (PNG has no float).
+    const RunResult p = run("texture --normal '" + in.string() + "' --roughness-value 0.3 --format png -o '" +
+                                (root_ / "png").string() + "'",
+                            root_ / "scratch");
+    ASSERT_EQ(p.code, 0) << p.err;
+    auto mp = io::read_manifest(root_ / "png" / "manifest.json");
+    ASSERT_TRUE(mp.ok());
+    EXPECT_EQ(mp->outputs[0].extra["encoding"], "unorm16");
 }
 
 TEST_F(TextureCli, BadInputsGiveOneErrorLineAndNoOutput) {
