@@ -4,6 +4,8 @@
 
 #include "io/byte_order.h"
 
+#include <zstd.h>
+
 #include <cstring>
 
 namespace specbake::io {
@@ -38,8 +40,24 @@ Result<UastcFile> read_uastc_ktx2(std::span<const uint8_t> b, const std::string&
 }
 
 std::vector<uint8_t> assemble_uastc_ktx2(const std::vector<UastcLevel>& levels, std::span<const uint8_t> dfd,
-                                         const std::string& writer) {
+                                         const std::string& writer, int zstd_level) {
     const size_t n = levels.size();
+    // The stored bytes of every level: the blocks, or one zstd frame of them.
+    std::vector<std::vector<uint8_t>> stored(n);
+    if (zstd_level > 0)
+        for (size_t i = 0; i < n; ++i) {
+            stored[i].resize(ZSTD_compressBound(levels[i].blocks.size()));
+            const size_t z = ZSTD_compress(stored[i].data(), stored[i].size(), levels[i].blocks.data(),
+                                           levels[i].blocks.size(), zstd_level);
+            if (ZSTD_isError(z)) {  // only on a bad level or out of memory: keep the file plain instead
+                zstd_level = 0;
+                break;
+            }
+            stored[i].resize(z);
+        }
+    if (zstd_level <= 0)
+        for (size_t i = 0; i < n; ++i) stored[i] = levels[i].blocks;
+    const size_t alignment = zstd_level > 0 ? 1 : 16;
     const size_t index_end = 80 + 24 * n;
     const size_t dfd_offset = index_end;
     std::vector<uint8_t> kvd;
@@ -58,9 +76,9 @@ std::vector<uint8_t> assemble_uastc_ktx2(const std::vector<UastcLevel>& levels, 
     size_t end = kvd_offset + kvd.size();
     std::vector<size_t> offsets(n);
     for (size_t i = n; i-- > 0;) {  // smallest level first
-        end = (end + 15) / 16 * 16;
+        end = (end + alignment - 1) / alignment * alignment;
         offsets[i] = end;
-        end += levels[i].blocks.size();
+        end += stored[i].size();
     }
     std::vector<uint8_t> f(end, 0);
     std::memcpy(f.data(), kKtx2Identifier, 12);
@@ -72,7 +90,7 @@ std::vector<uint8_t> assemble_uastc_ktx2(const std::vector<UastcLevel>& levels, 
     put32(f, 32, 0);  // layerCount
     put32(f, 36, 1);  // faceCount
     put32(f, 40, uint32_t(n));
-    put32(f, 44, 0);  // supercompressionScheme: none
+    put32(f, 44, zstd_level > 0 ? 2 : 0);  // supercompressionScheme: Zstandard or none
     put32(f, 48, uint32_t(dfd_offset));
     put32(f, 52, uint32_t(dfd.size()));
     put32(f, 56, uint32_t(kvd_offset));
@@ -81,9 +99,9 @@ std::vector<uint8_t> assemble_uastc_ktx2(const std::vector<UastcLevel>& levels, 
     put64(f, 72, 0);
     for (size_t i = 0; i < n; ++i) {
         put64(f, 80 + 24 * i, offsets[i]);
-        put64(f, 88 + 24 * i, levels[i].blocks.size());
+        put64(f, 88 + 24 * i, stored[i].size());
         put64(f, 96 + 24 * i, levels[i].blocks.size());
-        std::memcpy(f.data() + offsets[i], levels[i].blocks.data(), levels[i].blocks.size());
+        std::memcpy(f.data() + offsets[i], stored[i].data(), stored[i].size());
     }
     std::memcpy(f.data() + dfd_offset, dfd.data(), dfd.size());
     std::memcpy(f.data() + kvd_offset, kvd.data(), kvd.size());

@@ -26,10 +26,12 @@ struct UastcFile {
 };
 Result<UastcFile> read_uastc_ktx2(std::span<const uint8_t> bytes, const std::string& name);
 
-// A KTX2 file of `levels` (level 0 first, each half the previous size, down to 1x1), no
-// supercompression, the descriptor `dfd`, KTXwriter `writer`; level data smallest level first, each
-// aligned to 16 bytes (lcm of the 16-byte block and 4), KTX 2.0 Sec. 3.
+// A KTX2 file of `levels` (level 0 first, each half the previous size, down to 1x1), the descriptor `dfd`
+// (kept as it is: bytesPlane0 stays 16 under zstd, KHR DataFormat #27), KTXwriter `writer`; level data
+// smallest level first, KTX 2.0 Sec. 3. `zstd_level` 0: no supercompression, each level aligned to 16 bytes
+// (lcm of the 16-byte block and 4); 1-22: every level a zstd frame of that level (scheme 2, which
+// KHR_texture_basisu allows for UASTC), unaligned.
 std::vector<uint8_t> assemble_uastc_ktx2(const std::vector<UastcLevel>& levels, std::span<const uint8_t> dfd,
-                                         const std::string& writer);
+                                         const std::string& writer, int zstd_level = 0);
 
 }  // namespace specbake::io

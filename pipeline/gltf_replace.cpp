@@ -32,7 +32,7 @@ MipChain metallic_roughness_layout(const MipChain& roughness) {
 
 Result<void> replace_with_basisu(io::GltfScene& scene, const ReplaceLayer& layer, const fs::path& basisu,
                                  const fs::path& dir, bool embed, std::vector<io::ManifestOutput>& outputs,
-                                 std::vector<std::string>& warnings) {
+                                 std::vector<std::string>& warnings, int zstd_level) {
     const std::vector<io::MaterialInfo> materials = scene.materials();
     if (layer.material < 0 || size_t(layer.material) >= materials.size() || layer.normal.levels.empty()) return {};
     const io::MaterialInfo& mat = materials[size_t(layer.material)];
@@ -51,7 +51,7 @@ Result<void> replace_with_basisu(io::GltfScene& scene, const ReplaceLayer& layer
     const fs::path scratch = dir / (".basisu_" + layer.stem);
     auto write = [&](const MipChain& chain, const std::string& kind, std::string& uri) -> Result<void> {
         const std::string name = layer.stem + "_" + kind + "_basisu.ktx2";
-        auto bytes = encode_uastc_ktx2(chain, basisu, scratch, name);
+        auto bytes = encode_uastc_ktx2(chain, basisu, scratch, name, zstd_level);
         if (!bytes) return bytes.error();
         if (auto w = io::write_file_atomic(dir / name, std::span<const uint8_t>(*bytes)); !w) return w.error();
         io::ManifestOutput o;
@@ -62,9 +62,13 @@ Result<void> replace_with_basisu(io::GltfScene& scene, const ReplaceLayer& layer
         o.height = chain.levels.front().height;
         o.mips = int(chain.levels.size());
         o.channels = 4;
-        o.extra = {{"gpu_format", "UASTC"}, {"supercompression", "none"}, {"bytes", bytes->size()},
+        size_t raw = 0;  // the level bytes before zstd: 16 per 4x4 block
+        for (const Image& l : chain.levels) raw += size_t((l.width + 3) / 4) * size_t((l.height + 3) / 4) * 16;
+        o.extra = {{"gpu_format", "UASTC"}, {"supercompression", zstd_level > 0 ? "zstd" : "none"},
+                   {"bytes", bytes->size()}, {"uastc_level_bytes", raw},
                    {"gltf", kind == "normal" ? "normalTexture (KHR_texture_basisu)"
                                              : "metallicRoughnessTexture (KHR_texture_basisu)"}};
+        if (zstd_level > 0) o.extra["zstd_level"] = zstd_level;
         outputs.push_back(std::move(o));
         uri = name;
         return {};

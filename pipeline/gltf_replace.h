@@ -30,8 +30,9 @@ struct ReplaceLayer {
 // A layer whose size is not a multiple of 4 (KHR_texture_basisu) or whose metallic-roughness texture is
 // mapped unlike the normal map keeps that slot, with a line in `warnings`. With `embed` (a .glb output) the
 // scene carries the files on buffer views when it is written; the caller then removes them from `dir`.
+// `zstd_level` 1-22 supercompresses the UASTC levels with zstd (KTX2 scheme 2), 0 leaves them plain.
 Result<void> replace_with_basisu(io::GltfScene& scene, const ReplaceLayer& layer, const std::filesystem::path& basisu,
                                  const std::filesystem::path& dir, bool embed, std::vector<io::ManifestOutput>& outputs,
-                                 std::vector<std::string>& warnings);
+                                 std::vector<std::string>& warnings, int zstd_level = 0);
 
 }  // namespace specbake

@@ -210,7 +210,8 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
             layer.transform = materials[size_t(d.material)].normal.transform;
             say("encoding UASTC textures of material " + std::to_string(d.material) + " of " + input.string());
             const size_t before = result.outputs.size();
-            if (auto r = replace_with_basisu(scene, layer, *basisu, out_dir, glb, result.outputs, warnings); !r)
+            const int zstd = job.supercompression.zstd ? job.supercompression.zstd_level : 0;
+            if (auto r = replace_with_basisu(scene, layer, *basisu, out_dir, glb, result.outputs, warnings, zstd); !r)
                 return r.error();
             for (size_t k = before; k < result.outputs.size(); ++k) {
                 written.push_back(out_dir / result.outputs[k].path);

@@ -71,7 +71,7 @@ std::vector<uint8_t> slurp(const fs::path& p) {
 }  // namespace
 
 Result<std::vector<uint8_t>> encode_uastc_ktx2(const MipChain& chain, const fs::path& basisu, const fs::path& scratch,
-                                               const std::string& name) {
+                                               const std::string& name, int zstd_level) {
     std::error_code ec;
     fs::create_directories(scratch, ec);
     if (ec) return make_error(scratch.string() + ": " + ec.message());
@@ -109,7 +109,8 @@ Result<std::vector<uint8_t>> encode_uastc_ktx2(const MipChain& chain, const fs::
         fs::remove(ktx2, ec);
     }
     if (levels.empty()) return make_error(name + ": no levels to encode");
-    return io::assemble_uastc_ktx2(levels, dfd, std::string("specbake ") + tool_version() + " (UASTC levels by basisu)");
+    return io::assemble_uastc_ktx2(levels, dfd, std::string("specbake ") + tool_version() + " (UASTC levels by basisu)",
+                                   zstd_level);
 }
 
 }  // namespace specbake

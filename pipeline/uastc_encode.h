@@ -16,10 +16,11 @@ namespace specbake {
 // The error says how to get one.
 Result<std::filesystem::path> find_basisu(const std::filesystem::path& explicit_path);
 
-// The KTX2 file (UASTC, linear transfer, every level of `chain`, no supercompression) of a chain of
-// 3 or 4 channels in [0, 1] (3 channels get A = 1). `scratch` is a folder for the per-level files; `name`
-// names the texture in errors.
+// The KTX2 file (UASTC, linear transfer, every level of `chain`; zstd-supercompressed at `zstd_level`
+// when it is 1-22, plain when 0) of a chain of 3 or 4 channels in [0, 1] (3 channels get A = 1).
+// `scratch` is a folder for the per-level files; `name` names the texture in errors.
 Result<std::vector<uint8_t>> encode_uastc_ktx2(const MipChain& chain, const std::filesystem::path& basisu,
-                                               const std::filesystem::path& scratch, const std::string& name);
+                                               const std::filesystem::path& scratch, const std::string& name,
+                                               int zstd_level = 0);
 
 }  // namespace specbake

@@ -3,6 +3,8 @@
 // validates; the replaced slots point at KTX2 files that ktx-parse reads as UASTC with every level.
 #include "consumer_harness.h"
 
+#include <zstd.h>
+
 #include "io/image_io.h"
 
 namespace specbake::consumers {
@@ -92,9 +94,19 @@ TEST_F(GltfReplace, SizesNotMultiplesOfFourKeepTheSlotsAndOthersAreUastcWithEver
         EXPECT_EQ(info_k["pixelWidth"], 512);
         EXPECT_EQ(info_k["pixelHeight"], 384);
         ASSERT_EQ(info_k["levels"].size(), 10u);
+        // zstd-supercompressed by default (scheme 2): each level, as ktx-parse hands it out, inflates to
+        // the level's UASTC blocks, which uncompressedByteLength gives.
+        EXPECT_EQ(info_k["supercompressionScheme"], 2);
         for (int L = 0; L < 10; ++L) {
             const int w = std::max(1, 512 >> L), h = std::max(1, 384 >> L);
-            EXPECT_EQ(info_k["levels"][size_t(L)]["byteLength"], ((w + 3) / 4) * ((h + 3) / 4) * 16) << "level " << L;
+            const size_t blocks = size_t((w + 3) / 4) * size_t((h + 3) / 4) * 16;
+            EXPECT_EQ(info_k["levels"][size_t(L)]["uncompressedByteLength"], blocks) << "level " << L;
+            const std::string stored = slurp(root_ / "levels" / slot / ("level" + std::to_string(L) + ".bin"));
+            EXPECT_EQ(info_k["levels"][size_t(L)]["byteLength"], stored.size()) << "level " << L;
+            std::string raw(blocks + 1, '\0');
+            const size_t n = ZSTD_decompress(raw.data(), raw.size(), stored.data(), stored.size());
+            ASSERT_FALSE(ZSTD_isError(n)) << "level " << L;
+            EXPECT_EQ(n, blocks) << "level " << L;
         }
     }
 }

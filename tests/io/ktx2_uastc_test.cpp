@@ -3,6 +3,7 @@
 #include "io/ktx2_uastc.h"
 
 #include <gtest/gtest.h>
+#include <zstd.h>
 
 #include <cstring>
 
@@ -63,6 +64,32 @@ TEST(Ktx2Uastc, AssemblesEveryLevelSmallestFirstAligned) {
         for (uint64_t k = 0; k < length; ++k) ASSERT_EQ(f[offset + k], levels[i].blocks[0]) << i;
     }
     EXPECT_EQ(u64(f, 80) + u64(f, 88), f.size());  // level 0 is last
+}
+
+// zstd (scheme 2): every level one zstd frame that inflates (by libzstd's own decoder) to exactly the
+// level's blocks, uncompressedByteLength the block bytes, the descriptor unchanged, levels packed
+// smallest first without padding; the same bytes as a plain file once inflated.
+TEST(Ktx2Uastc, ZstdLevelsInflateToTheBlocks) {
+    std::vector<UastcLevel> levels = {level(12, 8, 1), level(6, 4, 2), level(3, 2, 3), level(1, 1, 4)};
+    for (size_t k = 0; k < levels[0].blocks.size(); ++k) levels[0].blocks[k] = uint8_t(k * 37 % 11);
+    const std::vector<uint8_t> dfd = uastc_dfd();
+    const std::vector<uint8_t> f = assemble_uastc_ktx2(levels, dfd, "test", 3);
+    EXPECT_EQ(u32(f, 44), 2u);  // Zstandard
+    ASSERT_EQ(u32(f, 52), dfd.size());
+    EXPECT_EQ(std::memcmp(f.data() + u32(f, 48), dfd.data(), dfd.size()), 0);
+    uint64_t end = f.size();
+    for (size_t i = 0; i < levels.size(); ++i) {
+        const uint64_t offset = u64(f, 80 + 24 * i), length = u64(f, 88 + 24 * i);
+        EXPECT_EQ(u64(f, 96 + 24 * i), levels[i].blocks.size()) << i;
+        EXPECT_EQ(offset + length, end) << "level " << i << " must end where the next larger one starts";
+        end = offset;
+        std::vector<uint8_t> raw(levels[i].blocks.size() + 1);
+        const size_t n = ZSTD_decompress(raw.data(), raw.size(), f.data() + offset, length);
+        ASSERT_FALSE(ZSTD_isError(n)) << i;
+        raw.resize(n);
+        EXPECT_EQ(raw, levels[i].blocks) << i;
+    }
+    EXPECT_LT(f.size(), assemble_uastc_ktx2(levels, dfd, "test").size());
 }
 
 TEST(Ktx2Uastc, ReadsOneLevelFileAndRefusesOthers) {
