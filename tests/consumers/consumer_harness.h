@@ -96,10 +96,13 @@ protected:
     void TearDown() override { fs::remove_all(root_); }
 
     // `specbake ARGS`; a failure names the command and its stderr. A bake here takes seconds: one still
-    // running after 120 s is stopped and reported by name, instead of the whole test reaching ctest's limit.
+    // running after 120 s is stopped and reported by name with the thread stacks of it and its child
+    // processes (run_with_stall_report.sh), instead of the whole test reaching ctest's limit.
     void specbake(const std::string& args) {
         std::string err;
-        const int rc = shell("timeout -k 5 120 " + quote(SPECBAKE_EXE) + " " + args, root_ / "scratch", nullptr, &err);
+        const int rc = shell("bash " + quote(consumers_dir() / "run_with_stall_report.sh") + " 120 " + quote(SPECBAKE_EXE) +
+                                 " " + args,
+                             root_ / "scratch", nullptr, &err);
         ASSERT_NE(rc, 124) << "specbake " << args << ": still running after 120 s, stopped; stderr so far: " << err;
         ASSERT_EQ(rc, 0) << "specbake " << args << ": " << err;
     }
