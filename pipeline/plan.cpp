@@ -222,8 +222,23 @@ Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& optio
                         w.roughness = &w.roughness_storage;
                     }
                     TextureBakeSettings s = options.texture_settings_for(mat.name);
-                    if (!options.texture_sink) s.outputs = TextureOutputs{true, false, false, false};
-                    auto baked = bake_texture(*w.normal, w.roughness, w.roughness_channel, d.roughness_value, s);
+                    if (!options.texture_sink && !options.texture_encoder)
+                        s.outputs = TextureOutputs{true, false, false, false};
+                    Result<TextureBakeResult> baked = make_error("");
+                    Result<EncodedTextureBake> encoded = make_error("");
+                    if (options.texture_encoder) {
+                        encoded = options.texture_encoder(d, w, s);
+                        if (encoded) {
+                            TextureBakeResult measure;
+                            measure.max_roughness_change = encoded->max_roughness_change;
+                            measure.notes = encoded->notes;
+                            baked = std::move(measure);
+                        } else {
+                            baked = encoded.error();
+                        }
+                    } else {
+                        baked = bake_texture(*w.normal, w.roughness, w.roughness_channel, d.roughness_value, s);
+                    }
                     if (!baked) {
                         d.reason = scene.image_label(d.normal_image) + ": " + baked.error().message;
                         plan.notes.push_back(d.reason);
@@ -238,6 +253,8 @@ Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& optio
                     d.reason += mapping_note;
                     if (!d.bake) {
                         plan.texture_work.erase(index);
+                    } else if (options.texture_encoder) {
+                        if (auto ok = encoded->write(d); !ok) return ok.error();
                     } else if (options.texture_sink) {
                         if (auto ok = options.texture_sink(d, w, std::move(*baked)); !ok) return ok.error();
                     }

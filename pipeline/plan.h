@@ -54,6 +54,17 @@ struct TextureWork;
 // Receives a texture bake the plan decided to keep, with its decision and inputs (see PlanOptions).
 using TextureBakeSink = std::function<Result<void>(const TextureDecision&, const TextureWork&, TextureBakeResult&&)>;
 
+// A texture bake held encoded (the row-streaming bake of pipeline/texture_job.h, no float chains): the
+// statistic and notes the plan decides on, and `write`, called once if the plan keeps the bake.
+struct EncodedTextureBake {
+    double max_roughness_change = 0.0;
+    TextureBakeNotes notes;
+    std::function<Result<void>(const TextureDecision&)> write;
+};
+// Bakes one texture's inputs with `settings`; errors are the bake's own ("normal map: ...").
+using TextureBakeEncoder =
+    std::function<Result<EncodedTextureBake>(const TextureDecision&, const TextureWork&, const TextureBakeSettings&)>;
+
 struct PlanOptions {
     bool textures = true;                 // false: curvature only (`specbake mesh`)
     bool check_material = true;           // false: curvature regardless of material roughness (`specbake mesh`)
@@ -78,6 +89,9 @@ struct PlanOptions {
     // only one material's chains are held at a time. Empty (`specbake plan`): roughness only, nothing kept.
     // An error from it ends the plan.
     TextureBakeSink texture_sink;
+    // In place of texture_sink when set (`specbake bake` without --gltf-mode replace, KTX2 and DDS): each
+    // texture is baked straight into its files' bytes, a fraction of the float chains' memory.
+    TextureBakeEncoder texture_encoder;
 
     // Materials that ask for glints through the config ([materials.NAME] glints = true ...), by name, as
     // SPECBAKE_glints objects (pipeline/glint_plan.h).

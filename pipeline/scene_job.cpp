@@ -116,6 +116,42 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         files_by_stem[d.stem] = std::move(out->outputs);
         return {};
     };
+    // Without replacement the files are all the bake needs: KTX2 and DDS are baked row by row straight into
+    // their bytes (zstd streamed per level), as `specbake texture` does, so no float chain is held. The
+    // replacement encodes the float roughness and normal chains, and other containers write from them.
+    if (job.gltf_mode != GltfMode::Replace && io::EncodedTexture::supports(job.container)) {
+        options.texture_encoder = [&](const TextureDecision& d, const TextureWork& w,
+                                      const TextureBakeSettings& settings) -> Result<EncodedTextureBake> {
+            TextureInputs in;
+            in.normal = w.normal;
+            // The plan names the image in its note; these keep the bake's own prefixes (name_error).
+            in.normal_name = "normal map";
+            in.roughness = w.roughness;
+            in.roughness_name = "roughness map";
+            in.roughness_channel = w.roughness_channel;
+            in.roughness_value = d.roughness_value;
+            in.normal_bits = w.normal_bits;
+            in.roughness_bits = w.roughness_bits;
+            auto encoded = std::make_shared<EncodedTextureOutputs>();
+            auto baked = bake_texture_encoded(in, settings, job.container, d.stem, {}, {}, job.supercompression);
+            if (!baked) return baked.error();
+            *encoded = std::move(*baked);
+            EncodedTextureBake out{encoded->max_roughness_change, encoded->notes, {}};
+            out.write = [&, encoded](const TextureDecision& kept) -> Result<void> {
+                say("writing " + (kept.layer == "base" ? std::string() : kept.layer + " ") + "textures of material " +
+                    std::to_string(kept.material) + " of " + input.string());
+                for (const io::EncodedFile& f : encoded->files) say("writing " + f.stem);
+                auto files = io::write_encoded_textures(encoded->files, out_dir);
+                if (!files) return files.error();
+                for (const io::ManifestOutput& o : *files) written.push_back(out_dir / o.path);
+                result.outputs.insert(result.outputs.end(), files->begin(), files->end());
+                files_by_stem[kept.stem] = std::move(*files);
+                *encoded = EncodedTextureOutputs{};  // written: the next material's bake needs the memory
+                return {};
+            };
+            return out;
+        };
+    }
     // Materials that ask for glints get slope-space LEAN moments of their normal map (C21 Eq. 16).
     if (auto r = add_glint_lean_settings(scene, options); !r) return r.error();
     say("planning " + input.string());
