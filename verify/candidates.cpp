@@ -86,6 +86,20 @@ std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool varia
                  {std::string(normal_mapped ? kBakedRoughnessDefines : "") + "#define SIM_NDF(h, A, a) specaa_filtered_D(h, A, specaa_base_alpha2(s))\n",
                   kMatrixDefault, "exact", "mean-projected"},
                  normal_mapped ? "mean-projected" : "", ""});
+    // The matrix form with each eigenvalue of A clamped to the isotropic form's a: the matrix's shape where
+    // the footprint is round, the isotropic width along an axis the matrix widens beyond it (README
+    // "Accuracy and its cost": where the matrix over-blurs, its tails along the widened axis).
+    c.push_back({"default-clamped", "default",
+                 "specaa_filtered_alpha2_matrix, eigenvalues clamped to specaa_filtered_alpha2",
+                 {normal_mapped ? kBakedRoughnessDefines : "",
+                  "vec3 Am = specaa_filtered_alpha2_matrix(s); float fi = specaa_filtered_alpha2(s);\n"
+                  "        float hm = 0.5 * (Am.x + Am.y), dm = sqrt(0.25 * (Am.x - Am.y) * (Am.x - Am.y) + Am.z * Am.z);\n"
+                  "        float l1 = hm + dm, l2 = hm - dm;\n"
+                  "        vec2 v = abs(Am.z) > 1.0e-20 ? normalize(vec2(Am.z, l1 - Am.x)) : (Am.x >= Am.y ? vec2(1.0, 0.0) : vec2(0.0, 1.0));\n"
+                  "        float m1 = min(l1, fi), m2 = min(l2, fi);\n"
+                  "        A = vec3(m1 * v.x * v.x + m2 * v.y * v.y, m1 * v.y * v.y + m2 * v.x * v.x, (m1 - m2) * v.x * v.y);",
+                  "exact", "mean-projected"},
+                 normal_mapped ? "mean-projected" : "", ""});
     if (variants) add_variants(c, normal_mapped);
     if (!has_exact_curvature(scene)) {
         // Scene files: curvature comes from the default estimator, as `specbake bake` writes it, and is
