@@ -40,9 +40,28 @@ uint64_t astc_level_bytes(int side, uint64_t w, uint64_t h) {
     return (w + s - 1) / s * ((h + s - 1) / s) * 16;
 }
 
-Result<std::vector<uint8_t>> astc_compress_level(const uint8_t* texels, int width, int height, int channels, int used,
-                                                 int side, int threads) {
+struct AstcEncoder::State {
+    Context ctx;
+    int side;
+    unsigned threads;
+};
+
+AstcEncoder::AstcEncoder(std::unique_ptr<State> state) : state_(std::move(state)) {}
+AstcEncoder::AstcEncoder(AstcEncoder&&) noexcept = default;
+AstcEncoder& AstcEncoder::operator=(AstcEncoder&&) noexcept = default;
+AstcEncoder::~AstcEncoder() = default;
+
+Result<AstcEncoder> AstcEncoder::create(int side, int threads) {
     if (!astc_block_supported(side)) return make_error("ASTC footprint " + std::to_string(side) + " is not 4, 6 or 8");
+    const unsigned count =
+        unsigned(std::clamp(threads > 0 ? threads : tbb::this_task_arena::max_concurrency(), 1, 64));
+    auto ctx = make_context(side, 0, count);
+    if (!ctx) return ctx.error();
+    return AstcEncoder(std::make_unique<State>(State{std::move(*ctx), side, count}));
+}
+
+Result<std::vector<uint8_t>> AstcEncoder::compress(const uint8_t* texels, int width, int height, int channels,
+                                                   int used) {
     if ((used != 1 && used != 2 && used != 4) || used > channels)
         return make_error("ASTC keeps 1, 2 or 4 of the stored channels, not " + std::to_string(used) + " of " +
                           std::to_string(channels));
@@ -57,23 +76,29 @@ Result<std::vector<uint8_t>> astc_compress_level(const uint8_t* texels, int widt
         else if (used == 2) d[0] = s[0], d[1] = s[1], d[2] = 0, d[3] = 255;
         else d[0] = s[0], d[1] = s[1], d[2] = s[2], d[3] = s[3];
     }
-    const unsigned count =
-        unsigned(std::clamp(threads > 0 ? threads : tbb::this_task_arena::max_concurrency(), 1, 64));
-    auto ctx = make_context(side, 0, count);
-    if (!ctx) return ctx.error();
     void* slices[1] = {rgba.data()};
     astcenc_image image{unsigned(width), unsigned(height), 1, ASTCENC_TYPE_U8, slices};
     const astcenc_swizzle identity{ASTCENC_SWZ_R, ASTCENC_SWZ_G, ASTCENC_SWZ_B, ASTCENC_SWZ_A};
-    std::vector<uint8_t> out(astc_level_bytes(side, uint64_t(width), uint64_t(height)));
+    std::vector<uint8_t> out(astc_level_bytes(state_->side, uint64_t(width), uint64_t(height)));
     // Every thread index calls in; astcenc hands out blocks dynamically, each block encoded on its own, so
     // the result is the same for any count. A task that starts after the others finished finds no work.
-    std::vector<astcenc_error> status(count, ASTCENC_SUCCESS);
-    tbb::parallel_for(0u, count, [&](unsigned t) {
-        status[t] = astcenc_compress_image(ctx->get(), &image, &identity, out.data(), out.size(), t);
+    std::vector<astcenc_error> status(state_->threads, ASTCENC_SUCCESS);
+    tbb::parallel_for(0u, state_->threads, [&](unsigned t) {
+        status[t] = astcenc_compress_image(state_->ctx.get(), &image, &identity, out.data(), out.size(), t);
     });
+    // Every thread has returned: the context is ready for the next image.
+    const astcenc_error reset = astcenc_compress_reset(state_->ctx.get());
     for (astcenc_error e : status)
         if (e != ASTCENC_SUCCESS) return make_error(std::string("astcenc: ") + astcenc_get_error_string(e));
+    if (reset != ASTCENC_SUCCESS) return make_error(std::string("astcenc: ") + astcenc_get_error_string(reset));
     return out;
+}
+
+Result<std::vector<uint8_t>> astc_compress_level(const uint8_t* texels, int width, int height, int channels, int used,
+                                                 int side, int threads) {
+    auto encoder = AstcEncoder::create(side, threads);
+    if (!encoder) return encoder.error();
+    return encoder->compress(texels, width, height, channels, used);
 }
 
 Result<std::vector<uint8_t>> astc_decompress_level(std::span<const uint8_t> blocks, int width, int height, int side) {

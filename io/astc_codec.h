@@ -6,6 +6,7 @@
 #include "core/result.h"
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -29,6 +30,22 @@ uint64_t astc_level_bytes(int side, uint64_t w, uint64_t h);
 // `threads` threads (0: the machine's). The bytes do not depend on the thread count.
 Result<std::vector<uint8_t>> astc_compress_level(const uint8_t* texels, int width, int height, int channels, int used,
                                                  int side, int threads = 0);
+
+// The same for many levels: the encoder's set-up (about 4 ms of tables per footprint) is done once and
+// reused, level after level. compress() gives the bytes astc_compress_level gives.
+class AstcEncoder {
+public:
+    static Result<AstcEncoder> create(int side, int threads = 0);
+    Result<std::vector<uint8_t>> compress(const uint8_t* texels, int width, int height, int channels, int used);
+    AstcEncoder(AstcEncoder&&) noexcept;
+    AstcEncoder& operator=(AstcEncoder&&) noexcept;
+    ~AstcEncoder();
+
+private:
+    struct State;
+    explicit AstcEncoder(std::unique_ptr<State> state);
+    std::unique_ptr<State> state_;
+};
 
 // Decodes one level of blocks to width x height RGBA8 texels (the LDR decode of the specification).
 Result<std::vector<uint8_t>> astc_decompress_level(std::span<const uint8_t> blocks, int width, int height, int side);

@@ -13,9 +13,9 @@ namespace {
 
 constexpr uint32_t kModelUastc = 166;  // KHR_DF_MODEL_UASTC
 
-size_t blocks_bytes(int w, int h) { return size_t((w + 3) / 4) * size_t((h + 3) / 4) * 16; }
-
 }  // namespace
+
+size_t uastc_level_bytes(int w, int h) { return size_t((w + 3) / 4) * size_t((h + 3) / 4) * 16; }
 
 Result<UastcFile> read_uastc_ktx2(std::span<const uint8_t> b, const std::string& name) {
     if (b.size() < 104 || std::memcmp(b.data(), kKtx2Identifier, 12) != 0) return make_error(name + ": not a KTX2 file");
@@ -32,9 +32,9 @@ Result<UastcFile> read_uastc_ktx2(std::span<const uint8_t> b, const std::string&
     if (f.dfd[4 + 8] != kModelUastc) return make_error(name + ": descriptor colour model is not UASTC");
     const uint64_t offset = get64(b, 80), length = get64(b, 88);
     if (offset + length > b.size()) return make_error(name + ": level 0 out of the file");
-    if (length != blocks_bytes(f.level.width, f.level.height))
+    if (length != uastc_level_bytes(f.level.width, f.level.height))
         return make_error(name + ": level 0 holds " + std::to_string(length) + " bytes, expected " +
-                          std::to_string(blocks_bytes(f.level.width, f.level.height)));
+                          std::to_string(uastc_level_bytes(f.level.width, f.level.height)));
     f.level.blocks.assign(b.begin() + offset, b.begin() + offset + length);
     return f;
 }

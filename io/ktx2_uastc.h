@@ -5,6 +5,7 @@
 
 #include "core/result.h"
 
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -13,6 +14,7 @@
 namespace specbake::io {
 
 // One level of UASTC data: ceil(w / 4) x ceil(h / 4) blocks of 16 bytes.
+size_t uastc_level_bytes(int width, int height);
 struct UastcLevel {
     int width = 0, height = 0;
     std::vector<uint8_t> blocks;

@@ -455,11 +455,13 @@ Result<BlockFile> block_compressed(const EncodedTexture& t, BlockFormat format) 
     const int astc_side = t.supercompression().astc_block;
     std::vector<std::vector<uint8_t>> levels(layout.level_offset.size());
     if (is_astc(format)) {
+        auto encoder = AstcEncoder::create(astc_side);
+        if (!encoder) return encoder.error();
         for (size_t L = 0; L < levels.size(); ++L) {
             std::vector<uint8_t> scratch;
             const uint8_t* src = level_as_unorm8(t, L, scratch);
-            auto blocks = astc_compress_level(src, std::max(1, t.width() >> L), std::max(1, t.height() >> L), channels,
-                                              block_channels(format), astc_side);
+            auto blocks = encoder->compress(src, std::max(1, t.width() >> L), std::max(1, t.height() >> L), channels,
+                                            block_channels(format));
             if (!blocks) return blocks.error();
             levels[L] = std::move(*blocks);
         }

@@ -2,6 +2,8 @@
 // own slots (metallic-roughness layout of the roughness chain, fallback PNG, manifest entries).
 #include "pipeline/gltf_replace.h"
 
+#include "io/ktx2_uastc.h"
+
 #include "io/atomic_file.h"
 #include "io/image_io.h"
 #include "pipeline/uastc_encode.h"
@@ -62,8 +64,8 @@ Result<void> replace_with_basisu(io::GltfScene& scene, const ReplaceLayer& layer
         o.height = chain.levels.front().height;
         o.mips = int(chain.levels.size());
         o.channels = 4;
-        size_t raw = 0;  // the level bytes before zstd: 16 per 4x4 block
-        for (const Image& l : chain.levels) raw += size_t((l.width + 3) / 4) * size_t((l.height + 3) / 4) * 16;
+        size_t raw = 0;  // the level bytes before zstd
+        for (const Image& l : chain.levels) raw += io::uastc_level_bytes(l.width, l.height);
         o.extra = {{"gpu_format", "UASTC"}, {"supercompression", zstd_level > 0 ? "zstd" : "none"},
                    {"bytes", bytes->size()}, {"uastc_level_bytes", raw},
                    {"gltf", kind == "normal" ? "normalTexture (KHR_texture_basisu)"

@@ -1,10 +1,12 @@
 // Runs basisu once per baked level (UASTC, linear, no mip generation; posix_spawn, output to a log the
-// error quotes) and assembles the levels into one KTX2 with the first level's descriptor.
+// error quotes; levels side by side) and assembles the levels into one KTX2 with the first level's descriptor.
 #include "pipeline/uastc_encode.h"
 
 #include "io/image_io.h"
 #include "io/ktx2_uastc.h"
 #include "pipeline/version.h"
+
+#include <tbb/parallel_for.h>
 
 #include <cstdlib>
 #include <fcntl.h>
@@ -75,38 +77,52 @@ Result<std::vector<uint8_t>> encode_uastc_ktx2(const MipChain& chain, const fs::
     std::error_code ec;
     fs::create_directories(scratch, ec);
     if (ec) return make_error(scratch.string() + ": " + ec.message());
-    std::vector<io::UastcLevel> levels;
-    std::vector<uint8_t> dfd;
-    for (size_t L = 0; L < chain.levels.size(); ++L) {
+    // One basisu process per level, several at a time, each with -no_multithreading: basisu 1.15's job pool
+    // can hang at exit (its main thread joins a worker still waiting on its condition variable; seen in a
+    // stalled bake's stacks), and a single-threaded run has no pool. Levels do not depend on each other.
+    const size_t count = chain.levels.size();
+    std::vector<Result<io::UastcFile>> files(count, make_error(""));
+    tbb::parallel_for(size_t(0), count, [&](size_t L) {
         const Image& src = chain.levels[L];
         Image rgba(src.width, src.height, 4);
         for (size_t i = 0; i < size_t(src.width) * size_t(src.height); ++i)
             for (int c = 0; c < 4; ++c)
                 rgba.pixels[i * 4 + size_t(c)] = c < src.channels ? src.pixels[i * size_t(src.channels) + size_t(c)] : 1.0f;
-        const fs::path png = scratch / ("level" + std::to_string(L) + ".png");
-        const fs::path ktx2 = scratch / ("level" + std::to_string(L) + ".ktx2");
-        if (auto w = io::write_image(png, rgba, 8); !w) return w.error();
-        // -linear: data, not colour (linear metrics and transfer); no -mipmap: this level only.
-        const int rc = run({basisu.string(), "-uastc", "-ktx2", "-ktx2_no_zstandard", "-linear", "-file", png.string(),
-                            "-output_file", ktx2.string()},
-                           scratch / "basisu.log");
-        if (rc != 0) {
-            std::ifstream log(scratch / "basisu.log");
-            std::string last, line;
-            while (std::getline(log, line))
-                if (!line.empty()) last = line;
-            return make_error(name + ": basisu failed on level " + std::to_string(L) + " (exit " + std::to_string(rc) +
-                              (last.empty() ? "" : ": " + last) + ")");
+        const std::string stem = "level" + std::to_string(L);
+        const fs::path png = scratch / (stem + ".png"), ktx2 = scratch / (stem + ".ktx2"), log = scratch / (stem + ".log");
+        if (auto w = io::write_image(png, rgba, 8); !w) {
+            files[L] = w.error();
+            return;
         }
-        auto file = io::read_uastc_ktx2(slurp(ktx2), name + " level " + std::to_string(L) + " (basisu output)");
-        if (!file) return file.error();
-        if (file->level.width != src.width || file->level.height != src.height)
+        // -linear: data, not colour (linear metrics and transfer); no -mipmap: this level only.
+        const int rc = run({basisu.string(), "-uastc", "-ktx2", "-ktx2_no_zstandard", "-linear", "-no_multithreading",
+                            "-file", png.string(), "-output_file", ktx2.string()},
+                           log);
+        if (rc != 0) {
+            std::ifstream in(log);
+            std::string last, line;
+            while (std::getline(in, line))
+                if (!line.empty()) last = line;
+            files[L] = make_error(name + ": basisu failed on level " + std::to_string(L) + " (exit " + std::to_string(rc) +
+                                  (last.empty() ? "" : ": " + last) + ")");
+            return;
+        }
+        files[L] = io::read_uastc_ktx2(slurp(ktx2), name + " level " + std::to_string(L) + " (basisu output)");
+        std::error_code rm;
+        fs::remove(png, rm);
+        fs::remove(ktx2, rm);
+        fs::remove(log, rm);
+    });
+    std::vector<io::UastcLevel> levels;
+    std::vector<uint8_t> dfd;
+    for (size_t L = 0; L < count; ++L) {  // the first error in level order
+        if (!files[L]) return files[L].error();
+        const Image& src = chain.levels[L];
+        if (files[L]->level.width != src.width || files[L]->level.height != src.height)
             return make_error(name + ": basisu wrote level " + std::to_string(L) + " as " +
-                              std::to_string(file->level.width) + "x" + std::to_string(file->level.height));
-        if (L == 0) dfd = std::move(file->dfd);
-        levels.push_back(std::move(file->level));
-        fs::remove(png, ec);
-        fs::remove(ktx2, ec);
+                              std::to_string(files[L]->level.width) + "x" + std::to_string(files[L]->level.height));
+        if (L == 0) dfd = std::move(files[L]->dfd);
+        levels.push_back(std::move(files[L]->level));
     }
     if (levels.empty()) return make_error(name + ": no levels to encode");
     return io::assemble_uastc_ktx2(levels, dfd, std::string("specbake ") + tool_version() + " (UASTC levels by basisu)",

@@ -23,13 +23,6 @@ namespace {
 using namespace scene_test;
 using namespace specbake;
 
-uint32_t le32(const std::string& b, size_t at) {
-    uint32_t v = 0;
-    for (int i = 3; i >= 0; --i) v = v << 8 | uint8_t(b[at + size_t(i)]);
-    return v;
-}
-uint64_t le64(const std::string& b, size_t at) { return uint64_t(le32(b, at)) | uint64_t(le32(b, at + 4)) << 32; }
-
 // Level L of a KTX2 file, zstd inflated to `raw` bytes when the file is supercompressed.
 std::string ktx2_level(const std::string& b, uint32_t L, size_t raw) {
     const uint64_t off = le64(b, 80 + 24 * L), len = le64(b, 80 + 24 * L + 8);

@@ -17,13 +17,6 @@
 namespace {
 using namespace scene_test;
 
-uint32_t le32(const std::string& b, size_t at) {
-    uint32_t v = 0;
-    for (int i = 3; i >= 0; --i) v = v << 8 | uint8_t(b[at + size_t(i)]);
-    return v;
-}
-uint64_t le64(const std::string& b, size_t at) { return uint64_t(le32(b, at)) | uint64_t(le32(b, at + 4)) << 32; }
-
 struct Level {
     int w, h;
     std::string bytes;

@@ -12,12 +12,6 @@ namespace {
 using namespace scene_test;
 using nlohmann::json;
 
-uint32_t le32(const std::string& b, size_t at) {
-    uint32_t v = 0;
-    for (int i = 3; i >= 0; --i) v = v << 8 | uint8_t(b[at + size_t(i)]);
-    return v;
-}
-
 struct Glb {
     json doc;
     std::string bin;

@@ -42,6 +42,14 @@ inline std::string slurp(const fs::path& p) {
     return ss.str();
 }
 
+// Little-endian 32- and 64-bit values at byte `at` of a file's bytes (KTX2, DDS and GLB headers).
+inline uint32_t le32(const std::string& b, size_t at) {
+    uint32_t v = 0;
+    for (int i = 3; i >= 0; --i) v = v << 8 | uint8_t(b[at + size_t(i)]);
+    return v;
+}
+inline uint64_t le64(const std::string& b, size_t at) { return uint64_t(le32(b, at)) | uint64_t(le32(b, at + 4)) << 32; }
+
 inline std::string quote(const std::string& s) {
     std::string q = "'";
     for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
