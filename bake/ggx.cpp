@@ -50,6 +50,46 @@ T filtered_ndf(const Vec3<T>& h, const Sym2<T>& A, T alpha2) {
 }
 
 template <class T>
+T convolved_ndf(const Vec3<T>& h, const Sym2<T>& A, T alpha2) {
+    if (!(h.z > T(0))) return T(0);
+    const T a = std::max(alpha2, T(1e-12));
+    // The added kernel, projected onto the PSD cone (an anisotropic material's A - a I can be indefinite),
+    // by the include's formula (specaa_sym_clamp_psd).
+    Sym2<T> K{A.xx - a, A.xy, A.yy - a};
+    {
+        const T half_trace = T(0.5) * (K.xx + K.yy), radius = std::hypot(T(0.5) * (K.xx - K.yy), K.xy);
+        const T lmax = half_trace + radius, lmin = half_trace - radius;
+        if (lmax <= T(0)) K = Sym2<T>{};
+        else if (lmin < T(0)) {
+            const T f = lmax / (T(2) * radius);
+            K = Sym2<T>{f * (K.xx - lmin), f * K.xy, f * (K.yy - lmin)};
+        }
+    }
+    const T kmax = std::max(T(0.5) * (K.xx + K.yy) + std::hypot(T(0.5) * (K.xx - K.yy), K.xy), T(0));
+    // No footprint to speak of: GGX(A) itself (within 0.1% of the convolution).
+    if (kmax <= T(1e-3) * a) return ggx_ndf(h, A, a * a);
+    // GGX(a) = int_0^inf e^-w Beckmann(a / w I) dw (a Gaussian scale mixture), so GGX(a) convolved with
+    // N(0, K / 2) is int_0^inf e^-w Beckmann(a / w I + K) dw: trapezoid rule in ln w on [w_lo, 10], steps
+    // of at most 1.1 (12 to 32 nodes) ...
+    const T w_lo = T(0.05) * std::min(T(1), a / kmax);
+    const T s_lo = std::log(w_lo), range = std::log(T(10)) - s_lo;
+    const int nodes = int(std::clamp(std::ceil(range / T(1.1)), T(11), T(31))) + 1;
+    const T ds = range / T(nodes - 1);
+    T sum = 0;
+    for (int j = 0; j < nodes; ++j) {
+        const T w = std::exp(s_lo + ds * T(j)), v = a / w;
+        const T weight = (j == 0 || j == nodes - 1) ? T(0.5) : T(1);
+        sum += weight * std::exp(-w) * w * beckmann_ndf(h, Sym2<T>{K.xx + v, K.xy, K.yy + v}, v * v);
+    }
+    // ... and below w_lo, where a / w >= 20 k_max, Beckmann(a / w I) in closed form:
+    // int_0^w_lo w e^(-w c) dw / (pi a h_z^4), c = tan^2(theta_h) / a.
+    const T z2 = h.z * h.z;
+    const T c = (h.x * h.x + h.y * h.y) / (z2 * a), x = c * w_lo;
+    const T below = x > T(1e-2) ? (T(1) - std::exp(-x) * (T(1) + x)) / (c * c) : w_lo * w_lo * (T(0.5) - x / T(3));
+    return sum * ds + below / (std::numbers::pi_v<T> * a * z2 * z2);
+}
+
+template <class T>
 T ggx_lambda(const Vec3<T>& o, const Sym2<T>& A) {
     if (o.z == T(0)) return std::numeric_limits<T>::infinity();
     // TK21 App. A.3.
@@ -67,6 +107,7 @@ T ggx_g2(const Vec3<T>& i, const Vec3<T>& o, const Vec3<T>& h, const Sym2<T>& A)
     template T ggx_ndf<T>(const Vec3<T>&, const Sym2<T>&, T);                  \
     template T beckmann_ndf<T>(const Vec3<T>&, const Sym2<T>&, T);             \
     template T filtered_ndf<T>(const Vec3<T>&, const Sym2<T>&, T);             \
+    template T convolved_ndf<T>(const Vec3<T>&, const Sym2<T>&, T);            \
     template T ggx_lambda<T>(const Vec3<T>&, const Sym2<T>&);                   \
     template T ggx_g2<T>(const Vec3<T>&, const Vec3<T>&, const Vec3<T>&, const Sym2<T>&);
 SPECBAKE_INSTANTIATE(float)

@@ -31,6 +31,15 @@ T beckmann_ndf(const Vec3<T>& h, const Sym2<T>& A, T tau);
 template <class T>
 T filtered_ndf(const Vec3<T>& h, const Sym2<T>& A, T alpha2);
 
+// NDF of GGX(alpha2) seen through a Gaussian footprint (the include's specaa_convolved_D): GGX(alpha2 I)
+// convolved with the footprint's slope distribution N(0, K / 2), K = A - alpha2 I (TK21 Eq. 3). GGX is a
+// Gaussian scale mixture, GGX(a) = int_0^inf e^-w Beckmann(a / w I) dw, so the convolution is exactly
+// int_0^inf e^-w Beckmann(a / w I + K) dw: evaluated by the trapezoid rule in ln w (steps <= 1.1, 12 to 32
+// nodes) over [w_lo, 10], w_lo = 0.05 min(1, a / k_max), plus the part below w_lo in closed form (K neglected there);
+// GGX(A) when k_max <= 1e-3 a. Keeps the unfiltered lobe's tails and a core as wide as the footprint.
+template <class T>
+T convolved_ndf(const Vec3<T>& h, const Sym2<T>& A, T alpha2);
+
 // GGX Smith Lambda for a non-axis-aligned roughness matrix, TK21 App. A.3:
 // Lambda(o) = -1/2 + sqrt(o_xy^T A o_xy + o_z^2) / (2 |o_z|). Returns +inf for o_z = 0.
 template <class T>

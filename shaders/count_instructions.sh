@@ -26,6 +26,8 @@ entries=(
   "ggx-D|SPECAA_COST_GGX_D"
   "ggx-G2|SPECAA_COST_GGX_G2"
   "beckmann-D|SPECAA_COST_BECKMANN_D"
+  "convolved-D (default NDF)|SPECAA_COST_CONVOLVED_D"
+  "filtered-D (tail mixture)|SPECAA_COST_FILTERED_D"
   "isotropic default (derivatives only)|SPECAA_COST_DEFAULT"
   "isotropic default + kernel texture|SPECAA_COST_DEFAULT SPECAA_COST_TEXTURES SPECAA_KERNEL_TEXTURE=uBaked0"
   "isotropic default + roughness texture|SPECAA_COST_DEFAULT SPECAA_COST_TEXTURES SPECAA_ROUGHNESS_TEXTURE=uBaked0"

@@ -509,6 +509,46 @@ float specaa_filtered_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
     return ggx + (1.0 - rho) * (specaa_beckmann_D(h, A, tau) - ggx);
 }
 
+// NDF of GGX(alpha2) seen through the pixel footprint: GGX(a) convolved with the footprint's distribution
+// of slopes, N(0, K / 2) with K = A - a I (TK21 Eq. 3: the kernel is twice the footprint's slope
+// covariance). GGX is a Gaussian scale mixture (a bivariate Student t with two degrees of freedom):
+// GGX(a) = int_0^inf e^-w Beckmann(a / w I) dw, so the convolution is, exactly,
+// int_0^inf e^-w Beckmann(a / w I + K) dw: a core as wide as the footprint and the unfiltered lobe's own
+// tails (from the small w), where GGX(A) widens both (its tails K / a too heavy) and specaa_filtered_D's
+// Beckmann part undershoots between them. Evaluated by the trapezoid rule in ln w, steps of at most 1.1,
+// from w_lo = 0.05 min(1, a / k_max) to 10 (e^-10 of the weight is left out; 12 to 32 nodes), and the
+// part below w_lo in closed form with K neglected there (a / w >= 20 k_max):
+// int_0^w_lo w e^(-w c) dw / (pi a h_z^4), c = tan^2(theta_h) / a. Relative error against a dense
+// quadrature under 1% for K / a from 1e-2 to 1e7 out to tan^2 = 1.4 (tests/bake/test_ggx.cpp checks it
+// against a brute-force convolution to 4%). GGX(A) itself where k_max <= 1e-3 a (within 0.1%).
+// `alpha2` is the a the footprint spreads: the material's, or the baked roughness texture's.
+float specaa_convolved_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
+    if (h.z <= 0.0) return 0.0;
+    float a = max(alpha2, 1.0e-12);
+    // The added kernel, projected onto the PSD cone (an anisotropic material's A - a I can be indefinite).
+    SPECAA_FLOAT3 K = specaa_sym_clamp_psd(A - SPECAA_FLOAT3(a, a, 0.0));
+    float kmax = max(0.5 * (K.x + K.y) + sqrt(0.25 * (K.x - K.y) * (K.x - K.y) + K.z * K.z), 0.0);
+    if (kmax <= 1.0e-3 * a) return specaa_ggx_D(h, A, a * a);  // no footprint to speak of
+    float wlo = 0.05 * min(1.0, a / kmax);
+    float slo = log(wlo);
+    float range = log(10.0) - slo;
+    int nodes = int(clamp(ceil(range / 1.1), 11.0, 31.0)) + 1;
+    float ds = range / float(nodes - 1);
+    float sum = 0.0;
+    for (int j = 0; j < 32; ++j) {
+        if (j >= nodes) break;
+        float w = exp(slo + ds * float(j));
+        float v = a / w;
+        float weight = (j == 0 || j == nodes - 1) ? 0.5 : 1.0;
+        sum += weight * exp(-w) * w * specaa_beckmann_D(h, K + SPECAA_FLOAT3(v, v, 0.0), v * v);
+    }
+    float z2 = h.z * h.z;
+    float c = dot(h.xy, h.xy) / (z2 * a);
+    float x = c * wlo;
+    float below = x > 1.0e-2 ? (1.0 - exp(-x) * (1.0 + x)) / (c * c) : wlo * wlo * (0.5 - x / 3.0);
+    return sum * ds + below / (SPECAA_PI * a * z2 * z2);
+}
+
 // GGX Smith Lambda, TK21 App. A.3: -1/2 + sqrt(s + o.z^2) / (2 |o.z|), s = [o.x, o.y] A [o.x, o.y]^T,
 // evaluated as s / (2 |o.z| (sqrt(s + o.z^2) + |o.z|)) (same value, no cancellation for smooth A).
 // +inf at o.z = 0 with s > 0.
@@ -658,6 +698,23 @@ SPECAA_FLOAT3 specaa_filtered_alpha2_matrix(SpecaaSurface s) {
     return specaa_guard_matrix(true, SPECAA_FLOAT2(a, a),
                                specaa_filter_projected_matrix(SPECAA_FLOAT2(a, a), specaa_baked_kernel_matrix(s) + specaa_pixel_kernel_matrix(s)));
 }
+
+// The default NDF for the default matrix A = specaa_filtered_alpha2_matrix(s). Without baked normal-map
+// data the footprint's spread of normals is the image of the pixel filter under the surface's curvature,
+// a Gaussian, and GGX of the material convolved with it (specaa_convolved_D) is exact. With a baked
+// roughness, kernel or LEAN texture bound, the texels' spread is not Gaussian (a normal map's bumps fill
+// a wide cone of normals) and GGX(A), whose tails are heavier, measured closer on the far normal-mapped
+// models (README "Accuracy and its cost": NormalTangentTest far 0.47x against 0.71x no filtering's
+// error), so those configurations keep specaa_ggx_D.
+float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, SpecaaSurface s) {
+    float a = specaa_base_alpha2(s);
+#if defined(SPECAA_ROUGHNESS_TEXTURE) || defined(SPECAA_KERNEL_TEXTURE) || defined(SPECAA_LEAN_TEXTURE0)
+    return specaa_ggx_D(h, A, a * a);
+#else
+    return specaa_convolved_D(h, A, a);
+#endif
+}
+
 
 // ===================================================================================================
 // Glints: geometric glint anti-aliasing, C21 (Chermain et al. 2021) on the procedural glint BRDF of

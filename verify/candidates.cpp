@@ -15,6 +15,10 @@ const char* kBakedRoughnessDefines =
     "#define SPECAA_ROUGHNESS_TEXTURE uBakedRoughness\n#define SPECAA_ROUGHNESS_CHANNEL r\n";
 const char* kIsotropicDefault = "float f = specaa_filtered_alpha2(s); A = vec3(f, f, 0.0);";
 const char* kMatrixDefault = "A = specaa_filtered_alpha2_matrix(s);";
+// The default NDF: GGX of the material (or baked) roughness convolved with the footprint (the include's
+// specaa_convolved_D), in place of GGX of the widened matrix.
+const char* kConvolvedNdf = "#define SIM_NDF(h, A, a) specaa_convolved_D(h, A, specaa_base_alpha2(s))\n";
+const char* kDefaultNdf = "#define SIM_NDF(h, A, a) specaa_default_D(h, A, s)\n";
 
 void add_variants(std::vector<SimCandidate>& c, bool normal_mapped);
 
@@ -71,8 +75,20 @@ std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool varia
                       "exact", "mean-projected"},
                      "mean-projected", ""});
     }
-    c.push_back({"default", "default", "specaa_filtered_alpha2_matrix (baked data + anisotropic per-pixel kernel)",
+    c.push_back({"default", "default",
+                 "specaa_filtered_alpha2_matrix with specaa_default_D (baked data + anisotropic per-pixel kernel; GGX "
+                 "convolved with the footprint without baked normal-map data, else GGX of the matrix)",
+                 {std::string(normal_mapped ? kBakedRoughnessDefines : "") + kDefaultNdf, kMatrixDefault, "exact",
+                  "mean-projected"},
+                 normal_mapped ? "mean-projected" : "", ""});
+    c.push_back({"default-ggx", "default", "specaa_filtered_alpha2_matrix with specaa_ggx_D (GGX of the widened matrix)",
                  {normal_mapped ? kBakedRoughnessDefines : "", kMatrixDefault, "exact", "mean-projected"},
+                 normal_mapped ? "mean-projected" : "", ""});
+    c.push_back({"default-convolved", "default",
+                 "specaa_filtered_alpha2_matrix with specaa_convolved_D everywhere (GGX of the baked roughness convolved with "
+                 "the footprint)",
+                 {std::string(normal_mapped ? kBakedRoughnessDefines : "") + kConvolvedNdf, kMatrixDefault, "exact",
+                  "mean-projected"},
                  normal_mapped ? "mean-projected" : "", ""});
     c.push_back({"default-isotropic", "default", "specaa_filtered_alpha2 (isotropic form of the default)",
                  {normal_mapped ? kBakedRoughnessDefines : "", kIsotropicDefault, "exact", "mean-projected"},

@@ -32,7 +32,6 @@ void main() {
     s.bitangent = cross(n, vTangent.xyz) * vTangent.w;
     // The default rule: an anisotropic roughness matrix in the (T, B) frame.
     vec3 A = specaa_filtered_alpha2_matrix(s);
-    float a = specaa_alpha2_from_roughness(roughness);   // unfiltered a, for the determinant clamp
 
     vec3 v = normalize(vViewDir);
     vec3 h = normalize(v + lightDir);
@@ -40,6 +39,6 @@ void main() {
     vec3 t = normalize(vTangent.xyz - n * dot(n, vTangent.xyz));
     mat3 toTangent = transpose(mat3(t, cross(n, t) * vTangent.w, n));
     vec3 hT = toTangent * h, lT = toTangent * lightDir, vT = toTangent * v;
-    float specular = specaa_ggx_D(hT, A, a * a) * specaa_ggx_G2(lT, vT, hT, A) / max(4.0 * vT.z, 1e-4);
+    float specular = specaa_default_D(hT, A, s) * specaa_ggx_G2(lT, vT, hT, A) / max(4.0 * vT.z, 1e-4);
     fragColor = vec4(lightColor * specular, 1.0);
 }

@@ -31,7 +31,6 @@ float4 main(PixelInput input) : SV_Target {
     s.bitangent = cross(n, input.tangent.xyz) * input.tangent.w;
     // The default rule: an anisotropic roughness matrix in the (T, B) frame.
     float3 A = specaa_filtered_alpha2_matrix(s);
-    float a = specaa_alpha2_from_roughness(roughness);   // unfiltered a, for the determinant clamp
 
     float3 v = normalize(input.viewDir);
     float3 h = normalize(v + lightDir);
@@ -39,6 +38,6 @@ float4 main(PixelInput input) : SV_Target {
     float3 t = normalize(input.tangent.xyz - n * dot(n, input.tangent.xyz));
     float3x3 toTangent = float3x3(t, cross(n, t) * input.tangent.w, n);
     float3 hT = mul(toTangent, h), lT = mul(toTangent, lightDir), vT = mul(toTangent, v);
-    float specular = specaa_ggx_D(hT, A, a * a) * specaa_ggx_G2(lT, vT, hT, A) / max(4.0 * vT.z, 1e-4);
+    float specular = specaa_default_D(hT, A, s) * specaa_ggx_G2(lT, vT, hT, A) / max(4.0 * vT.z, 1e-4);
     return float4(lightColor * specular, 1.0);
 }

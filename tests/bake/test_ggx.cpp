@@ -95,6 +95,72 @@ TEST(FilteredNdf, AnisotropicKernelKeepsTheUnfilteredTailInEveryDirection) {
     EXPECT_NEAR(area, 1.0, 2e-3);
 }
 
+// GGX(a) convolved with the footprint's slopes N(0, K / 2), by brute force: a midpoint grid over the
+// Gaussian's support (+-6 sigma along its eigenaxes) of the isotropic GGX slope density written out by
+// hand, P(m) = 1 / (pi a (1 + |m|^2 / a)^2), then D = P / h_z^4 (TK21 Sec. 2.1).
+double brute_force_convolved(const Vec3<double>& h, double a, double kx, double ky, double phi, int n = 700) {
+    const double mx = -h.x / h.z, my = -h.y / h.z;
+    const double sx = std::sqrt(0.5 * kx), sy = std::sqrt(0.5 * ky);
+    const double c = std::cos(phi), s = std::sin(phi);
+    double sum = 0;
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+            const double u = -6.0 + 12.0 * (i + 0.5) / n, v = -6.0 + 12.0 * (j + 0.5) / n;
+            const double x = sx * u * c - sy * v * s, y = sx * u * s + sy * v * c;
+            const double r2 = (mx - x) * (mx - x) + (my - y) * (my - y);
+            const double p = 1.0 / (kPi * a * (1.0 + r2 / a) * (1.0 + r2 / a));
+            sum += p * std::exp(-0.5 * (u * u + v * v)) / (2.0 * kPi);
+        }
+    return sum * (12.0 / n) * (12.0 / n) / std::pow(h.z, 4);
+}
+
+TEST(ConvolvedNdf, MatchesABruteForceConvolutionOfGgxWithTheFootprint) {
+    struct Case {
+        double a, kx, ky, phi;
+    };
+    // Isotropic and anisotropic kernels from a tenth of a to 40 a (a grazing footprint).
+    const Case cases[] = {{0.01, 0.001, 0.001, 0.0}, {0.01, 0.01, 0.01, 0.0}, {0.01, 0.04, 0.01, 0.7},
+                          {0.04, 0.4, 0.04, 2.0}, {0.0025, 0.1, 0.0025, 0.3}};
+    for (const Case& k : cases) {
+        const Sym2<double> A = sym(test::rotated_diag(k.a + k.kx, k.a + k.ky, k.phi));
+        for (double theta_deg : {0.0, 3.0, 8.0, 20.0, 40.0, 70.0})
+            for (double phi : {0.1, 1.3, 2.4}) {
+                const Vec3<double> h = test::spherical(theta_deg * kPi / 180.0, phi);
+                const double expected = brute_force_convolved(h, k.a, k.kx, k.ky, k.phi);
+                EXPECT_NEAR(convolved_ndf(h, A, k.a), expected, 0.04 * expected)
+                    << "a " << k.a << " K (" << k.kx << ", " << k.ky << ") theta " << theta_deg << " phi " << phi;
+            }
+    }
+}
+
+TEST(ConvolvedNdf, IntegratesToOneKeepsTheUnfilteredTailAndIsGgxWithoutAKernel) {
+    const double alpha2 = 0.01;
+    const Sym2<double> A = sym(test::rotated_diag(alpha2 + 0.09, alpha2 + 0.01, 0.4));
+    const double area = test::integrate_hemisphere(
+        [&](const Vec3<double>& m) { return convolved_ndf(m, A, alpha2) * m.z; }, 2000, 400);
+    EXPECT_NEAR(area, 1.0, 5e-3);
+    // Far from the footprint (theta = 80 deg) it falls like GGX(a), not like the widened GGX(A).
+    for (double phi : {0.0, 1.0, 2.5}) {
+        const Vec3<double> h = test::spherical(80.0 * kPi / 180.0, phi);
+        const double unfiltered = ggx_axis_aligned(h, 0.1, 0.1);
+        EXPECT_NEAR(convolved_ndf(h, A, alpha2) / unfiltered, 1.0, 0.05) << phi;
+        EXPECT_GT(ggx_ndf(h, A, 0.0) / unfiltered, 1.3);
+    }
+    // No kernel: GGX(a) itself; a kernel below 1e-3 a is ignored.
+    const Vec3<double> h = test::spherical(0.2, 0.2);
+    EXPECT_NEAR(convolved_ndf(h, Sym2<double>{alpha2, 0.0, alpha2}, alpha2), ggx_axis_aligned(h, 0.1, 0.1),
+                1e-9 * ggx_axis_aligned(h, 0.1, 0.1));
+    // An anisotropic material's matrix minus a I is indefinite: the kernel is clamped, the result finite.
+    const double d = convolved_ndf(h, Sym2<double>{0.04, 0.0, 0.0025}, 0.01);
+    EXPECT_TRUE(std::isfinite(d) && d > 0.0) << d;
+    EXPECT_EQ(convolved_ndf(Vec3<double>{0.0, 0.6, -0.8}, A, alpha2), 0.0);
+    // Smooth mirror (a = 1e-8) under a wide kernel: finite, and the peak is the kernel's Beckmann lobe.
+    const Sym2<double> wide{1e-8 + 0.02, 0.0, 1e-8 + 0.02};
+    const Vec3<double> up{0.0, 0.0, 1.0};
+    EXPECT_NEAR(convolved_ndf(up, wide, 1e-8), beckmann_ndf(up, Sym2<double>{0.02, 0.0, 0.02}, 0.0),
+                0.01 * beckmann_ndf(up, Sym2<double>{0.02, 0.0, 0.02}, 0.0));
+}
+
 TEST(Beckmann, MatchesRotatedGaussianOfSlopes) {
     std::mt19937_64 rng(2);
     std::uniform_real_distribution<double> u(0.0, 1.0);

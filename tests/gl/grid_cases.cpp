@@ -198,6 +198,12 @@ GridGroup ggx_group() {
         const double filtered = filtered_ndf(h, A, std::sqrt(tau));
         if (std::abs(r.out[1][0] - filtered) > kRelTol * cond * (1.0 + exponent) * filtered + kAbsTol)
             return describe("filtered D (TK21 Sec. 7)", c, {r.out[1][0]}, {filtered});
+        // GGX convolved with the footprint: a sum of up to 32 Beckmann lobes in float, each with its own
+        // exponent; 1e-3 relative (the quadrature itself is checked against a brute-force convolution in
+        // tests/bake/test_ggx.cpp).
+        const double convolved = convolved_ndf(h, A, std::sqrt(tau));
+        if (!(std::abs(r.out[1][1] - convolved) <= 1e-3 * cond * convolved + kAbsTol))
+            return describe("convolved D (GGX through the footprint)", c, {r.out[1][1]}, {convolved});
         return {};
     };
     return g;

@@ -23,10 +23,10 @@ float far_factor() {
     return 1.0f;
 }
 
-void expect_default_no_worse(const SimScene& scene, int size = 64) {
+void expect_default_no_worse(const SimScene& scene, int size = 64, bool tone_mapped = false, bool far = true) {
     VerifyOptions options = test::small_verify(size, size, 64, 3);
     options.only = {"default"};
-    auto report = run_verify(at_distance(scene, "far", far_factor()), options);
+    auto report = run_verify(far ? at_distance(scene, "far", far_factor()) : scene, options);
     ASSERT_TRUE(report.ok()) << report.error().message;
     const SimMetrics *none = nullptr, *def = nullptr;
     for (const CandidateReport& c : report->candidates) {
@@ -39,19 +39,25 @@ void expect_default_no_worse(const SimScene& scene, int size = 64) {
     EXPECT_LE(def->flicker_linear, none->flicker_linear) << scene.name;
     // The temporal error (frame pairs, so pixels the object enters or leaves count too) as well.
     EXPECT_LE(def->temporal_error_linear, none->temporal_error_linear) << scene.name;
+    // Tone-mapped flicker and temporal error, where the default NDF is GGX convolved with the footprint
+    // (no baked normal-map data): the over-bright tails of GGX(A) around a highlight used to raise them.
+    if (tone_mapped) {
+        EXPECT_LE(def->flicker, none->flicker) << scene.name;
+        EXPECT_LE(def->temporal_error, none->temporal_error) << scene.name;
+    }
 }
 
-void shared_model(const char* name, int size = 64) {
+void shared_model(const char* name, int size = 64, bool tone_mapped = false) {
     const fs::path file = fs::path(SPECBAKE_ASSETS_DIR) / "gltf" / name / (std::string(name) + ".gltf");
     if (!fs::exists(file)) GTEST_SKIP() << file << " not found: shared assets absent, do-no-harm not checked on it";
     auto scene = load_sim_scene(file);
     ASSERT_TRUE(scene.ok()) << scene.error().message;
-    expect_default_no_worse(*scene, size);
+    expect_default_no_worse(*scene, size, tone_mapped);
 }
 
 TEST(VerifyDoNoHarm, DefaultNoWorseThanNoneOnSuzanneFar) {
     SPECBAKE_REQUIRE_GL();
-    shared_model("Suzanne");
+    shared_model("Suzanne", 64, true);
 }
 
 TEST(VerifyDoNoHarm, DefaultNoWorseThanNoneOnSheenClothFar) {
@@ -73,6 +79,18 @@ TEST(VerifyDoNoHarm, DefaultNoWorseThanNoneOnTheNormalMappedSphereFar) {
         ASSERT_TRUE(scene.ok());
         expect_default_no_worse(*scene);
     }
+}
+
+// Smooth curved mirrors at the bench's own framing of the analytic scenes, the case the tone-mapped metrics
+// failed on (sphere 3.8x, torus 2.9x no filtering's tone-mapped flicker at alpha 0.01 with GGX(A)).
+TEST(VerifyDoNoHarm, DefaultNoWorseThanNoneOnSmoothCurvedMirrorsToneMapped) {
+    SPECBAKE_REQUIRE_GL();
+    for (const char* name : {"sphere", "torus"})
+        for (float alpha : {0.01f, 0.05f}) {
+            auto scene = make_builtin_scene(name, std::sqrt(alpha));
+            ASSERT_TRUE(scene.ok());
+            expect_default_no_worse(*scene, 64, true, false);
+        }
 }
 
 }  // namespace
