@@ -572,8 +572,9 @@ float specaa_ggx_G2(SPECAA_FLOAT3 i, SPECAA_FLOAT3 o, SPECAA_FLOAT3 h, SPECAA_FL
 // ---------------------------------------------------------------------------------------------------
 // Default entry point: filtered roughness from whatever baked data is bound plus a per-pixel kernel.
 // The default rule is the matrix form, specaa_filtered_alpha2_matrix (an anisotropic per-pixel kernel
-// in the tangent frame, with specaa_ggx_D / specaa_ggx_G2): of the combinations `specbake bench` scores
-// it has the lowest linear error and flicker (README "Accuracy and its cost"). specaa_filtered_alpha2 /
+// in the tangent frame), with specaa_default_D (GGX convolved with the footprint where no normal-map data
+// is baked) and specaa_ggx_G2: of the combinations `specbake bench` scores it has the lowest linear and
+// tone-mapped error and flicker (README "Accuracy and its cost"). specaa_filtered_alpha2 /
 // specaa_filtered_roughness are its isotropic form, a drop-in for BRDFs that take one roughness.
 // ---------------------------------------------------------------------------------------------------
 
@@ -690,8 +691,8 @@ float specaa_filtered_alpha2(SpecaaSurface s) {
 // Filtered perceptual roughness r = a^(1/4): drop-in for the material's roughness.
 float specaa_filtered_roughness(SpecaaSurface s) { return specaa_roughness_from_alpha2(specaa_filtered_alpha2(s)); }
 
-// The default: filtered roughness matrix A_bar in the (T, B) frame, for specaa_ggx_D / specaa_ggx_G2 with
-// tau = a^2 of the unfiltered material. Same composition as specaa_filtered_alpha2, with the per-pixel
+// The default: filtered roughness matrix A_bar in the (T, B) frame, for specaa_default_D / specaa_ggx_G2 (or
+// specaa_ggx_D with tau = a^2 of the unfiltered material). Same composition as specaa_filtered_alpha2, with the per-pixel
 // kernel kept anisotropic.
 SPECAA_FLOAT3 specaa_filtered_alpha2_matrix(SpecaaSurface s) {
     float a = specaa_base_alpha2(s);

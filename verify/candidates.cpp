@@ -75,21 +75,22 @@ std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool varia
                       "exact", "mean-projected"},
                      "mean-projected", ""});
     }
-    c.push_back({"default", "default",
-                 "specaa_filtered_alpha2_matrix with specaa_default_D (baked data + anisotropic per-pixel kernel; GGX "
-                 "convolved with the footprint without baked normal-map data, else GGX of the matrix)",
-                 {std::string(normal_mapped ? kBakedRoughnessDefines : "") + kDefaultNdf, kMatrixDefault, "exact",
-                  "mean-projected"},
-                 normal_mapped ? "mean-projected" : "", ""});
-    c.push_back({"default-ggx", "default", "specaa_filtered_alpha2_matrix with specaa_ggx_D (GGX of the widened matrix)",
-                 {normal_mapped ? kBakedRoughnessDefines : "", kMatrixDefault, "exact", "mean-projected"},
-                 normal_mapped ? "mean-projected" : "", ""});
-    c.push_back({"default-convolved", "default",
-                 "specaa_filtered_alpha2_matrix with specaa_convolved_D everywhere (GGX of the baked roughness convolved with "
-                 "the footprint)",
-                 {std::string(normal_mapped ? kBakedRoughnessDefines : "") + kConvolvedNdf, kMatrixDefault, "exact",
-                  "mean-projected"},
-                 normal_mapped ? "mean-projected" : "", ""});
+    // The matrix form (baked roughness where the scene is normal-mapped) with the NDF `ndf` defines.
+    const auto matrix_default = [&](const char* name, const char* source, const std::string& ndf) {
+        c.push_back({name, "default", source,
+                     {std::string(normal_mapped ? kBakedRoughnessDefines : "") + ndf, kMatrixDefault, "exact",
+                      "mean-projected"},
+                     normal_mapped ? "mean-projected" : "", ""});
+    };
+    matrix_default("default",
+                   "specaa_filtered_alpha2_matrix with specaa_default_D (baked data + anisotropic per-pixel kernel; GGX "
+                   "convolved with the footprint without baked normal-map data, else GGX of the matrix)",
+                   kDefaultNdf);
+    matrix_default("default-ggx", "specaa_filtered_alpha2_matrix with specaa_ggx_D (GGX of the widened matrix)", "");
+    matrix_default("default-convolved",
+                   "specaa_filtered_alpha2_matrix with specaa_convolved_D everywhere (GGX of the baked roughness "
+                   "convolved with the footprint)",
+                   kConvolvedNdf);
     c.push_back({"default-isotropic", "default", "specaa_filtered_alpha2 (isotropic form of the default)",
                  {normal_mapped ? kBakedRoughnessDefines : "", kIsotropicDefault, "exact", "mean-projected"},
                  normal_mapped ? "mean-projected" : "", ""});
@@ -97,11 +98,10 @@ std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool varia
                  {std::string(normal_mapped ? kBakedRoughnessDefines : "") + "#define SPECAA_USE_CURVATURE\n",
                   kMatrixDefault, "exact", "mean-projected"},
                  normal_mapped ? "mean-projected" : "", "exact"});
-    c.push_back({"default-tails", "default",
-                 "specaa_filtered_alpha2_matrix with specaa_filtered_D (tail weight of the baked roughness along the half vector, TK21 Sec. 7)",
-                 {std::string(normal_mapped ? kBakedRoughnessDefines : "") + "#define SIM_NDF(h, A, a) specaa_filtered_D(h, A, specaa_base_alpha2(s))\n",
-                  kMatrixDefault, "exact", "mean-projected"},
-                 normal_mapped ? "mean-projected" : "", ""});
+    matrix_default("default-tails",
+                   "specaa_filtered_alpha2_matrix with specaa_filtered_D (tail weight of the baked roughness along the "
+                   "half vector, TK21 Sec. 7)",
+                   "#define SIM_NDF(h, A, a) specaa_filtered_D(h, A, specaa_base_alpha2(s))\n");
     // The matrix form with each eigenvalue of A clamped to the isotropic form's a: the matrix's shape where
     // the footprint is round, the isotropic width along an axis the matrix widens beyond it (README
     // "Accuracy and its cost": where the matrix over-blurs, its tails along the widened axis).
