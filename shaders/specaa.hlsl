@@ -23,6 +23,8 @@
 #define SPECAA_TEXTURE_PARAMS(tex, smp) Texture2D tex, SamplerState smp
 #define SPECAA_TEXTURE_ARGS(tex, smp) tex, smp
 #define SPECAA_SAMPLE(tex, smp, uv) tex.Sample(smp, uv)
+// Level of detail the sampler computes for uv (relative to level 0, not clamped to the mip range).
+#define SPECAA_QUERY_LOD(tex, smp, uv) tex.CalculateLevelOfDetailUnclamped(smp, uv)
 #define SPECAA_UINT3 uint3
 // Glint dictionary (2D texture array) parameters and its explicit-gradient read.
 #define SPECAA_TEXTURE_ARRAY_PARAMS(tex, smp) Texture2DArray tex, SamplerState smp
@@ -700,17 +702,33 @@ SPECAA_FLOAT3 specaa_filtered_alpha2_matrix(SpecaaSurface s) {
                                specaa_filter_projected_matrix(SPECAA_FLOAT2(a, a), specaa_baked_kernel_matrix(s) + specaa_pixel_kernel_matrix(s)));
 }
 
+// Level of detail the hardware samples a texture at uv (negative under magnification).
+float specaa_texture_lod(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) { return SPECAA_QUERY_LOD(tex, smp, uv); }
+
 // The default NDF for the default matrix A = specaa_filtered_alpha2_matrix(s). Without baked normal-map
 // data the footprint's spread of normals is the image of the pixel filter under the surface's curvature,
 // a Gaussian, and GGX of the material convolved with it (specaa_convolved_D) is exact. With a baked
-// roughness, kernel or LEAN texture bound, the texels' spread is not Gaussian (a normal map's bumps fill
-// a wide cone of normals) and GGX(A), whose tails are heavier, measured closer on the far normal-mapped
-// models (README "Accuracy and its cost": NormalTangentTest far 0.47x against 0.71x no filtering's
-// error), so those configurations keep specaa_ggx_D.
+// roughness, kernel or LEAN texture bound the same holds under magnification (the footprint inside one
+// texel: the texel holds no spread of its own and the interpolated normals vary smoothly), but from the
+// texture's mip 1 on the texels hold a normal map's spread, a wide non-Gaussian cone of normals, and
+// GGX(A), whose tails are heavier, measured closer on the far normal-mapped models (README "Accuracy and
+// its cost": NormalTangentTest far 0.47x against 0.71x no filtering's error). So: the convolution up to
+// LOD 0, GGX(A) from LOD 1, linear in between.
 float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, SpecaaSurface s) {
     float a = specaa_base_alpha2(s);
 #if defined(SPECAA_ROUGHNESS_TEXTURE) || defined(SPECAA_KERNEL_TEXTURE) || defined(SPECAA_LEAN_TEXTURE0)
-    return specaa_ggx_D(h, A, a * a);
+#if defined(SPECAA_ROUGHNESS_TEXTURE)
+    float lod = specaa_texture_lod(SPECAA_TEXTURE_ARGS(SPECAA_ROUGHNESS_TEXTURE, SPECAA_SAMPLER), s.uv);
+#elif defined(SPECAA_KERNEL_TEXTURE)
+    float lod = specaa_texture_lod(SPECAA_TEXTURE_ARGS(SPECAA_KERNEL_TEXTURE, SPECAA_SAMPLER), s.uv);
+#else
+    float lod = specaa_texture_lod(SPECAA_TEXTURE_ARGS(SPECAA_LEAN_TEXTURE0, SPECAA_SAMPLER), s.uv);
+#endif
+    float t = SPECAA_SATURATE(lod);
+    t = SPECAA_SELECT(lod == lod, t, 1.0);  // NaN uv derivatives: GGX(A)
+    float ggx = specaa_ggx_D(h, A, a * a);
+    if (t >= 1.0) return ggx;
+    return ggx + (1.0 - t) * (specaa_convolved_D(h, A, a) - ggx);
 #else
     return specaa_convolved_D(h, A, a);
 #endif
