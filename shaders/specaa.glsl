@@ -22,8 +22,18 @@
 // Texture parameters: GLSL passes one combined sampler; the sampler-state argument is dropped.
 #define SPECAA_TEXTURE_PARAMS(tex, smp) sampler2D tex
 #define SPECAA_TEXTURE_ARGS(tex, smp) tex
-// Level of detail the sampler computes for uv (relative to level 0, not clamped to the mip range).
+// Level of detail the sampler computes for uv (relative to level 0, not clamped to the mip range):
+// textureQueryLod from GLSL 4.00; before it the isotropic LOD of the GL spec (Sec. 8.14) from the UV
+// derivatives and the level-0 size (textureSize, GLSL 1.30).
+#if __VERSION__ >= 400
 #define SPECAA_QUERY_LOD(tex, smp, uv) textureQueryLod(tex, uv).y
+#else
+#define SPECAA_QUERY_LOD(tex, smp, uv) specaa_lod_from_derivatives(vec2(textureSize(tex, 0)), uv)
+float specaa_lod_from_derivatives(vec2 size, vec2 uv) {
+    vec2 dx = dFdx(uv) * size, dy = dFdy(uv) * size;
+    return 0.5 * log2(max(dot(dx, dx), dot(dy, dy)));
+}
+#endif
 #define SPECAA_SAMPLE(tex, smp, uv) texture(tex, uv)
 #define SPECAA_UINT3 uvec3
 // Glint dictionary (2D texture array) parameters and its explicit-gradient read.
