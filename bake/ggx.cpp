@@ -1,6 +1,8 @@
 // GGX / Beckmann NDFs with a roughness matrix and GGX masking-shadowing (TK21 Sec. 2.1, App. A).
 #include "bake/ggx.h"
 
+#include "bake/isotropic_filter.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -65,7 +67,7 @@ T convolved_ndf(const Vec3<T>& h, const Sym2<T>& A, T alpha2) {
             K = Sym2<T>{f * (K.xx - lmin), f * K.xy, f * (K.yy - lmin)};
         }
     }
-    const T kmax = std::max(T(0.5) * (K.xx + K.yy) + std::hypot(T(0.5) * (K.xx - K.yy), K.xy), T(0));
+    const T kmax = std::max(max_eigenvalue_sym2(K.xx, K.yy, K.xy), T(0));
     // No footprint to speak of: GGX(A) itself (within 0.1% of the convolution).
     if (kmax <= T(1e-3) * a) return ggx_ndf(h, A, a * a);
     // GGX(a) = int_0^inf e^-w Beckmann(a / w I) dw (a Gaussian scale mixture), so GGX(a) convolved with

@@ -539,7 +539,7 @@ float specaa_convolved_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
     float a = max(alpha2, 1.0e-12);
     // The added kernel, projected onto the PSD cone (an anisotropic material's A - a I can be indefinite).
     SPECAA_FLOAT3 K = specaa_sym_clamp_psd(A - SPECAA_FLOAT3(a, a, 0.0));
-    float kmax = max(0.5 * (K.x + K.y) + sqrt(0.25 * (K.x - K.y) * (K.x - K.y) + K.z * K.z), 0.0);
+    float kmax = max(specaa_sym_max_eigenvalue(K), 0.0);
     if (kmax <= 1.0e-3 * a) return specaa_ggx_D(h, A, a * a);  // no footprint to speak of
     float wlo = 0.05 * min(1.0, a / kmax);
     float slo = log(wlo);
@@ -743,8 +743,6 @@ float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, SpecaaSurface s) {
     return specaa_convolved_D(h, A, a);
 #endif
 }
-
-
 // ===================================================================================================
 // Glints: geometric glint anti-aliasing, C21 (Chermain et al. 2021) on the procedural glint BRDF of
 // C20, with the dictionary that `specbake glints` bakes (glint_dictionary.ktx2, see its manifest).
