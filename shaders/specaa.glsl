@@ -54,6 +54,8 @@ float specaa_lod_from_derivatives(vec2 size, vec2 uv) {
 // Configuration (define before including):
 //   SPECAA_SIGMA2   pixel-filter variance in pixels^2, default 1/(2 pi) (TK21 App. B).
 //   SPECAA_KAPPA    clamp of derivative-based kernels, default 0.18 (TK21 Eq. 10, K16).
+//   SPECAA_GGX_SPREAD  specaa_default_D with a kernel or LEAN texture: GGX(A) where the minified
+//                   footprint's spread k_max exceeds 1 / this, default 8.
 //   Baked data for the default entry point (at most one of the roughness texture and kernel/LEAN):
 //   SPECAA_ROUGHNESS_TEXTURE name   baked filtered roughness mips (perceptual r), channel
 //                                   SPECAA_ROUGHNESS_CHANNEL (default g: the RGBA ORM layout, A = 1;
@@ -92,6 +94,9 @@ float specaa_lod_from_derivatives(vec2 size, vec2 uv) {
 #endif
 #ifndef SPECAA_KAPPA
 #define SPECAA_KAPPA 0.18
+#endif
+#ifndef SPECAA_GGX_SPREAD
+#define SPECAA_GGX_SPREAD 8.0
 #endif
 #ifndef SPECAA_ROUGHNESS_CHANNEL
 #define SPECAA_ROUGHNESS_CHANNEL g
@@ -715,33 +720,42 @@ SPECAA_FLOAT3 specaa_filtered_alpha2_matrix(SpecaaSurface s) {
 // Level of detail the hardware samples a texture at uv (negative under magnification).
 float specaa_texture_lod(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) { return SPECAA_QUERY_LOD(tex, smp, uv); }
 
-// The default NDF for the default matrix A = specaa_filtered_alpha2_matrix(s). Without baked normal-map
-// data the footprint's spread of normals is the image of the pixel filter under the surface's curvature,
-// a Gaussian, and GGX of the material convolved with it (specaa_convolved_D) is exact. With a baked
-// roughness, kernel or LEAN texture bound the same holds under magnification (the footprint inside one
-// texel: the texel holds no spread of its own and the interpolated normals vary smoothly), but from the
-// texture's mip 1 on the texels hold a normal map's spread, a wide non-Gaussian cone of normals, and
-// GGX(A), whose tails are heavier, measured closer on the far normal-mapped models (README "Accuracy and
-// its cost": NormalTangentTest far 0.47x against 0.71x no filtering's error). So: the convolution up to
-// LOD 0, GGX(A) from LOD 1, linear in between.
+// The default NDF for the default matrix A = specaa_filtered_alpha2_matrix(s): GGX(A) + (1 - w)
+// (specaa_convolved_D - GGX(A)), GGX of the material convolved with the footprint's spread K = A - a I
+// where that spread is Gaussian, GGX(A) where it is not.
+// - No baked normal-map data (w = 0): the spread is the image of the pixel filter under the surface's
+//   curvature, a Gaussian, and the convolution is exact.
+// - Baked kernel or LEAN texture (the material's own a; K holds the texel's spread and the pixel kernel,
+//   whose derivatives of the mapped normal carry the normal map across pixels):
+//   w = saturate(LOD) saturate(SPECAA_GGX_SPREAD k_max). Under magnification (LOD <= 0) the footprint lies
+//   inside one texel and the interpolated normals vary smoothly: the convolution. Minified, a small spread
+//   of small slopes is still close to Gaussian (slope and projected variance within 10% up to
+//   k_max ~ 0.05), but a broad one covers much of the hemisphere (a normal map's domes and bevels hold
+//   every slope up to the horizon), where a Gaussian in slope space has too little weight far from the
+//   mean and GGX(A) (TK21's projected-space widening; A = I is the uniform hemisphere) follows closer:
+//   GGX(A) from k_max = 1 / SPECAA_GGX_SPREAD = 0.125 (slope standard deviation 0.25) on. README
+//   "Accuracy and its cost" has the measurements (SPECAA_GGX_SPREAD 4, 8, 16 and the LOD factor).
+// - Baked roughness texture (a already holds the texel's spread, K only the pixel's): w = saturate(LOD),
+//   the convolution under magnification, GGX(A) from the texture's mip 1 on.
+// NaN inputs give GGX(A).
 float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, SpecaaSurface s) {
     float a = specaa_base_alpha2(s);
-#if defined(SPECAA_ROUGHNESS_TEXTURE) || defined(SPECAA_KERNEL_TEXTURE) || defined(SPECAA_LEAN_TEXTURE0)
 #if defined(SPECAA_ROUGHNESS_TEXTURE)
-    float lod = specaa_texture_lod(SPECAA_TEXTURE_ARGS(SPECAA_ROUGHNESS_TEXTURE, SPECAA_SAMPLER), s.uv);
-#elif defined(SPECAA_KERNEL_TEXTURE)
+    float w = SPECAA_SATURATE(specaa_texture_lod(SPECAA_TEXTURE_ARGS(SPECAA_ROUGHNESS_TEXTURE, SPECAA_SAMPLER), s.uv));
+#elif defined(SPECAA_KERNEL_TEXTURE) || defined(SPECAA_LEAN_TEXTURE0)
+#if defined(SPECAA_KERNEL_TEXTURE)
     float lod = specaa_texture_lod(SPECAA_TEXTURE_ARGS(SPECAA_KERNEL_TEXTURE, SPECAA_SAMPLER), s.uv);
 #else
     float lod = specaa_texture_lod(SPECAA_TEXTURE_ARGS(SPECAA_LEAN_TEXTURE0, SPECAA_SAMPLER), s.uv);
 #endif
-    float t = SPECAA_SATURATE(lod);
-    t = SPECAA_SELECT(lod == lod, t, 1.0);  // NaN uv derivatives: GGX(A)
-    float ggx = specaa_ggx_D(h, A, a * a);
-    if (t >= 1.0) return ggx;
-    return ggx + (1.0 - t) * (specaa_convolved_D(h, A, a) - ggx);
+    float w = SPECAA_SATURATE(lod) * SPECAA_SATURATE(SPECAA_GGX_SPREAD * specaa_sym_max_eigenvalue(A - SPECAA_FLOAT3(a, a, 0.0)));
 #else
-    return specaa_convolved_D(h, A, a);
+    float w = 0.0;
 #endif
+    w = SPECAA_SELECT(w == w, w, 1.0);
+    float ggx = specaa_ggx_D(h, A, a * a);
+    if (w >= 1.0) return ggx;
+    return ggx + (1.0 - w) * (specaa_convolved_D(h, A, a) - ggx);
 }
 // ===================================================================================================
 // Glints: geometric glint anti-aliasing, C21 (Chermain et al. 2021) on the procedural glint BRDF of

@@ -75,22 +75,32 @@ std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool varia
                       "exact", "mean-projected"},
                      "mean-projected", ""});
     }
-    // The matrix form (baked roughness where the scene is normal-mapped) with the NDF `ndf` defines.
-    const auto matrix_default = [&](const char* name, const char* source, const std::string& ndf) {
-        c.push_back({name, "default", source,
-                     {std::string(normal_mapped ? kBakedRoughnessDefines : "") + ndf, kMatrixDefault, "exact",
-                      "mean-projected"},
+    // The matrix form with the NDF `ndf` defines; where the scene is normal-mapped, with the baked kernel
+    // mips and the material's roughness (`kernel`) or the baked roughness (otherwise).
+    const char* kBakedKernelDefines = "#define SPECAA_KERNEL_TEXTURE uBakedKernel\n";
+    const auto matrix_default = [&](const char* name, const char* source, const std::string& ndf, bool kernel) {
+        const char* baked = !normal_mapped ? "" : kernel ? kBakedKernelDefines : kBakedRoughnessDefines;
+        c.push_back({name, "default", source, {baked + ndf, kMatrixDefault, "exact", "mean-projected"},
                      normal_mapped ? "mean-projected" : "", ""});
     };
     matrix_default("default",
-                   "specaa_filtered_alpha2_matrix with specaa_default_D (baked data + anisotropic per-pixel kernel; GGX "
-                   "convolved with the footprint without baked normal-map data, else GGX of the matrix)",
-                   kDefaultNdf);
-    matrix_default("default-ggx", "specaa_filtered_alpha2_matrix with specaa_ggx_D (GGX of the widened matrix)", "");
+                   "specaa_filtered_alpha2_matrix with specaa_default_D (baked kernel mips + anisotropic per-pixel "
+                   "kernel; GGX convolved with the footprint, GGX of the matrix as the spread grows)",
+                   kDefaultNdf, true);
+    matrix_default("default-roughness",
+                   "specaa_filtered_alpha2_matrix on the baked roughness with specaa_default_D (convolution under "
+                   "magnification, GGX of the matrix from mip 1)",
+                   kDefaultNdf, false);
+    matrix_default("default-ggx", "specaa_filtered_alpha2_matrix on the baked roughness with specaa_ggx_D (GGX of the widened matrix)", "", false);
     matrix_default("default-convolved",
-                   "specaa_filtered_alpha2_matrix with specaa_convolved_D everywhere (GGX of the baked roughness "
-                   "convolved with the footprint)",
-                   kConvolvedNdf);
+                   "specaa_filtered_alpha2_matrix on the baked roughness with specaa_convolved_D everywhere (GGX of "
+                   "the baked roughness convolved with the footprint)",
+                   kConvolvedNdf, false);
+    if (normal_mapped)
+        matrix_default("default-kernel-convolved",
+                       "specaa_filtered_alpha2_matrix on the baked kernel mips with specaa_convolved_D everywhere (the "
+                       "texel's and the pixel's spread convolved as one Gaussian)",
+                       kConvolvedNdf, true);
     c.push_back({"default-isotropic", "default", "specaa_filtered_alpha2 (isotropic form of the default)",
                  {normal_mapped ? kBakedRoughnessDefines : "", kIsotropicDefault, "exact", "mean-projected"},
                  normal_mapped ? "mean-projected" : "", ""});
@@ -101,7 +111,7 @@ std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool varia
     matrix_default("default-tails",
                    "specaa_filtered_alpha2_matrix with specaa_filtered_D (tail weight of the baked roughness along the "
                    "half vector, TK21 Sec. 7)",
-                   "#define SIM_NDF(h, A, a) specaa_filtered_D(h, A, specaa_base_alpha2(s))\n");
+                   "#define SIM_NDF(h, A, a) specaa_filtered_D(h, A, specaa_base_alpha2(s))\n", false);
     // The matrix form with each eigenvalue of A clamped to the isotropic form's a: the matrix's shape where
     // the footprint is round, the isotropic width along an axis the matrix widens beyond it (README
     // "Accuracy and its cost": where the matrix over-blurs, its tails along the widened axis).

@@ -65,14 +65,16 @@ TEST(ShaderCompile, GlslIncludeCompilesAsVersion330) {
     EXPECT_EQ(run_command("glslangValidator -S frag '" + path.string() + "'", out), 0) << out;
 }
 
-// The default NDF samples the baked texture's level of detail (textureQueryLod is GLSL 4.00): the include
-// must still compile as GLSL 3.30 with the driver itself, which (unlike glslangValidator) holds to the
-// version, and as 4.50.
+// With the baked roughness bound the default NDF samples its level of detail (textureQueryLod is GLSL
+// 4.00): the include must still compile as GLSL 3.30 with the driver itself, which (unlike
+// glslangValidator) holds to the version, and as 4.50; with the kernel mips as well.
 TEST(ShaderCompile, DefaultNdfCompilesWithTheDriverAsVersion330And450) {
     SPECBAKE_REQUIRE_GL(ctx);
-    for (const char* version : {"#version 330 core\n", "#version 450 core\n"}) {
+    for (const char* version : {"#version 330 core\n", "#version 450 core\n"})
+        for (const char* binding : {"uniform sampler2D uKernel;\n#define SPECAA_KERNEL_TEXTURE uKernel\n",
+                                    "uniform sampler2D uRough;\n#define SPECAA_ROUGHNESS_TEXTURE uRough\n"}) {
         const std::string source =
-            std::string(version) + "uniform sampler2D uKernel;\n#define SPECAA_KERNEL_TEXTURE uKernel\n" +
+            std::string(version) + binding +
             read_source_file("shaders/specaa.glsl") +
             "in vec3 vNormal;\nin vec4 vTangent;\nin vec2 vUv;\nin vec3 vH;\nout vec4 color;\nvoid main() {\n"
             "    SpecaaSurface s;\n    s.roughness = 0.2;\n    s.uv = vUv;\n    s.normal = normalize(vNormal);\n"
@@ -80,7 +82,7 @@ TEST(ShaderCompile, DefaultNdfCompilesWithTheDriverAsVersion330And450) {
             "    vec3 A = specaa_filtered_alpha2_matrix(s);\n"
             "    color = vec4(specaa_default_D(normalize(vH), A, s));\n}\n";
         auto shader = verify::compile_glsl_shader(GL_FRAGMENT_SHADER, source);
-        EXPECT_TRUE(shader.ok()) << version << (shader.ok() ? "" : shader.error().message);
+        EXPECT_TRUE(shader.ok()) << version << binding << (shader.ok() ? "" : shader.error().message);
     }
 }
 

@@ -23,15 +23,16 @@ float far_factor() {
     return 1.0f;
 }
 
-void expect_default_no_worse(const SimScene& scene, int size = 64, bool tone_mapped = false, bool far = true) {
-    VerifyOptions options = test::small_verify(size, size, 64, 3);
-    options.only = {"default"};
+void expect_default_no_worse(const SimScene& scene, int size = 64, bool tone_mapped = false, bool far = true,
+                             const std::string& candidate = "default", int spp = 64, int frames = 3) {
+    VerifyOptions options = test::small_verify(size, size, spp, frames);
+    options.only = {candidate};
     auto report = run_verify(far ? at_distance(scene, "far", far_factor()) : scene, options);
     ASSERT_TRUE(report.ok()) << report.error().message;
     const SimMetrics *none = nullptr, *def = nullptr;
     for (const CandidateReport& c : report->candidates) {
         if (c.name == "none") none = &c.metrics;
-        if (c.name == "default") def = &c.metrics;
+        if (c.name == candidate) def = &c.metrics;
     }
     ASSERT_TRUE(none && def);
     ASSERT_GT(none->pixels, 0) << scene.name << ": no pixel scored at the far distance";
@@ -91,6 +92,17 @@ TEST(VerifyDoNoHarm, DefaultNoWorseThanNoneOnSmoothCurvedMirrorsToneMapped) {
             ASSERT_TRUE(scene.ok());
             expect_default_no_worse(*scene, 64, true, false);
         }
+}
+
+// The normal-mapped sphere at the bench's framing, tone-mapped: its bump map's slopes are a sum of many
+// waves, a Gaussian-like spread the convolution models and GGX(A)'s tails over-brighten. At 128x128,
+// 256 spp, 4 frames the earlier rule (GGX(A) on the baked roughness, `default-roughness`) gives 1.23x no
+// filtering's tone-mapped flicker at alpha 0.01 and fails here; the default 0.83x.
+TEST(VerifyDoNoHarm, DefaultNoWorseThanNoneOnTheNormalMappedSphereToneMapped) {
+    SPECBAKE_REQUIRE_GL();
+    auto scene = make_builtin_scene("bumpy-sphere", std::sqrt(0.01f));
+    ASSERT_TRUE(scene.ok());
+    expect_default_no_worse(*scene, 128, true, false, "default", 256, 4);
 }
 
 }  // namespace
