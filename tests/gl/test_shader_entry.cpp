@@ -2,15 +2,19 @@
 // kind of baked data bound as a real mipmapped texture: every mip level holds its own constant, the
 // texture coordinates are scaled so that the hardware selects level L, and the result must be the
 // SPEC Sec. 3 composition of level L's data with the per-pixel kernel of a known normal or curvature
-// field, computed in double with the C++ core (bake/isotropic_filter.h, bake/roughness_space.h).
+// field, computed in double with the C++ core (bake/isotropic_filter.h, bake/roughness_space.h). The
+// default NDF (specaa_default_D) at a fixed half vector with that matrix is checked against the blend of
+// the C++ GGX and convolved NDFs (bake/ggx.h) by the level of detail and the spread.
 #include "gl/gl_harness.h"
 
 #include "bake/constants.h"
+#include "bake/ggx.h"
 #include "bake/isotropic_filter.h"
 #include "bake/roughness_space.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -78,8 +82,10 @@ uniform float uNormalSlope;
 uniform float uWorldPerPixel;
 uniform vec4 uCurvature;
 uniform float uRoughness;
+uniform vec3 uH;
 layout(location = 0) out vec4 o0;
 layout(location = 1) out vec4 o1;
+layout(location = 2) out vec4 o2;
 void main() {
     SpecaaSurface s;
     s.roughness = uRoughness;
@@ -90,7 +96,9 @@ void main() {
     s.bitangent = vec3(0.0, 1.0, 0.0);
     s.curvature = uCurvature;
     o0 = vec4(specaa_filtered_alpha2(s), specaa_filtered_roughness(s), 0.0, 0.0);
-    o1 = vec4(specaa_filtered_alpha2_matrix(s), 0.0);
+    vec3 A = specaa_filtered_alpha2_matrix(s);
+    o1 = vec4(A, 0.0);
+    o2 = vec4(specaa_default_D(normalize(uH), A, s), 0.0, 0.0, 0.0);
 }
 )";
 }
@@ -135,10 +143,10 @@ void run_config(const Config& c) {
             tex0 = make_texture(4, [](int L) { return std::array<float, 4>{0.7f, float(level_roughness(L)), 0.3f, 1.0f}; });
             break;
     }
-    GLuint vao = 0, fbo = 0, targets[2] = {};
+    GLuint vao = 0, fbo = 0, targets[3] = {};
     glGenVertexArrays(1, &vao);
     glBindVertexArray(vao);
-    fbo = create_float_targets(2, kView, kView, targets);
+    fbo = create_float_targets(3, kView, kView, targets);
     ASSERT_EQ(glCheckFramebufferStatus(GL_FRAMEBUFFER), static_cast<GLenum>(GL_FRAMEBUFFER_COMPLETE));
     // Bound after the render targets: creating them rebinds GL_TEXTURE_2D on the active unit.
     glBindTextureUnit(0, tex0);
@@ -150,17 +158,22 @@ void run_config(const Config& c) {
     glUniform1f(glGetUniformLocation(program, "uWorldPerPixel"), float(kWorldPerPixel));
     glUniform4f(glGetUniformLocation(program, "uCurvature"), float(kK1), float(kK2), float(2 * std::cos(dir)), float(2 * std::sin(dir)));
     glUniform1f(glGetUniformLocation(program, "uRoughness"), float(kRoughness));
+    const Vec3<double> h = normalize(Vec3<double>{0.12, -0.07, 1.0});
+    glUniform3f(glGetUniformLocation(program, "uH"), float(h.x), float(h.y), float(h.z));
+    int blends = 0;  // pixels where the default NDF is strictly between the convolution and GGX(A)
 
     int failures = 0;
     for (int L = 0; L < (c.baked == Baked::None ? 1 : kLevels - 1); ++L) {
         // One pixel spans 2^L texels: the hardware's level of detail is L.
         glUniform1f(glGetUniformLocation(program, "uUvPerPixel"), float(std::ldexp(1.0, L) / kTexSize));
         glDrawArrays(GL_TRIANGLES, 0, 3);
-        std::vector<float> out0(kView * kView * 4), out1(kView * kView * 4);
+        std::vector<float> out0(kView * kView * 4), out1(kView * kView * 4), out2(kView * kView * 4);
         glReadBuffer(GL_COLOR_ATTACHMENT0);
         glReadPixels(0, 0, kView, kView, GL_RGBA, GL_FLOAT, out0.data());
         glReadBuffer(GL_COLOR_ATTACHMENT1);
         glReadPixels(0, 0, kView, kView, GL_RGBA, GL_FLOAT, out1.data());
+        glReadBuffer(GL_COLOR_ATTACHMENT2);
+        glReadPixels(0, 0, kView, kView, GL_RGBA, GL_FLOAT, out2.data());
         ASSERT_EQ(glGetError(), static_cast<GLenum>(GL_NO_ERROR));
 
         for (int y = 0; y < kView; ++y)
@@ -210,10 +223,28 @@ void run_config(const Config& c) {
                      std::abs(out1[i + 2] - A.xy) > kTol * scale) && ++failures <= 5)
                     ADD_FAILURE() << c.name << " level " << L << " pixel " << x << "," << y << ": matrix " << out1[i] << " "
                                   << out1[i + 1] << " " << out1[i + 2] << " want " << A.xx << " " << A.yy << " " << A.xy;
+                // The default NDF: GGX(A) + (1 - w) (convolution - GGX(A)). w = 0 without baked data; the level
+                // of detail L (saturated) with the baked roughness; L times saturate(8 k_max), k_max the largest
+                // eigenvalue of A - a I, with kernel or LEAN mips (SPECAA_GGX_SPREAD 8).
+                double w = 0.0;
+                const Sym2<double> K{A.xx - a0, A.xy, A.yy - a0};
+                const double kmax = 0.5 * (K.xx + K.yy) + std::hypot(0.5 * (K.xx - K.yy), K.xy);
+                if (c.baked == Baked::Roughness) w = std::min(1.0, double(L));
+                else if (c.baked != Baked::None) w = std::min(1.0, double(L)) * std::clamp(8.0 * kmax, 0.0, 1.0);
+                const double ggx = ggx_ndf(h, A, a0 * a0), conv = convolved_ndf(h, A, a0);
+                const double want_d = ggx + (1.0 - w) * (conv - ggx);
+                // The convolution's quadrature in float and the matrix's rounding: 3e-3 of the larger NDF.
+                if (std::abs(out2[i] - want_d) > 3e-3 * std::max(ggx, conv) && ++failures <= 5)
+                    ADD_FAILURE() << c.name << " level " << L << " pixel " << x << "," << y << ": default D " << out2[i]
+                                  << " want " << want_d << " (GGX " << ggx << ", convolution " << conv << ", w " << w << ")";
+                if (w > 0.05 && w < 0.95 && std::abs(conv - ggx) > 0.05 * ggx) ++blends;
             }
     }
     EXPECT_EQ(failures, 0) << c.name;
-    glDeleteTextures(2, targets);
+    // The kernel cases reach the blend itself, not only its ends.
+    if (c.baked == Baked::Kernel || c.baked == Baked::KernelAnisotropic || c.baked == Baked::Lean)
+        EXPECT_GT(blends, 0) << c.name << ": no pixel between the convolution and GGX(A)";
+    glDeleteTextures(3, targets);
     glDeleteTextures(1, &tex0);
     glDeleteTextures(1, &tex1);
     glDeleteFramebuffers(1, &fbo);
