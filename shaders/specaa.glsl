@@ -157,6 +157,22 @@ float specaa_sym_max_eigenvalue(SPECAA_FLOAT3 m) {
     return 0.5 * (m.x + m.y) + sqrt(halfDiff * halfDiff + m.z * m.z);
 }
 
+// A positive semi-definite matrix with each eigenvalue clamped to [0, cap] (eigenvectors kept): TK21
+// Sec. 4's clamp of the non-axis-aligned kernel ("clamp the eigenvalues of Sigma"), the matrix analogue of
+// Listing 3's per-axis min. m = l2 I + (l1 - l2) P1 with the projector P1 = (m - l2 I) / (l1 - l2), so the
+// result is c2 I + (c1 - c2) P1, c_i = clamp(l_i, 0, cap); both above the cap: cap I. For a huge, nearly
+// rank-one m the rounded l2 can come out negative (cancellation in halfTrace - radius); the clamp to 0
+// keeps the result positive semi-definite and at most cap.
+SPECAA_FLOAT3 specaa_sym_clamp_eigenvalues(SPECAA_FLOAT3 m, float cap) {
+    float halfTrace = 0.5 * (m.x + m.y);
+    float halfDiff = 0.5 * (m.x - m.y);
+    float radius = sqrt(halfDiff * halfDiff + m.z * m.z);
+    float l2 = halfTrace - radius;
+    float c1 = clamp(halfTrace + radius, 0.0, cap), c2 = clamp(l2, 0.0, cap);
+    float f = radius > 0.0 ? (c1 - c2) / (2.0 * radius) : 0.0;
+    return SPECAA_FLOAT3(c2 + f * (m.x - l2), c2 + f * (m.y - l2), f * m.z);
+}
+
 // Nearest positive semi-definite matrix: negative eigenvalues set to 0 (Frobenius projection). Used on
 // covariances formed as a difference of moments, Sigma = M - m m^T (SPEC Sec. 3), which rounding can
 // push slightly indefinite. Uses the spectral projector (Sigma - lmin I) / (lmax - lmin).
@@ -650,8 +666,10 @@ bool specaa_curvature_footprint(SpecaaSurface s, out SPECAA_FLOAT4 footprint) {
 
 // Per-pixel kernel matrix of the curved geometry in the (T, B) frame: from _SPECAA_CURVATURE and the
 // position footprint, or from the quad derivatives of the vertex normal projected onto T and B
-// (TK21 Sec. 5.1). Scaled so that its largest eigenvalue is at most kappa (the clamp of TK21 Eq. 10);
-// an overflowing kernel is kappa I, unusable inputs give 0 (edge policy).
+// (TK21 Sec. 5.1). Each eigenvalue clamped to at most kappa, the eigenvectors kept (TK21 Sec. 4: "clamp the
+// eigenvalues of Sigma"; scaling the whole matrix by kappa / lambda_max instead would also shrink the minor
+// axis, and an elongated footprint's peak would come out too bright: ClearCoatTest far, README "Accuracy
+// and its cost"); an overflowing kernel is kappa I, unusable inputs give 0 (edge policy).
 SPECAA_FLOAT3 specaa_pixel_kernel_matrix(SpecaaSurface s) {
 #if defined(SPECAA_NO_PIXEL_KERNEL)
     return SPECAA_FLOAT3(0.0, 0.0, 0.0);
@@ -671,7 +689,7 @@ SPECAA_FLOAT3 specaa_pixel_kernel_matrix(SpecaaSurface s) {
     SPECAA_FLOAT3 K = specaa_kernel_matrix(SPECAA_FLOAT2(dot(dnU, t), dot(dnU, b)), SPECAA_FLOAT2(dot(dnV, t), dot(dnV, b)));
 #endif
     float lmax = specaa_sym_max_eigenvalue(K);
-    SPECAA_FLOAT3 clamped = SPECAA_SELECT3(lmax > SPECAA_KAPPA, K * (SPECAA_KAPPA / lmax), K);
+    SPECAA_FLOAT3 clamped = SPECAA_SELECT3(lmax > SPECAA_KAPPA, specaa_sym_clamp_eigenvalues(K, SPECAA_KAPPA), K);
     bool bounded = max(specaa_magnitude_bits(lmax), specaa_max_component(specaa_magnitude_bits3(clamped))) < SPECAA_NOT_FINITE;
     return SPECAA_SELECT3(usable, SPECAA_SELECT3(bounded, clamped, SPECAA_FLOAT3(SPECAA_KAPPA, SPECAA_KAPPA, 0.0)),
                           SPECAA_FLOAT3(0.0, 0.0, 0.0));

@@ -45,6 +45,7 @@ struct Config {
     Baked baked;
     bool curvature;
     bool pixel_kernel;
+    double world_per_pixel = kWorldPerPixel;  // footprint of the curvature kernel
 };
 
 GLuint make_texture(int channels, const std::function<std::array<float, 4>(int)>& level_value) {
@@ -103,10 +104,15 @@ void main() {
 )";
 }
 
-// Largest eigenvalue scaled to at most kappa (the per-pixel clamp of the matrix form).
+// Each eigenvalue clamped to at most kappa, eigenvectors kept (the per-pixel clamp of the matrix form,
+// TK21 Sec. 4), by an explicit eigendecomposition: angle of the major axis, then V diag(min) V^T.
 Sym2<double> clamp_kernel(Sym2<double> k) {
-    const double lmax = 0.5 * (k.xx + k.yy) + std::hypot(0.5 * (k.xx - k.yy), k.xy);
-    return lmax > kKappa ? (kKappa / lmax) * k : k;
+    const double phi = 0.5 * std::atan2(2.0 * k.xy, k.xx - k.yy);
+    const double c = std::cos(phi), s = std::sin(phi);
+    const double l1 = c * c * k.xx + 2.0 * c * s * k.xy + s * s * k.yy;  // along (c, s)
+    const double l2 = s * s * k.xx - 2.0 * c * s * k.xy + c * c * k.yy;  // along (-s, c)
+    const double m1 = std::min(l1, kKappa), m2 = std::min(l2, kKappa);
+    return {m1 * c * c + m2 * s * s, (m1 - m2) * c * s, m1 * s * s + m2 * c * c};
 }
 
 void run_config(const Config& c) {
@@ -155,7 +161,7 @@ void run_config(const Config& c) {
     glUseProgram(program);
     const double dir = kDirAngle;
     glUniform1f(glGetUniformLocation(program, "uNormalSlope"), float(kNormalSlope));
-    glUniform1f(glGetUniformLocation(program, "uWorldPerPixel"), float(kWorldPerPixel));
+    glUniform1f(glGetUniformLocation(program, "uWorldPerPixel"), float(c.world_per_pixel));
     glUniform4f(glGetUniformLocation(program, "uCurvature"), float(kK1), float(kK2), float(2 * std::cos(dir)), float(2 * std::sin(dir)));
     glUniform1f(glGetUniformLocation(program, "uRoughness"), float(kRoughness));
     const Vec3<double> h = normalize(Vec3<double>{0.12, -0.07, 1.0});
@@ -194,7 +200,7 @@ void run_config(const Config& c) {
                 if (c.pixel_kernel && c.curvature) {
                     const double cx = std::cos(dir), cy = std::sin(dir);
                     const Sym2<double> S{kK1 * cx * cx + kK2 * cy * cy, (kK1 - kK2) * cx * cy, kK1 * cy * cy + kK2 * cx * cx};
-                    const double w2 = kWorldPerPixel * kWorldPerPixel;
+                    const double w2 = c.world_per_pixel * c.world_per_pixel;
                     k_px = (2 * kSigma2 * w2) * Sym2<double>{S.xx * S.xx + S.xy * S.xy, S.xy * (S.xx + S.yy), S.yy * S.yy + S.xy * S.xy};
                 } else if (c.pixel_kernel) {
                     auto normal_x = [](int px) { const double t = double(float(kNormalSlope)) * (px + 0.5); return Vec3<double>{t / std::hypot(t, 1.0), 0.0, 1.0 / std::hypot(t, 1.0)}; };
@@ -256,6 +262,11 @@ TEST(ShaderEntry, DerivativesOnly) { run_config({"derivatives", Baked::None, fal
 TEST(ShaderEntry, KernelTexturePlusDerivatives) { run_config({"kernel+derivatives", Baked::Kernel, false, true}); }
 TEST(ShaderEntry, AnisotropicKernelTextureOnly) { run_config({"anisotropic kernel", Baked::KernelAnisotropic, false, false}); }
 TEST(ShaderEntry, LeanPlusCurvature) { run_config({"LEAN+curvature", Baked::Lean, true, true}); }
+// A footprint of 0.4 makes the curvature kernel's major eigenvalue exceed kappa and its minor one stay
+// below: the clamp must cap the first and keep the second (TK21 Sec. 4), not scale the matrix.
+TEST(ShaderEntry, CurvatureKernelClampedPerEigenvalue) {
+    run_config({"curvature, clamped", Baked::None, true, true, 0.4});
+}
 TEST(ShaderEntry, RoughnessTexturePlusDerivatives) { run_config({"roughness+derivatives", Baked::Roughness, false, true}); }
 
 }  // namespace
