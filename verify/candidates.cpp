@@ -13,6 +13,7 @@ SimCandidate derivative(const char* name, const char* source, const char* body) 
 
 const char* kBakedRoughnessDefines =
     "#define SPECAA_ROUGHNESS_TEXTURE uBakedRoughness\n#define SPECAA_ROUGHNESS_CHANNEL r\n";
+const char* kBakedKernelDefines = "#define SPECAA_KERNEL_TEXTURE uBakedKernel\n";
 const char* kIsotropicDefault = "float f = specaa_filtered_alpha2(s); A = vec3(f, f, 0.0);";
 const char* kMatrixDefault = "A = specaa_filtered_alpha2_matrix(s);";
 // The default NDF: GGX of the material (or baked) roughness convolved with the footprint (the include's
@@ -77,7 +78,6 @@ std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool varia
     }
     // The matrix form with the NDF `ndf` defines; where the scene is normal-mapped, with the baked kernel
     // mips and the material's roughness (`kernel`) or the baked roughness (otherwise).
-    const char* kBakedKernelDefines = "#define SPECAA_KERNEL_TEXTURE uBakedKernel\n";
     const auto matrix_default = [&](const char* name, const char* source, const std::string& ndf, bool kernel) {
         const char* baked = !normal_mapped ? "" : kernel ? kBakedKernelDefines : kBakedRoughnessDefines;
         c.push_back({name, "default", source, {baked + ndf, kMatrixDefault, "exact", "mean-projected"},
@@ -154,7 +154,7 @@ void add_variants(std::vector<SimCandidate>& c, bool normal_mapped) {
                           kIsotropicDefault, "exact", key},
                          key, ""});
         c.push_back({"baked-kernel", "variant", "SPEC Sec. 3 kernel mips (t, mean), added at run time",
-                     {"#define SPECAA_KERNEL_TEXTURE uBakedKernel\n#define SPECAA_NO_PIXEL_KERNEL\n",
+                     {std::string(kBakedKernelDefines) + "#define SPECAA_NO_PIXEL_KERNEL\n",
                       kIsotropicDefault, "exact", "mean-projected"},
                      "mean-projected", ""});
         c.push_back({"baked-lean", "variant", "SPEC Sec. 3 LEAN moments (C21 Eq. 16)",

@@ -233,8 +233,7 @@ void run_config(const Config& c) {
                 // of detail L (saturated) with the baked roughness; L times saturate(8 k_max), k_max the largest
                 // eigenvalue of A - a I, with kernel or LEAN mips (SPECAA_GGX_SPREAD 8).
                 double w = 0.0;
-                const Sym2<double> K{A.xx - a0, A.xy, A.yy - a0};
-                const double kmax = 0.5 * (K.xx + K.yy) + std::hypot(0.5 * (K.xx - K.yy), K.xy);
+                const double kmax = max_eigenvalue_sym2(A.xx - a0, A.yy - a0, A.xy);
                 if (c.baked == Baked::Roughness) w = std::min(1.0, double(L));
                 else if (c.baked != Baked::None) w = std::min(1.0, double(L)) * std::clamp(8.0 * kmax, 0.0, 1.0);
                 const double ggx = ggx_ndf(h, A, a0 * a0), conv = convolved_ndf(h, A, a0);

@@ -24,15 +24,15 @@ float far_factor() {
 }
 
 void expect_default_no_worse(const SimScene& scene, int size = 64, bool tone_mapped = false, bool far = true,
-                             const std::string& candidate = "default", int spp = 64, int frames = 3) {
+                             int spp = 64, int frames = 3) {
     VerifyOptions options = test::small_verify(size, size, spp, frames);
-    options.only = {candidate};
+    options.only = {"default"};
     auto report = run_verify(far ? at_distance(scene, "far", far_factor()) : scene, options);
     ASSERT_TRUE(report.ok()) << report.error().message;
     const SimMetrics *none = nullptr, *def = nullptr;
     for (const CandidateReport& c : report->candidates) {
         if (c.name == "none") none = &c.metrics;
-        if (c.name == candidate) def = &c.metrics;
+        if (c.name == "default") def = &c.metrics;
     }
     ASSERT_TRUE(none && def);
     ASSERT_GT(none->pixels, 0) << scene.name << ": no pixel scored at the far distance";
@@ -102,7 +102,7 @@ TEST(VerifyDoNoHarm, DefaultNoWorseThanNoneOnTheNormalMappedSphereToneMapped) {
     SPECBAKE_REQUIRE_GL();
     auto scene = make_builtin_scene("bumpy-sphere", std::sqrt(0.01f));
     ASSERT_TRUE(scene.ok());
-    expect_default_no_worse(*scene, 128, true, false, "default", 256, 4);
+    expect_default_no_worse(*scene, 128, true, false, 256, 4);
 }
 
 }  // namespace
