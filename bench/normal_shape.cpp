@@ -1,0 +1,189 @@
+// Shape of a normal map's spread per mip texel, and what a one-lobe model of it gets wrong (README
+// "Accuracy and its cost", issue 15 item 3): for every shared normal map and mip levels 2, 4 and 6,
+// - the kurtosis E|d|^4 / (E|d|^2)^2 of the slopes d about the texel's mean slope (2 for a 2D Gaussian,
+//   below 2 for a compact band, above 2 for a spike with tails), weighted by the texel's variance, and
+// - the density of the map's normals in slope space at half vectors h tilted 5-60 degrees from the
+//   surface normal (mean over 8 azimuths): the true one (the fraction of full-resolution texels whose
+//   slope lies within a disk of radius 0.02 about h's slope, per area) against the model every one-lobe
+//   filter shares, one Gaussian per mip texel with the texel's mean and covariance of slopes (LEAN,
+//   LEADR), averaged over the texels and widened by the disk's own variance (0.02^2 / 4 per axis).
+// A ratio above 1 is light the filtered material reflects at h that the full-resolution map does not:
+// where texels mix a flat field with steep bumps, each texel's Gaussian fills the gap between them.
+//
+// Run: build/bench/normal_shape [assets folder]   (seconds)
+#include "io/image_io.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace {
+using namespace specbake;
+namespace fs = std::filesystem;
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDisk = 0.02;  // slope-space radius of the true density's histogram disk
+constexpr double kTilts[] = {5, 10, 20, 30, 45, 60};
+constexpr int kAzimuths = 8;
+
+struct Slopes {
+    int width = 0, height = 0;
+    std::vector<double> x, y;
+};
+
+// Slopes (-n_x / n_z, -n_y / n_z in the map's tangent frame; the sign does not matter here) of every
+// texel, from the encoded (n + 1) / 2, renormalised; normals within 3 degrees of the horizon are clamped there.
+Slopes decode_slopes(const Image& n) {
+    Slopes s;
+    s.width = n.width, s.height = n.height;
+    s.x.resize(n.texel_count()), s.y.resize(n.texel_count());
+    for (int j = 0; j < n.height; ++j)
+        for (int i = 0; i < n.width; ++i) {
+            const float* c = n.texel(i, j);
+            double v[3] = {2.0 * c[0] - 1.0, 2.0 * c[1] - 1.0, n.channels >= 3 ? 2.0 * c[2] - 1.0 : 0.0};
+            if (n.channels == 2) v[2] = std::sqrt(std::max(0.0, 1.0 - v[0] * v[0] - v[1] * v[1]));
+            const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+            if (len < 1e-12) v[0] = 0, v[1] = 0, v[2] = 1;
+            const double z = std::max(v[2] / std::max(len, 1e-12), 0.05);
+            const size_t k = size_t(j) * n.width + i;
+            s.x[k] = v[0] / std::max(len, 1e-12) / z;
+            s.y[k] = v[1] / std::max(len, 1e-12) / z;
+        }
+    return s;
+}
+
+struct Texel {
+    double mx, my, cxx, cyy, cxy;
+};
+
+// Mean and covariance of the slopes of each texel of level L (box of 2^L x 2^L base texels) and the
+// variance-weighted kurtosis over the level.
+std::vector<Texel> level_moments(const Slopes& s, int L, double& kurtosis) {
+    const int b = 1 << L, w = s.width / b, h = s.height / b;
+    std::vector<Texel> t(size_t(w) * h);
+    double kurt_sum = 0, var_sum = 0;
+    for (int ty = 0; ty < h; ++ty)
+        for (int tx = 0; tx < w; ++tx) {
+            double sx = 0, sy = 0;
+            for (int y = ty * b; y < ty * b + b; ++y)
+                for (int x = tx * b; x < tx * b + b; ++x) sx += s.x[size_t(y) * s.width + x], sy += s.y[size_t(y) * s.width + x];
+            const double n = double(b) * b, mx = sx / n, my = sy / n;
+            double xx = 0, yy = 0, xy = 0, m4 = 0;
+            for (int y = ty * b; y < ty * b + b; ++y)
+                for (int x = tx * b; x < tx * b + b; ++x) {
+                    const double dx = s.x[size_t(y) * s.width + x] - mx, dy = s.y[size_t(y) * s.width + x] - my;
+                    xx += dx * dx, yy += dy * dy, xy += dx * dy, m4 += (dx * dx + dy * dy) * (dx * dx + dy * dy);
+                }
+            t[size_t(ty) * w + tx] = {mx, my, xx / n, yy / n, xy / n};
+            const double m2 = (xx + yy) / n;
+            if (m2 > 1e-8) kurt_sum += m2 * (m4 / n) / (m2 * m2), var_sum += m2;
+        }
+    kurtosis = var_sum > 0 ? kurt_sum / var_sum : 0.0;
+    return t;
+}
+
+double true_density(const Slopes& s, double hx, double hy) {
+    long long count = 0;
+    for (size_t k = 0; k < s.x.size(); ++k) {
+        const double dx = s.x[k] - hx, dy = s.y[k] - hy;
+        count += dx * dx + dy * dy < kDisk * kDisk;
+    }
+    return double(count) / double(s.x.size()) / (kPi * kDisk * kDisk);
+}
+
+double model_density(const std::vector<Texel>& texels, double hx, double hy) {
+    const double widen = 0.25 * kDisk * kDisk;
+    double sum = 0;
+    for (const Texel& t : texels) {
+        const double xx = t.cxx + widen, yy = t.cyy + widen, xy = t.cxy, det = xx * yy - xy * xy;
+        const double dx = hx - t.mx, dy = hy - t.my;
+        const double q = (yy * dx * dx - 2.0 * xy * dx * dy + xx * dy * dy) / det;
+        sum += std::exp(-0.5 * q) / (2.0 * kPi * std::sqrt(det));
+    }
+    return sum / double(texels.size());
+}
+
+// A normal map by its name: a word of the stem (split at '_', '-', '.', ' ') that ends in "normal" or
+// "normals" or is "normal" followed by digits ("RibsNormal", "rock_normal_1k", "ldr-xy-normal1"; not
+// "NormalTangentTest_BaseColor").
+bool is_normal_map_name(const fs::path& path) {
+    std::string stem = path.stem().string();
+    std::transform(stem.begin(), stem.end(), stem.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    size_t start = 0;
+    while (start <= stem.size()) {
+        size_t end = stem.find_first_of("_-. ", start);
+        if (end == std::string::npos) end = stem.size();
+        const std::string word = stem.substr(start, end - start);
+        const size_t at = word.rfind("normal");
+        if (at != std::string::npos) {
+            const std::string rest = word.substr(at + 6);
+            if ((rest.empty() || rest == "s") && (at == 0 || word.size() == at + 6 + rest.size())) return true;
+            if (at == 0 && !rest.empty() && std::all_of(rest.begin(), rest.end(), [](unsigned char c) { return std::isdigit(c); }))
+                return true;
+        }
+        start = end + 1;
+    }
+    return false;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    const fs::path assets = argc > 1 ? fs::path(argv[1]) : fs::path(SPECBAKE_ASSETS_DIR);
+    std::vector<fs::path> maps;
+    std::error_code ec;
+    if (fs::is_directory(assets, ec))
+        for (const auto& e : fs::recursive_directory_iterator(assets)) {
+            std::string ext = e.path().extension().string();
+            std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+            if (e.is_regular_file() && (ext == ".png" || ext == ".jpg" || ext == ".exr") && is_normal_map_name(e.path()))
+                maps.push_back(e.path());
+        }
+    std::sort(maps.begin(), maps.end());
+    if (maps.empty()) {
+        std::fprintf(stderr, "normal_shape: no normal maps found under %s (give the assets folder)\n", assets.string().c_str());
+        return 1;
+    }
+    std::printf("| map | level | texel | kurtosis");
+    for (double t : kTilts) std::printf(" | model / true, %.0f deg", t);
+    std::printf(" |\n|---|---:|---:|---:");
+    for (size_t i = 0; i < std::size(kTilts); ++i) std::printf("|---:");
+    std::printf("|\n");
+    for (const fs::path& path : maps) {
+        auto image = io::read_image(path);
+        if (!image) {
+            std::fprintf(stderr, "normal_shape: %s\n", image.error().message.c_str());
+            return 1;
+        }
+        const Slopes s = decode_slopes(*image);
+        std::vector<double> truth;
+        for (double tilt : kTilts)
+            for (int a = 0; a < kAzimuths; ++a) {
+                const double m = std::tan(tilt * kPi / 180.0), phi = 2.0 * kPi * a / kAzimuths;
+                truth.push_back(true_density(s, m * std::cos(phi), m * std::sin(phi)));
+            }
+        for (int L : {2, 4, 6}) {
+            if ((s.width >> L) < 4 || (s.height >> L) < 4) continue;
+            double kurtosis = 0;
+            const std::vector<Texel> texels = level_moments(s, L, kurtosis);
+            std::printf("| %s | %d | %dx%d | %.2f ", fs::relative(path, assets).generic_string().c_str(), L, 1 << L, 1 << L, kurtosis);
+            size_t k = 0;
+            for (double tilt : kTilts) {
+                double t = 0, m = 0;
+                for (int a = 0; a < kAzimuths; ++a, ++k) {
+                    const double mt = std::tan(tilt * kPi / 180.0), phi = 2.0 * kPi * a / kAzimuths;
+                    t += truth[k];
+                    m += model_density(texels, mt * std::cos(phi), mt * std::sin(phi));
+                }
+                if (t > 0) std::printf("| %.2f ", m / t);
+                else std::printf("| - ");
+            }
+            std::printf("|\n");
+        }
+    }
+    return 0;
+}
