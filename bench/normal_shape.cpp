@@ -9,6 +9,10 @@
 //   LEADR), averaged over the texels and widened by the disk's own variance (0.02^2 / 4 per axis).
 // A ratio above 1 is light the filtered material reflects at h that the full-resolution map does not:
 // where texels mix a flat field with steep bumps, each texel's Gaussian fills the gap between them.
+// Second model, from the same moments plus one number per texel: the flat fraction f (the share of the
+// texel whose slope is below kFlat, the unperturbed normal) as a spike at slope 0, and the rest as one
+// Gaussian whose moments follow from the texel's: mean m / (1 - f), second moment E[d d^T] / (1 - f).
+// f is linear in the base texels, so its mips are plain box filters of a 0/1 mask.
 //
 // Run: build/bench/normal_shape [assets folder]   (seconds)
 #include "io/image_io.h"
@@ -27,6 +31,7 @@ namespace fs = std::filesystem;
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDisk = 0.02;  // slope-space radius of the true density's histogram disk
+constexpr double kFlat = 0.02;  // slope below which a base texel counts as flat (8-bit encoding: 1/127 steps)
 constexpr double kTilts[] = {5, 10, 20, 30, 45, 60};
 constexpr int kAzimuths = 8;
 
@@ -56,8 +61,14 @@ Slopes decode_slopes(const Image& n) {
     return s;
 }
 
-struct Texel {
+struct Gaussian {
     double mx, my, cxx, cyy, cxy;
+};
+
+struct Texel {
+    Gaussian all;   // every base texel
+    double flat;    // flat fraction f
+    Gaussian rest;  // the base texels that are not flat (moments derived from `all` and f)
 };
 
 // Mean and covariance of the slopes of each texel of level L (box of 2^L x 2^L base texels) and the
@@ -72,13 +83,29 @@ std::vector<Texel> level_moments(const Slopes& s, int L, double& kurtosis) {
             for (int y = ty * b; y < ty * b + b; ++y)
                 for (int x = tx * b; x < tx * b + b; ++x) sx += s.x[size_t(y) * s.width + x], sy += s.y[size_t(y) * s.width + x];
             const double n = double(b) * b, mx = sx / n, my = sy / n;
-            double xx = 0, yy = 0, xy = 0, m4 = 0;
+            double xx = 0, yy = 0, xy = 0, m4 = 0, flat = 0;
             for (int y = ty * b; y < ty * b + b; ++y)
                 for (int x = tx * b; x < tx * b + b; ++x) {
-                    const double dx = s.x[size_t(y) * s.width + x] - mx, dy = s.y[size_t(y) * s.width + x] - my;
+                    const double sx0 = s.x[size_t(y) * s.width + x], sy0 = s.y[size_t(y) * s.width + x];
+                    const double dx = sx0 - mx, dy = sy0 - my;
                     xx += dx * dx, yy += dy * dy, xy += dx * dy, m4 += (dx * dx + dy * dy) * (dx * dx + dy * dy);
+                    flat += sx0 * sx0 + sy0 * sy0 < kFlat * kFlat;
                 }
-            t[size_t(ty) * w + tx] = {mx, my, xx / n, yy / n, xy / n};
+            Texel& texel = t[size_t(ty) * w + tx];
+            texel.all = {mx, my, xx / n, yy / n, xy / n};
+            texel.flat = flat / n;
+            // The rest from the texel's moments (the flat texels taken as slope 0): mean m / (1 - f), second
+            // moment (Sigma + m m^T) / (1 - f), its covariance clamped to positive semi-definite.
+            const double r = 1.0 - texel.flat;
+            if (r > 1e-3) {
+                const double rx = mx / r, ry = my / r;
+                double rxx = std::max((xx / n + mx * mx) / r - rx * rx, 0.0), ryy = std::max((yy / n + my * my) / r - ry * ry, 0.0);
+                const double lim = std::sqrt(rxx * ryy);
+                const double rxy = std::clamp((xy / n + mx * my) / r - rx * ry, -lim, lim);
+                texel.rest = {rx, ry, rxx, ryy, rxy};
+            } else {
+                texel.rest = {0, 0, 0, 0, 0};
+            }
             const double m2 = (xx + yy) / n;
             if (m2 > 1e-8) kurt_sum += m2 * (m4 / n) / (m2 * m2), var_sum += m2;
         }
@@ -95,16 +122,24 @@ double true_density(const Slopes& s, double hx, double hy) {
     return double(count) / double(s.x.size()) / (kPi * kDisk * kDisk);
 }
 
-double model_density(const std::vector<Texel>& texels, double hx, double hy) {
+// A Gaussian's density at (hx, hy), widened by the histogram disk's variance (0.02^2 / 4 per axis).
+double gaussian_density(const Gaussian& g, double hx, double hy) {
     const double widen = 0.25 * kDisk * kDisk;
-    double sum = 0;
+    const double xx = g.cxx + widen, yy = g.cyy + widen, xy = g.cxy, det = std::max(xx * yy - xy * xy, widen * widen);
+    const double dx = hx - g.mx, dy = hy - g.my;
+    const double q = (yy * dx * dx - 2.0 * xy * dx * dy + xx * dy * dy) / det;
+    return std::exp(-0.5 * q) / (2.0 * kPi * std::sqrt(det));
+}
+
+// Mean over the texels of the one-Gaussian model (first) and of the flat-fraction model (second).
+std::pair<double, double> model_density(const std::vector<Texel>& texels, double hx, double hy) {
+    double one = 0, split = 0;
     for (const Texel& t : texels) {
-        const double xx = t.cxx + widen, yy = t.cyy + widen, xy = t.cxy, det = xx * yy - xy * xy;
-        const double dx = hx - t.mx, dy = hy - t.my;
-        const double q = (yy * dx * dx - 2.0 * xy * dx * dy + xx * dy * dy) / det;
-        sum += std::exp(-0.5 * q) / (2.0 * kPi * std::sqrt(det));
+        one += gaussian_density(t.all, hx, hy);
+        split += t.flat * gaussian_density(Gaussian{0, 0, 0, 0, 0}, hx, hy);
+        if (t.flat < 1.0 - 1e-3) split += (1.0 - t.flat) * gaussian_density(t.rest, hx, hy);
     }
-    return sum / double(texels.size());
+    return {one / double(texels.size()), split / double(texels.size())};
 }
 
 // A normal map by its name: a word of the stem (split at '_', '-', '.', ' ') that ends in "normal" or
@@ -148,9 +183,10 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "normal_shape: no normal maps found under %s (give the assets folder)\n", assets.string().c_str());
         return 1;
     }
-    std::printf("| map | level | texel | kurtosis");
-    for (double t : kTilts) std::printf(" | model / true, %.0f deg", t);
-    std::printf(" |\n|---|---:|---:|---:");
+    std::printf("Density of normals at h, model / true: one Gaussian per texel, then flat fraction + one Gaussian\n\n");
+    std::printf("| map | level | texel | kurtosis | flat fraction");
+    for (double t : kTilts) std::printf(" | %.0f deg", t);
+    std::printf(" |\n|---|---:|---:|---:|---:");
     for (size_t i = 0; i < std::size(kTilts); ++i) std::printf("|---:");
     std::printf("|\n");
     for (const fs::path& path : maps) {
@@ -170,16 +206,20 @@ int main(int argc, char** argv) {
             if ((s.width >> L) < 4 || (s.height >> L) < 4) continue;
             double kurtosis = 0;
             const std::vector<Texel> texels = level_moments(s, L, kurtosis);
-            std::printf("| %s | %d | %dx%d | %.2f ", fs::relative(path, assets).generic_string().c_str(), L, 1 << L, 1 << L, kurtosis);
+            double flat = 0;
+            for (const Texel& t : texels) flat += t.flat;
+            std::printf("| %s | %d | %dx%d | %.2f | %.2f ", fs::relative(path, assets).generic_string().c_str(), L, 1 << L,
+                        1 << L, kurtosis, flat / double(texels.size()));
             size_t k = 0;
             for (double tilt : kTilts) {
-                double t = 0, m = 0;
+                double t = 0, one = 0, split = 0;
                 for (int a = 0; a < kAzimuths; ++a, ++k) {
                     const double mt = std::tan(tilt * kPi / 180.0), phi = 2.0 * kPi * a / kAzimuths;
                     t += truth[k];
-                    m += model_density(texels, mt * std::cos(phi), mt * std::sin(phi));
+                    const auto [o, sp] = model_density(texels, mt * std::cos(phi), mt * std::sin(phi));
+                    one += o, split += sp;
                 }
-                if (t > 0) std::printf("| %.2f ", m / t);
+                if (t > 0) std::printf("| %.2f / %.2f ", one / t, split / t);
                 else std::printf("| - ");
             }
             std::printf("|\n");
