@@ -44,7 +44,10 @@ struct TextureBakeSettings {
     // Texture addressing the map is sampled with. Box footprints lie inside the map, so it does not change
     // the baked values; it is recorded with the outputs so the run time samples them the same way.
     WrapMode wrap = WrapMode::Repeat;
-    bool anisotropic = false;             // kernel output = Sigma (xx, yy, xy) instead of t
+    // Kernel output = Sigma (xx, yy, xy) (default) instead of t. The default rule needs the axes: a mip texel
+    // on a bump's rim spreads along the slope only, and t = tr(Sigma) in both axes lights a crescent along
+    // the rim (README "Accuracy and its cost", NormalTangentMirrorTest near).
+    bool anisotropic = true;
     LeanSpace lean_space = LeanSpace::Projected;
     TextureOutputs outputs;
     int threads = 0;                      // 0: all available (TBB default); the result does not depend on it

@@ -34,7 +34,7 @@ struct TextureOptions {
     std::string normal_y = "+y";
     std::string reconstruct_z = "auto";
     std::string wrap = "repeat";
-    bool anisotropic = false;
+    bool anisotropic = true;
     std::string lean_space = "projected";
     std::string outputs = "roughness,kernel,lean,normal";
     bool demo = false;
@@ -223,7 +223,9 @@ void add_texture_command(CLI::App& app, std::function<int()>& run) {
                     "Addressing the textures are sampled with: repeat (default), clamp, mirror. Footprints lie "
                     "inside the map, so it does not change values; it is recorded in the manifest and EXR files")
         ->check(CLI::IsMember({"repeat", "clamp", "mirror"}));
-    sub->add_flag("--anisotropic", o->anisotropic, "Kernel output holds Sigma (xx, yy, xy) instead of t");
+    sub->add_flag("--anisotropic,!--isotropic-kernel", o->anisotropic,
+                  "Kernel output holds Sigma (xx, yy, xy) (default, what the default rule reads); --isotropic-kernel: "
+                  "t only, a third of the memory");
     sub->add_option("--lean-space", o->lean_space,
                     "LEAN moments in projected space (default) or slope space (Olano & Baker, base roughness folded in)")
         ->check(CLI::IsMember({"projected", "slope"}));
@@ -238,7 +240,7 @@ void add_texture_command(CLI::App& app, std::function<int()>& run) {
         "  specbake texture --demo -o out/demo\n"
         "  specbake texture --normal rock_n.png --roughness rock_orm.png -o out/rock\n"
         "  specbake texture --normal n.tga --roughness-value 0.3 --format dds --normal-y -y -o out/n\n"
-        "  specbake texture --normal n.png --roughness r.png:0 --isotropic max --anisotropic --format exr -o out/n");
+        "  specbake texture --normal n.png --roughness r.png:0 --isotropic max --isotropic-kernel --format exr -o out/n");
     auto pipe = std::make_shared<PipelineFlags>();
     add_pipeline_options(*sub, *pipe);
     sub->callback([&run, o, pipe] { run = [o, pipe] { return run_texture(*o, *pipe); }; });

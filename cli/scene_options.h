@@ -35,7 +35,7 @@ struct SceneCliOptions {
     double max_kernel = 0.0;
     std::string normal_y = "+y";
     std::string reconstruct_z = "auto";
-    bool anisotropic = false;
+    bool anisotropic = true;
     std::string lean_space = "projected";
     std::vector<std::string> outputs{"roughness", "kernel", "lean", "normal"};
     double min_roughness_gain = 0.05;
@@ -95,7 +95,8 @@ inline void add_material_options(CLI::App* sub, SceneCliOptions& o) {
     sub->add_option("--reconstruct-z", o.reconstruct_z, "Rebuild normal z from x, y")
         ->check(CLI::IsMember({"auto", "always", "never"}))
         ->capture_default_str();
-    sub->add_flag("--anisotropic", o.anisotropic, "Kernel texture holds Sigma (xx, yy, xy) instead of t");
+    sub->add_flag("--anisotropic,!--isotropic-kernel", o.anisotropic,
+                  "Kernel texture holds Sigma (xx, yy, xy) (default, what the default rule reads); --isotropic-kernel: t only");
     sub->add_option("--lean-space", o.lean_space, "LEAN moments in projected or slope space")
         ->check(CLI::IsMember({"projected", "slope"}))
         ->capture_default_str();

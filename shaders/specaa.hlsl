@@ -50,9 +50,10 @@
 //   SPECAA_ROUGHNESS_TEXTURE name   baked filtered roughness mips (perceptual r), channel
 //                                   SPECAA_ROUGHNESS_CHANNEL (default g: the RGBA ORM layout, A = 1;
 //                                   define it as r for the one-channel R8/R16 file).
-//   SPECAA_KERNEL_TEXTURE name      baked projected-space kernel mips: R = t (isotropic mean, R16_SFLOAT)
-//                                   or, with SPECAA_KERNEL_ANISOTROPIC, RGBA = (xx, yy, xy, 1) of Sigma
-//                                   (R16G16B16A16_SFLOAT; A unused).
+//   SPECAA_KERNEL_TEXTURE name      baked projected-space kernel mips: with SPECAA_KERNEL_ANISOTROPIC
+//                                   RGBA = (xx, yy, xy, 1) of Sigma (R16G16B16A16_SFLOAT; A unused), the
+//                                   bake's default; without it R = t (isotropic mean, R16_SFLOAT;
+//                                   `specbake texture --isotropic-kernel`).
 //   SPECAA_LEAN_TEXTURE0 name       LEAN moments, projected space (SPEC Sec. 3), in two textures:
 //   SPECAA_LEAN_TEXTURE1 name         TEXTURE0 RGBA = (m.x, m.y, M.xx, M.yy), TEXTURE1 R = M.xy
 //                                     (at least 16-bit float, trilinear filtering).

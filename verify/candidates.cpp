@@ -13,7 +13,10 @@ SimCandidate derivative(const char* name, const char* source, const char* body) 
 
 const char* kBakedRoughnessDefines =
     "#define SPECAA_ROUGHNESS_TEXTURE uBakedRoughness\n#define SPECAA_ROUGHNESS_CHANNEL r\n";
-const char* kBakedKernelDefines = "#define SPECAA_KERNEL_TEXTURE uBakedKernel\n";
+// The bake's default kernel mips hold Sigma (xx, yy, xy); "-isotropic-kernel" bakes hold t = tr(Sigma).
+const char* kBakedKernelDefines = "#define SPECAA_KERNEL_TEXTURE uBakedKernel\n#define SPECAA_KERNEL_ANISOTROPIC\n";
+const char* kBakedIsotropicKernelDefines = "#define SPECAA_KERNEL_TEXTURE uBakedKernel\n";
+const char* kIsotropicKernelBake = "mean-projected-isotropic-kernel";
 const char* kIsotropicDefault = "float f = specaa_filtered_alpha2(s); A = vec3(f, f, 0.0);";
 const char* kMatrixDefault = "A = specaa_filtered_alpha2_matrix(s);";
 // The default NDF: GGX of the material (or baked) roughness convolved with the footprint (the include's
@@ -77,16 +80,25 @@ std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool varia
                      "mean-projected", ""});
     }
     // The matrix form with the NDF `ndf` defines; where the scene is normal-mapped, with the baked kernel
-    // mips and the material's roughness (`kernel`) or the baked roughness (otherwise).
-    const auto matrix_default = [&](const char* name, const char* source, const std::string& ndf, bool kernel) {
-        const char* baked = !normal_mapped ? "" : kernel ? kBakedKernelDefines : kBakedRoughnessDefines;
-        c.push_back({name, "default", source, {baked + ndf, kMatrixDefault, "exact", "mean-projected"},
-                     normal_mapped ? "mean-projected" : "", ""});
+    // mips (Sigma) and the material's roughness (`kernel`) or the baked roughness (otherwise).
+    const auto matrix_default = [&](const char* name, const char* source, const std::string& ndf, bool kernel,
+                                    bool isotropic_kernel = false) {
+        const char* baked = !normal_mapped ? ""
+                            : !kernel      ? kBakedRoughnessDefines
+                            : isotropic_kernel ? kBakedIsotropicKernelDefines
+                                               : kBakedKernelDefines;
+        const std::string bake = !normal_mapped ? "" : kernel && isotropic_kernel ? kIsotropicKernelBake : "mean-projected";
+        c.push_back({name, "default", source, {baked + ndf, kMatrixDefault, "exact", bake}, bake, ""});
     };
     matrix_default("default",
-                   "specaa_filtered_alpha2_matrix with specaa_default_D (baked kernel mips + anisotropic per-pixel "
-                   "kernel; GGX convolved with the footprint, GGX of the matrix as the spread grows)",
+                   "specaa_filtered_alpha2_matrix with specaa_default_D (baked Sigma kernel mips + anisotropic "
+                   "per-pixel kernel; GGX convolved with the footprint, GGX of the matrix as the spread grows)",
                    kDefaultNdf, true);
+    if (normal_mapped)
+        matrix_default("default-isotropic-kernel",
+                       "specaa_filtered_alpha2_matrix with specaa_default_D on the isotropic kernel mips (t = tr Sigma; "
+                       "--isotropic-kernel)",
+                       kDefaultNdf, true, true);
     matrix_default("default-roughness",
                    "specaa_filtered_alpha2_matrix on the baked roughness with specaa_default_D (convolution under "
                    "magnification, GGX of the matrix from mip 1)",
@@ -154,9 +166,9 @@ void add_variants(std::vector<SimCandidate>& c, bool normal_mapped) {
                           kIsotropicDefault, "exact", key},
                          key, ""});
         c.push_back({"baked-kernel", "variant", "SPEC Sec. 3 kernel mips (t, mean), added at run time",
-                     {std::string(kBakedKernelDefines) + "#define SPECAA_NO_PIXEL_KERNEL\n",
-                      kIsotropicDefault, "exact", "mean-projected"},
-                     "mean-projected", ""});
+                     {std::string(kBakedIsotropicKernelDefines) + "#define SPECAA_NO_PIXEL_KERNEL\n",
+                      kIsotropicDefault, "exact", kIsotropicKernelBake},
+                     kIsotropicKernelBake, ""});
         c.push_back({"baked-lean", "variant", "SPEC Sec. 3 LEAN moments (C21 Eq. 16)",
                      {"#define SPECAA_LEAN_TEXTURE0 uBakedLean0\n#define SPECAA_LEAN_TEXTURE1 uBakedLean1\n"
                       "#define SPECAA_NO_PIXEL_KERNEL\n",
@@ -211,6 +223,7 @@ std::vector<SimTextureBake> texture_bakes_for(const std::vector<SimCandidate>& c
         s.outputs.normal = false;
         // The glint materials' LEAN (pipeline/glint_bake.h): slope space, the base roughness folded in.
         if (k == "slope-lean") s.lean_space = LeanSpace::Slope;
+        s.anisotropic = !k.ends_with("isotropic-kernel");
         bakes.push_back({k, s});
     }
     return bakes;

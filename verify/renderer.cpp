@@ -675,7 +675,7 @@ void SimRenderer::set_curvature(const std::string& key, int object, const Vertex
 void SimRenderer::set_baked(const std::string& key, int texture_set, const SimBakedTextures& textures) {
     Impl::Baked b;
     if (!textures.roughness.levels.empty()) b.roughness = upload_mips(textures.roughness, 0, 1);
-    if (!textures.kernel.levels.empty()) b.kernel = upload_mips(textures.kernel, 0, 1);
+    if (!textures.kernel.levels.empty()) b.kernel = upload_mips(textures.kernel, 0, textures.kernel.channels());
     if (!textures.lean.levels.empty()) {
         b.lean0 = upload_mips(textures.lean, 0, 4);
         b.lean1 = upload_mips(textures.lean, 4, 1);

@@ -5,8 +5,9 @@
 // `specbake texture --outputs kernel` with trilinear filtering.
 #extension GL_GOOGLE_include_directive : require
 
-layout(binding = 0) uniform sampler2D uKernel;    // baked kernel mips: R = t
+layout(binding = 0) uniform sampler2D uKernel;    // baked kernel mips: RGB = Sigma (xx, yy, xy)
 #define SPECAA_KERNEL_TEXTURE uKernel
+#define SPECAA_KERNEL_ANISOTROPIC                     // the default bake; drop it for --isotropic-kernel (R = t)
 #include "specaa.glsl"
 
 layout(location = 0) in vec3 vNormal;    // world-space vertex normal

@@ -1,9 +1,10 @@
 // Minimal forward-shading pixel shader using the specbake include (HLSL): GGX specular from one
 // directional light with the roughness filtered by the baked kernel mips (normal-map variance) and the
 // per-pixel curvature of the mesh (normal derivatives). Entry point: main.
-Texture2D gKernel : register(t0);        // baked kernel mips: R = t
+Texture2D gKernel : register(t0);        // baked kernel mips: RGB = Sigma (xx, yy, xy)
 SamplerState gTrilinear : register(s0);
 #define SPECAA_KERNEL_TEXTURE gKernel
+#define SPECAA_KERNEL_ANISOTROPIC            // the default bake; drop it for --isotropic-kernel (R = t)
 #define SPECAA_SAMPLER gTrilinear
 #include "specaa.hlsl"
 

@@ -54,7 +54,7 @@ TEST_F(BakeBlock, SceneTexturesAreCompressedAsTheTextureCommandDoes) {
             if (o.contains("gpu_format")) gpu[o["kind"].get<std::string>() + ":" + o["path"].get<std::string>()] = o["gpu_format"];
         EXPECT_EQ(gpu["roughness:quad_mat0_Bumpy_roughness." + std::string(container)], "BC4_UNORM_BLOCK");
         EXPECT_EQ(gpu["normal:quad_mat0_Bumpy_normal." + std::string(container)], "BC5_UNORM_BLOCK");
-        EXPECT_EQ(gpu["kernel:quad_mat0_Bumpy_kernel." + std::string(container)], "R16_SFLOAT");
+        EXPECT_EQ(gpu["kernel:quad_mat0_Bumpy_kernel." + std::string(container)], "R16G16B16A16_SFLOAT");
         // The extension says what the blocks hold: BC5 is the normal's x, y only.
         const nlohmann::json g = json_of(scene / "quad.gltf");
         const nlohmann::json& outs = g["materials"][0]["extensions"]["SPECBAKE_specular_aa"]["outputs"];

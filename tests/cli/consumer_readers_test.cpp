@@ -80,7 +80,7 @@ float expected(const std::string& stem, int level, size_t i, int c) {
     };
     if (stem == "texture_roughness") return c == 3 ? 1.0f : at(b.roughness, c);
     if (stem == "texture_normal") return c == 3 ? 1.0f : at(b.normal, c);
-    if (stem == "texture_kernel") return at(b.kernel, c);
+    if (stem == "texture_kernel") return c == 3 ? 1.0f : at(b.kernel, c);  // Sigma (xx, yy, xy), A = 1
     if (stem == "texture_lean") return at(b.lean, c);
     return at(b.lean, 4);  // texture_lean_xy
 }
@@ -105,7 +105,7 @@ TEST_F(ConsumerReaders, KtxParseAndZstdReadEveryKtx2Output) {
     struct Want { const char* stem; uint32_t vk; int channels; double tol; };
     // R8G8B8A8_UNORM 37, R16_SFLOAT 76, R16G16B16A16_SFLOAT 97.
     const Want wants[] = {{"texture_roughness", 37, 4, 0.5 / 255 + 1e-6}, {"texture_normal", 37, 4, 0.5 / 255 + 1e-6},
-                          {"texture_kernel", 76, 1, 1e-3}, {"texture_lean", 97, 4, 1e-3},
+                          {"texture_kernel", 97, 4, 1e-3}, {"texture_lean", 97, 4, 1e-3},
                           {"texture_lean_xy", 76, 1, 1e-3}};
     for (const char* mode : {"", "--supercompression none"}) {
         SCOPED_TRACE(mode);

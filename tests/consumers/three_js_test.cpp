@@ -200,7 +200,8 @@ TEST_F(ThreeJs, LoadersDecodeEveryTextureOutputWithItsMipsAndTexels) {
         GTEST_SKIP() << "no Chromium installed (Debian package chromium; .ci/setup installs it)";
 
     // Inputs the test makes: the built-in demo maps (ORM roughness, 512x384), the demo normal map as an 8-
-    // and a 16-bit PNG with constant roughness (R8 / R16 roughness, anisotropic kernel, slope-space LEAN).
+    // and a 16-bit PNG with constant roughness (R8 / R16 roughness, the isotropic R16F kernel, slope-space LEAN;
+    // the other bakes write the default Sigma kernel).
     const fs::path in = root_ / "inputs";
     fs::create_directories(in);
     const Image demo_normal = demo_normal_map(), demo_orm = demo_orm_map();
@@ -224,12 +225,12 @@ TEST_F(ThreeJs, LoadersDecodeEveryTextureOutputWithItsMipsAndTexels) {
                      true});
     {
         TextureBakeSettings s;
-        s.anisotropic = true;
+        s.anisotropic = false;
         s.lean_space = LeanSpace::Slope;
         auto n8 = io::read_image(in / "normal8.png");
         ASSERT_TRUE(n8.ok());
-        cases.push_back({"aniso_slope", "--normal " + quote(in / "normal8.png") +
-                                            " --roughness-value 0.3 --anisotropic --lean-space slope",
+        cases.push_back({"iso_slope", "--normal " + quote(in / "normal8.png") +
+                                          " --roughness-value 0.3 --isotropic-kernel --lean-space slope",
                          bake(*n8, nullptr, 0.3f, s)});
         cases.push_back({"normal_bc", "--normal " + quote(in / "normal8.png") + " --roughness-value 0.3 --block bc",
                          bake(*n8, nullptr, 0.3f, {}), true});
