@@ -225,7 +225,7 @@ void add_texture_command(CLI::App& app, std::function<int()>& run) {
         ->check(CLI::IsMember({"repeat", "clamp", "mirror"}));
     sub->add_flag("--anisotropic,!--isotropic-kernel", o->anisotropic,
                   "Kernel output holds Sigma (xx, yy, xy) (default, what the default rule reads); --isotropic-kernel: "
-                  "t only, a third of the memory");
+                  "t only, a quarter of the memory");
     sub->add_option("--lean-space", o->lean_space,
                     "LEAN moments in projected space (default) or slope space (Olano & Baker, base roughness folded in)")
         ->check(CLI::IsMember({"projected", "slope"}));
