@@ -18,10 +18,12 @@
 #include "io/image_io.h"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -51,12 +53,13 @@ Slopes decode_slopes(const Image& n) {
             const float* c = n.texel(i, j);
             double v[3] = {2.0 * c[0] - 1.0, 2.0 * c[1] - 1.0, n.channels >= 3 ? 2.0 * c[2] - 1.0 : 0.0};
             if (n.channels == 2) v[2] = std::sqrt(std::max(0.0, 1.0 - v[0] * v[0] - v[1] * v[1]));
-            const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-            if (len < 1e-12) v[0] = 0, v[1] = 0, v[2] = 1;
-            const double z = std::max(v[2] / std::max(len, 1e-12), 0.05);
+            double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+            if (len < 1e-12) v[0] = 0, v[1] = 0, v[2] = 1, len = 1;
+            // Slope = (x / len) / (z / len), with z / len clamped at 0.05.
+            const double z = std::max(v[2], 0.05 * len);
             const size_t k = size_t(j) * n.width + i;
-            s.x[k] = v[0] / std::max(len, 1e-12) / z;
-            s.y[k] = v[1] / std::max(len, 1e-12) / z;
+            s.x[k] = v[0] / z;
+            s.y[k] = v[1] / z;
         }
     return s;
 }
@@ -133,13 +136,25 @@ double gaussian_density(const Gaussian& g, double hx, double hy) {
 
 // Mean over the texels of the one-Gaussian model (first) and of the flat-fraction model (second).
 std::pair<double, double> model_density(const std::vector<Texel>& texels, double hx, double hy) {
+    const double spike = gaussian_density(Gaussian{0, 0, 0, 0, 0}, hx, hy);  // the flat part, the same for every texel
     double one = 0, split = 0;
     for (const Texel& t : texels) {
         one += gaussian_density(t.all, hx, hy);
-        split += t.flat * gaussian_density(Gaussian{0, 0, 0, 0, 0}, hx, hy);
+        split += t.flat * spike;
         if (t.flat < 1.0 - 1e-3) split += (1.0 - t.flat) * gaussian_density(t.rest, hx, hy);
     }
     return {one / double(texels.size()), split / double(texels.size())};
+}
+
+// Half-vector slopes: kAzimuths per tilt of kTilts, tilt-major.
+std::vector<std::array<double, 2>> half_vector_slopes() {
+    std::vector<std::array<double, 2>> h;
+    for (double tilt : kTilts)
+        for (int a = 0; a < kAzimuths; ++a) {
+            const double m = std::tan(tilt * kPi / 180.0), phi = 2.0 * kPi * a / kAzimuths;
+            h.push_back({m * std::cos(phi), m * std::sin(phi)});
+        }
+    return h;
 }
 
 // A normal map by its name: a word of the stem (split at '_', '-', '.', ' ') that ends in "normal" or
@@ -147,20 +162,15 @@ std::pair<double, double> model_density(const std::vector<Texel>& texels, double
 // "NormalTangentTest_BaseColor").
 bool is_normal_map_name(const fs::path& path) {
     std::string stem = path.stem().string();
-    std::transform(stem.begin(), stem.end(), stem.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    size_t start = 0;
-    while (start <= stem.size()) {
-        size_t end = stem.find_first_of("_-. ", start);
-        if (end == std::string::npos) end = stem.size();
-        const std::string word = stem.substr(start, end - start);
-        const size_t at = word.rfind("normal");
-        if (at != std::string::npos) {
-            const std::string rest = word.substr(at + 6);
-            if ((rest.empty() || rest == "s") && (at == 0 || word.size() == at + 6 + rest.size())) return true;
-            if (at == 0 && !rest.empty() && std::all_of(rest.begin(), rest.end(), [](unsigned char c) { return std::isdigit(c); }))
-                return true;
-        }
-        start = end + 1;
+    std::transform(stem.begin(), stem.end(), stem.begin(), [](unsigned char c) {
+        return c == '-' || c == '.' || c == ' ' ? '_' : char(std::tolower(c));
+    });
+    std::stringstream words(stem);
+    for (std::string w; std::getline(words, w, '_');) {
+        if (w.ends_with("normal") || w.ends_with("normals")) return true;
+        if (w.starts_with("normal") && w.size() > 6 &&
+            std::all_of(w.begin() + 6, w.end(), [](unsigned char c) { return std::isdigit(c); }))
+            return true;
     }
     return false;
 }
@@ -189,6 +199,7 @@ int main(int argc, char** argv) {
     std::printf(" |\n|---|---:|---:|---:|---:");
     for (size_t i = 0; i < std::size(kTilts); ++i) std::printf("|---:");
     std::printf("|\n");
+    const std::vector<std::array<double, 2>> halves = half_vector_slopes();
     for (const fs::path& path : maps) {
         auto image = io::read_image(path);
         if (!image) {
@@ -197,11 +208,7 @@ int main(int argc, char** argv) {
         }
         const Slopes s = decode_slopes(*image);
         std::vector<double> truth;
-        for (double tilt : kTilts)
-            for (int a = 0; a < kAzimuths; ++a) {
-                const double m = std::tan(tilt * kPi / 180.0), phi = 2.0 * kPi * a / kAzimuths;
-                truth.push_back(true_density(s, m * std::cos(phi), m * std::sin(phi)));
-            }
+        for (const auto& [hx, hy] : halves) truth.push_back(true_density(s, hx, hy));
         for (int L : {2, 4, 6}) {
             if ((s.width >> L) < 4 || (s.height >> L) < 4) continue;
             double kurtosis = 0;
@@ -210,13 +217,11 @@ int main(int argc, char** argv) {
             for (const Texel& t : texels) flat += t.flat;
             std::printf("| %s | %d | %dx%d | %.2f | %.2f ", fs::relative(path, assets).generic_string().c_str(), L, 1 << L,
                         1 << L, kurtosis, flat / double(texels.size()));
-            size_t k = 0;
-            for (double tilt : kTilts) {
+            for (size_t k = 0; k < halves.size();) {
                 double t = 0, one = 0, split = 0;
                 for (int a = 0; a < kAzimuths; ++a, ++k) {
-                    const double mt = std::tan(tilt * kPi / 180.0), phi = 2.0 * kPi * a / kAzimuths;
                     t += truth[k];
-                    const auto [o, sp] = model_density(texels, mt * std::cos(phi), mt * std::sin(phi));
+                    const auto [o, sp] = model_density(texels, halves[k][0], halves[k][1]);
                     one += o, split += sp;
                 }
                 if (t > 0) std::printf("| %.2f / %.2f ", one / t, split / t);

@@ -79,40 +79,40 @@ std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool varia
                       "exact", "mean-projected"},
                      "mean-projected", ""});
     }
-    // The matrix form with the NDF `ndf` defines; where the scene is normal-mapped, with the baked kernel
-    // mips (Sigma) and the material's roughness (`kernel`) or the baked roughness (otherwise).
-    const auto matrix_default = [&](const char* name, const char* source, const std::string& ndf, bool kernel,
-                                    bool isotropic_kernel = false) {
-        const char* baked = !normal_mapped ? ""
-                            : !kernel      ? kBakedRoughnessDefines
-                            : isotropic_kernel ? kBakedIsotropicKernelDefines
-                                               : kBakedKernelDefines;
-        const std::string bake = !normal_mapped ? "" : kernel && isotropic_kernel ? kIsotropicKernelBake : "mean-projected";
-        c.push_back({name, "default", source, {baked + ndf, kMatrixDefault, "exact", bake}, bake, ""});
+    // The matrix form with the NDF `ndf` defines; where the scene is normal-mapped, with the baked data
+    // `baked` binds: the Sigma kernel mips or t mips with the material's roughness, or the baked roughness.
+    enum class Baked { Kernel, IsotropicKernel, Roughness };
+    const auto matrix_default = [&](const char* name, const char* source, const std::string& ndf, Baked baked) {
+        const char* defines = !normal_mapped                   ? ""
+                              : baked == Baked::Kernel          ? kBakedKernelDefines
+                              : baked == Baked::IsotropicKernel ? kBakedIsotropicKernelDefines
+                                                                : kBakedRoughnessDefines;
+        const std::string bake = !normal_mapped ? "" : baked == Baked::IsotropicKernel ? kIsotropicKernelBake : "mean-projected";
+        c.push_back({name, "default", source, {defines + ndf, kMatrixDefault, "exact", bake}, bake, ""});
     };
     matrix_default("default",
                    "specaa_filtered_alpha2_matrix with specaa_default_D (baked Sigma kernel mips + anisotropic "
                    "per-pixel kernel; GGX convolved with the footprint, GGX of the matrix as the spread grows)",
-                   kDefaultNdf, true);
+                   kDefaultNdf, Baked::Kernel);
     if (normal_mapped)
         matrix_default("default-isotropic-kernel",
                        "specaa_filtered_alpha2_matrix with specaa_default_D on the isotropic kernel mips (t = tr Sigma; "
                        "--isotropic-kernel)",
-                       kDefaultNdf, true, true);
+                       kDefaultNdf, Baked::IsotropicKernel);
     matrix_default("default-roughness",
                    "specaa_filtered_alpha2_matrix on the baked roughness with specaa_default_D (convolution under "
                    "magnification, GGX of the matrix from mip 1)",
-                   kDefaultNdf, false);
-    matrix_default("default-ggx", "specaa_filtered_alpha2_matrix on the baked roughness with specaa_ggx_D (GGX of the widened matrix)", "", false);
+                   kDefaultNdf, Baked::Roughness);
+    matrix_default("default-ggx", "specaa_filtered_alpha2_matrix on the baked roughness with specaa_ggx_D (GGX of the widened matrix)", "", Baked::Roughness);
     matrix_default("default-convolved",
                    "specaa_filtered_alpha2_matrix on the baked roughness with specaa_convolved_D everywhere (GGX of "
                    "the baked roughness convolved with the footprint)",
-                   kConvolvedNdf, false);
+                   kConvolvedNdf, Baked::Roughness);
     if (normal_mapped)
         matrix_default("default-kernel-convolved",
                        "specaa_filtered_alpha2_matrix on the baked kernel mips with specaa_convolved_D everywhere (the "
                        "texel's and the pixel's spread convolved as one Gaussian)",
-                       kConvolvedNdf, true);
+                       kConvolvedNdf, Baked::Kernel);
     c.push_back({"default-isotropic", "default", "specaa_filtered_alpha2 (isotropic form of the default)",
                  {normal_mapped ? kBakedRoughnessDefines : "", kIsotropicDefault, "exact", "mean-projected"},
                  normal_mapped ? "mean-projected" : "", ""});
@@ -123,7 +123,7 @@ std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool varia
     matrix_default("default-tails",
                    "specaa_filtered_alpha2_matrix with specaa_filtered_D (tail weight of the baked roughness along the "
                    "half vector, TK21 Sec. 7)",
-                   "#define SIM_NDF(h, A, a) specaa_filtered_D(h, A, specaa_base_alpha2(s))\n", false);
+                   "#define SIM_NDF(h, A, a) specaa_filtered_D(h, A, specaa_base_alpha2(s))\n", Baked::Roughness);
     // The matrix form with each eigenvalue of A clamped to the isotropic form's a: the matrix's shape where
     // the footprint is round, the isotropic width along an axis the matrix widens beyond it (README
     // "Accuracy and its cost": where the matrix over-blurs, its tails along the widened axis).
