@@ -542,9 +542,14 @@ float specaa_filtered_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
 // Beckmann part undershoots between them. Evaluated by the trapezoid rule in ln w, steps of at most 1.1,
 // from w_lo = 0.05 min(1, a / k_max) to 10 (e^-10 of the weight is left out; 12 to 32 nodes), and the
 // part below w_lo in closed form with K neglected there (a / w >= 20 k_max):
-// int_0^w_lo w e^(-w c) dw / (pi a h_z^4), c = tan^2(theta_h) / a. Relative error against a dense
-// quadrature under 1% for K / a from 1e-2 to 1e7 out to tan^2 = 1.4 (tests/bake/test_ggx.cpp checks it
-// against a brute-force convolution to 4%). GGX(A) itself where k_max <= 1e-3 a (within 0.1%).
+// int_0^w_lo w e^(-w (1 + c)) dw / (pi a h_z^4), c = tan^2(theta_h) / a. That sum's own error (about 1% in
+// the tails, from the node at w_lo) exceeds what a footprint much smaller than the lobe changes there, so
+// for k_max < a the same nodes also sum the K = 0 integrand and the result is GGX(a) + (sum_K - sum_0):
+// exact as K -> 0, its error a fraction of the footprint's effect; from k_max = a / 10 to a it blends
+// (in log k_max) into the direct sum. Relative error against a dense quadrature under 0.1% for
+// K / a <= 0.03, 0.7% to K / a = 0.3, 3% beyond, out to tan^2 = 2 (tests/bake/test_ggx.cpp checks it
+// against a brute-force convolution to 4%, and the small-footprint effect to 10% of itself).
+// GGX(A) itself where k_max <= 1e-3 a (within 0.1%).
 // `alpha2` is the a the footprint spreads: the material's, or the baked roughness texture's.
 float specaa_convolved_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
     if (h.z <= 0.0) return 0.0;
@@ -558,19 +563,26 @@ float specaa_convolved_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
     float range = log(10.0) - slo;
     int nodes = int(clamp(ceil(range / 1.1), 11.0, 31.0)) + 1;
     float ds = range / float(nodes - 1);
+    float z2 = h.z * h.z;
+    float c = dot(h.xy, h.xy) / (z2 * a);
+    float unit = 1.0 / (SPECAA_PI * a * z2 * z2);
     float sum = 0.0;
+    float sumUnfiltered = 0.0;
     for (int j = 0; j < 32; ++j) {
         if (j >= nodes) break;
         float w = exp(slo + ds * float(j));
         float v = a / w;
         float weight = (j == 0 || j == nodes - 1) ? 0.5 : 1.0;
         sum += weight * exp(-w) * w * specaa_beckmann_D(h, K + SPECAA_FLOAT3(v, v, 0.0), v * v);
+        sumUnfiltered += weight * exp(-w * (1.0 + c)) * w * w * unit;  // Beckmann(a / w I)
     }
-    float z2 = h.z * h.z;
-    float c = dot(h.xy, h.xy) / (z2 * a);
-    float x = c * wlo;
-    float below = x > 1.0e-2 ? (1.0 - exp(-x) * (1.0 + x)) / (c * c) : wlo * wlo * (0.5 - x / 3.0);
-    return sum * ds + below / (SPECAA_PI * a * z2 * z2);
+    float c1 = 1.0 + c;
+    float x = c1 * wlo;
+    float below = x > 1.0e-2 ? (1.0 - exp(-x) * (1.0 + x)) / (c1 * c1) : wlo * wlo * (0.5 - x / 3.0);
+    float direct = sum * ds + below * unit;
+    float difference = max(0.0, specaa_ggx_D(h, SPECAA_FLOAT3(a, a, 0.0), a * a) + (sum - sumUnfiltered) * ds);
+    float blend = SPECAA_SATURATE(log2(10.0 * kmax / a) * 0.30103);
+    return difference + blend * (direct - difference);
 }
 
 // GGX Smith Lambda, TK21 App. A.3: -1/2 + sqrt(s + o.z^2) / (2 |o.z|), s = [o.x, o.y] A [o.x, o.y]^T,
@@ -734,8 +746,8 @@ float specaa_texture_lod(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) { re
 // where that spread is Gaussian, GGX(A) where it is not.
 // - No baked normal-map data (w = 0): the spread is the image of the pixel filter under the surface's
 //   curvature, a Gaussian, and the convolution is exact.
-// - Baked kernel or LEAN texture (the material's own a; K holds the texel's spread and the pixel kernel,
-//   whose derivatives of the mapped normal carry the normal map across pixels):
+// - Baked kernel or LEAN texture (the material's own a; K holds the texel's spread and the pixel kernel
+//   of the vertex normal's curvature):
 //   w = saturate(LOD) saturate(SPECAA_GGX_SPREAD k_max). Under magnification (LOD <= 0) the footprint lies
 //   inside one texel and the interpolated normals vary smoothly: the convolution. Minified, a small spread
 //   of small slopes is still close to Gaussian (slope and projected variance within 10% up to
