@@ -541,13 +541,14 @@ float specaa_filtered_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
 // tails (from the small w), where GGX(A) widens both (its tails K / a too heavy) and specaa_filtered_D's
 // Beckmann part undershoots between them. Evaluated by the trapezoid rule in ln w, steps of at most 1.1,
 // from w_lo = 0.05 min(1, a / k_max) to 10 (e^-10 of the weight is left out; 12 to 32 nodes), and the
-// part below w_lo in closed form with K neglected there (a / w >= 20 k_max):
-// int_0^w_lo w e^(-w (1 + c)) dw / (pi a h_z^4), c = tan^2(theta_h) / a. That sum's own error (about 1% in
+// part below w_lo in closed form (a / w >= 20 k_max) with Beckmann(a / w I + K) to first order in K:
+// int_0^w_lo w e^(-w (1 + c)) (1 + q w^2 / a^2 - tr(K) w / (2 a)) dw / (pi a h_z^4), c = tan^2(theta_h) / a,
+// q = h.xy^T K h.xy / h_z^2 (in the tails most of the lobe lies there). That sum's own error (about 1% in
 // the tails, from the node at w_lo) exceeds what a footprint much smaller than the lobe changes there, so
 // for k_max < a the same nodes also sum the K = 0 integrand and the result is GGX(a) + (sum_K - sum_0):
 // exact as K -> 0, its error a fraction of the footprint's effect; from k_max = a / 10 to a it blends
 // (in log k_max) into the direct sum. Relative error against a dense quadrature under 0.1% for
-// K / a <= 0.03, 0.7% to K / a = 0.3, 3% beyond, out to tan^2 = 2 (tests/bake/test_ggx.cpp checks it
+// K / a <= 0.1, 1.6% to K / a = 3, 4% beyond, out to tan^2 = 2 (tests/bake/test_ggx.cpp checks it
 // against a brute-force convolution to 4%, and the small-footprint effect to 10% of itself).
 // GGX(A) itself where k_max <= 1e-3 a (within 0.1%).
 // `alpha2` is the a the footprint spreads: the material's, or the baked roughness texture's.
@@ -576,11 +577,21 @@ float specaa_convolved_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
         sum += weight * exp(-w) * w * specaa_beckmann_D(h, K + SPECAA_FLOAT3(v, v, 0.0), v * v);
         sumUnfiltered += weight * exp(-w * (1.0 + c)) * w * w * unit;  // Beckmann(a / w I)
     }
+    // Below w_lo, Beckmann(a / w I + K) to first order in K, integrated in closed form (series where the
+    // closed forms cancel in float): I1 + q I3 / a^2 - tr(K) I2 / (2 a), In = int_0^w_lo w^n e^(-w (1 + c)) dw.
     float c1 = 1.0 + c;
     float x = c1 * wlo;
     float below = x > 1.0e-2 ? (1.0 - exp(-x) * (1.0 + x)) / (c1 * c1) : wlo * wlo * (0.5 - x / 3.0);
-    float direct = sum * ds + below * unit;
-    float difference = max(0.0, specaa_ggx_D(h, SPECAA_FLOAT3(a, a, 0.0), a * a) + (sum - sumUnfiltered) * ds);
+    float e = exp(-x);
+    float p2 = 1.0 + x + 0.5 * x * x;
+    float wlo3 = wlo * wlo * wlo;
+    float i2 = x < 0.5 ? wlo3 * (1.0 / 3.0 - x / 4.0 + x * x / 10.0 - x * x * x / 36.0) : 2.0 * (1.0 - e * p2) / (c1 * c1 * c1);
+    float i3 = x < 0.5 ? wlo3 * wlo * (0.25 - x / 5.0 + x * x / 12.0 - x * x * x / 42.0)
+                       : 6.0 * (1.0 - e * (p2 + x * x * x / 6.0)) / (c1 * c1 * c1 * c1);
+    float q = (h.x * h.x * K.x + 2.0 * h.x * h.y * K.z + h.y * h.y * K.y) / z2;
+    float firstOrder = q / (a * a) * i3 - 0.5 * (K.x + K.y) / a * i2;
+    float direct = sum * ds + (below + firstOrder) * unit;
+    float difference = max(0.0, specaa_ggx_D(h, SPECAA_FLOAT3(a, a, 0.0), a * a) + (sum - sumUnfiltered) * ds + firstOrder * unit);
     float blend = SPECAA_SATURATE(log2(10.0 * kmax / a) * 0.30103);
     return difference + blend * (direct - difference);
 }

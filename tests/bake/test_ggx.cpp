@@ -133,6 +133,25 @@ TEST(ConvolvedNdf, MatchesABruteForceConvolutionOfGgxWithTheFootprint) {
     }
 }
 
+// A footprint as wide as the lobe (K = a .. 3a): the tails' mass lies mostly below the quadrature's w_lo,
+// where the footprint enters to first order; without that term the sum is 2.1% low at 45-55 degrees here.
+TEST(ConvolvedNdf, IsWithinTwoPercentWhereTheFootprintIsAsWideAsTheLobe) {
+    struct Case {
+        double a, kx, ky, phi;
+    };
+    const Case cases[] = {{1e-4, 1e-4, 1e-4, 0.0}, {0.01, 0.03, 0.006, 0.5}, {0.01, 0.01, 0.0, 1.1}, {0.04, 0.04, 0.04, 0.0}};
+    for (const Case& k : cases) {
+        const Sym2<double> A = sym(test::rotated_diag(k.a + k.kx, k.a + k.ky, k.phi));
+        for (double theta_deg : {0.0, 2.0, 10.0, 30.0, 45.0, 55.0})
+            for (double phi : {0.2, 1.4}) {
+                const Vec3<double> h = test::spherical(theta_deg * kPi / 180.0, phi);
+                const double expected = brute_force_convolved(h, k.a, k.kx, k.ky, k.phi);
+                EXPECT_NEAR(convolved_ndf(h, A, k.a), expected, 0.02 * expected)
+                    << "a " << k.a << " K (" << k.kx << ", " << k.ky << ") theta " << theta_deg << " phi " << phi;
+            }
+    }
+}
+
 // A footprint much smaller than the lobe changes GGX by a fraction of a percent: the second-order term
 // of the convolution, written out by hand for the isotropic slope density P(m) = f(|m|^2),
 // f(q) = 1 / (pi a (1 + q / a)^2): E[P(m - x)] - P(m) = f'(q) tr(S) + 2 f''(q) m^T S m, S = K / 2.
