@@ -93,14 +93,14 @@ T convolved_ndf(const Vec3<T>& h, const Sym2<T>& A, T alpha2) {
     // int_0^w_lo e^-w Beckmann dw = (I1 + q I3 / a^2 - tr(K) I2 / (2 a)) / (pi a h_z^4) with
     // In = int_0^w_lo w^n e^(-w (1 + c)) dw, c = tan^2(theta_h) / a (the first-order terms matter in the
     // tails, where the lobe's mass lies below w_lo: up to 2.5% of D at K ~ a without them).
-    const T c1 = T(1) + c, x = c1 * w_lo;
-    const T below = x > T(1e-2) ? (T(1) - std::exp(-x) * (T(1) + x)) / (c1 * c1) : w_lo * w_lo * (T(0.5) - x / T(3));
+    const T c1 = T(1) + c, x = c1 * w_lo, e = std::exp(-x);
+    const T below = x > T(1e-2) ? (T(1) - e * (T(1) + x)) / (c1 * c1) : w_lo * w_lo * (T(0.5) - x / T(3));
     T i2, i3;
     if (x < T(0.5)) {  // series (the closed forms cancel in float)
         i2 = std::pow(w_lo, T(3)) * (T(1) / T(3) - x / T(4) + x * x / T(10) - x * x * x / T(36));
         i3 = std::pow(w_lo, T(4)) * (T(1) / T(4) - x / T(5) + x * x / T(12) - x * x * x / T(42));
     } else {
-        const T e = std::exp(-x), p2 = T(1) + x + T(0.5) * x * x;
+        const T p2 = T(1) + x + T(0.5) * x * x;
         i2 = T(2) * (T(1) - e * p2) / (c1 * c1 * c1);
         i3 = T(6) * (T(1) - e * (p2 + x * x * x / T(6))) / (c1 * c1 * c1 * c1);
     }

@@ -591,8 +591,8 @@ float specaa_convolved_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
     // closed forms cancel in float): I1 + q I3 / a^2 - tr(K) I2 / (2 a), In = int_0^w_lo w^n e^(-w (1 + c)) dw.
     float c1 = 1.0 + c;
     float x = c1 * wlo;
-    float below = x > 1.0e-2 ? (1.0 - exp(-x) * (1.0 + x)) / (c1 * c1) : wlo * wlo * (0.5 - x / 3.0);
     float e = exp(-x);
+    float below = x > 1.0e-2 ? (1.0 - e * (1.0 + x)) / (c1 * c1) : wlo * wlo * (0.5 - x / 3.0);
     float p2 = 1.0 + x + 0.5 * x * x;
     float wlo3 = wlo * wlo * wlo;
     float i2 = x < 0.5 ? wlo3 * (1.0 / 3.0 - x / 4.0 + x * x / 10.0 - x * x * x / 36.0) : 2.0 * (1.0 - e * p2) / (c1 * c1 * c1);

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <initializer_list>
+
 namespace specbake {
 namespace {
 
@@ -114,42 +116,39 @@ double brute_force_convolved(const Vec3<double>& h, double a, double kx, double 
     return sum * (12.0 / n) * (12.0 / n) / std::pow(h.z, 4);
 }
 
-TEST(ConvolvedNdf, MatchesABruteForceConvolutionOfGgxWithTheFootprint) {
-    struct Case {
-        double a, kx, ky, phi;
-    };
-    // Isotropic and anisotropic kernels from a tenth of a to 40 a (a grazing footprint).
-    const Case cases[] = {{0.01, 0.001, 0.001, 0.0}, {0.01, 0.01, 0.01, 0.0}, {0.01, 0.04, 0.01, 0.7},
-                          {0.04, 0.4, 0.04, 2.0}, {0.0025, 0.1, 0.0025, 0.3}};
-    for (const Case& k : cases) {
+// A material a and a footprint kernel K = R(phi) diag(kx, ky) R(phi)^T.
+struct ConvolutionCase {
+    double a, kx, ky, phi;
+};
+
+// convolved_ndf within `tolerance` (relative) of the brute-force convolution at every half vector of the
+// grid (theta in degrees, azimuths in radians).
+void expect_matches_brute_force(std::initializer_list<ConvolutionCase> cases, std::initializer_list<double> thetas_deg,
+                                std::initializer_list<double> azimuths, double tolerance) {
+    for (const ConvolutionCase& k : cases) {
         const Sym2<double> A = sym(test::rotated_diag(k.a + k.kx, k.a + k.ky, k.phi));
-        for (double theta_deg : {0.0, 3.0, 8.0, 20.0, 40.0, 70.0})
-            for (double phi : {0.1, 1.3, 2.4}) {
+        for (double theta_deg : thetas_deg)
+            for (double phi : azimuths) {
                 const Vec3<double> h = test::spherical(theta_deg * kPi / 180.0, phi);
                 const double expected = brute_force_convolved(h, k.a, k.kx, k.ky, k.phi);
-                EXPECT_NEAR(convolved_ndf(h, A, k.a), expected, 0.04 * expected)
+                EXPECT_NEAR(convolved_ndf(h, A, k.a), expected, tolerance * expected)
                     << "a " << k.a << " K (" << k.kx << ", " << k.ky << ") theta " << theta_deg << " phi " << phi;
             }
     }
 }
 
+TEST(ConvolvedNdf, MatchesABruteForceConvolutionOfGgxWithTheFootprint) {
+    // Isotropic and anisotropic kernels from a tenth of a to 40 a (a grazing footprint).
+    expect_matches_brute_force({{0.01, 0.001, 0.001, 0.0}, {0.01, 0.01, 0.01, 0.0}, {0.01, 0.04, 0.01, 0.7},
+                                {0.04, 0.4, 0.04, 2.0}, {0.0025, 0.1, 0.0025, 0.3}},
+                               {0.0, 3.0, 8.0, 20.0, 40.0, 70.0}, {0.1, 1.3, 2.4}, 0.04);
+}
+
 // A footprint as wide as the lobe (K = a .. 3a): the tails' mass lies mostly below the quadrature's w_lo,
 // where the footprint enters to first order; without that term the sum is 2.1% low at 45-55 degrees here.
 TEST(ConvolvedNdf, IsWithinTwoPercentWhereTheFootprintIsAsWideAsTheLobe) {
-    struct Case {
-        double a, kx, ky, phi;
-    };
-    const Case cases[] = {{1e-4, 1e-4, 1e-4, 0.0}, {0.01, 0.03, 0.006, 0.5}, {0.01, 0.01, 0.0, 1.1}, {0.04, 0.04, 0.04, 0.0}};
-    for (const Case& k : cases) {
-        const Sym2<double> A = sym(test::rotated_diag(k.a + k.kx, k.a + k.ky, k.phi));
-        for (double theta_deg : {0.0, 2.0, 10.0, 30.0, 45.0, 55.0})
-            for (double phi : {0.2, 1.4}) {
-                const Vec3<double> h = test::spherical(theta_deg * kPi / 180.0, phi);
-                const double expected = brute_force_convolved(h, k.a, k.kx, k.ky, k.phi);
-                EXPECT_NEAR(convolved_ndf(h, A, k.a), expected, 0.02 * expected)
-                    << "a " << k.a << " K (" << k.kx << ", " << k.ky << ") theta " << theta_deg << " phi " << phi;
-            }
-    }
+    expect_matches_brute_force({{1e-4, 1e-4, 1e-4, 0.0}, {0.01, 0.03, 0.006, 0.5}, {0.01, 0.01, 0.0, 1.1}, {0.04, 0.04, 0.04, 0.0}},
+                               {0.0, 2.0, 10.0, 30.0, 45.0, 55.0}, {0.2, 1.4}, 0.02);
 }
 
 // A footprint much smaller than the lobe changes GGX by a fraction of a percent: the second-order term
@@ -159,12 +158,9 @@ TEST(ConvolvedNdf, IsWithinTwoPercentWhereTheFootprintIsAsWideAsTheLobe) {
 // larger change than the footprint makes there, and a smooth sphere's highlight then flickers more
 // filtered than unfiltered (README "Accuracy and its cost").
 TEST(ConvolvedNdf, GetsTheChangeOfASmallFootprintRight) {
-    struct Case {
-        double a, kx, ky, phi;
-    };
-    const Case cases[] = {{0.04, 0.003 * 0.04, 0.003 * 0.04, 0.0}, {0.04, 0.01 * 0.04, 0.002 * 0.04, 0.5},
-                          {0.0025, 0.01 * 0.0025, 0.01 * 0.0025, 0.0}};
-    for (const Case& k : cases) {
+    const ConvolutionCase cases[] = {{0.04, 0.003 * 0.04, 0.003 * 0.04, 0.0}, {0.04, 0.01 * 0.04, 0.002 * 0.04, 0.5},
+                                     {0.0025, 0.01 * 0.0025, 0.01 * 0.0025, 0.0}};
+    for (const ConvolutionCase& k : cases) {
         const double c = std::cos(k.phi), s = std::sin(k.phi);
         const double sxx = 0.5 * (k.kx * c * c + k.ky * s * s), syy = 0.5 * (k.kx * s * s + k.ky * c * c);
         const double sxy = 0.5 * (k.kx - k.ky) * c * s;
