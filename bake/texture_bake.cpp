@@ -60,7 +60,7 @@ TextureBakeShape texture_bake_shape(const TextureMap& normal, const TextureMap* 
     const bool orm = roughness && roughness->channels >= 3 && roughness_channel == 1;
     const TextureOutputs& want = settings.outputs;
     shape.roughness_channels = want.roughness ? (orm ? 3 : 1) : 0;
-    shape.kernel_channels = want.kernel ? (settings.anisotropic ? 3 : 1) : 0;
+    shape.kernel_channels = want.kernel ? (settings.anisotropic ? 4 : 1) : 0;
     shape.lean_channels = want.lean ? 5 : 0;
     shape.normal_channels = want.normal ? 3 : 0;
     return shape;

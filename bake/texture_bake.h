@@ -88,7 +88,7 @@ struct TextureMap {
 // Mip chains, level 0 first, each as large as the normal map's chain. Empty when not requested.
 struct TextureBakeResult {
     MipChain roughness;   // 1 channel r, or 3 channels (occlusion, r, metallic) for an ORM input
-    MipChain kernel;      // 1 channel t, or 3 channels (Sigma.xx, Sigma.yy, Sigma.xy) when anisotropic
+    MipChain kernel;      // 1 channel t, or 4 channels (Sigma.xx, Sigma.yy, Sigma.xy, rough share) when anisotropic
     MipChain lean;        // 5 channels (m.x, m.y, M.xx, M.yy, M.xy), projected or slope space
     MipChain normal;      // 3 channels, the normalised mean normal re-encoded as (n + 1) / 2 (green as input)
     TextureBakeNotes notes;

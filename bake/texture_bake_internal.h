@@ -14,6 +14,7 @@
 // into float chains (bake_texture).
 #pragma once
 
+#include "bake/constants.h"
 #include "bake/texture_bake.h"
 
 #include <tbb/task_arena.h>
@@ -62,7 +63,13 @@ constexpr int kMaxFusedLevels = 4;
 constexpr int kBandBaseRows = 128;
 
 // Per-texel linear quantities, in this order; the ORM and slope groups are present only when needed.
-enum Channel : int { kPx, kPy, kPz, kPxx, kPyy, kPxy, kA, kCore };
+// kRough: 1 where the base texel's normal is steeper than kFlatSlope, else 0 (its mean is the rough share).
+enum Channel : int { kPx, kPy, kPz, kPxx, kPyy, kPxy, kA, kRough, kCore };
+
+// 1 for a unit normal (x, y, z) steeper than kFlatSlope (x^2 + y^2 > kFlatSlope^2 z^2), else 0.
+inline double rough_indicator(double x, double y, double z) {
+    return x * x + y * y > kFlatSlope * kFlatSlope * z * z ? 1.0 : 0.0;
+}
 
 struct Layout {
     int count = kCore;

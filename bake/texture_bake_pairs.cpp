@@ -42,6 +42,7 @@ SPECBAKE_AVX2 int base_and_pairs_avx2(const Decoder& dec, int y, int bx, int n, 
     long long zero_length = 0;
     const __m256d half = _mm256_set1_pd(0.5), half_y = _mm256_set1_pd(flip_y ? -0.5 : 0.5);
     const __m256d quarter = _mm256_set1_pd(0.25);
+    const __m256d flat2 = _mm256_set1_pd(kFlatSlope * kFlatSlope), one = _mm256_set1_pd(1.0);
     const __m128 constant_r = _mm_set1_ps(dec.constant_r);
     const __m256d constant_a = _mm256_set1_pd(dec.constant_a);
     __m256d normal_finite = _mm256_setzero_pd();
@@ -62,7 +63,7 @@ SPECBAKE_AVX2 int base_and_pairs_avx2(const Decoder& dec, int y, int bx, int n, 
         }
     // One row's quantities of a half group: the unit normal, its products, and the roughness.
     struct Texels {
-        __m256d x, y, z, xx, yy, xy, a;
+        __m256d x, y, z, xx, yy, xy, a, g;
         __m128 r, occlusion, metallic;
     };
     int i = 0;
@@ -77,6 +78,10 @@ SPECBAKE_AVX2 int base_and_pairs_avx2(const Decoder& dec, int y, int bx, int n, 
                 q.x = _mm256_load_pd(unit[r][0] + o), q.y = _mm256_load_pd(unit[r][1] + o);
                 q.z = _mm256_load_pd(unit[r][2] + o);
                 q.xx = _mm256_mul_pd(q.x, q.x), q.yy = _mm256_mul_pd(q.y, q.y), q.xy = _mm256_mul_pd(q.x, q.y);
+                // rough_indicator: x^2 + y^2 > kFlatSlope^2 z^2
+                q.g = _mm256_and_pd(_mm256_cmp_pd(_mm256_add_pd(q.xx, q.yy),
+                                                  _mm256_mul_pd(flat2, _mm256_mul_pd(q.z, q.z)), _CMP_GT_OQ),
+                                    one);
                 q.r = q.occlusion = q.metallic = constant_r, q.a = constant_a;
                 bool clamped = false;
                 if constexpr (kMap) {
@@ -102,10 +107,16 @@ SPECBAKE_AVX2 int base_and_pairs_avx2(const Decoder& dec, int y, int bx, int n, 
                         _mm_storeu_ps(out.rough + o, q.r);
                     }
                 }
-                if (out.kern) {  // Sigma = 0 at the base
+                if (out.kern) {  // Sigma = 0 at the base, the rough share the texel's indicator
                     float* k = out.kern + size_t(kern_ch) * o;
-                    _mm_storeu_ps(k, _mm_setzero_ps());
-                    if (kern_ch == 3) _mm_storeu_ps(k + 4, _mm_setzero_ps()), _mm_storeu_ps(k + 8, _mm_setzero_ps());
+                    if (kern_ch == 4) {
+                        alignas(16) float g[4];
+                        _mm_store_ps(g, _mm256_cvtpd_ps(q.g));
+                        for (int e = 0; e < 4; ++e)
+                            _mm_storeu_ps(k + 4 * e, _mm_setr_ps(0.0f, 0.0f, 0.0f, g[e]));
+                    } else {
+                        _mm_storeu_ps(k, _mm_setzero_ps());
+                    }
                 }
                 if (out.lean)
                     store5x4(out.lean + 5 * o, _mm256_cvtpd_ps(q.x), _mm256_cvtpd_ps(q.y), _mm256_cvtpd_ps(q.xx),
@@ -124,12 +135,13 @@ SPECBAKE_AVX2 int base_and_pairs_avx2(const Decoder& dec, int y, int bx, int n, 
             _mm256_store_pd(sum[kPyy], _mm256_add_pd(t[0].yy, t[1].yy));
             _mm256_store_pd(sum[kPxy], _mm256_add_pd(t[0].xy, t[1].xy));
             _mm256_store_pd(sum[kA], _mm256_add_pd(t[0].a, t[1].a));
+            _mm256_store_pd(sum[kRough], _mm256_add_pd(t[0].g, t[1].g));
             if constexpr (kOrm) {
                 _mm256_store_pd(sum[kCore], _mm256_add_pd(_mm256_cvtps_pd(t[0].occlusion), _mm256_cvtps_pd(t[1].occlusion)));
                 _mm256_store_pd(sum[kCore + 1], _mm256_add_pd(_mm256_cvtps_pd(t[0].metallic), _mm256_cvtps_pd(t[1].metallic)));
             }
         }
-#pragma GCC unroll 9
+#pragma GCC unroll 10
         for (int c = 0; c < C; ++c) {  // as pair_means_avx2
             const __m256d pairs = _mm256_hadd_pd(_mm256_load_pd(sums[0][c]), _mm256_load_pd(sums[1][c]));
             _mm256_storeu_pd(plane(m, c, w) + i, _mm256_mul_pd(_mm256_permute4x64_pd(pairs, 0xD8), quarter));

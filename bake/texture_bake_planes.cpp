@@ -81,7 +81,13 @@ void write_base_row(const double* v, const float* r0, int W, const Layout& layou
             std::memcpy(rough, r0, size_t(W) * sizeof(float));
         }
     }
-    if (kern) std::fill(kern, kern + size_t(W) * size_t(kern_ch), 0.0f);
+    if (kern) {
+        std::fill(kern, kern + size_t(W) * size_t(kern_ch), 0.0f);
+        if (kern_ch == 4) {  // Sigma = 0, the rough share the texel's own indicator
+            const double* g = plane(v, kRough, W);
+            for (int x = 0; x < W; ++x) kern[4 * size_t(x) + 3] = float(g[x]);
+        }
+    }
     if (lean) {
         if (slope) {
             // Olano & Baker LEAN: the base lobe's slope covariance alpha^2 / 2 folded into the second moments.

@@ -119,7 +119,7 @@ void add_verify_command(CLI::App& app, std::function<int()>& run) {
                                  "Scene file: glTF/GLB (its KHR_lights_punctual lights, first perspective camera, "
                                  "roughness and normal textures) or any mesh Assimp reads")
                      ->check(CLI::ExistingFile);
-    sub->add_option("--builtin", o->builtin, "Built-in analytic scene: sphere, cylinder, torus, bumpy-sphere; glints (C21): "
+    sub->add_option("--builtin", o->builtin, "Built-in analytic scene: sphere, cylinder, torus, bumpy-sphere, scratched-sphere; glints (C21): "
                     "glitter-sphere, glitter-plane")
         ->excludes(file);
     sub->add_option("--alpha", o->alpha, "GGX alpha of a built-in scene's material (the papers' roughness; glTF r = sqrt(alpha))")

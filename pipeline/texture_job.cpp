@@ -89,7 +89,7 @@ struct OutputFile {
 
 // The files of settings.outputs, in the order they are written, each in a layout GPUs sample (1, 2 or 4
 // channels, the same in every container; README "Output layouts"): `<stem>_roughness` (Y = r, or the ORM
-// map as RGBA with G = r and A = 1), `_kernel` (Y = t, or RGBA = xx, yy, xy, 1), `_normal` (RGBA = normalised
+// map as RGBA with G = r and A = 1), `_kernel` (Y = t, or RGBA = xx, yy, xy, rough share), `_normal` (RGBA = normalised
 // mean normal as (n + 1) / 2, A = 1: a drop-in for glTF normalTexture and engine shaders that read .xyz;
 // zstd removes the constant A almost entirely, and the two-channel form belongs to BC5),
 // `_lean` (RGBA = m.x, m.y, M.xx, M.yy) plus `_lean_xy` (Y = M.xy). `names` are the channels' meanings.
@@ -108,7 +108,7 @@ std::vector<OutputFile> output_files(const TextureBakeShape& shape, const Textur
     }
     if (settings.outputs.kernel) {
         files.push_back({Chain::Kernel, "kernel", stem + "_kernel", io::TexelEncoding::Float16, 0, shape.kernel_channels,
-                         settings.anisotropic ? std::vector<std::string>{"xx", "yy", "xy", "1"}
+                         settings.anisotropic ? std::vector<std::string>{"xx", "yy", "xy", "rough"}
                                               : std::vector<std::string>{"t"}});
     }
     if (settings.outputs.normal) {

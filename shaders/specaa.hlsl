@@ -51,9 +51,11 @@
 //                                   SPECAA_ROUGHNESS_CHANNEL (default g: the RGBA ORM layout, A = 1;
 //                                   define it as r for the one-channel R8/R16 file).
 //   SPECAA_KERNEL_TEXTURE name      baked projected-space kernel mips: with SPECAA_KERNEL_ANISOTROPIC
-//                                   RGBA = (xx, yy, xy, 1) of Sigma (R16G16B16A16_SFLOAT; A unused), the
-//                                   bake's default; without it R = t (isotropic mean, R16_SFLOAT;
-//                                   `specbake texture --isotropic-kernel`).
+//                                   RGBA = (xx, yy, xy, g) of Sigma and its rough share g
+//                                   (R16G16B16A16_SFLOAT), the bake's default; without it R = t (isotropic
+//                                   mean, R16_SFLOAT; `specbake texture --isotropic-kernel`).
+//   SPECAA_KERNEL_TWO_LOBES         specaa_default_D splits the Sigma kernel's texel into its flat share
+//                                   (the material's lobe) and its rough share g (all of Sigma): opt-in.
 //   SPECAA_LEAN_TEXTURE0 name       LEAN moments, projected space (SPEC Sec. 3), in two textures:
 //   SPECAA_LEAN_TEXTURE1 name         TEXTURE0 RGBA = (m.x, m.y, M.xx, M.yy), TEXTURE1 R = M.xy
 //                                     (at least 16-bit float, trilinear filtering).
@@ -389,6 +391,13 @@ float specaa_sample_kernel(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
 SPECAA_FLOAT3 specaa_sample_kernel_covariance(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
     SPECAA_FLOAT3 sigma = specaa_sym_clamp_psd(SPECAA_SAMPLE(tex, smp, uv).rgb);
     return SPECAA_SELECT3(specaa_is_finite3(sigma), sigma, SPECAA_FLOAT3(0.0, 0.0, 0.0));
+}
+
+// Rough share g of a baked Sigma kernel texel (alpha channel): the part of its normals steeper than slope
+// 0.02, which holds all of Sigma (specaa_default_D). Non-finite or absent (1) gives the single lobe.
+float specaa_sample_kernel_rough_share(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
+    float g = SPECAA_SAMPLE(tex, smp, uv).a;
+    return SPECAA_SELECT(specaa_is_finite(g), SPECAA_SATURATE(g), 1.0);
 }
 
 // Covariance from LEAN moments, Sigma = M - m m^T clamped to PSD (SPEC Sec. 3; C21 Eq. 16).
@@ -767,11 +776,20 @@ float specaa_texture_lod(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) { re
 //   mean and GGX(A) (TK21's projected-space widening; A = I is the uniform hemisphere) follows closer:
 //   GGX(A) from k_max = 1 / SPECAA_GGX_SPREAD = 0.125 (slope standard deviation 0.25) on. README
 //   "Accuracy and its cost" has the measurements (SPECAA_GGX_SPREAD 4, 8, 16 and the LOD factor).
+// - Baked Sigma kernel with SPECAA_KERNEL_TWO_LOBES (opt-in): two lobes with the texel's mean and
+//   covariance. The texel's flat share 1 - g (normals within slope 0.02 of the surface's, alpha channel)
+//   keeps the material's own lobe convolved with the pixel kernel only; its rough share g holds all of
+//   Sigma, as the lobe above with K = 2 Sigma / g + pixel kernel. One Gaussian of the whole texel spreads
+//   a flat field's highlight over the slopes of the few scratches or seams in it; the two lobes keep it
+//   (README "Mixed texels": they win on scratched metal and lose on domes on a flat field far away, so
+//   they are not the default). g = 1 (earlier bakes wrote A = 1) is the single lobe.
 // - Baked roughness texture (a already holds the texel's spread, K only the pixel's): w = saturate(LOD),
 //   the convolution under magnification, GGX(A) from the texture's mip 1 on.
 // NaN inputs give GGX(A).
 float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, SpecaaSurface s) {
     float a = specaa_base_alpha2(s);
+    float share = 1.0;   // rough share g of the texel (two lobes where g < 1)
+    float flatD = 0.0;   // the flat share's lobe
 #if defined(SPECAA_ROUGHNESS_TEXTURE)
     float w = SPECAA_SATURATE(specaa_texture_lod(SPECAA_TEXTURE_ARGS(SPECAA_ROUGHNESS_TEXTURE, SPECAA_SAMPLER), s.uv));
 #elif defined(SPECAA_KERNEL_TEXTURE) || defined(SPECAA_LEAN_TEXTURE0)
@@ -780,14 +798,27 @@ float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, SpecaaSurface s) {
 #else
     float lod = specaa_texture_lod(SPECAA_TEXTURE_ARGS(SPECAA_LEAN_TEXTURE0, SPECAA_SAMPLER), s.uv);
 #endif
+#if defined(SPECAA_KERNEL_TEXTURE) && defined(SPECAA_KERNEL_ANISOTROPIC) && defined(SPECAA_KERNEL_TWO_LOBES)
+    // Sampled and differentiated in uniform control flow; only the convolution is skipped for g = 1.
+    share = specaa_sample_kernel_rough_share(SPECAA_TEXTURE_ARGS(SPECAA_KERNEL_TEXTURE, SPECAA_SAMPLER), s.uv);
+    SPECAA_FLOAT3 pixel = specaa_pixel_kernel_matrix(s);
+    SPECAA_FLOAT3 flatA = specaa_guard_matrix(true, SPECAA_FLOAT2(a, a), specaa_filter_projected_matrix(SPECAA_FLOAT2(a, a), pixel));
+    SPECAA_FLOAT3 roughA = specaa_guard_matrix(true, SPECAA_FLOAT2(a, a),
+        specaa_filter_projected_matrix(SPECAA_FLOAT2(a, a), specaa_baked_kernel_matrix(s) / max(share, 1.0e-3) + pixel));
+    if (share < 1.0) {
+        flatD = specaa_convolved_D(h, flatA, a);
+        A = roughA;
+    }
+#endif
     float w = SPECAA_SATURATE(lod) * SPECAA_SATURATE(SPECAA_GGX_SPREAD * specaa_sym_max_eigenvalue(A - SPECAA_FLOAT3(a, a, 0.0)));
 #else
     float w = 0.0;
 #endif
     w = SPECAA_SELECT(w == w, w, 1.0);
     float ggx = specaa_ggx_D(h, A, a * a);
-    if (w >= 1.0) return ggx;
-    return ggx + (1.0 - w) * (specaa_convolved_D(h, A, a) - ggx);
+    float roughD = ggx;
+    if (w < 1.0) roughD = ggx + (1.0 - w) * (specaa_convolved_D(h, A, a) - ggx);
+    return share * roughD + (1.0 - share) * flatD;
 }
 // ===================================================================================================
 // Glints: geometric glint anti-aliasing, C21 (Chermain et al. 2021) on the procedural glint BRDF of

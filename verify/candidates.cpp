@@ -99,6 +99,11 @@ std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool varia
                        "specaa_filtered_alpha2_matrix with specaa_default_D on the isotropic kernel mips (t = tr Sigma; "
                        "--isotropic-kernel)",
                        kDefaultNdf, Baked::IsotropicKernel);
+    if (normal_mapped)
+        matrix_default("default-two-lobes",
+                       "specaa_filtered_alpha2_matrix with specaa_default_D, SPECAA_KERNEL_TWO_LOBES (the Sigma kernel "
+                       "texel as its flat share's lobe and its rough share's, alpha = rough share)",
+                       std::string("#define SPECAA_KERNEL_TWO_LOBES\n") + kDefaultNdf, Baked::Kernel);
     matrix_default("default-roughness",
                    "specaa_filtered_alpha2_matrix on the baked roughness with specaa_default_D (convolution under "
                    "magnification, GGX of the matrix from mip 1)",

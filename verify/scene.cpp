@@ -125,6 +125,40 @@ Image make_bump_normal_map(int size, float slope_scale, uint32_t seed) {
     return map;
 }
 
+// Scratch normal map: sparse grooves on a flat field (most texels exactly flat, a few steep), the mixed
+// texels of scratched metal or panel seams, where one Gaussian per texel would spread the flat field's
+// highlight over the grooves' slopes. 90 straight grooves of random direction, length and depth, each a
+// Gaussian-profile trough 1.2 texels wide; slopes up to ~1.
+Image make_scratch_normal_map(int size, uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    std::vector<float> height(size_t(size) * size_t(size), 0.0f);
+    for (int g = 0; g < 90; ++g) {
+        const float x0 = unit(rng) * float(size), y0 = unit(rng) * float(size), angle = kPi * unit(rng);
+        const float length = (0.1f + 0.4f * unit(rng)) * float(size), depth = 0.5f + unit(rng);
+        const float dx = std::cos(angle), dy = std::sin(angle);
+        for (float t = 0; t < length; t += 0.5f) {
+            const float cx = x0 + dx * t, cy = y0 + dy * t;
+            for (int oy = -2; oy <= 2; ++oy)
+                for (int ox = -2; ox <= 2; ++ox) {
+                    const int ix = int(std::floor(cx)) + ox, iy = int(std::floor(cy)) + oy;
+                    const float r2 = (float(ix) + 0.5f - cx) * (float(ix) + 0.5f - cx) + (float(iy) + 0.5f - cy) * (float(iy) + 0.5f - cy);
+                    float& h = height[size_t((iy % size + size) % size) * size_t(size) + size_t((ix % size + size) % size)];
+                    h = std::min(h, -depth * std::exp(-r2 / 0.72f));
+                }
+        }
+    }
+    Image map(size, size, 3);
+    auto at = [&](int x, int y) { return height[size_t((y + size) % size) * size_t(size) + size_t((x + size) % size)]; };
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+            const Float3 n = normalized({-0.5f * (at(x + 1, y) - at(x - 1, y)), -0.5f * (at(x, y + 1) - at(x, y - 1)), 1.0f});
+            float* t = map.texel(x, y);
+            for (int c = 0; c < 3; ++c) t[c] = 0.5f * (n[c] + 1.0f);
+        }
+    return map;
+}
+
 // Ridge normal map of the glitter plane: slope a cos(2 pi k.uv) (k / |k|) with the integer wave vector
 // k = (35, 20) (29.7 degrees from the u axis, so it tiles), amplitude 0.3: strongly anisotropic and not
 // axis-aligned, the case where the slope correlation rho of C21 Eq. 18 matters (C21 Fig. 7).
@@ -183,7 +217,7 @@ Result<SimScene> make_builtin_scene(std::string_view name, float roughness, floa
     SimScene scene;
     scene.name = std::string(name);
     const Float3 key_light = normalized({-0.45f, 0.65f, 0.6f});
-    if (name == "sphere" || name == "bumpy-sphere") {
+    if (name == "sphere" || name == "bumpy-sphere" || name == "scratched-sphere") {
         scene.objects.push_back(make_sphere(1.0f, {0, 0, 0}, scaled(256, tessellation), scaled(128, tessellation)));
         scene.camera = {{0.0f, 0.4f, 3.6f}, {0, 0, 0}, {0, 1, 0}, 40.0f};
         scene.lights.push_back(directional_light(key_light));
@@ -192,6 +226,10 @@ Result<SimScene> make_builtin_scene(std::string_view name, float roughness, floa
             scene.normal_maps.push_back(make_bump_normal_map(512, 0.35f, 7));
             scene.objects[0].material.normal_map = 0;
             scene.objects[0].material.uv_scale = 4.0f;
+        } else if (name == "scratched-sphere") {
+            scene.normal_maps.push_back(make_scratch_normal_map(512, 11));
+            scene.objects[0].material.normal_map = 0;
+            scene.objects[0].material.uv_scale = 2.0f;
         }
     } else if (name == "glitter-sphere") {
         scene.objects.push_back(make_sphere(1.0f, {0, 0, 0}, scaled(256, tessellation), scaled(128, tessellation)));
@@ -229,6 +267,7 @@ Result<SimScene> make_builtin_scene(std::string_view name, float roughness, floa
     } else {
         std::string names;
         for (auto n : builtin_scene_names()) names += (names.empty() ? "" : ", ") + std::string(n);
+        names += ", scratched-sphere";
         for (auto n : builtin_glint_scene_names()) names += ", " + std::string(n);
         return make_error("unknown built-in scene '" + std::string(name) + "' (built-in scenes: " + names + ")");
     }

@@ -320,6 +320,43 @@ TEST(TextureBake, SinusoidalRibsClosedForm) {
     }
 }
 
+// The Sigma kernel's alpha channel is the rough share: at every level, the fraction of the footprint's
+// base texels whose slope |n.xy| / n.z exceeds 0.02. Texels with slope 0.019 (flat) and 0.021 (rough) at
+// angles of their own, and steep ones, in a hashed pattern; the expected share is counted from the
+// pattern itself. Both bake paths: the register pass (projected LEAN) and the planes (slope-space LEAN).
+TEST(TextureBake, RoughShareCountsTheSteepTexelsOfEachFootprint) {
+    const int W = 64, H = 32;
+    auto kind = [](int x, int y) { return (unsigned(x) * 73856093u ^ unsigned(y) * 19349663u) % 5u; };
+    auto slope_of = [](unsigned k) { return k == 0 ? 0.0 : k == 1 ? 0.019 : k == 2 ? 0.021 : k == 3 ? 0.4 : 1.5; };
+    Image nm(W, H, 3);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const double t = slope_of(kind(x, y)), phi = 0.37 * x + 1.1 * y, len = std::hypot(t, 1.0);
+            const double n[3] = {t * std::cos(phi) / len, t * std::sin(phi) / len, 1.0 / len};
+            for (int c = 0; c < 3; ++c) nm.texel(x, y)[c] = encode(n[c]);
+        }
+    for (LeanSpace space : {LeanSpace::Projected, LeanSpace::Slope}) {
+        TextureBakeSettings s;
+        s.anisotropic = true;
+        s.lean_space = space;
+        auto res = bake_texture(nm, nullptr, 0, 0.3f, s);
+        ASSERT_TRUE(res.ok());
+        ASSERT_EQ(res->kernel.channels(), 4);
+        for (size_t L = 0; L < res->kernel.levels.size(); ++L) {
+            const Image& K = res->kernel.levels[L];
+            const int fx = W / K.width, fy = H / K.height;  // the last levels' footprints are 2:1
+            for (int j = 0; j < K.height; ++j)
+                for (int i = 0; i < K.width; ++i) {
+                    int rough = 0;
+                    for (int y = j * fy; y < (j + 1) * fy; ++y)
+                        for (int x = i * fx; x < (i + 1) * fx; ++x) rough += kind(x, y) >= 2 ? 1 : 0;
+                    ASSERT_NEAR(K.texel(i, j)[3], double(rough) / double(fx * fy), 1e-6)
+                        << "level " << L << " texel " << i << "," << j << (space == LeanSpace::Slope ? " (slope LEAN)" : "");
+                }
+        }
+    }
+}
+
 TEST(TextureBake, OutputsAreIdenticalForAnyThreadCount) {
     const Image nm = random_normal_map(257, 129, 9, 0.3);
     const Image orm = random_orm(100, 300, 10);

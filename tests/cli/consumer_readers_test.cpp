@@ -80,7 +80,7 @@ float expected(const std::string& stem, int level, size_t i, int c) {
     };
     if (stem == "texture_roughness") return c == 3 ? 1.0f : at(b.roughness, c);
     if (stem == "texture_normal") return c == 3 ? 1.0f : at(b.normal, c);
-    if (stem == "texture_kernel") return c == 3 ? 1.0f : at(b.kernel, c);  // Sigma (xx, yy, xy), A = 1
+    if (stem == "texture_kernel") return at(b.kernel, c);  // Sigma (xx, yy, xy), A = rough share
     if (stem == "texture_lean") return at(b.lean, c);
     return at(b.lean, 4);  // texture_lean_xy
 }

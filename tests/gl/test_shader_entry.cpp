@@ -37,6 +37,8 @@ Sym2<double> level_sigma(int L) { return {0.002 * (L + 1), 0.0005 * (L + 1), 0.0
 double level_kernel(int L) { return 0.003 * (L + 1) * (L + 1); }
 double level_roughness(int L) { return 0.1 + 0.1 * L; }
 Vec2<double> level_mean(int L) { return {0.1 * L, -0.05 * L}; }
+// Rough share g of the Sigma kernel texels (alpha): both ends and between.
+double level_share(int L) { static constexpr double g[kLevels] = {1.0, 0.3, 0.6, 0.0, 0.85, 0.45, 1.0}; return g[L]; }
 
 enum class Baked { None, Kernel, KernelAnisotropic, Lean, Roughness };
 
@@ -46,6 +48,7 @@ struct Config {
     bool curvature;
     bool pixel_kernel;
     double world_per_pixel = kWorldPerPixel;  // footprint of the curvature kernel
+    bool two_lobes = false;                    // SPECAA_KERNEL_TWO_LOBES
 };
 
 GLuint make_texture(int channels, const std::function<std::array<float, 4>(int)>& level_value) {
@@ -77,6 +80,7 @@ std::string fragment_source(const Config& c) {
     }
     if (c.curvature) defines += "#define SPECAA_USE_CURVATURE\n";
     if (!c.pixel_kernel) defines += "#define SPECAA_NO_PIXEL_KERNEL\n";
+    if (c.two_lobes) defines += "#define SPECAA_KERNEL_TWO_LOBES\n";
     return defines + read_source_file("shaders/specaa.glsl") + R"(
 uniform float uUvPerPixel;
 uniform float uNormalSlope;
@@ -130,7 +134,7 @@ void run_config(const Config& c) {
         case Baked::KernelAnisotropic:
             tex0 = make_texture(4, [](int L) {
                 const auto s = level_sigma(L);
-                return std::array<float, 4>{float(s.xx), float(s.yy), float(s.xy), 0.0f};
+                return std::array<float, 4>{float(s.xx), float(s.yy), float(s.xy), float(level_share(L))};
             });
             break;
         case Baked::Lean:
@@ -236,10 +240,22 @@ void run_config(const Config& c) {
                 const double kmax = max_eigenvalue_sym2(A.xx - a0, A.yy - a0, A.xy);
                 if (c.baked == Baked::Roughness) w = std::min(1.0, double(L));
                 else if (c.baked != Baked::None) w = std::min(1.0, double(L)) * std::clamp(8.0 * kmax, 0.0, 1.0);
-                const double ggx = ggx_ndf(h, A, a0 * a0), conv = convolved_ndf(h, A, a0);
-                const double want_d = ggx + (1.0 - w) * (conv - ggx);
+                // The Sigma kernel's two lobes: the rough share g with K = 2 Sigma / g, the flat share with the
+                // pixel kernel alone, convolved.
+                const double g = c.baked == Baked::KernelAnisotropic && c.two_lobes ? level_share(L) : 1.0;
+                const Sym2<double> rough_A =
+                    g < 1.0 ? projected_to_slope_roughness(slope_to_projected_roughness(diag(a0, a0)) +
+                                                           (1.0 / std::max(g, 1e-3)) * k_tex + clamp_kernel(k_px))
+                            : A;
+                const Sym2<double> flat_A = projected_to_slope_roughness(slope_to_projected_roughness(diag(a0, a0)) + clamp_kernel(k_px));
+                if (g < 1.0)
+                    w = std::min(1.0, double(L)) *
+                        std::clamp(8.0 * max_eigenvalue_sym2(rough_A.xx - a0, rough_A.yy - a0, rough_A.xy), 0.0, 1.0);
+                const double ggx = ggx_ndf(h, rough_A, a0 * a0), conv = convolved_ndf(h, rough_A, a0);
+                const double flat = g < 1.0 ? convolved_ndf(h, flat_A, a0) : 0.0;
+                const double want_d = g * (ggx + (1.0 - w) * (conv - ggx)) + (1.0 - g) * flat;
                 // The convolution's quadrature in float and the matrix's rounding: 3e-3 of the larger NDF.
-                if (std::abs(out2[i] - want_d) > 3e-3 * std::max(ggx, conv) && ++failures <= 5)
+                if (std::abs(out2[i] - want_d) > 3e-3 * std::max({ggx, conv, flat}) && ++failures <= 5)
                     ADD_FAILURE() << c.name << " level " << L << " pixel " << x << "," << y << ": default D " << out2[i]
                                   << " want " << want_d << " (GGX " << ggx << ", convolution " << conv << ", w " << w << ")";
                 if (w > 0.05 && w < 0.95 && std::abs(conv - ggx) > 0.05 * ggx) ++blends;
@@ -260,6 +276,14 @@ void run_config(const Config& c) {
 TEST(ShaderEntry, DerivativesOnly) { run_config({"derivatives", Baked::None, false, true}); }
 TEST(ShaderEntry, KernelTexturePlusDerivatives) { run_config({"kernel+derivatives", Baked::Kernel, false, true}); }
 TEST(ShaderEntry, AnisotropicKernelTextureOnly) { run_config({"anisotropic kernel", Baked::KernelAnisotropic, false, false}); }
+// SPECAA_KERNEL_TWO_LOBES: the rough share in alpha splits the texel; the flat share's lobe carries the
+// pixel kernel (and only it). Without the define the alpha channel is ignored (the cases above).
+TEST(ShaderEntry, AnisotropicKernelTwoLobes) {
+    run_config({"anisotropic kernel, two lobes", Baked::KernelAnisotropic, false, false, kWorldPerPixel, true});
+}
+TEST(ShaderEntry, AnisotropicKernelTwoLobesPlusDerivatives) {
+    run_config({"anisotropic kernel+derivatives, two lobes", Baked::KernelAnisotropic, false, true, kWorldPerPixel, true});
+}
 TEST(ShaderEntry, LeanPlusCurvature) { run_config({"LEAN+curvature", Baked::Lean, true, true}); }
 // A footprint of 0.4 makes the curvature kernel's major eigenvalue exceed kappa and its minor one stay
 // below: the clamp must cap the first and keep the second (TK21 Sec. 4), not scale the matrix.
