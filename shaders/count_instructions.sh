@@ -40,6 +40,7 @@ entries=(
   "default matrix + specaa_default_D (derivatives only)|SPECAA_COST_DEFAULT_NDF"
   "default matrix + specaa_default_D + kernel|SPECAA_COST_DEFAULT_NDF SPECAA_COST_TEXTURES SPECAA_KERNEL_TEXTURE=uBaked0"
   "default matrix + specaa_default_D + Sigma kernel|SPECAA_COST_DEFAULT_NDF SPECAA_COST_TEXTURES SPECAA_KERNEL_TEXTURE=uBaked0 SPECAA_KERNEL_ANISOTROPIC"
+  "default matrix + specaa_default_D + Sigma kernel, two lobes|SPECAA_COST_DEFAULT_NDF SPECAA_COST_TEXTURES SPECAA_KERNEL_TEXTURE=uBaked0 SPECAA_KERNEL_ANISOTROPIC SPECAA_KERNEL_TWO_LOBES"
   "default matrix + specaa_default_D + roughness texture|SPECAA_COST_DEFAULT_NDF SPECAA_COST_TEXTURES SPECAA_ROUGHNESS_TEXTURE=uBaked0"
   "mean normal texture (RGBA8)|SPECAA_COST_MEAN_NORMAL SPECAA_COST_TEXTURES"
   "mean normal texture (BC5, z rebuilt)|SPECAA_COST_MEAN_NORMAL SPECAA_COST_TEXTURES SPECAA_NORMAL_TWO_CHANNEL"
