@@ -115,6 +115,8 @@ std::vector<Quantity> quantities_of(const MipChain& mips, const std::string& kin
     } else if (kind == "kernel") {
         if (c >= 3) {
             out.push_back(derive(mips, "kernel tr(Sigma)", true, [](const float* t) { return t[0] + t[1]; }));
+            // Alpha: the share of the texel's base normals steeper than slope 0.02 (SPECAA_KERNEL_TWO_LOBES).
+            if (c >= 4) out.push_back(derive(mips, "rough share", true, [](const float* t) { return t[3]; }));
         } else {
             out.push_back(derive(mips, "kernel t", true, [](const float* t) { return t[0]; }));
         }
