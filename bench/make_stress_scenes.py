@@ -150,41 +150,40 @@ def brushed_height(size, rng):
     return [smooth[y] * (1.0 + 0.3 * long[y * size + x]) for y in range(size) for x in range(size)]
 
 
-def sphere(rings, segments, radius):
+def grid_mesh(rings, segments, surface):
+    """Triangles of a (rings + 1) x (segments + 1) vertex grid; surface(u, v) gives (position, normal, uv)."""
     pos, nrm, uv, idx = [], [], [], []
     for r in range(rings + 1):
         for s in range(segments + 1):
-            u, v = s / segments, r / rings
-            theta, phi = v * math.pi, u * 2 * math.pi
-            n = (math.sin(theta) * math.cos(phi), math.cos(theta), -math.sin(theta) * math.sin(phi))
-            pos += [radius * c for c in n]
+            p, n, t = surface(s / segments, r / rings)
+            pos += p
             nrm += n
-            uv += (2 * u, v)  # 2:1 so texels are about square on the sphere
+            uv += t
     for r in range(rings):
         for s in range(segments):
             a = r * (segments + 1) + s
             b, c = a + 1, a + segments + 1
             idx += (a, c, b, b, c, c + 1)
     return pos, nrm, uv, idx
+
+
+def sphere(rings, segments, radius):
+    def surface(u, v):
+        theta, phi = v * math.pi, u * 2 * math.pi
+        n = (math.sin(theta) * math.cos(phi), math.cos(theta), -math.sin(theta) * math.sin(phi))
+        return [radius * c for c in n], n, (2 * u, v)  # 2:1 so texels are about square on the sphere
+
+    return grid_mesh(rings, segments, surface)
 
 
 def torus(rings, segments, major, minor):
-    pos, nrm, uv, idx = [], [], [], []
-    for r in range(rings + 1):
-        for s in range(segments + 1):
-            u, v = s / segments, r / rings
-            phi, theta = u * 2 * math.pi, v * 2 * math.pi
-            n = (math.cos(theta) * math.cos(phi), math.sin(theta), -math.cos(theta) * math.sin(phi))
-            c = (major * math.cos(phi), 0.0, -major * math.sin(phi))
-            pos += [c[i] + minor * n[i] for i in range(3)]
-            nrm += n
-            uv += (3 * u, v)
-    for r in range(rings):
-        for s in range(segments):
-            a = r * (segments + 1) + s
-            b, c = a + 1, a + segments + 1
-            idx += (a, c, b, b, c, c + 1)
-    return pos, nrm, uv, idx
+    def surface(u, v):
+        phi, theta = u * 2 * math.pi, v * 2 * math.pi
+        n = (math.cos(theta) * math.cos(phi), math.sin(theta), -math.cos(theta) * math.sin(phi))
+        c = (major * math.cos(phi), 0.0, -major * math.sin(phi))
+        return [c[i] + minor * n[i] for i in range(3)], n, (3 * u, v)
+
+    return grid_mesh(rings, segments, surface)
 
 
 SCENES = {

@@ -23,6 +23,13 @@ float distance_factor(const std::string& label) {
     return 1.0f;
 }
 
+// The metrics of candidate `name` in `report`, or null.
+const SimMetrics* metrics_of(const SceneReport& report, const std::string& name) {
+    for (const CandidateReport& c : report.candidates)
+        if (c.name == name) return &c.metrics;
+    return nullptr;
+}
+
 // `distance`: a bench distance label, or empty for the scene's own framing (the analytic scenes' bench view).
 void expect_default_no_worse(const SimScene& scene, int size = 64, bool tone_mapped = false,
                              const std::string& distance = "far", int spp = 64, int frames = 3) {
@@ -30,11 +37,8 @@ void expect_default_no_worse(const SimScene& scene, int size = 64, bool tone_map
     options.only = {"default"};
     auto report = run_verify(distance.empty() ? scene : at_distance(scene, distance, distance_factor(distance)), options);
     ASSERT_TRUE(report.ok()) << report.error().message;
-    const SimMetrics *none = nullptr, *def = nullptr;
-    for (const CandidateReport& c : report->candidates) {
-        if (c.name == "none") none = &c.metrics;
-        if (c.name == "default") def = &c.metrics;
-    }
+    const SimMetrics* none = metrics_of(*report, "none");
+    const SimMetrics* def = metrics_of(*report, "default");
     ASSERT_TRUE(none && def);
     ASSERT_GT(none->pixels, 0) << scene.name << ": no pixel scored at the " << (distance.empty() ? "bench" : distance) << " distance";
     EXPECT_LE(def->rmse, none->rmse) << scene.name;
@@ -142,11 +146,8 @@ TEST(VerifyTwoLobes, BeatTheSingleLobeOnTheScratchedSphere) {
     options.only = {"default", "default-two-lobes"};
     auto report = run_verify(*scene, options);
     ASSERT_TRUE(report.ok()) << report.error().message;
-    const SimMetrics *one = nullptr, *two = nullptr;
-    for (const CandidateReport& c : report->candidates) {
-        if (c.name == "default") one = &c.metrics;
-        if (c.name == "default-two-lobes") two = &c.metrics;
-    }
+    const SimMetrics* one = metrics_of(*report, "default");
+    const SimMetrics* two = metrics_of(*report, "default-two-lobes");
     ASSERT_TRUE(one && two);
     EXPECT_LE(two->rmse_tonemapped, 0.8 * one->rmse_tonemapped);
     EXPECT_LE(two->flicker, one->flicker);
