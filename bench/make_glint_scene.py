@@ -9,6 +9,8 @@ import os
 import struct
 import zlib
 
+from make_stress_scenes import grid_mesh
+
 
 def png_rgb8(path, width, height, rows):
     def chunk(kind, data):
@@ -41,21 +43,12 @@ def ridge_rows(size):
 
 
 def sphere(rings, segments):
-    pos, nrm, uv, idx = [], [], [], []
-    for r in range(rings + 1):
-        for s in range(segments + 1):
-            u, v = s / segments, r / rings
-            theta, phi = v * math.pi, u * 2 * math.pi
-            n = (math.sin(theta) * math.cos(phi), math.cos(theta), -math.sin(theta) * math.sin(phi))
-            pos += n
-            nrm += n
-            uv += (u, v)
-    for r in range(rings):
-        for s in range(segments):
-            a = r * (segments + 1) + s
-            b, c = a + 1, a + segments + 1
-            idx += (a, c, b, b, c, c + 1)
-    return pos, nrm, uv, idx
+    def surface(u, v):
+        theta, phi = v * math.pi, u * 2 * math.pi
+        n = (math.sin(theta) * math.cos(phi), math.cos(theta), -math.sin(theta) * math.sin(phi))
+        return n, n, (u, v)
+
+    return grid_mesh(rings, segments, surface)
 
 
 def main():
