@@ -132,13 +132,8 @@ long long Decoder::decode_span(int y, int x0, int W, double* v, float* r0) const
     double* nz = plane(v, kPz, W);
     const long long degenerate = decode_normal_span(y, x0, W, nx, ny, nz, plane(v, kPxx, W), plane(v, kPyy, W),
                                                     plane(v, kPxy, W));
-    {
-        const double* px = plane(v, kPx, W);
-        const double* py = plane(v, kPy, W);
-        const double* pz = plane(v, kPz, W);
-        double* g = plane(v, kRough, W);
-        for (int x = 0; x < W; ++x) g[x] = rough_indicator(px[x], py[x], pz[x]);
-    }
+    double* g = plane(v, kRough, W);
+    for (int x = 0; x < W; ++x) g[x] = rough_indicator(nx[x], ny[x], nz[x]);
     double* a = plane(v, kA, W);
     double* occlusion = layout.occlusion >= 0 ? plane(v, layout.occlusion, W) : nullptr;
     double* metallic = layout.occlusion >= 0 ? plane(v, layout.metallic, W) : nullptr;

@@ -109,14 +109,11 @@ SPECBAKE_AVX2 int base_and_pairs_avx2(const Decoder& dec, int y, int bx, int n, 
                 }
                 if (out.kern) {  // Sigma = 0 at the base, the rough share the texel's indicator
                     float* k = out.kern + size_t(kern_ch) * o;
-                    if (kern_ch == 4) {
-                        alignas(16) float g[4];
-                        _mm_store_ps(g, _mm256_cvtpd_ps(q.g));
-                        for (int e = 0; e < 4; ++e)
-                            _mm_storeu_ps(k + 4 * e, _mm_setr_ps(0.0f, 0.0f, 0.0f, g[e]));
-                    } else {
-                        _mm_storeu_ps(k, _mm_setzero_ps());
-                    }
+                    const __m128 zero = _mm_setzero_ps();
+                    if (kern_ch == 4)
+                        store4x4(k, zero, zero, zero, _mm256_cvtpd_ps(q.g));
+                    else
+                        _mm_storeu_ps(k, zero);
                 }
                 if (out.lean)
                     store5x4(out.lean + 5 * o, _mm256_cvtpd_ps(q.x), _mm256_cvtpd_ps(q.y), _mm256_cvtpd_ps(q.xx),

@@ -129,6 +129,12 @@ SPECBAKE_AVX2_INLINE void store3x4(float* out, __m128 a, __m128 b, __m128 c) {
                                         _mm_shuffle_ps(c, c, _MM_SHUFFLE(3, 3, 3, 2)), 0x9));  // c2 a3 b3 c3
 }
 
+// Four texels of four channels a, b, c, d interleaved into out[0 .. 16).
+SPECBAKE_AVX2_INLINE void store4x4(float* out, __m128 a, __m128 b, __m128 c, __m128 d) {
+    _MM_TRANSPOSE4_PS(a, b, c, d);
+    _mm_storeu_ps(out, a), _mm_storeu_ps(out + 4, b), _mm_storeu_ps(out + 8, c), _mm_storeu_ps(out + 12, d);
+}
+
 // Four texels of five channels m0[k] .. m4[k] interleaved into out[0 .. 20): texel k's first four are row k
 // of the transposed 4 x 4 block, the fifth follows it.
 SPECBAKE_AVX2_INLINE void store5x4(float* out, __m128 m0, __m128 m1, __m128 m2, __m128 m3, __m128 m4) {

@@ -141,13 +141,9 @@ SPECBAKE_AVX2 int store_finalized_avx2(const double* m, int w, const Layout& lay
                 _mm_storeu_ps(rough + i, to_float4(f.r + k, 1.0, 0.0));
         }
         if (kern) {
-            if (anisotropic) {
-                __m128 sxx = to_float4(f.sxx + k, 1.0, 0.0), syy = to_float4(f.syy + k, 1.0, 0.0);
-                __m128 sxy = to_float4(f.sxy + k, 1.0, 0.0), g = to_float4(plane(m, kRough, w) + i, 1.0, 0.0);
-                _MM_TRANSPOSE4_PS(sxx, syy, sxy, g);
-                _mm_storeu_ps(kern + 4 * i, sxx), _mm_storeu_ps(kern + 4 * i + 4, syy);
-                _mm_storeu_ps(kern + 4 * i + 8, sxy), _mm_storeu_ps(kern + 4 * i + 12, g);
-            }
+            if (anisotropic)
+                store4x4(kern + 4 * i, to_float4(f.sxx + k, 1.0, 0.0), to_float4(f.syy + k, 1.0, 0.0),
+                         to_float4(f.sxy + k, 1.0, 0.0), to_float4(plane(m, kRough, w) + i, 1.0, 0.0));
             else
                 _mm_storeu_ps(kern + i, to_float4(f.t + k, 1.0, 0.0));
         }

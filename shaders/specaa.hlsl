@@ -749,13 +749,16 @@ float specaa_filtered_alpha2(SpecaaSurface s) {
 // Filtered perceptual roughness r = a^(1/4): drop-in for the material's roughness.
 float specaa_filtered_roughness(SpecaaSurface s) { return specaa_roughness_from_alpha2(specaa_filtered_alpha2(s)); }
 
+// Isotropic a widened by the kernel matrix K in projected space (TK21 Eq. 6-7), non-finite results as I.
+SPECAA_FLOAT3 specaa_widened_matrix(float a, SPECAA_FLOAT3 K) {
+    return specaa_guard_matrix(true, SPECAA_FLOAT2(a, a), specaa_filter_projected_matrix(SPECAA_FLOAT2(a, a), K));
+}
+
 // The default: filtered roughness matrix A_bar in the (T, B) frame, for specaa_default_D / specaa_ggx_G2 (or
 // specaa_ggx_D with tau = a^2 of the unfiltered material). Same composition as specaa_filtered_alpha2, with the per-pixel
 // kernel kept anisotropic.
 SPECAA_FLOAT3 specaa_filtered_alpha2_matrix(SpecaaSurface s) {
-    float a = specaa_base_alpha2(s);
-    return specaa_guard_matrix(true, SPECAA_FLOAT2(a, a),
-                               specaa_filter_projected_matrix(SPECAA_FLOAT2(a, a), specaa_baked_kernel_matrix(s) + specaa_pixel_kernel_matrix(s)));
+    return specaa_widened_matrix(specaa_base_alpha2(s), specaa_baked_kernel_matrix(s) + specaa_pixel_kernel_matrix(s));
 }
 
 // Level of detail the hardware samples a texture at uv (negative under magnification).
@@ -802,9 +805,8 @@ float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, SpecaaSurface s) {
     // Sampled and differentiated in uniform control flow; only the convolution is skipped for g = 1.
     share = specaa_sample_kernel_rough_share(SPECAA_TEXTURE_ARGS(SPECAA_KERNEL_TEXTURE, SPECAA_SAMPLER), s.uv);
     SPECAA_FLOAT3 pixel = specaa_pixel_kernel_matrix(s);
-    SPECAA_FLOAT3 flatA = specaa_guard_matrix(true, SPECAA_FLOAT2(a, a), specaa_filter_projected_matrix(SPECAA_FLOAT2(a, a), pixel));
-    SPECAA_FLOAT3 roughA = specaa_guard_matrix(true, SPECAA_FLOAT2(a, a),
-        specaa_filter_projected_matrix(SPECAA_FLOAT2(a, a), specaa_baked_kernel_matrix(s) / max(share, 1.0e-3) + pixel));
+    SPECAA_FLOAT3 flatA = specaa_widened_matrix(a, pixel);
+    SPECAA_FLOAT3 roughA = specaa_widened_matrix(a, specaa_baked_kernel_matrix(s) / max(share, 1.0e-3) + pixel);
     if (share < 1.0) {
         flatD = specaa_convolved_D(h, flatA, a);
         A = roughA;

@@ -133,6 +133,9 @@ Image make_scratch_normal_map(int size, uint32_t seed) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> unit(0.0f, 1.0f);
     std::vector<float> height(size_t(size) * size_t(size), 0.0f);
+    auto at = [&](int x, int y) -> float& {  // periodic
+        return height[size_t((y % size + size) % size) * size_t(size) + size_t((x % size + size) % size)];
+    };
     for (int g = 0; g < 90; ++g) {
         const float x0 = unit(rng) * float(size), y0 = unit(rng) * float(size), angle = kPi * unit(rng);
         const float length = (0.1f + 0.4f * unit(rng)) * float(size), depth = 0.5f + unit(rng);
@@ -143,13 +146,12 @@ Image make_scratch_normal_map(int size, uint32_t seed) {
                 for (int ox = -2; ox <= 2; ++ox) {
                     const int ix = int(std::floor(cx)) + ox, iy = int(std::floor(cy)) + oy;
                     const float r2 = (float(ix) + 0.5f - cx) * (float(ix) + 0.5f - cx) + (float(iy) + 0.5f - cy) * (float(iy) + 0.5f - cy);
-                    float& h = height[size_t((iy % size + size) % size) * size_t(size) + size_t((ix % size + size) % size)];
+                    float& h = at(ix, iy);
                     h = std::min(h, -depth * std::exp(-r2 / 0.72f));
                 }
         }
     }
     Image map(size, size, 3);
-    auto at = [&](int x, int y) { return height[size_t((y + size) % size) * size_t(size) + size_t((x + size) % size)]; };
     for (int y = 0; y < size; ++y)
         for (int x = 0; x < size; ++x) {
             const Float3 n = normalized({-0.5f * (at(x + 1, y) - at(x - 1, y)), -0.5f * (at(x, y + 1) - at(x, y - 1)), 1.0f});
