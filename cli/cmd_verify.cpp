@@ -80,6 +80,11 @@ int run_verify_command(const VerifyCommandOptions& o) {
                 material, report->width, report->height, report->spp,
                 (report->ground_truth_ms + report->glint_ground_truth_ms) / 1000.0, report->frames,
                 (*context)->description().c_str());
+    if (!options.defines.empty()) {
+        std::string shown = options.defines;
+        std::replace(shown.begin(), shown.end(), '\n', ';');
+        std::printf("Candidates but the baseline compiled with: %s\n\n", shown.c_str());
+    }
     std::fputs(markdown_table(*report).c_str(), stdout);
     if (!report->glint_ground_truth.empty() || report->glint_ground_truth_ms > 0)
         std::printf("\nglint-* rows: the materials with SPECBAKE_glints only, against the glint ground truth (the "
@@ -139,6 +144,7 @@ void add_verify_command(CLI::App& app, std::function<int()>& run) {
                 "  specbake verify --builtin cylinder --alpha 0.01 --spp 1024 --frames 16 --size 256x256\n"
                 "  specbake verify --builtin bumpy-sphere --only baked-texture,default\n"
                 "  specbake verify --builtin glitter-plane --alpha 0.1 --size 64x64 --spp 1024 --frames 4\n"
+                "  specbake verify scene.gltf --distance 3 --only default,default-two-lobes --define SPECAA_KAPPA=1.0\n"
                 "  specbake verify glittery.gltf   (materials with \"SPECBAKE_glints\" also get the glint candidates)");
     sub->callback([&run, o] { run = [o] { return run_verify_command(*o); }; });
 }

@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 namespace specbake::cli {
 
@@ -24,6 +25,7 @@ struct SimCommandOptions {
     std::string ground_truth = "footprint";
     bool no_floor = false;
     bool no_limit = false;
+    std::vector<std::string> defines;  // NAME or NAME=VALUE
 };
 
 inline void add_sim_command_options(CLI::App* sub, SimCommandOptions& o) {
@@ -47,6 +49,32 @@ inline void add_sim_command_options(CLI::App* sub, SimCommandOptions& o) {
                   "Skip the limit row (per pixel the best of 32 isotropic GGX lobes about the shading normal)");
     sub->add_flag("--no-floor", o.no_floor,
                   "Skip the floor row (a second ground truth at a quarter of the samples scored against the first)");
+    sub->add_option("--define", o.defines,
+                    "Compile every candidate but the baseline with '#define NAME VALUE' (repeatable): try the "
+                    "include's settings on a scene, e.g. --define SPECAA_KERNEL_TWO_LOBES --define SPECAA_KAPPA=1.0")
+        ->type_name("NAME[=VALUE]");
+}
+
+// "NAME" or "NAME=VALUE" as the line "#define NAME VALUE"; an error message for anything else (NAME a C
+// identifier, VALUE one line).
+inline bool define_line(const std::string& d, std::string& line, std::string& error) {
+    const size_t eq = d.find('=');
+    const std::string name = d.substr(0, eq), value = eq == std::string::npos ? "" : d.substr(eq + 1);
+    const auto ident = [](char c, bool first) {
+        return c == '_' || (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (!first && c >= '0' && c <= '9');
+    };
+    bool ok = !name.empty();
+    for (size_t i = 0; ok && i < name.size(); ++i) ok = ident(name[i], i == 0);
+    if (!ok) {
+        error = "--define '" + d + "': expected NAME or NAME=VALUE with NAME a C identifier";
+        return false;
+    }
+    if (value.find_first_of("\n\r\\") != std::string::npos) {
+        error = "--define '" + d + "': the value must be one line without backslashes";
+        return false;
+    }
+    line = "#define " + name + (value.empty() ? "" : " " + value) + "\n";
+    return true;
 }
 
 // Fills `v` from `o` and the embedded runtime include. Prints the error and returns false for a bad --size.
@@ -64,6 +92,15 @@ inline bool apply_sim_command_options(const SimCommandOptions& o, verify::Verify
     v.footprint_ground_truth = o.ground_truth == "footprint";
     v.floor = !o.no_floor;
     v.limit = !o.no_limit;
+    v.defines.clear();
+    for (const std::string& d : o.defines) {
+        std::string line, error;
+        if (!define_line(d, line, error)) {
+            print_error(error);
+            return false;
+        }
+        v.defines += line;
+    }
     return true;
 }
 

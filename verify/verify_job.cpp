@@ -90,6 +90,18 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
                    std::find(options.only.begin(), options.only.end(), c.name) == options.only.end();
         });
     }
+    if (!options.defines.empty()) {
+        // With SPECAA_USE_CURVATURE every candidate reads _SPECAA_CURVATURE: the analytic one, or for a scene
+        // file the default estimator's, as for the candidates that ask for curvature themselves.
+        const bool curvature = options.defines.find("#define SPECAA_USE_CURVATURE\n") != std::string::npos ||
+                               options.defines.find("#define SPECAA_USE_CURVATURE ") != std::string::npos;
+        const std::string estimator = has_exact_curvature(scene) ? "exact" : "shape-operator";
+        for (SimCandidate& c : candidates) {
+            if (c.name == baseline_of(c.family)) continue;
+            c.shader.defines = options.defines + c.shader.defines;
+            if (curvature && c.curvature_bake.empty()) c.curvature_bake = c.shader.curvature_source = estimator;
+        }
+    }
     const bool any_glint = std::any_of(candidates.begin(), candidates.end(), [](const SimCandidate& c) { return c.shader.glint; });
     const bool any_ggx = std::any_of(candidates.begin(), candidates.end(), [](const SimCandidate& c) { return !c.shader.glint; });
     if (any_glint) {

@@ -35,6 +35,9 @@ struct VerifyOptions {
     // Also score the limit row: per pixel and frame the best of kLimitKernels isotropic GGX lobes about the
     // engine's shading normal (verify_job.cpp), a lower bound for every rule that widens the lobe.
     bool limit = true;
+    // Lines "#define NAME VALUE" put before every candidate's own defines, but not the baselines' (none,
+    // glint-c20) or the ground truths' (`--define`).
+    std::string defines;
     // Ground-truth samples integrate the highlight over their stratum (false: point samples).
     bool footprint_ground_truth = true;
     // Receives one line per finished stage (bakes, each ground-truth frame, timing); may be empty.

@@ -159,6 +159,12 @@ TEST_F(PipelineCli, UsageErrorsExitTwo) {
     EXPECT_EQ(run({"--config", (dir_ / "missing.toml").string(), "bake", scene(), "-o", out("u").string()}).code, 2);
     EXPECT_EQ(run({}).code, 2);
     EXPECT_EQ(run({"--help"}).code, 0);
+    // verify --define takes NAME or NAME=VALUE (a C identifier, a one-line value); rejected before any GL work.
+    for (const char* bad : {"1X", "A-B", "=1", "", "A=b\\c", "A=b\nc"}) {
+        const CommandResult r = run({"verify", "--builtin", "sphere", "--define", bad});
+        EXPECT_EQ(r.code, 2) << bad;
+        EXPECT_NE(r.err.find("--define"), std::string::npos) << bad << ": " << r.err;
+    }
 }
 
 TEST_F(PipelineCli, ResponseFileGivesTheArguments) {

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -128,6 +129,60 @@ TEST(VerifySimulation, BakedCurvatureIsAtLeastAsStableAsNormalDerivativesOnCurve
         EXPECT_LE(curvature, 1.05 * metrics(r, "iso-mean").flicker_linear) << scene;
         EXPECT_LT(curvature, metrics(r, "varef-screen").flicker_linear) << scene;
     }
+}
+
+TEST(VerifySimulation, DefinesReachEveryCandidateButTheBaseline) {
+    SPECBAKE_REQUIRE_GL();
+    // On the sphere without a normal map the default's only kernel is the per-pixel one: with
+    // SPECAA_NO_PIXEL_KERNEL it is GGX(a), the same image as no filtering; without it, it is not.
+    auto scene = make_builtin_scene("sphere", std::sqrt(0.01f));
+    ASSERT_TRUE(scene.ok());
+    VerifyOptions options = test::small_verify(48, 48, 16, 2);
+    options.only = {"default", "projected"};
+    options.keep_images = true;
+    auto plain = run_verify(*scene, options);
+    options.defines = "#define SPECAA_NO_PIXEL_KERNEL\n";
+    auto defined = run_verify(*scene, options);
+    ASSERT_TRUE(plain.ok() && defined.ok());
+    const auto image = [](const SceneReport& r, const std::string& name) -> const SimImage& {
+        for (const CandidateReport& c : r.candidates)
+            if (c.name == name) return c.image;
+        ADD_FAILURE() << "no candidate " << name;
+        static SimImage empty;
+        return empty;
+    };
+    // Largest difference in radiance relative to the image's peak (the default's zero-width convolution
+    // rounds differently from GGX itself).
+    const auto difference = [](const SimImage& a, const SimImage& b) {
+        double d = 0, peak = 0;
+        for (size_t i = 0; i < a.texel_count(); ++i) {
+            d = std::max(d, double(std::abs(a.pixels[2 * i] - b.pixels[2 * i])));
+            peak = std::max(peak, double(b.pixels[2 * i]));
+        }
+        return peak > 0 ? d / peak : d;
+    };
+    const SimImage& none = image(*plain, "none");
+    ASSERT_GT(none.texel_count(), 0u);
+    EXPECT_EQ(image(*defined, "none").pixels, none.pixels);  // the baseline keeps its own shader
+    EXPECT_LT(difference(image(*defined, "default"), none), 1e-4);  // GGX(a): no kernel left
+    EXPECT_GT(difference(image(*plain, "default"), none), 1e-2);    // the pixel kernel widens the lobe
+    // A define the candidate's path does not read leaves it as it was.
+    EXPECT_EQ(image(*defined, "projected").pixels, image(*plain, "projected").pixels);
+}
+
+TEST(VerifySimulation, CurvatureDefineBindsTheCurvatureOfEveryCandidate) {
+    SPECBAKE_REQUIRE_GL();
+    // With SPECAA_USE_CURVATURE and no pixel-derivative kernel, the default on the glossy sphere widens the
+    // lobe by the sphere's curvature only: a zero (unbound) _SPECAA_CURVATURE would leave GGX(a), no
+    // filtering's image, and its error; the analytic curvature 1 / R cuts it.
+    auto scene = make_builtin_scene("sphere", std::sqrt(0.01f));
+    ASSERT_TRUE(scene.ok());
+    VerifyOptions options = test::small_verify(64, 64, 64, 2);
+    options.only = {"default"};
+    options.defines = "#define SPECAA_USE_CURVATURE\n";
+    auto r = run_verify(*scene, options);
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    EXPECT_LT(metrics(*r, "default").rmse, 0.8 * metrics(*r, "none").rmse);
 }
 
 }  // namespace
