@@ -54,6 +54,8 @@
 //                                   RGBA = (xx, yy, xy, g) of Sigma and its rough share g
 //                                   (R16G16B16A16_SFLOAT), the bake's default; without it R = t (isotropic
 //                                   mean, R16_SFLOAT; `specbake texture --isotropic-kernel`).
+//                                   The single lobe takes K = 2 Sigma sqrt(g) (specaa_baked_kernel_matrix);
+//   SPECAA_KERNEL_COVARIANCE        K = 2 Sigma whatever g (the covariance-matched lobe of earlier releases).
 //   SPECAA_KERNEL_TWO_LOBES         specaa_default_D splits the Sigma kernel's texel into its flat share
 //                                   (the material's lobe) and its rough share g (all of Sigma): opt-in.
 //   SPECAA_LEAN_TEXTURE0 name       LEAN moments, projected space (SPEC Sec. 3), in two textures:
@@ -387,7 +389,8 @@ float specaa_sample_kernel(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
     return SPECAA_SELECT(specaa_is_finite(t), max(t, 0.0), 0.0);
 }
 
-// Baked anisotropic kernel mips: Sigma = (xx, yy, xy) in RGB (A = 1 unused); clamped to PSD after filtering.
+// Baked anisotropic kernel mips: Sigma = (xx, yy, xy) in RGB (A: the rough share below); clamped to PSD
+// after filtering.
 SPECAA_FLOAT3 specaa_sample_kernel_covariance(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
     SPECAA_FLOAT3 sigma = specaa_sym_clamp_psd(SPECAA_SAMPLE(tex, smp, uv).rgb);
     return SPECAA_SELECT3(specaa_is_finite3(sigma), sigma, SPECAA_FLOAT3(0.0, 0.0, 0.0));
@@ -395,9 +398,17 @@ SPECAA_FLOAT3 specaa_sample_kernel_covariance(SPECAA_TEXTURE_PARAMS(tex, smp), S
 
 // Rough share g of a baked Sigma kernel texel (alpha channel): the part of its normals steeper than slope
 // 0.02, which holds all of Sigma (specaa_default_D). Non-finite or absent (1) gives the single lobe.
+float specaa_rough_share(float g) { return SPECAA_SELECT(specaa_is_finite(g), SPECAA_SATURATE(g), 1.0); }
 float specaa_sample_kernel_rough_share(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
-    float g = SPECAA_SAMPLE(tex, smp, uv).a;
-    return SPECAA_SELECT(specaa_is_finite(g), SPECAA_SATURATE(g), 1.0);
+    return specaa_rough_share(SPECAA_SAMPLE(tex, smp, uv).a);
+}
+
+// Both from one fetch: (Sigma.xx, Sigma.yy, Sigma.xy, g), Sigma clamped to PSD (zero if not finite).
+SPECAA_FLOAT4 specaa_sample_kernel_texel(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
+    SPECAA_FLOAT4 t = SPECAA_SAMPLE(tex, smp, uv);
+    SPECAA_FLOAT3 sigma = specaa_sym_clamp_psd(t.rgb);
+    return SPECAA_FLOAT4(SPECAA_SELECT3(specaa_is_finite3(sigma), sigma, SPECAA_FLOAT3(0.0, 0.0, 0.0)),
+                         specaa_rough_share(t.a));
 }
 
 // Covariance from LEAN moments, Sigma = M - m m^T clamped to PSD (SPEC Sec. 3; C21 Eq. 16).
@@ -666,7 +677,20 @@ SPECAA_FLOAT3 specaa_baked_kernel_matrix(SpecaaSurface s) {
     return 2.0 * specaa_sample_lean(SPECAA_TEXTURE_ARGS(SPECAA_LEAN_TEXTURE0, SPECAA_SAMPLER),
                                     SPECAA_TEXTURE_ARGS(SPECAA_LEAN_TEXTURE1, SPECAA_SAMPLER), s.uv);
 #elif defined(SPECAA_KERNEL_TEXTURE) && defined(SPECAA_KERNEL_ANISOTROPIC)
-    return 2.0 * specaa_sample_kernel_covariance(SPECAA_TEXTURE_ARGS(SPECAA_KERNEL_TEXTURE, SPECAA_SAMPLER), s.uv);
+    // The single lobe of a texel with rough share g: K = 2 Sigma sqrt(g), not 2 Sigma. A texel of a flat
+    // field with a few steep grooves or seams (g small) is a spike at the flat normal plus a wide rough
+    // part; the Gaussian of its covariance spreads the spike's highlight over the grooves' slopes, while
+    // the Gaussian closest to the mixture in L2 (the radiance error over half vectors) is far narrower
+    // (K / (2 Sigma) = 0.11-0.24 at g = 0.1-0.5 for a rough part 10x the material's lobe). The covariance
+    // is what keeps the rough part's sparkle down where it is lit; sqrt(g) sits between the two ends
+    // (g^0 and g^1). g = 1 (every texel steep, or bakes before the rough share) is the covariance itself.
+    // README "Mixed texels" has the measurements (g^0, g^0.25, g^0.5, g^0.75, g^1).
+    SPECAA_FLOAT4 k = specaa_sample_kernel_texel(SPECAA_TEXTURE_ARGS(SPECAA_KERNEL_TEXTURE, SPECAA_SAMPLER), s.uv);
+#if defined(SPECAA_KERNEL_COVARIANCE)
+    return 2.0 * k.xyz;
+#else
+    return (2.0 * sqrt(k.w)) * k.xyz;
+#endif
 #elif defined(SPECAA_KERNEL_TEXTURE)
     float t = specaa_sample_kernel(SPECAA_TEXTURE_ARGS(SPECAA_KERNEL_TEXTURE, SPECAA_SAMPLER), s.uv);
     return SPECAA_FLOAT3(t, t, 0.0);
@@ -803,10 +827,11 @@ float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, SpecaaSurface s) {
 #endif
 #if defined(SPECAA_KERNEL_TEXTURE) && defined(SPECAA_KERNEL_ANISOTROPIC) && defined(SPECAA_KERNEL_TWO_LOBES)
     // Sampled and differentiated in uniform control flow; only the convolution is skipped for g = 1.
-    share = specaa_sample_kernel_rough_share(SPECAA_TEXTURE_ARGS(SPECAA_KERNEL_TEXTURE, SPECAA_SAMPLER), s.uv);
+    SPECAA_FLOAT4 k = specaa_sample_kernel_texel(SPECAA_TEXTURE_ARGS(SPECAA_KERNEL_TEXTURE, SPECAA_SAMPLER), s.uv);
+    share = k.w;
     SPECAA_FLOAT3 pixel = specaa_pixel_kernel_matrix(s);
     SPECAA_FLOAT3 flatA = specaa_widened_matrix(a, pixel);
-    SPECAA_FLOAT3 roughA = specaa_widened_matrix(a, specaa_baked_kernel_matrix(s) / max(share, 1.0e-3) + pixel);
+    SPECAA_FLOAT3 roughA = specaa_widened_matrix(a, (2.0 / max(share, 1.0e-3)) * k.xyz + pixel);
     if (share < 1.0) {
         flatD = specaa_convolved_D(h, flatA, a);
         A = roughA;

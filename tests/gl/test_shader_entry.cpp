@@ -190,11 +190,16 @@ void run_config(const Config& c) {
             for (int x = 0; x < kView; ++x) {
                 // Baked data of level L as the kernel matrix K = 2 Sigma (isotropic t: K = t I).
                 double a0 = std::pow(kRoughness, 4);
-                Sym2<double> k_tex{};
+                // The Sigma kernel's single lobe: K = 2 Sigma sqrt(g), g the texel's rough share (alpha);
+                // k_sigma = 2 Sigma itself, which the two lobes split.
+                Sym2<double> k_tex{}, k_sigma{};
                 switch (c.baked) {
                     case Baked::None: break;
                     case Baked::Kernel: k_tex = diag(level_kernel(L), level_kernel(L)); break;
                     case Baked::KernelAnisotropic:
+                        k_sigma = 2.0 * level_sigma(L);
+                        k_tex = std::sqrt(level_share(L)) * k_sigma;
+                        break;
                     case Baked::Lean: k_tex = 2.0 * level_sigma(L); break;
                     case Baked::Roughness: a0 = std::pow(double(float(level_roughness(L))), 4); break;
                 }
@@ -245,7 +250,7 @@ void run_config(const Config& c) {
                 const double g = c.baked == Baked::KernelAnisotropic && c.two_lobes ? level_share(L) : 1.0;
                 const Sym2<double> rough_A =
                     g < 1.0 ? projected_to_slope_roughness(slope_to_projected_roughness(diag(a0, a0)) +
-                                                           (1.0 / std::max(g, 1e-3)) * k_tex + clamp_kernel(k_px))
+                                                           (1.0 / std::max(g, 1e-3)) * k_sigma + clamp_kernel(k_px))
                             : A;
                 const Sym2<double> flat_A = projected_to_slope_roughness(slope_to_projected_roughness(diag(a0, a0)) + clamp_kernel(k_px));
                 if (g < 1.0)
@@ -277,7 +282,7 @@ TEST(ShaderEntry, DerivativesOnly) { run_config({"derivatives", Baked::None, fal
 TEST(ShaderEntry, KernelTexturePlusDerivatives) { run_config({"kernel+derivatives", Baked::Kernel, false, true}); }
 TEST(ShaderEntry, AnisotropicKernelTextureOnly) { run_config({"anisotropic kernel", Baked::KernelAnisotropic, false, false}); }
 // SPECAA_KERNEL_TWO_LOBES: the rough share in alpha splits the texel; the flat share's lobe carries the
-// pixel kernel (and only it). Without the define the alpha channel is ignored (the cases above).
+// pixel kernel (and only it). Without the define the single lobe scales Sigma by sqrt(g) (the cases above).
 TEST(ShaderEntry, AnisotropicKernelTwoLobes) {
     run_config({"anisotropic kernel, two lobes", Baked::KernelAnisotropic, false, false, kWorldPerPixel, true});
 }
