@@ -66,6 +66,9 @@ float specaa_lod_from_derivatives(vec2 size, vec2 uv) {
 //                                   mean, R16_SFLOAT; `specbake texture --isotropic-kernel`).
 //                                   The single lobe takes K = 2 Sigma sqrt(g) (specaa_baked_kernel_matrix);
 //   SPECAA_KERNEL_COVARIANCE        K = 2 Sigma whatever g (the covariance-matched lobe of earlier releases).
+//   SPECAA_KERNEL_GATE              a baked kernel K whose largest eigenvalue is below this times the
+//                                   material's a is faded out, K saturate(lambda_max(K) / (gate a))^2
+//                                   (specaa_baked_kernel_matrix); default 0.5, 0 keeps every kernel whole.
 //   SPECAA_KERNEL_TWO_LOBES         specaa_default_D splits the Sigma kernel's texel into its flat share
 //                                   (the material's lobe) and its rough share g (all of Sigma): opt-in.
 //   SPECAA_LEAN_TEXTURE0 name       LEAN moments, projected space (SPEC Sec. 3), in two textures:
@@ -102,6 +105,9 @@ float specaa_lod_from_derivatives(vec2 size, vec2 uv) {
 #endif
 #ifndef SPECAA_GGX_SPREAD
 #define SPECAA_GGX_SPREAD 8.0
+#endif
+#ifndef SPECAA_KERNEL_GATE
+#define SPECAA_KERNEL_GATE 0.5
 #endif
 #ifndef SPECAA_ROUGHNESS_CHANNEL
 #define SPECAA_ROUGHNESS_CHANNEL g
@@ -680,9 +686,9 @@ float specaa_base_alpha2(SpecaaSurface s) {
 #endif
 }
 
-// Baked kernel matrix K = 2 Sigma of the normal map at this fragment's mip (0 without kernel/LEAN data);
-// an isotropic kernel texture gives K = t I.
-SPECAA_FLOAT3 specaa_baked_kernel_matrix(SpecaaSurface s) {
+// The normal map's spread at this fragment's mip as a kernel matrix, before the gate below (0 without
+// kernel/LEAN data); an isotropic kernel texture gives K = t I.
+SPECAA_FLOAT3 specaa_baked_spread_matrix(SpecaaSurface s) {
 #if defined(SPECAA_LEAN_TEXTURE0)
     return 2.0 * specaa_sample_lean(SPECAA_TEXTURE_ARGS(SPECAA_LEAN_TEXTURE0, SPECAA_SAMPLER),
                                     SPECAA_TEXTURE_ARGS(SPECAA_LEAN_TEXTURE1, SPECAA_SAMPLER), s.uv);
@@ -707,6 +713,22 @@ SPECAA_FLOAT3 specaa_baked_kernel_matrix(SpecaaSurface s) {
 #else
     return SPECAA_FLOAT3(0.0, 0.0, 0.0);
 #endif
+}
+
+// Baked kernel matrix of the default: the spread above, faded out where it is much narrower than the
+// material's lobe, K f^2 with f = saturate(lambda_max(K) / (SPECAA_KERNEL_GATE a)) (NaN passes through
+// for the guards downstream). A spread far below a changes D by a small fraction, and on a smooth bump
+// map under a rough material (the normal-mapped sphere at alpha 0.2-0.5) that change raised the flicker
+// above no filtering's (alpha 0.2: 1.0025x tone-mapped, 0.3: 1.017x, 0.5: 1.012x); no filtering's flicker
+// there is the engine's trilinear sampling of the mean normal, which no widening of the lobe removes.
+// Kernels of half of a or more pass whole. README "The gate" has the forms measured (gates 0.25, 0.5
+// and 1, linear and squared fade). The opt-in two lobes gate their rough lobe's kernel the same way.
+SPECAA_FLOAT3 specaa_gate_baked_kernel(SPECAA_FLOAT3 K, float a) {
+    float f = SPECAA_SATURATE(specaa_sym_max_eigenvalue(K) / max(SPECAA_KERNEL_GATE * a, 1.0e-30));
+    return K * SPECAA_SELECT(f == f, f * f, 1.0);
+}
+SPECAA_FLOAT3 specaa_baked_kernel_matrix(SpecaaSurface s) {
+    return specaa_gate_baked_kernel(specaa_baked_spread_matrix(s), specaa_base_alpha2(s));
 }
 
 // Footprint of the pixel in the (T, B) frame (specaa_footprint) and whether it and the curvature are
@@ -816,11 +838,11 @@ float specaa_texture_lod(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) { re
 // - Baked Sigma kernel with SPECAA_KERNEL_TWO_LOBES (opt-in): two lobes with the texel's mean and
 //   covariance. The texel's flat share 1 - g (normals within slope 0.02 of the surface's, alpha channel)
 //   keeps the material's own lobe convolved with the pixel kernel only; its rough share g holds all of
-//   Sigma, as the lobe above with K = 2 Sigma / g + pixel kernel. One Gaussian of the whole texel spreads
-//   a flat field's highlight over the slopes of the few scratches or seams in it; the two lobes keep it
-//   (README "Mixed texels": they win on the stress scenes' scratches and tiles, but over the bench's
-//   normal-mapped scenes they have more error than the default's single lobe, K = 2 Sigma sqrt(g), at
-//   1.7x its cost, so they are not the default). g = 1 (earlier bakes wrote A = 1) is the single lobe.
+//   Sigma, as the lobe above with K = 2 Sigma / g (gated like every baked kernel) + pixel kernel. One
+//   Gaussian of the whole texel spreads a flat field's highlight over the slopes of the few scratches or
+//   seams in it; the two lobes keep it (README "Mixed texels": they win on the stress scenes' scratches
+//   and tiles, but over the bench's normal-mapped scenes they have more error than the default's single
+//   lobe, K = 2 Sigma sqrt(g), at 1.7x its cost, so they are not the default). g = 1 (earlier bakes wrote A = 1) is the single lobe.
 // - Baked roughness texture (a already holds the texel's spread, K only the pixel's): w = saturate(LOD),
 //   the convolution under magnification, GGX(A) from the texture's mip 1 on.
 // NaN inputs give GGX(A).
@@ -842,7 +864,7 @@ float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, SpecaaSurface s) {
     share = k.w;
     SPECAA_FLOAT3 pixel = specaa_pixel_kernel_matrix(s);
     SPECAA_FLOAT3 flatA = specaa_widened_matrix(a, pixel);
-    SPECAA_FLOAT3 roughA = specaa_widened_matrix(a, (2.0 / max(share, 1.0e-3)) * k.xyz + pixel);
+    SPECAA_FLOAT3 roughA = specaa_widened_matrix(a, specaa_gate_baked_kernel((2.0 / max(share, 1.0e-3)) * k.xyz, a) + pixel);
     if (share < 1.0) {
         flatD = specaa_convolved_D(h, flatA, a);
         A = roughA;

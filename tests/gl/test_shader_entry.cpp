@@ -30,6 +30,7 @@ constexpr double kRoughness = 0.3;    // material r when no roughness texture is
 constexpr double kNormalSlope = 0.02;  // n = normalize(kNormalSlope * x, 0, 1) at window x
 constexpr double kWorldPerPixel = 0.01;
 constexpr double kK1 = 3.0, kK2 = -1.0, kDirAngle = 0.4;  // _SPECAA_CURVATURE
+constexpr double kGate = 0.5;  // SPECAA_KERNEL_GATE
 constexpr double kTol = 4e-5;  // single-precision evaluation of a few closed forms (see grid_cases.h)
 
 // Per-level baked data.
@@ -49,6 +50,7 @@ struct Config {
     bool pixel_kernel;
     double world_per_pixel = kWorldPerPixel;  // footprint of the curvature kernel
     bool two_lobes = false;                    // SPECAA_KERNEL_TWO_LOBES
+    double roughness = kRoughness;             // material r (no roughness texture)
 };
 
 GLuint make_texture(int channels, const std::function<std::array<float, 4>(int)>& level_value) {
@@ -119,6 +121,17 @@ Sym2<double> clamp_kernel(Sym2<double> k) {
     return {m1 * c * c + m2 * s * s, (m1 - m2) * c * s, m1 * s * s + m2 * c * c};
 }
 
+// The gate: a baked kernel narrower than SPECAA_KERNEL_GATE times a is scaled by (lambda_max / (gate a))^2,
+// lambda_max found here by an explicit eigendecomposition.
+double gate_factor(Sym2<double> k, double a) {
+    const double phi = 0.5 * std::atan2(2.0 * k.xy, k.xx - k.yy);
+    const double c = std::cos(phi), s = std::sin(phi);
+    const double l1 = c * c * k.xx + 2.0 * c * s * k.xy + s * s * k.yy;
+    const double l2 = s * s * k.xx - 2.0 * c * s * k.xy + c * c * k.yy;
+    const double f = std::clamp(std::max(l1, l2) / (kGate * a), 0.0, 1.0);
+    return f * f;
+}
+
 void run_config(const Config& c) {
     SPECBAKE_REQUIRE_GL(gl);
     std::string log;
@@ -167,10 +180,11 @@ void run_config(const Config& c) {
     glUniform1f(glGetUniformLocation(program, "uNormalSlope"), float(kNormalSlope));
     glUniform1f(glGetUniformLocation(program, "uWorldPerPixel"), float(c.world_per_pixel));
     glUniform4f(glGetUniformLocation(program, "uCurvature"), float(kK1), float(kK2), float(2 * std::cos(dir)), float(2 * std::sin(dir)));
-    glUniform1f(glGetUniformLocation(program, "uRoughness"), float(kRoughness));
+    glUniform1f(glGetUniformLocation(program, "uRoughness"), float(c.roughness));
     const Vec3<double> h = normalize(Vec3<double>{0.12, -0.07, 1.0});
     glUniform3f(glGetUniformLocation(program, "uH"), float(h.x), float(h.y), float(h.z));
     int blends = 0;  // pixels where the default NDF is strictly between the convolution and GGX(A)
+    int faded = 0;   // pixels where the gate scales the baked kernel strictly between 0 and 1
 
     int failures = 0;
     for (int L = 0; L < (c.baked == Baked::None ? 1 : kLevels - 1); ++L) {
@@ -189,7 +203,7 @@ void run_config(const Config& c) {
         for (int y = 0; y < kView; ++y)
             for (int x = 0; x < kView; ++x) {
                 // Baked data of level L as the kernel matrix K = 2 Sigma (isotropic t: K = t I).
-                double a0 = std::pow(kRoughness, 4);
+                double a0 = std::pow(double(float(c.roughness)), 4);
                 // The Sigma kernel's single lobe: K = 2 Sigma sqrt(g), g the texel's rough share (alpha);
                 // k_sigma = 2 Sigma itself, which the two lobes split.
                 Sym2<double> k_tex{}, k_sigma{};
@@ -202,6 +216,11 @@ void run_config(const Config& c) {
                         break;
                     case Baked::Lean: k_tex = 2.0 * level_sigma(L); break;
                     case Baked::Roughness: a0 = std::pow(double(float(level_roughness(L))), 4); break;
+                }
+                if (c.baked != Baked::None && c.baked != Baked::Roughness) {
+                    const double fade = gate_factor(k_tex, a0);
+                    if (fade > 0.05 && fade < 0.95) ++faded;
+                    k_tex = fade * k_tex;
                 }
                 // Per-pixel kernel: normal differences across the quad (x&~1 -> x|1), or the curvature
                 // kernel of the footprint (w, 0), (0, w) in the (T, B) frame.
@@ -245,12 +264,13 @@ void run_config(const Config& c) {
                 const double kmax = max_eigenvalue_sym2(A.xx - a0, A.yy - a0, A.xy);
                 if (c.baked == Baked::Roughness) w = std::min(1.0, double(L));
                 else if (c.baked != Baked::None) w = std::min(1.0, double(L)) * std::clamp(8.0 * kmax, 0.0, 1.0);
-                // The Sigma kernel's two lobes: the rough share g with K = 2 Sigma / g, the flat share with the
-                // pixel kernel alone, convolved.
+                // The Sigma kernel's two lobes: the rough share g with K = 2 Sigma / g (gated), the flat share
+                // with the pixel kernel alone, convolved.
                 const double g = c.baked == Baked::KernelAnisotropic && c.two_lobes ? level_share(L) : 1.0;
+                const Sym2<double> k_rough = (1.0 / std::max(g, 1e-3)) * k_sigma;
                 const Sym2<double> rough_A =
                     g < 1.0 ? projected_to_slope_roughness(slope_to_projected_roughness(diag(a0, a0)) +
-                                                           (1.0 / std::max(g, 1e-3)) * k_sigma + clamp_kernel(k_px))
+                                                           gate_factor(k_rough, a0) * k_rough + clamp_kernel(k_px))
                             : A;
                 const Sym2<double> flat_A = projected_to_slope_roughness(slope_to_projected_roughness(diag(a0, a0)) + clamp_kernel(k_px));
                 if (g < 1.0)
@@ -267,8 +287,11 @@ void run_config(const Config& c) {
             }
     }
     EXPECT_EQ(failures, 0) << c.name;
+    if (c.roughness != kRoughness) EXPECT_GT(faded, 0) << c.name << ": no pixel where the gate fades the baked kernel";
     // The kernel cases reach the blend itself, not only its ends.
-    if (c.baked == Baked::Kernel || c.baked == Baked::KernelAnisotropic || c.baked == Baked::Lean)
+    // The rough material's cases are there for the gate (with the Sigma kernel at r = 0.6 no pixel is both
+    // in the blend and 5% apart).
+    if ((c.baked == Baked::Kernel || c.baked == Baked::KernelAnisotropic || c.baked == Baked::Lean) && c.roughness == kRoughness)
         EXPECT_GT(blends, 0) << c.name << ": no pixel between the convolution and GGX(A)";
     glDeleteTextures(3, targets);
     glDeleteTextures(1, &tex0);
@@ -288,6 +311,17 @@ TEST(ShaderEntry, AnisotropicKernelTwoLobes) {
 }
 TEST(ShaderEntry, AnisotropicKernelTwoLobesPlusDerivatives) {
     run_config({"anisotropic kernel+derivatives, two lobes", Baked::KernelAnisotropic, false, true, kWorldPerPixel, true});
+}
+// A rough material (r = 0.6, a = 0.13): the baked kernels of the lower levels are narrower than a and the
+// gate (SPECAA_KERNEL_GATE) fades them, the upper levels' pass whole.
+TEST(ShaderEntry, AnisotropicKernelGatedUnderARoughMaterial) {
+    run_config({"anisotropic kernel+derivatives, rough material", Baked::KernelAnisotropic, false, true, kWorldPerPixel, false, 0.6});
+}
+TEST(ShaderEntry, AnisotropicKernelTwoLobesGatedUnderARoughMaterial) {
+    run_config({"anisotropic kernel+derivatives, two lobes, rough material", Baked::KernelAnisotropic, false, true, kWorldPerPixel, true, 0.6});
+}
+TEST(ShaderEntry, KernelTextureGatedUnderARoughMaterial) {
+    run_config({"kernel, rough material", Baked::Kernel, false, false, kWorldPerPixel, false, 0.6});
 }
 TEST(ShaderEntry, LeanPlusCurvature) { run_config({"LEAN+curvature", Baked::Lean, true, true}); }
 // A footprint of 0.4 makes the curvature kernel's major eigenvalue exceed kappa and its minor one stay
