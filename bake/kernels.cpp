@@ -37,8 +37,16 @@ Vec2<T> projected_half_vector(const Vec3<T>& h) {
 template <class T>
 Sym2<T> kernel_roughness(const Vec2<T>& du, const Vec2<T>& dv, T sigma2) {
     // TK21 Eq. (3): Sigma = sigma^2 [du; dv]^T [du; dv]; the roughness matrix of a Gaussian is 2 Sigma.
-    const T s = T(2) * sigma2;
-    return {s * (du.x * du.x + dv.x * dv.x), s * (du.x * du.y + dv.x * dv.y), s * (du.y * du.y + dv.y * dv.y)};
+    // The derivatives are scaled by sqrt(2 sigma^2) before the products, so that tiny derivatives under a
+    // large sigma^2 do not lose their digits in subnormal squares (a float kernel came out indefinite:
+    // fuzz/regressions/filter); the off-diagonal is then kept within sqrt(xx yy), which the Gram matrix of
+    // exact arithmetic satisfies, so the kernel is positive semi-definite after rounding too.
+    const T r = std::sqrt(T(2) * sigma2);
+    const Vec2<T> u{r * du.x, r * du.y}, v{r * dv.x, r * dv.y};
+    const T xx = u.x * u.x + v.x * v.x, yy = u.y * u.y + v.y * v.y;
+    const T bound = std::sqrt(xx) * std::sqrt(yy);
+    const T xy = std::clamp(u.x * u.y + v.x * v.y, -bound, bound);
+    return {xx, xy, yy};
 }
 
 template <class T>
