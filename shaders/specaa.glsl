@@ -842,7 +842,8 @@ float specaa_texture_lod(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) { re
 //   Gaussian of the whole texel spreads a flat field's highlight over the slopes of the few scratches or
 //   seams in it; the two lobes keep it (README "Mixed texels": they win on the stress scenes' scratches
 //   and tiles, but over the bench's normal-mapped scenes they have more error than the default's single
-//   lobe, K = 2 Sigma sqrt(g), at 1.7x its cost, so they are not the default). g = 1 (earlier bakes wrote A = 1) is the single lobe.
+//   lobe, K = 2 Sigma sqrt(g), at 1.7x its cost, so they are not the default). g = 1 (earlier bakes
+//   wrote A = 1) is the single lobe.
 // - Baked roughness texture (a already holds the texel's spread, K only the pixel's): w = saturate(LOD),
 //   the convolution under magnification, GGX(A) from the texture's mip 1 on.
 // NaN inputs give GGX(A).

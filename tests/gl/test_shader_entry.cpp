@@ -121,14 +121,10 @@ Sym2<double> clamp_kernel(Sym2<double> k) {
     return {m1 * c * c + m2 * s * s, (m1 - m2) * c * s, m1 * s * s + m2 * c * c};
 }
 
-// The gate: a baked kernel narrower than SPECAA_KERNEL_GATE times a is scaled by (lambda_max / (gate a))^2,
-// lambda_max found here by an explicit eigendecomposition.
+// The gate: a baked kernel narrower than SPECAA_KERNEL_GATE times a is scaled by (lambda_max / (gate a))^2
+// (lambda_max in double by the C++ core, as for the blend's k_max below).
 double gate_factor(Sym2<double> k, double a) {
-    const double phi = 0.5 * std::atan2(2.0 * k.xy, k.xx - k.yy);
-    const double c = std::cos(phi), s = std::sin(phi);
-    const double l1 = c * c * k.xx + 2.0 * c * s * k.xy + s * s * k.yy;
-    const double l2 = s * s * k.xx - 2.0 * c * s * k.xy + c * c * k.yy;
-    const double f = std::clamp(std::max(l1, l2) / (kGate * a), 0.0, 1.0);
+    const double f = std::clamp(max_eigenvalue_sym2(k.xx, k.yy, k.xy) / (kGate * a), 0.0, 1.0);
     return f * f;
 }
 
