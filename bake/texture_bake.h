@@ -66,7 +66,7 @@ struct TextureBakeNotes {
 
 // An input map as the bake reads it: `channels` interleaved values per texel, row y starting `row_stride`
 // values after row y - 1. The values are floats, or 8-bit integers v standing for float(v) * (1.0f / 255.0f),
-// the value io/image_io.h decodes them to, so a bake of the integers equals the bake of the decoded floats
+// the value io/image/image_io.h decodes them to, so a bake of the integers equals the bake of the decoded floats
 // while holding a quarter of the memory. Exactly one of f32 and u8 is set. The memory is the caller's.
 struct TextureMap {
     int width = 0, height = 0, channels = 0;

@@ -11,7 +11,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "io/mesh_import.h"
+#include "io/mesh_import/mesh_import.h"
 #include "mesh/curvature.h"
 #include "mesh/generate_tangents.h"
 #include "mesh/halfedge_mesh.h"

@@ -7,8 +7,8 @@
 //
 //   cmake --build build --target bench_scene && build/bench/bench_scene --benchmark_min_time=0.01 --benchmark_repetitions=3
 #include "pipeline/scene_job.h"
-#include "io/gltf_scene.h"
-#include "io/sha256.h"
+#include "io/gltf/gltf_scene.h"
+#include "io/files/sha256.h"
 #include "mesh/curvature.h"
 #include "mesh/generate_tangents.h"
 #include "mesh/prepare_mesh.h"

@@ -18,7 +18,7 @@
 // Run: build/bench/bench_texture [--size N] [--compute-only] [google-benchmark flags]
 // (--compute-only skips (b) and (c), which take about 15 s at 4096^2.)
 #include "pipeline/texture_job.h"
-#include "io/image_io.h"
+#include "io/image/image_io.h"
 
 #include <benchmark/benchmark.h>
 

@@ -1,14 +1,14 @@
 // Block compression against the uncompressed bake (issue 16, item 3): the shared NormalTangentTest normal
 // and ORM maps baked once, every level of the 8-bit outputs compressed by io/block_compress and decoded by
 // the spec-written decoder of tests/io/bc_decode.h (ASTC: compressed and decoded by astcenc,
-// io/astc_codec.h). Prints, per format: roughness error in r units (RMS and
+// io/texture/astc_codec.h). Prints, per format: roughness error in r units (RMS and
 // max, worst level and level 0), mean-normal angle error (BC5, z rebuilt from x, y), size against the
 // uncompressed level data (and both after zstd -3), encode throughput.
 // Run: build/bench/block_accuracy [normal.png orm.png]
 #include "bake/texture_bake.h"
-#include "io/astc_codec.h"
-#include "io/block_compress.h"
-#include "io/image_io.h"
+#include "io/texture/astc_codec.h"
+#include "io/texture/block_compress.h"
+#include "io/image/image_io.h"
 #include "tests/io/bc_decode.h"
 
 #include <zstd.h>

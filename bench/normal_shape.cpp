@@ -15,7 +15,7 @@
 // f is linear in the base texels, so its mips are plain box filters of a 0/1 mask.
 //
 // Run: build/bench/normal_shape [assets folder]   (seconds)
-#include "io/image_io.h"
+#include "io/image/image_io.h"
 
 #include <algorithm>
 #include <array>

@@ -14,7 +14,7 @@
 //
 // Run: build/bench/texture_accuracy [assets folder]   (a few minutes on 2 cores)
 #include "bake/texture_bake.h"
-#include "io/image_io.h"
+#include "io/image/image_io.h"
 
 #include <tbb/parallel_for.h>
 

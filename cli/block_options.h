@@ -1,9 +1,9 @@
-// The command-line side of block compression (io/block_compress.h, io/astc_codec.h): --block, --block-rgba
+// The command-line side of block compression (io/texture/block_compress.h, io/texture/astc_codec.h): --block, --block-rgba
 // and --astc-block, shared by `texture` and `bake`.
 #pragma once
 
 #include "core/result.h"
-#include "io/texture_writer.h"
+#include "io/texture/texture_writer.h"
 
 #include <CLI/CLI.hpp>
 

@@ -3,7 +3,7 @@
 #include "cli/command.h"
 #include "cli/pipeline_options.h"
 #include "cli/scene_options.h"
-#include "pipeline/bake_output.h"
+#include "io/output/bake_output.h"
 #include "pipeline/progress.h"
 #include "pipeline/version.h"
 
@@ -24,7 +24,7 @@ int run_scene_command(const SceneCliOptions& o, const PipelineFlags& pipe, bool 
         job.plan.check_material = false;
     }
     std::vector<std::string> scenes(job.scenes.begin(), job.scenes.end());
-    auto lock = lock_output_folder(job.output_dir, pipe.depfile);
+    auto lock = io::lock_output_folder(job.output_dir, pipe.depfile, [](const std::string& line) { print_info(line); });
     if (!lock) {
         print_error(lock.error().message);
         return kExitFailed;

@@ -2,7 +2,7 @@
 // byte for byte identical to shaders/specaa.glsl and shaders/specaa.hlsl of the source tree.
 #include "cli/command.h"
 
-#include "io/atomic_file.h"
+#include "io/files/atomic_write.h"
 
 #include <cstddef>
 #include <cstdio>

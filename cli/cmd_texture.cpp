@@ -3,7 +3,7 @@
 // is pipeline/texture_job.h.
 #include "cli/block_options.h"
 #include "cli/command.h"
-#include "pipeline/bake_output.h"
+#include "io/output/bake_output.h"
 #include "pipeline/texture_job.h"
 #include "cli/pipeline_options.h"
 #include "pipeline/progress.h"
@@ -137,7 +137,7 @@ int run_texture(const TextureOptions& o, const PipelineFlags& pipe) {
     }
     if (job.demo || job.roughness) recorded["roughness_channel"] = job.roughness_channel;
     else recorded["roughness_value"] = job.roughness_value;
-    auto lock = lock_output_folder(job.output_dir, pipe.depfile);
+    auto lock = io::lock_output_folder(job.output_dir, pipe.depfile, [](const std::string& line) { print_info(line); });
     if (!lock) {
         print_error(lock.error().message);
         return kExitFailed;

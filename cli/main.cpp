@@ -1,8 +1,8 @@
 // specbake: command-line entry point. Expands response files, reads --config, parses the global flags
 // and dispatches to one registered subcommand.
 #include "cli/command.h"
-#include "io/cleanup_registry.h"
-#include "io/input_policy.h"
+#include "io/files/cleanup_registry.h"
+#include "io/files/input_policy.h"
 #include "pipeline/config.h"
 #include "pipeline/batch.h"
 #include "pipeline/progress.h"

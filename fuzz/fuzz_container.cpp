@@ -1,6 +1,6 @@
-// libFuzzer target: the KTX2 and DDS readers of `inspect` (io/container_inspect.h): the structural check
+// libFuzzer target: the KTX2 and DDS readers of `inspect` (io/texture/container_inspect.h): the structural check
 // of both containers, then the decoder for whatever the check accepts, as `inspect` runs them.
-#include "io/container_inspect.h"
+#include "io/texture/container_inspect.h"
 
 #include <cstring>
 

@@ -1,7 +1,7 @@
-// libFuzzer target: the glTF/GLB reader (io/gltf_scene.h). An input starting with "glTF" is a .glb, any
+// libFuzzer target: the glTF/GLB reader (io/gltf/gltf_scene.h). An input starting with "glTF" is a .glb, any
 // other a .gltf; the scene is loaded, and every primitive, material and image is read back as a bake does.
 #include "fuzz/fuzz_common.h"
-#include "io/gltf_scene.h"
+#include "io/gltf/gltf_scene.h"
 
 #include <nlohmann/json.hpp>
 

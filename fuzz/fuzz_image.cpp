@@ -1,8 +1,8 @@
-// libFuzzer target: the image-decode path of the texture bake (io/image_io.h) for PNG and JPEG: the PNG
-// chunk and image-data checks, the JPEG marker check and the OpenImageIO module (io/oiio_api.h), fed in
+// libFuzzer target: the image-decode path of the texture bake (io/image/image_io.h) for PNG and JPEG: the PNG
+// chunk and image-data checks, the JPEG marker check and the OpenImageIO module (io/image/oiio_api.h), fed in
 // memory as embedded GLB images are.
-#include "io/image_io.h"
-#include "io/input_policy.h"
+#include "io/image/image_io.h"
+#include "io/files/input_policy.h"
 
 #include <cstdint>
 #include <cstring>

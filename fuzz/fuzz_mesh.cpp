@@ -1,7 +1,7 @@
-// libFuzzer target: OBJ and PLY through Assimp (io/mesh_import.h). An input starting with "ply" is a .ply
+// libFuzzer target: OBJ and PLY through Assimp (io/mesh_import/mesh_import.h). An input starting with "ply" is a .ply
 // file, any other an .obj; an imported scene must satisfy what import_mesh promises.
 #include "fuzz/fuzz_common.h"
-#include "io/mesh_import.h"
+#include "io/mesh_import/mesh_import.h"
 
 #include <cmath>
 #include <cstring>

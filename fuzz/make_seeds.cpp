@@ -1,10 +1,10 @@
 // Writes the seed corpora of the fuzz targets, each made here from the project's own writers or from
 // text built in this file (no third-party files): make_seeds OUT_DIR creates OUT_DIR/<target>/seed-N.
 #include "bake/constants.h"
-#include "io/atomic_file.h"
-#include "io/gltf_scene.h"
-#include "io/image_io.h"
-#include "io/texture_writer.h"
+#include "io/files/file_read.h"
+#include "io/gltf/gltf_scene.h"
+#include "io/image/image_io.h"
+#include "io/texture/texture_writer.h"
 
 #include <nlohmann/json.hpp>
 

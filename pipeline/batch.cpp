@@ -1,6 +1,6 @@
 #include "pipeline/batch.h"
 
-#include "io/depfile.h"
+#include "io/output/depfile.h"
 #include "pipeline/progress.h"
 
 #include <tbb/parallel_for.h>

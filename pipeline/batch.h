@@ -4,7 +4,7 @@
 #pragma once
 
 #include "core/result.h"
-#include "io/up_to_date.h"
+#include "io/output/up_to_date.h"
 
 #include <filesystem>
 

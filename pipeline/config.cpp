@@ -1,6 +1,6 @@
 #include "pipeline/config.h"
 
-#include "io/atomic_file.h"
+#include "io/files/file_read.h"
 
 #include <CLI/CLI.hpp>
 

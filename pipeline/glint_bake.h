@@ -1,11 +1,11 @@
 // The scene bake's glint steps: slope-space LEAN settings for the normal maps of materials that ask for
 // glints, and after the texture bake the shared dictionary (once per output folder) and the material's
-// "glints" entry in SPECBAKE_specular_aa (io/SPECBAKE_EXTENSION.md).
+// "glints" entry in SPECBAKE_specular_aa (io/gltf/SPECBAKE_EXTENSION.md).
 #pragma once
 
 #include "core/result.h"
-#include "io/gltf_scene.h"
-#include "io/manifest.h"
+#include "io/gltf/gltf_scene.h"
+#include "io/output/manifest.h"
 #include "pipeline/plan.h"
 
 #include <nlohmann/json.hpp>

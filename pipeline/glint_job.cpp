@@ -1,13 +1,14 @@
-// Glint dictionary job: bake, encode as a KTX2 2D array (io/ktx2.h), hash, write atomically, and the
+// Glint dictionary job: bake, encode as a KTX2 2D array (io/texture/ktx2.h), hash, write atomically, and the
 // manifest with every parameter of the dictionary (SPEC Sec. 7).
 #include "pipeline/glint_job.h"
 
-#include "io/atomic_file.h"
-#include "io/ktx2.h"
-#include "io/sha256.h"
+#include "io/files/atomic_write.h"
+#include "io/files/file_read.h"
+#include "io/texture/ktx2.h"
+#include "io/files/sha256.h"
 #include "pipeline/version.h"
 
-#include "io/manifest.h"
+#include "io/output/manifest.h"
 
 #include <algorithm>
 #include <cmath>

@@ -3,7 +3,7 @@
 #pragma once
 
 #include "bake/glint_dictionary.h"
-#include "io/manifest.h"
+#include "io/output/manifest.h"
 
 #include <nlohmann/json.hpp>
 

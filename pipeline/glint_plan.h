@@ -5,8 +5,8 @@
 #pragma once
 
 #include "core/result.h"
-#include "io/gltf_scene.h"
-#include "io/glint_extension.h"
+#include "io/gltf/gltf_scene.h"
+#include "io/gltf/glint_extension.h"
 
 #include <nlohmann/json.hpp>
 

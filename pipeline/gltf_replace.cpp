@@ -2,10 +2,10 @@
 // own slots (metallic-roughness layout of the roughness chain, fallback PNG, manifest entries).
 #include "pipeline/gltf_replace.h"
 
-#include "io/ktx2_uastc.h"
+#include "io/texture/ktx2_uastc.h"
 
-#include "io/atomic_file.h"
-#include "io/image_io.h"
+#include "io/files/atomic_write.h"
+#include "io/image/image_io.h"
 #include "pipeline/uastc_encode.h"
 
 namespace specbake {

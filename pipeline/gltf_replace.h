@@ -4,8 +4,8 @@
 #pragma once
 
 #include "bake/texture_bake.h"
-#include "io/gltf_scene.h"
-#include "io/manifest.h"
+#include "io/gltf/gltf_scene.h"
+#include "io/output/manifest.h"
 
 #include <filesystem>
 #include <string>

@@ -1,8 +1,8 @@
 #include "pipeline/inspect.h"
 
 #include "core/text_format.h"
-#include "io/manifest.h"
-#include "io/sha256.h"
+#include "io/output/manifest.h"
+#include "io/files/sha256.h"
 
 #include <algorithm>
 #include <array>

@@ -6,7 +6,7 @@
 
 #include "core/image.h"
 #include "core/result.h"
-#include "io/container_inspect.h"
+#include "io/texture/container_inspect.h"
 
 #include <nlohmann/json.hpp>
 
@@ -49,7 +49,7 @@ struct Quantity {
 // or "" when unknown.
 std::string kind_from_name(const std::filesystem::path& path);
 
-// The raw channels and the quantities derived for `kind` (layouts of SPEC Sec. 3 and io/texture_writer.h:
+// The raw channels and the quantities derived for `kind` (layouts of SPEC Sec. 3 and io/texture/texture_writer.h:
 // roughness 1 channel r or 3 channels ORM with r in G; kernel t or (Sigma.xx, Sigma.yy, Sigma.xy);
 // LEAN (m.x, m.y, M.xx, M.yy[, M.xy])). Variance is clamped at zero (Sigma is positive semi-definite).
 std::vector<Quantity> quantities_of(const MipChain& mips, const std::string& kind,
@@ -86,7 +86,7 @@ Result<ManifestReport> inspect_manifest(const std::filesystem::path& manifest_pa
 // windows, never copied) and compared with the manifest; KTX2/DDS structure checked and their declared
 // shape, and EXR/PNG headers, compared with the manifest entry. Takes the folder's lock (waiting for a run
 // that writes it; `on_wait` says so), rolls an interrupted commit forward when the folder is writable
-// (io/output_folder.h; said in `notes`), and reports leftovers of interrupted runs as problems.
+// (io/output/output_folder.h; said in `notes`), and reports leftovers of interrupted runs as problems.
 struct FolderCheck {
     std::vector<std::string> problems;
     std::vector<std::string> notes;

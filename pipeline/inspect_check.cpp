@@ -1,12 +1,12 @@
 // `inspect --check` of a manifest folder (pipeline/inspect.h): hashes at disk speed, header checks, and the
-// folder's transactional state (io/output_folder.h).
+// folder's transactional state (io/output/output_folder.h).
 #include "pipeline/inspect.h"
 
-#include "io/atomic_file.h"
-#include "io/container_inspect.h"
-#include "io/manifest.h"
-#include "io/output_folder.h"
-#include "io/sha256.h"
+#include "io/files/file_read.h"
+#include "io/texture/container_inspect.h"
+#include "io/output/manifest.h"
+#include "io/output/output_folder.h"
+#include "io/files/sha256.h"
 
 #include <tbb/parallel_for.h>
 

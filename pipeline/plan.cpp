@@ -1,7 +1,7 @@
 #include "pipeline/plan.h"
 
 #include "core/text_format.h"
-#include "io/image_io.h"
+#include "io/image/image_io.h"
 #include "mesh/curvature_summary.h"
 #include "mesh/prepare_mesh.h"
 

@@ -31,7 +31,7 @@
 
 #include "core/result.h"
 #include "bake/texture_bake.h"
-#include "io/gltf_scene.h"
+#include "io/gltf/gltf_scene.h"
 #include "mesh/curvature.h"
 #include "core/trimesh.h"
 #include "mesh/validate_mesh.h"

@@ -3,14 +3,13 @@
 #include "pipeline/gltf_replace.h"
 #include "pipeline/uastc_encode.h"
 
-#include "pipeline/bake_output.h"
+#include "io/output/bake_output.h"
 #include "pipeline/batch.h"
 #include "pipeline/glint_bake.h"
 #include "pipeline/version.h"
-#include "io/atomic_file.h"
-#include "io/input_policy.h"
-#include "io/mesh_import.h"
-#include "io/sha256.h"
+#include "io/files/input_policy.h"
+#include "io/mesh_import/mesh_import.h"
+#include "io/files/sha256.h"
 #include "mesh/generate_normals.h"
 
 #include <algorithm>
@@ -188,7 +187,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
     };
 
     // Material extensions pointing at the files written during planning: the base layer's properties at
-    // the top of the object, the clear coat's in "clearcoat" (io/SPECBAKE_EXTENSION.md).
+    // the top of the object, the clear coat's in "clearcoat" (io/gltf/SPECBAKE_EXTENSION.md).
     const std::vector<io::MaterialInfo> materials = scene.materials();
     std::map<int, json> extension_of_material;
     for (size_t i = 0; i < plan->textures.size(); ++i) {
@@ -422,7 +421,7 @@ Result<SceneJobOutcome> run_scene_job(const SceneJob& job) {
                               "'; each scene gets its own folder named after it, so names must differ");
 
     std::vector<std::string> identity(job.scenes.begin(), job.scenes.end());
-    auto out = BakeOutput::open(job.output_dir, job.lock, identity, job.replace, job.progress);
+    auto out = io::BakeOutput::open(job.output_dir, job.lock, identity, job.replace, job.progress);
     if (!out) return out.error();
     // The scenes are baked side by side (each one's own parallel loops still use every thread) into the
     // staging folder and merged in input order, so the manifest and the messages do not depend on the

@@ -7,10 +7,10 @@
 
 #include "pipeline/plan.h"
 #include "pipeline/texture_job.h"
-#include "io/gltf_scene.h"
-#include "io/manifest.h"
-#include "io/output_folder.h"
-#include "io/texture_writer.h"
+#include "io/gltf/gltf_scene.h"
+#include "io/output/manifest.h"
+#include "io/output/output_folder.h"
+#include "io/texture/texture_writer.h"
 
 #include <filesystem>
 #include <functional>
@@ -38,7 +38,7 @@ struct SceneJob {
     GltfMode gltf_mode = GltfMode::Sidecar;
     std::filesystem::path basisu;          // empty: $SPECBAKE_BASISU or basisu on the PATH
     ProgressFn progress;                   // called from the threads baking the scenes
-    // The output folder's lock when the caller already holds it (else the job takes it, pipeline/bake_output.h).
+    // The output folder's lock when the caller already holds it (else the job takes it, io/output/bake_output.h).
     const io::OutputLock* lock = nullptr;
     // Replace a bake of other scenes that output_dir holds (refused otherwise).
     bool replace = false;
@@ -70,7 +70,7 @@ struct SceneJobOutcome {
 // hold the decisions only (work, texture_work and decoded_images are released once written). Fails as a
 // whole (Error) only for problems that stop every scene: the output folder is (or holds) an input or holds
 // a bake of other scenes, or the commit fails. Everything is staged and committed with the manifest
-// (pipeline/bake_output.h); when every scene fails the folder is unchanged.
+// (io/output/bake_output.h); when every scene fails the folder is unchanged.
 Result<SceneJobOutcome> run_scene_job(const SceneJob& job);
 
 // The plan of one scene, as `specbake plan` prints it.

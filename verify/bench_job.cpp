@@ -3,7 +3,7 @@
 #include "verify/scene_file.h"
 #include "verify/strips.h"
 #include "core/text_format.h"
-#include "io/atomic_file.h"
+#include "io/files/atomic_write.h"
 
 #include <algorithm>
 #include <cmath>

@@ -18,7 +18,7 @@ namespace specbake::verify {
 
 using Float3 = std::array<float, 3>;
 
-// A material's glints (C21), from its SPECBAKE_glints extension (io/glint_extension.h): simulated only for
+// A material's glints (C21), from its SPECBAKE_glints extension (io/gltf/glint_extension.h): simulated only for
 // materials that ask for them. The Beckmann slope covariance is alpha^2 / 2 per axis (alpha = r^2), with
 // the normal map's LEAN moments added by the LEAN candidates.
 struct SimGlints {

@@ -1,9 +1,9 @@
 #include "verify/scene_file.h"
 
-#include "io/glint_extension.h"
-#include "io/gltf_scene.h"
-#include "io/image_io.h"
-#include "io/mesh_import.h"
+#include "io/gltf/glint_extension.h"
+#include "io/gltf/gltf_scene.h"
+#include "io/image/image_io.h"
+#include "io/mesh_import/mesh_import.h"
 #include "mesh/prepare_mesh.h"
 
 #include <nlohmann/json.hpp>
@@ -287,7 +287,7 @@ Result<void> load_gltf(const fs::path& path, SimScene& scene, GltfContents& out)
         if (!error.empty()) return make_error(error);
         mat.roughness = std::max(mat.roughness, kMinRoughness);
         if (!m.glints.is_null()) {
-            // Glints only for the materials that ask for them (SPECBAKE_glints, io/SPECBAKE_EXTENSION.md).
+            // Glints only for the materials that ask for them (SPECBAKE_glints, io/gltf/SPECBAKE_EXTENSION.md).
             const std::string where = path.string() + ": material " + std::to_string(out.materials.size());
             auto g = io::parse_glint_extension(m.glints, where);
             if (!g) return g.error();
@@ -405,7 +405,7 @@ Result<void> load_imported(const fs::path& path, SimScene& scene, GltfContents& 
         mat.roughness = std::clamp(m.roughness_factor, 0.0f, 1.0f);
         if (mat.roughness < kMinRoughness) ++clamped_materials;
         mat.roughness = std::max(mat.roughness, kMinRoughness);
-        // The files were resolved by the path policy at import (io/mesh_import.h).
+        // The files were resolved by the path policy at import (io/mesh_import/mesh_import.h).
         const auto read = [&](const std::string& ref, const fs::path& file) -> Result<Image> {
             if (file.empty()) return make_error("embedded texture " + ref);
             return io::read_image(file);

@@ -1,6 +1,6 @@
 #include "verify/strips.h"
 
-#include "io/texture_writer.h"
+#include "io/texture/texture_writer.h"
 
 #include <algorithm>
 #include <cctype>

@@ -7,8 +7,8 @@
 // in tests/consumers/three_js_test.cpp (three.js KTX2Loader in Chromium).
 #include "tests/cli/scene_test_util.h"
 
-#include "io/astc_codec.h"
-#include "io/container_inspect.h"
+#include "io/texture/astc_codec.h"
+#include "io/texture/container_inspect.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>

@@ -6,7 +6,7 @@
 #include "tests/cli/scene_test_util.h"
 #include "tests/io/bc_decode.h"
 
-#include "io/container_inspect.h"
+#include "io/texture/container_inspect.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>

@@ -1,8 +1,8 @@
 // `specbake inspect` on files this test writes byte by byte from the KTX 2.0 / DDS specifications, so
 // neither the reader nor the statistics are checked against code that shares their assumptions.
 #include "pipeline/inspect.h"
-#include "io/container_inspect.h"
-#include "io/texture_writer.h"
+#include "io/texture/container_inspect.h"
+#include "io/texture/texture_writer.h"
 
 #include <gtest/gtest.h>
 

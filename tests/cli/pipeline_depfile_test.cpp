@@ -1,8 +1,8 @@
 // Depfile syntax and the content-hash up-to-date check.
-#include "io/depfile.h"
-#include "io/manifest.h"
-#include "io/sha256.h"
-#include "io/up_to_date.h"
+#include "io/output/depfile.h"
+#include "io/output/manifest.h"
+#include "io/files/sha256.h"
+#include "io/output/up_to_date.h"
 
 #include <gtest/gtest.h>
 

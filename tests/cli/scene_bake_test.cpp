@@ -2,7 +2,7 @@
 // the plan's decisions (no normal map -> curvature only, rough -> none, flat -> none), the manifest, and
 // refusing to write into the input's folder.
 #include "pipeline/scene_job.h"
-#include "io/manifest.h"
+#include "io/output/manifest.h"
 #include "scene_test_util.h"
 
 #include <gtest/gtest.h>
@@ -222,7 +222,7 @@ TEST(SceneBakeCli, PlanPrintsJsonWithReasonsAndHelpHasExamples) {
     fs::remove_all(dir);
 }
 
-// OpenImageIO is a module loaded on first use (io/oiio_api.h). With the module made unfindable, commands
+// OpenImageIO is a module loaded on first use (io/image/oiio_api.h). With the module made unfindable, commands
 // that pass no image through it still work, and one that does fails with a clear error.
 TEST(SceneBakeCli, OnlyImageWorkLoadsTheImageModule) {
     const fs::path dir = temp_dir("no_image_module");

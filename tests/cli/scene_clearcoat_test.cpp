@@ -4,8 +4,8 @@
 // Checked on a generated sphere (the coarsest roughness mip against the closed form of SPEC Sec. 3 computed
 // here from the normal map's texels) and on the shared ClearCoatTest model.
 #include "pipeline/scene_job.h"
-#include "io/image_io.h"
-#include "io/manifest.h"
+#include "io/image/image_io.h"
+#include "io/output/manifest.h"
 #include "scene_test_util.h"
 
 #include <assimp/Importer.hpp>

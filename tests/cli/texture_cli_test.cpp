@@ -1,9 +1,9 @@
 // `specbake texture` end to end: the demo, the shared normal maps, and bad inputs (one error line naming
 // the file, exit code 1, nothing half-written).
-#include "io/image_io.h"
-#include "io/ktx2.h"
-#include "io/manifest.h"
-#include "io/sha256.h"
+#include "io/image/image_io.h"
+#include "io/texture/ktx2.h"
+#include "io/output/manifest.h"
+#include "io/files/sha256.h"
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>

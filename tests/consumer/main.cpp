@@ -1,7 +1,7 @@
 // Links the installed specbake library: checks the baked manifest's hashes with the library's own reader.
 #include "pipeline/version.h"
-#include "io/manifest.h"
-#include "io/sha256.h"
+#include "io/output/manifest.h"
+#include "io/files/sha256.h"
 
 #include <cstdio>
 #include <filesystem>

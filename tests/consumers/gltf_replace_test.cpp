@@ -5,7 +5,7 @@
 
 #include <zstd.h>
 
-#include "io/image_io.h"
+#include "io/image/image_io.h"
 
 namespace specbake::consumers {
 namespace {

@@ -2,13 +2,13 @@
 // the input did not have (per issue code), three.js GLTFLoader (headless Chromium) must load every baked
 // .gltf/.glb with the input's meshes and materials, and the baked textures the SPECBAKE_specular_aa
 // extension references must load in the matching three.js loader with the extension's size and level
-// count, texels read back from the GPU matching specbake's spec-based reader (io/container_inspect.h, which
+// count, texels read back from the GPU matching specbake's spec-based reader (io/texture/container_inspect.h, which
 // decodes the `--block bc` files' BC1/BC4/BC5 blocks). Scenes: a generated quad with the demo normal map,
 // and the shared glTF models where present.
 #include "consumer_harness.h"
 #include "three_js_support.h"
 
-#include "io/container_inspect.h"
+#include "io/texture/container_inspect.h"
 
 #include <array>
 #include <cmath>

@@ -13,8 +13,8 @@
 #include "tests/io/bc_decode.h"
 
 #include "bake/texture_bake.h"
-#include "io/astc_codec.h"
-#include "io/image_io.h"
+#include "io/texture/astc_codec.h"
+#include "io/image/image_io.h"
 
 #include <array>
 #include <cstring>

@@ -1,5 +1,5 @@
 // A BC1/BC3/BC4/BC5 decoder written from the Khronos Data Format Specification 1.3 Sec. 21 (independent of
-// io/block_compress.cpp), for the tests and the block-compression accuracy benchmark.
+// io/texture/block_compress.cpp), for the tests and the block-compression accuracy benchmark.
 #pragma once
 
 #include <algorithm>

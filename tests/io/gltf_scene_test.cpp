@@ -2,8 +2,8 @@
 // bad indices, and the writer's promises (appended buffer, existing bytes untouched, extension in
 // extensionsUsed only, images kept as they were). The glTF files are written here by hand, byte by byte,
 // so the expected values are independent of the code under test.
-#include "io/gltf_scene.h"
-#include "io/sha256.h"
+#include "io/gltf/gltf_scene.h"
+#include "io/files/sha256.h"
 
 #include <gtest/gtest.h>
 #include <tiny_gltf.h>

@@ -1,8 +1,8 @@
-// The JPEG marker check (io/jpeg_markers.cpp) on JPEGs built here: the metadata segments OpenImageIO would
+// The JPEG marker check (io/image/jpeg_markers.cpp) on JPEGs built here: the metadata segments OpenImageIO would
 // read past the end of are refused with one line naming the file, wherever libjpeg's marker walk finds
 // them; JPEGs written by libjpeg (through OpenImageIO) with Exif, XMP, ICC, IPTC and comment segments load
 // with the pixels OpenImageIO itself reads.
-#include "io/image_io.h"
+#include "io/image/image_io.h"
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>

@@ -1,6 +1,6 @@
-// UASTC KTX2 assembly (io/ktx2_uastc.h): header, level index and level placement read back by hand from
+// UASTC KTX2 assembly (io/texture/ktx2_uastc.h): header, level index and level placement read back by hand from
 // the KTX 2.0 layout, and the one-level reader's refusals.
-#include "io/ktx2_uastc.h"
+#include "io/texture/ktx2_uastc.h"
 
 #include <gtest/gtest.h>
 #include <zstd.h>

@@ -1,8 +1,8 @@
-// Transactional output folders (io/output_folder.h): the lock excludes a second holder, an abandoned stage
+// Transactional output folders (io/output/output_folder.h): the lock excludes a second holder, an abandoned stage
 // leaves the folder as it was, and a commit stopped after its commit point at any step is rolled forward
 // to exactly the new bake by the next lock holder.
-#include "io/cleanup_registry.h"
-#include "io/output_folder.h"
+#include "io/files/cleanup_registry.h"
+#include "io/output/output_folder.h"
 
 #include <gtest/gtest.h>
 

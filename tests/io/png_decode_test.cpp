@@ -1,6 +1,6 @@
 // decode_plain_png() against OpenImageIO (libpng) on PNGs written here with every row filter, every plain
 // colour type and both bit depths; files it must leave to OpenImageIO (palette, interlaced, gAMA, bad CRC).
-#include "io/png_decode.h"
+#include "io/image/png_decode.h"
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>

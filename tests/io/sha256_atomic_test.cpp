@@ -1,6 +1,8 @@
-#include "io/atomic_file.h"
-#include "io/manifest.h"
-#include "io/sha256.h"
+#include "io/files/atomic_write.h"
+#include "io/files/file_read.h"
+#include "io/files/input_policy.h"
+#include "io/output/manifest.h"
+#include "io/files/sha256.h"
 
 #include <gtest/gtest.h>
 

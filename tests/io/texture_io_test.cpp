@@ -1,10 +1,10 @@
 // Image decoding and texture containers: round trips through independent readers (OpenImageIO for
 // EXR/PNG, a DDS parse written here from the DDS/DX10 layout, byte-level KTX2 structure checks).
-#include "io/image_io.h"
-#include "io/dds.h"
-#include "io/ktx2.h"
-#include "io/texel_encoding.h"
-#include "io/texture_writer.h"
+#include "io/image/image_io.h"
+#include "io/texture/dds.h"
+#include "io/texture/ktx2.h"
+#include "io/texture/texel_encoding.h"
+#include "io/texture/texture_writer.h"
 
 #include <Imath/half.h>
 #include <OpenImageIO/imageio.h>

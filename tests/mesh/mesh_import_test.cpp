@@ -10,7 +10,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "io/mesh_import.h"
+#include "io/mesh_import/mesh_import.h"
 #include "mesh/procedural_shapes.h"
 
 namespace specbake {

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <filesystem>
 
-#include "io/mesh_import.h"
+#include "io/mesh_import/mesh_import.h"
 #include "mesh/curvature.h"
 #include "mesh/prepare_mesh.h"
 

@@ -7,7 +7,7 @@
 #include "verify/renderer.h"
 #include "verify/scene.h"
 #include "verify/scene_file.h"
-#include "io/image_io.h"
+#include "io/image/image_io.h"
 
 #include "tests/verify/sim_test_environment.h"
 

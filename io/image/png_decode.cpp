@@ -1,0 +1,121 @@
+// decode_plain_png(): chunk walk with CRC checks, zlib inflate, the five PNG row filters (PNG spec
+// Sec. 9), and OpenImageIO's integer-to-float conversion.
+#include "io/image/png_decode.h"
+
+#include <zlib.h>
+
+#include <cstdlib>
+#include <cstring>
+#include <string_view>
+#include <vector>
+
+namespace specbake::io {
+
+namespace {
+
+uint32_t be32(const uint8_t* p) { return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3]; }
+
+// Ancillary chunks that change neither the pixels nor the colour space OpenImageIO reports.
+// oFFs is a page-layout position (OpenImageIO's writer adds a zero one), nothing a texture reader uses.
+bool harmless_chunk(std::string_view type) {
+    return type == "pHYs" || type == "oFFs" || type == "tIME" || type == "tEXt" || type == "zTXt" || type == "iTXt";
+}
+
+int paeth(int a, int b, int c) {
+    const int p = a + b - c, pa = std::abs(p - a), pb = std::abs(p - b), pc = std::abs(p - c);
+    return pa <= pb && pa <= pc ? a : pb <= pc ? b : c;
+}
+
+}  // namespace
+
+std::optional<DecodedImage> decode_plain_png(std::span<const uint8_t> b, bool keep_8bit) {
+    static const uint8_t signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+    if (b.size() < 8 || std::memcmp(b.data(), signature, 8) != 0) return std::nullopt;
+    uint32_t width = 0, height = 0;
+    int depth = 0, channels = 0;
+    std::vector<uint8_t> compressed;
+    bool header = false, end = false;
+    for (size_t at = 8; !end;) {
+        if (at + 12 > b.size()) return std::nullopt;
+        const uint32_t length = be32(b.data() + at);
+        if (size_t(length) + 12 > b.size() - at) return std::nullopt;
+        const std::string_view type(reinterpret_cast<const char*>(b.data() + at + 4), 4);
+        const uint8_t* data = b.data() + at + 8;
+        const uLong crc = crc32(0L, b.data() + at + 4, uInt(length + 4));
+        if (crc != be32(data + length)) return std::nullopt;
+        if (type == "IHDR") {
+            if (header || length != 13) return std::nullopt;
+            width = be32(data), height = be32(data + 4), depth = data[8];
+            const int colour = data[9];
+            // Compression, filter method 0; no interlacing.
+            if (data[10] != 0 || data[11] != 0 || data[12] != 0) return std::nullopt;
+            channels = colour == 0 ? 1 : colour == 4 ? 2 : colour == 2 ? 3 : colour == 6 ? 4 : 0;
+            if (channels == 0 || (depth != 8 && depth != 16)) return std::nullopt;
+            if (width == 0 || height == 0 || width > (1u << 15) || height > (1u << 15)) return std::nullopt;
+            header = true;
+        } else if (!header) {
+            return std::nullopt;
+        } else if (type == "IDAT") {
+            compressed.insert(compressed.end(), data, data + length);
+        } else if (type == "IEND") {
+            end = true;
+        } else if (!harmless_chunk(type)) {
+            return std::nullopt;
+        }
+        at += size_t(length) + 12;
+    }
+    const size_t bytes_per_pixel = size_t(channels) * size_t(depth / 8);
+    const size_t stride = size_t(width) * bytes_per_pixel;
+    std::vector<uint8_t> raw(size_t(height) * (stride + 1));
+    uLongf raw_size = uLongf(raw.size());
+    if (uncompress(raw.data(), &raw_size, compressed.data(), uLong(compressed.size())) != Z_OK ||
+        raw_size != raw.size())
+        return std::nullopt;
+
+    // Unfilter in place: row y's bytes follow its filter byte; the previous row is already decoded.
+    for (size_t y = 0; y < height; ++y) {
+        uint8_t* row = raw.data() + y * (stride + 1) + 1;
+        const uint8_t* up = y ? row - (stride + 1) : nullptr;
+        const int filter = row[-1];
+        for (size_t i = 0; i < stride; ++i) {
+            const int a = i >= bytes_per_pixel ? row[i - bytes_per_pixel] : 0;
+            const int u = up ? up[i] : 0;
+            const int c = up && i >= bytes_per_pixel ? up[i - bytes_per_pixel] : 0;
+            switch (filter) {
+                case 0: break;
+                case 1: row[i] = uint8_t(row[i] + a); break;
+                case 2: row[i] = uint8_t(row[i] + u); break;
+                case 3: row[i] = uint8_t(row[i] + (a + u) / 2); break;
+                case 4: row[i] = uint8_t(row[i] + paeth(a, u, c)); break;
+                default: return std::nullopt;
+            }
+        }
+    }
+
+    DecodedImage out;
+    out.info.bits_per_channel = depth;
+    out.info.is_float = false;
+    out.info.format = "png";
+    out.info.color_space = "sRGB";  // OpenImageIO's claim for a PNG without colour chunks
+    if (keep_8bit && depth == 8) {
+        out.bytes8.width = int(width), out.bytes8.height = int(height), out.bytes8.channels = channels;
+        out.bytes8.offset = 1, out.bytes8.row_bytes = stride + 1;
+        out.bytes8.data = std::move(raw);
+        return out;
+    }
+    out.image = Image(int(width), int(height), channels);
+    // OpenImageIO converts by multiplying with the reciprocal in float (not a division): the same bits.
+    const float scale = depth == 8 ? 1.0f / 255.0f : 1.0f / 65535.0f;
+    float* dst = out.image.pixels.data();
+    for (size_t y = 0; y < height; ++y) {
+        const uint8_t* row = raw.data() + y * (stride + 1) + 1;
+        const size_t values = size_t(width) * size_t(channels);
+        if (depth == 8)
+            for (size_t i = 0; i < values; ++i) *dst++ = float(row[i]) * scale;
+        else
+            for (size_t i = 0; i < values; ++i) *dst++ = float(uint32_t(row[2 * i]) << 8 | row[2 * i + 1]) * scale;
+    }
+    return out;
+}
+
+}  // namespace specbake::io

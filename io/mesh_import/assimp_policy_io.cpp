@@ -1,0 +1,74 @@
+// new_policy_io_system(): Assimp's default file access behind the path policy.
+#include "io/mesh_import/assimp_policy_io_internal.h"
+
+#include <assimp/DefaultIOSystem.h>
+#include <assimp/IOStream.hpp>
+
+#include <algorithm>
+#include <cstring>
+#include <optional>
+
+namespace specbake::io {
+namespace fs = std::filesystem;
+
+namespace {
+
+class PolicyIOSystem final : public Assimp::DefaultIOSystem {
+public:
+    PolicyIOSystem(const fs::path& asset, const InputPolicy& policy, AssimpReads& reads)
+        : asset_(absolute_normal(asset)), folder_(asset_.parent_path()), given_folder_(asset.parent_path()),
+          policy_(policy), reads_(reads) {}
+
+    bool Exists(const char* file) const override {
+        const std::optional<fs::path> path = resolve(file);
+        return path && DefaultIOSystem::Exists(path->c_str());
+    }
+
+    Assimp::IOStream* Open(const char* file, const char* mode) override {
+        // Assimp's importers only read; a write would be a bug, and is refused like a path outside.
+        if (!mode || std::strchr(mode, 'w') || std::strchr(mode, 'a') || std::strchr(mode, '+')) return nullptr;
+        const std::optional<fs::path> path = resolve(file);
+        if (!path) return nullptr;
+        Assimp::IOStream* stream = DefaultIOSystem::Open(path->c_str(), mode);
+        if (stream && absolute_normal(*path) != asset_ &&
+            std::find(reads_.files.begin(), reads_.files.end(), *path) == reads_.files.end())
+            reads_.files.push_back(*path);
+        return stream;
+    }
+
+private:
+    static fs::path absolute_normal(const fs::path& p) {
+        std::error_code ec;
+        const fs::path a = fs::absolute(p, ec);
+        return (ec ? p : a).lexically_normal();
+    }
+
+    // Assimp names a referenced file by joining the asset's folder with the reference as written (an OBJ's
+    // "mtllib ../x.mtl" arrives as "FOLDER/../x.mtl"), or by the reference alone; either way the name is
+    // taken relative to the asset's folder and resolved once.
+    std::optional<fs::path> resolve(const char* file) const {
+        if (!file || !*file) return std::nullopt;
+        const fs::path full = absolute_normal(file);
+        if (full == asset_) return fs::path(file);
+        fs::path rel = full.lexically_relative(folder_);
+        const std::string reference = rel.empty() ? full.string() : rel.generic_string();
+        // Resolved against the folder as the asset was named, so the path read and listed has the same form.
+        auto resolved = resolve_in_folder(given_folder_, reference, policy_);
+        if (resolved) return *resolved;
+        if (reads_.refused.empty())
+            reads_.refused = "referenced file '" + reference + "' refused: " + resolved.error().message;
+        return std::nullopt;
+    }
+
+    fs::path asset_, folder_, given_folder_;
+    const InputPolicy& policy_;
+    AssimpReads& reads_;
+};
+
+}  // namespace
+
+Assimp::IOSystem* new_policy_io_system(const fs::path& asset, const InputPolicy& policy, AssimpReads& reads) {
+    return new PolicyIOSystem(asset, policy, reads);
+}
+
+}  // namespace specbake::io

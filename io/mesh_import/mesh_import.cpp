@@ -1,0 +1,306 @@
+#include "io/mesh_import/mesh_import.h"
+
+#include "io/mesh_import/assimp_policy_io_internal.h"
+#include "io/files/input_policy.h"
+
+#include <assimp/Importer.hpp>
+#include <assimp/material.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace specbake {
+using io::over_limit;
+namespace {
+
+bool is_gltf(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return ext == ".gltf" || ext == ".glb";
+}
+
+// Assimp 5.2's PLY reader never returns on a file whose header lacks its end_header line (it keeps
+// seeking and re-reading the file), so a PLY file (by its "ply" magic, which is what Assimp goes by) is
+// refused here unless an end_header line closes its header within the first MiB. Its element counts are
+// checked here too, before Assimp sizes its instance lists by them: against the vertex and face limits,
+// and against the bytes after the header (every instance takes at least one byte).
+Result<void> check_ply_header(const std::string& path, const io::InputLimits& limits) {
+    std::ifstream in(path, std::ios::binary);
+    // Read in 4 KiB steps until the header's end is in (a header is a few hundred bytes; a whole MiB
+    // zeroed for every file was most of the cost of a small import).
+    std::string head;
+    size_t end = std::string::npos;
+    for (char block[4096]; head.size() < (size_t(1) << 20) && in.read(block, sizeof block).gcount() > 0;) {
+        head.append(block, size_t(in.gcount()));
+        if (head.size() >= 3 && head.compare(0, 3, "ply") != 0) return {};
+        end = head.find("\nend_header");
+        if (end != std::string::npos && head.size() >= end + 13) break;
+    }
+    if (head.compare(0, 3, "ply") != 0) return {};
+    end = head.find("\nend_header");
+    if (end == std::string::npos || (head.compare(end + 11, 1, "\n") != 0 && head.compare(end + 11, 2, "\r\n") != 0))
+        return make_error(path + ": PLY header has no end_header line (within its first MiB)");
+    std::error_code ec;
+    const uint64_t body = std::filesystem::file_size(path, ec) - (end + 12);
+    std::istringstream lines(head.substr(0, end));
+    uint64_t instances = 0;
+    for (std::string line; std::getline(lines, line);) {
+        std::istringstream words(line);
+        std::string keyword, name, count_text;
+        if (!(words >> keyword >> name >> count_text) || keyword != "element") continue;
+        uint64_t count = 0;
+        const auto [ptr, err] = std::from_chars(count_text.data(), count_text.data() + count_text.size(), count);
+        if (err != std::errc() || ptr != count_text.data() + count_text.size())
+            return make_error(path + ": PLY element '" + name + "' has no valid count ('" + count_text + "')");
+        if (name == "vertex" && count > limits.vertices)
+            return make_error(path + ": PLY vertex count " + over_limit("vertices", count, limits.vertices));
+        if (name == "face" && count > limits.faces)
+            return make_error(path + ": PLY face count " + over_limit("faces", count, limits.faces));
+        instances += std::min<uint64_t>(count, UINT64_MAX / 2);
+        if (!ec && instances > body)
+            return make_error(path + ": PLY header claims " + std::to_string(instances) +
+                              " element instances but only " + std::to_string(body) + " bytes follow it");
+    }
+    return {};
+}
+
+ImportedMaterial read_material(const aiMaterial& m) {
+    ImportedMaterial out;
+    aiString name;
+    if (m.Get(AI_MATKEY_NAME, name) == AI_SUCCESS) out.name = name.C_Str();
+    aiString tex;
+    if (m.GetTextureCount(aiTextureType_NORMALS) > 0 && m.GetTexture(aiTextureType_NORMALS, 0, &tex) == AI_SUCCESS) {
+        out.has_normal_texture = true;
+        out.normal_texture = tex.C_Str();
+    }
+    // glTF's metallicRoughness texture arrives as DIFFUSE_ROUGHNESS or, in older importers, as UNKNOWN.
+    for (aiTextureType type : {aiTextureType_DIFFUSE_ROUGHNESS, aiTextureType_UNKNOWN}) {
+        if (m.GetTextureCount(type) > 0 && m.GetTexture(type, 0, &tex) == AI_SUCCESS) {
+            out.has_roughness_texture = true;
+            out.roughness_texture = tex.C_Str();
+            break;
+        }
+    }
+    float value = 0.0f;
+    if (m.Get(AI_MATKEY_ROUGHNESS_FACTOR, value) == AI_SUCCESS && std::isfinite(value)) {
+        out.roughness_factor = std::clamp(value, 0.0f, 1.0f);
+        out.roughness_from_file = true;
+    } else if (m.Get(AI_MATKEY_SHININESS, value) == AI_SUCCESS && std::isfinite(value) && value > 0.0f) {
+        // Phong exponent to Beckmann: alpha^2 = 2 / (Ns + 2), and r = sqrt(alpha) (SPEC Sec. 2).
+        out.roughness_factor = float(std::pow(2.0 / (double(value) + 2.0), 0.25));
+    }
+    return out;
+}
+
+Result<TriMesh> read_mesh(const aiMesh& am, const std::string& path, size_t index) {
+    TriMesh m;
+    const std::string mesh_name = am.mName.length ? std::string(am.mName.C_Str()) : "#" + std::to_string(index);
+    m.name = path + ": mesh '" + mesh_name + "'";
+    m.material = int(am.mMaterialIndex);
+    const size_t n = am.mNumVertices;
+    if (n == 0 || !am.mVertices) return make_error(m.name + ": no vertices");
+    m.positions.resize(3 * n);
+    for (size_t v = 0; v < n; ++v) {
+        const aiVector3D& p = am.mVertices[v];
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+            return make_error(m.name + ": vertex " + std::to_string(v) + " has a non-finite position");
+        m.positions[3 * v] = p.x;
+        m.positions[3 * v + 1] = p.y;
+        m.positions[3 * v + 2] = p.z;
+    }
+    if (am.mNormals) {
+        m.normals.resize(3 * n);
+        for (size_t v = 0; v < n; ++v) {
+            m.normals[3 * v] = am.mNormals[v].x;
+            m.normals[3 * v + 1] = am.mNormals[v].y;
+            m.normals[3 * v + 2] = am.mNormals[v].z;
+        }
+    }
+    if (am.mNormals && am.mTangents && am.mBitangents) {
+        // Assimp stores the bitangent; glTF's w is its side of cross(N, T).
+        m.tangents.resize(4 * n);
+        for (size_t v = 0; v < n; ++v) {
+            const aiVector3D& t = am.mTangents[v];
+            const aiVector3D b = am.mBitangents[v];
+            const aiVector3D nb = am.mNormals[v] ^ t;
+            m.tangents[4 * v] = t.x;
+            m.tangents[4 * v + 1] = t.y;
+            m.tangents[4 * v + 2] = t.z;
+            m.tangents[4 * v + 3] = (nb * b) < 0.0f ? -1.0f : 1.0f;
+        }
+    }
+    if (am.mTextureCoords[0]) {
+        m.uv0.resize(2 * n);
+        for (size_t v = 0; v < n; ++v) {
+            m.uv0[2 * v] = am.mTextureCoords[0][v].x;
+            m.uv0[2 * v + 1] = 1.0f - am.mTextureCoords[0][v].y;  // Assimp's v up -> glTF's v down
+        }
+    }
+    m.indices.reserve(3 * size_t(am.mNumFaces));
+    for (size_t f = 0; f < am.mNumFaces; ++f) {
+        const aiFace& face = am.mFaces[f];
+        if (face.mNumIndices != 3) continue;  // points and lines left by the loader
+        for (int c = 0; c < 3; ++c) {
+            if (face.mIndices[c] >= n)
+                return make_error(m.name + ": face " + std::to_string(f) + " references vertex " +
+                                  std::to_string(face.mIndices[c]) + " but there are only " + std::to_string(n) +
+                                  " vertices");
+            m.indices.push_back(face.mIndices[c]);
+        }
+    }
+    return m;
+}
+
+}  // namespace
+
+Result<ImportedScene> import_mesh(const std::string& path, const MeshImportOptions& options) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) return make_error(path + ": no such file");
+    const io::InputPolicy& policy = io::input_policy();
+    const io::InputLimits& limits = policy.limits;
+    if (auto ply = check_ply_header(path, limits); !ply) return ply.error();
+
+    Assimp::Importer importer;
+    // Every file Assimp opens (the asset, an OBJ's .mtl, a glTF's buffers) passes the path policy.
+    io::AssimpReads reads;
+    importer.SetIOHandler(io::new_policy_io_system(path, policy, reads));
+    importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+    unsigned flags = aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_ValidateDataStructure;
+    const bool join = options.join == VertexJoin::Always || (options.join == VertexJoin::Auto && !is_gltf(path));
+    if (join) flags |= aiProcess_JoinIdenticalVertices;
+
+    const aiScene* scene = nullptr;
+    try {
+        // Read and validated first, post-processed second: Assimp's PLY reader turns a broken face list
+        // into faces without indices, which its validation lets through and its triangulation stops the
+        // process on (an assertion). Such a file is refused in between, and the primitive types are
+        // recomputed from the faces (the steps run in Assimp's own order either way).
+        scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
+        if (scene) {
+            for (unsigned i = 0; i < scene->mNumMeshes; ++i) {
+                aiMesh& am = *scene->mMeshes[i];
+                unsigned types = 0;
+                for (unsigned f = 0; f < am.mNumFaces; ++f) {
+                    const unsigned n = am.mFaces[f].mNumIndices;
+                    if (n == 0)
+                        return make_error(path + ": face " + std::to_string(f) + " of mesh " + std::to_string(i) +
+                                          " has no vertex indices");
+                    types |= n == 1 ? aiPrimitiveType_POINT : n == 2 ? aiPrimitiveType_LINE
+                             : n == 3                ? aiPrimitiveType_TRIANGLE
+                                                     : aiPrimitiveType_POLYGON;
+                }
+                am.mPrimitiveTypes = types;
+            }
+            scene = importer.ApplyPostProcessing(flags & ~unsigned(aiProcess_ValidateDataStructure));
+        }
+    } catch (const std::exception& e) {
+        return make_error(path + ": " + e.what());
+    }
+    // Assimp goes on without a file it could not open (an OBJ without its .mtl gets default materials), so
+    // a refusal is an error whether or not the import succeeded.
+    if (!reads.refused.empty()) return make_error(path + ": " + reads.refused);
+    if (!scene) {
+        std::string why = importer.GetErrorString();
+        while (!why.empty() && std::isspace(static_cast<unsigned char>(why.back()))) why.pop_back();
+        if (why.empty()) why = "unreadable or unsupported mesh file";
+        return make_error(path + ": " + why);
+    }
+    if (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) return make_error(path + ": incomplete scene (no meshes)");
+
+    // Assimp's loaders allocate as they parse; the counts are checked as soon as they are known, before
+    // this copies the meshes (see check_ply_header for the one format checked before parsing).
+    if (scene->mNumMeshes > limits.primitives)
+        return make_error(path + ": mesh count " + over_limit("primitives", scene->mNumMeshes, limits.primitives));
+    uint64_t vertices = 0, faces = 0;
+    for (size_t i = 0; i < scene->mNumMeshes; ++i) {
+        vertices += scene->mMeshes[i]->mNumVertices;
+        faces += scene->mMeshes[i]->mNumFaces;
+    }
+    if (vertices > limits.vertices) return make_error(path + ": vertex count " + over_limit("vertices", vertices, limits.vertices));
+    if (faces > limits.faces) return make_error(path + ": face count " + over_limit("faces", faces, limits.faces));
+
+    ImportedScene out;
+    out.path = path;
+    out.files = std::move(reads.files);
+    const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+    for (size_t i = 0; i < scene->mNumMaterials; ++i) {
+        const aiMaterial& am = *scene->mMaterials[i];
+        ImportedMaterial m = read_material(am);
+        // Every texture reference resolves like the files Assimp opened, used by the bake or not (embedded
+        // textures, "*N", stay as they are); the files of the ones read are kept.
+        for (int type = aiTextureType_NONE; type <= int(AI_TEXTURE_TYPE_MAX); ++type) {
+            for (unsigned k = 0; k < am.GetTextureCount(aiTextureType(type)); ++k) {
+                aiString tex;
+                if (am.GetTexture(aiTextureType(type), k, &tex) != AI_SUCCESS) continue;
+                const std::string ref = tex.C_Str();
+                if (ref.empty() || ref.starts_with("*")) continue;
+                auto resolved = io::resolve_in_folder(folder, ref, policy);
+                if (!resolved)
+                    return make_error(path + ": texture '" + ref + "' of material '" + m.name + "' refused: " +
+                                      resolved.error().message);
+                if (m.has_normal_texture && ref == m.normal_texture) m.normal_texture_file = *resolved;
+                if (m.has_roughness_texture && ref == m.roughness_texture) m.roughness_texture_file = *resolved;
+            }
+        }
+        out.materials.push_back(std::move(m));
+    }
+    // Assimp appends a default material: always for glTF (unnamed), for other formats when some mesh has
+    // none (named AI_DEFAULT_MATERIAL_NAME). It is not in the file, so primitives using it get material -1.
+    if (!out.materials.empty() && (is_gltf(path) || out.materials.back().name == AI_DEFAULT_MATERIAL_NAME))
+        out.materials.pop_back();
+
+    std::vector<int> mesh_slot(scene->mNumMeshes, -1);
+    for (size_t i = 0; i < scene->mNumMeshes; ++i) {
+        const aiMesh& am = *scene->mMeshes[i];
+        if (!(am.mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) {
+            out.notes.push_back("mesh '" + std::string(am.mName.C_Str()) + "' has no triangles (points or lines), skipped");
+            continue;
+        }
+        Result<TriMesh> m = read_mesh(am, path, i);
+        if (!m) return m.error();
+        if (m->indices.empty()) {
+            out.notes.push_back(m->name + ": no triangles, skipped");
+            continue;
+        }
+        if (m->material >= int(out.materials.size())) m->material = -1;
+        mesh_slot[i] = int(out.meshes.size());
+        out.meshes.push_back(std::move(m.value()));
+    }
+    if (out.meshes.empty()) return make_error(path + ": no triangles in the file");
+
+    // The node hierarchy, depth first in child order, without recursion (a deep hierarchy is a file's
+    // choice, the stack's depth is not); its size is bounded by the node limit.
+    std::vector<std::pair<const aiNode*, int>> stack;
+    if (scene->mRootNode) stack.push_back({scene->mRootNode, -1});
+    while (!stack.empty()) {
+        const auto [node, parent] = stack.back();
+        stack.pop_back();
+        if (out.nodes.size() >= limits.nodes)
+            return make_error(path + ": node count " + over_limit("nodes", out.nodes.size() + 1, limits.nodes));
+        ImportedNode n;
+        n.name = node->mName.C_Str();
+        n.parent = parent;
+        const aiMatrix4x4& t = node->mTransformation;  // row-major
+        const float rows[4][4] = {{t.a1, t.a2, t.a3, t.a4}, {t.b1, t.b2, t.b3, t.b4},
+                                  {t.c1, t.c2, t.c3, t.c4}, {t.d1, t.d2, t.d3, t.d4}};
+        for (int c = 0; c < 4; ++c)
+            for (int r = 0; r < 4; ++r) n.local_transform[4 * c + r] = rows[r][c];
+        for (unsigned k = 0; k < node->mNumMeshes; ++k) {
+            const unsigned mi = node->mMeshes[k];
+            if (mi < mesh_slot.size() && mesh_slot[mi] >= 0) n.meshes.push_back(mesh_slot[mi]);
+        }
+        const int self = int(out.nodes.size());
+        out.nodes.push_back(std::move(n));
+        for (unsigned k = node->mNumChildren; k-- > 0;) stack.push_back({node->mChildren[k], self});
+    }
+    return out;
+}
+
+}  // namespace specbake

@@ -1,0 +1,52 @@
+// How a bake's files reach their output folder (README, "Use in a build pipeline"): under the folder's
+// lock, staged and committed as one transaction (io/output/output_folder.h), and only over a bake of the same
+// inputs: a folder holds one bake, and a bake of other inputs is refused unless the caller replaces it.
+#pragma once
+
+#include "io/output/manifest.h"
+#include "io/output/output_folder.h"
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace specbake::io {
+
+// The identity recorded for `texture --demo`, in place of an input path.
+inline constexpr const char* kDemoIdentity = "(demo)";
+
+// The inputs that name the bake a manifest records: the scenes of a scene bake (its plan's "scene"
+// entries), the normal map of a texture bake (its plan's "target"), or kDemoIdentity.
+std::vector<std::string> bake_identity(const Manifest& manifest);
+// The files of that bake in its folder: every output, and the inputs a demo bake generated there.
+std::vector<std::string> bake_files(const Manifest& manifest);
+
+class BakeOutput {
+public:
+    // Takes the folder's lock unless the caller holds it (`held`), reads the bake the folder holds, and
+    // refuses, naming both, when that bake is of inputs `identity` does not include (unless `replace`),
+    // or when its manifest.json is not a specbake manifest (same). Then opens the stage.
+    static Result<BakeOutput> open(const std::filesystem::path& dir, const OutputLock* held,
+                                   const std::vector<std::string>& identity, bool replace,
+                                   const std::function<void(const std::string&)>& on_wait = {});
+
+    const std::filesystem::path& stage() const { return tx_.stage(); }
+    // The error with staged paths replaced by final ones.
+    Error final_names(const Error& e) const { return make_error(tx_.final_names(e.message)); }
+    // Commits the stage; the previous bake's files that were not written again are removed.
+    Result<void> commit() { return tx_.commit(previous_files_); }
+
+private:
+    std::optional<OutputLock> own_lock_;  // destroyed after tx_: the stage goes first
+    OutputTransaction tx_;
+    std::vector<std::string> previous_files_;
+};
+
+// For the commands: takes `dir`'s lock (calling `on_wait` with a line that names the process it waits
+// for) and checks that `depfile` (when not empty) can be written, both before any work is done.
+Result<OutputLock> lock_output_folder(const std::filesystem::path& dir, const std::string& depfile,
+                                      const std::function<void(const std::string&)>& on_wait = {});
+
+}  // namespace specbake::io

@@ -1,0 +1,570 @@
+#include "io/texture/texture_writer.h"
+
+#include "io/texture/astc_codec.h"
+#include "io/files/atomic_write.h"
+#include "io/texture/block_compress.h"
+#include "io/texture/dds.h"
+#include "io/texture/ktx2.h"
+#include "io/image/oiio_api.h"
+#include "io/files/sha256.h"
+#include "io/texture/texel_encoding.h"
+
+#include "core/huge_pages.h"
+
+#include <tbb/parallel_for.h>
+
+#define ZSTD_STATIC_LINKING_ONLY  // ZSTD_getCParams: the window the stream reads back
+#include <sys/mman.h>
+#include <zstd.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <ctime>
+#include <memory>
+
+
+namespace specbake::io {
+namespace fs = std::filesystem;
+
+int gpu_channels(int channels) { return channels == 3 ? 4 : channels; }
+
+std::string gpu_format_name(TexelEncoding encoding, int channels) {
+    static const char* rgba[] = {"R", "G", "B", "A"};
+    const char* bits = encoding == TexelEncoding::Unorm8 ? "8" : encoding == TexelEncoding::Float32 ? "32" : "16";
+    std::string name;
+    for (int c = 0; c < channels && c < 4; ++c) name += std::string(rgba[c]) + bits;
+    const bool is_float = encoding == TexelEncoding::Float16 || encoding == TexelEncoding::Float32;
+    return name + (is_float ? "_SFLOAT" : "_UNORM");
+}
+
+const char* container_name(TextureContainer c) {
+    switch (c) {
+        case TextureContainer::Ktx2: return "ktx2";
+        case TextureContainer::Dds: return "dds";
+        case TextureContainer::Exr: return "exr";
+        case TextureContainer::PngPerMip: return "png";
+    }
+    return "ktx2";
+}
+
+const char* encoding_name(TexelEncoding e) {
+    switch (e) {
+        case TexelEncoding::Unorm8: return "unorm8";
+        case TexelEncoding::Unorm16: return "unorm16";
+        case TexelEncoding::Float16: return "float16";
+        case TexelEncoding::Float32: return "float32";
+    }
+    return "float32";
+}
+
+std::optional<TextureContainer> parse_container(const std::string& name) {
+    for (TextureContainer c : {TextureContainer::Ktx2, TextureContainer::Dds, TextureContainer::Exr,
+                               TextureContainer::PngPerMip}) {
+        if (name == container_name(c)) return c;
+    }
+    return std::nullopt;
+}
+
+const char* block_family_name(BlockFamily f) {
+    switch (f) {
+        case BlockFamily::Bc: return "bc";
+        case BlockFamily::Astc: return "astc";
+        case BlockFamily::None: break;
+    }
+    return "none";
+}
+
+std::optional<BlockFamily> parse_block_family(const std::string& name) {
+    for (BlockFamily f : {BlockFamily::None, BlockFamily::Bc, BlockFamily::Astc})
+        if (name == block_family_name(f)) return f;
+    return std::nullopt;
+}
+
+std::string block_container_problem(TextureContainer container, BlockFamily family) {
+    if (family == BlockFamily::None || container == TextureContainer::Ktx2) return {};
+    if (container == TextureContainer::Dds && family == BlockFamily::Bc) return {};
+    if (container == TextureContainer::Dds)
+        return "ASTC is written to KTX2 only: DDS has no standard ASTC format (D3D samples none)";
+    return std::string(block_family_name(family)) + " block compression needs a ktx2 or dds container; " +
+           container_name(container) + " writes its levels uncompressed";
+}
+
+namespace {
+
+const char* wrap_name(WrapMode w) {
+    switch (w) {
+        case WrapMode::Repeat: return "periodic";
+        case WrapMode::Clamp: return "clamp";
+        case WrapMode::Mirror: return "mirror";
+    }
+    return "periodic";
+}
+
+oiio::PixelType oiio_type(TexelEncoding e) {
+    switch (e) {
+        case TexelEncoding::Unorm8: return oiio::PixelType::Uint8;
+        case TexelEncoding::Unorm16: return oiio::PixelType::Uint16;
+        case TexelEncoding::Float16: return oiio::PixelType::Half;
+        case TexelEncoding::Float32: return oiio::PixelType::Float;
+    }
+    return oiio::PixelType::Float;
+}
+
+// EXR channel names common readers load (three.js EXRLoader, OpenImageIO, Pillow-free tools): Y alone,
+// else R, G, B, A in the KTX2/DDS order. What the channels mean goes into "specbake:channels".
+std::vector<std::string> exr_names(int channels) {
+    if (channels == 1) return {"Y"};
+    static const char* rgba[] = {"R", "G", "B", "A"};
+    return {rgba, rgba + channels};
+}
+
+// `given` meanings, padded with the defaults (R, G, B; "1" for the A = 1 of padded 3-channel data).
+std::vector<std::string> meaning_for(int data_channels, int stored, const std::vector<std::string>& given) {
+    std::vector<std::string> names = exr_names(stored);
+    for (int c = 0; c < stored; ++c) {
+        if (size_t(c) < given.size()) names[size_t(c)] = given[size_t(c)];
+        else if (c >= data_channels) names[size_t(c)] = "1";
+    }
+    return names;
+}
+
+std::string joined(const std::vector<std::string>& names) {
+    std::string s;
+    for (const std::string& n : names) s += (s.empty() ? "" : ",") + n;
+    return s;
+}
+
+// `chain` with 3 channels widened to RGBA, A = 1 (other counts are returned as they are).
+const MipChain& gpu_chain(const MipChain& chain, MipChain& storage) {
+    if (chain.channels() != 3) return chain;
+    for (const Image& level : chain.levels) {
+        Image wide(level.width, level.height, 4);
+        const size_t n = level.texel_count();
+        for (size_t i = 0; i < n; ++i) {
+            for (int c = 0; c < 3; ++c) wide.pixels[i * 4 + size_t(c)] = level.pixels[i * 3 + size_t(c)];
+            wide.pixels[i * 4 + 3] = 1.0f;
+        }
+        storage.levels.push_back(std::move(wide));
+    }
+    return storage;
+}
+
+// The DateTime written into EXR headers: SOURCE_DATE_EPOCH (the reproducible-builds convention) when it is
+// set, else the epoch. OpenImageIO's EXR writer stamps the current time otherwise (its PNG writer adds none), so the same bake would give files (and
+// manifest hashes) that differ from run to run and defeat build caches.
+std::string reproducible_date_time() {
+    std::time_t t = 0;
+    if (const char* epoch = std::getenv("SOURCE_DATE_EPOCH")) {
+        char* end = nullptr;
+        const long long v = std::strtoll(epoch, &end, 10);
+        if (end != epoch && *end == '\0' && v >= 0) t = std::time_t(v);
+    }
+    std::tm utc{};
+    gmtime_r(&t, &utc);
+    char text[32];
+    std::strftime(text, sizeof text, "%Y:%m:%d %H:%M:%S", &utc);
+    return text;
+}
+
+// One OpenImageIO file: all levels as a tiled MIP-mapped EXR, or a single level (PNG / EXR).
+Result<void> write_oiio(const fs::path& temp, const fs::path& final_path, const std::vector<const Image*>& levels,
+                        oiio::PixelType type, bool mipmapped, const std::vector<std::string>& meaning,
+                        WrapMode wrap) {
+    auto api = oiio::api();
+    if (!api) return make_error(final_path.string() + ": " + api.error().message);
+    oiio::LevelsRequest request;
+    request.temp_path = temp.string();
+    request.name = final_path.string();
+    request.levels = levels;
+    request.type = type;
+    request.mipmapped = mipmapped;
+    request.channel_names = exr_names(levels.front()->channels);
+    request.channel_meaning = joined(meaning);
+    request.wrap = wrap_name(wrap);
+    request.date_time = reproducible_date_time();
+    return (*api)->write_levels(request);
+}
+
+}  // namespace
+
+Result<std::vector<ManifestOutput>> write_texture(const MipChain& data, TexelEncoding encoding,
+                                                  TextureContainer container, const fs::path& dir,
+                                                  const std::string& stem, const std::string& kind,
+                                                  const std::vector<std::string>& channel_names, WrapMode wrap,
+                                                  const Supercompression& supercompression, BlockFormat block) {
+    if (data.levels.empty() || data.channels() < 1) return make_error((dir / stem).string() + ": nothing to write");
+    if (data.channels() > 4)
+        return make_error((dir / stem).string() + ": " + std::to_string(data.channels()) +
+                          " channels; a texture holds at most 4");
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec) return make_error(dir.string() + ": cannot create folder: " + ec.message());
+
+    struct Pending {
+        std::unique_ptr<AtomicOutput> file;
+        ManifestOutput entry;
+    };
+    const int mips = int(data.levels.size());
+    const std::vector<std::string> names = meaning_for(data.channels(), gpu_channels(data.channels()), channel_names);
+
+    if (EncodedTexture::supports(container)) {
+        EncodedTexture t(container, encoding, data.width(), data.height(), mips, data.channels(), supercompression);
+        for (int L = 0; L < mips; ++L) {
+            const Image& level = data.levels[size_t(L)];
+            t.put_block(L, 0, 0, level.width, level.height, level.pixels.data(), level.channels, 0);
+        }
+        const EncodedFile file{&t, stem, kind, names, block};
+        return write_encoded_textures({&file, 1}, dir);
+    }
+    MipChain widened;
+    const MipChain& chain = gpu_chain(data, widened);
+    std::vector<Pending> pending;
+    auto add = [&](const std::string& filename, int width, int height, int mips) -> Pending& {
+        Pending p;
+        p.file = std::make_unique<AtomicOutput>(dir / filename);
+        p.entry.kind = kind;
+        p.entry.path = filename;
+        p.entry.format = container_name(container);
+        p.entry.width = width;
+        p.entry.height = height;
+        p.entry.mips = mips;
+        p.entry.channels = chain.channels();
+        p.entry.extra["encoding"] = encoding_name(encoding);
+        p.entry.extra["gpu_format"] = gpu_format_name(encoding, chain.channels());
+        p.entry.extra["channel_meaning"] = names;
+        p.entry.extra["channel_names"] = exr_names(chain.channels());
+        pending.push_back(std::move(p));
+        return pending.back();
+    };
+    switch (container) {
+        case TextureContainer::Ktx2:
+        case TextureContainer::Dds: break;  // written above
+        case TextureContainer::Exr: {
+            Pending& p = add(stem + ".exr", chain.width(), chain.height(), mips);
+            const TexelEncoding stored = encoding == TexelEncoding::Float32 ? encoding : TexelEncoding::Float16;
+            p.entry.extra["encoding"] = encoding_name(stored);
+            p.entry.extra["gpu_format"] = gpu_format_name(stored, chain.channels());
+            std::vector<const Image*> levels;
+            for (const Image& l : chain.levels) levels.push_back(&l);
+            if (auto ok = write_oiio(p.file->temp_path(), p.file->final_path(), levels, oiio_type(stored), true,
+                                     names, wrap);
+                !ok)
+                return ok.error();
+            break;
+        }
+        case TextureContainer::PngPerMip: {
+            const bool integer = encoding == TexelEncoding::Unorm8 || encoding == TexelEncoding::Unorm16;
+            for (int L = 0; L < mips; ++L) {
+                const Image& level = chain.levels[size_t(L)];
+                const std::string filename = stem + "_mip" + std::to_string(L) + (integer ? ".png" : ".exr");
+                Pending& p = add(filename, level.width, level.height, 1);
+                p.entry.format = integer ? "png" : "exr";
+                p.entry.extra["mip_level"] = L;
+                if (auto ok = write_oiio(p.file->temp_path(), p.file->final_path(), {&level}, oiio_type(encoding),
+                                         false, names, wrap);
+                    !ok)
+                    return ok.error();
+            }
+            break;
+        }
+    }
+
+    std::vector<ManifestOutput> entries;
+    for (Pending& p : pending) {
+        auto hash = sha256_file(p.file->temp_path());
+        if (!hash) return hash.error();
+        p.entry.sha256 = *hash;
+    }
+    for (Pending& p : pending) {
+        if (auto ok = p.file->commit(); !ok) return ok.error();
+        entries.push_back(p.entry);
+    }
+    return entries;
+}
+
+bool EncodedTexture::supports(TextureContainer container) {
+    return container == TextureContainer::Ktx2 || container == TextureContainer::Dds;
+}
+
+EncodedTexture::EncodedTexture(TextureContainer container, TexelEncoding encoding, int width, int height, int levels,
+                               int channels, const Supercompression& supercompression)
+    : container_(container), encoding_(encoding), width_(width), height_(height), channels_(channels),
+      supercompression_(supercompression) {
+    layout_ = container == TextureContainer::Ktx2 ? ktx2_layout(width, height, levels, encoding, channels)
+                                                  : dds_layout(width, height, levels, encoding, channels);
+    data_.reset(new uint8_t[layout_.total]);
+    // Faulted in on transparent huge pages as the rows arrive: a 4096^2 bake writes about 400 MiB of fresh
+    // container bytes.
+    detail::hint_huge_pages(data_.get(), layout_.total);
+    if (container == TextureContainer::Ktx2) ktx2_write_header(data_.get(), layout_, width, height, encoding, channels);
+    else dds_write_header(data_.get(), layout_, width, height, encoding, channels);
+    if (container == TextureContainer::Dds)
+        if (const auto legacy = dds_legacy_pixel_format(encoding, channels); legacy && legacy->bgra) bgra_ = true;
+}
+
+void EncodedTexture::put_block(int level, int x0, int y0, int width, int rows, const float* src, int src_channels,
+                               int first) {
+    const size_t w = size_t(std::max(1, width_ >> level));
+    const size_t texel_bytes = size_t(layout_.stored_channels) * size_t(encoding_bytes(encoding_));
+    uint8_t* dst = data_.get() + layout_.level_offset[size_t(level)] + (size_t(y0) * w + size_t(x0)) * texel_bytes;
+    if (size_t(width) == w) {  // whole rows: one run
+        encode_texels_into(src, w * size_t(rows), src_channels, first, channels_, encoding_, layout_.stored_channels,
+                           1.0f, dst);
+        if (bgra_) dds_swap_red_blue(dst, w * size_t(rows));
+        return;
+    }
+    for (int k = 0; k < rows; ++k, src += size_t(width) * size_t(src_channels), dst += w * texel_bytes) {
+        encode_texels_into(src, size_t(width), src_channels, first, channels_, encoding_, layout_.stored_channels,
+                           1.0f, dst);
+        if (bgra_) dds_swap_red_blue(dst, size_t(width));
+    }
+}
+
+// The zstd stream of one level (compress_rows).
+struct EncodedTexture::LevelStream {
+    ZSTD_CCtx* cctx = nullptr;
+    std::unique_ptr<uint8_t[]> out;  // compressBound bytes, touched only as far as zstd writes
+    size_t capacity = 0, in_pos = 0, out_pos = 0;
+    size_t released = 0;             // bytes from the level's start whose pages were returned
+    size_t window = 0;               // how far back zstd reads, plus a block
+    bool done = false;
+    ~LevelStream() { ZSTD_freeCCtx(cctx); }
+};
+
+EncodedTexture::~EncodedTexture() = default;
+
+Result<void> EncodedTexture::compress_rows(int level, int rows) {
+    if (!supercompressed()) return make_error("zstd streams are for zstd-supercompressed KTX2 files");
+    if (streams_.empty()) streams_.resize(layout_.level_offset.size());
+    auto& slot = streams_[size_t(level)];
+    const size_t w = size_t(std::max(1, width_ >> level)), h = size_t(std::max(1, height_ >> level));
+    const size_t row_bytes = w * size_t(layout_.stored_channels) * size_t(encoding_bytes(encoding_));
+    const size_t length = h * row_bytes;
+    if (!slot) {
+        slot = std::make_unique<LevelStream>();
+        slot->cctx = ZSTD_createCCtx();
+        if (!slot->cctx) return make_error("zstd: cannot create a compression context");
+        const int zl = supercompression_.zstd_level;
+        ZSTD_CCtx_setParameter(slot->cctx, ZSTD_c_compressionLevel, zl);
+        ZSTD_CCtx_setParameter(slot->cctx, ZSTD_c_stableInBuffer, 1);
+        ZSTD_CCtx_setParameter(slot->cctx, ZSTD_c_stableOutBuffer, 1);
+        ZSTD_CCtx_setPledgedSrcSize(slot->cctx, length);
+        slot->capacity = ZSTD_compressBound(length);
+        slot->out.reset(new uint8_t[slot->capacity]);
+        slot->window = (size_t(1) << ZSTD_getCParams(zl, length, 0).windowLog) + ZSTD_BLOCKSIZE_MAX;
+    }
+    LevelStream& z = *slot;
+    if (z.done) return {};
+    uint8_t* const start = data_.get() + layout_.level_offset[size_t(level)];
+    const size_t available = std::min(length, size_t(rows) * row_bytes);
+    const ZSTD_EndDirective mode = available == length ? ZSTD_e_end : ZSTD_e_continue;
+    ZSTD_inBuffer in{start, available, z.in_pos};
+    ZSTD_outBuffer out{z.out.get(), z.capacity, z.out_pos};
+    for (;;) {
+        const size_t left = ZSTD_compressStream2(z.cctx, &out, &in, mode);
+        if (ZSTD_isError(left)) return make_error(std::string("zstd: ") + ZSTD_getErrorName(left));
+        if (mode == ZSTD_e_continue || left == 0) break;
+    }
+    z.in_pos = in.pos, z.out_pos = out.pos;
+    if (mode == ZSTD_e_end) {
+        z.done = true;
+        ZSTD_freeCCtx(z.cctx);
+        z.cctx = nullptr;
+        return {};
+    }
+    // Whole 2 MiB pages (the huge pages the buffer was hinted for) wholly behind the window.
+    constexpr uintptr_t kPage = uintptr_t(2) << 20;
+    if (z.in_pos > z.window) {
+        const uintptr_t from = (reinterpret_cast<uintptr_t>(start) + z.released + kPage - 1) & ~(kPage - 1);
+        const uintptr_t to = (reinterpret_cast<uintptr_t>(start) + z.in_pos - z.window) & ~(kPage - 1);
+        if (to > from) {
+            madvise(reinterpret_cast<void*>(from), to - from, MADV_DONTNEED);
+            z.released = to - reinterpret_cast<uintptr_t>(start);
+        }
+    }
+    return {};
+}
+
+std::vector<std::span<const uint8_t>> EncodedTexture::streamed_levels() const {
+    std::vector<std::span<const uint8_t>> levels;
+    if (streams_.size() != layout_.level_offset.size()) return {};
+    for (const auto& z : streams_) {
+        if (!z || !z->done) return {};
+        levels.emplace_back(z->out.get(), z->out_pos);
+    }
+    return levels;
+}
+
+ManifestOutput EncodedTexture::entry(const std::string& filename, const std::string& kind) const {
+    ManifestOutput e;
+    e.kind = kind;
+    e.path = filename;
+    e.format = container_name(container_);
+    e.width = width_;
+    e.height = height_;
+    e.mips = int(layout_.level_offset.size());
+    e.channels = layout_.stored_channels;
+    e.extra["encoding"] = encoding_name(encoding_);
+    e.extra["gpu_format"] = gpu_format_name(encoding_, layout_.stored_channels);
+    if (container_ == TextureContainer::Ktx2) e.extra["vkFormat"] = ktx2_vk_format(encoding_, layout_.stored_channels);
+    else {
+        e.extra["dxgiFormat"] = dds_dxgi_format(encoding_, channels_, nullptr);
+        const auto legacy = dds_legacy_pixel_format(encoding_, channels_);
+        e.extra["dds_header"] = legacy ? std::string("legacy ") + legacy->name : std::string("dx10");
+    }
+    return e;
+}
+
+namespace {
+
+// The level `L` of `t` as 8-bit texels in stored channel order (DDS A8R8G8B8 back to RGBA; 16-bit unorm
+// rounded to 8 bits: BC endpoints and the ASTC LDR decode hold 8 bits). `scratch` holds them when
+// they are not the level's own bytes.
+const uint8_t* level_as_unorm8(const EncodedTexture& t, size_t L, std::vector<uint8_t>& scratch) {
+    const ContainerLayout& layout = t.layout();
+    const int channels = layout.stored_channels;
+    const int w = std::max(1, t.width() >> L), h = std::max(1, t.height() >> L);
+    const uint8_t* src = t.bytes().data() + layout.level_offset[L];
+    if (t.bgra()) {  // the DDS A8R8G8B8 byte order back to RGBA for the block encoder
+        scratch.assign(src, src + size_t(w) * size_t(h) * 4);
+        dds_swap_red_blue(scratch.data(), size_t(w) * size_t(h));
+        src = scratch.data();
+    }
+    if (t.encoding() == TexelEncoding::Unorm16) {
+        std::vector<uint8_t> narrowed(size_t(w) * size_t(h) * size_t(channels));
+        for (size_t k = 0; k < narrowed.size(); ++k) {
+            uint16_t v;
+            std::memcpy(&v, src + 2 * k, 2);
+            narrowed[k] = uint8_t((uint32_t(v) * 255u + 32767u) / 65535u);
+        }
+        scratch = std::move(narrowed);
+        src = scratch.data();
+    }
+    return src;
+}
+
+// The file of `t` with every level block-compressed as `format`, zstd-supercompressed when `t` asks for it
+// (KTX2). BC levels are encoded in parallel; ASTC levels one after another, each on every thread.
+Result<BlockFile> block_compressed(const EncodedTexture& t, BlockFormat format) {
+    if (t.encoding() != TexelEncoding::Unorm8 && t.encoding() != TexelEncoding::Unorm16)
+        return make_error("block compression takes 8- or 16-bit unorm data");
+    const ContainerLayout& layout = t.layout();
+    const int channels = layout.stored_channels;
+    const int astc_side = t.supercompression().astc_block;
+    std::vector<std::vector<uint8_t>> levels(layout.level_offset.size());
+    if (is_astc(format)) {
+        auto encoder = AstcEncoder::create(astc_side);
+        if (!encoder) return encoder.error();
+        for (size_t L = 0; L < levels.size(); ++L) {
+            std::vector<uint8_t> scratch;
+            const uint8_t* src = level_as_unorm8(t, L, scratch);
+            auto blocks = encoder->compress(src, std::max(1, t.width() >> L), std::max(1, t.height() >> L), channels,
+                                            block_channels(format));
+            if (!blocks) return blocks.error();
+            levels[L] = std::move(*blocks);
+        }
+    } else {
+        tbb::parallel_for(size_t(0), levels.size(), [&](size_t L) {
+            std::vector<uint8_t> scratch;
+            const uint8_t* src = level_as_unorm8(t, L, scratch);
+            levels[L] = compress_level(format, src, std::max(1, t.width() >> L), std::max(1, t.height() >> L), channels);
+        });
+    }
+    return block_file(t.container(), format, t.width(), t.height(), std::move(levels),
+                      t.supercompressed() ? t.supercompression().zstd_level : 0, astc_side);
+}
+
+// The manifest entry of a block-compressed file: its format names and the channels the blocks hold.
+void describe_blocks(ManifestOutput& e, const EncodedTexture& t, const EncodedFile& f) {
+    const int side = t.supercompression().astc_block;
+    e.extra["gpu_format"] = block_gpu_format_name(f.block, side);
+    e.extra["encoding"] = "unorm8";
+    if (t.container() == TextureContainer::Ktx2) e.extra["vkFormat"] = block_vk_format(f.block, side);
+    else {
+        e.extra.erase("dxgiFormat");
+        e.extra["dds_header"] = std::string("legacy FourCC ") + block_fourcc(f.block);
+    }
+    if (is_astc(f.block)) {
+        e.extra["astc_block"] = std::to_string(side) + "x" + std::to_string(side);
+        // What the decoded RGBA holds beyond the kept channels (io/texture/astc_codec.h).
+        e.extra["astc_decoded_as"] = f.block == BlockFormat::AstcR ? "r, r, r, 1" : f.block == BlockFormat::AstcRg
+                                                                                      ? "x, y, 0, 1" : "r, g, b, a";
+    }
+    if (block_channels(f.block) < 4) {
+        e.channels = block_channels(f.block);
+        std::vector<std::string> meaning = e.extra["channel_meaning"];
+        meaning.resize(size_t(e.channels));
+        e.extra["channel_meaning"] = meaning;
+    }
+}
+
+}  // namespace
+
+Result<std::vector<ManifestOutput>> write_encoded_textures(std::span<const EncodedFile> files, const fs::path& dir) {
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec) return make_error(dir.string() + ": cannot create folder: " + ec.message());
+    std::vector<std::unique_ptr<AtomicOutput>> outputs;
+    std::vector<ManifestOutput> entries;
+    for (const EncodedFile& f : files) {
+        const std::string filename = f.stem + '.' + container_name(f.texture->container());
+        outputs.push_back(std::make_unique<AtomicOutput>(dir / filename));
+        entries.push_back(f.texture->entry(filename, f.kind));
+        entries.back().extra["channel_meaning"] =
+            meaning_for(f.texture->channels(), gpu_channels(f.texture->channels()), f.channel_meaning);
+    }
+    // Each file is supercompressed (its levels in parallel), hashed from memory and written by one task;
+    // the first error in file order is reported.
+    std::vector<std::optional<Error>> errors(files.size());
+    tbb::parallel_for(size_t(0), files.size(), [&](size_t i) {
+        const EncodedTexture& t = *files[i].texture;
+        Ktx2Pieces packed;
+        BlockFile blocks;
+        std::vector<std::span<const uint8_t>> pieces{t.bytes()};
+        if (files[i].block != BlockFormat::None) {
+            auto b = block_compressed(t, files[i].block);
+            if (!b) {
+                errors[i] = make_error(outputs[i]->final_path().string() + ": " + b.error().message);
+                return;
+            }
+            blocks = std::move(*b);
+            pieces = blocks.pieces();
+            describe_blocks(entries[i], t, files[i]);
+        } else if (const auto streamed = t.streamed_levels(); t.supercompressed() && !streamed.empty()) {
+            // Compressed while the bake ran (compress_rows): the header, then the levels smallest first.
+            std::vector<size_t> sizes;
+            for (std::span<const uint8_t> l : streamed) sizes.push_back(l.size());
+            packed.header = ktx2_zstd_header(t.bytes(), sizes);
+            pieces = {std::span<const uint8_t>(packed.header)};
+            for (size_t L = streamed.size(); L-- > 0;) pieces.push_back(streamed[L]);
+        } else if (t.supercompressed()) {
+            auto z = ktx2_zstd_pieces(t.bytes(), t.layout(), t.supercompression().zstd_level);
+            if (!z) {
+                errors[i] = make_error(outputs[i]->final_path().string() + ": " + z.error().message);
+                return;
+            }
+            packed = std::move(*z);
+            pieces = packed.pieces();
+        }
+        Sha256 hash;
+        size_t size = 0;
+        for (std::span<const uint8_t> p : pieces) hash.update(p), size += p.size();
+        entries[i].sha256 = hash.hex();
+        entries[i].extra["bytes"] = size;
+        entries[i].extra["uncompressed_bytes"] = t.bytes().size();
+        entries[i].extra["block_compression"] = block_format_name(files[i].block);
+        entries[i].extra["supercompression"] = t.supercompressed() ? "zstd" : "none";
+        if (t.supercompressed()) entries[i].extra["zstd_level"] = t.supercompression().zstd_level;
+        if (auto ok = write_pieces_to(outputs[i]->temp_path(), outputs[i]->final_path(), pieces); !ok)
+            errors[i] = ok.error();
+    });
+    for (const std::optional<Error>& e : errors)
+        if (e) return *e;
+    for (const auto& out : outputs)
+        if (auto ok = out->commit(); !ok) return ok.error();
+    return entries;
+}
+
+}  // namespace specbake::io

@@ -1,0 +1,151 @@
+// Writes a MipChain with its full mip chain to a texture container, atomically (temporary file + rename),
+// and describes what it wrote as manifest entries (SPEC Sec. 7). Containers: KTX2 (io/texture/ktx2.h), DDS
+// (io/texture/dds.h), tiled mipmapped OpenEXR (OpenImageIO, "Plain Texture"), or one PNG (integer encodings) / EXR
+// (float encodings) file per mip level. Every container stores 1, 2 or 4 channels (formats GPUs sample:
+// D3D has no 3-channel 8/16-bit formats and Vulkan makes them optional): 3-channel data gets A = 1.
+#pragma once
+
+#include "core/image.h"
+#include "core/result.h"
+#include "io/output/manifest.h"
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace specbake::io {
+
+enum class TextureContainer { Ktx2, Dds, Exr, PngPerMip };
+
+// How texel values are stored. Unorm: round(clamp(v, 0, 1) * (2^bits - 1)); Float16: IEEE half.
+enum class TexelEncoding { Unorm8, Unorm16, Float16, Float32 };
+
+// Where the level data of a container file lies: total file size and the byte offset of every level's
+// texels (level 0 first), each level tightly packed with `stored_channels` channels per texel.
+struct ContainerLayout {
+    size_t total = 0;
+    std::vector<size_t> level_offset;
+    int stored_channels = 0;
+};
+
+// Channels a container stores for `channels` of data: 3 becomes 4 (RGBA, A = 1), the others stay.
+int gpu_channels(int channels);
+
+// The GPU format name of `channels` stored channels as `encoding`: "R8_UNORM", "R16G16_SFLOAT",
+// "R8G8B8A8_UNORM", ... (Vulkan / DXGI spelling without the prefix).
+std::string gpu_format_name(TexelEncoding encoding, int channels);
+
+// How KTX2/DDS level data is compressed. zstd: KTX2 supercompression (io/texture/ktx2.h, ktx2_zstd), scheme 2, on
+// by default; other containers ignore it. block: 8-bit outputs block-compressed (io/texture/block_compress.h).
+// Bc: one channel BC4, the mean normal BC5 (x, y), four channels `rgba_block` (BC1 by default: the ORM
+// map's A is 1, which BC1's opaque mode stores exactly; BC3 adds an alpha block). Astc: every 8-bit
+// output ASTC with an `astc_block` x `astc_block` footprint (io/texture/astc_codec.h; the mean normal keeps x, y
+// as BC5 does), KTX2 only. Float data stays float16/32 either way.
+enum class BlockFormat;
+enum class BlockFamily { None, Bc, Astc };
+struct Supercompression {
+    bool zstd = true;
+    int zstd_level = 3;  // 1 (fastest) .. 22; 3 is zstd's own default
+    BlockFamily block = BlockFamily::None;
+    int rgba_block = 1;  // 1: BC1, 3: BC3
+    int astc_block = 4;  // 4, 6 or 8 texels a side
+};
+
+const char* block_family_name(BlockFamily f);  // "none", "bc", "astc"
+std::optional<BlockFamily> parse_block_family(const std::string& name);
+// Why `container` cannot hold the block formats of `family` (BC: KTX2 and DDS; ASTC: KTX2 only, as DDS
+// has no standard ASTC format), or empty when it can.
+std::string block_container_problem(TextureContainer container, BlockFamily family);
+
+const char* container_name(TextureContainer c);      // "ktx2", "dds", "exr", "png"
+const char* encoding_name(TexelEncoding e);          // "unorm8", "unorm16", "float16", "float32"
+std::optional<TextureContainer> parse_container(const std::string& name);
+
+// Writes `chain` (1-4 channels) as `dir/<stem>.<ext>` (per-mip: `dir/<stem>_mip<L>.<ext>`), 3 channels
+// stored as RGBA with A = 1. `channel_names` say what each stored channel means (e.g. "m.x"); they go to
+// the manifest ("channel_meaning") and to the EXR header attribute "specbake:channels", while EXR
+// channels are named as common readers expect: Y for one channel, R, G (, B, A) otherwise, in the same
+// order as the KTX2/DDS channels. `wrap` is recorded where the container has a place for it (EXR
+// "wrapmodes"). Returns one entry per file, `path` relative to `dir`,
+// kind `kind`, sha256 filled. Creates `dir` when missing; the error names the file. All files of the call
+// are written to temporary names first and renamed only when every one succeeded. `block` other than
+// BlockFormat::None block-compresses a KTX2/DDS file's levels (io/texture/block_compress.h); EXR and PNG ignore it.
+Result<std::vector<ManifestOutput>> write_texture(const MipChain& chain, TexelEncoding encoding,
+                                                  TextureContainer container, const std::filesystem::path& dir,
+                                                  const std::string& stem, const std::string& kind,
+                                                  const std::vector<std::string>& channel_names = {},
+                                                  WrapMode wrap = WrapMode::Repeat,
+                                                  const Supercompression& supercompression = {},
+                                                  BlockFormat block = {});
+
+// A KTX2 or DDS file assembled in memory, level by level and row by row, so a producer can encode rows
+// as it finishes them instead of holding float chains. put_block() may run on several threads at once
+// for disjoint blocks; the file is complete once every texel of every level was put. bytes() is the file
+// without supercompression; write_encoded_textures applies `supercompression` to KTX2 files as it writes.
+class EncodedTexture {
+public:
+    static bool supports(TextureContainer container);  // KTX2 and DDS
+    EncodedTexture(TextureContainer container, TexelEncoding encoding, int width, int height, int levels,
+                   int channels, const Supercompression& supercompression = {});
+
+    // Encodes the texels [x0, x0 + width) x [y0, y0 + rows) of `level` from `rows` rows of `width`
+    // interleaved floats with `src_channels` per texel, taking channels [first, first + channels()).
+    void put_block(int level, int x0, int y0, int width, int rows, const float* src, int src_channels, int first);
+
+    std::span<const uint8_t> bytes() const { return {data_.get(), layout_.total}; }
+    int channels() const { return channels_; }
+    int width() const { return width_; }
+    int height() const { return height_; }
+    TexelEncoding encoding() const { return encoding_; }
+    TextureContainer container() const { return container_; }
+    const ContainerLayout& layout() const { return layout_; }
+    // True when the written file is supercompressed (KTX2 with zstd on).
+    bool supercompressed() const { return container_ == TextureContainer::Ktx2 && supercompression_.zstd; }
+    const Supercompression& supercompression() const { return supercompression_; }
+    // True when the level bytes hold RGBA8 texels in B, G, R, A order (DDS A8R8G8B8, io/texture/dds.h).
+    bool bgra() const { return bgra_; }
+    // The manifest entry of this file as `filename` (sha256 left empty; the writer fills it).
+    ManifestOutput entry(const std::string& filename, const std::string& kind) const;
+
+    // KTX2 with zstd: zstd-compresses rows [0, rows) of `level`, put before the call, as a stream of the
+    // level (whole zstd blocks; the rest once rows is the level's height), and returns the raw pages zstd
+    // no longer reads (older than its window) to the system, so a level's raw bytes are never all held.
+    // `rows` grows from call to call; rows below it are not put again. A level is fed by one thread at a
+    // time. The compressed levels are the bytes of ktx2_zstd's one-shot compression: zstd compresses the
+    // same blocks from the same contiguous buffer (ZSTD_c_stableInBuffer). write_encoded_textures uses them
+    // once every level was fed to its end.
+    Result<void> compress_rows(int level, int rows);
+    // The compressed bytes of every level when all were fed to their end by compress_rows, else empty.
+    std::vector<std::span<const uint8_t>> streamed_levels() const;
+    ~EncodedTexture();
+
+private:
+    struct LevelStream;
+    std::vector<std::unique_ptr<LevelStream>> streams_;
+    TextureContainer container_;
+    TexelEncoding encoding_;
+    int width_, height_, channels_;
+    Supercompression supercompression_;
+    ContainerLayout layout_;
+    bool bgra_ = false;
+    std::unique_ptr<uint8_t[]> data_;  // not zero-filled: every byte is written by the header or a row
+};
+
+// Writes `files` (each `dir/<stem>.<ext>`, `kind` as given) atomically: all are supercompressed where
+// asked, hashed and written to temporary names in parallel, and renamed only when every one succeeded.
+// Returns their manifest entries, with "bytes" (file size), "uncompressed_bytes" and "supercompression".
+struct EncodedFile {
+    const EncodedTexture* texture = nullptr;
+    std::string stem;
+    std::string kind;
+    std::vector<std::string> channel_meaning;  // what each stored channel holds (manifest), may be empty
+    BlockFormat block{};                       // BlockFormat::None: the texels as they are
+};
+Result<std::vector<ManifestOutput>> write_encoded_textures(std::span<const EncodedFile> files,
+                                                           const std::filesystem::path& dir);
+
+}  // namespace specbake::io
