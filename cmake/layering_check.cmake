@@ -1,4 +1,4 @@
-# ctest driver: the include rules of the layout (README: Layout). Each folder may include only the folders
+# ctest driver: the include rules of the layout (docs/library.md#layout). Each folder may include only the folders
 # listed for it, and no source file outside tests/ and the generated shader includes exceeds MAX_LINES.
 # Arguments: SOURCE_DIR.
 cmake_minimum_required(VERSION 3.22)
