@@ -11,7 +11,8 @@ inline constexpr double kDefaultSigma2 = 0.15915494309189535;
 inline constexpr double kDefaultKappa = 0.18;
 
 // Slope |n.xy| / n.z below which a normal-map texel counts as flat for the Sigma kernel's rough share
-// (README "Output layouts"): 2.5 steps of an 8-bit map, so quantisation noise on a flat field stays flat.
+// (docs/texture-bake.md#output-layouts): 2.5 steps of an 8-bit map, so quantisation noise on a flat field
+// stays flat.
 inline constexpr double kFlatSlope = 0.02;
 
 }  // namespace specbake

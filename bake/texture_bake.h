@@ -46,7 +46,7 @@ struct TextureBakeSettings {
     WrapMode wrap = WrapMode::Repeat;
     // Kernel output = Sigma (xx, yy, xy) (default) instead of t. The default rule needs the axes: a mip texel
     // on a bump's rim spreads along the slope only, and t = tr(Sigma) in both axes lights a crescent along
-    // the rim (README "Accuracy and its cost", NormalTangentMirrorTest near).
+    // the rim (docs/accuracy.md#why-the-kernel-is-sigma-not-t, NormalTangentMirrorTest near).
     bool anisotropic = true;
     LeanSpace lean_space = LeanSpace::Projected;
     TextureOutputs outputs;

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-# Writes a glTF scene that asks for glints, for `specbake verify` / `bench` / `bake` (README, Glints): two
+# Writes a glTF scene that asks for glints, for `specbake verify` / `bench` / `bake` (docs/glints.md#accuracy): two
 # UV spheres side by side under a directional light, the left one glittery ("SPECBAKE_glints": {}) with an
 # anisotropic, rotated ridge normal map, the right one plain with the same roughness. Standard library only.
 import argparse

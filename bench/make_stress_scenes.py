@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Writes a corpus of glTF scenes whose materials have the statistics real assets have and the analytic
-scenes lack, for `specbake verify` / `bench --scenes` (README, "Beyond the shared assets"): a sphere and a
+scenes lack, for `specbake verify` / `bench --scenes` (docs/accuracy.md#the-stress-corpus): a sphere and a
 torus side by side per scene, each scene one material kind:
 
   noise-orm      fBm height bumps in the normal map, an ORM texture with noisy roughness (scanned metal)

@@ -1,5 +1,5 @@
-// Shape of a normal map's spread per mip texel, and what a one-lobe model of it gets wrong (README
-// "Accuracy and its cost", issue 15 item 3): for every shared normal map and mip levels 2, 4 and 6,
+// Shape of a normal map's spread per mip texel, and what a one-lobe model of it gets wrong
+// (docs/accuracy.md#mixed-texels): for every shared normal map and mip levels 2, 4 and 6,
 // - the kurtosis E|d|^4 / (E|d|^2)^2 of the slopes d about the texel's mean slope (2 for a 2D Gaussian,
 //   below 2 for a compact band, above 2 for a spike with tails), weighted by the texel's variance, and
 // - the density of the map's normals in slope space at half vectors h tilted 5-60 degrees from the

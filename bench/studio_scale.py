@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 # The studio-scale benchmark: a generated library (bench/make_library.py) baked as one `specbake bake @list`
 # process, by Ninja with one specbake action per asset, and by the same Ninja build with nothing changed.
-"""Bakes a generated asset library three ways and prints the throughput table (README "At studio scale").
+"""Bakes a generated asset library three ways and prints the throughput table
+(docs/build-pipelines.md#at-studio-scale).
 
   bench/studio_scale.py --specbake build/cli/specbake [--baseline OLD_SPECBAKE] [--quick]
 

@@ -21,7 +21,7 @@
 
 namespace specbake::cli {
 
-// Exit codes documented in the README.
+// Exit codes documented in docs/build-pipelines.md#exit-codes.
 enum ExitCode : int {
     kExitOk = 0,
     kExitFailed = 1,  // an input failed (the others, if any, completed)

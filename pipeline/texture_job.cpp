@@ -87,7 +87,7 @@ struct OutputFile {
 };
 
 // The files of settings.outputs, in the order they are written, each in a layout GPUs sample (1, 2 or 4
-// channels, the same in every container; README "Output layouts"): `<stem>_roughness` (Y = r, or the ORM
+// channels, the same in every container; docs/texture-bake.md#output-layouts): `<stem>_roughness` (Y = r, or the ORM
 // map as RGBA with G = r and A = 1), `_kernel` (Y = t, or RGBA = xx, yy, xy, rough share), `_normal` (RGBA = normalised
 // mean normal as (n + 1) / 2, A = 1: a drop-in for glTF normalTexture and engine shaders that read .xyz;
 // zstd removes the constant A almost entirely, and the two-channel form belongs to BC5),

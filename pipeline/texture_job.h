@@ -84,7 +84,7 @@ struct TextureOutputsWritten {
 
 // Bakes and writes `dir/<stem>_roughness.<ext>`, `_kernel`, `_lean` (RGBA = (m.x, m.y, M.xx, M.yy)
 // plus `_lean_xy` Y = M.xy), `_normal`, as selected in settings.outputs, 1, 2 or 4 channels each, the
-// same layout in every container (README "Output layouts"). Does not write a manifest.
+// same layout in every container (docs/texture-bake.md#output-layouts). Does not write a manifest.
 Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& inputs, const TextureBakeSettings& settings,
                                                    io::TextureContainer container, const std::filesystem::path& dir,
                                                    const std::string& stem, const ProgressFn& progress = {},

@@ -64,9 +64,9 @@
 //   SPECAA_LEAN_TEXTURE0 name       LEAN moments, projected space (SPEC Sec. 3), in two textures:
 //   SPECAA_LEAN_TEXTURE1 name         TEXTURE0 RGBA = (m.x, m.y, M.xx, M.yy), TEXTURE1 R = M.xy
 //                                     (at least 16-bit float, trilinear filtering).
-//   Every baked file has 1, 2 or 4 channels in the same order in KTX2, DDS, EXR and PNG (README
-//   "Output layouts"); bind them with linear mip filtering (LINEAR_MIPMAP_LINEAR): loaders such as
-//   three.js KTX2Loader default to nearest.
+//   Every baked file has 1, 2 or 4 channels in the same order in KTX2, DDS, EXR and PNG
+//   (docs/texture-bake.md#output-layouts); bind them with linear mip filtering (LINEAR_MIPMAP_LINEAR):
+//   loaders such as three.js KTX2Loader default to nearest.
 //   SPECAA_NORMAL_TWO_CHANNEL       the baked mean normal (`*_normal`) read by specaa_sample_mean_normal
 //                                   has two channels (BC5 of `--block bc`, ASTC of `--block astc`: x, y as
 //                                   (n + 1) / 2); z is rebuilt as sqrt(max(0, 1 - x^2 - y^2)). Without it:
@@ -427,7 +427,7 @@ SPECAA_FLOAT3 specaa_lean_covariance(SPECAA_FLOAT4 lean0, float lean1) {
     return SPECAA_SELECT3(specaa_is_finite3(sigma), sigma, SPECAA_FLOAT3(0.0, 0.0, 0.0));
 }
 
-// Baked mean normal (`*_normal`, README "Output layouts"), tangent space, unit length. Two-channel texels
+// Baked mean normal (`*_normal`, docs/texture-bake.md#output-layouts), tangent space, unit length. Two-channel texels
 // (BC5 under `--block bc`, ASTC's (x, y, 0, 1) under `--block astc`) hold x, y as (n + 1) / 2: z = sqrt(max(0, 1 - x^2 - y^2)) (the mean normal lies in
 // the upper hemisphere), renormalised where filtering or quantisation put (x, y) outside the unit disc.
 // RGB texels hold (n + 1) / 2, renormalised after filtering; a zero vector gives (0, 0, 1).
@@ -647,7 +647,7 @@ float specaa_ggx_G2(SPECAA_FLOAT3 i, SPECAA_FLOAT3 o, SPECAA_FLOAT3 h, SPECAA_FL
 // The default rule is the matrix form, specaa_filtered_alpha2_matrix (an anisotropic per-pixel kernel
 // in the tangent frame), with specaa_default_D (GGX convolved with the footprint where no normal-map data
 // is baked) and specaa_ggx_G2: of the combinations `specbake bench` scores it has the lowest linear and
-// tone-mapped error and flicker (README "Accuracy and its cost"). specaa_filtered_alpha2 /
+// tone-mapped error and flicker (docs/accuracy.md#the-rule). specaa_filtered_alpha2 /
 // specaa_filtered_roughness are its isotropic form, a drop-in for BRDFs that take one roughness.
 // ---------------------------------------------------------------------------------------------------
 
@@ -690,7 +690,7 @@ SPECAA_FLOAT3 specaa_baked_spread_matrix(SpecaaSurface s) {
     // (K / (2 Sigma) = 0.11-0.24 at g = 0.1-0.5 for a rough part 10x the material's lobe). The covariance
     // is what keeps the rough part's sparkle down where it is lit; sqrt(g) sits between the two ends
     // (g^0 and g^1). g = 1 (every texel steep, or bakes before the rough share) is the covariance itself.
-    // README "Mixed texels" has the measurements (g^0, g^0.25, g^0.5, g^0.75, g^1).
+    // The measurements (g^0, g^0.25, g^0.5, g^0.75, g^1): docs/accuracy.md#the-single-lobe-of-a-mixed-texel.
     SPECAA_FLOAT4 k = specaa_sample_kernel_texel(SPECAA_TEXTURE_ARGS(SPECAA_KERNEL_TEXTURE, SPECAA_SAMPLER), s.uv);
 #if defined(SPECAA_KERNEL_COVARIANCE)
     return 2.0 * k.xyz;
@@ -711,7 +711,7 @@ SPECAA_FLOAT3 specaa_baked_spread_matrix(SpecaaSurface s) {
 // map under a rough material (the normal-mapped sphere at alpha 0.2-0.5) that change raised the flicker
 // above no filtering's (alpha 0.2: 1.0025x tone-mapped, 0.3: 1.017x, 0.5: 1.012x); no filtering's flicker
 // there is the engine's trilinear sampling of the mean normal, which no widening of the lobe removes.
-// Kernels of half of a or more pass whole. README "The gate" has the forms measured (gates 0.25, 0.5
+// Kernels of half of a or more pass whole. docs/accuracy.md#the-gate has the forms measured (gates 0.25, 0.5
 // and 1, linear and squared fade). The opt-in two lobes gate their rough lobe's kernel the same way.
 SPECAA_FLOAT3 specaa_gate_baked_kernel(SPECAA_FLOAT3 K, float a) {
     float f = SPECAA_SATURATE(specaa_sym_max_eigenvalue(K) / max(SPECAA_KERNEL_GATE * a, 1.0e-30));
@@ -737,8 +737,9 @@ bool specaa_curvature_footprint(SpecaaSurface s, out SPECAA_FLOAT4 footprint) {
 // position footprint, or from the quad derivatives of the vertex normal projected onto T and B
 // (TK21 Sec. 5.1). Each eigenvalue clamped to at most kappa, the eigenvectors kept (TK21 Sec. 4: "clamp the
 // eigenvalues of Sigma"; scaling the whole matrix by kappa / lambda_max instead would also shrink the minor
-// axis, and an elongated footprint's peak would come out too bright: ClearCoatTest far, README "Accuracy
-// and its cost"); an overflowing kernel is kappa I, unusable inputs give 0 (edge policy).
+// axis, and an elongated footprint's peak would come out too bright: ClearCoatTest far,
+// docs/accuracy.md#the-per-pixel-kernels-clamp); an overflowing kernel is kappa I, unusable inputs give 0
+// (edge policy).
 SPECAA_FLOAT3 specaa_pixel_kernel_matrix(SpecaaSurface s) {
 #if defined(SPECAA_NO_PIXEL_KERNEL)
     return SPECAA_FLOAT3(0.0, 0.0, 0.0);
@@ -823,14 +824,14 @@ float specaa_texture_lod(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) { re
 //   k_max ~ 0.05), but a broad one covers much of the hemisphere (a normal map's domes and bevels hold
 //   every slope up to the horizon), where a Gaussian in slope space has too little weight far from the
 //   mean and GGX(A) (TK21's projected-space widening; A = I is the uniform hemisphere) follows closer:
-//   GGX(A) from k_max = 1 / SPECAA_GGX_SPREAD = 0.125 (slope standard deviation 0.25) on. README
-//   "Accuracy and its cost" has the measurements (SPECAA_GGX_SPREAD 4, 8, 16 and the LOD factor).
+//   GGX(A) from k_max = 1 / SPECAA_GGX_SPREAD = 0.125 (slope standard deviation 0.25) on. The measurements
+//   (SPECAA_GGX_SPREAD 4, 8, 16 and the LOD factor): docs/accuracy.md#normal-mapped-materials-the-blend.
 // - Baked Sigma kernel with SPECAA_KERNEL_TWO_LOBES (opt-in): two lobes with the texel's mean and
 //   covariance. The texel's flat share 1 - g (normals within slope 0.02 of the surface's, alpha channel)
 //   keeps the material's own lobe convolved with the pixel kernel only; its rough share g holds all of
 //   Sigma, as the lobe above with K = 2 Sigma / g (gated like every baked kernel) + pixel kernel. One
 //   Gaussian of the whole texel spreads a flat field's highlight over the slopes of the few scratches or
-//   seams in it; the two lobes keep it (README "Mixed texels": they win on the stress scenes' scratches
+//   seams in it; the two lobes keep it (docs/accuracy.md#two-lobes-per-texel: they win on the stress scenes' scratches
 //   and tiles, but over the bench's normal-mapped scenes they have more error than the default's single
 //   lobe, K = 2 Sigma sqrt(g), at 1.7x its cost, so they are not the default). g = 1 (earlier bakes
 //   wrote A = 1) is the single lobe.

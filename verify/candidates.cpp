@@ -130,8 +130,9 @@ std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool varia
                    "half vector, TK21 Sec. 7)",
                    "#define SIM_NDF(h, A, a) specaa_filtered_D(h, A, specaa_base_alpha2(s))\n", Baked::Roughness);
     // The matrix form with each eigenvalue of A clamped to the isotropic form's a: the matrix's shape where
-    // the footprint is round, the isotropic width along an axis the matrix widens beyond it (README
-    // "Accuracy and its cost": where the matrix over-blurs, its tails along the widened axis).
+    // the footprint is round, the isotropic width along an axis the matrix widens beyond it
+    // (docs/accuracy.md#other-rules-measured-and-not-kept: where the matrix over-blurs, its tails along the
+    // widened axis).
     c.push_back({"default-clamped", "default",
                  "specaa_filtered_alpha2_matrix, eigenvalues clamped to specaa_filtered_alpha2",
                  {normal_mapped ? kBakedRoughnessDefines : "",

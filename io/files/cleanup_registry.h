@@ -1,6 +1,7 @@
-// Paths to remove when the process is interrupted: temporaries of atomic writes, staging folders and the
-// lock files of output folders. install_interrupt_cleanup() makes SIGINT, SIGTERM and SIGHUP remove them
-// before the process ends by the signal, so an interrupted run leaves nothing behind (README, pipeline).
+// Paths to remove when the process is interrupted: temporaries of atomic writes, staging folders and the lock
+// files of output folders. install_interrupt_cleanup() makes SIGINT, SIGTERM and SIGHUP remove them before
+// the process ends by the signal, so an interrupted run leaves nothing behind
+// (docs/build-pipelines.md#output-folders-are-transactional).
 #pragma once
 
 #include <filesystem>

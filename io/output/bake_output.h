@@ -1,6 +1,7 @@
-// How a bake's files reach their output folder (README, "Use in a build pipeline"): under the folder's
-// lock, staged and committed as one transaction (io/output/output_folder.h), and only over a bake of the same
-// inputs: a folder holds one bake, and a bake of other inputs is refused unless the caller replaces it.
+// How a bake's files reach their output folder (docs/build-pipelines.md#output-folders-are-transactional):
+// under the folder's lock, staged and committed as one transaction (io/output/output_folder.h), and only over a bake
+// of the same inputs: a folder holds one bake, and a bake of other inputs is refused unless the caller
+// replaces it.
 #pragma once
 
 #include "io/output/manifest.h"

@@ -1,6 +1,6 @@
-// Transactional output folders (README, "Use in a build pipeline"): one run at a time per folder (an
-// advisory lock), every file of a run staged in a hidden folder inside it, and a commit whose record makes
-// the folder hold either the previous complete bake or the new one, whenever the process dies.
+// Transactional output folders (docs/build-pipelines.md#output-folders-are-transactional): one run at a time
+// per folder (an advisory lock), every file of a run staged in a hidden folder inside it, and a commit whose
+// record makes the folder hold either the previous complete bake or the new one, whenever the process dies.
 //
 // Commit protocol. The run writes everything, manifest.json included, into OUT/.specbake-stage-PID/. The
 // commit point is the atomic rename of the stage's commit record (.specbake-commit, listing the previous

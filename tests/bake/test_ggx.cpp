@@ -156,7 +156,7 @@ TEST(ConvolvedNdf, IsWithinTwoPercentWhereTheFootprintIsAsWideAsTheLobe) {
 // f(q) = 1 / (pi a (1 + q / a)^2): E[P(m - x)] - P(m) = f'(q) tr(S) + 2 f''(q) m^T S m, S = K / 2.
 // The quadrature must get that change right, not only D to a percent: a 1% error in the tails is a
 // larger change than the footprint makes there, and a smooth sphere's highlight then flickers more
-// filtered than unfiltered (README "Accuracy and its cost").
+// filtered than unfiltered (docs/accuracy.md#the-convolutions-accuracy).
 TEST(ConvolvedNdf, GetsTheChangeOfASmallFootprintRight) {
     const ConvolutionCase cases[] = {{0.04, 0.003 * 0.04, 0.003 * 0.04, 0.0}, {0.04, 0.01 * 0.04, 0.002 * 0.04, 0.5},
                                      {0.0025, 0.01 * 0.0025, 0.01 * 0.0025, 0.0}};

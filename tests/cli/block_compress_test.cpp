@@ -168,9 +168,10 @@ TEST_F(BlockCompress, Bc1OrmRoughnessIsOpaqueAndClose) {
             sum += d * d, worst = std::max(worst, std::fabs(d));
             ASSERT_EQ(v[i * 4 + 3], 1.0f);
         }
-        // BC1 fits one line through RGB per block: where the metallic channel (B) jumps 0 -> 1 inside a
-        // block the line follows B and r (G) loses precision. Measured on the demo: RMS <= 0.055, max <= 0.13
-        // (README, block compression table); BC4 of a roughness-only output keeps r within the BC4 bound.
+        // BC1 fits one line through RGB per block: where the metallic channel (B) jumps 0 -> 1 inside a block
+        // the line follows B and r (G) loses precision. Measured on the demo: RMS <= 0.055, max <= 0.13
+        // (docs/texture-bake.md#block-compression-measured); BC4 of a roughness-only output keeps r within
+        // the BC4 bound.
         EXPECT_LT(std::sqrt(sum / double(ref[L].w * ref[L].h)), 0.07) << "level " << L;
         EXPECT_LT(worst, 0.16) << "level " << L;
     }

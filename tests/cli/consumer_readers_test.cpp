@@ -71,7 +71,7 @@ const TextureBakeResult& reference_bake() {
     return baked;
 }
 
-// Expected stored channel c of texel i at `level` of output `kind` (the README's layout table).
+// Expected stored channel c of texel i at `level` of output `kind` (docs/texture-bake.md#output-layouts).
 float expected(const std::string& stem, int level, size_t i, int c) {
     const TextureBakeResult& b = reference_bake();
     auto at = [&](const MipChain& m, int ch) {

@@ -1,7 +1,8 @@
-// Transactional output folders end to end (README, "Use in a build pipeline"): the real executable is
-// killed at random moments, interrupted by SIGINT/SIGTERM/SIGHUP, starved of disk space, made to throw,
-// run twice into one folder, pointed at a read-only folder and at an unwritable depfile; afterwards the
-// folder must hold exactly the previous complete bake or the new complete one, and no temporaries.
+// Transactional output folders end to end (docs/build-pipelines.md#output-folders-are-transactional): the
+// real executable is killed at random moments, interrupted by SIGINT/SIGTERM/SIGHUP, starved of disk space,
+// made to throw, run twice into one folder, pointed at a read-only folder and at an unwritable depfile;
+// afterwards the folder must hold exactly the previous complete bake or the new complete one, and no
+// temporaries.
 #include "io/output/output_folder.h"
 #include "pipeline/scene_job.h"
 #include "pipeline/texture_job.h"

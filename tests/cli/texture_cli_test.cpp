@@ -113,7 +113,7 @@ TEST_F(TextureCli, DemoWritesContainersAndManifestDeterministically) {
     const std::vector<uint8_t> bytes{std::istreambuf_iterator<char>(f), {}};
     auto rough = io::read_ktx2_texture(bytes, "r");
     ASSERT_TRUE(rough.ok());
-    // The ORM roughness is stored as RGBA with A = 1 (README "Output layouts").
+    // The ORM roughness is stored as RGBA with A = 1 (docs/texture-bake.md#output-layouts).
     ASSERT_EQ(rough->chain.channels(), 4);
     ASSERT_EQ(rough->chain.levels[0].texel_count(), orm->texel_count());
     for (size_t i = 0; i < orm->texel_count(); ++i) {

@@ -130,9 +130,9 @@ protected:
     fs::path root_;
 };
 
-// Which stored value the reference bake gives channel c of a texel of output `stem` (the README's layout
-// table): RGBA files pad a 1- or 3-channel chain with A = 1; LEAN is RGBA = m.x, m.y, M.xx, M.yy and
-// `_lean_xy` holds M.xy.
+// Which stored value the reference bake gives channel c of a texel of output `stem` (the layout table,
+// docs/texture-bake.md#output-layouts): RGBA files pad a 1- or 3-channel chain with A = 1; LEAN is RGBA =
+// m.x, m.y, M.xx, M.yy and `_lean_xy` holds M.xy.
 inline float reference_value(const TextureBakeResult& b, const std::string& stem, int level, int x, int y, int c) {
     auto at = [&](const MipChain& m, int ch) {
         const Image& l = m.levels[size_t(level)];

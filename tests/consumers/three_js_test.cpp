@@ -312,11 +312,12 @@ TEST_F(ThreeJs, LoadersDecodeEveryTextureOutputWithItsMipsAndTexels) {
         cell.levels_seen = levels;
         cell.levels_want = f.mip_level >= 0 ? f.mips : f.mips;
         if (f.mip_level >= 0 || levels == f.mips) ++cell.all_levels;
-        // The README's filtering note: KTX2Loader hands out uncompressed textures with nearest filtering,
-        // block-compressed ones with trilinear filtering.
+        // docs/consumers.md#filtering-in-threejs: KTX2Loader hands out uncompressed textures with nearest
+        // filtering, block-compressed ones with trilinear filtering.
         if (f.loader == "KTX2Loader")
             EXPECT_NE(r.value("minFilter", "").find(f.block.empty() ? "Nearest" : "LinearMip"), std::string::npos)
-                << f.id << ": KTX2Loader's minFilter is now " << r.value("minFilter", "") << "; update the README";
+                << f.id << ": KTX2Loader's minFilter is now " << r.value("minFilter", "")
+                << "; update docs/consumers.md#filtering-in-threejs";
         const auto& values = r["values"];
         ASSERT_EQ(values.size(), f.samples.size()) << f.id;
         bool all = true;
@@ -353,7 +354,7 @@ TEST_F(ThreeJs, LoadersDecodeEveryTextureOutputWithItsMipsAndTexels) {
         if (all) ++cell.texels_ok;
     }
 
-    // The table of the README's "Consumers" paragraph.
+    // The table of docs/consumers.md#results-per-loader.
     std::string md = "| container | kind | stored format | consumer | loads | levels | texels match |\n"
                      "|---|---|---|---|---|---|---|\n";
     for (const auto& [key, cell] : table) {
