@@ -3,13 +3,26 @@
 // Domain: a in [0, 1], t >= 0. NaN inputs propagate as NaN (callers validate data before filtering).
 #pragma once
 
+#include "core/enum_names.h"
+
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstddef>
+#include <optional>
+#include <string_view>
 
 namespace specbake {
 
 // How a 2x2 covariance is reduced to an isotropic kernel variance.
 enum class IsotropicReduction { Mean, Sum, Max };
+
+// "mean", "sum", "max" (the CLI and manifest spellings), in enum order.
+inline constexpr std::array<std::string_view, 3> kIsotropicReductionNames{"mean", "sum", "max"};
+inline std::string_view to_string(IsotropicReduction r) { return kIsotropicReductionNames[size_t(r)]; }
+inline std::optional<IsotropicReduction> parse_isotropic_reduction(std::string_view name) {
+    return enum_from_name<IsotropicReduction>(kIsotropicReductionNames, name);
+}
 
 // Full projected-space filtering, isotropic closed form of TK21 Eq. (4)-(7):
 // a' = (a + t (1 - a)) / (1 + t (1 - a)). Stays in [a, 1]; a = 1 stays 1, t = 0 leaves a unchanged.

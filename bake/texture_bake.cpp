@@ -131,4 +131,32 @@ Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughne
     return baked;
 }
 
+std::vector<std::string_view> to_names(const TextureOutputs& outputs) {
+    const bool selected[] = {outputs.roughness, outputs.kernel, outputs.lean, outputs.normal};
+    std::vector<std::string_view> names;
+    for (size_t i = 0; i < kTextureOutputNames.size(); ++i)
+        if (selected[i]) names.push_back(kTextureOutputNames[i]);
+    return names;
+}
+
+bool select_texture_output(TextureOutputs& outputs, std::string_view name) {
+    bool* const flags[] = {&outputs.roughness, &outputs.kernel, &outputs.lean, &outputs.normal};
+    for (size_t i = 0; i < kTextureOutputNames.size(); ++i)
+        if (kTextureOutputNames[i] == name) return *flags[i] = true;
+    return false;
+}
+
+Result<TextureOutputs> parse_texture_outputs(std::string_view list) {
+    TextureOutputs outputs{false, false, false, false};
+    // As std::getline splits: items between commas, a trailing empty item dropped.
+    while (!list.empty()) {
+        const size_t comma = list.find(',');
+        const std::string_view item = list.substr(0, comma);
+        if (!select_texture_output(outputs, item))
+            return make_error("'" + std::string(item) + "' is not one of roughness, kernel, lean, normal");
+        list = comma == std::string_view::npos ? std::string_view() : list.substr(comma + 1);
+    }
+    return outputs;
+}
+
 }  // namespace specbake

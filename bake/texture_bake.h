@@ -14,11 +14,13 @@
 #include "bake/isotropic_filter.h"
 #include "core/result.h"
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace specbake {
@@ -28,12 +30,44 @@ enum class NormalGreen { PlusY, MinusY };               // +Y: OpenGL/glTF (defa
 enum class ReconstructZ { Auto, Always, Never };        // Auto: two channels or constant full-scale blue
 enum class LeanSpace { Projected, Slope };              // SPEC Sec. 3 LEAN texture: projected (default) | slope
 
+// The CLI, config and manifest spellings, in enum order.
+inline constexpr std::array<std::string_view, 2> kRoughnessFilterModeNames{"projected", "approx"};
+inline constexpr std::array<std::string_view, 2> kNormalGreenNames{"+y", "-y"};
+inline constexpr std::array<std::string_view, 3> kReconstructZNames{"auto", "always", "never"};
+inline constexpr std::array<std::string_view, 2> kLeanSpaceNames{"projected", "slope"};
+inline std::string_view to_string(RoughnessFilterMode m) { return kRoughnessFilterModeNames[size_t(m)]; }
+inline std::string_view to_string(NormalGreen g) { return kNormalGreenNames[size_t(g)]; }
+inline std::string_view to_string(ReconstructZ z) { return kReconstructZNames[size_t(z)]; }
+inline std::string_view to_string(LeanSpace s) { return kLeanSpaceNames[size_t(s)]; }
+inline std::optional<RoughnessFilterMode> parse_roughness_filter_mode(std::string_view name) {
+    return enum_from_name<RoughnessFilterMode>(kRoughnessFilterModeNames, name);
+}
+inline std::optional<NormalGreen> parse_normal_green(std::string_view name) {
+    return enum_from_name<NormalGreen>(kNormalGreenNames, name);
+}
+inline std::optional<ReconstructZ> parse_reconstruct_z(std::string_view name) {
+    return enum_from_name<ReconstructZ>(kReconstructZNames, name);
+}
+inline std::optional<LeanSpace> parse_lean_space(std::string_view name) {
+    return enum_from_name<LeanSpace>(kLeanSpaceNames, name);
+}
+
 struct TextureOutputs {
     bool roughness = true;
     bool kernel = true;
     bool lean = true;
     bool normal = true;
 };
+
+// The outputs' names, in the order manifests list them.
+inline constexpr std::array<std::string_view, 4> kTextureOutputNames{"roughness", "kernel", "lean", "normal"};
+// The names of the outputs `outputs` selects, in kTextureOutputNames order.
+std::vector<std::string_view> to_names(const TextureOutputs& outputs);
+// Adds the output called `name` to `outputs`; false when no output has that name.
+bool select_texture_output(TextureOutputs& outputs, std::string_view name);
+// A comma list of output names ("roughness,lean"; empty: none). The error names the first unknown item:
+// "'x' is not one of roughness, kernel, lean, normal".
+Result<TextureOutputs> parse_texture_outputs(std::string_view list);
 
 struct TextureBakeSettings {
     IsotropicReduction isotropic = IsotropicReduction::Mean;

@@ -2,6 +2,7 @@
 // and --astc-block, shared by `texture` and `bake`.
 #pragma once
 
+#include "cli/name_options.h"
 #include "core/result.h"
 #include "io/texture/texture_writer.h"
 
@@ -24,7 +25,7 @@ inline void add_block_options(CLI::App& sub, BlockCliOptions& o, const std::stri
                        ", keeping every baked mip: none (default); bc (KTX2 or DDS: one channel BC4, the mean "
                        "normal BC5 with x, y only, RGBA per --block-rgba); astc (KTX2 only: ASTC LDR with the "
                        "--astc-block footprint, the mean normal x, y only). Float " + what + " stay float")
-        ->check(CLI::IsMember({"none", "bc", "astc"}))
+        ->check(is_member_of(io::kBlockFamilyNames))
         ->capture_default_str();
     sub.add_option("--block-rgba", o.block_rgba,
                    "BC format of four-channel " + what + " (the ORM roughness): bc1 (default; A = 1 is exact) or bc3")

@@ -1,6 +1,7 @@
 // specbake bake: glTF/GLB (or any Assimp format) in, glTF/GLB out with per-vertex curvature and baked
 // material textures, exactly as the plan says; manifest.json records outputs, inputs, settings and plan.
 #include "cli/command.h"
+#include "cli/name_options.h"
 #include "cli/pipeline_options.h"
 #include "cli/scene_options.h"
 #include "io/output/bake_output.h"
@@ -87,16 +88,16 @@ void add_bake_command(CLI::App& app, std::function<int()>& run) {
         ->required();
     sub->add_option("--format", o->format, "Scene format written: same (as the input; non-glTF inputs give gltf), "
                                            "gltf or glb (self-contained: buffers and images go into the file)")
-        ->check(CLI::IsMember({"same", "gltf", "glb"}))
+        ->check(is_member_of(kSceneFormatNames))
         ->capture_default_str();
     sub->add_option("--container", o->container, "Texture container: ktx2, dds, exr or png (one file per mip)")
-        ->check(CLI::IsMember({"ktx2", "dds", "exr", "png"}))
+        ->check(is_member_of(io::kTextureContainerNames))
         ->capture_default_str();
     sub->add_option("--gltf-mode", o->gltf_mode,
                     "sidecar: baked textures in the SPECBAKE_specular_aa extension only; replace: also put the baked "
                     "roughness and mean-normal mips into the material's metallicRoughnessTexture and normalTexture "
                     "as KTX2 (UASTC) through KHR_texture_basisu, so any glTF viewer shows them (needs basisu)")
-        ->check(CLI::IsMember({"sidecar", "replace"}))
+        ->check(is_member_of(kGltfModeNames))
         ->capture_default_str();
     sub->add_option("--basisu", o->basisu,
                     "Basis Universal encoder for --gltf-mode replace (default: $SPECBAKE_BASISU, else basisu on the PATH)");

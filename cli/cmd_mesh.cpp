@@ -1,5 +1,6 @@
 // specbake mesh: per-vertex curvature attributes alone (no texture bake, no material check), glTF out.
 #include "cli/command.h"
+#include "cli/name_options.h"
 #include "cli/pipeline_options.h"
 #include "cli/scene_options.h"
 
@@ -17,7 +18,7 @@ void add_mesh_command(CLI::App& app, std::function<int()>& run) {
     sub->add_option("file", o->scenes, "glTF/GLB, FBX, OBJ, PLY, DAE, STL, ...")->required()->check(CLI::ExistingFile);
     sub->add_option("-o,--output", o->output_dir, "Output folder (must not hold the input)")->required();
     sub->add_option("--format", o->format, "Scene format written: same, gltf or glb")
-        ->check(CLI::IsMember({"same", "gltf", "glb"}))
+        ->check(is_member_of(kSceneFormatNames))
         ->capture_default_str();
     add_curvature_options(sub, *o);
     auto pipe = std::make_shared<PipelineFlags>();

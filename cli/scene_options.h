@@ -3,6 +3,7 @@
 #pragma once
 
 #include "cli/block_options.h"
+#include "cli/name_options.h"
 #include "pipeline/config.h"
 #include "pipeline/batch.h"
 #include "pipeline/scene_job.h"
@@ -12,10 +13,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
-#include <initializer_list>
 #include <memory>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -83,25 +82,25 @@ inline void add_material_options(CLI::App* sub, SceneCliOptions& o) {
         ->capture_default_str();
     sub->add_option("--isotropic", o.isotropic,
                     "Kernel from the footprint covariance Sigma: mean t = tr, sum t = 2 tr, max t = 2 lambda_max")
-        ->check(CLI::IsMember({"mean", "sum", "max"}))
+        ->check(is_member_of(kIsotropicReductionNames))
         ->capture_default_str();
     sub->add_option("--filter", o.filter, "Roughness filter: projected (TK21 Eq. 4-7) or approx (Eq. 9)")
-        ->check(CLI::IsMember({"projected", "approx"}))
+        ->check(is_member_of(kRoughnessFilterModeNames))
         ->capture_default_str();
     sub->add_option("--max-kernel", o.max_kernel, "Clamp of the baked kernel (0: none)")->check(finite_number(true));
     sub->add_option("--normal-y", o.normal_y, "Normal-map green convention: +y (OpenGL/glTF) or -y (DirectX)")
-        ->check(CLI::IsMember({"+y", "-y"}))
+        ->check(is_member_of(kNormalGreenNames))
         ->capture_default_str();
     sub->add_option("--reconstruct-z", o.reconstruct_z, "Rebuild normal z from x, y")
-        ->check(CLI::IsMember({"auto", "always", "never"}))
+        ->check(is_member_of(kReconstructZNames))
         ->capture_default_str();
     sub->add_flag("--anisotropic,!--isotropic-kernel", o.anisotropic,
                   "Kernel texture holds Sigma (xx, yy, xy) (default, what the default rule reads); --isotropic-kernel: t only");
     sub->add_option("--lean-space", o.lean_space, "LEAN moments in projected or slope space")
-        ->check(CLI::IsMember({"projected", "slope"}))
+        ->check(is_member_of(kLeanSpaceNames))
         ->capture_default_str();
     sub->add_option("--outputs", o.outputs, "Texture outputs to write (any of roughness, kernel, lean, normal)")
-        ->check(CLI::IsMember({"roughness", "kernel", "lean", "normal"}))
+        ->check(is_member_of(kTextureOutputNames))
         ->delimiter(',')
         ->capture_default_str();
 }
@@ -110,26 +109,21 @@ inline void add_material_options(CLI::App* sub, SceneCliOptions& o) {
 // isotropic, filter, max-kernel (0: none), normal-y, reconstruct-z, anisotropic, lean-space, outputs.
 // Returns the problem, or an empty string when `value` was applied.
 inline std::string set_texture_setting(TextureBakeSettings& t, const std::string& key, const std::string& value) {
-    auto one_of = [&](std::initializer_list<const char*> allowed) {
-        for (const char* a : allowed)
-            if (value == a) return true;
-        return false;
+    // Sets `field` to the enumerator `value` names, or says it names none.
+    auto set = [&value](auto& field, auto parsed) -> std::string {
+        if (!parsed) return "'" + value + "' is not a valid value";
+        field = *parsed;
+        return {};
     };
-    if (key == "isotropic" && one_of({"mean", "sum", "max"})) {
-        t.isotropic = value == "sum" ? IsotropicReduction::Sum : value == "max" ? IsotropicReduction::Max
-                                                                                : IsotropicReduction::Mean;
-    } else if (key == "filter" && one_of({"projected", "approx"})) {
-        t.filter = value == "approx" ? RoughnessFilterMode::Approx : RoughnessFilterMode::Projected;
-    } else if (key == "normal-y" && one_of({"+y", "-y"})) {
-        t.normal_y = value == "-y" ? NormalGreen::MinusY : NormalGreen::PlusY;
-    } else if (key == "reconstruct-z" && one_of({"auto", "always", "never"})) {
-        t.reconstruct_z = value == "always" ? ReconstructZ::Always
-                          : value == "never" ? ReconstructZ::Never
-                                             : ReconstructZ::Auto;
-    } else if (key == "anisotropic" && one_of({"true", "false", "1", "0"})) {
+    if (key == "isotropic") return set(t.isotropic, parse_isotropic_reduction(value));
+    if (key == "filter") return set(t.filter, parse_roughness_filter_mode(value));
+    if (key == "normal-y") return set(t.normal_y, parse_normal_green(value));
+    if (key == "reconstruct-z") return set(t.reconstruct_z, parse_reconstruct_z(value));
+    if (key == "lean-space") return set(t.lean_space, parse_lean_space(value));
+    if (key == "anisotropic") {
+        if (value != "true" && value != "false" && value != "1" && value != "0")
+            return "'" + value + "' is not a valid value";
         t.anisotropic = value == "true" || value == "1";
-    } else if (key == "lean-space" && one_of({"projected", "slope"})) {
-        t.lean_space = value == "slope" ? LeanSpace::Slope : LeanSpace::Projected;
     } else if (key == "max-kernel") {
         char* end = nullptr;
         const double v = std::strtod(value.c_str(), &end);
@@ -137,20 +131,9 @@ inline std::string set_texture_setting(TextureBakeSettings& t, const std::string
             return "'" + value + "' is not a finite number >= 0";
         t.max_kernel = v > 0 ? std::optional<double>(v) : std::nullopt;
     } else if (key == "outputs") {
-        TextureOutputs out{false, false, false, false};
-        std::stringstream list(value);
-        std::string item;
-        while (std::getline(list, item, ',')) {
-            if (item == "roughness") out.roughness = true;
-            else if (item == "kernel") out.kernel = true;
-            else if (item == "lean") out.lean = true;
-            else if (item == "normal") out.normal = true;
-            else return "'" + item + "' is not one of roughness, kernel, lean, normal";
-        }
-        t.outputs = out;
-    } else if (key == "isotropic" || key == "filter" || key == "normal-y" || key == "reconstruct-z" ||
-               key == "anisotropic" || key == "lean-space") {
-        return "'" + value + "' is not a valid value";
+        auto outputs = parse_texture_outputs(value);
+        if (!outputs) return outputs.error().message;
+        t.outputs = *outputs;
     } else {
         return "unknown key (per-material keys: isotropic, filter, max-kernel, normal-y, reconstruct-z, "
                "anisotropic, lean-space, outputs)";
@@ -164,9 +147,9 @@ inline Result<SceneJob> make_scene_job(const SceneCliOptions& o) {
     SceneJob job;
     for (const std::string& s : o.scenes) job.scenes.emplace_back(s);
     job.output_dir = o.output_dir;
-    job.format = o.format == "gltf" ? SceneFormat::Gltf : o.format == "glb" ? SceneFormat::Glb : SceneFormat::SameAsInput;
+    job.format = *parse_scene_format(o.format);
     job.container = io::parse_container(o.container).value_or(io::TextureContainer::Ktx2);
-    job.gltf_mode = o.gltf_mode == "replace" ? GltfMode::Replace : GltfMode::Sidecar;
+    job.gltf_mode = *parse_gltf_mode(o.gltf_mode);
     job.basisu = o.basisu;
     if (auto ok = apply_block_options(o.blocks, job.container, "--container", job.supercompression); !ok)
         return ok.error();
@@ -176,19 +159,17 @@ inline Result<SceneJob> make_scene_job(const SceneCliOptions& o) {
     p.min_relative_curvature = o.min_relative_curvature;
     p.kappa = o.kappa;
     p.threads = run_settings().jobs;
+    // The options' checks accept only the enums' names.
     TextureBakeSettings& t = p.texture_settings;
-    t.isotropic = o.isotropic == "sum" ? IsotropicReduction::Sum : o.isotropic == "max" ? IsotropicReduction::Max
-                                                                                        : IsotropicReduction::Mean;
-    t.filter = o.filter == "approx" ? RoughnessFilterMode::Approx : RoughnessFilterMode::Projected;
+    t.isotropic = *parse_isotropic_reduction(o.isotropic);
+    t.filter = *parse_roughness_filter_mode(o.filter);
     if (o.max_kernel > 0) t.max_kernel = o.max_kernel;
-    t.normal_y = o.normal_y == "-y" ? NormalGreen::MinusY : NormalGreen::PlusY;
-    t.reconstruct_z = o.reconstruct_z == "always" ? ReconstructZ::Always
-                      : o.reconstruct_z == "never" ? ReconstructZ::Never
-                                                   : ReconstructZ::Auto;
+    t.normal_y = *parse_normal_green(o.normal_y);
+    t.reconstruct_z = *parse_reconstruct_z(o.reconstruct_z);
     t.anisotropic = o.anisotropic;
-    t.lean_space = o.lean_space == "slope" ? LeanSpace::Slope : LeanSpace::Projected;
-    auto has = [&](const char* k) { return std::find(o.outputs.begin(), o.outputs.end(), k) != o.outputs.end(); };
-    t.outputs = TextureOutputs{has("roughness"), has("kernel"), has("lean"), has("normal")};
+    t.lean_space = *parse_lean_space(o.lean_space);
+    t.outputs = TextureOutputs{false, false, false, false};
+    for (const std::string& name : o.outputs) select_texture_output(t.outputs, name);
     t.threads = run_settings().jobs;
     const nlohmann::json overrides = material_overrides().to_json();
     for (const auto& [material, keys] : overrides.items()) {

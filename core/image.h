@@ -2,7 +2,12 @@
 // Values are stored as decoded from the file (no colour conversion); 8/16-bit data is normalised to [0,1].
 #pragma once
 
+#include "core/enum_names.h"
+
+#include <array>
 #include <cstddef>
+#include <optional>
+#include <string_view>
 #include <vector>
 
 namespace specbake {
@@ -25,6 +30,13 @@ struct Image {
 // How a texture is addressed outside [0, 1]: recorded with baked outputs so the run time samples them the
 // way the bake assumed (EXR "wrapmodes", the manifest).
 enum class WrapMode { Repeat, Clamp, Mirror };
+
+// "repeat", "clamp", "mirror" (the CLI and manifest spellings), in enum order.
+inline constexpr std::array<std::string_view, 3> kWrapModeNames{"repeat", "clamp", "mirror"};
+inline std::string_view to_string(WrapMode wrap) { return kWrapModeNames[size_t(wrap)]; }
+inline std::optional<WrapMode> parse_wrap_mode(std::string_view name) {
+    return enum_from_name<WrapMode>(kWrapModeNames, name);
+}
 
 // A full mip chain, level 0 first; level L is max(1, W >> L) x max(1, H >> L).
 struct MipChain {

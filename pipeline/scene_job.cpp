@@ -372,9 +372,7 @@ Result<ScenePlan> plan_scene(const fs::path& path, const PlanOptions& options) {
 
 json scene_settings_json(const SceneJob& job) {
     json s = {{"estimator", std::string(to_string(job.plan.estimator))},
-              {"format", job.format == SceneFormat::Glb    ? "glb"
-                         : job.format == SceneFormat::Gltf ? "gltf"
-                                                           : "same as input"},
+              {"format", job.format == SceneFormat::SameAsInput ? "same as input" : std::string(to_string(job.format))},
               {"textures", job.plan.textures},
               {"check_material", job.plan.check_material},
               {"kappa", job.plan.kappa},
@@ -387,7 +385,7 @@ json scene_settings_json(const SceneJob& job) {
         for (const auto& [name, object] : job.plan.material_glints) glints[name] = object;
         s["material_glints"] = glints;
     }
-    if (job.gltf_mode == GltfMode::Replace) s["gltf_mode"] = "replace";
+    if (job.gltf_mode != GltfMode::Sidecar) s["gltf_mode"] = std::string(to_string(job.gltf_mode));
     // Recorded only when asked, so manifests of bakes without it stay as they were.
     if (job.supercompression.block != io::BlockFamily::None) s["supercompression"] = supercompression_json(job.supercompression);
     if (job.plan.textures) {

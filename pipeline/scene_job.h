@@ -5,6 +5,7 @@
 // plan. Curvature is stored in object space (a node scale s divides it by s in world space).
 #pragma once
 
+#include "core/enum_names.h"
 #include "pipeline/plan.h"
 #include "pipeline/texture_job.h"
 #include "io/gltf/gltf_scene.h"
@@ -12,15 +13,31 @@
 #include "io/output/output_folder.h"
 #include "io/texture/texture_writer.h"
 
+#include <array>
+#include <cstddef>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace specbake {
 
 enum class SceneFormat { SameAsInput, Gltf, Glb };
 enum class GltfMode { Sidecar, Replace };  // `bake --gltf-mode`
+
+// The CLI spellings (`--format`, `--gltf-mode`), in enum order.
+inline constexpr std::array<std::string_view, 3> kSceneFormatNames{"same", "gltf", "glb"};
+inline constexpr std::array<std::string_view, 2> kGltfModeNames{"sidecar", "replace"};
+inline std::string_view to_string(SceneFormat f) { return kSceneFormatNames[size_t(f)]; }
+inline std::string_view to_string(GltfMode m) { return kGltfModeNames[size_t(m)]; }
+inline std::optional<SceneFormat> parse_scene_format(std::string_view name) {
+    return enum_from_name<SceneFormat>(kSceneFormatNames, name);
+}
+inline std::optional<GltfMode> parse_gltf_mode(std::string_view name) {
+    return enum_from_name<GltfMode>(kGltfModeNames, name);
+}
 
 struct SceneJob {
     std::vector<std::filesystem::path> scenes;

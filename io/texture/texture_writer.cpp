@@ -39,14 +39,11 @@ std::string gpu_format_name(TexelEncoding encoding, int channels) {
     return name + (is_float ? "_SFLOAT" : "_UNORM");
 }
 
-const char* container_name(TextureContainer c) {
-    switch (c) {
-        case TextureContainer::Ktx2: return "ktx2";
-        case TextureContainer::Dds: return "dds";
-        case TextureContainer::Exr: return "exr";
-        case TextureContainer::PngPerMip: return "png";
-    }
-    return "ktx2";
+// The names are string literals, so their data() is null-terminated.
+const char* container_name(TextureContainer c) { return kTextureContainerNames[size_t(c)].data(); }
+
+std::optional<TextureContainer> parse_container(std::string_view name) {
+    return enum_from_name<TextureContainer>(kTextureContainerNames, name);
 }
 
 const char* encoding_name(TexelEncoding e) {
@@ -59,27 +56,10 @@ const char* encoding_name(TexelEncoding e) {
     return "float32";
 }
 
-std::optional<TextureContainer> parse_container(const std::string& name) {
-    for (TextureContainer c : {TextureContainer::Ktx2, TextureContainer::Dds, TextureContainer::Exr,
-                               TextureContainer::PngPerMip}) {
-        if (name == container_name(c)) return c;
-    }
-    return std::nullopt;
-}
+const char* block_family_name(BlockFamily f) { return kBlockFamilyNames[size_t(f)].data(); }
 
-const char* block_family_name(BlockFamily f) {
-    switch (f) {
-        case BlockFamily::Bc: return "bc";
-        case BlockFamily::Astc: return "astc";
-        case BlockFamily::None: break;
-    }
-    return "none";
-}
-
-std::optional<BlockFamily> parse_block_family(const std::string& name) {
-    for (BlockFamily f : {BlockFamily::None, BlockFamily::Bc, BlockFamily::Astc})
-        if (name == block_family_name(f)) return f;
-    return std::nullopt;
+std::optional<BlockFamily> parse_block_family(std::string_view name) {
+    return enum_from_name<BlockFamily>(kBlockFamilyNames, name);
 }
 
 std::string block_container_problem(TextureContainer container, BlockFamily family) {

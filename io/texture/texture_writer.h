@@ -5,16 +5,20 @@
 // D3D has no 3-channel 8/16-bit formats and Vulkan makes them optional): 3-channel data gets A = 1.
 #pragma once
 
+#include "core/enum_names.h"
 #include "core/image.h"
 #include "core/result.h"
 #include "io/output/manifest.h"
 
+#include <array>
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace specbake::io {
@@ -55,15 +59,19 @@ struct Supercompression {
     int astc_block = 4;  // 4, 6 or 8 texels a side
 };
 
-const char* block_family_name(BlockFamily f);  // "none", "bc", "astc"
-std::optional<BlockFamily> parse_block_family(const std::string& name);
+// "none", "bc", "astc" (the CLI spellings), in enum order.
+inline constexpr std::array<std::string_view, 3> kBlockFamilyNames{"none", "bc", "astc"};
+const char* block_family_name(BlockFamily f);
+std::optional<BlockFamily> parse_block_family(std::string_view name);
 // Why `container` cannot hold the block formats of `family` (BC: KTX2 and DDS; ASTC: KTX2 only, as DDS
 // has no standard ASTC format), or empty when it can.
 std::string block_container_problem(TextureContainer container, BlockFamily family);
 
-const char* container_name(TextureContainer c);      // "ktx2", "dds", "exr", "png"
+// "ktx2", "dds", "exr", "png" (the CLI and manifest spellings), in enum order.
+inline constexpr std::array<std::string_view, 4> kTextureContainerNames{"ktx2", "dds", "exr", "png"};
+const char* container_name(TextureContainer c);
+std::optional<TextureContainer> parse_container(std::string_view name);
 const char* encoding_name(TexelEncoding e);          // "unorm8", "unorm16", "float16", "float32"
-std::optional<TextureContainer> parse_container(const std::string& name);
 
 // Writes `chain` (1-4 channels) as `dir/<stem>.<ext>` (per-mip: `dir/<stem>_mip<L>.<ext>`), 3 channels
 // stored as RGBA with A = 1. `channel_names` say what each stored channel means (e.g. "m.x"); they go to
