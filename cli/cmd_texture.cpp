@@ -3,6 +3,7 @@
 // is pipeline/texture_job.h.
 #include "cli/block_options.h"
 #include "cli/command.h"
+#include "cli/name_options.h"
 #include "io/output/bake_output.h"
 #include "pipeline/texture_job.h"
 #include "cli/pipeline_options.h"
@@ -12,7 +13,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
-#include <sstream>
 #include <string>
 
 namespace specbake::cli {
@@ -57,22 +57,6 @@ bool parse_roughness(const std::string& arg, fs::path& file, int& channel) {
     return true;
 }
 
-bool parse_outputs(const std::string& list, TextureOutputs& out) {
-    out = TextureOutputs{false, false, false, false};
-    std::stringstream ss(list);
-    std::string item;
-    bool any = false;
-    while (std::getline(ss, item, ',')) {
-        if (item == "roughness") out.roughness = true;
-        else if (item == "kernel") out.kernel = true;
-        else if (item == "lean") out.lean = true;
-        else if (item == "normal") out.normal = true;
-        else return false;
-        any = true;
-    }
-    return any;
-}
-
 int run_texture(const TextureOptions& o, const PipelineFlags& pipe) {
     TextureJob job;
     job.demo = o.demo;
@@ -106,43 +90,32 @@ int run_texture(const TextureOptions& o, const PipelineFlags& pipe) {
         print_error("texture: " + ok.error().message);
         return kExitUsage;
     }
+    // The options' checks accept only the enums' names.
     TextureBakeSettings& s = job.settings;
-    s.isotropic = o.isotropic == "sum" ? IsotropicReduction::Sum
-                  : o.isotropic == "max" ? IsotropicReduction::Max : IsotropicReduction::Mean;
-    s.filter = o.filter == "approx" ? RoughnessFilterMode::Approx : RoughnessFilterMode::Projected;
+    s.isotropic = *parse_isotropic_reduction(o.isotropic);
+    s.filter = *parse_roughness_filter_mode(o.filter);
     s.max_kernel = o.max_kernel;
-    s.normal_y = o.normal_y == "-y" ? NormalGreen::MinusY : NormalGreen::PlusY;
-    s.reconstruct_z = o.reconstruct_z == "always" ? ReconstructZ::Always
-                      : o.reconstruct_z == "never" ? ReconstructZ::Never : ReconstructZ::Auto;
-    s.wrap = o.wrap == "clamp" ? WrapMode::Clamp : o.wrap == "mirror" ? WrapMode::Mirror : WrapMode::Repeat;
+    s.normal_y = *parse_normal_green(o.normal_y);
+    s.reconstruct_z = *parse_reconstruct_z(o.reconstruct_z);
+    s.wrap = *parse_wrap_mode(o.wrap);
     s.anisotropic = o.anisotropic;
-    s.lean_space = o.lean_space == "slope" ? LeanSpace::Slope : LeanSpace::Projected;
+    s.lean_space = *parse_lean_space(o.lean_space);
     s.threads = run_settings().jobs;
-    if (!parse_outputs(o.outputs, s.outputs)) {
+    auto outputs = parse_texture_outputs(o.outputs);
+    if (!outputs || to_names(*outputs).empty()) {
         print_error("texture: --outputs " + o.outputs + ": expected a comma list of roughness, kernel, lean, normal");
         return kExitUsage;
     }
-    // The settings and inputs exactly as run_texture_job records them in the manifest ("input_facts" is
-    // derived from the inputs, which their hashes cover).
-    nlohmann::json recorded = texture_settings_json(job.settings, job.container);
-    if (job.container == io::TextureContainer::Ktx2 || job.supercompression.block != io::BlockFamily::None)
-        recorded["supercompression"] = supercompression_json(job.supercompression);
-    std::vector<std::string> inputs;
-    if (job.demo) {
-        recorded["demo"] = true;
-        inputs = {"demo_normal.png", "demo_orm.png"};
-    } else {
-        inputs.push_back(job.normal.string());
-        if (job.roughness) inputs.push_back(job.roughness->string());
-    }
-    if (job.demo || job.roughness) recorded["roughness_channel"] = job.roughness_channel;
-    else recorded["roughness_value"] = job.roughness_value;
+    s.outputs = *outputs;
+    TextureJobRecord record = texture_job_record(job);
+    std::vector<std::string>& inputs = record.inputs;
     auto lock = io::lock_output_folder(job.output_dir, pipe.depfile, [](const std::string& line) { print_info(line); });
     if (!lock) {
         print_error(lock.error().message);
         return kExitFailed;
     }
-    if (skip_if_up_to_date({job.output_dir, inputs, recorded, tool_version(), {"input_facts"}}, pipe)) return kExitOk;
+    if (skip_if_up_to_date({job.output_dir, inputs, record.settings, tool_version(), {"input_facts"}}, pipe))
+        return kExitOk;
     job.lock = &*lock;
     job.replace = pipe.force;
     const bool quiet = run_settings().verbosity == Verbosity::quiet;
@@ -198,7 +171,7 @@ void add_texture_command(CLI::App& app, std::function<int()>& run) {
     sub->add_option("-o,--output", o->output, "Output folder (created; must not hold an input)")->required();
     sub->add_option("--format", o->format, "Container: ktx2 (default), dds, exr (tiled, mipmapped) or png "
                                            "(one file per mip; float data as EXR)")
-        ->check(CLI::IsMember({"ktx2", "dds", "exr", "png"}));
+        ->check(is_member_of(io::kTextureContainerNames));
     sub->add_option("--supercompression", o->supercompression,
                     "KTX2 level compression: zstd (default; KTX2 supercompression scheme 2) or none")
         ->check(CLI::IsMember({"zstd", "none"}));
@@ -208,27 +181,27 @@ void add_texture_command(CLI::App& app, std::function<int()>& run) {
     sub->add_option("--isotropic", o->isotropic,
                     "Kernel from the footprint covariance Sigma: mean t = tr (default), sum t = 2 tr, "
                     "max t = 2 lambda_max")
-        ->check(CLI::IsMember({"mean", "sum", "max"}));
+        ->check(is_member_of(kIsotropicReductionNames));
     sub->add_option("--filter", o->filter,
                     "projected: a' = (a + t(1-a)) / (1 + t(1-a)) (default, exact for GGX); approx: a' = min(1, a + t)")
-        ->check(CLI::IsMember({"projected", "approx"}));
+        ->check(is_member_of(kRoughnessFilterModeNames));
     sub->add_option("--max-kernel", o->max_kernel, "Clamp of the kernel t (none by default)")
         ->check(CLI::Range(0.0, 1e9));
     sub->add_option("--normal-y", o->normal_y, "Green channel convention: +y (OpenGL/glTF, default) or -y (DirectX)")
-        ->check(CLI::IsMember({"+y", "-y"}));
+        ->check(is_member_of(kNormalGreenNames));
     sub->add_option("--reconstruct-z", o->reconstruct_z,
                     "auto (default: for 2-channel maps and maps whose blue is constant at full scale), always, never")
-        ->check(CLI::IsMember({"auto", "always", "never"}));
+        ->check(is_member_of(kReconstructZNames));
     sub->add_option("--wrap", o->wrap,
                     "Addressing the textures are sampled with: repeat (default), clamp, mirror. Footprints lie "
                     "inside the map, so it does not change values; it is recorded in the manifest and EXR files")
-        ->check(CLI::IsMember({"repeat", "clamp", "mirror"}));
+        ->check(is_member_of(kWrapModeNames));
     sub->add_flag("--anisotropic,!--isotropic-kernel", o->anisotropic,
                   "Kernel output holds Sigma (xx, yy, xy) (default, what the default rule reads); --isotropic-kernel: "
                   "t only, a quarter of the memory");
     sub->add_option("--lean-space", o->lean_space,
                     "LEAN moments in projected space (default) or slope space (Olano & Baker, base roughness folded in)")
-        ->check(CLI::IsMember({"projected", "slope"}));
+        ->check(is_member_of(kLeanSpaceNames));
     sub->add_option("--outputs", o->outputs, "Comma list of roughness, kernel, lean, normal (default: all)");
     sub->add_flag("--demo", o->demo,
                   "Bake the built-in 512x384 procedural normal map (bumps, ribs, noise) and ORM map; they are "

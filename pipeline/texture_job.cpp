@@ -25,24 +25,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const char* reduction_name(IsotropicReduction r) {
-    switch (r) {
-        case IsotropicReduction::Mean: return "mean";
-        case IsotropicReduction::Sum: return "sum";
-        case IsotropicReduction::Max: return "max";
-    }
-    return "mean";
-}
-
-const char* wrap_name(WrapMode w) {
-    switch (w) {
-        case WrapMode::Repeat: return "repeat";
-        case WrapMode::Clamp: return "clamp";
-        case WrapMode::Mirror: return "mirror";
-    }
-    return "repeat";
-}
-
 // Replaces the bake's "normal map: " / "roughness map: " prefix by the file's name.
 Error name_error(const Error& e, const std::string& normal_name, const std::string& roughness_name) {
     const std::string& m = e.message;
@@ -219,6 +201,9 @@ double hash01(int x, int y, uint32_t seed) {
 }
 
 constexpr int kDemoWidth = 512, kDemoHeight = 384;
+// The demo maps as written beside its outputs.
+constexpr const char* kDemoNormalName = "demo_normal.png";
+constexpr const char* kDemoOrmName = "demo_orm.png";
 constexpr double kPi = 3.14159265358979323846;
 
 // Height-field gradient of the demo surface: bumps on the left third, ribs along x in the middle,
@@ -273,20 +258,16 @@ Image demo_orm_map() {
 nlohmann::json texture_settings_json(const TextureBakeSettings& s, io::TextureContainer container) {
     nlohmann::json j;
     j["format"] = io::container_name(container);
-    j["isotropic"] = reduction_name(s.isotropic);
-    j["filter"] = s.filter == RoughnessFilterMode::Projected ? "projected" : "approx";
+    j["isotropic"] = std::string(to_string(s.isotropic));
+    j["filter"] = std::string(to_string(s.filter));
     j["max_kernel"] = s.max_kernel ? nlohmann::json(*s.max_kernel) : nlohmann::json(nullptr);
-    j["normal_y"] = s.normal_y == NormalGreen::PlusY ? "+y" : "-y";
-    j["reconstruct_z"] = s.reconstruct_z == ReconstructZ::Auto ? "auto"
-                         : s.reconstruct_z == ReconstructZ::Always ? "always" : "never";
-    j["wrap"] = wrap_name(s.wrap);
+    j["normal_y"] = std::string(to_string(s.normal_y));
+    j["reconstruct_z"] = std::string(to_string(s.reconstruct_z));
+    j["wrap"] = std::string(to_string(s.wrap));
     j["anisotropic"] = s.anisotropic;
-    j["lean_space"] = s.lean_space == LeanSpace::Projected ? "projected" : "slope";
+    j["lean_space"] = std::string(to_string(s.lean_space));
     nlohmann::json outs = nlohmann::json::array();
-    if (s.outputs.roughness) outs.push_back("roughness");
-    if (s.outputs.kernel) outs.push_back("kernel");
-    if (s.outputs.lean) outs.push_back("lean");
-    if (s.outputs.normal) outs.push_back("normal");
+    for (std::string_view name : to_names(s.outputs)) outs.push_back(std::string(name));
     j["outputs"] = outs;
     return j;
 }
@@ -312,6 +293,23 @@ nlohmann::json supercompression_json(const io::Supercompression& s) {
         j["block"] = {{"one_channel", astc}, {"normal", astc}, {"rgba", astc}};
     }
     return j;
+}
+
+TextureJobRecord texture_job_record(const TextureJob& job) {
+    TextureJobRecord record;
+    record.settings = texture_settings_json(job.settings, job.container);
+    if (job.container == io::TextureContainer::Ktx2 || job.supercompression.block != io::BlockFamily::None)
+        record.settings["supercompression"] = supercompression_json(job.supercompression);
+    if (job.demo) {
+        record.settings["demo"] = true;
+        record.inputs = {kDemoNormalName, kDemoOrmName};
+    } else {
+        record.inputs.push_back(job.normal.string());
+        if (job.roughness) record.inputs.push_back(job.roughness->string());
+    }
+    if (job.demo || job.roughness) record.settings["roughness_channel"] = job.roughness_channel;
+    else record.settings["roughness_value"] = job.roughness_value;
+    return record;
 }
 
 Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& in, const TextureBakeSettings& settings,
@@ -434,8 +432,11 @@ Result<TextureOutputsWritten> write_texture_outputs(TextureBakeResult&& baked, c
     return result;
 }
 
-Result<TextureJobOutcome> run_texture_job(const TextureJob& job) {
-    const ProgressFn& progress = job.progress;
+namespace {
+
+// The job's checks before anything is read: an output folder that can be one, no input inside it, block
+// formats its container holds, UTF-8 paths.
+Result<void> check_texture_job(const TextureJob& job) {
     std::error_code ec;
     if (job.output_dir.empty()) return make_error("no output folder given");
     if (const std::string p = io::block_container_problem(job.container, job.supercompression.block); !p.empty())
@@ -444,143 +445,178 @@ Result<TextureJobOutcome> run_texture_job(const TextureJob& job) {
         if (auto r = io::check_utf8_path(p); !r) return r.error();
     if (fs::exists(job.output_dir, ec) && !fs::is_directory(job.output_dir, ec))
         return make_error(job.output_dir.string() + ": exists and is not a folder");
-
     if (!job.demo) {
         std::vector<fs::path> inputs{job.normal};
         if (job.roughness) inputs.push_back(*job.roughness);
         if (auto ok = io::check_output_not_input(job.output_dir, inputs); !ok) return ok.error();
     }
-    auto out = io::BakeOutput::open(job.output_dir, job.lock,
-                                {job.demo ? std::string(io::kDemoIdentity) : job.normal.string()}, job.replace,
-                                progress);
-    if (!out) return out.error();
-    const fs::path& stage = out->stage();
+    return {};
+}
 
-    io::Manifest manifest;
-    manifest.version = tool_version();
-    manifest.settings = texture_settings_json(job.settings, job.container);
-    if (job.container == io::TextureContainer::Ktx2 || job.supercompression.block != io::BlockFamily::None)
-        manifest.settings["supercompression"] = supercompression_json(job.supercompression);
-
-    TextureInputs in;
+// The job's decoded maps, named as the manifest and error messages name them, with their manifest entries.
+struct JobMaps {
     io::DecodedImage normal, roughness;
-    if (job.demo) {
-        normal.image = demo_normal_map();
-        roughness.image = demo_orm_map();
-        in.normal_name = "demo_normal.png";
-        in.roughness_name = "demo_orm.png";
-        manifest.settings["demo"] = true;
-        // The generated inputs are written beside the outputs, so the bake can be inspected and repeated
-        // with --normal/--roughness.
-        for (const auto& [image, name] : {std::pair{&normal.image, in.normal_name},
-                                          std::pair{&roughness.image, in.roughness_name}}) {
-            const fs::path path = stage / name;
-            if (auto ok = io::write_image(path, *image, 8); !ok) return out->final_names(ok.error());
-            auto hash = io::sha256_file(path);
-            if (!hash) return hash.error();
-            manifest.inputs.push_back({name, *hash});
-        }
-    } else {
-        if (progress) progress("reading " + job.normal.string());
-        if (job.roughness && progress) progress("reading " + job.roughness->string());
-        // The two maps are decoded and hashed side by side, each file by one task. The row-streaming bake
-        // (KTX2, DDS) reads 8-bit maps as bytes, a quarter of the float images' memory.
-        const bool keep_8bit = io::EncodedTexture::supports(job.container);
-        Result<io::DecodedImage> n = make_error(""), r = make_error("");
-        Result<std::string> n_hash = make_error(""), r_hash = make_error("");
-        tbb::parallel_invoke(
-            [&] {
-                n = io::decode_image(job.normal, keep_8bit);
-                if (n) n_hash = io::sha256_file(job.normal);
-            },
-            [&] {
-                if (!job.roughness) return;
-                r = io::decode_image(*job.roughness, keep_8bit);
-                if (r) r_hash = io::sha256_file(*job.roughness);
-            });
-        if (!n) return n.error();
-        if (!n_hash) return n_hash.error();
-        normal = std::move(*n);
-        in.normal_name = job.normal.string();
-        manifest.inputs.push_back({job.normal.string(), *n_hash});
-        if (job.roughness) {
-            if (!r) return r.error();
-            if (!r_hash) return r_hash.error();
-            roughness = std::move(*r);
-            in.roughness_name = job.roughness->string();
-            manifest.inputs.push_back({job.roughness->string(), *r_hash});
-        }
+    std::string normal_name, roughness_name;
+    bool have_roughness = false;
+    std::vector<io::ManifestInput> entries;
+};
+
+// The demo maps, written into `out`'s staging folder beside the outputs, so the bake can be inspected and
+// repeated with --normal/--roughness.
+Result<void> make_demo_maps(const io::BakeOutput& out, JobMaps& maps) {
+    maps.normal.image = demo_normal_map();
+    maps.roughness.image = demo_orm_map();
+    maps.normal_name = kDemoNormalName;
+    maps.roughness_name = kDemoOrmName;
+    maps.have_roughness = true;
+    for (const auto& [image, name] : {std::pair{&maps.normal.image, maps.normal_name},
+                                      std::pair{&maps.roughness.image, maps.roughness_name}}) {
+        const fs::path path = out.stage() / name;
+        if (auto ok = io::write_image(path, *image, 8); !ok) return out.final_names(ok.error());
+        auto hash = io::sha256_file(path);
+        if (!hash) return hash.error();
+        maps.entries.push_back({name, *hash});
     }
-    const bool have_roughness = job.demo || job.roughness.has_value();
-    // Non-finite texels are reported by the bake's validation, with the file's name.
+    return {};
+}
+
+// The job's map files, decoded and hashed side by side, each file by one task. The row-streaming bake
+// (KTX2, DDS) reads 8-bit maps as bytes, a quarter of the float images' memory.
+Result<void> read_job_maps(const TextureJob& job, JobMaps& maps) {
+    if (job.progress) job.progress("reading " + job.normal.string());
+    if (job.roughness && job.progress) job.progress("reading " + job.roughness->string());
+    const bool keep_8bit = io::EncodedTexture::supports(job.container);
+    Result<io::DecodedImage> n = make_error(""), r = make_error("");
+    Result<std::string> n_hash = make_error(""), r_hash = make_error("");
+    tbb::parallel_invoke(
+        [&] {
+            n = io::decode_image(job.normal, keep_8bit);
+            if (n) n_hash = io::sha256_file(job.normal);
+        },
+        [&] {
+            if (!job.roughness) return;
+            r = io::decode_image(*job.roughness, keep_8bit);
+            if (r) r_hash = io::sha256_file(*job.roughness);
+        });
+    if (!n) return n.error();
+    if (!n_hash) return n_hash.error();
+    maps.normal = std::move(*n);
+    maps.normal_name = job.normal.string();
+    maps.entries.push_back({job.normal.string(), *n_hash});
+    if (job.roughness) {
+        if (!r) return r.error();
+        if (!r_hash) return r_hash.error();
+        maps.roughness = std::move(*r);
+        maps.roughness_name = job.roughness->string();
+        maps.have_roughness = true;
+        maps.entries.push_back({job.roughness->string(), *r_hash});
+    }
+    return {};
+}
+
+// The bake's view of `maps` (which must stay where they are while it is used): the 8-bit bytes where the
+// decoder kept them, else the float images. Non-finite texels are reported by the bake's validation.
+TextureInputs texture_inputs_of(const JobMaps& maps, const TextureJob& job) {
     auto bytes_map = [](const io::Bytes8& b) {
         return TextureMap{b.width, b.height, b.channels, b.row_bytes, nullptr, b.data.data() + b.offset};
     };
-    in.normal = &normal.image;
-    if (!normal.bytes8.empty()) in.normal = nullptr, in.normal_map = bytes_map(normal.bytes8);
+    TextureInputs in;
+    in.normal_name = maps.normal_name;
+    in.roughness_name = maps.roughness_name;
+    in.normal = &maps.normal.image;
+    if (!maps.normal.bytes8.empty()) in.normal = nullptr, in.normal_map = bytes_map(maps.normal.bytes8);
     in.release_rows = true;  // the job's own buffers, dropped after the bake
-    in.normal_bits = normal.info.is_float ? 16 : normal.info.bits_per_channel;
-    if (have_roughness) {
-        in.roughness = &roughness.image;
-        if (!roughness.bytes8.empty()) in.roughness = nullptr, in.roughness_map = bytes_map(roughness.bytes8);
-        in.roughness_bits = roughness.info.is_float ? 16 : roughness.info.bits_per_channel;
+    in.normal_bits = maps.normal.info.is_float ? 16 : maps.normal.info.bits_per_channel;
+    if (maps.have_roughness) {
+        in.roughness = &maps.roughness.image;
+        if (!maps.roughness.bytes8.empty()) in.roughness = nullptr, in.roughness_map = bytes_map(maps.roughness.bytes8);
+        in.roughness_bits = maps.roughness.info.is_float ? 16 : maps.roughness.info.bits_per_channel;
     }
     in.roughness_channel = job.roughness_channel;
     in.roughness_value = job.roughness_value;
-    if (!have_roughness) manifest.settings["roughness_value"] = job.roughness_value;
-    else manifest.settings["roughness_channel"] = job.roughness_channel;
+    return in;
+}
 
-    Result<TextureOutputsWritten> written = make_error("");
-    if (io::EncodedTexture::supports(job.container)) {
-        // KTX2 and DDS: the decoded inputs are released once baked, before the files are packed and written,
-        // so the inputs, the encoded files and the packed files are never all held at once.
-        auto encoded = bake_texture_encoded(in, job.settings, job.container, "texture", progress, job.fraction,
-                                            job.supercompression);
-        if (!encoded) return out->final_names(encoded.error());
-        normal.image = Image{}, normal.bytes8 = io::Bytes8{};
-        roughness.image = Image{}, roughness.bytes8 = io::Bytes8{};
-        if (progress)
-            for (const io::EncodedFile& f : encoded->files) progress("writing " + f.stem);
-        auto files = io::write_encoded_textures(encoded->files, stage);
-        if (!files) return out->final_names(files.error());
-        written = TextureOutputsWritten{std::move(*files), encoded->notes, encoded->max_roughness_change};
-    } else {
-        written = bake_texture_outputs(in, job.settings, job.container, stage, "texture", progress, job.fraction,
-                                       job.supercompression);
+// Bakes `in` and writes the outputs into `out`'s staging folder. KTX2 and DDS: the decoded maps are
+// released once baked, before the files are packed and written, so the inputs, the encoded files and the
+// packed files are never all held at once. Errors name the final files.
+Result<TextureOutputsWritten> bake_job_outputs(const TextureJob& job, const TextureInputs& in, JobMaps& maps,
+                                               const io::BakeOutput& out) {
+    if (!io::EncodedTexture::supports(job.container)) {
+        auto written = bake_texture_outputs(in, job.settings, job.container, out.stage(), "texture", job.progress,
+                                            job.fraction, job.supercompression);
+        if (!written) return out.final_names(written.error());
+        return written;
     }
-    if (!written) return out->final_names(written.error());
+    auto encoded = bake_texture_encoded(in, job.settings, job.container, "texture", job.progress, job.fraction,
+                                        job.supercompression);
+    if (!encoded) return out.final_names(encoded.error());
+    maps.normal.image = Image{}, maps.normal.bytes8 = io::Bytes8{};
+    maps.roughness.image = Image{}, maps.roughness.bytes8 = io::Bytes8{};
+    if (job.progress)
+        for (const io::EncodedFile& f : encoded->files) job.progress("writing " + f.stem);
+    auto files = io::write_encoded_textures(encoded->files, out.stage());
+    if (!files) return out.final_names(files.error());
+    return TextureOutputsWritten{std::move(*files), encoded->notes, encoded->max_roughness_change};
+}
 
-    // The plan (SPEC Sec. 6): would the bake change roughness visibly, i.e. by half a quantisation step?
+// The plan's entry (SPEC Sec. 6): would the bake change roughness visibly, i.e. by half a quantisation step?
+nlohmann::json texture_decision(const TextureInputs& in, bool have_roughness, double max_roughness_change) {
     const int bits = (have_roughness ? in.roughness_bits : in.normal_bits) <= 8 ? 8 : 16;
     const double half_step = 0.5 / double((1 << bits) - 1);
-    const bool visible = written->max_roughness_change >= half_step;
+    const bool visible = max_roughness_change >= half_step;
     nlohmann::json decision;
     decision["target"] = in.normal_name;
     decision["action"] = "texture bake";
-    decision["max_roughness_change"] = written->max_roughness_change;
+    decision["max_roughness_change"] = max_roughness_change;
     decision["half_quantisation_step"] = half_step;
     decision["reason"] = visible ? "requested; the bake changes roughness by more than half a quantisation step"
                                  : "requested; the bake changes roughness by less than half a quantisation step "
                                    "(the outputs equal plain mipmapping of alpha^2 after quantisation)";
-    manifest.plan.push_back(decision);
-    const TextureBakeNotes& notes = written->notes;
+    return decision;
+}
+
+// The manifest's "input_facts": what the bake noticed about its inputs.
+nlohmann::json input_facts(const TextureBakeNotes& notes, const std::string& normal_color_space) {
     nlohmann::json facts;
     facts["z_reconstructed"] = notes.z_reconstructed;
     if (notes.z_reconstructed) facts["z_reason"] = notes.z_reason;
     facts["looks_srgb"] = notes.looks_srgb;
     facts["roughness_is_orm"] = notes.roughness_is_orm;
     facts["roughness_resampled"] = notes.roughness_resampled;
-    facts["normal_color_space_claimed"] = normal.info.color_space;
-    manifest.settings["input_facts"] = facts;
+    facts["normal_color_space_claimed"] = normal_color_space;
+    return facts;
+}
 
+}  // namespace
+
+Result<TextureJobOutcome> run_texture_job(const TextureJob& job) {
+    if (auto ok = check_texture_job(job); !ok) return ok.error();
+    auto out = io::BakeOutput::open(job.output_dir, job.lock,
+                                    {job.demo ? std::string(io::kDemoIdentity) : job.normal.string()}, job.replace,
+                                    job.progress);
+    if (!out) return out.error();
+
+    io::Manifest manifest;
+    manifest.version = tool_version();
+    manifest.settings = texture_job_record(job).settings;
+    JobMaps maps;
+    if (auto ok = job.demo ? make_demo_maps(*out, maps) : read_job_maps(job, maps); !ok) return ok.error();
+    manifest.inputs = maps.entries;
+    const TextureInputs in = texture_inputs_of(maps, job);
+    auto written = bake_job_outputs(job, in, maps, *out);
+    if (!written) return written.error();
+
+    manifest.plan.push_back(texture_decision(in, maps.have_roughness, written->max_roughness_change));
+    manifest.settings["input_facts"] = input_facts(written->notes, maps.normal.info.color_space);
     manifest.outputs = written->outputs;
-    if (progress) progress("writing manifest.json");
-    if (auto ok = io::write_manifest(stage, manifest); !ok) return out->final_names(ok.error());
+    if (job.progress) job.progress("writing manifest.json");
+    if (auto ok = io::write_manifest(out->stage(), manifest); !ok) return out->final_names(ok.error());
     if (auto ok = out->commit(); !ok) return ok.error();
 
     TextureJobOutcome outcome;
     outcome.manifest = std::move(manifest);
-    outcome.notes = notes;
+    outcome.notes = written->notes;
     outcome.max_roughness_change = written->max_roughness_change;
     return outcome;
 }

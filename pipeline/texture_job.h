@@ -46,6 +46,16 @@ struct TextureJob {
 // The manifest's "supercompression" setting: {"scheme": "zstd", "zstd_level": N} or {"scheme": "none"}.
 nlohmann::json supercompression_json(const io::Supercompression& s);
 
+// What a texture job records about how it was asked to bake: the manifest's settings (texture_settings_json
+// plus "supercompression", "demo", and "roughness_channel" or "roughness_value"; the job adds "input_facts",
+// which the inputs' hashes cover) and the input files as the manifest names them (the demo's: the maps it
+// writes). run_texture_job records it and the up-to-date check compares it, so the two cannot disagree.
+struct TextureJobRecord {
+    nlohmann::json settings;
+    std::vector<std::string> inputs;
+};
+TextureJobRecord texture_job_record(const TextureJob& job);
+
 struct TextureJobOutcome {
     io::Manifest manifest;                         // as written to output_dir/manifest.json
     TextureBakeNotes notes;                        // warnings to print, z reconstruction, ...
