@@ -175,13 +175,22 @@ struct Ktx2Layout {
     std::vector<std::vector<uint8_t>> inflated;  // zstd: every level decompressed (and checked)
 };
 
-// `inflate`: zstd levels are decompressed (and kept for decoding); otherwise only each level's zstd frame
-// header is read, whose content size must equal uncompressedByteLength (the check reads headers alone).
-Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& name, bool inflate = true) {
-    auto fail = [&](const std::string& what) { return make_error(name + ": KTX2: " + what); };
+Error ktx2_error(const std::string& name, const std::string& what) { return make_error(name + ": KTX2: " + what); }
+
+// What the header says about the rest of the file: how the levels are stored and where the metadata lies.
+struct Ktx2Sections {
+    bool zstd = false;
+    uint32_t stored_layers = 1;  // layers of every level: 1 for a single image
+    uint64_t index_end = 0;      // end of the level index
+    uint32_t dfd_offset = 0, dfd_length = 0, kvd_offset = 0, kvd_length = 0;
+};
+
+// The header (KTX 2.0 Sec. 3.1): format, size, layers and levels of `L`, checked against what specbake reads
+// and the input limits, and the metadata's place in the file.
+Result<Ktx2Sections> read_ktx2_header(std::span<const uint8_t> b, const std::string& name, Ktx2Layout& L) {
+    auto fail = [&](const std::string& what) { return ktx2_error(name, what); };
     if (b.size() < kKtx2HeaderBytes) return fail("truncated header (" + std::to_string(b.size()) + " bytes)");
     if (std::memcmp(b.data(), kKtx2Identifier, 12) != 0) return fail("bad identifier");
-    Ktx2Layout L;
     const uint32_t vk = u32(b, 12), type_size = u32(b, 16);
     L.width = u32(b, 20);
     L.height = u32(b, 24);
@@ -198,67 +207,51 @@ Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& nam
     if (depth != 0 || faces != 1) return fail("only 2D images and 2D arrays are supported");
     L.layers = layers;
     if (f.block && layers != 0) return fail("block-compressed 2D arrays are not supported");
-    const uint32_t stored_layers = std::max<uint32_t>(1, layers);
+    Ktx2Sections s;
+    s.stored_layers = std::max<uint32_t>(1, layers);
     // Scheme 2 is Zstandard (KTX 2.0 Sec. 3.9.2); BasisLZ (1) and ZLIB (3) are not written by specbake.
     if (supercompression != 0 && supercompression != 2)
         return fail("supercompression scheme " + std::to_string(supercompression) + " (specbake reads none and zstd)");
-    const bool zstd = supercompression == 2;
-    if (auto r = check_size(L.width, L.height, f, stored_layers); !r) return fail(r.error().message);
+    s.zstd = supercompression == 2;
+    if (auto r = check_size(L.width, L.height, f, s.stored_layers); !r) return fail(r.error().message);
     if (L.levels > uint32_t(full_chain_levels(L.width, L.height)))
         return fail("levelCount " + std::to_string(L.levels) + " exceeds the full chain of " +
                     std::to_string(full_chain_levels(L.width, L.height)));
 
-    const uint64_t index_end = kKtx2HeaderBytes + kKtx2LevelEntryBytes * uint64_t(L.levels);
-    if (b.size() < index_end) return fail("truncated level index");
-    const uint32_t dfd_offset = u32(b, 48), dfd_length = u32(b, 52);
-    const uint32_t kvd_offset = u32(b, 56), kvd_length = u32(b, 60);
+    s.index_end = kKtx2HeaderBytes + kKtx2LevelEntryBytes * uint64_t(L.levels);
+    if (b.size() < s.index_end) return fail("truncated level index");
+    s.dfd_offset = u32(b, 48), s.dfd_length = u32(b, 52);
+    s.kvd_offset = u32(b, 56), s.kvd_length = u32(b, 60);
     const uint64_t sgd_offset = u64(b, 64), sgd_length = u64(b, 72);
-    if (dfd_length == 0) return fail("no data format descriptor");
-    if (dfd_offset < index_end || uint64_t(dfd_offset) + dfd_length > b.size())
-        return fail("data format descriptor at " + std::to_string(dfd_offset) + "+" + std::to_string(dfd_length) +
+    if (s.dfd_length == 0) return fail("no data format descriptor");
+    if (s.dfd_offset < s.index_end || uint64_t(s.dfd_offset) + s.dfd_length > b.size())
+        return fail("data format descriptor at " + std::to_string(s.dfd_offset) + "+" + std::to_string(s.dfd_length) +
                     " lies outside the file");
-    if (dfd_offset % 4) return fail("data format descriptor is not 4-byte aligned");
-    if (kvd_length && (kvd_offset < index_end || uint64_t(kvd_offset) + kvd_length > b.size()))
+    if (s.dfd_offset % 4) return fail("data format descriptor is not 4-byte aligned");
+    if (s.kvd_length && (s.kvd_offset < s.index_end || uint64_t(s.kvd_offset) + s.kvd_length > b.size()))
         return fail("key/value data lies outside the file");
     if (sgd_offset != 0 || sgd_length != 0) return fail("supercompression global data, which zstd does not use");
-    // Key/value entries (KTX 2.0 Sec. 3.11): each a 4-byte length, that many bytes, padding to 4; every
-    // entry inside the block.
-    for (uint64_t at = kvd_offset, end = uint64_t(kvd_offset) + kvd_length; kvd_length && at < end;) {
-        if (end - at < 4) return fail("key/value data ends inside an entry's length");
+    return s;
+}
+
+// Key/value entries (KTX 2.0 Sec. 3.11): each a 4-byte length, that many bytes, padding to 4; every entry
+// inside the block.
+Result<void> check_ktx2_key_values(std::span<const uint8_t> b, const Ktx2Sections& s, const std::string& name) {
+    for (uint64_t at = s.kvd_offset, end = uint64_t(s.kvd_offset) + s.kvd_length; s.kvd_length && at < end;) {
+        if (end - at < 4) return ktx2_error(name, "key/value data ends inside an entry's length");
         const uint64_t entry = u32(b, size_t(at));
         if (entry > end - at - 4)
-            return fail("key/value entry at " + std::to_string(at) + " of length " + std::to_string(entry) +
-                        " runs past the key/value data");
+            return ktx2_error(name, "key/value entry at " + std::to_string(at) + " of length " +
+                                        std::to_string(entry) + " runs past the key/value data");
         at += 4 + (entry + 3) / 4 * 4;
     }
+    return {};
+}
 
-    // Data format descriptor: the basic block (Khronos Data Format Specification 1.3, Sec. 5).
-    if (dfd_length < 4 + 24) return fail("data format descriptor too short");
-    if (u32(b, dfd_offset) != dfd_length) return fail("dfdTotalSize does not match dfdByteLength");
-    const size_t blk = dfd_offset + 4;
-    const uint32_t w0 = u32(b, blk), w1 = u32(b, blk + 4);
-    const uint32_t vendor = w0 & 0x1ffff, type = w0 >> 17, version = w1 & 0xffff, block_size = w1 >> 16;
-    if (vendor != 0 || type != 0) return fail("first descriptor block is not the Khronos basic block");
-    if (version != 2) return fail("descriptor version " + std::to_string(version) + " (expected 2)");
-    const uint32_t samples = (block_size - 24) / 16;
-    if (block_size < 24 || (block_size - 24) % 16 || 4 + block_size > dfd_length)
-        return fail("descriptor block size " + std::to_string(block_size) + " is inconsistent");
-    const uint8_t color_model = b[blk + 8];
-    L.transfer = b[blk + 10];
-    if (color_model != f.colour_model)
-        return fail("colour model " + std::to_string(color_model) + " does not match " + f.name + " (expected " +
-                    std::to_string(f.colour_model) + ")");
-    // Texel block dimensions are stored minus one: 1x1x1x1 for plain texels, 4x4x1x1 for BC blocks, the
-    // footprint for ASTC.
-    const int side = block_side(f);
-    if (b[blk + 12] != side - 1 || b[blk + 13] != side - 1 || b[blk + 14] | b[blk + 15])
-        return fail("texel block dimensions are not " + std::to_string(side) + "x" + std::to_string(side) + "x1x1");
-    const uint32_t plane_bytes = block_size_bytes(f);
-    if (b[blk + 16] != plane_bytes)
-        return fail("bytesPlane0 " + std::to_string(b[blk + 16]) + " does not match " + f.name);
-    const uint32_t expected_transfer = f.numeric == Numeric::srgb ? 2 : 1;
-    if (L.transfer != expected_transfer)
-        return fail("transfer function " + std::to_string(L.transfer) + " does not match " + f.name);
+// The samples of the basic descriptor block starting at `blk` (KDFS 1.3 Sec. 5.18) against format `f`.
+Result<void> check_dfd_samples(std::span<const uint8_t> b, size_t blk, uint32_t samples, const FormatInfo& f,
+                               const std::string& name) {
+    auto fail = [&](const std::string& what) { return ktx2_error(name, what); };
     if (f.astc) {
         // One 128-bit sample of channel 0 (ASTC data, KDFS 1.3 Sec. 5.18).
         if (samples != 1 || (b[blk + 24] | b[blk + 25] << 8) != 0 || b[blk + 26] != 127 || (b[blk + 27] & 0x0f) != 0)
@@ -291,20 +284,62 @@ Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& nam
             return fail("DFD sample " + std::to_string(s) + " does not describe channel " + std::to_string(s) +
                         " of " + f.name);
     }
+    return {};
+}
 
-    // Level index: sizes exact, aligned, inside the file, clear of the metadata, smallest level first.
-    // Supercompressed levels have no alignment (mipPadding is align(1)) and any byteLength; they must
-    // inflate to exactly uncompressedByteLength.
+// Data format descriptor: the basic block (Khronos Data Format Specification 1.3, Sec. 5) against the
+// format of `L`, whose transfer function it fills.
+Result<void> check_ktx2_dfd(std::span<const uint8_t> b, const Ktx2Sections& s, const std::string& name,
+                            Ktx2Layout& L) {
+    auto fail = [&](const std::string& what) { return ktx2_error(name, what); };
+    const FormatInfo& f = *L.format;
+    if (s.dfd_length < 4 + 24) return fail("data format descriptor too short");
+    if (u32(b, s.dfd_offset) != s.dfd_length) return fail("dfdTotalSize does not match dfdByteLength");
+    const size_t blk = s.dfd_offset + 4;
+    const uint32_t w0 = u32(b, blk), w1 = u32(b, blk + 4);
+    const uint32_t vendor = w0 & 0x1ffff, type = w0 >> 17, version = w1 & 0xffff, block_size = w1 >> 16;
+    if (vendor != 0 || type != 0) return fail("first descriptor block is not the Khronos basic block");
+    if (version != 2) return fail("descriptor version " + std::to_string(version) + " (expected 2)");
+    const uint32_t samples = (block_size - 24) / 16;
+    if (block_size < 24 || (block_size - 24) % 16 || 4 + block_size > s.dfd_length)
+        return fail("descriptor block size " + std::to_string(block_size) + " is inconsistent");
+    const uint8_t color_model = b[blk + 8];
+    L.transfer = b[blk + 10];
+    if (color_model != f.colour_model)
+        return fail("colour model " + std::to_string(color_model) + " does not match " + f.name + " (expected " +
+                    std::to_string(f.colour_model) + ")");
+    // Texel block dimensions are stored minus one: 1x1x1x1 for plain texels, 4x4x1x1 for BC blocks, the
+    // footprint for ASTC.
+    const int side = block_side(f);
+    if (b[blk + 12] != side - 1 || b[blk + 13] != side - 1 || b[blk + 14] | b[blk + 15])
+        return fail("texel block dimensions are not " + std::to_string(side) + "x" + std::to_string(side) + "x1x1");
+    const uint32_t plane_bytes = block_size_bytes(f);
+    if (b[blk + 16] != plane_bytes)
+        return fail("bytesPlane0 " + std::to_string(b[blk + 16]) + " does not match " + f.name);
+    const uint32_t expected_transfer = f.numeric == Numeric::srgb ? 2 : 1;
+    if (L.transfer != expected_transfer)
+        return fail("transfer function " + std::to_string(L.transfer) + " does not match " + f.name);
+    return check_dfd_samples(b, blk, samples, f, name);
+}
+
+// Level index: sizes exact, aligned, inside the file, clear of the metadata, smallest level first.
+// Supercompressed levels have no alignment (mipPadding is align(1)) and any byteLength; they must
+// inflate to exactly uncompressedByteLength. Fills the offsets (and, with `inflate`, the inflated levels) of `L`.
+Result<void> read_ktx2_levels(std::span<const uint8_t> b, const Ktx2Sections& s, const std::string& name,
+                              bool inflate, Ktx2Layout& L) {
+    auto fail = [&](const std::string& what) { return ktx2_error(name, what); };
+    const FormatInfo& f = *L.format;
+    const bool zstd = s.zstd;
     const uint64_t alignment =
         zstd ? 1 : std::lcm(uint64_t(block_size_bytes(f)), uint64_t(4));
-    const uint64_t metadata_end =
-        std::max<uint64_t>(uint64_t(dfd_offset) + dfd_length, kvd_length ? uint64_t(kvd_offset) + kvd_length : 0);
+    const uint64_t metadata_end = std::max<uint64_t>(uint64_t(s.dfd_offset) + s.dfd_length,
+                                                     s.kvd_length ? uint64_t(s.kvd_offset) + s.kvd_length : 0);
     for (uint32_t level = 0; level < L.levels; ++level) {
         const size_t at = kKtx2HeaderBytes + kKtx2LevelEntryBytes * level;
         const uint64_t offset = u64(b, at), length = u64(b, at + 8), uncompressed = u64(b, at + 16);
         const std::string lv = "level " + std::to_string(level);
         // An array level holds its layers one after another (KTX 2.0 Sec. 3.9.7).
-        const uint64_t expected = level_bytes(L.width, L.height, int(level), f) * stored_layers;
+        const uint64_t expected = level_bytes(L.width, L.height, int(level), f) * s.stored_layers;
         if ((!zstd && length != expected) || uncompressed != expected)
             return fail(lv + " holds " + std::to_string(zstd ? uncompressed : length) + " bytes, expected " +
                         std::to_string(expected));
@@ -332,6 +367,18 @@ Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& nam
             L.inflated.push_back(std::move(level_bytes_out));
         }
     }
+    return {};
+}
+
+// `inflate`: zstd levels are decompressed (and kept for decoding); otherwise only each level's zstd frame
+// header is read, whose content size must equal uncompressedByteLength (the check reads headers alone).
+Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& name, bool inflate = true) {
+    Ktx2Layout L;
+    auto sections = read_ktx2_header(b, name, L);
+    if (!sections) return sections.error();
+    if (auto ok = check_ktx2_key_values(b, *sections, name); !ok) return ok.error();
+    if (auto ok = check_ktx2_dfd(b, *sections, name, L); !ok) return ok.error();
+    if (auto ok = read_ktx2_levels(b, *sections, name, inflate, L); !ok) return ok.error();
     return L;
 }
 
