@@ -75,9 +75,6 @@ struct TextureBakeSettings {
     std::optional<double> max_kernel;     // clamp of the isotropic kernel t; none by default
     NormalGreen normal_y = NormalGreen::PlusY;
     ReconstructZ reconstruct_z = ReconstructZ::Auto;
-    // Texture addressing the map is sampled with. Box footprints lie inside the map, so it does not change
-    // the baked values; it is recorded with the outputs so the run time samples them the same way.
-    WrapMode wrap = WrapMode::Repeat;
     // Kernel output = Sigma (xx, yy, xy) (default) instead of t. The default rule needs the axes: a mip texel
     // on a bump's rim spreads along the slope only, and t = tr(Sigma) in both axes lights a crescent along
     // the rim (docs/accuracy.md#why-the-kernel-is-sigma-not-t, NormalTangentMirrorTest near).

@@ -223,7 +223,8 @@ int main(int argc, char** argv) {
                     const auto t0 = Clock::now();
                     for (auto _ : state) {
                         if (kind == Kind::Encoded) {
-                            auto r = bake_texture_encoded(inputs, s, io::TextureContainer::Ktx2, "texture");
+                            const io::TextureFileFormat ktx2(io::TextureContainer::Ktx2);
+                            auto r = bake_texture_encoded(inputs, s, ktx2, "texture");
                             benchmark::DoNotOptimize(r);
                         } else if (kind == Kind::Values) {
                             auto r = bake_texture_rows(normal, &orm, 1, 0.0f, s, [](const TextureBakeRows& rows) {

@@ -37,16 +37,18 @@ inline void add_block_options(CLI::App& sub, BlockCliOptions& o, const std::stri
         ->capture_default_str();
 }
 
-// Fills the block fields of `s` from `o`. When `container` cannot hold the formats asked for, the error
-// names --block and the container option (`container_option`, e.g. "--format") with their values.
-inline Result<void> apply_block_options(const BlockCliOptions& o, io::TextureContainer container,
-                                        const std::string& container_option, io::Supercompression& s) {
+// Fills the block fields of `format.supercompression` from `o`. When `format.container` cannot hold the
+// formats asked for, the error names --block and the container option (`container_option`, e.g. "--format")
+// with their values.
+inline Result<void> apply_block_options(const BlockCliOptions& o, const std::string& container_option,
+                                        io::TextureFileFormat& format) {
+    io::Supercompression& s = format.supercompression;
     s.block = io::parse_block_family(o.block).value_or(io::BlockFamily::None);
     s.rgba_block = o.block_rgba == "bc3" ? 3 : 1;
     s.astc_block = o.astc_block == "8x8" ? 8 : o.astc_block == "6x6" ? 6 : 4;
-    if (const std::string problem = io::block_container_problem(container, s.block); !problem.empty())
-        return make_error("--block " + o.block + " with " + container_option + " " + io::container_name(container) +
-                          ": " + problem);
+    if (const std::string problem = io::block_container_problem(format.container, s.block); !problem.empty())
+        return make_error("--block " + o.block + " with " + container_option + " " +
+                          io::container_name(format.container) + ": " + problem);
     return {};
 }
 

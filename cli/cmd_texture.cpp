@@ -83,10 +83,11 @@ int run_texture(const TextureOptions& o, const PipelineFlags& pipe) {
     }
     if (o.roughness_value) job.roughness_value = *o.roughness_value;
     job.output_dir = o.output;
-    job.container = *io::parse_container(o.format);
-    job.supercompression.zstd = o.supercompression == "zstd";
-    job.supercompression.zstd_level = o.zstd_level;
-    if (auto ok = apply_block_options(o.blocks, job.container, "--format", job.supercompression); !ok) {
+    job.texture_format.container = *io::parse_container(o.format);
+    job.texture_format.supercompression.zstd = o.supercompression == "zstd";
+    job.texture_format.supercompression.zstd_level = o.zstd_level;
+    job.texture_format.wrap = *parse_wrap_mode(o.wrap);
+    if (auto ok = apply_block_options(o.blocks, "--format", job.texture_format); !ok) {
         print_error("texture: " + ok.error().message);
         return kExitUsage;
     }
@@ -97,7 +98,6 @@ int run_texture(const TextureOptions& o, const PipelineFlags& pipe) {
     s.max_kernel = o.max_kernel;
     s.normal_y = *parse_normal_green(o.normal_y);
     s.reconstruct_z = *parse_reconstruct_z(o.reconstruct_z);
-    s.wrap = *parse_wrap_mode(o.wrap);
     s.anisotropic = o.anisotropic;
     s.lean_space = *parse_lean_space(o.lean_space);
     s.threads = run_settings().jobs;

@@ -148,10 +148,10 @@ inline Result<SceneJob> make_scene_job(const SceneCliOptions& o) {
     for (const std::string& s : o.scenes) job.scenes.emplace_back(s);
     job.output_dir = o.output_dir;
     job.format = *parse_scene_format(o.format);
-    job.container = io::parse_container(o.container).value_or(io::TextureContainer::Ktx2);
+    job.texture_format.container = io::parse_container(o.container).value_or(io::TextureContainer::Ktx2);
     job.gltf_mode = *parse_gltf_mode(o.gltf_mode);
     job.basisu = o.basisu;
-    if (auto ok = apply_block_options(o.blocks, job.container, "--container", job.supercompression); !ok)
+    if (auto ok = apply_block_options(o.blocks, "--container", job.texture_format); !ok)
         return ok.error();
     PlanOptions& p = job.plan;
     p.estimator = parse_curvature_estimator(o.estimator).value_or(CurvatureEstimator::ShapeOperator);

@@ -92,7 +92,8 @@ void containers(const fs::path& tmp) {
                 if ((n++ % 2) && channels == 2) continue;  // keep the corpus small
                 MipChain chain;
                 for (int size = 4; size >= 1; size /= 2) chain.levels.push_back(gradient(size, size, channels));
-                auto written = io::write_texture(chain, encoding, container, tmp, "tex", "roughness");
+                auto written =
+                    io::write_texture(chain, encoding, io::TextureFileFormat(container), tmp, "tex", "roughness");
                 need(bool(written), "write_texture");
                 put("container", "seed-" + std::to_string(n) + "." + io::container_name(container),
                     slurp(tmp / written->front().path));

@@ -54,7 +54,7 @@ json root_extension(const SceneJob& job, bool textures) {
                   {"units", "1 / object-space length"},
                   {"space", "object"},
                   {"estimator", std::string(to_string(job.plan.estimator))}}}};
-    if (textures) ext["textures"] = texture_settings_json(job.plan.texture_settings, job.container);
+    if (textures) ext["textures"] = texture_settings_json(job.plan.texture_settings, job.texture_format);
     return ext;
 }
 
@@ -108,7 +108,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
             r.normal = baked.normal;
         }
         auto out = write_texture_outputs(std::move(baked), in, options.texture_settings_for(d.material_name),
-                                         job.container, out_dir, d.stem, job.progress, job.supercompression);
+                                         job.texture_format, out_dir, d.stem, job.progress);
         if (!out) return out.error();
         for (const io::ManifestOutput& o : out->outputs) written.push_back(out_dir / o.path);
         result.outputs.insert(result.outputs.end(), out->outputs.begin(), out->outputs.end());
@@ -118,7 +118,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
     // Without replacement the files are all the bake needs: KTX2 and DDS are baked row by row straight into
     // their bytes (zstd streamed per level), as `specbake texture` does, so no float chain is held. The
     // replacement encodes the float roughness and normal chains, and other containers write from them.
-    if (job.gltf_mode != GltfMode::Replace && io::EncodedTexture::supports(job.container)) {
+    if (job.gltf_mode != GltfMode::Replace && io::EncodedTexture::supports(job.texture_format.container)) {
         options.texture_encoder = [&](const TextureDecision& d, const TextureWork& w,
                                       const TextureBakeSettings& settings) -> Result<EncodedTextureBake> {
             TextureInputs in;
@@ -132,7 +132,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
             in.normal_bits = w.normal_bits;
             in.roughness_bits = w.roughness_bits;
             auto encoded = std::make_shared<EncodedTextureOutputs>();
-            auto baked = bake_texture_encoded(in, settings, job.container, d.stem, {}, {}, job.supercompression);
+            auto baked = bake_texture_encoded(in, settings, job.texture_format, d.stem);
             if (!baked) return baked.error();
             *encoded = std::move(*baked);
             EncodedTextureBake out{encoded->max_roughness_change, encoded->notes, {}};
@@ -208,7 +208,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         if (!normal.transform.is_null()) ext["KHR_texture_transform"] = normal.transform;
         const std::string& owner_name = plan->textures[owner].material_name;
         if (options.material_texture_settings.count(owner_name))  // differs from the root's "textures"
-            ext["settings"] = texture_settings_json(options.texture_settings_for(owner_name), job.container);
+            ext["settings"] = texture_settings_json(options.texture_settings_for(owner_name), job.texture_format);
         ext["outputs"] = json::array();
         for (const io::ManifestOutput& o : files_by_stem.at(d.stem)) {
             json entry = {{"kind", o.kind}, {"uri", o.path}, {"format", o.format}, {"width", o.width},
@@ -245,7 +245,8 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
             layer.transform = materials[size_t(d.material)].normal.transform;
             say("encoding UASTC textures of material " + std::to_string(d.material) + " of " + input.string());
             const size_t before = result.outputs.size();
-            const int zstd = job.supercompression.zstd ? job.supercompression.zstd_level : 0;
+            const io::Supercompression& supercompression = job.texture_format.supercompression;
+            const int zstd = supercompression.zstd ? supercompression.zstd_level : 0;
             if (auto r = replace_with_basisu(scene, layer, *basisu, out_dir, glb, result.outputs, warnings, zstd); !r)
                 return r.error();
             for (size_t k = before; k < result.outputs.size(); ++k) {
@@ -387,14 +388,16 @@ json scene_settings_json(const SceneJob& job) {
     }
     if (job.gltf_mode != GltfMode::Sidecar) s["gltf_mode"] = std::string(to_string(job.gltf_mode));
     // Recorded only when asked, so manifests of bakes without it stay as they were.
-    if (job.supercompression.block != io::BlockFamily::None) s["supercompression"] = supercompression_json(job.supercompression);
+    const io::Supercompression& supercompression = job.texture_format.supercompression;
+    if (supercompression.block != io::BlockFamily::None)
+        s["supercompression"] = supercompression_json(supercompression);
     if (job.plan.textures) {
-        s["texture"] = texture_settings_json(job.plan.texture_settings, job.container);
+        s["texture"] = texture_settings_json(job.plan.texture_settings, job.texture_format);
         // Per-material settings as applied, so the up-to-date check sees a changed override.
         if (!job.plan.material_texture_settings.empty()) {
             json materials = json::object();
             for (const auto& [name, settings] : job.plan.material_texture_settings)
-                materials[name] = texture_settings_json(settings, job.container);
+                materials[name] = texture_settings_json(settings, job.texture_format);
             s["materials"] = materials;
         }
     }
@@ -404,7 +407,8 @@ json scene_settings_json(const SceneJob& job) {
 Result<SceneJobOutcome> run_scene_job(const SceneJob& job) {
     if (job.scenes.empty()) return make_error("no scene given");
     if (auto r = io::check_utf8_path(job.output_dir); !r) return r.error();
-    if (const std::string p = io::block_container_problem(job.container, job.supercompression.block); !p.empty())
+    const io::TextureFileFormat& format = job.texture_format;
+    if (const std::string p = io::block_container_problem(format.container, format.supercompression.block); !p.empty())
         return make_error(p);
     SceneJobOutcome outcome;
     outcome.manifest.version = tool_version();

@@ -45,10 +45,10 @@ struct SceneJob {
     // Non-glTF inputs: .gltf unless Glb is asked for. A .glb holds the input's buffers and images itself.
     SceneFormat format = SceneFormat::SameAsInput;
     PlanOptions plan;
-    io::TextureContainer container = io::TextureContainer::Ktx2;
-    // KTX2 zstd (on, level 3) and `bake --block bc` (block-compressed 8/16-bit outputs in KTX2 and DDS, as
-    // `texture --block`: BC4 one channel, BC5 the mean normal, BC1/BC3 four channels; float stays float).
-    io::Supercompression supercompression;
+    // The baked textures' container (KTX2 by default), KTX2 zstd (on, level 3) and `bake --block bc`
+    // (block-compressed 8/16-bit outputs in KTX2 and DDS, as `texture --block`: BC4 one channel, BC5 the
+    // mean normal, BC1/BC3 four channels; float stays float).
+    io::TextureFileFormat texture_format;
     // Sidecar: baked textures in the SPECBAKE_specular_aa extension only. Replace: also the material's
     // normalTexture and metallicRoughnessTexture carry the baked chains as KTX2 (UASTC) through
     // KHR_texture_basisu (pipeline/gltf_replace.h), encoded by `basisu` (find_basisu()).

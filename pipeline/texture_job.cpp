@@ -37,9 +37,9 @@ Error name_error(const Error& e, const std::string& normal_name, const std::stri
 // deeper inputs as half floats (R16_SFLOAT, R16G16B16A16_SFLOAT: formats every GPU samples and filters,
 // 11 significant bits, which three.js and WebGL 2 load where they have no 16-bit UNORM), except as 16-bit
 // UNORM in per-mip PNGs (PNG has no float) and where block compression narrows them to 8 bits anyway.
-io::TexelEncoding encoding_for_bits(int bits, io::TextureContainer container, const io::Supercompression& s) {
+io::TexelEncoding encoding_for_bits(int bits, const io::TextureFileFormat& format) {
     if (bits <= 8) return io::TexelEncoding::Unorm8;
-    if (container == io::TextureContainer::PngPerMip || s.block != io::BlockFamily::None)
+    if (format.container == io::TextureContainer::PngPerMip || format.supercompression.block != io::BlockFamily::None)
         return io::TexelEncoding::Unorm16;
     return io::TexelEncoding::Float16;
 }
@@ -76,13 +76,13 @@ struct OutputFile {
 // `_lean` (RGBA = m.x, m.y, M.xx, M.yy) plus `_lean_xy` (Y = M.xy). `names` are the channels' meanings.
 std::vector<OutputFile> output_files(const TextureBakeShape& shape, const TextureInputs& in,
                                      const TextureBakeSettings& settings, const std::string& stem,
-                                     io::TextureContainer container, const io::Supercompression& supercompression) {
+                                     const io::TextureFileFormat& format) {
     std::vector<OutputFile> files;
     const bool have_roughness = in.roughness || in.roughness_map.channels > 0;
     const int roughness_bits = have_roughness ? in.roughness_bits : in.normal_bits;
     if (settings.outputs.roughness) {
         files.push_back({Chain::Roughness, "roughness", stem + "_roughness",
-                         encoding_for_bits(roughness_bits, container, supercompression), 0,
+                         encoding_for_bits(roughness_bits, format), 0,
                          shape.roughness_channels,
                          shape.roughness_channels == 3 ? std::vector<std::string>{"input.r", "r", "input.b", "1"}
                                                        : std::vector<std::string>{"r"}});
@@ -94,7 +94,7 @@ std::vector<OutputFile> output_files(const TextureBakeShape& shape, const Textur
     }
     if (settings.outputs.normal) {
         files.push_back({Chain::Normal, "normal", stem + "_normal",
-                         encoding_for_bits(in.normal_bits, container, supercompression), 0, 3,
+                         encoding_for_bits(in.normal_bits, format), 0, 3,
                          {"n.x", "n.y", "n.z", "1"}});
     }
     if (settings.outputs.lean) {
@@ -255,15 +255,15 @@ Image demo_orm_map() {
     return m;
 }
 
-nlohmann::json texture_settings_json(const TextureBakeSettings& s, io::TextureContainer container) {
+nlohmann::json texture_settings_json(const TextureBakeSettings& s, const io::TextureFileFormat& format) {
     nlohmann::json j;
-    j["format"] = io::container_name(container);
+    j["format"] = io::container_name(format.container);
     j["isotropic"] = std::string(to_string(s.isotropic));
     j["filter"] = std::string(to_string(s.filter));
     j["max_kernel"] = s.max_kernel ? nlohmann::json(*s.max_kernel) : nlohmann::json(nullptr);
     j["normal_y"] = std::string(to_string(s.normal_y));
     j["reconstruct_z"] = std::string(to_string(s.reconstruct_z));
-    j["wrap"] = std::string(to_string(s.wrap));
+    j["wrap"] = std::string(to_string(format.wrap));
     j["anisotropic"] = s.anisotropic;
     j["lean_space"] = std::string(to_string(s.lean_space));
     nlohmann::json outs = nlohmann::json::array();
@@ -297,9 +297,10 @@ nlohmann::json supercompression_json(const io::Supercompression& s) {
 
 TextureJobRecord texture_job_record(const TextureJob& job) {
     TextureJobRecord record;
-    record.settings = texture_settings_json(job.settings, job.container);
-    if (job.container == io::TextureContainer::Ktx2 || job.supercompression.block != io::BlockFamily::None)
-        record.settings["supercompression"] = supercompression_json(job.supercompression);
+    const io::TextureFileFormat& format = job.texture_format;
+    record.settings = texture_settings_json(job.settings, format);
+    if (format.container == io::TextureContainer::Ktx2 || format.supercompression.block != io::BlockFamily::None)
+        record.settings["supercompression"] = supercompression_json(format.supercompression);
     if (job.demo) {
         record.settings["demo"] = true;
         record.inputs = {kDemoNormalName, kDemoOrmName};
@@ -313,17 +314,15 @@ TextureJobRecord texture_job_record(const TextureJob& job) {
 }
 
 Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& in, const TextureBakeSettings& settings,
-                                                   io::TextureContainer container, const fs::path& dir,
+                                                   const io::TextureFileFormat& format, const fs::path& dir,
                                                    const std::string& stem, const ProgressFn& progress,
-                                                   const FractionFn& fraction,
-                                                   const io::Supercompression& supercompression) {
-    if (!io::EncodedTexture::supports(container)) {
+                                                   const FractionFn& fraction) {
+    if (!io::EncodedTexture::supports(format.container)) {
         auto baked = bake_texture_inputs(in, settings, progress);
         if (!baked) return baked.error();
-        return write_texture_outputs(std::move(*baked), in, settings, container, dir, stem, progress,
-                                     supercompression);
+        return write_texture_outputs(std::move(*baked), in, settings, format, dir, stem, progress);
     }
-    auto encoded = bake_texture_encoded(in, settings, container, stem, progress, fraction, supercompression);
+    auto encoded = bake_texture_encoded(in, settings, format, stem, progress, fraction);
     if (!encoded) return encoded.error();
     TextureOutputsWritten result;
     result.notes = encoded->notes;
@@ -337,16 +336,17 @@ Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& in, cons
 }
 
 Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, const TextureBakeSettings& settings,
-                                                   io::TextureContainer container, const std::string& stem,
-                                                   const ProgressFn& progress, const FractionFn& fraction,
-                                                   const io::Supercompression& supercompression) {
+                                                   const io::TextureFileFormat& format, const std::string& stem,
+                                                   const ProgressFn& progress, const FractionFn& fraction) {
+    const io::TextureContainer container = format.container;
+    const io::Supercompression& supercompression = format.supercompression;
     const InputMaps maps = maps_of(in);
     if (maps.normal.channels == 0) return make_error(in.normal_name + ": no normal map given");
     if (!io::EncodedTexture::supports(container))
         return make_error(std::string("cannot encode ") + io::container_name(container) + " in memory");
     const int channel = roughness_channel_of(in);
     const TextureBakeShape shape = texture_bake_shape(maps.normal, maps.roughness, channel, settings);
-    const std::vector<OutputFile> files = output_files(shape, in, settings, stem, container, supercompression);
+    const std::vector<OutputFile> files = output_files(shape, in, settings, stem, format);
     EncodedTextureOutputs out;
     for (const OutputFile& f : files) {
         out.textures.push_back(std::make_unique<io::EncodedTexture>(container, f.encoding, shape.width, shape.height,
@@ -403,9 +403,8 @@ Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, cons
 
 Result<TextureOutputsWritten> write_texture_outputs(TextureBakeResult&& baked, const TextureInputs& in,
                                                     const TextureBakeSettings& settings,
-                                                    io::TextureContainer container, const fs::path& dir,
-                                                    const std::string& stem, const ProgressFn& progress,
-                                                    const io::Supercompression& supercompression) {
+                                                    const io::TextureFileFormat& format, const fs::path& dir,
+                                                    const std::string& stem, const ProgressFn& progress) {
     TextureOutputsWritten result;
     result.notes = baked.notes;
     result.max_roughness_change = baked.max_roughness_change;
@@ -414,7 +413,7 @@ Result<TextureOutputsWritten> write_texture_outputs(TextureBakeResult&& baked, c
     shape.kernel_channels = baked.kernel.channels();
     shape.lean_channels = baked.lean.channels();
     shape.normal_channels = baked.normal.channels();
-    const std::vector<OutputFile> files = output_files(shape, in, settings, stem, container, supercompression);
+    const std::vector<OutputFile> files = output_files(shape, in, settings, stem, format);
     for (size_t i = 0; i < files.size(); ++i) {
         const OutputFile& f = files[i];
         if (progress) progress("writing " + f.stem);
@@ -422,8 +421,8 @@ Result<TextureOutputsWritten> write_texture_outputs(TextureBakeResult&& baked, c
         const bool whole = f.first == 0 && f.channels == chain.channels();
         if (auto ok = append(result.outputs,
                              io::write_texture(whole ? chain : channel_subset(chain, f.first, f.channels), f.encoding,
-                                               container, dir, f.stem, f.kind, f.names, settings.wrap,
-                                               supercompression, block_format_of(f, supercompression)));
+                                               format, dir, f.stem, f.kind, f.names,
+                                               block_format_of(f, format.supercompression)));
             !ok)
             return ok.error();
         // Written: release the chain before the next one is encoded, unless a later file reads it too.
@@ -439,7 +438,8 @@ namespace {
 Result<void> check_texture_job(const TextureJob& job) {
     std::error_code ec;
     if (job.output_dir.empty()) return make_error("no output folder given");
-    if (const std::string p = io::block_container_problem(job.container, job.supercompression.block); !p.empty())
+    const io::TextureFileFormat& format = job.texture_format;
+    if (const std::string p = io::block_container_problem(format.container, format.supercompression.block); !p.empty())
         return make_error(p);
     for (const fs::path& p : {job.output_dir, job.demo ? fs::path() : job.normal, job.roughness.value_or(fs::path())})
         if (auto r = io::check_utf8_path(p); !r) return r.error();
@@ -485,7 +485,7 @@ Result<void> make_demo_maps(const io::BakeOutput& out, JobMaps& maps) {
 Result<void> read_job_maps(const TextureJob& job, JobMaps& maps) {
     if (job.progress) job.progress("reading " + job.normal.string());
     if (job.roughness && job.progress) job.progress("reading " + job.roughness->string());
-    const bool keep_8bit = io::EncodedTexture::supports(job.container);
+    const bool keep_8bit = io::EncodedTexture::supports(job.texture_format.container);
     Result<io::DecodedImage> n = make_error(""), r = make_error("");
     Result<std::string> n_hash = make_error(""), r_hash = make_error("");
     tbb::parallel_invoke(
@@ -542,14 +542,13 @@ TextureInputs texture_inputs_of(const JobMaps& maps, const TextureJob& job) {
 // packed files are never all held at once. Errors name the final files.
 Result<TextureOutputsWritten> bake_job_outputs(const TextureJob& job, const TextureInputs& in, JobMaps& maps,
                                                const io::BakeOutput& out) {
-    if (!io::EncodedTexture::supports(job.container)) {
-        auto written = bake_texture_outputs(in, job.settings, job.container, out.stage(), "texture", job.progress,
-                                            job.fraction, job.supercompression);
+    if (!io::EncodedTexture::supports(job.texture_format.container)) {
+        auto written = bake_texture_outputs(in, job.settings, job.texture_format, out.stage(), "texture", job.progress,
+                                            job.fraction);
         if (!written) return out.final_names(written.error());
         return written;
     }
-    auto encoded = bake_texture_encoded(in, job.settings, job.container, "texture", job.progress, job.fraction,
-                                        job.supercompression);
+    auto encoded = bake_texture_encoded(in, job.settings, job.texture_format, "texture", job.progress, job.fraction);
     if (!encoded) return out.final_names(encoded.error());
     maps.normal.image = Image{}, maps.normal.bytes8 = io::Bytes8{};
     maps.roughness.image = Image{}, maps.roughness.bytes8 = io::Bytes8{};

@@ -32,8 +32,7 @@ struct TextureJob {
     float roughness_value = 0.5f;                  // used when no roughness file is given
     bool demo = false;                             // bake the built-in procedural normal + ORM maps instead
     std::filesystem::path output_dir;
-    io::TextureContainer container = io::TextureContainer::Ktx2;
-    io::Supercompression supercompression;         // KTX2 only: zstd on by default
+    io::TextureFileFormat texture_format;          // KTX2 with zstd by default
     TextureBakeSettings settings;
     ProgressFn progress;
     // The output folder's lock when the caller already holds it (else the job takes it, io/output/bake_output.h).
@@ -96,10 +95,9 @@ struct TextureOutputsWritten {
 // plus `_lean_xy` Y = M.xy), `_normal`, as selected in settings.outputs, 1, 2 or 4 channels each, the
 // same layout in every container (docs/texture-bake.md#output-layouts). Does not write a manifest.
 Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& inputs, const TextureBakeSettings& settings,
-                                                   io::TextureContainer container, const std::filesystem::path& dir,
-                                                   const std::string& stem, const ProgressFn& progress = {},
-                                                   const FractionFn& fraction = {},
-                                                   const io::Supercompression& supercompression = {});
+                                                   const io::TextureFileFormat& format,
+                                                   const std::filesystem::path& dir, const std::string& stem,
+                                                   const ProgressFn& progress = {}, const FractionFn& fraction = {});
 
 // bake_texture_outputs() for KTX2 and DDS up to the write: the bake encodes every finished row straight
 // into the files' bytes (no float chain of the whole map is held). files[i] refers to textures[i].
@@ -110,9 +108,8 @@ struct EncodedTextureOutputs {
     double max_roughness_change = 0.0;
 };
 Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& inputs, const TextureBakeSettings& settings,
-                                                   io::TextureContainer container, const std::string& stem,
-                                                   const ProgressFn& progress = {}, const FractionFn& fraction = {},
-                                                   const io::Supercompression& supercompression = {});
+                                                   const io::TextureFileFormat& format, const std::string& stem,
+                                                   const ProgressFn& progress = {}, const FractionFn& fraction = {});
 
 // The two steps of bake_texture_outputs(), for a caller that needs the bake before deciding to write it
 // (`specbake bake` measures the plan's statistic on the bake it writes). Errors name the input files.
@@ -123,12 +120,12 @@ Result<TextureBakeResult> bake_texture_inputs(const TextureInputs& inputs, const
 // gives the output encodings. Each chain is released once written, so peak memory stays one encoding.
 Result<TextureOutputsWritten> write_texture_outputs(TextureBakeResult&& baked, const TextureInputs& inputs,
                                                     const TextureBakeSettings& settings,
-                                                    io::TextureContainer container, const std::filesystem::path& dir,
-                                                    const std::string& stem, const ProgressFn& progress = {},
-                                                    const io::Supercompression& supercompression = {});
+                                                    const io::TextureFileFormat& format,
+                                                    const std::filesystem::path& dir, const std::string& stem,
+                                                    const ProgressFn& progress = {});
 
-// The settings as recorded in manifests.
-nlohmann::json texture_settings_json(const TextureBakeSettings& settings, io::TextureContainer container);
+// The settings as recorded in manifests, with the container and wrap of `format`.
+nlohmann::json texture_settings_json(const TextureBakeSettings& settings, const io::TextureFileFormat& format);
 
 // The built-in demo inputs: a 512x384 (deliberately non-power-of-two) RGB normal map of bumps, ribs
 // and a flat area, and a matching ORM map, both as 8-bit-quantised values.

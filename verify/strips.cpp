@@ -128,8 +128,8 @@ Result<void> write_strip_png(const Image& strip, const std::filesystem::path& pa
     const auto scratch = parent / (".specbake-strip-" + std::to_string(rd()));
     MipChain chain;
     chain.levels.push_back(strip);
-    auto written = io::write_texture(chain, io::TexelEncoding::Unorm8, io::TextureContainer::PngPerMip, scratch,
-                                     "strip", "strip");
+    const io::TextureFileFormat png(io::TextureContainer::PngPerMip);
+    auto written = io::write_texture(chain, io::TexelEncoding::Unorm8, png, scratch, "strip", "strip");
     Result<void> result;
     if (!written) {
         result = make_error(path.string() + ": " + written.error().message);

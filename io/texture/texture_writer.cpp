@@ -170,10 +170,9 @@ Result<void> write_oiio(const fs::path& temp, const fs::path& final_path, const 
 }  // namespace
 
 Result<std::vector<ManifestOutput>> write_texture(const MipChain& data, TexelEncoding encoding,
-                                                  TextureContainer container, const fs::path& dir,
+                                                  const TextureFileFormat& format, const fs::path& dir,
                                                   const std::string& stem, const std::string& kind,
-                                                  const std::vector<std::string>& channel_names, WrapMode wrap,
-                                                  const Supercompression& supercompression, BlockFormat block) {
+                                                  const std::vector<std::string>& channel_names, BlockFormat block) {
     if (data.levels.empty() || data.channels() < 1) return make_error((dir / stem).string() + ": nothing to write");
     if (data.channels() > 4)
         return make_error((dir / stem).string() + ": " + std::to_string(data.channels()) +
@@ -189,8 +188,9 @@ Result<std::vector<ManifestOutput>> write_texture(const MipChain& data, TexelEnc
     const int mips = int(data.levels.size());
     const std::vector<std::string> names = meaning_for(data.channels(), gpu_channels(data.channels()), channel_names);
 
-    if (EncodedTexture::supports(container)) {
-        EncodedTexture t(container, encoding, data.width(), data.height(), mips, data.channels(), supercompression);
+    if (EncodedTexture::supports(format.container)) {
+        EncodedTexture t(format.container, encoding, data.width(), data.height(), mips, data.channels(),
+                         format.supercompression);
         for (int L = 0; L < mips; ++L) {
             const Image& level = data.levels[size_t(L)];
             t.put_block(L, 0, 0, level.width, level.height, level.pixels.data(), level.channels, 0);
@@ -206,7 +206,7 @@ Result<std::vector<ManifestOutput>> write_texture(const MipChain& data, TexelEnc
         p.file = std::make_unique<AtomicOutput>(dir / filename);
         p.entry.kind = kind;
         p.entry.path = filename;
-        p.entry.format = container_name(container);
+        p.entry.format = container_name(format.container);
         p.entry.width = width;
         p.entry.height = height;
         p.entry.mips = mips;
@@ -218,7 +218,7 @@ Result<std::vector<ManifestOutput>> write_texture(const MipChain& data, TexelEnc
         pending.push_back(std::move(p));
         return pending.back();
     };
-    switch (container) {
+    switch (format.container) {
         case TextureContainer::Ktx2:
         case TextureContainer::Dds: break;  // written above
         case TextureContainer::Exr: {
@@ -229,7 +229,7 @@ Result<std::vector<ManifestOutput>> write_texture(const MipChain& data, TexelEnc
             std::vector<const Image*> levels;
             for (const Image& l : chain.levels) levels.push_back(&l);
             if (auto ok = write_oiio(p.file->temp_path(), p.file->final_path(), levels, oiio_type(stored), true,
-                                     names, wrap);
+                                     names, format.wrap);
                 !ok)
                 return ok.error();
             break;
@@ -243,7 +243,7 @@ Result<std::vector<ManifestOutput>> write_texture(const MipChain& data, TexelEnc
                 p.entry.format = integer ? "png" : "exr";
                 p.entry.extra["mip_level"] = L;
                 if (auto ok = write_oiio(p.file->temp_path(), p.file->final_path(), {&level}, oiio_type(encoding),
-                                         false, names, wrap);
+                                         false, names, format.wrap);
                     !ok)
                     return ok.error();
             }

@@ -61,6 +61,21 @@ struct Supercompression {
 
 // "none", "bc", "astc" (the CLI spellings), in enum order.
 inline constexpr std::array<std::string_view, 3> kBlockFamilyNames{"none", "bc", "astc"};
+// How a texture's files are stored: the parameters that travel together from the command line through the
+// jobs to the writers.
+struct TextureFileFormat {
+    TextureFileFormat() = default;
+    explicit TextureFileFormat(TextureContainer container, const Supercompression& supercompression = {},
+                               WrapMode wrap = WrapMode::Repeat)
+        : container(container), supercompression(supercompression), wrap(wrap) {}
+
+    TextureContainer container = TextureContainer::Ktx2;
+    Supercompression supercompression;  // KTX2 zstd, KTX2/DDS block compression
+    // The addressing the textures are sampled with, recorded where the container has a place for it (EXR
+    // "wrapmodes") and in manifests. Box footprints lie inside the map, so it does not change baked values.
+    WrapMode wrap = WrapMode::Repeat;
+};
+
 const char* block_family_name(BlockFamily f);
 std::optional<BlockFamily> parse_block_family(std::string_view name);
 // Why `container` cannot hold the block formats of `family` (BC: KTX2 and DDS; ASTC: KTX2 only, as DDS
@@ -77,17 +92,14 @@ const char* encoding_name(TexelEncoding e);          // "unorm8", "unorm16", "fl
 // stored as RGBA with A = 1. `channel_names` say what each stored channel means (e.g. "m.x"); they go to
 // the manifest ("channel_meaning") and to the EXR header attribute "specbake:channels", while EXR
 // channels are named as common readers expect: Y for one channel, R, G (, B, A) otherwise, in the same
-// order as the KTX2/DDS channels. `wrap` is recorded where the container has a place for it (EXR
-// "wrapmodes"). Returns one entry per file, `path` relative to `dir`,
+// order as the KTX2/DDS channels. Returns one entry per file, `path` relative to `dir`,
 // kind `kind`, sha256 filled. Creates `dir` when missing; the error names the file. All files of the call
 // are written to temporary names first and renamed only when every one succeeded. `block` other than
 // BlockFormat::None block-compresses a KTX2/DDS file's levels (io/texture/block_compress.h); EXR and PNG ignore it.
 Result<std::vector<ManifestOutput>> write_texture(const MipChain& chain, TexelEncoding encoding,
-                                                  TextureContainer container, const std::filesystem::path& dir,
+                                                  const TextureFileFormat& format, const std::filesystem::path& dir,
                                                   const std::string& stem, const std::string& kind,
                                                   const std::vector<std::string>& channel_names = {},
-                                                  WrapMode wrap = WrapMode::Repeat,
-                                                  const Supercompression& supercompression = {},
                                                   BlockFormat block = {});
 
 // A KTX2 or DDS file assembled in memory, level by level and row by row, so a producer can encode rows

@@ -399,7 +399,8 @@ TEST(InspectWriterCrossCheck, TextureWriterOutputReadsBackExactly) {
         chain.levels.push_back(std::move(img));
     }
     for (io::TextureContainer container : {io::TextureContainer::Ktx2, io::TextureContainer::Dds}) {
-        auto written = io::write_texture(chain, io::TexelEncoding::Float32, container, files.dir(), "x", "lean");
+        auto written = io::write_texture(chain, io::TexelEncoding::Float32, io::TextureFileFormat(container),
+                                         files.dir(), "x", "lean");
         ASSERT_TRUE(written.ok()) << written.error().message;
         const fs::path p = files.dir() / written->front().path;
         EXPECT_TRUE(io::check_texture_file(p).ok()) << io::check_texture_file(p).error().message;

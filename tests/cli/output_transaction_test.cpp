@@ -317,7 +317,7 @@ TEST_F(OutputTransactionCli, ExceptionMidBakeLeavesThePreviousBake) {
     job.output_dir = out;
     ASSERT_TRUE(specbake::run_texture_job(job).ok());
     const Tree before = tree(out);
-    job.container = specbake::io::TextureContainer::Dds;
+    job.texture_format.container = specbake::io::TextureContainer::Dds;
     job.progress = [](const std::string& line) {
         if (line.rfind("writing texture_lean", 0) == 0) throw std::runtime_error("injected");
     };

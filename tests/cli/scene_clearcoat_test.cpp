@@ -107,7 +107,7 @@ TEST(SceneClearcoat, BakedCoatIsReferencedAndFiltered) {
     SceneJob job;
     job.scenes = {write_coated_sphere(dir, 1.0, coat_roughness)};
     job.output_dir = dir / "out";
-    job.container = io::TextureContainer::PngPerMip;
+    job.texture_format.container = io::TextureContainer::PngPerMip;
     auto outcome = run_scene_job(job);
     ASSERT_TRUE(outcome) << outcome.error().message;
     ASSERT_TRUE(outcome->errors.empty()) << outcome->errors[0];

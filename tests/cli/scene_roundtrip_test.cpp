@@ -114,7 +114,7 @@ TEST(SceneRoundTrip, EverySharedModel) {
         SceneJob job;
         job.scenes = {scene};
         job.output_dir = out_dir;
-        job.container = io::TextureContainer::Ktx2;
+        job.texture_format.container = io::TextureContainer::Ktx2;
         auto outcome = run_scene_job(job);
         ASSERT_TRUE(outcome) << outcome.error().message;
         ASSERT_TRUE(outcome->errors.empty()) << outcome->errors[0];

@@ -92,8 +92,8 @@ TEST(Ktx2, RoundTripAndStructureEveryFormat) {
         for (int channels = 1; channels <= 4; ++channels) {
             SCOPED_TRACE(std::string(encoding_name(e)) + " x" + std::to_string(channels));
             const MipChain chain = random_chain(13, 6, channels, unsigned(channels) * 7 + unsigned(e));
-            auto written = write_texture(chain, e, TextureContainer::Ktx2, dir, "t", "kernel", {}, WrapMode::Repeat,
-                                         Supercompression{false, 3});
+            const TextureFileFormat plain(TextureContainer::Ktx2, Supercompression{false, 3});
+            auto written = write_texture(chain, e, plain, dir, "t", "kernel");
             ASSERT_TRUE(written.ok()) << written.error().message;
             ASSERT_EQ(written->size(), 1u);
             const std::vector<uint8_t> b = slurp(dir / "t.ktx2");
@@ -253,8 +253,8 @@ TEST(Ktx2, ZstdLevelsInflateToTheUncompressedFile) {
             SCOPED_TRACE(std::string(encoding_name(e)) + " x" + std::to_string(channels));
             const MipChain chain = random_chain(37, 21, channels, unsigned(channels) * 3 + unsigned(e));
             const std::vector<uint8_t> plain = encode_ktx2(chain, e);
-            auto written = write_texture(chain, e, TextureContainer::Ktx2, dir, "z", "kernel", {}, WrapMode::Repeat,
-                                         Supercompression{true, 5});
+            const TextureFileFormat zstd(TextureContainer::Ktx2, Supercompression{true, 5});
+            auto written = write_texture(chain, e, zstd, dir, "z", "kernel");
             ASSERT_TRUE(written.ok()) << written.error().message;
             const std::vector<uint8_t> z = slurp(dir / "z.ktx2");
             EXPECT_EQ(u32(z, 44), 2u);
@@ -298,7 +298,8 @@ TEST(Ktx2, ZstdLevelsInflateToTheUncompressedFile) {
     const MipChain chain = random_chain(300, 200, 4, 77);
     std::vector<std::vector<uint8_t>> runs;
     for (int run = 0; run < 2; ++run) {
-        ASSERT_TRUE(write_texture(chain, TexelEncoding::Float16, TextureContainer::Ktx2, dir, "d", "lean").ok());
+        const TextureFileFormat ktx2(TextureContainer::Ktx2);
+        ASSERT_TRUE(write_texture(chain, TexelEncoding::Float16, ktx2, dir, "d", "lean").ok());
         runs.push_back(slurp(dir / "d.ktx2"));
     }
     EXPECT_EQ(runs[0], runs[1]);
@@ -421,7 +422,7 @@ TEST(Dds, LegacyHeaderWhereOneExistsElseDx10) {
                           Case{TexelEncoding::Float32, 3, 2, 4, four, 0x30315844u, 0, {0, 0, 0, 0}}}) {
         SCOPED_TRACE(std::string(encoding_name(c.e)) + " x" + std::to_string(c.channels));
         const MipChain chain = random_chain(10, 4, c.channels, 5);
-        auto written = write_texture(chain, c.e, TextureContainer::Dds, dir, "t", "roughness");
+        auto written = write_texture(chain, c.e, TextureFileFormat(TextureContainer::Dds), dir, "t", "roughness");
         ASSERT_TRUE(written.ok()) << written.error().message;
         const std::vector<uint8_t> b = slurp(dir / "t.dds");
         const ParsedDds p = parse_dds(b);
@@ -486,8 +487,8 @@ TEST(Exr, SameChainSameBytesAtAnyTime) {
     const fs::path dir = fresh_dir("exr_reproducible");
     const MipChain chain = random_chain(20, 12, 1, 3, 0.0f, 1.0f);
     auto bytes = [&](const std::string& stem) {
-        auto written = write_texture(chain, TexelEncoding::Float16, TextureContainer::Exr, dir, stem, "kernel", {"t"},
-                                     WrapMode::Repeat);
+        const TextureFileFormat exr(TextureContainer::Exr, {}, WrapMode::Repeat);
+        auto written = write_texture(chain, TexelEncoding::Float16, exr, dir, stem, "kernel", {"t"});
         EXPECT_TRUE(written.ok()) << written.error().message;
         std::ifstream f(dir / (stem + ".exr"), std::ios::binary);
         return std::string(std::istreambuf_iterator<char>(f), {});
@@ -511,8 +512,9 @@ TEST(Exr, SameChainSameBytesAtAnyTime) {
 TEST(Exr, MipmappedTiledPlainTextureThroughOpenImageIO) {
     const fs::path dir = fresh_dir("exr");
     const MipChain chain = random_chain(70, 33, 4, 9, -2.0f, 2.0f);
-    auto written = write_texture(chain, TexelEncoding::Float32, TextureContainer::Exr, dir, "lean", "lean",
-                                 {"m.x", "m.y", "M.xx", "M.yy"}, WrapMode::Clamp);
+    const TextureFileFormat exr(TextureContainer::Exr, {}, WrapMode::Clamp);
+    auto written =
+        write_texture(chain, TexelEncoding::Float32, exr, dir, "lean", "lean", {"m.x", "m.y", "M.xx", "M.yy"});
     ASSERT_TRUE(written.ok()) << written.error().message;
     EXPECT_EQ((*written)[0].extra["channel_meaning"], (std::vector<std::string>{"m.x", "m.y", "M.xx", "M.yy"}));
     EXPECT_EQ((*written)[0].extra["gpu_format"], "R32G32B32A32_SFLOAT");
@@ -546,14 +548,13 @@ TEST(Exr, MipmappedTiledPlainTextureThroughOpenImageIO) {
     }
     EXPECT_EQ(levels, int(chain.levels.size()));
     // One channel is Y; five channels are refused with the file's name.
-    auto one = write_texture(random_chain(8, 8, 1, 2), TexelEncoding::Float16, TextureContainer::Exr, dir, "t",
-                             "kernel", {"t"});
+    const TextureFileFormat exr_repeat(TextureContainer::Exr);
+    auto one = write_texture(random_chain(8, 8, 1, 2), TexelEncoding::Float16, exr_repeat, dir, "t", "kernel", {"t"});
     ASSERT_TRUE(one.ok()) << one.error().message;
     auto in1 = OIIO::ImageInput::open((dir / "t.exr").string());
     ASSERT_TRUE(in1);
     EXPECT_EQ(in1->spec().channelnames, std::vector<std::string>{"Y"});
-    auto five = write_texture(random_chain(8, 8, 5, 2), TexelEncoding::Float16, TextureContainer::Exr, dir, "five",
-                              "lean");
+    auto five = write_texture(random_chain(8, 8, 5, 2), TexelEncoding::Float16, exr_repeat, dir, "five", "lean");
     ASSERT_FALSE(five.ok());
     EXPECT_NE(five.error().message.find("five"), std::string::npos);
     EXPECT_FALSE(fs::exists(dir / "five.exr"));
@@ -563,7 +564,8 @@ TEST(Exr, MipmappedTiledPlainTextureThroughOpenImageIO) {
 TEST(PngPerMip, OneFilePerLevel) {
     const fs::path dir = fresh_dir("png");
     const MipChain chain = random_chain(9, 5, 3, 11);
-    auto written = write_texture(chain, TexelEncoding::Unorm16, TextureContainer::PngPerMip, dir, "n", "normal");
+    const TextureFileFormat png(TextureContainer::PngPerMip);
+    auto written = write_texture(chain, TexelEncoding::Unorm16, png, dir, "n", "normal");
     ASSERT_TRUE(written.ok()) << written.error().message;
     ASSERT_EQ(written->size(), chain.levels.size());
     for (size_t L = 0; L < chain.levels.size(); ++L) {
@@ -578,7 +580,7 @@ TEST(PngPerMip, OneFilePerLevel) {
         want.levels.push_back(chain.levels[L]);
         expect_chain_near(one, want, 3, tolerance(TexelEncoding::Unorm16));
     }
-    auto floats = write_texture(chain, TexelEncoding::Float16, TextureContainer::PngPerMip, dir, "k", "kernel");
+    auto floats = write_texture(chain, TexelEncoding::Float16, png, dir, "k", "kernel");
     ASSERT_TRUE(floats.ok());
     EXPECT_EQ((*floats)[0].path, "k_mip0.exr");
     fs::remove_all(dir);
