@@ -3,8 +3,8 @@
 #pragma once
 
 #include "cli/block_options.h"
-#include "pipeline/config.h"
-#include "pipeline/batch.h"
+#include "cli/config.h"
+#include "cli/batch.h"
 #include "pipeline/scene_job.h"
 
 #include <CLI/CLI.hpp>
@@ -176,6 +176,7 @@ inline Result<SceneJob> make_scene_job(const SceneCliOptions& o) {
     p.min_relative_curvature = o.min_relative_curvature;
     p.kappa = o.kappa;
     p.threads = run_settings().jobs;
+    p.input_policy = run_settings().input_policy;
     TextureBakeSettings& t = p.texture_settings;
     t.isotropic = o.isotropic == "sum" ? IsotropicReduction::Sum : o.isotropic == "max" ? IsotropicReduction::Max
                                                                                         : IsotropicReduction::Mean;
