@@ -5,7 +5,7 @@
 #include "cli/pipeline_options.h"
 #include "cli/scene_options.h"
 #include "io/output/bake_output.h"
-#include "pipeline/progress.h"
+#include "cli/progress.h"
 #include "pipeline/version.h"
 
 #include <cstdio>
@@ -76,6 +76,8 @@ namespace {
 
 int run_bake(const SceneCliOptions& o, const PipelineFlags& pipe) { return run_scene_command(o, pipe, false); }
 
+}  // namespace
+
 void add_bake_command(CLI::App& app, std::function<int()>& run) {
     auto* sub = app.add_subcommand(
         "bake", "Bake scenes: per-vertex curvature (_SPECAA_CURVATURE) and filtered material textures, glTF out.");
@@ -124,7 +126,4 @@ void add_bake_command(CLI::App& app, std::function<int()>& run) {
     sub->callback([&run, o, pipe] { run = [o, pipe] { return run_bake(*o, *pipe); }; });
 }
 
-const Registration reg{"bake", 10, &add_bake_command};
-
-}  // namespace
 }  // namespace specbake::cli

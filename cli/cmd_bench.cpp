@@ -4,8 +4,8 @@
 #include "verify/gl_context.h"
 #include "verify/bench_job.h"
 #include "verify/scene.h"
-#include "pipeline/batch.h"
-#include "pipeline/progress.h"
+#include "cli/batch.h"
+#include "cli/progress.h"
 #include "cli/verify_options.h"
 
 #include <cstddef>
@@ -50,6 +50,7 @@ int run_bench_command(const BenchCommandOptions& given) {
         o.alpha = {0.01f, 0.05f};
     }
     BenchOptions options;
+    options.input_policy = run_settings().input_policy;
     VerifyOptions& v = options.verify;
     if (!apply_sim_command_options(o.sim, v)) return kExitUsage;
     if (!o.no_corpus) {
@@ -118,6 +119,8 @@ int run_bench_command(const BenchCommandOptions& given) {
     return kExitOk;
 }
 
+}  // namespace
+
 void add_bench_command(CLI::App& app, std::function<int()>& run) {
     auto* sub = app.add_subcommand("bench",
                                    "Accuracy against cost of every anti-aliasing candidate on the built-in scenes "
@@ -169,7 +172,4 @@ void add_bench_command(CLI::App& app, std::function<int()>& run) {
     });
 }
 
-const Registration reg{"bench", 90, &add_bench_command};
-
-}  // namespace
 }  // namespace specbake::cli

@@ -142,6 +142,8 @@ int run_filter(const FilterOptions& o) {
     return kExitOk;
 }
 
+}  // namespace
+
 void add_filter_command(CLI::App& app, std::function<int()>& run) {
     auto opts = std::make_shared<FilterOptions>();
     auto* sub = app.add_subcommand(
@@ -182,7 +184,4 @@ void add_filter_command(CLI::App& app, std::function<int()>& run) {
     sub->callback([&run, opts] { run = [opts] { return run_filter(*opts); }; });
 }
 
-const Registration reg{"filter", 90, &add_filter_command};
-
-}  // namespace
 }  // namespace specbake::cli

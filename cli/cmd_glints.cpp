@@ -2,7 +2,7 @@
 // its manifest into a folder.
 #include "cli/command.h"
 
-#include "pipeline/batch.h"
+#include "cli/batch.h"
 #include "pipeline/glint_job.h"
 
 #include <cstdio>
@@ -34,6 +34,8 @@ int run_glints(const GlintsOptions& o) {
     return kExitOk;
 }
 
+}  // namespace
+
 void add_glints_command(CLI::App& app, std::function<int()>& run) {
     auto* sub = app.add_subcommand(
         "glints", "Bake the glint dictionary (C21: MIP-mapped 1D slope distributions) as a KTX2 2D array.");
@@ -60,7 +62,4 @@ void add_glints_command(CLI::App& app, std::function<int()>& run) {
     sub->callback([&run, o] { run = [o] { return run_glints(*o); }; });
 }
 
-const Registration reg{"glints", 65, &add_glints_command};
-
-}  // namespace
 }  // namespace specbake::cli

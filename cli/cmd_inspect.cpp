@@ -1,6 +1,7 @@
 // `specbake inspect`: statistics, histograms, differences, structural checks and a contact sheet of baked
 // textures and manifests.
 #include "cli/command.h"
+#include "cli/run_settings.h"
 #include "pipeline/inspect.h"
 
 #include <cstdio>
@@ -31,19 +32,20 @@ fs::path resolve(const std::string& file) {
 bool is_manifest(const fs::path& p) { return p.extension() == ".json"; }
 
 int run_check(const InspectOptions& o) {
+    const io::InputLimits& limits = run_settings().input_policy.limits;
     int failed = 0;
     for (const std::string& f : o.files) {
         const fs::path p = resolve(f);
         std::vector<std::string> problems;
         if (is_manifest(p)) {
-            FolderCheck c = check_manifest_folder(p, [&](const std::string& line) {
+            FolderCheck c = check_manifest_folder(p, limits, [&](const std::string& line) {
                 if (!o.json) std::fprintf(stderr, "specbake: %s\n", line.c_str());
             });
             for (const std::string& note : c.notes)
                 if (!o.json) std::fprintf(stderr, "specbake: note: %s\n", note.c_str());
             problems = std::move(c.problems);
         } else {
-            auto r = io::check_texture_file(p);
+            auto r = io::check_texture_file(p, limits);
             if (!r) problems.push_back(r.error().message);
         }
         for (const std::string& problem : problems) print_error(problem);
@@ -77,6 +79,7 @@ Result<json> diff_manifests(const ManifestReport& a, const ManifestReport& b, co
 }
 
 int run_diff(const InspectOptions& o) {
+    const io::InputLimits& limits = run_settings().input_policy.limits;
     const fs::path pa = resolve(o.files[0]), pb = resolve(o.files[1]);
     json diffs = json::array();
     if (is_manifest(pa) != is_manifest(pb)) {
@@ -84,8 +87,8 @@ int run_diff(const InspectOptions& o) {
         return kExitUsage;
     }
     if (is_manifest(pa)) {
-        auto a = inspect_manifest(pa, false);
-        auto b = inspect_manifest(pb, false);
+        auto a = inspect_manifest(pa, false, limits);
+        auto b = inspect_manifest(pb, false, limits);
         if (!a || !b) {
             print_error((!a ? a.error() : b.error()).message);
             return kExitFailed;
@@ -97,8 +100,8 @@ int run_diff(const InspectOptions& o) {
         }
         diffs = std::move(*d);
     } else {
-        auto a = inspect_texture(pa, o.kind);
-        auto b = inspect_texture(pb, o.kind);
+        auto a = inspect_texture(pa, o.kind, limits);
+        auto b = inspect_texture(pb, o.kind, limits);
         if (!a || !b) {
             print_error((!a ? a.error() : b.error()).message);
             return kExitFailed;
@@ -127,6 +130,7 @@ int run_diff(const InspectOptions& o) {
 }
 
 int run_inspect(const InspectOptions& o) {
+    const io::InputLimits& limits = run_settings().input_policy.limits;
     if (o.check) return run_check(o);
     if (o.files.size() == 2 && o.sheet.empty()) return run_diff(o);
     std::vector<TextureReport> textures;
@@ -135,7 +139,7 @@ int run_inspect(const InspectOptions& o) {
     for (const std::string& f : o.files) {
         const fs::path p = resolve(f);
         if (is_manifest(p)) {
-            auto m = inspect_manifest(p, false);
+            auto m = inspect_manifest(p, false, limits);
             if (!m) {
                 print_error(m.error().message);
                 ++failed;
@@ -163,7 +167,7 @@ int run_inspect(const InspectOptions& o) {
             out["manifests"].push_back(std::move(mj));
             continue;
         }
-        auto t = inspect_texture(p, o.kind);
+        auto t = inspect_texture(p, o.kind, limits);
         if (!t) {
             print_error(t.error().message);
             ++failed;
@@ -186,6 +190,8 @@ int run_inspect(const InspectOptions& o) {
     }
     return failed ? kExitFailed : kExitOk;
 }
+
+}  // namespace
 
 void add_inspect_command(CLI::App& app, std::function<int()>& run) {
     auto* sub = app.add_subcommand(
@@ -215,7 +221,4 @@ void add_inspect_command(CLI::App& app, std::function<int()>& run) {
     sub->callback([&run, o] { run = [o] { return run_inspect(*o); }; });
 }
 
-const Registration reg{"inspect", 70, &add_inspect_command};
-
-}  // namespace
 }  // namespace specbake::cli

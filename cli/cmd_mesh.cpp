@@ -11,6 +11,8 @@ namespace {
 
 int run_mesh(const SceneCliOptions& o, const PipelineFlags& pipe) { return run_scene_command(o, pipe, true); }
 
+}  // namespace
+
 void add_mesh_command(CLI::App& app, std::function<int()>& run) {
     auto* sub = app.add_subcommand(
         "mesh", "Add per-vertex curvature (_SPECAA_CURVATURE, and TANGENT where missing) to a mesh; glTF out.");
@@ -34,7 +36,4 @@ void add_mesh_command(CLI::App& app, std::function<int()>& run) {
     sub->callback([&run, o, pipe] { run = [o, pipe] { return run_mesh(*o, *pipe); }; });
 }
 
-const Registration reg{"mesh", 30, &add_mesh_command};
-
-}  // namespace
 }  // namespace specbake::cli

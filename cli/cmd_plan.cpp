@@ -30,6 +30,8 @@ int run_plan(const SceneCliOptions& o) {
     return status;
 }
 
+}  // namespace
+
 void add_plan_command(CLI::App& app, std::function<int()>& run) {
     auto* sub = app.add_subcommand("plan", "Show what 'bake' would compute for each material and primitive, and why.");
     auto o = std::make_shared<SceneCliOptions>();
@@ -49,7 +51,4 @@ void add_plan_command(CLI::App& app, std::function<int()>& run) {
     sub->callback([&run, o] { run = [o] { return run_plan(*o); }; });
 }
 
-const Registration reg{"plan", 40, &add_plan_command};
-
-}  // namespace
 }  // namespace specbake::cli

@@ -42,6 +42,8 @@ int run_shader(const ShaderOptions& opts) {
     return kExitOk;
 }
 
+}  // namespace
+
 void add_shader_command(CLI::App& app, std::function<int()>& run) {
     auto* sub = app.add_subcommand(
         "shader", "Write the runtime shader include (GLSL or HLSL) for specular anti-aliasing in an engine.");
@@ -58,7 +60,4 @@ void add_shader_command(CLI::App& app, std::function<int()>& run) {
     sub->callback([&run, opts] { run = [opts] { return run_shader(*opts); }; });
 }
 
-const Registration reg{"shader", 70, &add_shader_command};
-
-}  // namespace
 }  // namespace specbake::cli

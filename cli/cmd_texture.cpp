@@ -7,7 +7,7 @@
 #include "io/output/bake_output.h"
 #include "pipeline/texture_job.h"
 #include "cli/pipeline_options.h"
-#include "pipeline/progress.h"
+#include "cli/progress.h"
 #include "pipeline/version.h"
 
 #include <cstdio>
@@ -84,6 +84,7 @@ int run_texture(const TextureOptions& o, const PipelineFlags& pipe) {
     if (o.roughness_value) job.roughness_value = *o.roughness_value;
     job.output_dir = o.output;
     job.texture_format.container = *io::parse_container(o.format);
+    job.limits = run_settings().input_policy.limits;
     job.texture_format.supercompression.zstd = o.supercompression == "zstd";
     job.texture_format.supercompression.zstd_level = o.zstd_level;
     job.texture_format.wrap = *parse_wrap_mode(o.wrap);
@@ -154,6 +155,8 @@ int run_texture(const TextureOptions& o, const PipelineFlags& pipe) {
     return kExitOk;
 }
 
+}  // namespace
+
 void add_texture_command(CLI::App& app, std::function<int()>& run) {
     auto* sub = app.add_subcommand(
         "texture",
@@ -219,7 +222,4 @@ void add_texture_command(CLI::App& app, std::function<int()>& run) {
     sub->callback([&run, o, pipe] { run = [o, pipe] { return run_texture(*o, *pipe); }; });
 }
 
-const Registration reg{"texture", 20, &add_texture_command};
-
-}  // namespace
 }  // namespace specbake::cli

@@ -1,8 +1,8 @@
 // specbake verify: scores every specular anti-aliasing candidate against the ground truth on one scene.
 #include "cli/command.h"
 #include "verify/gl_context.h"
-#include "pipeline/batch.h"
-#include "pipeline/progress.h"
+#include "cli/batch.h"
+#include "cli/progress.h"
 #include "verify/verify_job.h"
 #include "cli/verify_options.h"
 #include "verify/scene_file.h"
@@ -49,7 +49,8 @@ int run_verify_command(const VerifyCommandOptions& o) {
         print_error("give either a scene file or --builtin NAME (see specbake verify --help)");
         return kExitUsage;
     }
-    auto scene = o.builtin.empty() ? load_sim_scene(o.scene_file) : make_builtin_scene(o.builtin, std::sqrt(o.alpha));
+    auto scene = o.builtin.empty() ? load_sim_scene(o.scene_file, run_settings().input_policy)
+                                   : make_builtin_scene(o.builtin, std::sqrt(o.alpha));
     if (!scene) {
         print_error(scene.error().message);
         return o.builtin.empty() ? kExitFailed : kExitUsage;
@@ -115,6 +116,8 @@ int run_verify_command(const VerifyCommandOptions& o) {
     return kExitOk;
 }
 
+}  // namespace
+
 void add_verify_command(CLI::App& app, std::function<int()>& run) {
     auto* sub = app.add_subcommand("verify",
                                    "Render a scene's ground truth and every anti-aliasing candidate on headless "
@@ -149,7 +152,4 @@ void add_verify_command(CLI::App& app, std::function<int()>& run) {
     sub->callback([&run, o] { run = [o] { return run_verify_command(*o); }; });
 }
 
-const Registration reg{"verify", 80, &add_verify_command};
-
-}  // namespace
 }  // namespace specbake::cli

@@ -1,6 +1,6 @@
-// Subcommand registry. Each cmd_*.cpp registers one subcommand at static-initialisation time:
+// The subcommands. Each cmd_*.cpp defines one add_*_command function, which cli/app.cpp calls in the
+// order of --help:
 //
-//   namespace {
 //   void add_texture_command(CLI::App& app, std::function<int()>& run) {
 //       auto* sub = app.add_subcommand("texture", "Bake a normal map ...");
 //       auto opts = std::make_shared<TextureOptions>();
@@ -8,10 +8,8 @@
 //       sub->footer("Examples:\n  specbake texture --normal n.png -o out/");
 //       sub->callback([&run, opts] { run = [opts] { return run_texture(*opts); }; });
 //   }
-//   const specbake::cli::Registration reg{"texture", 20, &add_texture_command};
-//   }  // namespace
 //
-// The order value sorts the subcommands in --help. A subcommand's callback returns the process exit code.
+// A subcommand's callback returns the process exit code.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -31,9 +29,16 @@ enum ExitCode : int {
 // Adds the subcommand to `app` and sets `run` to the function that executes it after parsing.
 using AddCommand = void (*)(CLI::App& app, std::function<int()>& run);
 
-struct Registration {
-    Registration(const char* name, int order, AddCommand add);
-};
+void add_bake_command(CLI::App& app, std::function<int()>& run);
+void add_texture_command(CLI::App& app, std::function<int()>& run);
+void add_mesh_command(CLI::App& app, std::function<int()>& run);
+void add_plan_command(CLI::App& app, std::function<int()>& run);
+void add_glints_command(CLI::App& app, std::function<int()>& run);
+void add_inspect_command(CLI::App& app, std::function<int()>& run);
+void add_shader_command(CLI::App& app, std::function<int()>& run);
+void add_verify_command(CLI::App& app, std::function<int()>& run);
+void add_bench_command(CLI::App& app, std::function<int()>& run);
+void add_filter_command(CLI::App& app, std::function<int()>& run);
 
 // Prints "specbake: error: <message>" on stderr.
 void print_error(const std::string& message);

@@ -1,8 +1,8 @@
-// The command-line side of pipeline/batch.h: the flags every bake-type command offers. The global flags
-// (--jobs, --quiet, --verbose, --config) are parsed by main() for every command.
+// The command-line side of cli/batch.h: the flags every bake-type command offers. The global flags
+// (--jobs, --quiet, --verbose, --config) are parsed by run_cli() for every command.
 #pragma once
 
-#include "pipeline/batch.h"
+#include "cli/batch.h"
 
 #include <CLI/CLI.hpp>
 

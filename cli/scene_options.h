@@ -4,8 +4,8 @@
 
 #include "cli/block_options.h"
 #include "cli/name_options.h"
-#include "pipeline/config.h"
-#include "pipeline/batch.h"
+#include "cli/config.h"
+#include "cli/batch.h"
 #include "pipeline/scene_job.h"
 
 #include <CLI/CLI.hpp>
@@ -159,6 +159,7 @@ inline Result<SceneJob> make_scene_job(const SceneCliOptions& o) {
     p.min_relative_curvature = o.min_relative_curvature;
     p.kappa = o.kappa;
     p.threads = run_settings().jobs;
+    p.input_policy = run_settings().input_policy;
     // The options' checks accept only the enums' names.
     TextureBakeSettings& t = p.texture_settings;
     t.isotropic = *parse_isotropic_reduction(o.isotropic);

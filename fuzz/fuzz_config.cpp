@@ -1,8 +1,8 @@
-// libFuzzer target: the response-file and config-file parsers (pipeline/config.h). The first byte picks
+// libFuzzer target: the response-file and config-file parsers (cli/config.h). The first byte picks
 // the parser: even = config text (TOML or JSON) sorted for a command, odd = a response file expanded
 // (it may name itself or other files of the scratch folder, which is the working folder).
 #include "fuzz/fuzz_common.h"
-#include "pipeline/config.h"
+#include "cli/config.h"
 
 #include <array>
 #include <string>

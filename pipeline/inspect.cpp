@@ -146,8 +146,8 @@ std::vector<Quantity> quantities_of(const MipChain& mips, const std::string& kin
     return out;
 }
 
-Result<TextureReport> inspect_texture(const fs::path& path, std::string kind) {
-    auto texture = io::read_texture_for_inspection(path);
+Result<TextureReport> inspect_texture(const fs::path& path, std::string kind, const io::InputLimits& limits) {
+    auto texture = io::read_texture_for_inspection(path, limits);
     if (!texture) return texture.error();
     TextureReport r;
     r.path = path.string();
@@ -310,7 +310,8 @@ std::string diff_text(const json& d) {
     return out;
 }
 
-Result<ManifestReport> inspect_manifest(const fs::path& manifest_path, bool check_hashes) {
+Result<ManifestReport> inspect_manifest(const fs::path& manifest_path, bool check_hashes,
+                                        const io::InputLimits& limits) {
     auto manifest = io::read_manifest(manifest_path);
     if (!manifest) return manifest.error();
     ManifestReport r;
@@ -327,7 +328,7 @@ Result<ManifestReport> inspect_manifest(const fs::path& manifest_path, bool chec
             if (*hash != o.sha256) r.problems.push_back(file.string() + ": content differs from the manifest's hash");
         }
         if (o.format != "ktx2" && o.format != "dds" && o.format != "exr" && o.format != "png") continue;
-        auto t = inspect_texture(file, o.kind);
+        auto t = inspect_texture(file, o.kind, limits);
         if (!t) {
             r.problems.push_back(t.error().message);
             continue;

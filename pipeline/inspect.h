@@ -62,8 +62,9 @@ struct TextureReport {
     std::vector<Quantity> quantities;  // stats filled
 };
 
-// Reads and analyses one texture file; `kind` empty: guessed from the file name.
-Result<TextureReport> inspect_texture(const std::filesystem::path& path, std::string kind = "");
+// Reads and analyses one texture file (its size held to `limits`); `kind` empty: guessed from the file name.
+Result<TextureReport> inspect_texture(const std::filesystem::path& path, std::string kind = "",
+                                      const io::InputLimits& limits = {});
 
 nlohmann::json report_json(const TextureReport& report);
 // A per-mip table of the derived quantities (all raw channels when none is derived, or with `all`).
@@ -80,7 +81,8 @@ struct ManifestReport {
     std::vector<TextureReport> textures;
     std::vector<std::string> problems;  // missing files, hash mismatches, structure errors
 };
-Result<ManifestReport> inspect_manifest(const std::filesystem::path& manifest_path, bool check_hashes);
+Result<ManifestReport> inspect_manifest(const std::filesystem::path& manifest_path, bool check_hashes,
+                                        const io::InputLimits& limits = {});
 
 // `inspect --check` of a manifest: every output hashed (in parallel, from read-only mappings streamed in
 // windows, never copied) and compared with the manifest; KTX2/DDS structure checked and their declared
@@ -92,7 +94,7 @@ struct FolderCheck {
     std::vector<std::string> notes;
     uint64_t bytes_hashed = 0;
 };
-FolderCheck check_manifest_folder(const std::filesystem::path& manifest_path,
+FolderCheck check_manifest_folder(const std::filesystem::path& manifest_path, const io::InputLimits& limits,
                                   const std::function<void(const std::string&)>& on_wait = {});
 
 // One row per report: every mip level of the first derived quantity (else channel R) in false colour

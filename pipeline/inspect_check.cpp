@@ -26,7 +26,7 @@ struct FileCheck {
 };
 
 // One output before hashing: mapped read-only (no copy), KTX2/DDS headers parsed from the mapping.
-void open_output(const fs::path& file, const io::ManifestOutput& o, FileCheck& r) {
+void open_output(const fs::path& file, const io::ManifestOutput& o, const io::InputLimits& limits, FileCheck& r) {
     auto mapped = io::MappedFile::open(file);
     if (!mapped) {
         r.problem = mapped.error().message;
@@ -34,7 +34,7 @@ void open_output(const fs::path& file, const io::ManifestOutput& o, FileCheck& r
     }
     r.mapped = std::move(*mapped);
     if (o.format == "ktx2" || o.format == "dds") {
-        auto s = io::check_container_shape(r.mapped.bytes(), file.string());
+        auto s = io::check_container_shape(r.mapped.bytes(), file.string(), limits);
         if (!s) {
             r.problem = s.error().message;
             return;
@@ -73,7 +73,8 @@ void finish_output(const fs::path& file, const io::ManifestOutput& o, const std:
 
 }  // namespace
 
-FolderCheck check_manifest_folder(const fs::path& manifest_path, const std::function<void(const std::string&)>& on_wait) {
+FolderCheck check_manifest_folder(const fs::path& manifest_path, const io::InputLimits& limits,
+                                  const std::function<void(const std::string&)>& on_wait) {
     FolderCheck out;
     const fs::path dir = manifest_path.parent_path().empty() ? fs::path(".") : manifest_path.parent_path();
     auto lock = io::OutputLock::acquire(dir, io::OutputLock::Purpose::check, on_wait);
@@ -106,7 +107,7 @@ FolderCheck check_manifest_folder(const fs::path& manifest_path, const std::func
             return;
         }
         files[i] = dir / o.path;
-        open_output(files[i], o, checks[i]);
+        open_output(files[i], o, limits, checks[i]);
     });
     // All outputs hashed together, several interleaved on each core (io::sha256_ranges), from the mappings
     // in windows: the window after next is read from disk while one is hashed (cold page cache), and each

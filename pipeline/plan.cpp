@@ -57,14 +57,14 @@ Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& optio
         if (decode_errors.count(image)) return nullptr;
         Result<io::DecodedImage> decoded = make_error(scene.image_label(image) + ": not read");
         if (const std::filesystem::path file = scene.image_file(image); !file.empty()) {
-            decoded = io::decode_image(file);
+            decoded = io::decode_image(file, options.input_policy.limits);
         } else {
             auto bytes = scene.image_bytes(image);
             if (!bytes) {
                 decode_errors[image] = bytes.error().message;
                 return nullptr;
             }
-            decoded = io::decode_image_memory(*bytes, scene.image_label(image));
+            decoded = io::decode_image_memory(*bytes, scene.image_label(image), options.input_policy.limits);
         }
         if (!decoded) {
             decode_errors[image] = decoded.error().message;

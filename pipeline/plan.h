@@ -31,6 +31,7 @@
 
 #include "core/result.h"
 #include "bake/texture_bake.h"
+#include "io/files/input_policy.h"
 #include "io/gltf/gltf_scene.h"
 #include "mesh/curvature.h"
 #include "core/trimesh.h"
@@ -73,6 +74,8 @@ struct PlanOptions {
     double min_relative_curvature = 0.05;
     CurvatureEstimator estimator = CurvatureEstimator::ShapeOperator;
     int threads = 0;
+    // What the scene may make the job read and allocate: the scene is loaded and its images decoded under it.
+    io::InputPolicy input_policy;
     TextureBakeSettings texture_settings;  // the statistic is measured with the settings the bake uses
     // Settings of the materials named here (config [materials.NAME]); every other material uses
     // texture_settings.

@@ -4,7 +4,7 @@
 #include "pipeline/uastc_encode.h"
 
 #include "io/output/bake_output.h"
-#include "pipeline/batch.h"
+#include "pipeline/concurrency.h"
 #include "pipeline/glint_bake.h"
 #include "pipeline/version.h"
 #include "io/files/input_policy.h"
@@ -72,7 +72,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         if (job.progress) job.progress(s);
     };
     say("reading " + input.string());
-    auto loaded = load_scene(input);
+    auto loaded = load_scene(input, job.plan.input_policy);
     if (!loaded) return loaded.error();
     for (const std::string& n : loaded->notes) warnings.push_back(n);
     io::GltfScene& scene = loaded->scene;
@@ -330,18 +330,18 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
 
 }  // namespace
 
-Result<LoadedScene> load_scene(const fs::path& path) {
+Result<LoadedScene> load_scene(const fs::path& path, const io::InputPolicy& policy) {
     if (auto r = io::check_utf8_path(path); !r) return r.error();
     LoadedScene out;
     const std::string ext = lower_extension(path);
     if (ext == ".gltf" || ext == ".glb") {
-        auto scene = io::GltfScene::load(path);
+        auto scene = io::GltfScene::load(path, policy);
         if (!scene) return scene.error();
         out.scene = std::move(*scene);
         out.roughness_known.assign(out.scene.materials().size(), true);
         return out;
     }
-    auto imported = import_mesh(path.string());
+    auto imported = import_mesh(path.string(), {}, policy);
     if (!imported) return imported.error();
     out.is_gltf = false;
     out.notes = imported->notes;
@@ -363,7 +363,7 @@ Result<LoadedScene> load_scene(const fs::path& path) {
 }
 
 Result<ScenePlan> plan_scene(const fs::path& path, const PlanOptions& options) {
-    auto loaded = load_scene(path);
+    auto loaded = load_scene(path, options.input_policy);
     if (!loaded) return loaded.error();
     auto plan = make_plan(loaded->scene, options, loaded->roughness_known);
     if (!plan) return plan.error();

@@ -71,9 +71,10 @@ struct LoadedScene {
     std::vector<std::string> notes;        // import notes (dropped primitives, generated normals, ...)
 };
 
-// glTF/GLB (detected by content) through tinygltf; everything else through Assimp. Imported meshes
-// without normals get generated normals (Max weights, noted), which are written into the output.
-Result<LoadedScene> load_scene(const std::filesystem::path& path);
+// glTF/GLB (detected by content) through tinygltf; everything else through Assimp, both under `policy`.
+// Imported meshes without normals get generated normals (Max weights, noted), which are written into the
+// output.
+Result<LoadedScene> load_scene(const std::filesystem::path& path, const io::InputPolicy& policy);
 
 struct SceneJobOutcome {
     io::Manifest manifest;                 // as written (empty outputs when every scene failed)
@@ -82,7 +83,7 @@ struct SceneJobOutcome {
     std::vector<std::string> warnings;
 };
 
-// Runs the bake of every scene, several at a time (for_each_concurrently, pipeline/batch.h). A scene that
+// Runs the bake of every scene, several at a time (for_each_concurrently, pipeline/concurrency.h). A scene that
 // fails leaves none of its files behind; the manifest lists the scenes that completed. The plans returned
 // hold the decisions only (work, texture_work and decoded_images are released once written). Fails as a
 // whole (Error) only for problems that stop every scene: the output folder is (or holds) an input or holds
@@ -90,7 +91,7 @@ struct SceneJobOutcome {
 // (io/output/bake_output.h); when every scene fails the folder is unchanged.
 Result<SceneJobOutcome> run_scene_job(const SceneJob& job);
 
-// The plan of one scene, as `specbake plan` prints it.
+// The plan of one scene, as `specbake plan` prints it (the scene read under options.input_policy).
 Result<ScenePlan> plan_scene(const std::filesystem::path& path, const PlanOptions& options);
 
 // The settings block of the manifest.

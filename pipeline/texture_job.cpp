@@ -490,12 +490,12 @@ Result<void> read_job_maps(const TextureJob& job, JobMaps& maps) {
     Result<std::string> n_hash = make_error(""), r_hash = make_error("");
     tbb::parallel_invoke(
         [&] {
-            n = io::decode_image(job.normal, keep_8bit);
+            n = io::decode_image(job.normal, job.limits, keep_8bit);
             if (n) n_hash = io::sha256_file(job.normal);
         },
         [&] {
             if (!job.roughness) return;
-            r = io::decode_image(*job.roughness, keep_8bit);
+            r = io::decode_image(*job.roughness, job.limits, keep_8bit);
             if (r) r_hash = io::sha256_file(*job.roughness);
         });
     if (!n) return n.error();

@@ -5,6 +5,7 @@
 #pragma once
 
 #include "bake/texture_bake.h"
+#include "io/files/input_policy.h"
 #include "io/output/manifest.h"
 #include "io/output/output_folder.h"
 #include "io/texture/texture_writer.h"
@@ -34,6 +35,7 @@ struct TextureJob {
     std::filesystem::path output_dir;
     io::TextureFileFormat texture_format;          // KTX2 with zstd by default
     TextureBakeSettings settings;
+    io::InputLimits limits;                        // the maps' texel counts are checked against them
     ProgressFn progress;
     // The output folder's lock when the caller already holds it (else the job takes it, io/output/bake_output.h).
     const io::OutputLock* lock = nullptr;

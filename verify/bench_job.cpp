@@ -139,7 +139,7 @@ Result<BenchReport> run_bench(const BenchOptions& options, const std::function<v
         files.insert(files.end(), corpus->begin(), corpus->end());
     }
     for (const std::filesystem::path& file : files) {
-        auto scene = load_sim_scene(file);
+        auto scene = load_sim_scene(file, options.input_policy);
         if (!scene) return scene.error();
         for (const auto& [label, factor] : options.distances) {
             auto result = run_verify(at_distance(*scene, label, factor), options.verify);

@@ -6,6 +6,7 @@
 #pragma once
 
 #include "core/result.h"
+#include "io/files/input_policy.h"
 #include "verify/verify_job.h"
 
 #include <filesystem>
@@ -20,6 +21,7 @@ struct BenchOptions {
     std::vector<std::string> scenes;   // built-in scene names (glint scenes too); empty: all (none with `no_builtin`)
     bool no_builtin = false;           // only the scene files
     std::vector<std::filesystem::path> scene_files;  // glTF/GLB or other mesh files, each at every distance
+    io::InputPolicy input_policy;                    // what the scene files may make the bench read and allocate
     // Real-asset corpus: every .gltf/.glb directly inside each subfolder of this folder (the layout of the
     // glTF sample models, e.g. ../shared/assets/gltf), added to `scene_files`; empty: none.
     std::filesystem::path corpus_dir;

@@ -218,8 +218,8 @@ double number_or(const nlohmann::json& j, const char* key, double fallback) {
 
 // Reads one texture slot's map; a note instead when the simulator cannot sample it as the file means.
 std::optional<Image> slot_image(const io::GltfScene& gltf, const io::TextureSlot& slot, const char* what,
-                                std::map<int, Image>& decoded, std::vector<std::string>& notes,
-                                std::string& error) {
+                                const io::InputLimits& limits, std::map<int, Image>& decoded,
+                                std::vector<std::string>& notes, std::string& error) {
     if (slot.texture < 0) return std::nullopt;
     if (slot.image < 0) {
         notes.push_back(std::string(what) + " texture " + std::to_string(slot.texture) + " has no image: not simulated");
@@ -238,7 +238,7 @@ std::optional<Image> slot_image(const io::GltfScene& gltf, const io::TextureSlot
         error = bytes.error().message;
         return std::nullopt;
     }
-    auto image = io::read_image_memory(*bytes, gltf.image_label(slot.image));
+    auto image = io::read_image_memory(*bytes, gltf.image_label(slot.image), limits);
     if (!image) {
         error = image.error().message;
         return std::nullopt;
@@ -257,8 +257,8 @@ struct GltfContents {
     std::optional<FileCamera> camera;
 };
 
-Result<void> load_gltf(const fs::path& path, SimScene& scene, GltfContents& out) {
-    auto loaded = io::GltfScene::load(path);
+Result<void> load_gltf(const fs::path& path, const io::InputPolicy& policy, SimScene& scene, GltfContents& out) {
+    auto loaded = io::GltfScene::load(path, policy);
     if (!loaded) return loaded.error();
     // io::GltfScene reads primitives, materials and images; the node graph, cameras and lights, which only
     // the simulator needs, are read from the same JSON here.
@@ -275,13 +275,14 @@ Result<void> load_gltf(const fs::path& path, SimScene& scene, GltfContents& out)
         mat.roughness = float(std::clamp(m.roughness_factor, 0.0, 1.0));
         if (mat.roughness < kMinRoughness) ++clamped_materials;
         std::string error;
-        if (auto image = slot_image(*loaded, m.normal, "normal", decoded, scene.notes, error)) {
+        if (auto image = slot_image(*loaded, m.normal, "normal", policy.limits, decoded, scene.notes, error)) {
             auto index = cache.normal_map("image" + std::to_string(m.normal.image), *image, m.normal_scale);
             if (!index) return make_error(loaded->image_label(m.normal.image) + ": " + index.error().message);
             mat.normal_map = *index;
         }
         if (!error.empty()) return make_error(error);
-        if (auto image = slot_image(*loaded, m.metallic_roughness, "metallicRoughness", decoded, scene.notes, error))
+        if (auto image = slot_image(*loaded, m.metallic_roughness, "metallicRoughness", policy.limits, decoded,
+                                    scene.notes, error))
             mat.roughness_map = cache.roughness_map("image" + std::to_string(m.metallic_roughness.image), *image,
                                                     image->channels >= 2 ? 1 : 0, mat.roughness);
         if (!error.empty()) return make_error(error);
@@ -394,8 +395,9 @@ Result<void> load_gltf(const fs::path& path, SimScene& scene, GltfContents& out)
     return {};
 }
 
-Result<void> load_imported(const fs::path& path, SimScene& scene, GltfContents& out) {
-    auto imported = import_mesh(path.string());
+Result<void> load_imported(const fs::path& path, const io::InputPolicy& policy, SimScene& scene,
+                           GltfContents& out) {
+    auto imported = import_mesh(path.string(), {}, policy);
     if (!imported) return imported.error();
     for (const std::string& note : imported->notes) scene.notes.push_back(note);
     MapCache cache(scene);
@@ -408,7 +410,7 @@ Result<void> load_imported(const fs::path& path, SimScene& scene, GltfContents& 
         // The files were resolved by the path policy at import (io/mesh_import/mesh_import.h).
         const auto read = [&](const std::string& ref, const fs::path& file) -> Result<Image> {
             if (file.empty()) return make_error("embedded texture " + ref);
-            return io::read_image(file);
+            return io::read_image(file, policy.limits);
         };
         if (m.has_normal_texture) {
             auto image = read(m.normal_texture, m.normal_texture_file);
@@ -443,7 +445,7 @@ Result<void> load_imported(const fs::path& path, SimScene& scene, GltfContents& 
 
 }  // namespace
 
-Result<SimScene> load_sim_scene(const fs::path& path) {
+Result<SimScene> load_sim_scene(const fs::path& path, const io::InputPolicy& policy) {
     std::error_code ec;
     if (!fs::is_regular_file(path, ec)) return make_error(path.string() + ": no such file");
     SimScene scene;
@@ -452,7 +454,8 @@ Result<SimScene> load_sim_scene(const fs::path& path) {
     GltfContents contents;
     std::string ext = path.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    auto loaded = ext == ".gltf" || ext == ".glb" ? load_gltf(path, scene, contents) : load_imported(path, scene, contents);
+    auto loaded = ext == ".gltf" || ext == ".glb" ? load_gltf(path, policy, scene, contents)
+                                                  : load_imported(path, policy, scene, contents);
     if (!loaded) return loaded.error();
 
     double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};

@@ -8,6 +8,7 @@
 #pragma once
 
 #include "core/result.h"
+#include "io/files/input_policy.h"
 #include "verify/scene.h"
 
 #include <filesystem>
@@ -16,7 +17,8 @@ namespace specbake::verify {
 
 // Loads `path` as world-space simulator objects. Meshes get generated normals and tangents where the file
 // has none (as the scene bake does); their curvature is unknown (SimObject::exact_curvature stays empty).
-// Errors name the file: unreadable, not a scene, no triangles, a texture that does not decode.
-Result<SimScene> load_sim_scene(const std::filesystem::path& path);
+// Errors name the file: unreadable, not a scene, no triangles, a texture that does not decode; the scene
+// and its textures are read under `policy`.
+Result<SimScene> load_sim_scene(const std::filesystem::path& path, const io::InputPolicy& policy = {});
 
 }  // namespace specbake::verify

@@ -48,11 +48,6 @@ bool in_allowed_root(const fs::path& candidate, const InputPolicy& policy) {
 
 }  // namespace
 
-InputPolicy& input_policy() {
-    static InputPolicy policy;
-    return policy;
-}
-
 Result<void> set_limit(InputLimits& limits, const std::string& assignment) {
     std::string names;
     for (const NamedLimit& l : kLimits) names += std::string(names.empty() ? "" : ", ") + l.name;

@@ -27,14 +27,13 @@ struct InputLimits {
     uint64_t faces = uint64_t(1) << 26;
 };
 
+// Passed to every reader that opens inputs (the command line builds one from --limit and --allow-root); a
+// default-constructed policy has the default limits and no roots besides the scene's own folder.
 struct InputPolicy {
     InputLimits limits;
     // Folders besides a scene's own that its URIs may resolve into (absolute, lexically normal).
     std::vector<std::filesystem::path> allowed_roots;
 };
-
-// The policy of this process; set once by the command line before any work starts.
-InputPolicy& input_policy();
 
 // Applies "NAME=VALUE" (VALUE a whole number, optionally with a K, M or G suffix for 2^10, 2^20, 2^30).
 // The error lists the names.

@@ -107,7 +107,7 @@ namespace {
 
 // Dense copy of an accessor's values as doubles (count * components), sparse substitution applied.
 Result<std::vector<double>> read_accessor(const tinygltf::Model& m, const Payloads& payloads, int index,
-                                          const std::string& what) {
+                                          const std::string& what, const InputLimits& limits) {
     if (index < 0 || size_t(index) >= m.accessors.size())
         return make_error(what + ": accessor " + std::to_string(index) + " does not exist");
     const tinygltf::Accessor& a = m.accessors[size_t(index)];
@@ -120,7 +120,7 @@ Result<std::vector<double>> read_accessor(const tinygltf::Model& m, const Payloa
     if (a.bufferView >= 0) {
         view = view_of(m, payloads, a.bufferView, a.byteOffset, a.count, cs * size_t(nc), cs * size_t(nc), what);
         if (!view) return view.error();
-    } else if (const uint64_t limit = input_policy().limits.accessor_elements; a.count > limit) {
+    } else if (const uint64_t limit = limits.accessor_elements; a.count > limit) {
         return make_error(what + ": accessor " + std::to_string(index) + " without a bufferView: element count " +
                           over_limit("accessor-elements", a.count, limit));
     }
@@ -177,7 +177,7 @@ Result<std::vector<double>> read_accessor(const tinygltf::Model& m, const Payloa
 
 // Float attribute with exactly `components` per element (TEXCOORD/NORMAL/...).
 Result<std::vector<float>> read_attribute(const tinygltf::Model& m, const Payloads& payloads, int index,
-                                          int components, const std::string& what) {
+                                          int components, const std::string& what, const InputLimits& limits) {
     const tinygltf::Accessor& a = m.accessors.at(size_t(index));
     if (component_count(a.type) != components)
         return make_error(what + ": expected " + std::to_string(components) + " components per element");
@@ -197,7 +197,7 @@ Result<std::vector<float>> read_attribute(const tinygltf::Model& m, const Payloa
         }
         return out;
     }
-    auto values = read_accessor(m, payloads, index, what);
+    auto values = read_accessor(m, payloads, index, what, limits);
     if (!values) return values.error();
     std::vector<float> out(values->size());
     for (size_t i = 0; i < out.size(); ++i) out[i] = float((*values)[i]);
@@ -206,7 +206,7 @@ Result<std::vector<float>> read_attribute(const tinygltf::Model& m, const Payloa
 
 // An index accessor (unsigned byte, short or int scalars) as uint32, read directly when not sparse.
 Result<std::vector<uint32_t>> read_indices(const tinygltf::Model& m, const Payloads& payloads, int index,
-                                           const std::string& what) {
+                                           const std::string& what, const InputLimits& limits) {
     const tinygltf::Accessor& a = m.accessors.at(size_t(index));
     const size_t cs = component_size(a.componentType);
     if (!a.sparse.isSparse && a.bufferView >= 0 && cs > 0) {
@@ -233,7 +233,7 @@ Result<std::vector<uint32_t>> read_indices(const tinygltf::Model& m, const Paylo
         }
         return out;
     }
-    auto values = read_accessor(m, payloads, index, what);
+    auto values = read_accessor(m, payloads, index, what, limits);
     if (!values) return values.error();
     std::vector<uint32_t> out(values->size());
     for (size_t i = 0; i < out.size(); ++i) out[i] = uint32_t((*values)[i]);

@@ -45,6 +45,7 @@ struct SceneState {
     Payloads buffers;
     std::filesystem::path source;
     bool binary = false;
+    InputLimits limits;  // of the policy the scene was loaded with; accessors are read against them
     std::map<std::filesystem::path, std::string> content_hashes;  // of the files read at load
     // The file of every image and buffer stored as an external file, resolved once by the path policy
     // (io/files/input_policy.h) at load; empty for embedded and remote ones. Everything reads these.
@@ -106,12 +107,13 @@ struct StridedView {
 Result<StridedView> view_of(const tinygltf::Model& m, const Payloads& payloads, int buffer_view, size_t byte_offset,
                             size_t count, size_t element_size, size_t element_stride_default,
                             const std::string& what);
-// Float attribute with exactly `components` per element (TEXCOORD/NORMAL/...).
+// Float attribute with exactly `components` per element (TEXCOORD/NORMAL/...). An accessor without a
+// bufferView is held to limits.accessor_elements before it is allocated.
 Result<std::vector<float>> read_attribute(const tinygltf::Model& m, const Payloads& payloads, int index,
-                                          int components, const std::string& what);
+                                          int components, const std::string& what, const InputLimits& limits);
 // An index accessor (unsigned byte, short or int scalars) as uint32.
 Result<std::vector<uint32_t>> read_indices(const tinygltf::Model& m, const Payloads& payloads, int index,
-                                           const std::string& what);
+                                           const std::string& what, const InputLimits& limits);
 
 // io/gltf/gltf_buffers.cpp: where every byte of a written scene comes from.
 struct OutBuffer {

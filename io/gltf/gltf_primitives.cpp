@@ -129,7 +129,7 @@ Result<TriMesh> GltfScene::primitive_mesh(PrimitiveRef ref) const {
         if (it == p.attributes.end()) return {};
         if (it->second < 0 || size_t(it->second) >= m.accessors.size())
             return make_error(t.name + ": " + name + " accessor " + std::to_string(it->second) + " does not exist");
-        auto v = gltf::read_attribute(m, impl_->buffers, it->second, nc, t.name + ": " + name);
+        auto v = gltf::read_attribute(m, impl_->buffers, it->second, nc, t.name + ": " + name, impl_->limits);
         if (!v) return v.error();
         dst = std::move(*v);
         return {};
@@ -153,7 +153,7 @@ Result<TriMesh> GltfScene::primitive_mesh(PrimitiveRef ref) const {
              ia.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
              ia.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT))
             return make_error(t.name + ": indices are not unsigned integer scalars");
-        auto v = gltf::read_indices(m, impl_->buffers, p.indices, t.name + ": indices");
+        auto v = gltf::read_indices(m, impl_->buffers, p.indices, t.name + ": indices", impl_->limits);
         if (!v) return v.error();
         order = std::move(*v);
         for (size_t i = 0; i < order.size(); ++i) {

@@ -226,12 +226,13 @@ GltfScene& GltfScene::operator=(GltfScene&&) noexcept = default;
 const fs::path& GltfScene::source() const { return impl_->source; }
 bool GltfScene::source_is_binary() const { return impl_->binary; }
 
-Result<GltfScene> GltfScene::load(const fs::path& path) {
+Result<GltfScene> GltfScene::load(const fs::path& path, const InputPolicy& policy) {
     auto read = MappedFile::open(path);
     if (!read) return read.error();
     GltfScene scene;
     Impl& impl = *scene.impl_;
     impl.source = path;
+    impl.limits = policy.limits;
     impl.source_bytes = std::move(*read);
     const std::span<const uint8_t> source_bytes = impl.source_bytes.bytes();
     const std::span<const uint8_t>* bytes = &source_bytes;
@@ -240,7 +241,6 @@ Result<GltfScene> GltfScene::load(const fs::path& path) {
     // of reading the file again later, on another thread, beside the parse and whatever the caller does next.
     impl.source_hashing = std::make_unique<tbb::task_group>();
     impl.source_hashing->run([&impl] { impl.source_hash = sha256_hex(impl.source_bytes.bytes()); });
-    const InputPolicy& policy = input_policy();
     if (auto shape = check_json_shape(json_of(*bytes, impl.binary), path.string(), policy.limits); !shape)
         return shape.error();
     LoadContext ctx;

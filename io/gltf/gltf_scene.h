@@ -6,6 +6,7 @@
 #pragma once
 
 #include "core/result.h"
+#include "io/files/input_policy.h"
 #include "io/mesh_import/mesh_import.h"
 #include "core/trimesh.h"
 
@@ -93,8 +94,8 @@ public:
     // Loads a .gltf or .glb file. Images are not decoded; their bytes and URIs are kept as they are.
     // Refused before or right after parsing, with the file named: JSON deeper or larger than the limits,
     // URIs the path policy refuses (io/files/input_policy.h), more nodes or primitives than the limits, a node
-    // hierarchy with a cycle.
-    static Result<GltfScene> load(const std::filesystem::path& path);
+    // hierarchy with a cycle. The accessors read later are held to the same limits.
+    static Result<GltfScene> load(const std::filesystem::path& path, const InputPolicy& policy = {});
     // A new scene from an Assimp import (io/mesh_import/mesh_import.h): one glTF mesh with one triangle primitive per
     // imported mesh (positions, normals, tangents, TEXCOORD_0, indices as given), the node hierarchy with
     // its matrices, and one material per imported material: its name and, when the file states one, its

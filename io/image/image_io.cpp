@@ -65,7 +65,7 @@ Result<void> check_ihdr(const uint8_t* d, const std::string& name) {
 // is even loaded.
 }  // namespace
 
-Result<void> check_png_structure(std::span<const uint8_t> b, const std::string& name) {
+Result<void> check_png_structure(std::span<const uint8_t> b, const std::string& name, const InputLimits& limits) {
     static const uint8_t signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
     if (b.size() < 8 || !std::equal(signature, signature + 8, b.begin())) return {};
     size_t at = 8;
@@ -82,10 +82,9 @@ Result<void> check_png_structure(std::span<const uint8_t> b, const std::string& 
             if (w == 0 || h == 0)
                 return make_error(name + ": empty image (" + std::to_string(w) + "x" + std::to_string(h) + ")");
             if (auto r = check_ihdr(b.data() + at + 8, name); !r) return r.error();
-            const uint64_t limit = input_policy().limits.texels;
-            if (uint64_t(w) * h > limit)
+            if (uint64_t(w) * h > limits.texels)
                 return make_error(name + ": image is " + std::to_string(w) + "x" + std::to_string(h) +
-                                  ", its texel count " + over_limit("texels", uint64_t(w) * h, limit));
+                                  ", its texel count " + over_limit("texels", uint64_t(w) * h, limits.texels));
             first = false;
         }
         // PNG spec Sec. 5.3: the CRC covers the chunk type and data.
@@ -148,7 +147,7 @@ Result<void> check_png_image_data(std::span<const uint8_t> b, const std::string&
     return {};
 }
 
-Result<DecodedImage> decode_image(const fs::path& path, bool keep_8bit) {
+Result<DecodedImage> decode_image(const fs::path& path, const InputLimits& limits, bool keep_8bit) {
     const std::string name = path.string();
     std::error_code ec;
     if (!fs::exists(path, ec)) return make_error(name + ": no such file");
@@ -165,18 +164,18 @@ Result<DecodedImage> decode_image(const fs::path& path, bool keep_8bit) {
             f.close();
             auto bytes = MappedFile::open(path);
             if (!bytes) return bytes.error();
-            return decode_image_memory(bytes->bytes(), name, keep_8bit);
+            return decode_image_memory(bytes->bytes(), name, limits, keep_8bit);
         }
     }
     auto oiio = oiio::api();
     if (!oiio) return make_error(name + ": " + oiio.error().message);
-    return (*oiio)->decode_file(name, input_policy().limits.texels);
+    return (*oiio)->decode_file(name, limits.texels);
 }
 
 Result<DecodedImage> decode_image_memory(std::span<const uint8_t> bytes, const std::string& name_for_errors,
-                                         bool keep_8bit) {
+                                         const InputLimits& limits, bool keep_8bit) {
     if (bytes.empty()) return make_error(name_for_errors + ": no image data");
-    if (auto ok = check_png_structure(bytes, name_for_errors); !ok) return ok.error();
+    if (auto ok = check_png_structure(bytes, name_for_errors, limits); !ok) return ok.error();
     // Plain PNGs (most texture libraries) without loading OpenImageIO; the same values and facts.
     if (auto png = decode_plain_png(bytes, keep_8bit)) return std::move(*png);
     if (auto ok = check_png_image_data(bytes, name_for_errors); !ok) return ok.error();
@@ -194,17 +193,18 @@ Result<DecodedImage> decode_image_memory(std::span<const uint8_t> bytes, const s
         probe = "image.webp";
     auto oiio = oiio::api();
     if (!oiio) return make_error(name_for_errors + ": " + oiio.error().message);
-    return (*oiio)->decode_memory(bytes, probe, name_for_errors, input_policy().limits.texels);
+    return (*oiio)->decode_memory(bytes, probe, name_for_errors, limits.texels);
 }
 
-Result<Image> read_image(const fs::path& path) {
-    auto d = decode_image(path);
+Result<Image> read_image(const fs::path& path, const InputLimits& limits) {
+    auto d = decode_image(path, limits);
     if (!d) return d.error();
     return std::move(d->image);
 }
 
-Result<Image> read_image_memory(std::span<const uint8_t> bytes, const std::string& name_for_errors) {
-    auto d = decode_image_memory(bytes, name_for_errors);
+Result<Image> read_image_memory(std::span<const uint8_t> bytes, const std::string& name_for_errors,
+                                const InputLimits& limits) {
+    auto d = decode_image_memory(bytes, name_for_errors, limits);
     if (!d) return d.error();
     return std::move(d->image);
 }

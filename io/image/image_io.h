@@ -5,6 +5,7 @@
 
 #include "core/image.h"
 #include "core/result.h"
+#include "io/files/input_policy.h"
 
 #include <cstdint>
 #include <filesystem>
@@ -39,18 +40,20 @@ struct DecodedImage {
 };
 
 // Reads the first subimage, level 0. Errors name the file ("<path>: <problem>"): missing, unreadable,
-// unknown format, truncated, 0x0, more than 2^15 texels per side. Non-finite values are returned as is
-// (callers validate; see has_non_finite()). keep_8bit: a plain 8-bit PNG (io/image/png_decode.h) comes back in
-// `bytes8`, its rows as they were inflated (no copy), `image` empty; every other file as `image`.
-Result<DecodedImage> decode_image(const std::filesystem::path& path, bool keep_8bit = false);
+// unknown format, truncated, 0x0, more than 2^15 texels per side, more texels than limits.texels.
+// Non-finite values are returned as is (callers validate; see has_non_finite()). keep_8bit: a plain 8-bit
+// PNG (io/image/png_decode.h) comes back in `bytes8`, its rows as they were inflated (no copy), `image`
+// empty; every other file as `image`.
+Result<DecodedImage> decode_image(const std::filesystem::path& path, const InputLimits& limits = {},
+                                  bool keep_8bit = false);
 
 // Same, from bytes in memory (embedded GLB images); `name_for_errors` is used in place of a path.
 Result<DecodedImage> decode_image_memory(std::span<const uint8_t> bytes, const std::string& name_for_errors,
-                                         bool keep_8bit = false);
+                                         const InputLimits& limits = {}, bool keep_8bit = false);
 
 // The chunk structure of a PNG (lengths, CRCs, IHDR fields) and its size against the texel limit
 // (io/files/input_policy.h), from the bytes alone; anything that is not a PNG passes.
-Result<void> check_png_structure(std::span<const uint8_t> bytes, const std::string& name);
+Result<void> check_png_structure(std::span<const uint8_t> bytes, const std::string& name, const InputLimits& limits);
 // The image data of a PNG whose structure passed check_png_structure: its IDAT chunks inflate without a
 // zlib error to at least the bytes the header's size, depth, colour type and interlacing need (PNG spec
 // Sec. 10, Sec. 8.2), so that libpng never has to report a broken stream itself (on stderr, without the
@@ -64,8 +67,9 @@ Result<void> check_png_image_data(std::span<const uint8_t> bytes, const std::str
 Result<void> check_jpeg_markers(std::span<const uint8_t> bytes, const std::string& name);
 
 // Convenience forms that drop the metadata.
-Result<Image> read_image(const std::filesystem::path& path);
-Result<Image> read_image_memory(std::span<const uint8_t> bytes, const std::string& name_for_errors);
+Result<Image> read_image(const std::filesystem::path& path, const InputLimits& limits = {});
+Result<Image> read_image_memory(std::span<const uint8_t> bytes, const std::string& name_for_errors,
+                                const InputLimits& limits = {});
 
 // Writes `image` atomically as an 8- or 16-bit integer file (format from the extension: .png, .tif, ...),
 // values clamped to [0, 1], no colour conversion. The error names the file.

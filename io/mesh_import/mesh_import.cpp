@@ -160,10 +160,10 @@ Result<TriMesh> read_mesh(const aiMesh& am, const std::string& path, size_t inde
 
 }  // namespace
 
-Result<ImportedScene> import_mesh(const std::string& path, const MeshImportOptions& options) {
+Result<ImportedScene> import_mesh(const std::string& path, const MeshImportOptions& options,
+                                  const io::InputPolicy& policy) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) return make_error(path + ": no such file");
-    const io::InputPolicy& policy = io::input_policy();
     const io::InputLimits& limits = policy.limits;
     if (auto ply = check_ply_header(path, limits); !ply) return ply.error();
 

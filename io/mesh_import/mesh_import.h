@@ -9,6 +9,7 @@
 
 #include "core/result.h"
 #include "core/trimesh.h"
+#include "io/files/input_policy.h"
 
 namespace specbake {
 
@@ -60,10 +61,11 @@ struct MeshImportOptions {
 // the file for: unreadable file, empty scene, no triangles, out-of-range indices, inf/NaN positions.
 // Assimp's own loaders may drop broken faces first (its glTF loader skips a triangle whose index is out of
 // range), so a glTF read with another library must still go through validate_mesh. Every file Assimp opens
-// and every texture reference is resolved by the path policy (io/files/input_policy.h) relative to the asset's
+// and every texture reference is resolved by `policy` (io/files/input_policy.h) relative to the asset's
 // folder, and refused outside it; the limits on primitives, vertices, faces and nodes apply (a PLY
 // header's counts before Assimp parses, the others right after import). The default material
 // Assimp appends (for glTF always) is removed: primitives without a material in the file get -1.
-Result<ImportedScene> import_mesh(const std::string& path, const MeshImportOptions& options = {});
+Result<ImportedScene> import_mesh(const std::string& path, const MeshImportOptions& options = {},
+                                  const io::InputPolicy& policy = {});
 
 }  // namespace specbake

@@ -154,8 +154,7 @@ constexpr size_t kKtx2LevelEntryBytes = 24;
 
 // Level 0 against the limits (io/files/input_policy.h) before it is decoded to float texels: its texel count
 // and its bytes in the file (over all `layers` of an array; 1 for a single image).
-Result<void> check_size(uint32_t w, uint32_t h, const FormatInfo& f, uint32_t layers = 1) {
-    const InputLimits& limits = input_policy().limits;
+Result<void> check_size(uint32_t w, uint32_t h, const FormatInfo& f, const InputLimits& limits, uint32_t layers = 1) {
     const uint64_t texels = uint64_t(w) * h * layers;
     if (texels > limits.texels)
         return make_error("image is " + std::to_string(w) + "x" + std::to_string(h) +
@@ -187,7 +186,8 @@ struct Ktx2Sections {
 
 // The header (KTX 2.0 Sec. 3.1): format, size, layers and levels of `L`, checked against what specbake reads
 // and the input limits, and the metadata's place in the file.
-Result<Ktx2Sections> read_ktx2_header(std::span<const uint8_t> b, const std::string& name, Ktx2Layout& L) {
+Result<Ktx2Sections> read_ktx2_header(std::span<const uint8_t> b, const std::string& name, const InputLimits& limits,
+                                      Ktx2Layout& L) {
     auto fail = [&](const std::string& what) { return ktx2_error(name, what); };
     if (b.size() < kKtx2HeaderBytes) return fail("truncated header (" + std::to_string(b.size()) + " bytes)");
     if (std::memcmp(b.data(), kKtx2Identifier, 12) != 0) return fail("bad identifier");
@@ -213,7 +213,7 @@ Result<Ktx2Sections> read_ktx2_header(std::span<const uint8_t> b, const std::str
     if (supercompression != 0 && supercompression != 2)
         return fail("supercompression scheme " + std::to_string(supercompression) + " (specbake reads none and zstd)");
     s.zstd = supercompression == 2;
-    if (auto r = check_size(L.width, L.height, f, s.stored_layers); !r) return fail(r.error().message);
+    if (auto r = check_size(L.width, L.height, f, limits, s.stored_layers); !r) return fail(r.error().message);
     if (L.levels > uint32_t(full_chain_levels(L.width, L.height)))
         return fail("levelCount " + std::to_string(L.levels) + " exceeds the full chain of " +
                     std::to_string(full_chain_levels(L.width, L.height)));
@@ -372,9 +372,10 @@ Result<void> read_ktx2_levels(std::span<const uint8_t> b, const Ktx2Sections& s,
 
 // `inflate`: zstd levels are decompressed (and kept for decoding); otherwise only each level's zstd frame
 // header is read, whose content size must equal uncompressedByteLength (the check reads headers alone).
-Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& name, bool inflate = true) {
+Result<Ktx2Layout> parse_ktx2(std::span<const uint8_t> b, const std::string& name, const InputLimits& limits,
+                              bool inflate = true) {
     Ktx2Layout L;
-    auto sections = read_ktx2_header(b, name, L);
+    auto sections = read_ktx2_header(b, name, limits, L);
     if (!sections) return sections.error();
     if (auto ok = check_ktx2_key_values(b, *sections, name); !ok) return ok.error();
     if (auto ok = check_ktx2_dfd(b, *sections, name, L); !ok) return ok.error();
@@ -392,7 +393,7 @@ struct DdsLayout {
     size_t data_start = 0;  // after the legacy header, or after the DX10 header
 };
 
-Result<DdsLayout> parse_dds(std::span<const uint8_t> b, const std::string& name) {
+Result<DdsLayout> parse_dds(std::span<const uint8_t> b, const std::string& name, const InputLimits& limits) {
     auto fail = [&](const std::string& what) { return make_error(name + ": DDS: " + what); };
     if (b.size() < kDdsHeaderBytes) return fail("truncated header");
     if (std::memcmp(b.data(), "DDS ", 4) != 0) return fail("bad magic");
@@ -444,7 +445,7 @@ Result<DdsLayout> parse_dds(std::span<const uint8_t> b, const std::string& name)
         L.format = format_by_dxgi(dxgi);
         if (!L.format) return fail("legacy pixel format is not one specbake reads");
     }
-    if (auto r = check_size(L.width, L.height, *L.format); !r) return fail(r.error().message);
+    if (auto r = check_size(L.width, L.height, *L.format, limits); !r) return fail(r.error().message);
     uint64_t expected = L.data_start;
     for (uint32_t level = 0; level < L.levels; ++level) expected += level_bytes(L.width, L.height, int(level), *L.format);
     if (b.size() != expected)
@@ -456,28 +457,31 @@ bool has_prefix(std::span<const uint8_t> b, const void* magic, size_t n) {
     return b.size() >= n && std::memcmp(b.data(), magic, n) == 0;
 }
 
-Result<InspectedTexture> read_with_oiio(const std::filesystem::path& path) {
+Result<InspectedTexture> read_with_oiio(const std::filesystem::path& path, const InputLimits& limits) {
     auto api = oiio::api();
     if (!api) return make_error(path.string() + ": " + api.error().message);
-    return (*api)->read_levels(path.string(), input_policy().limits.texels);
+    return (*api)->read_levels(path.string(), limits.texels);
 }
 
 }  // namespace
 
-Result<void> check_ktx2_structure(std::span<const uint8_t> bytes, const std::string& name) {
-    auto r = parse_ktx2(bytes, name);
+Result<void> check_ktx2_structure(std::span<const uint8_t> bytes, const std::string& name,
+                                  const InputLimits& limits) {
+    auto r = parse_ktx2(bytes, name, limits);
     if (!r) return r.error();
     return {};
 }
 
-Result<void> check_dds_structure(std::span<const uint8_t> bytes, const std::string& name) {
-    auto r = parse_dds(bytes, name);
+Result<void> check_dds_structure(std::span<const uint8_t> bytes, const std::string& name,
+                                 const InputLimits& limits) {
+    auto r = parse_dds(bytes, name, limits);
     if (!r) return r.error();
     return {};
 }
 
-Result<InspectedTexture> decode_ktx2_for_inspection(std::span<const uint8_t> bytes, const std::string& name) {
-    auto layout = parse_ktx2(bytes, name);
+Result<InspectedTexture> decode_ktx2_for_inspection(std::span<const uint8_t> bytes, const std::string& name,
+                                                    const InputLimits& limits) {
+    auto layout = parse_ktx2(bytes, name, limits);
     if (!layout) return layout.error();
     InspectedTexture t;
     t.format = "ktx2";
@@ -501,8 +505,9 @@ Result<InspectedTexture> decode_ktx2_for_inspection(std::span<const uint8_t> byt
     return t;
 }
 
-Result<InspectedTexture> decode_dds_for_inspection(std::span<const uint8_t> bytes, const std::string& name) {
-    auto layout = parse_dds(bytes, name);
+Result<InspectedTexture> decode_dds_for_inspection(std::span<const uint8_t> bytes, const std::string& name,
+                                                   const InputLimits& limits) {
+    auto layout = parse_dds(bytes, name, limits);
     if (!layout) return layout.error();
     InspectedTexture t;
     t.format = "dds";
@@ -527,34 +532,35 @@ Result<InspectedTexture> decode_dds_for_inspection(std::span<const uint8_t> byte
     return t;
 }
 
-Result<InspectedTexture> read_texture_for_inspection(const std::filesystem::path& path) {
+Result<InspectedTexture> read_texture_for_inspection(const std::filesystem::path& path, const InputLimits& limits) {
     auto bytes = read_file(path);
     if (!bytes) return bytes.error();
-    if (has_prefix(*bytes, kKtx2Identifier, 12)) return decode_ktx2_for_inspection(*bytes, path.string());
-    if (has_prefix(*bytes, "DDS ", 4)) return decode_dds_for_inspection(*bytes, path.string());
-    if (auto r = check_png_structure(*bytes, path.string()); !r) return r.error();  // before OpenImageIO loads
-    return read_with_oiio(path);
+    if (has_prefix(*bytes, kKtx2Identifier, 12)) return decode_ktx2_for_inspection(*bytes, path.string(), limits);
+    if (has_prefix(*bytes, "DDS ", 4)) return decode_dds_for_inspection(*bytes, path.string(), limits);
+    if (auto r = check_png_structure(*bytes, path.string(), limits); !r) return r.error();  // before OpenImageIO loads
+    return read_with_oiio(path, limits);
 }
 
-Result<void> check_texture_file(const std::filesystem::path& path) {
+Result<void> check_texture_file(const std::filesystem::path& path, const InputLimits& limits) {
     auto bytes = read_file(path);
     if (!bytes) return bytes.error();
-    if (has_prefix(*bytes, kKtx2Identifier, 12)) return check_ktx2_structure(*bytes, path.string());
-    if (has_prefix(*bytes, "DDS ", 4)) return check_dds_structure(*bytes, path.string());
-    if (auto r = check_png_structure(*bytes, path.string()); !r) return r.error();
-    auto t = read_with_oiio(path);
+    if (has_prefix(*bytes, kKtx2Identifier, 12)) return check_ktx2_structure(*bytes, path.string(), limits);
+    if (has_prefix(*bytes, "DDS ", 4)) return check_dds_structure(*bytes, path.string(), limits);
+    if (auto r = check_png_structure(*bytes, path.string(), limits); !r) return r.error();
+    auto t = read_with_oiio(path, limits);
     if (!t) return t.error();
     return {};
 }
 
-Result<TextureShape> check_container_shape(std::span<const uint8_t> bytes, const std::string& name) {
+Result<TextureShape> check_container_shape(std::span<const uint8_t> bytes, const std::string& name,
+                                           const InputLimits& limits) {
     if (has_prefix(bytes, kKtx2Identifier, 12)) {
-        auto l = parse_ktx2(bytes, name, false);
+        auto l = parse_ktx2(bytes, name, limits, false);
         if (!l) return l.error();
         return TextureShape{"ktx2", int(l->width), int(l->height), int(l->levels), l->format->channels, int(l->layers)};
     }
     if (has_prefix(bytes, "DDS ", 4)) {
-        auto l = parse_dds(bytes, name);
+        auto l = parse_dds(bytes, name, limits);
         if (!l) return l.error();
         return TextureShape{"dds", int(l->width), int(l->height), int(l->levels), l->format->channels};
     }

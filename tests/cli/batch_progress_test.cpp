@@ -1,6 +1,6 @@
 // Many assets in one process: scenes bake side by side with at most one per thread in flight, outputs the
 // same bytes whatever --jobs, and the progress display (plain lines, nothing with -q, a line on a terminal).
-#include "pipeline/progress.h"
+#include "cli/progress.h"
 #include "pipeline/scene_job.h"
 
 #include <gtest/gtest.h>

@@ -1,5 +1,5 @@
 // Response files, config files and per-material overrides.
-#include "pipeline/config.h"
+#include "cli/config.h"
 
 #include <gtest/gtest.h>
 

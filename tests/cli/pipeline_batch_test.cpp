@@ -1,5 +1,5 @@
 // The batch runner: every input runs once whatever --jobs is, one error line per failed input, exit codes.
-#include "pipeline/batch.h"
+#include "cli/batch.h"
 
 #include <gtest/gtest.h>
 

@@ -1,9 +1,9 @@
-#include "pipeline/batch.h"
+#include "cli/batch.h"
 
+#include "cli/progress.h"
 #include "io/output/depfile.h"
-#include "pipeline/progress.h"
+#include "pipeline/concurrency.h"
 
-#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <chrono>
@@ -12,26 +12,7 @@
 
 namespace specbake {
 
-RunSettings& run_settings() {
-    static RunSettings settings;
-    return settings;
-}
-
-void print_info(const std::string& message, bool verbose_only) {
-    const Verbosity v = run_settings().verbosity;
-    if (v == Verbosity::quiet || (verbose_only && v != Verbosity::verbose)) return;
-    print_line(stderr, message);
-}
-
 int BatchSummary::exit_code() const { return failed > 0 ? 1 : 0; }
-
-void for_each_concurrently(size_t count, const std::function<void(size_t)>& work) {
-    // One task per item; isolation keeps a thread that waits inside an item's own parallel loops from
-    // starting another item, so at most one item per thread is in memory at a time.
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 1), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t i = r.begin(); i != r.end(); ++i) tbb::this_task_arena::isolate([&] { work(i); });
-    }, tbb::simple_partitioner());
-}
 
 std::string error_line(const std::string& input, const std::string& message) {
     const bool names_input = message.rfind(input, 0) == 0;

@@ -1,8 +1,8 @@
 // The progress display (see progress.h): one process-wide output lock, the bar on a terminal, plain lines
 // otherwise.
-#include "pipeline/progress.h"
+#include "cli/progress.h"
 
-#include "pipeline/batch.h"
+#include "cli/run_settings.h"
 
 #include <sys/ioctl.h>
 #include <unistd.h>

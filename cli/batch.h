@@ -1,8 +1,8 @@
-// What every bake-type command shares when it runs inside a build: the run settings from the global
-// flags (--jobs, --quiet, --verbose), a batch runner with progress, a summary and exit codes, the
-// content-hash skip of up-to-date outputs, and --depfile.
+// What every bake-type command shares when it runs inside a build: a batch runner with progress, a
+// summary and exit codes, the content-hash skip of up-to-date outputs, and --depfile.
 #pragma once
 
+#include "cli/run_settings.h"
 #include "core/result.h"
 #include "io/output/up_to_date.h"
 
@@ -14,21 +14,6 @@
 #include <vector>
 
 namespace specbake {
-
-enum class Verbosity { quiet, normal, verbose };
-
-struct RunSettings {
-    int jobs = 0;  // worker threads; 0 uses every core. Outputs do not depend on it.
-    Verbosity verbosity = Verbosity::normal;
-    bool progress_bar = false;  // redraw one line instead of printing one line per input
-    std::vector<std::string> option_files;  // response and config files the command line was read from
-};
-
-// The process-wide settings, filled by main() from the global flags before a command runs.
-RunSettings& run_settings();
-
-// Prints an informational line on stderr unless --quiet; `verbose_only` lines need --verbose.
-void print_info(const std::string& message, bool verbose_only = false);
 
 enum class ItemStatus { done, up_to_date, failed };
 
@@ -44,12 +29,6 @@ struct BatchSummary {
     // 0 when nothing failed, 1 when some input failed (the others completed).
     int exit_code() const;
 };
-
-// Runs work(0) ... work(count - 1) on the current task arena's threads, several items at a time. Each item
-// runs isolated: its own parallel loops still use every thread, but a thread waiting inside one item never
-// starts another, so at most one item per thread is in flight (memory stays bounded). Items must not
-// depend on their order; callers collect results by index, so outputs do not depend on the thread count.
-void for_each_concurrently(size_t count, const std::function<void(size_t)>& work);
 
 // "specbake: error: INPUT: MESSAGE", without repeating INPUT when the message already starts with it.
 std::string error_line(const std::string& input, const std::string& message);

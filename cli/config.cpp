@@ -1,4 +1,4 @@
-#include "pipeline/config.h"
+#include "cli/config.h"
 
 #include "io/files/file_read.h"
 
@@ -13,7 +13,7 @@ namespace {
 
 constexpr int kMaxResponseDepth = 16;
 // Nesting alone does not bound the work: a file naming the next one ten times, sixteen levels deep, is
-// 10^16 reads. The files read and the arguments they give are bounded as a whole (pipeline/config.h).
+// 10^16 reads. The files read and the arguments they give are bounded as a whole (cli/config.h).
 constexpr size_t kMaxResponseReads = 4096;
 constexpr size_t kMaxResponseArguments = size_t(1) << 20;
 constexpr size_t kMaxResponseBytes = size_t(64) << 20;

@@ -46,7 +46,7 @@ private:
     nlohmann::json table_ = nlohmann::json::object();
 };
 
-// The overrides of the config file given with --config (empty without one). Set by main().
+// The overrides of the config file given with --config (empty without one). Set by run_cli().
 MaterialOverrides& material_overrides();
 
 // One option value from a config file, addressed like the argument parser addresses it: `section` empty
