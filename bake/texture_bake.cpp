@@ -9,6 +9,7 @@
 #include "bake/texture_bake.h"
 
 #include "bake/texture_bake_internal.h"
+#include "core/assert.h"
 #include "core/huge_pages.h"
 
 #include <tbb/parallel_invoke.h>
@@ -77,8 +78,8 @@ Result<TextureBakeResult> bake_texture_rows(const TextureMap& normal, const Text
                                             const TextureBakeRowSink& sink, const TextureBakeRowsDone& rows_done,
                                             const TextureBakeInputsDone& inputs_done) {
     if (auto ok = validate(normal, roughness, roughness_channel, roughness_value); !ok) return ok.error();
-    return bake_validated(normal, roughness, roughness_channel, roughness_value, settings, sink, rows_done,
-                          inputs_done);
+    return bake_validated({normal, roughness, roughness_channel, roughness_value}, settings,
+                          {sink, rows_done, inputs_done});
 }
 
 Result<TextureBakeResult> bake_texture_rows(const Image& normal, const Image* roughness, int roughness_channel,
@@ -111,18 +112,20 @@ Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughne
     });
     auto copy_rows = [](MipChain& chain, const TextureBakeRows& r, const float* src) {
         if (!src) return;
+        SPECBAKE_ASSERT(r.level >= 0 && size_t(r.level) < chain.levels.size());
         Image& level = chain.levels[size_t(r.level)];
+        SPECBAKE_ASSERT(r.x0 >= 0 && r.y0 >= 0 && r.x0 + r.width <= level.width && r.y0 + r.rows <= level.height);
         const size_t row_floats = size_t(r.width) * size_t(level.channels);
         for (int k = 0; k < r.rows; ++k)
             std::memcpy(level.texel(r.x0, r.y0 + k), src + size_t(k) * row_floats, row_floats * sizeof(float));
     };
-    auto baked = bake_validated(normal_map, rough, roughness_channel, roughness_value, settings,
-                                [&](const TextureBakeRows& r) {
-                                    copy_rows(rough_chain, r, r.roughness);
-                                    copy_rows(kern, r, r.kernel);
-                                    copy_rows(lean, r, r.lean);
-                                    copy_rows(nrm, r, r.normal);
-                                });
+    const TextureBakeRowSink sink = [&](const TextureBakeRows& r) {
+        copy_rows(rough_chain, r, r.roughness);
+        copy_rows(kern, r, r.kernel);
+        copy_rows(lean, r, r.lean);
+        copy_rows(nrm, r, r.normal);
+    };
+    auto baked = bake_validated({normal_map, rough, roughness_channel, roughness_value}, settings, {sink, {}, {}});
     if (!baked) return baked;
     baked->roughness = std::move(rough_chain);
     baked->kernel = std::move(kern);

@@ -203,10 +203,25 @@ void run_with_threads(int threads, Fn&& fn) {
     }
 }
 
+// The maps a bake reads: the normal map, and the roughness as a channel of a map or, without one, the
+// constant perceptual roughness roughness_value.
+struct BakeInputs {
+    const TextureMap& normal;
+    const TextureMap* roughness = nullptr;
+    int roughness_channel = 0;
+    float roughness_value = 1.0f;
+};
+
+// Where a bake's rows go: every finished block of output rows to the sink; rows_done (optional) hears of the
+// levels whose rows are all out, inputs_done (optional) of the base rows of the inputs no longer read.
+struct BakeRowTargets {
+    const TextureBakeRowSink& sink;
+    const TextureBakeRowsDone& rows_done;
+    const TextureBakeInputsDone& inputs_done;
+};
+
 // The bake proper, on validated inputs (texture_bake_levels.cpp).
-Result<TextureBakeResult> bake_validated(const TextureMap& normal, const TextureMap* roughness, int roughness_channel,
-                                         float roughness_value, const TextureBakeSettings& settings,
-                                         const TextureBakeRowSink& sink, const TextureBakeRowsDone& rows_done = {},
-                                         const TextureBakeInputsDone& inputs_done = {});
+Result<TextureBakeResult> bake_validated(const BakeInputs& in, const TextureBakeSettings& settings,
+                                         const BakeRowTargets& to);
 
 }  // namespace specbake::texture_bake_detail

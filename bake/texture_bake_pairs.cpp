@@ -9,6 +9,68 @@
 namespace specbake::texture_bake_detail {
 namespace {
 
+// One row's quantities of four texels of a half group: the unit normal, its products, and the roughness.
+struct PairTexels4 {
+    __m256d x, y, z, xx, yy, xy, a, g;
+    __m128 r, occlusion, metallic;
+};
+
+// The base level's outputs of four texels from `o` on in `out` (each output that was requested);
+// `rough_in`: the roughness texels as read, for ORM from a three-channel map.
+template <bool kOrm, bool kRgb>
+SPECBAKE_AVX2_INLINE void store_base_outputs4(const BaseRow& out, const PairTexels4& q, const float* rough_in, size_t o,
+                                              bool clamped, int kern_ch, __m256d half, __m256d half_y) {
+    if (out.rough) {
+        if constexpr (kOrm && kRgb) {
+            // The texels as read unless G was clamped: R and B pass through.
+            const float* in = rough_in;
+            if (!clamped) {
+                _mm_storeu_ps(out.rough + 3 * o, _mm_loadu_ps(in));
+                _mm_storeu_ps(out.rough + 3 * o + 4, _mm_loadu_ps(in + 4));
+                _mm_storeu_ps(out.rough + 3 * o + 8, _mm_loadu_ps(in + 8));
+            } else {
+                store3x4(out.rough + 3 * o, q.occlusion, q.r, q.metallic);
+            }
+        } else if constexpr (kOrm) {
+            store3x4(out.rough + 3 * o, q.occlusion, q.r, q.metallic);
+        } else {
+            _mm_storeu_ps(out.rough + o, q.r);
+        }
+    }
+    if (out.kern) {  // Sigma = 0 at the base, the rough share the texel's indicator
+        float* k = out.kern + size_t(kern_ch) * o;
+        const __m128 zero = _mm_setzero_ps();
+        if (kern_ch == 4)
+            store4x4(k, zero, zero, zero, _mm256_cvtpd_ps(q.g));
+        else
+            _mm_storeu_ps(k, zero);
+    }
+    if (out.lean)
+        store5x4(out.lean + 5 * o, _mm256_cvtpd_ps(q.x), _mm256_cvtpd_ps(q.y), _mm256_cvtpd_ps(q.xx),
+                 _mm256_cvtpd_ps(q.yy), _mm256_cvtpd_ps(q.xy));
+    if (out.nrm)
+        store3x4(out.nrm + 3 * o, _mm256_cvtpd_ps(_mm256_add_pd(_mm256_mul_pd(half, q.x), half)),
+                 _mm256_cvtpd_ps(_mm256_add_pd(_mm256_mul_pd(half_y, q.y), half)),
+                 _mm256_cvtpd_ps(_mm256_add_pd(_mm256_mul_pd(half, q.z), half)));
+}
+
+// The column sums of the group's half `sum` (per quantity, four columns): row y plus row y + 1.
+template <bool kOrm>
+SPECBAKE_AVX2_INLINE void add_column_sums4(const PairTexels4 (&t)[2], double (*sum)[4]) {
+    _mm256_store_pd(sum[kPx], _mm256_add_pd(t[0].x, t[1].x));
+    _mm256_store_pd(sum[kPy], _mm256_add_pd(t[0].y, t[1].y));
+    _mm256_store_pd(sum[kPz], _mm256_add_pd(t[0].z, t[1].z));
+    _mm256_store_pd(sum[kPxx], _mm256_add_pd(t[0].xx, t[1].xx));
+    _mm256_store_pd(sum[kPyy], _mm256_add_pd(t[0].yy, t[1].yy));
+    _mm256_store_pd(sum[kPxy], _mm256_add_pd(t[0].xy, t[1].xy));
+    _mm256_store_pd(sum[kA], _mm256_add_pd(t[0].a, t[1].a));
+    _mm256_store_pd(sum[kRough], _mm256_add_pd(t[0].g, t[1].g));
+    if constexpr (kOrm) {
+        _mm256_store_pd(sum[kCore], _mm256_add_pd(_mm256_cvtps_pd(t[0].occlusion), _mm256_cvtps_pd(t[1].occlusion)));
+        _mm256_store_pd(sum[kCore + 1], _mm256_add_pd(_mm256_cvtps_pd(t[0].metallic), _mm256_cvtps_pd(t[1].metallic)));
+    }
+}
+
 // Levels 0 and 1 of base rows y and y + 1 over base texels [bx, bx + 2 n) in one pass, for a level 1 whose
 // footprints are 2 x 2 blocks of the base: each 4 x 2 group of texels is decoded in registers, written as
 // level 0 into rows[0] and rows[1], and its column sums kept; the pair sums of two groups give four level-1
@@ -61,20 +123,15 @@ SPECBAKE_AVX2 int base_and_pairs_avx2(const Decoder& dec, int y, int bx, int n, 
             _mm256_store_pd(unit[r][1] + x, u.y);
             _mm256_store_pd(unit[r][2] + x, u.z);
         }
-    // One row's quantities of a half group: the unit normal, its products, and the roughness.
-    struct Texels {
-        __m256d x, y, z, xx, yy, xy, a, g;
-        __m128 r, occlusion, metallic;
-    };
     int i = 0;
     for (; i + 4 <= n; i += 4) {
 #pragma GCC unroll 2
         for (int h = 0; h < 2; ++h) {
             const size_t o = size_t(2 * i + 4 * h);  // the half's first texel in the rows
-            Texels t[2];
+            PairTexels4 t[2];
 #pragma GCC unroll 2
             for (int r = 0; r < 2; ++r) {
-                Texels& q = t[r];
+                PairTexels4& q = t[r];
                 q.x = _mm256_load_pd(unit[r][0] + o), q.y = _mm256_load_pd(unit[r][1] + o);
                 q.z = _mm256_load_pd(unit[r][2] + o);
                 q.xx = _mm256_mul_pd(q.x, q.x), q.yy = _mm256_mul_pd(q.y, q.y), q.xy = _mm256_mul_pd(q.x, q.y);
@@ -89,54 +146,10 @@ SPECBAKE_AVX2 int base_and_pairs_avx2(const Decoder& dec, int y, int bx, int n, 
                                                            kOrm, rough_finite);
                     q.r = g.r, q.occlusion = g.occlusion, q.metallic = g.metallic, q.a = g.a, clamped = g.clamped;
                 }
-                const BaseRow& out = rows[r];
-                if (out.rough) {
-                    if constexpr (kOrm && kRgb) {
-                        // The texels as read unless G was clamped: R and B pass through.
-                        const float* in = rough_row[r] + 3 * o;
-                        if (!clamped) {
-                            _mm_storeu_ps(out.rough + 3 * o, _mm_loadu_ps(in));
-                            _mm_storeu_ps(out.rough + 3 * o + 4, _mm_loadu_ps(in + 4));
-                            _mm_storeu_ps(out.rough + 3 * o + 8, _mm_loadu_ps(in + 8));
-                        } else {
-                            store3x4(out.rough + 3 * o, q.occlusion, q.r, q.metallic);
-                        }
-                    } else if constexpr (kOrm) {
-                        store3x4(out.rough + 3 * o, q.occlusion, q.r, q.metallic);
-                    } else {
-                        _mm_storeu_ps(out.rough + o, q.r);
-                    }
-                }
-                if (out.kern) {  // Sigma = 0 at the base, the rough share the texel's indicator
-                    float* k = out.kern + size_t(kern_ch) * o;
-                    const __m128 zero = _mm_setzero_ps();
-                    if (kern_ch == 4)
-                        store4x4(k, zero, zero, zero, _mm256_cvtpd_ps(q.g));
-                    else
-                        _mm_storeu_ps(k, zero);
-                }
-                if (out.lean)
-                    store5x4(out.lean + 5 * o, _mm256_cvtpd_ps(q.x), _mm256_cvtpd_ps(q.y), _mm256_cvtpd_ps(q.xx),
-                             _mm256_cvtpd_ps(q.yy), _mm256_cvtpd_ps(q.xy));
-                if (out.nrm)
-                    store3x4(out.nrm + 3 * o, _mm256_cvtpd_ps(_mm256_add_pd(_mm256_mul_pd(half, q.x), half)),
-                             _mm256_cvtpd_ps(_mm256_add_pd(_mm256_mul_pd(half_y, q.y), half)),
-                             _mm256_cvtpd_ps(_mm256_add_pd(_mm256_mul_pd(half, q.z), half)));
+                store_base_outputs4<kOrm, kRgb>(rows[r], q, kOrm && kRgb ? rough_row[r] + 3 * o : nullptr, o, clamped,
+                                                kern_ch, half, half_y);
             }
-            // Column sums: row y plus row y + 1.
-            double(*sum)[4] = sums[h];
-            _mm256_store_pd(sum[kPx], _mm256_add_pd(t[0].x, t[1].x));
-            _mm256_store_pd(sum[kPy], _mm256_add_pd(t[0].y, t[1].y));
-            _mm256_store_pd(sum[kPz], _mm256_add_pd(t[0].z, t[1].z));
-            _mm256_store_pd(sum[kPxx], _mm256_add_pd(t[0].xx, t[1].xx));
-            _mm256_store_pd(sum[kPyy], _mm256_add_pd(t[0].yy, t[1].yy));
-            _mm256_store_pd(sum[kPxy], _mm256_add_pd(t[0].xy, t[1].xy));
-            _mm256_store_pd(sum[kA], _mm256_add_pd(t[0].a, t[1].a));
-            _mm256_store_pd(sum[kRough], _mm256_add_pd(t[0].g, t[1].g));
-            if constexpr (kOrm) {
-                _mm256_store_pd(sum[kCore], _mm256_add_pd(_mm256_cvtps_pd(t[0].occlusion), _mm256_cvtps_pd(t[1].occlusion)));
-                _mm256_store_pd(sum[kCore + 1], _mm256_add_pd(_mm256_cvtps_pd(t[0].metallic), _mm256_cvtps_pd(t[1].metallic)));
-            }
+            add_column_sums4<kOrm>(t, sums[h]);
         }
 #pragma GCC unroll 10
         for (int c = 0; c < C; ++c) {  // as pair_means_avx2

@@ -6,20 +6,33 @@
 #include <cstdint>
 #include <vector>
 
-#if defined(__linux__)
+#if __has_include(<sys/mman.h>)
 #include <sys/mman.h>
 #endif
 
 namespace specbake::detail {
 
+// Gives madvise `advice` for the whole `page`-sized pages inside [p, p + bytes) (page a power of two; the
+// partial pages at either end are left alone, they may hold live data). Returns the end of the last page
+// advised, or nullptr when the range holds no whole page (or the system has no madvise).
+inline const void* advise_whole_pages([[maybe_unused]] const void* p, [[maybe_unused]] size_t bytes,
+                                      [[maybe_unused]] uintptr_t page, [[maybe_unused]] int advice) {
+#if __has_include(<sys/mman.h>)
+    const uintptr_t begin = (reinterpret_cast<uintptr_t>(p) + page - 1) & ~(page - 1);
+    const uintptr_t end = (reinterpret_cast<uintptr_t>(p) + bytes) & ~(page - 1);
+    if (end <= begin) return nullptr;
+    madvise(reinterpret_cast<void*>(begin), end - begin, advice);
+    return reinterpret_cast<const void*>(end);
+#else
+    return nullptr;
+#endif
+}
+
 // Asks for transparent huge pages on the 2 MiB-aligned part of [p, p + bytes), memory not yet touched (a
 // hint: nothing changes where the kernel declines). Small ranges are left alone.
 inline void hint_huge_pages([[maybe_unused]] const void* p, [[maybe_unused]] size_t bytes) {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
-    constexpr uintptr_t kHuge = uintptr_t(2) << 20;
-    const uintptr_t begin = (reinterpret_cast<uintptr_t>(p) + kHuge - 1) & ~(kHuge - 1);
-    const uintptr_t end = (reinterpret_cast<uintptr_t>(p) + bytes) & ~(kHuge - 1);
-    if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
+    advise_whole_pages(p, bytes, uintptr_t(2) << 20, MADV_HUGEPAGE);
 #endif
 }
 

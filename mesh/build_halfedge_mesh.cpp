@@ -12,6 +12,7 @@
 #include <immintrin.h>
 #endif
 
+#include "core/assert.h"
 #include "mesh/halfedge_mesh.h"
 #include "mesh/mesh_math.h"
 #include "mesh/scratch_array.h"
@@ -291,22 +292,19 @@ uint32_t mark_usable(const TriMesh& mesh, const uint32_t* pid, uint8_t* usable, 
 // sums, then each block writes from its offset (the same numbers for any thread count).
 constexpr uint32_t kBlock = 16384;
 
-}  // namespace
+// The usable triangles in triangle order (three distinct positions and a non-zero area) and the positions of
+// their corners.
+struct KeptTriangles {
+    uint32_t faces = 0;
+    detail::ScratchArray<uint32_t> triangle;  // per kept face: its triangle in the input mesh
+    detail::ScratchArray<uint32_t> pos;       // per corner 3 * face + c: its position
+};
 
-HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& positions) {
-    using OpenMesh::EdgeHandle;
-    using OpenMesh::FaceHandle;
-    using OpenMesh::HalfedgeHandle;
-    using OpenMesh::VertexHandle;
-    HalfEdgeTopology out;
+// Per block of triangles the usable ones are counted, then each block writes its kept triangles and their
+// corners' positions. The large per-triangle, per-corner and per-position arrays of the build are scratch
+// arrays (uninitialised, huge pages) wherever every element read has been written first.
+KeptTriangles keep_usable_triangles(const TriMesh& mesh, const std::vector<uint32_t>& pid) {
     const size_t tris = mesh.triangle_count();
-    const uint32_t position_count = positions.position_count;
-    const std::vector<uint32_t>& pid = positions.position_id;
-
-    // Usable triangles, in order: three distinct positions and a non-zero area. Per block of triangles the
-    // usable ones are counted, then each block writes its kept triangles and their corners' positions.
-    // The large per-triangle, per-corner and per-position arrays below are scratch arrays (uninitialised,
-    // huge pages) wherever every element read has been written first.
     const size_t blocks = (tris + kBlock - 1) / kBlock;
     auto block_range = [&](size_t block) {
         return std::pair<size_t, size_t>(block * kBlock, std::min(tris, (block + 1) * kBlock));
@@ -321,16 +319,13 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     });
     std::partial_sum(block_faces.begin(), block_faces.end(), block_faces.begin());
     const uint32_t faces = block_faces[blocks];
-    out.degenerate_triangles = tris - faces;
-    const uint32_t corners = 3 * faces;
-    detail::ScratchArray<uint32_t> kept(faces);
-    detail::ScratchArray<uint32_t> pos(corners);
+    KeptTriangles kept{faces, detail::ScratchArray<uint32_t>(faces), detail::ScratchArray<uint32_t>(3 * faces)};
     tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const auto& r) {
         for (size_t block = r.begin(); block != r.end(); ++block) {
             const auto [first, last] = block_range(block);
             const uint32_t *const indices = mesh.indices.data(), *const pid_p = pid.data();
             const uint8_t* const usable_p = usable.data();
-            uint32_t *const kept_p = kept.data(), *const pos_p = pos.data();
+            uint32_t *const kept_p = kept.triangle.data(), *const pos_p = kept.pos.data();
             uint32_t f = block_faces[block];
             for (size_t t = first; t != last; ++t) {
                 if (!usable_p[t]) continue;
@@ -338,13 +333,25 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
                 for (int c = 0; c < 3; ++c) pos_p[3 * f + c] = pid_p[indices[3 * t + c]];
                 ++f;
             }
+            SPECBAKE_ASSERT(f == block_faces[block + 1]);
         }
     });
+    return kept;
+}
 
-    // Corners of each position, in corner order (a counting sort), with the positions of their next and
-    // previous corners beside them so that the pairing reads each position's corners contiguously. The faces
-    // are sorted in two fixed halves side by side: per position, the first half's corners come first.
-    const uint32_t half = faces / 2;
+// Corners of each position, in corner order (a counting sort), with the positions of their next and
+// previous corners beside them so that the pairing reads each position's corners contiguously.
+struct CornersByPosition {
+    std::vector<uint32_t> start;                   // per position: its first entry; position_count + 1
+    detail::ScratchArray<uint32_t> by_position;    // per entry: the corner
+    detail::ScratchArray<uint32_t> around_next;    // per entry: the position of the corner's next corner
+    detail::ScratchArray<uint32_t> around_prev;    // per entry: the position of the corner's previous corner
+};
+
+// The faces are sorted in two fixed halves side by side: per position, the first half's corners come first.
+CornersByPosition sort_corners_by_position(const KeptTriangles& kept, uint32_t position_count) {
+    const uint32_t faces = kept.faces, corners = 3 * faces, half = faces / 2;
+    const detail::ScratchArray<uint32_t>& pos = kept.pos;
     std::vector<uint32_t> fill[2] = {std::vector<uint32_t>(position_count, 0),
                                      std::vector<uint32_t>(position_count, 0)};
     auto halves = [&](auto&& body) {
@@ -363,6 +370,7 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
         fill[0][p] = start[p];
         fill[1][p] = start[p] + first_half;
     }
+    SPECBAKE_ASSERT(start[position_count] == corners);
     detail::ScratchArray<uint32_t> by_position(corners);
     detail::ScratchArray<uint32_t> around_next(corners + 8), around_prev(corners + 8);
     std::fill_n(around_next.data() + corners, 8, kNone);
@@ -382,36 +390,24 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
             }
         }
     });
+    return {std::move(start), std::move(by_position), std::move(around_next), std::move(around_prev)};
+}
 
-    // Edge pairing (pair_positions), in parallel over positions.
-    detail::ScratchArray<uint32_t> mate(corners);
-    detail::ScratchArray<uint8_t> simple(corners);
-    // The halfedges on the position pair {a, b} of halfedge k (a -> b), found among the corners of a, for
-    // the rare edges that are not simple.
-    auto scan_edge = [&](uint32_t k, uint32_t& total, uint32_t& opposite, uint32_t& partner, uint32_t& lowest) {
-        const uint32_t a = pos[k], b = pos[next_corner(k)];
-        total = opposite = 0;
-        partner = kNone;
-        lowest = k;
-        for (uint32_t i = start[a]; i < start[a + 1]; ++i) {
-            const uint32_t j = by_position[i];
-            if (around_next[i] == b) {
-                ++total;
-                lowest = std::min(lowest, j);
-            } else if (around_prev[i] == b) {
-                ++total;
-                ++opposite;
-                partner = prev_corner(j);
-                lowest = std::min(lowest, partner);
-            }
-        }
-    };
-    const PairingArrays pairing{start.data(), by_position.data(), around_next.data(), around_prev.data(),
-                                mate.data(), simple.data()};
-    const EdgeCounts edge_counts = tbb::parallel_reduce(
+// Edge pairing (pair_positions), in parallel over positions.
+struct EdgePairing {
+    detail::ScratchArray<uint32_t> mate;   // per corner: the halfedge paired with its halfedge, or kNone
+    detail::ScratchArray<uint8_t> simple;  // per corner: its edge is simple
+    EdgeCounts counts;
+};
+
+EdgePairing pair_edges(const CornersByPosition& around, uint32_t corners, uint32_t position_count) {
+    EdgePairing pairing{detail::ScratchArray<uint32_t>(corners), detail::ScratchArray<uint8_t>(corners), {}};
+    const PairingArrays arrays{around.start.data(), around.by_position.data(), around.around_next.data(),
+                               around.around_prev.data(), pairing.mate.data(), pairing.simple.data()};
+    pairing.counts = tbb::parallel_reduce(
         tbb::blocked_range<uint32_t>(0, position_count, 2048), EdgeCounts{},
         [&](const tbb::blocked_range<uint32_t>& r, EdgeCounts counts) {
-            return pair_positions(pairing, r.begin(), r.end(), counts);
+            return pair_positions(arrays, r.begin(), r.end(), counts);
         },
         [](EdgeCounts x, const EdgeCounts& y) {
             x.boundary += y.boundary;
@@ -419,14 +415,47 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
             x.not_simple += y.not_simple;
             return x;
         });
-    out.boundary_edges = edge_counts.boundary;
-    out.nonmanifold_edges = edge_counts.nonmanifold;
+    return pairing;
+}
 
-    // Faces on a non-simple edge, in triangle order: attached while the edge has no halfedge running their
-    // way and fewer than two triangles; otherwise detached.
-    // Only when some edge is not simple: usually every face is attached and the scan is skipped.
-    const bool any_not_simple = edge_counts.not_simple > 0;
-    std::vector<uint8_t> attached(any_not_simple ? faces : 0, 1);
+// Which faces stay attached to their neighbours: all of them unless some edge is not simple.
+struct FaceAttachment {
+    std::vector<uint8_t> attached;   // per face when some edge is not simple, else empty (all attached)
+    std::vector<uint32_t> detached;  // the detached faces, in order
+};
+
+// Faces on a non-simple edge, in triangle order: attached while the edge has no halfedge running their way
+// and fewer than two triangles; otherwise detached (and their halfedges unpaired in `pairing.mate`).
+// Only when some edge is not simple: usually every face is attached and the scan is skipped.
+FaceAttachment attach_faces_on_nonsimple_edges(const KeptTriangles& kept, const CornersByPosition& around,
+                                               EdgePairing& pairing) {
+    const uint32_t faces = kept.faces;
+    const detail::ScratchArray<uint32_t>& pos = kept.pos;
+    detail::ScratchArray<uint32_t>& mate = pairing.mate;
+    const detail::ScratchArray<uint8_t>& simple = pairing.simple;
+    // The halfedges on the position pair {a, b} of halfedge k (a -> b), found among the corners of a, for
+    // the rare edges that are not simple.
+    auto scan_edge = [&](uint32_t k, uint32_t& total, uint32_t& opposite, uint32_t& partner, uint32_t& lowest) {
+        const uint32_t a = pos[k], b = pos[next_corner(k)];
+        total = opposite = 0;
+        partner = kNone;
+        lowest = k;
+        for (uint32_t i = around.start[a]; i < around.start[a + 1]; ++i) {
+            const uint32_t j = around.by_position[i];
+            if (around.around_next[i] == b) {
+                ++total;
+                lowest = std::min(lowest, j);
+            } else if (around.around_prev[i] == b) {
+                ++total;
+                ++opposite;
+                partner = prev_corner(j);
+                lowest = std::min(lowest, partner);
+            }
+        }
+    };
+    const bool any_not_simple = pairing.counts.not_simple > 0;
+    FaceAttachment result{std::vector<uint8_t>(any_not_simple ? faces : 0, 1), {}};
+    std::vector<uint8_t>& attached = result.attached;
     struct EdgeState {
         uint32_t first = kNone;
         bool full = false;
@@ -461,27 +490,38 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
             }
         }
     }
-    std::vector<uint32_t> detached;
     for (uint32_t f = 0; any_not_simple && f < faces; ++f) {
         if (attached[f]) continue;
-        detached.push_back(f);
+        result.detached.push_back(f);
         for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
             if (mate[k] != kNone) mate[mate[k]] = kNone;
             mate[k] = kNone;
         }
     }
-    out.detached_faces = detached.size();
+    return result;
+}
 
-    // Fans: around a position, corner k's successor is the corner at the same position in the triangle across
-    // its outgoing halfedge, next_corner(mate[k]); its predecessor is mate[prev_corner(k)]. Each chain or
-    // cycle of attached corners is one fan and becomes one OpenMesh vertex.
-    const bool any_detached = !detached.empty();
-    // fan and fan_head start as kNone and 0, written in corner order (cheaper than per position). They live
-    // in the storage of around_prev and simple, no longer read: fewer fresh pages to fault in.
-    detail::ScratchArray<uint32_t>& fan = around_prev;
-    detail::ScratchArray<uint8_t>& fan_head = simple;
-    // Per corner without successor: its fan's head; in the storage of around_next (no longer read).
-    detail::ScratchArray<uint32_t>& tail_head = around_next;
+// Fans: around a position, corner k's successor is the corner at the same position in the triangle across
+// its outgoing halfedge, next_corner(mate[k]); its predecessor is mate[prev_corner(k)]. Each chain or cycle
+// of attached corners is one fan and becomes one OpenMesh vertex.
+struct FanArrays {
+    detail::ScratchArray<uint32_t>& fan;        // per corner: its fan's number at its position
+    detail::ScratchArray<uint8_t>& fan_head;    // per corner: it heads its fan
+    detail::ScratchArray<uint32_t>& tail_head;  // per corner without successor: its fan's head
+};
+
+// Numbers the fans at every position (fan, fan_head, tail_head); returns the fan count per position and
+// adds the non-manifold and split vertices to `out`.
+detail::ScratchArray<uint32_t> number_fans(const KeptTriangles& kept, const CornersByPosition& around,
+                                           const detail::ScratchArray<uint32_t>& mate,
+                                           const FaceAttachment& attachment, uint32_t position_count,
+                                           const FanArrays& fans_out, HalfEdgeTopology& out) {
+    const uint32_t corners = 3 * kept.faces;
+    const bool any_detached = !attachment.detached.empty();
+    detail::ScratchArray<uint32_t>& fan = fans_out.fan;
+    detail::ScratchArray<uint8_t>& fan_head = fans_out.fan_head;
+    detail::ScratchArray<uint32_t>& tail_head = fans_out.tail_head;
+    // fan and fan_head start as kNone and 0, written in corner order (cheaper than per position).
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, corners, 65536), [&](const auto& r) {
         std::fill(fan.data() + r.begin(), fan.data() + r.end(), kNone);
         std::fill(fan_head.data() + r.begin(), fan_head.data() + r.end(), uint8_t(0));
@@ -490,9 +530,9 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     detail::ScratchArray<uint8_t> suspect(position_count);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, position_count, 4096), [&](const auto& r) {
         // Local copies: the byte stores below could otherwise alias them and force reloads.
-        const uint32_t *const start_p = start.data(), *const by_position_p = by_position.data();
+        const uint32_t *const start_p = around.start.data(), *const by_position_p = around.by_position.data();
         const uint32_t* const mate_p = mate.data();
-        const uint8_t* const attached_p = attached.data();
+        const uint8_t* const attached_p = attachment.attached.data();
         uint32_t* const fan_p = fan.data();
         const bool detached_any = any_detached;
         for (uint32_t p = r.begin(); p != r.end(); ++p) {
@@ -533,31 +573,41 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
     });
     for (uint32_t p = 0; p < position_count; ++p) {
         if (!suspect[p]) continue;
-        out.nonmanifold_vertices += !link_is_single_fan(pos, &by_position[start[p]], start[p + 1] - start[p]);
+        out.nonmanifold_vertices +=
+            !link_is_single_fan(kept.pos, &around.by_position[around.start[p]], around.start[p + 1] - around.start[p]);
         if (fan_count[p] > 1) out.split_vertices += fan_count[p] - 1;
     }
+    return fan_count;
+}
 
-    // Numbering: vertices per (position, fan), then three per detached face; an edge per mate pair or
-    // unpaired halfedge (its twin is a boundary halfedge), then three per detached face.
-    detail::ScratchArray<uint32_t> vertex_base(position_count + 1);
-    vertex_base[0] = 0;
-    for (uint32_t p = 0; p < position_count; ++p) vertex_base[p + 1] = vertex_base[p] + fan_count[p];
-    const uint32_t attached_vertices = vertex_base[position_count];
-    const uint32_t detached_count = uint32_t(detached.size());
-    const uint32_t vertices = attached_vertices + 3 * detached_count;
-    auto is_attached = [&](uint32_t f) { return !any_detached || attached[f]; };
-    // Halfedge k opens a new edge unless its mate comes first (kNone is above every corner).
-    auto opens_edge = [](const uint32_t* mate_p, uint32_t k) { return mate_p[k] > k; };
+// Element counts of the OpenMesh mesh: vertices per (position, fan), then three per detached face; an edge
+// per mate pair or unpaired halfedge (its twin is a boundary halfedge), then three per detached face. Per
+// block of faces the edges and attached faces are counted, so that each block numbers from its offsets.
+struct ElementCounts {
+    ElementCounts(uint32_t position_count, size_t face_blocks)
+        : vertex_base(position_count + 1), block_start(face_blocks + 1, {0, 0}) {}
+    detail::ScratchArray<uint32_t> vertex_base;                // per position: its first vertex; + 1
+    std::vector<std::array<uint32_t, 2>> block_start;          // per face block: first edge, first face
+    uint32_t attached_vertices = 0, vertices = 0;
+    uint32_t attached_edges = 0, edges = 0;
+    uint32_t attached_faces = 0, faces = 0;
+};
 
-    // OpenMesh halfedge of each attached corner, in the storage of by_position (no longer read): one fresh
-    // corner-sized array less to fault in. Per block of faces the edges and attached faces are counted, then
-    // numbered from the block's offsets; fan[k] becomes the OpenMesh vertex of corner k on the way.
-    detail::ScratchArray<uint32_t>& halfedge = by_position;
-    detail::ScratchArray<uint32_t>& vertex = fan;
-    // Face of each attached triangle; the identity (and not stored) when no face is detached.
-    detail::ScratchArray<uint32_t> face_index(any_detached ? faces : 0);
+// Halfedge k opens a new edge unless its mate comes first (kNone is above every corner).
+inline bool opens_edge(const uint32_t* mate_p, uint32_t k) { return mate_p[k] > k; }
+
+ElementCounts count_elements(uint32_t faces, const detail::ScratchArray<uint32_t>& fan_count,
+                             const detail::ScratchArray<uint32_t>& mate, const FaceAttachment& attachment,
+                             uint32_t position_count) {
+    const bool any_detached = !attachment.detached.empty();
+    const std::vector<uint8_t>& attached = attachment.attached;
+    const uint32_t detached_count = uint32_t(attachment.detached.size());
     const size_t face_blocks = (size_t(faces) + kBlock - 1) / kBlock;
-    std::vector<std::array<uint32_t, 2>> block_start(face_blocks + 1, {0, 0});  // edges, attached faces
+    ElementCounts n(position_count, face_blocks);
+    n.vertex_base[0] = 0;
+    for (uint32_t p = 0; p < position_count; ++p) n.vertex_base[p + 1] = n.vertex_base[p] + fan_count[p];
+    n.attached_vertices = n.vertex_base[position_count];
+    n.vertices = n.attached_vertices + 3 * detached_count;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, face_blocks, 1), [&](const auto& r) {
         for (size_t block = r.begin(); block != r.end(); ++block) {
             const uint32_t first = uint32_t(block * kBlock);
@@ -574,82 +624,109 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
                     for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) block_edges += opens_edge(mate_p, k);
                 }
             }
-            block_start[block + 1] = {block_edges, block_faces_attached};
+            n.block_start[block + 1] = {block_edges, block_faces_attached};
         }
     });
     for (size_t block = 0; block < face_blocks; ++block)
-        for (int i = 0; i < 2; ++i) block_start[block + 1][i] += block_start[block][i];
-    uint32_t edges = block_start[face_blocks][0];
-    const uint32_t attached_faces = block_start[face_blocks][1];
-    const uint32_t attached_edges = edges;
-    edges += 3 * detached_count;
-    HalfEdgeMesh& m = out.mesh;
-    const uint32_t mesh_faces = attached_faces + detached_count;
+        for (int i = 0; i < 2; ++i) n.block_start[block + 1][i] += n.block_start[block][i];
+    n.attached_edges = n.block_start[face_blocks][0];
+    n.edges = n.attached_edges + 3 * detached_count;
+    n.attached_faces = n.block_start[face_blocks][1];
+    n.faces = n.attached_faces + detached_count;
+    return n;
+}
 
-    // The OpenMesh arrays are sized beside the numbering (their sizes are known from the block totals).
-    auto resize = [&] {
-        if (vertices > 0 && edges > 0 && mesh_faces > 0) {
-            // OpenMesh value-initialises its arrays in resize, on one thread (some 60 MB for a million
-            // triangles): their storage is reserved first and hinted for huge pages, so resize faults it in
-            // 2 MiB at a time. One element of each reaches the reserved storage.
-            m.reserve(vertices, edges, mesh_faces);
-            m.resize(1, 1, 1);
-            detail::hint_huge_pages(&m.edge(EdgeHandle(0)), size_t(edges) * sizeof(m.edge(EdgeHandle(0))));
-            detail::hint_huge_pages(&m.vertex(VertexHandle(0)),
-                                    size_t(vertices) * sizeof(m.vertex(VertexHandle(0))));
-            detail::hint_huge_pages(&m.face(FaceHandle(0)), size_t(mesh_faces) * sizeof(m.face(FaceHandle(0))));
-            detail::hint_huge_pages(&m.point(VertexHandle(0)), size_t(vertices) * sizeof(HalfEdgeMesh::Point));
-        }
-        m.resize(vertices, edges, mesh_faces);
-        detail::reserve_huge_pages(out.vertex_position, vertices);
-        out.vertex_position.resize(vertices);
-        detail::reserve_huge_pages(out.face_triangle, mesh_faces);
-        out.face_triangle.resize(mesh_faces);
-    };
-    auto number = [&] {
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, face_blocks, 1), [&](const auto& r) {
-            for (size_t block = r.begin(); block != r.end(); ++block) {
-                const uint32_t first = uint32_t(block * kBlock);
-                const uint32_t last = uint32_t(std::min<size_t>(faces, first + size_t(kBlock)));
-                const uint32_t *const mate_p = mate.data(), *const pos_p = pos.data();
-                const uint32_t* const base_p = vertex_base.data();
-                uint32_t *const halfedge_p = halfedge.data(), *const vertex_p = vertex.data();
-                uint32_t* const face_p = face_index.data();
-                uint32_t e = block_start[block][0], face = block_start[block][1];
-                for (uint32_t f = first; f != last; ++f) {
-                    if (!is_attached(f)) continue;
-                    if (any_detached) face_p[f] = face;
-                    ++face;
-                    for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
-                        vertex_p[k] = base_p[pos_p[k]] + vertex_p[k];
-                        if (!opens_edge(mate_p, k)) continue;
-                        halfedge_p[k] = 2 * e;
-                        if (mate_p[k] != kNone) halfedge_p[mate_p[k]] = 2 * e + 1;
-                        ++e;
-                    }
+// Sizes the OpenMesh arrays and the per-vertex and per-face outputs to the counts.
+void size_mesh(const ElementCounts& n, HalfEdgeTopology& out) {
+    using OpenMesh::EdgeHandle;
+    using OpenMesh::FaceHandle;
+    using OpenMesh::VertexHandle;
+    HalfEdgeMesh& m = out.mesh;
+    if (n.vertices > 0 && n.edges > 0 && n.faces > 0) {
+        // OpenMesh value-initialises its arrays in resize, on one thread (some 60 MB for a million
+        // triangles): their storage is reserved first and hinted for huge pages, so resize faults it in
+        // 2 MiB at a time. One element of each reaches the reserved storage.
+        m.reserve(n.vertices, n.edges, n.faces);
+        m.resize(1, 1, 1);
+        detail::hint_huge_pages(&m.edge(EdgeHandle(0)), size_t(n.edges) * sizeof(m.edge(EdgeHandle(0))));
+        detail::hint_huge_pages(&m.vertex(VertexHandle(0)), size_t(n.vertices) * sizeof(m.vertex(VertexHandle(0))));
+        detail::hint_huge_pages(&m.face(FaceHandle(0)), size_t(n.faces) * sizeof(m.face(FaceHandle(0))));
+        detail::hint_huge_pages(&m.point(VertexHandle(0)), size_t(n.vertices) * sizeof(HalfEdgeMesh::Point));
+    }
+    m.resize(n.vertices, n.edges, n.faces);
+    detail::reserve_huge_pages(out.vertex_position, n.vertices);
+    out.vertex_position.resize(n.vertices);
+    detail::reserve_huge_pages(out.face_triangle, n.faces);
+    out.face_triangle.resize(n.faces);
+}
+
+// The OpenMesh numbering of the attached faces: per corner its halfedge, per corner its vertex (`vertex`
+// holds the fan number at the corner's position on entry), per face its OpenMesh face (only when some face
+// is detached; the identity otherwise).
+struct AttachedNumbering {
+    detail::ScratchArray<uint32_t>& halfedge;
+    detail::ScratchArray<uint32_t>& vertex;
+    detail::ScratchArray<uint32_t>& face_index;
+};
+
+void number_attached_faces(const KeptTriangles& kept, const detail::ScratchArray<uint32_t>& mate,
+                           const FaceAttachment& attachment, const ElementCounts& n, const AttachedNumbering& to) {
+    const uint32_t faces = kept.faces;
+    const bool any_detached = !attachment.detached.empty();
+    const size_t face_blocks = n.block_start.size() - 1;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, face_blocks, 1), [&](const auto& r) {
+        for (size_t block = r.begin(); block != r.end(); ++block) {
+            const uint32_t first = uint32_t(block * kBlock);
+            const uint32_t last = uint32_t(std::min<size_t>(faces, first + size_t(kBlock)));
+            const uint32_t *const mate_p = mate.data(), *const pos_p = kept.pos.data();
+            const uint32_t* const base_p = n.vertex_base.data();
+            uint32_t *const halfedge_p = to.halfedge.data(), *const vertex_p = to.vertex.data();
+            uint32_t* const face_p = to.face_index.data();
+            uint32_t e = n.block_start[block][0], face = n.block_start[block][1];
+            for (uint32_t f = first; f != last; ++f) {
+                if (any_detached && !attachment.attached[f]) continue;
+                if (any_detached) face_p[f] = face;
+                ++face;
+                for (uint32_t k = 3 * f; k < 3 * f + 3; ++k) {
+                    vertex_p[k] = base_p[pos_p[k]] + vertex_p[k];
+                    if (!opens_edge(mate_p, k)) continue;
+                    halfedge_p[k] = 2 * e;
+                    if (mate_p[k] != kNone) halfedge_p[mate_p[k]] = 2 * e + 1;
+                    ++e;
                 }
             }
-        });
-    };
-    tbb::parallel_invoke(resize, number);
+            SPECBAKE_ASSERT(e == n.block_start[block + 1][0] && face == n.block_start[block + 1][1]);
+        }
+    });
+}
 
-    auto point = [&](uint32_t f, uint32_t c) {
-        const float* x = &mesh.positions[3 * size_t(mesh.indices[3 * size_t(kept[f]) + c])];
-        return HalfEdgeMesh::Point(x[0], x[1], x[2]);
-    };
+HalfEdgeMesh::Point corner_point(const TriMesh& mesh, const KeptTriangles& kept, uint32_t f, uint32_t c) {
+    const float* x = &mesh.positions[3 * size_t(mesh.indices[3 * size_t(kept.triangle[f]) + c])];
+    return HalfEdgeMesh::Point(x[0], x[1], x[2]);
+}
 
-    // One pass per attached face: its halfedges, the boundary halfedges across its unpaired ones, and the
-    // vertices whose fan it heads. A vertex has one fan, so at most one boundary halfedge out of it: the
-    // twin of the unpaired halfedge into its head corner (OpenMesh keeps a boundary vertex's halfedge there),
-    // which is also the boundary successor of the twin into its tail.
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, faces, 8192), [&](const auto& r) {
-        const uint32_t *const halfedge_p = halfedge.data(), *const vertex_p = vertex.data();
+// One pass per attached face: its halfedges, the boundary halfedges across its unpaired ones, and the
+// vertices whose fan it heads. A vertex has one fan, so at most one boundary halfedge out of it: the twin of
+// the unpaired halfedge into its head corner (OpenMesh keeps a boundary vertex's halfedge there), which is
+// also the boundary successor of the twin into its tail.
+void link_attached_faces(const TriMesh& mesh, const KeptTriangles& kept, const detail::ScratchArray<uint32_t>& mate,
+                         const FaceAttachment& attachment, const AttachedNumbering& numbering,
+                         const FanArrays& fans, HalfEdgeTopology& out) {
+    using OpenMesh::FaceHandle;
+    using OpenMesh::HalfedgeHandle;
+    using OpenMesh::VertexHandle;
+    HalfEdgeMesh& m = out.mesh;
+    const bool any_detached = !attachment.detached.empty();
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, kept.faces, 8192), [&](const auto& r) {
+        const uint32_t *const halfedge_p = numbering.halfedge.data(), *const vertex_p = numbering.vertex.data();
         const uint32_t* const mate_p = mate.data();
-        const uint32_t *const face_p = face_index.data(), *const kept_p = kept.data(), *const pos_p = pos.data();
-        const uint8_t* const head_p = fan_head.data();
+        const uint32_t *const face_p = numbering.face_index.data(), *const kept_p = kept.triangle.data(),
+                              *const pos_p = kept.pos.data();
+        const uint8_t* const head_p = fans.fan_head.data();
+        const uint32_t* const tail_head = fans.tail_head.data();
         uint32_t *const face_triangle = out.face_triangle.data(), *const vertex_position = out.vertex_position.data();
         for (uint32_t f = r.begin(); f != r.end(); ++f) {
-            if (!is_attached(f)) continue;
+            if (any_detached && !attachment.attached[f]) continue;
             const uint32_t face = any_detached ? face_p[f] : f;
             const FaceHandle fh(static_cast<int>(face));
             face_triangle[face] = kept_p[f];
@@ -670,17 +747,27 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
                 const uint32_t v = vertex_p[k];
                 const uint32_t out_h = mate_p[3 * f + prev] == kNone ? he[prev] ^ 1u : he[c];
                 m.set_halfedge_handle(VertexHandle(static_cast<int>(v)), HalfedgeHandle(static_cast<int>(out_h)));
-                m.set_point(VertexHandle(static_cast<int>(v)), point(f, c));
+                m.set_point(VertexHandle(static_cast<int>(v)), corner_point(mesh, kept, f, c));
                 vertex_position[v] = pos_p[k];
             }
             m.set_halfedge_handle(fh, HalfedgeHandle(static_cast<int>(he[0])));
         }
     });
-    for (uint32_t d = 0; d < detached_count; ++d) {
-        const uint32_t f = detached[d];
-        const uint32_t v0 = attached_vertices + 3 * d, e0 = attached_edges + 3 * d;
-        const FaceHandle fh(static_cast<int>(attached_faces + d));
-        out.face_triangle[attached_faces + d] = kept[f];
+}
+
+// Each detached face as its own triangle: three fresh vertices, three fresh edges with boundary twins.
+void link_detached_faces(const TriMesh& mesh, const KeptTriangles& kept, const FaceAttachment& attachment,
+                         const ElementCounts& n, HalfEdgeTopology& out) {
+    using OpenMesh::FaceHandle;
+    using OpenMesh::HalfedgeHandle;
+    using OpenMesh::VertexHandle;
+    HalfEdgeMesh& m = out.mesh;
+    for (uint32_t d = 0; d < uint32_t(attachment.detached.size()); ++d) {
+        const uint32_t f = attachment.detached[d];
+        const uint32_t v0 = n.attached_vertices + 3 * d, e0 = n.attached_edges + 3 * d;
+        SPECBAKE_ASSERT(v0 + 2 < n.vertices && e0 + 2 < n.edges && n.attached_faces + d < n.faces);
+        const FaceHandle fh(static_cast<int>(n.attached_faces + d));
+        out.face_triangle[n.attached_faces + d] = kept.triangle[f];
         for (uint32_t c = 0; c < 3; ++c) {
             const HalfedgeHandle h(static_cast<int>(2 * (e0 + c))), b(static_cast<int>(2 * (e0 + c) + 1));
             m.set_vertex_handle(h, VertexHandle(static_cast<int>(v0 + (c + 1) % 3)));
@@ -689,11 +776,47 @@ HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& 
             m.set_next_halfedge_handle(h, HalfedgeHandle(static_cast<int>(2 * (e0 + (c + 1) % 3))));
             m.set_next_halfedge_handle(b, HalfedgeHandle(static_cast<int>(2 * (e0 + (c + 2) % 3) + 1)));
             m.set_halfedge_handle(VertexHandle(static_cast<int>(v0 + c)), HalfedgeHandle(static_cast<int>(2 * (e0 + (c + 2) % 3) + 1)));
-            m.set_point(VertexHandle(static_cast<int>(v0 + c)), point(f, c));
-            out.vertex_position[v0 + c] = pos[3 * f + c];
+            m.set_point(VertexHandle(static_cast<int>(v0 + c)), corner_point(mesh, kept, f, c));
+            out.vertex_position[v0 + c] = kept.pos[3 * f + c];
         }
         m.set_halfedge_handle(fh, HalfedgeHandle(static_cast<int>(2 * e0)));
     }
+}
+
+}  // namespace
+
+HalfEdgeTopology build_halfedge_mesh(const TriMesh& mesh, const WeldedTopology& positions) {
+    HalfEdgeTopology out;
+    const uint32_t position_count = positions.position_count;
+    SPECBAKE_ASSERT(positions.position_id.size() == mesh.vertex_count());
+    const KeptTriangles kept = keep_usable_triangles(mesh, positions.position_id);
+    out.degenerate_triangles = mesh.triangle_count() - kept.faces;
+    const uint32_t corners = 3 * kept.faces;
+
+    CornersByPosition around = sort_corners_by_position(kept, position_count);
+    EdgePairing pairing = pair_edges(around, corners, position_count);
+    out.boundary_edges = pairing.counts.boundary;
+    out.nonmanifold_edges = pairing.counts.nonmanifold;
+    const FaceAttachment attachment = attach_faces_on_nonsimple_edges(kept, around, pairing);
+    out.detached_faces = attachment.detached.size();
+
+    // The fans live in the storage of around_prev, simple and around_next, no longer read: fewer fresh pages
+    // to fault in.
+    const FanArrays fans{around.around_prev, pairing.simple, around.around_next};
+    const detail::ScratchArray<uint32_t> fan_count =
+        number_fans(kept, around, pairing.mate, attachment, position_count, fans, out);
+
+    // The OpenMesh halfedge of each attached corner lives in the storage of by_position (no longer read): one
+    // fresh corner-sized array less to fault in; fan[k] becomes the OpenMesh vertex of corner k. The
+    // OpenMesh arrays are sized beside the numbering (their sizes are known from the block totals).
+    const ElementCounts n = count_elements(kept.faces, fan_count, pairing.mate, attachment, position_count);
+    detail::ScratchArray<uint32_t> face_index(attachment.detached.empty() ? 0 : kept.faces);
+    const AttachedNumbering numbering{around.by_position, fans.fan, face_index};
+    tbb::parallel_invoke([&] { size_mesh(n, out); },
+                         [&] { number_attached_faces(kept, pairing.mate, attachment, n, numbering); });
+
+    link_attached_faces(mesh, kept, pairing.mate, attachment, numbering, fans, out);
+    link_detached_faces(mesh, kept, attachment, n, out);
     return out;
 }
 

@@ -122,6 +122,50 @@ SPECBAKE_INLINE v4d gather(const float* const (&x)[kLanes], int k) {
     return __builtin_convertvector((v4f{x[0][k], x[1][k], x[2][k], x[3][k]}), v4d);
 }
 
+// Mixed-Voronoi areas of the corners of four faces with squared edge lengths l (l[i] opposite corner i)
+// and areas `area` (detail::mixed_voronoi_areas, its operations lane by lane): the Voronoi region when no
+// angle is obtuse, else half the area at the obtuse corner and a quarter at the two others. inv_area is
+// 1 / (4 area).
+SPECBAKE_INLINE void mixed_voronoi_weights4(const v4d (&l)[3], v4d area, v4d inv_area, v4d (&w)[3]) {
+    const v4d cot[3] = {(l[1] + l[2] - l[0]) * inv_area, (l[0] + l[2] - l[1]) * inv_area,
+                        (l[0] + l[1] - l[2]) * inv_area};
+    const v4d voronoi[3] = {(l[1] * cot[1] + l[2] * cot[2]) / 8.0, (l[0] * cot[0] + l[2] * cot[2]) / 8.0,
+                            (l[0] * cot[0] + l[1] * cot[1]) / 8.0};
+    const v4l obtuse[3] = {l[0] > l[1] + l[2], l[1] > l[0] + l[2], l[2] > l[0] + l[1]};
+    const v4l any_obtuse = obtuse[0] | obtuse[1] | obtuse[2];
+#pragma GCC unroll 4
+    for (int i = 0; i < 3; ++i) w[i] = obtuse[i] ? 0.5 * area : (any_obtuse ? 0.25 * area : voronoi[i]);
+}
+
+// The face's shape operator (a, b, c) = S in its frame (fu, fv), least squares over its three edges e_i
+// (opposite corner i) of S e = dn, dn the change of the corner normals n along the edge (Rusinkiewicz 2004
+// Sec. 3). G = 3 |cr|^2 and inv_det = 1 / ((A + C) G), cr twice the face's area vector.
+SPECBAKE_INLINE void solve_face_operator4(const v4d (&e)[3][3], const v4d (&n)[3][3], const v4d (&fu)[3],
+                                          const v4d (&fv)[3], v4d G, v4d inv_det, v4d& sa, v4d& sb, v4d& sc) {
+    // Normal equations of the six equations [eu ev 0; 0 eu ev] (a b c)^T = (dn.u, dn.v):
+    // M = [[A, B, 0], [B, A + C, B], [0, B, C]] with A = sum eu^2, B = sum eu ev, C = sum ev^2.
+    v4d A = splat(0.0), B = A, C = A, r0 = A, r1 = A, r2 = A;
+#pragma GCC unroll 4
+    for (int i = 0; i < 3; ++i) {
+        const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
+        const v4d dn[3] = {n[i2][0] - n[i1][0], n[i2][1] - n[i1][1], n[i2][2] - n[i1][2]};
+        const v4d eu = dot4(e[i], fu), ev = dot4(e[i], fv);
+        const v4d dnu = dot4(dn, fu), dnv = dot4(dn, fv);
+        A += eu * eu;
+        B += eu * ev;
+        C += ev * ev;
+        r0 += dnu * eu;
+        r1 += dnu * ev + dnv * eu;
+        r2 += dnv * ev;
+    }
+    // det M = (A + C)(AC - B^2), and AC - B^2 = sum over edge pairs of (e_i x e_j)^2 (Cauchy-Binet) = 3 |cr|^2,
+    // which keeps the solve accurate on thin triangles; A + C is the summed squared edge length.
+    const v4d c00 = G + C * C, c11 = A * C, c22 = G + A * A, c01 = -B * C, c02 = B * B, c12 = -A * B;
+    sa = (c00 * r0 + c01 * r1 + c02 * r2) * inv_det;
+    sb = (c01 * r0 + c11 * r1 + c12 * r2) * inv_det;
+    sc = (c02 * r0 + c12 * r1 + c22 * r2) * inv_det;
+}
+
 // Weighted operators of the corners of faces t .. t + 3 (lane l: face t + l; lanes at or past `lanes`
 // repeat the last face): shape[i][l] is (a, b, c, weight) of corner i of lane l, all zero for a face that
 // carries no information; group[i][l] is that corner's curvature group.
@@ -197,40 +241,10 @@ SPECBAKE_INLINE void face_shapes(const FaceInput& in, size_t t, int lanes, uint3
         inv_turn[i] = 1.0 / (1.0 + ndot[i]);
     }
 
-    // Mixed-Voronoi areas (detail::mixed_voronoi_areas, its operations lane by lane): the Voronoi region
-    // when no angle is obtuse, else half the area at the obtuse corner and a quarter at the two others.
-    const v4d cot[3] = {(l[1] + l[2] - l[0]) * inv_area, (l[0] + l[2] - l[1]) * inv_area,
-                        (l[0] + l[1] - l[2]) * inv_area};
-    const v4d voronoi[3] = {(l[1] * cot[1] + l[2] * cot[2]) / 8.0, (l[0] * cot[0] + l[2] * cot[2]) / 8.0,
-                            (l[0] * cot[0] + l[1] * cot[1]) / 8.0};
-    const v4l obtuse[3] = {l[0] > l[1] + l[2], l[1] > l[0] + l[2], l[2] > l[0] + l[1]};
-    const v4l any_obtuse = obtuse[0] | obtuse[1] | obtuse[2];
     v4d w[3];
-#pragma GCC unroll 4
-    for (int i = 0; i < 3; ++i) w[i] = obtuse[i] ? 0.5 * area : (any_obtuse ? 0.25 * area : voronoi[i]);
-
-    // Normal equations of the six equations [eu ev 0; 0 eu ev] (a b c)^T = (dn.u, dn.v):
-    // M = [[A, B, 0], [B, A + C, B], [0, B, C]] with A = sum eu^2, B = sum eu ev, C = sum ev^2.
-    v4d A = splat(0.0), B = A, C = A, r0 = A, r1 = A, r2 = A;
-#pragma GCC unroll 4
-    for (int i = 0; i < 3; ++i) {
-        const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
-        const v4d dn[3] = {n[i2][0] - n[i1][0], n[i2][1] - n[i1][1], n[i2][2] - n[i1][2]};
-        const v4d eu = dot4(e[i], fu), ev = dot4(e[i], fv);
-        const v4d dnu = dot4(dn, fu), dnv = dot4(dn, fv);
-        A += eu * eu;
-        B += eu * ev;
-        C += ev * ev;
-        r0 += dnu * eu;
-        r1 += dnu * ev + dnv * eu;
-        r2 += dnv * ev;
-    }
-    // det M = (A + C)(AC - B^2), and AC - B^2 = sum over edge pairs of (e_i x e_j)^2 (Cauchy-Binet) = 3 |cr|^2,
-    // which keeps the solve accurate on thin triangles; A + C is the summed squared edge length.
-    const v4d c00 = G + C * C, c11 = A * C, c22 = G + A * A, c01 = -B * C, c02 = B * B, c12 = -A * B;
-    const v4d sa = (c00 * r0 + c01 * r1 + c02 * r2) * inv_det;
-    const v4d sb = (c01 * r0 + c11 * r1 + c12 * r2) * inv_det;
-    const v4d sc = (c02 * r0 + c12 * r1 + c22 * r2) * inv_det;
+    mixed_voronoi_weights4(l, area, inv_area, w);
+    v4d sa, sb, sc;
+    solve_face_operator4(e, n, fu, fv, G, inv_det, sa, sb, sc);
     usable &= is_finite(sa) & is_finite(sb) & is_finite(sc);
 
 #pragma GCC unroll 3

@@ -22,7 +22,6 @@ inline Vec3d normal(const TriMesh& m, uint32_t v) {
 inline Vec3d tangent(const TriMesh& m, uint32_t v) {
     return {m.tangents[4 * v], m.tangents[4 * v + 1], m.tangents[4 * v + 2]};
 }
-inline double tangent_sign(const TriMesh& m, uint32_t v) { return m.tangents[4 * v + 3] < 0.0f ? -1.0 : 1.0; }
 
 // Angle between two edge vectors, robust for small and near-pi angles (atan2 of |cross| and dot).
 inline double angle_between(const Vec3d& a, const Vec3d& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }

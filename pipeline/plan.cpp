@@ -1,5 +1,6 @@
 #include "pipeline/plan.h"
 
+#include "bake/isotropic_filter.h"
 #include "core/text_format.h"
 #include "io/image/image_io.h"
 #include "mesh/curvature_summary.h"
@@ -36,100 +37,223 @@ std::string sanitize(const std::string& name) {
 
 double roughness_gain(double r, double kappa) {
     const double a = std::pow(std::clamp(r, 0.0, 1.0), 4.0);
-    const double tk = kappa * (1.0 - a);
-    const double filtered = (a + tk) / (1.0 + tk);  // SPEC Sec. 3, TK21 Eq. (4)-(7) isotropic closed form
-    return std::pow(filtered, 0.25) - std::clamp(r, 0.0, 1.0);
+    return std::pow(filter_projected_isotropic(a, kappa), 0.25) - std::clamp(r, 0.0, 1.0);
 }
 
-Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& options,
-                            const std::vector<bool>& roughness_known) {
-    ScenePlan plan;
-    plan.scene = scene.source().string();
-    const std::vector<io::PrimitiveInfo> infos = scene.primitives();
-    const std::vector<io::MaterialInfo> materials = scene.materials();
-    const std::string stem = scene.source().stem().string();
+namespace {
 
-    std::map<int, bool> image_is_float;
-    std::map<int, std::string> decode_errors;
-    auto decode = [&](int image) -> const Image* {
+// The scene's images, decoded on first use into plan.decoded_images (kept for the bake) with their bit
+// depth in plan.image_bits; an image that cannot be read is decoded once and its error kept.
+class ImageDecoder {
+public:
+    ImageDecoder(const io::GltfScene& scene, const io::InputLimits& limits, ScenePlan& plan)
+        : scene_(scene), limits_(limits), plan_(plan) {}
+
+    // The decoded image, or null (negative index, or not readable: see error()).
+    const Image* decode(int image) {
         if (image < 0) return nullptr;
-        if (auto it = plan.decoded_images.find(image); it != plan.decoded_images.end()) return &it->second;
-        if (decode_errors.count(image)) return nullptr;
-        Result<io::DecodedImage> decoded = make_error(scene.image_label(image) + ": not read");
-        if (const std::filesystem::path file = scene.image_file(image); !file.empty()) {
-            decoded = io::decode_image(file, options.input_policy.limits);
+        if (auto it = plan_.decoded_images.find(image); it != plan_.decoded_images.end()) return &it->second;
+        if (errors_.count(image)) return nullptr;
+        Result<io::DecodedImage> decoded = make_error(scene_.image_label(image) + ": not read");
+        if (const std::filesystem::path file = scene_.image_file(image); !file.empty()) {
+            decoded = io::decode_image(file, limits_);
         } else {
-            auto bytes = scene.image_bytes(image);
+            auto bytes = scene_.image_bytes(image);
             if (!bytes) {
-                decode_errors[image] = bytes.error().message;
+                errors_[image] = bytes.error().message;
                 return nullptr;
             }
-            decoded = io::decode_image_memory(*bytes, scene.image_label(image), options.input_policy.limits);
+            decoded = io::decode_image_memory(*bytes, scene_.image_label(image), limits_);
         }
         if (!decoded) {
-            decode_errors[image] = decoded.error().message;
+            errors_[image] = decoded.error().message;
             return nullptr;
         }
         if (auto bad = find_non_finite(decoded->image)) {
-            decode_errors[image] = scene.image_label(image) + ": non-finite value at texel (" +
-                                   std::to_string(bad->first) + ", " + std::to_string(bad->second) + ")";
+            errors_[image] = scene_.image_label(image) + ": non-finite value at texel (" +
+                             std::to_string(bad->first) + ", " + std::to_string(bad->second) + ")";
             return nullptr;
         }
-        plan.image_bits[image] = decoded->info.bits_per_channel;
-        image_is_float[image] = decoded->info.is_float;
-        return &plan.decoded_images.emplace(image, std::move(decoded->image)).first->second;
-    };
-
-    // The layers whose normals a texture bake can filter: the base (normalTexture, roughness from
-    // metallicRoughness G) and, with KHR_materials_clearcoat, the coat (clearcoatNormalTexture, roughness
-    // from clearcoatRoughnessTexture G), each with its own roughness factor and normal scale.
-    struct Layer {
-        const char* name;
-        const io::TextureSlot* normal;
-        double normal_scale;
-        const io::TextureSlot* roughness;
-        double roughness_factor;
-    };
-    auto layers_of = [](const io::MaterialInfo& mat) {
-        std::vector<Layer> layers{{"base", &mat.normal, mat.normal_scale, &mat.metallic_roughness, mat.roughness_factor}};
-        if (mat.clearcoat.present)
-            layers.push_back({"clearcoat", &mat.clearcoat.normal, mat.clearcoat.normal_scale, &mat.clearcoat.roughness,
-                              mat.clearcoat.roughness_factor});
-        return layers;
-    };
-
-    // Lowest perceptual roughness of a layer: its roughness factor times its smallest G texel.
-    auto lowest_roughness = [&](const Layer& layer) {
-        double r = layer.roughness_factor;
-        if (layer.roughness->image >= 0) {
-            if (const Image* img = decode(layer.roughness->image)) {
-                const int ch = img->channels >= 2 ? 1 : 0;
-                float lo = 1.0f;
-                for (size_t i = 0; i < img->texel_count(); ++i)
-                    lo = std::min(lo, img->pixels[i * size_t(img->channels) + size_t(ch)]);
-                r *= std::clamp(double(lo), 0.0, 1.0);
-            } else {
-                plan.notes.push_back(decode_errors[layer.roughness->image] + " (" + layer.name +
-                                     " roughness texture not read; its roughness factor used alone)");
-            }
-        }
-        return r;
-    };
-    // A material's lowest roughness is that of its glossiest layer: a clear coat over a rough base aliases
-    // as much as a glossy base.
-    std::vector<std::vector<double>> layer_min_roughness(materials.size());
-    std::vector<std::optional<double>> min_roughness(materials.size());
-    for (size_t m = 0; m < materials.size(); ++m) {
-        for (const Layer& layer : layers_of(materials[m])) layer_min_roughness[m].push_back(lowest_roughness(layer));
-        double r = layer_min_roughness[m][0];
-        if (materials[m].clearcoat.active()) r = std::min(r, layer_min_roughness[m][1]);
-        min_roughness[m] = r;
+        plan_.image_bits[image] = decoded->info.bits_per_channel;
+        is_float_[image] = decoded->info.is_float;
+        return &plan_.decoded_images.emplace(image, std::move(decoded->image)).first->second;
     }
+    // Why `image` could not be decoded ("" when it was).
+    const std::string& error(int image) { return errors_[image]; }
+    bool is_float(int image) { return is_float_[image]; }
 
-    // Texture decisions, one per material and layer.
-    // Materials with their own settings share a bake only with themselves (the name is part of the key).
-    std::map<std::tuple<int, int, float, float, double, std::string>, int> bakes_by_inputs;
-    for (size_t m = 0; m < materials.size() && options.textures; ++m) {
+private:
+    const io::GltfScene& scene_;
+    const io::InputLimits& limits_;
+    ScenePlan& plan_;
+    std::map<int, bool> is_float_;
+    std::map<int, std::string> errors_;
+};
+
+// The layers whose normals a texture bake can filter: the base (normalTexture, roughness from
+// metallicRoughness G) and, with KHR_materials_clearcoat, the coat (clearcoatNormalTexture, roughness from
+// clearcoatRoughnessTexture G), each with its own roughness factor and normal scale.
+struct Layer {
+    const char* name;
+    const io::TextureSlot* normal;
+    double normal_scale;
+    const io::TextureSlot* roughness;
+    double roughness_factor;
+};
+
+std::vector<Layer> layers_of(const io::MaterialInfo& mat) {
+    std::vector<Layer> layers{{"base", &mat.normal, mat.normal_scale, &mat.metallic_roughness, mat.roughness_factor}};
+    if (mat.clearcoat.present)
+        layers.push_back({"clearcoat", &mat.clearcoat.normal, mat.clearcoat.normal_scale, &mat.clearcoat.roughness,
+                          mat.clearcoat.roughness_factor});
+    return layers;
+}
+
+// Lowest perceptual roughness of a layer: its roughness factor times its smallest G texel.
+double lowest_roughness(const Layer& layer, ImageDecoder& images, ScenePlan& plan) {
+    double r = layer.roughness_factor;
+    if (layer.roughness->image >= 0) {
+        if (const Image* img = images.decode(layer.roughness->image)) {
+            const int ch = img->channels >= 2 ? 1 : 0;
+            float lo = 1.0f;
+            for (size_t i = 0; i < img->texel_count(); ++i)
+                lo = std::min(lo, img->pixels[i * size_t(img->channels) + size_t(ch)]);
+            r *= std::clamp(double(lo), 0.0, 1.0);
+        } else {
+            plan.notes.push_back(images.error(layer.roughness->image) + " (" + layer.name +
+                                 " roughness texture not read; its roughness factor used alone)");
+        }
+    }
+    return r;
+}
+
+// Lowest roughness per material and layer, and per material that of its glossiest layer: a clear coat over
+// a rough base aliases as much as a glossy base.
+struct MaterialRoughness {
+    std::vector<std::vector<double>> per_layer;
+    std::vector<std::optional<double>> lowest;
+};
+
+MaterialRoughness lowest_material_roughness(const std::vector<io::MaterialInfo>& materials, ImageDecoder& images,
+                                            ScenePlan& plan) {
+    MaterialRoughness out{std::vector<std::vector<double>>(materials.size()),
+                          std::vector<std::optional<double>>(materials.size())};
+    for (size_t m = 0; m < materials.size(); ++m) {
+        for (const Layer& layer : layers_of(materials[m])) out.per_layer[m].push_back(lowest_roughness(layer, images, plan));
+        double r = out.per_layer[m][0];
+        if (materials[m].clearcoat.active()) r = std::min(r, out.per_layer[m][1]);
+        out.lowest[m] = r;
+    }
+    return out;
+}
+
+// Why a layer has nothing a texture bake could filter, or "" when it has (a readable normal image that a
+// primitive with its texture coordinates uses).
+std::string texture_skip_reason(const io::MaterialInfo& mat, int material, const Layer& layer, bool coat,
+                                const std::vector<io::PrimitiveInfo>& infos) {
+    bool used_with_uv = false, used = false;
+    for (const io::PrimitiveInfo& p : infos) {
+        if (p.material != material) continue;
+        used = true;
+        used_with_uv |= std::find(p.texcoords.begin(), p.texcoords.end(), layer.normal->texcoord) != p.texcoords.end();
+    }
+    if (coat && !mat.clearcoat.active()) return "clearcoatFactor is 0: the material has no coat";
+    if (layer.normal->texture < 0)
+        return coat ? "no clearcoat normal texture (the coat uses the geometry normal)" : "no normal texture";
+    if (layer.normal->image < 0)
+        return std::string(coat ? "clearcoat normal texture" : "normal texture") + " has no image source specbake can read";
+    if (!used) return "no primitive uses the material";
+    if (!used_with_uv) return "no primitive using the material has TEXCOORD_" + std::to_string(layer.normal->texcoord);
+    return "";
+}
+
+// The bake's inputs as the glTF material defines them: the normal map with normalTexture.scale applied
+// (n = normalize((2c - 1) * (scale, scale, 1))) and the roughness map times the roughness factor, copies
+// only where they differ from the decoded images.
+void set_texture_inputs(TextureWork& w, const TextureDecision& d, const Layer& layer, const Image* normal,
+                        const Image* rough, const ScenePlan& plan) {
+    w.normal = normal;
+    w.roughness = rough;
+    w.normal_bits = plan.image_bits.at(d.normal_image);
+    w.roughness_bits = rough ? plan.image_bits.at(d.roughness_image) : w.normal_bits;
+    if (layer.normal_scale != 1.0) {
+        w.normal_storage = *normal;
+        Image& n = w.normal_storage;
+        for (size_t t = 0; t < n.texel_count(); ++t)
+            for (int c = 0; c < std::min(2, n.channels); ++c) {
+                float& v = n.pixels[t * size_t(n.channels) + size_t(c)];
+                v = float(((2.0 * v - 1.0) * layer.normal_scale + 1.0) * 0.5);
+            }
+        w.normal = &w.normal_storage;
+    }
+    w.roughness_channel = rough && rough->channels >= 2 ? 1 : 0;
+    if (rough && d.roughness_factor != 1.0f) {  // glTF: r = roughness factor * G
+        w.roughness_storage = *rough;
+        Image& r = w.roughness_storage;
+        for (size_t t = 0; t < r.texel_count(); ++t)
+            r.pixels[t * size_t(r.channels) + size_t(w.roughness_channel)] *= d.roughness_factor;
+        w.roughness = &w.roughness_storage;
+    }
+}
+
+// Bakes one layer's texture with the settings the bake will use, so the statistic that decides comes
+// from the bake itself; `reason_note` ends the decision's reason. A bake that is kept goes to the plan's
+// encoder or sink right away (which write it), one that is not is dropped from plan.texture_work.
+Result<void> bake_and_decide_texture(TextureDecision& d, int index, const std::string& material,
+                                     const std::string& reason_note, const io::GltfScene& scene,
+                                     const PlanOptions& options, ScenePlan& plan) {
+    TextureWork& w = plan.texture_work.at(index);
+    TextureBakeSettings s = options.texture_settings_for(material);
+    if (!options.texture_sink && !options.texture_encoder) s.outputs = TextureOutputs{true, false, false, false};
+    Result<TextureBakeResult> baked = make_error("");
+    Result<EncodedTextureBake> encoded = make_error("");
+    if (options.texture_encoder) {
+        encoded = options.texture_encoder(d, w, s);
+        if (encoded) {
+            TextureBakeResult measure;
+            measure.max_roughness_change = encoded->max_roughness_change;
+            measure.notes = encoded->notes;
+            baked = std::move(measure);
+        } else {
+            baked = encoded.error();
+        }
+    } else {
+        baked = bake_texture(*w.normal, w.roughness, w.roughness_channel, d.roughness_value, s);
+    }
+    if (!baked) {
+        d.reason = scene.image_label(d.normal_image) + ": " + baked.error().message;
+        plan.notes.push_back(d.reason);
+    } else {
+        d.max_roughness_change = baked->max_roughness_change;
+        d.bake = baked->max_roughness_change >= d.threshold;
+        d.reason = d.bake ? "the bake changes roughness by at least half a quantisation step"
+                          : "the bake changes no texel of any mip by half a quantisation step";
+        for (const std::string& warning : baked->notes.warnings)
+            plan.notes.push_back(scene.image_label(d.normal_image) + ": " + warning);
+    }
+    d.reason += reason_note;
+    if (!d.bake) {
+        plan.texture_work.erase(index);
+    } else if (options.texture_encoder) {
+        if (auto ok = encoded->write(d); !ok) return ok.error();
+    } else if (options.texture_sink) {
+        if (auto ok = options.texture_sink(d, w, std::move(*baked)); !ok) return ok.error();
+    }
+    return {};
+}
+
+// The inputs a layer's texture bake is keyed by: layers with equal keys share one bake. Materials with
+// their own settings share a bake only with themselves (the name is part of the key).
+using TextureBakeKey = std::tuple<int, int, float, float, double, std::string>;
+
+// The texture decisions, one per material and layer, each bake run (and handed on) as it is decided.
+Result<void> decide_textures(const io::GltfScene& scene, const PlanOptions& options,
+                             const std::vector<io::MaterialInfo>& materials,
+                             const std::vector<io::PrimitiveInfo>& infos, const MaterialRoughness& roughness,
+                             ImageDecoder& images, ScenePlan& plan) {
+    const std::string stem = scene.source().stem().string();
+    std::map<TextureBakeKey, int> bakes_by_inputs;
+    for (size_t m = 0; m < materials.size(); ++m) {
         const io::MaterialInfo& mat = materials[m];
         const std::vector<Layer> layers = layers_of(mat);
         for (size_t l = 0; l < layers.size(); ++l) {
@@ -143,27 +267,12 @@ Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& optio
             d.stem = stem + "_mat" + std::to_string(m) + (mat.name.empty() ? "" : "_" + sanitize(mat.name)) +
                      (coat ? "_clearcoat" : "");
             d.texcoord = layer.normal->texcoord;
-            bool used_with_uv = false, used = false;
-            for (const io::PrimitiveInfo& p : infos) {
-                if (p.material != int(m)) continue;
-                used = true;
-                used_with_uv |=
-                    std::find(p.texcoords.begin(), p.texcoords.end(), layer.normal->texcoord) != p.texcoords.end();
-            }
             const std::string normal_name = coat ? "clearcoat normal texture" : "normal texture";
-            if (coat && !mat.clearcoat.active()) {
-                d.reason = "clearcoatFactor is 0: the material has no coat";
-            } else if (layer.normal->texture < 0) {
-                d.reason = coat ? "no clearcoat normal texture (the coat uses the geometry normal)" : "no normal texture";
-            } else if (layer.normal->image < 0) {
-                d.reason = normal_name + " has no image source specbake can read";
-            } else if (!used) {
-                d.reason = "no primitive uses the material";
-            } else if (!used_with_uv) {
-                d.reason = "no primitive using the material has TEXCOORD_" + std::to_string(layer.normal->texcoord);
-            } else if (const Image* normal = decode(layer.normal->image); !normal) {
-                d.reason = normal_name + " cannot be decoded: " + decode_errors[layer.normal->image];
-                plan.notes.push_back(decode_errors[layer.normal->image]);
+            if (std::string skip = texture_skip_reason(mat, int(m), layer, coat, infos); !skip.empty()) {
+                d.reason = std::move(skip);
+            } else if (const Image* normal = images.decode(layer.normal->image); !normal) {
+                d.reason = normal_name + " cannot be decoded: " + images.error(layer.normal->image);
+                plan.notes.push_back(images.error(layer.normal->image));
             } else {
                 d.normal_image = layer.normal->image;
                 const Image* rough = nullptr;
@@ -174,19 +283,18 @@ Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& optio
                     if (!same_mapping) {
                         mapping_note = "; roughness texture is mapped differently from the " + normal_name +
                                        ", so the layer's lowest roughness is used as a constant";
-                    } else if ((rough = decode(layer.roughness->image)) != nullptr) {
+                    } else if ((rough = images.decode(layer.roughness->image)) != nullptr) {
                         d.roughness_image = layer.roughness->image;
                         d.roughness_texture_used = true;
                     }
                 }
-                d.roughness_value = float(std::clamp(layer_min_roughness[m][l], 0.0, 1.0));
+                d.roughness_value = float(std::clamp(roughness.per_layer[m][l], 0.0, 1.0));
                 const int bits_image = d.roughness_texture_used ? d.roughness_image : d.normal_image;
-                d.threshold = half_quantisation_step(plan.image_bits[bits_image], image_is_float[bits_image]);
-                const auto key = std::make_tuple(d.normal_image, d.roughness_image,
-                                                 d.roughness_texture_used ? d.roughness_factor : d.roughness_value,
-                                                 d.roughness_texture_used ? 1.0f : 0.0f, layer.normal_scale,
-                                                 options.material_texture_settings.count(mat.name) ? mat.name
-                                                                                                   : std::string());
+                d.threshold = half_quantisation_step(plan.image_bits[bits_image], images.is_float(bits_image));
+                const TextureBakeKey key(d.normal_image, d.roughness_image,
+                                         d.roughness_texture_used ? d.roughness_factor : d.roughness_value,
+                                         d.roughness_texture_used ? 1.0f : 0.0f, layer.normal_scale,
+                                         options.material_texture_settings.count(mat.name) ? mat.name : std::string());
                 if (auto it = bakes_by_inputs.find(key); it != bakes_by_inputs.end()) {
                     const TextureDecision& first = plan.textures[size_t(it->second)];
                     d.same_as = it->second;
@@ -196,76 +304,58 @@ Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& optio
                     d.reason = "same inputs as material " + std::to_string(first.material) +
                                (first.layer == "base" ? "" : " (" + first.layer + ")") + ": " + first.reason;
                 } else {
-                    // The statistic comes from the bake itself, with the settings the bake will use.
                     const int index = int(plan.textures.size());
-                    TextureWork& w = plan.texture_work[index];
-                    w.normal = normal;
-                    w.roughness = rough;
-                    w.normal_bits = plan.image_bits[d.normal_image];
-                    w.roughness_bits = rough ? plan.image_bits[d.roughness_image] : w.normal_bits;
-                    if (layer.normal_scale != 1.0) {  // glTF: n = normalize((2c - 1) * (scale, scale, 1))
-                        w.normal_storage = *normal;
-                        Image& n = w.normal_storage;
-                        for (size_t t = 0; t < n.texel_count(); ++t)
-                            for (int c = 0; c < std::min(2, n.channels); ++c) {
-                                float& v = n.pixels[t * size_t(n.channels) + size_t(c)];
-                                v = float(((2.0 * v - 1.0) * layer.normal_scale + 1.0) * 0.5);
-                            }
-                        w.normal = &w.normal_storage;
-                    }
-                    w.roughness_channel = rough && rough->channels >= 2 ? 1 : 0;
-                    if (rough && d.roughness_factor != 1.0f) {  // glTF: r = roughness factor * G
-                        w.roughness_storage = *rough;
-                        Image& r = w.roughness_storage;
-                        for (size_t t = 0; t < r.texel_count(); ++t)
-                            r.pixels[t * size_t(r.channels) + size_t(w.roughness_channel)] *= d.roughness_factor;
-                        w.roughness = &w.roughness_storage;
-                    }
-                    TextureBakeSettings s = options.texture_settings_for(mat.name);
-                    if (!options.texture_sink && !options.texture_encoder)
-                        s.outputs = TextureOutputs{true, false, false, false};
-                    Result<TextureBakeResult> baked = make_error("");
-                    Result<EncodedTextureBake> encoded = make_error("");
-                    if (options.texture_encoder) {
-                        encoded = options.texture_encoder(d, w, s);
-                        if (encoded) {
-                            TextureBakeResult measure;
-                            measure.max_roughness_change = encoded->max_roughness_change;
-                            measure.notes = encoded->notes;
-                            baked = std::move(measure);
-                        } else {
-                            baked = encoded.error();
-                        }
-                    } else {
-                        baked = bake_texture(*w.normal, w.roughness, w.roughness_channel, d.roughness_value, s);
-                    }
-                    if (!baked) {
-                        d.reason = scene.image_label(d.normal_image) + ": " + baked.error().message;
-                        plan.notes.push_back(d.reason);
-                    } else {
-                        d.max_roughness_change = baked->max_roughness_change;
-                        d.bake = baked->max_roughness_change >= d.threshold;
-                        d.reason = d.bake ? "the bake changes roughness by at least half a quantisation step"
-                                          : "the bake changes no texel of any mip by half a quantisation step";
-                        for (const std::string& warning : baked->notes.warnings)
-                            plan.notes.push_back(scene.image_label(d.normal_image) + ": " + warning);
-                    }
-                    d.reason += mapping_note;
-                    if (!d.bake) {
-                        plan.texture_work.erase(index);
-                    } else if (options.texture_encoder) {
-                        if (auto ok = encoded->write(d); !ok) return ok.error();
-                    } else if (options.texture_sink) {
-                        if (auto ok = options.texture_sink(d, w, std::move(*baked)); !ok) return ok.error();
-                    }
+                    set_texture_inputs(plan.texture_work[index], d, layer, normal, rough, plan);
+                    if (auto ok = bake_and_decide_texture(d, index, mat.name, mapping_note, scene, options, plan); !ok)
+                        return ok;
                     bakes_by_inputs[key] = index;
                 }
             }
             plan.textures.push_back(std::move(d));
         }
     }
+    return {};
+}
 
-    // Curvature decisions, one per primitive.
+// Condition 2 for a primitive not measured before: the mesh prepared for curvature (validated, normals and
+// tangents present) and its relative curvature, kept in plan.work when it bakes.
+Result<void> measure_curvature(CurvatureDecision& d, size_t primitive, TriMesh mesh, const io::PrimitiveInfo& p,
+                               bool roughness_known, const PlanOptions& options, ScenePlan& plan) {
+    // The curvature needs the normals and tangents, not the topology report: it runs beside it.
+    CurvatureOptions copts;
+    copts.max_threads = options.threads;
+    Result<VertexCurvature> curvature = make_error(mesh.name + ": curvature not estimated");
+    PrepareOptions prepare;
+    prepare.weld = copts.weld;
+    prepare.with_frames = [&](const TriMesh& m, const WeldedTopology& welded) {
+        curvature = estimate_curvature(m, welded, options.estimator, copts);
+    };
+    auto report = prepare_mesh_for_curvature(mesh, prepare);
+    if (!report) return report.error();
+    if (!curvature) return curvature.error();
+    for (float v : curvature->values)
+        if (!std::isfinite(v)) return make_error(mesh.name + ": curvature estimate is not finite");
+    const CurvatureSummary summary = summarize_curvature(mesh, *curvature);
+    d.relative_curvature = double(summary.relative_p95());
+    d.mesh_report = report->summary();
+    d.bake = *d.relative_curvature >= options.min_relative_curvature;
+    const std::string material_part =
+        !options.check_material ? "material not checked"
+        : !roughness_known      ? "material roughness unknown (the file states none), treated as glossy"
+                                : "material glossy enough to alias";
+    d.reason = material_part + (d.bake ? "; shading normals curve" : "; shading normals do not curve");
+    if (d.bake) {
+        d.generates_tangents = !p.has_tangent;
+        d.repairs_normals = report->repaired_normals > 0;
+        plan.work[primitive] = PrimitiveWork{std::move(mesh), *report, std::move(*curvature)};
+    }
+    return {};
+}
+
+// The curvature decisions, one per primitive.
+Result<void> decide_curvature(const io::GltfScene& scene, const PlanOptions& options,
+                              const std::vector<io::PrimitiveInfo>& infos, const MaterialRoughness& roughness,
+                              const std::vector<bool>& roughness_known, ScenePlan& plan) {
     std::map<std::string, size_t> measured_geometry;  // geometry key -> first primitive measured
     for (size_t i = 0; i < infos.size(); ++i) {
         const io::PrimitiveInfo& p = infos[i];
@@ -279,7 +369,7 @@ Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& optio
         d.max_instance_scale = p.max_instance_scale;
         const bool known = p.material < 0 || size_t(p.material) >= roughness_known.size() ||
                            roughness_known[size_t(p.material)];
-        if (p.material >= 0 && size_t(p.material) < materials.size()) d.min_roughness = min_roughness[size_t(p.material)];
+        if (p.material >= 0 && size_t(p.material) < roughness.lowest.size()) d.min_roughness = roughness.lowest[size_t(p.material)];
         else d.min_roughness = 1.0;  // glTF default material: roughnessFactor 1
         d.roughness_gain = roughness_gain(*d.min_roughness, options.kappa);
 
@@ -310,37 +400,27 @@ Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& optio
             if (d.bake) plan.work[i] = plan.work.at(same->second);
         } else {
             measured_geometry[p.geometry_key] = i;
-            // The curvature needs the normals and tangents, not the topology report: it runs beside it.
-            CurvatureOptions copts;
-            copts.max_threads = options.threads;
-            Result<VertexCurvature> curvature = make_error(mesh->name + ": curvature not estimated");
-            PrepareOptions prepare;
-            prepare.weld = copts.weld;
-            prepare.with_frames = [&](const TriMesh& m, const WeldedTopology& welded) {
-                curvature = estimate_curvature(m, welded, options.estimator, copts);
-            };
-            auto report = prepare_mesh_for_curvature(*mesh, prepare);
-            if (!report) return report.error();
-            if (!curvature) return curvature.error();
-            for (float v : curvature->values)
-                if (!std::isfinite(v)) return make_error(mesh->name + ": curvature estimate is not finite");
-            const CurvatureSummary summary = summarize_curvature(*mesh, *curvature);
-            d.relative_curvature = double(summary.relative_p95());
-            d.mesh_report = report->summary();
-            d.bake = *d.relative_curvature >= options.min_relative_curvature;
-            const std::string material_part =
-                !options.check_material ? "material not checked"
-                : !known                ? "material roughness unknown (the file states none), treated as glossy"
-                                        : "material glossy enough to alias";
-            d.reason = material_part + (d.bake ? "; shading normals curve" : "; shading normals do not curve");
-            if (d.bake) {
-                d.generates_tangents = !p.has_tangent;
-                d.repairs_normals = report->repaired_normals > 0;
-                plan.work[i] = PrimitiveWork{std::move(*mesh), *report, std::move(*curvature)};
-            }
+            if (auto ok = measure_curvature(d, i, std::move(*mesh), p, known, options, plan); !ok) return ok;
         }
         plan.primitives.push_back(std::move(d));
     }
+    return {};
+}
+
+}  // namespace
+
+Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& options,
+                            const std::vector<bool>& roughness_known) {
+    ScenePlan plan;
+    plan.scene = scene.source().string();
+    const std::vector<io::PrimitiveInfo> infos = scene.primitives();
+    const std::vector<io::MaterialInfo> materials = scene.materials();
+    ImageDecoder images(scene, options.input_policy.limits, plan);
+    const MaterialRoughness roughness = lowest_material_roughness(materials, images, plan);
+    if (options.textures) {
+        if (auto ok = decide_textures(scene, options, materials, infos, roughness, images, plan); !ok) return ok.error();
+    }
+    if (auto ok = decide_curvature(scene, options, infos, roughness, roughness_known, plan); !ok) return ok.error();
     auto glints = plan_glints(scene, options.material_glints);
     if (!glints) return glints.error();
     plan.glints = std::move(*glints);

@@ -3,10 +3,12 @@
 #include "pipeline/gltf_replace.h"
 #include "pipeline/uastc_encode.h"
 
+#include "core/assert.h"
 #include "io/output/bake_output.h"
 #include "pipeline/concurrency.h"
 #include "pipeline/glint_bake.h"
 #include "pipeline/version.h"
+#include "io/files/file_name.h"
 #include "io/files/input_policy.h"
 #include "io/mesh_import/mesh_import.h"
 #include "io/files/sha256.h"
@@ -17,15 +19,10 @@
 
 namespace specbake {
 namespace fs = std::filesystem;
+using io::lower_extension;
 using nlohmann::json;
 
 namespace {
-
-std::string lower_extension(const fs::path& p) {
-    std::string e = p.extension().string();
-    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    return e;
-}
 
 const char* format_of(const fs::path& p) {
     const std::string e = lower_extension(p);
@@ -64,33 +61,39 @@ struct SceneResult {
     ScenePlan plan;
 };
 
-// Writes into `out_dir` (staged) what belongs in `final_dir`.
-Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, const fs::path& out_dir,
-                                   const fs::path& final_dir, std::vector<fs::path>& written,
-                                   std::vector<std::string>& warnings) {
-    auto say = [&](const std::string& s) {
-        if (job.progress) job.progress(s);
-    };
-    say("reading " + input.string());
-    auto loaded = load_scene(input, job.plan.input_policy);
-    if (!loaded) return loaded.error();
-    for (const std::string& n : loaded->notes) warnings.push_back(n);
-    io::GltfScene& scene = loaded->scene;
+// One scene's bake in progress: where it writes (out_dir, staged, for final_dir), what it has written
+// (removed if it fails) and what the manifest will list, each texture stem's files for the material
+// extensions, and the outputs that move inside a .glb.
+struct SceneBake {
+    SceneBake(const SceneJob& scene_job, const fs::path& input_file, const fs::path& staged_dir,
+              const fs::path& final_folder, std::vector<fs::path>& written_files, std::vector<std::string>& notes)
+        : job(scene_job), input(input_file), out_dir(staged_dir), final_dir(final_folder), written(written_files),
+          warnings(notes), say([&job = scene_job](const std::string& s) {
+              if (job.progress) job.progress(s);
+          }) {}
 
+    const SceneJob& job;
+    const fs::path& input;
+    const fs::path& out_dir;
+    const fs::path& final_dir;
+    std::vector<fs::path>& written;
+    std::vector<std::string>& warnings;
+    std::function<void(const std::string&)> say;
     SceneResult result;
-    std::vector<fs::path> inputs{input};
-    for (const fs::path& r : scene.resource_files()) inputs.push_back(r);
-    if (auto r = io::check_output_not_input(final_dir, inputs); !r) return r.error();
-
-    // Material textures: the plan measures its statistic on the full bake and this writes each kept bake
-    // right away. Layers with identical inputs share one set of files (the first one's, by its stem).
+    // Layers with identical inputs share one set of files (the first one's, by its stem).
     std::map<std::string, std::vector<io::ManifestOutput>> files_by_stem;
     std::map<std::string, ReplaceLayer> replace_by_stem;  // --gltf-mode replace: the chains it encodes
-    PlanOptions options = job.plan;
-    options.texture_sink = [&](const TextureDecision& d, const TextureWork& w,
-                               TextureBakeResult&& baked) -> Result<void> {
-        say("writing " + (d.layer == "base" ? std::string() : d.layer + " ") + "textures of material " +
-            std::to_string(d.material) + " of " + input.string());
+    std::map<std::string, int> embedded;  // output path -> its number among the scene's embedded files
+};
+
+// The plan's texture sink: the plan measures its statistic on the full bake and this writes each kept bake
+// right away (and keeps, for --gltf-mode replace, the chains the replacement encodes).
+TextureBakeSink texture_sink(SceneBake& bake, const io::GltfScene& scene, const PlanOptions& options) {
+    return [&bake, &scene, &options](const TextureDecision& d, const TextureWork& w,
+                                     TextureBakeResult&& baked) -> Result<void> {
+        const SceneJob& job = bake.job;
+        bake.say("writing " + (d.layer == "base" ? std::string() : d.layer + " ") + "textures of material " +
+                 std::to_string(d.material) + " of " + bake.input.string());
         TextureInputs in;
         in.normal = w.normal;
         in.normal_name = scene.image_label(d.normal_image);
@@ -102,67 +105,66 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         in.roughness_bits = w.roughness_bits;
         // The replacement needs the mean normal (normalTexture); without it the layer keeps its slots.
         if (job.gltf_mode == GltfMode::Replace && d.layer == "base" && options.texture_settings_for(d.material_name).outputs.normal) {
-            ReplaceLayer& r = replace_by_stem[d.stem];
+            ReplaceLayer& r = bake.replace_by_stem[d.stem];
             r.stem = d.stem;
             r.roughness = baked.roughness;
             r.normal = baked.normal;
         }
         auto out = write_texture_outputs(std::move(baked), in, options.texture_settings_for(d.material_name),
-                                         job.texture_format, out_dir, d.stem, job.progress);
+                                         job.texture_format, bake.out_dir, d.stem, job.progress);
         if (!out) return out.error();
-        for (const io::ManifestOutput& o : out->outputs) written.push_back(out_dir / o.path);
-        result.outputs.insert(result.outputs.end(), out->outputs.begin(), out->outputs.end());
-        files_by_stem[d.stem] = std::move(out->outputs);
+        for (const io::ManifestOutput& o : out->outputs) bake.written.push_back(bake.out_dir / o.path);
+        bake.result.outputs.insert(bake.result.outputs.end(), out->outputs.begin(), out->outputs.end());
+        bake.files_by_stem[d.stem] = std::move(out->outputs);
         return {};
     };
-    // Without replacement the files are all the bake needs: KTX2 and DDS are baked row by row straight into
-    // their bytes (zstd streamed per level), as `specbake texture` does, so no float chain is held. The
-    // replacement encodes the float roughness and normal chains, and other containers write from them.
-    if (job.gltf_mode != GltfMode::Replace && io::EncodedTexture::supports(job.texture_format.container)) {
-        options.texture_encoder = [&](const TextureDecision& d, const TextureWork& w,
-                                      const TextureBakeSettings& settings) -> Result<EncodedTextureBake> {
-            TextureInputs in;
-            in.normal = w.normal;
-            // The plan names the image in its note; these keep the bake's own prefixes (name_error).
-            in.normal_name = "normal map";
-            in.roughness = w.roughness;
-            in.roughness_name = "roughness map";
-            in.roughness_channel = w.roughness_channel;
-            in.roughness_value = d.roughness_value;
-            in.normal_bits = w.normal_bits;
-            in.roughness_bits = w.roughness_bits;
-            auto encoded = std::make_shared<EncodedTextureOutputs>();
-            auto baked = bake_texture_encoded(in, settings, job.texture_format, d.stem);
-            if (!baked) return baked.error();
-            *encoded = std::move(*baked);
-            EncodedTextureBake out{encoded->max_roughness_change, encoded->notes, {}};
-            out.write = [&, encoded](const TextureDecision& kept) -> Result<void> {
-                say("writing " + (kept.layer == "base" ? std::string() : kept.layer + " ") + "textures of material " +
-                    std::to_string(kept.material) + " of " + input.string());
-                for (const io::EncodedFile& f : encoded->files) say("writing " + f.stem);
-                auto files = io::write_encoded_textures(encoded->files, out_dir);
-                if (!files) return files.error();
-                for (const io::ManifestOutput& o : *files) written.push_back(out_dir / o.path);
-                result.outputs.insert(result.outputs.end(), files->begin(), files->end());
-                files_by_stem[kept.stem] = std::move(*files);
-                *encoded = EncodedTextureOutputs{};  // written: the next material's bake needs the memory
-                return {};
-            };
-            return out;
-        };
-    }
-    // Materials that ask for glints get slope-space LEAN moments of their normal map (C21 Eq. 16).
-    if (auto r = add_glint_lean_settings(scene, options); !r) return r.error();
-    say("planning " + input.string());
-    auto plan = make_plan(scene, options, loaded->roughness_known);
-    if (!plan) return plan.error();
-    for (const std::string& n : plan->notes) warnings.push_back(n);
+}
 
-    // Curvature, and the frame it refers to. The vectors move into the scene (the plan keeps the meshes'
-    // positions, which is all the manifest needs of them).
+// Without replacement the files are all the bake needs: KTX2 and DDS are baked row by row straight into
+// their bytes (zstd streamed per level), as `specbake texture` does, so no float chain is held. The
+// replacement encodes the float roughness and normal chains, and other containers write from them.
+TextureBakeEncoder texture_encoder(SceneBake& bake) {
+    return [&bake](const TextureDecision& d, const TextureWork& w,
+                   const TextureBakeSettings& settings) -> Result<EncodedTextureBake> {
+        const SceneJob& job = bake.job;
+        TextureInputs in;
+        in.normal = w.normal;
+        // The plan names the image in its note; these keep the bake's own prefixes (name_error).
+        in.normal_name = "normal map";
+        in.roughness = w.roughness;
+        in.roughness_name = "roughness map";
+        in.roughness_channel = w.roughness_channel;
+        in.roughness_value = d.roughness_value;
+        in.normal_bits = w.normal_bits;
+        in.roughness_bits = w.roughness_bits;
+        auto encoded = std::make_shared<EncodedTextureOutputs>();
+        auto baked = bake_texture_encoded(in, settings, job.texture_format, d.stem);
+        if (!baked) return baked.error();
+        *encoded = std::move(*baked);
+        EncodedTextureBake out{encoded->max_roughness_change, encoded->notes, {}};
+        out.write = [&bake, encoded](const TextureDecision& kept) -> Result<void> {
+            bake.say("writing " + (kept.layer == "base" ? std::string() : kept.layer + " ") + "textures of material " +
+                     std::to_string(kept.material) + " of " + bake.input.string());
+            for (const io::EncodedFile& f : encoded->files) bake.say("writing " + f.stem);
+            auto files = io::write_encoded_textures(encoded->files, bake.out_dir);
+            if (!files) return files.error();
+            for (const io::ManifestOutput& o : *files) bake.written.push_back(bake.out_dir / o.path);
+            bake.result.outputs.insert(bake.result.outputs.end(), files->begin(), files->end());
+            bake.files_by_stem[kept.stem] = std::move(*files);
+            *encoded = EncodedTextureOutputs{};  // written: the next material's bake needs the memory
+            return {};
+        };
+        return out;
+    };
+}
+
+// Curvature, and the frame it refers to, set on the scene's primitives; returns how many were baked. The
+// vectors move into the scene (the plan keeps the meshes' positions, which is all the manifest needs).
+Result<size_t> move_curvature_into_scene(ScenePlan& plan, io::GltfScene& scene) {
     size_t baked_primitives = 0;
-    for (auto& [index, work] : plan->work) {
-        const CurvatureDecision& d = plan->primitives[index];
+    for (auto& [index, work] : plan.work) {
+        SPECBAKE_ASSERT(index < plan.primitives.size());
+        const CurvatureDecision& d = plan.primitives[index];
         if (auto r = scene.set_vertex_attribute(d.ref, io::kCurvatureAttribute, std::move(work.curvature.values), 4); !r)
             return r.error();
         if (d.generates_tangents || work.report.repaired_tangents > 0)
@@ -171,29 +173,30 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
             if (auto r = scene.set_vertex_attribute(d.ref, "NORMAL", std::move(work.mesh.normals), 3); !r) return r.error();
         ++baked_primitives;
     }
+    return baked_primitives;
+}
 
-    std::string ext = loaded->is_gltf && scene.source_is_binary() ? ".glb" : ".gltf";
-    if (job.format == SceneFormat::Gltf) ext = ".gltf";
-    if (job.format == SceneFormat::Glb) ext = ".glb";
-    const bool glb = ext == ".glb";
-    // A .glb carries the baked textures it refers to on buffer views (KTX2, DDS, PNG: the formats with a
-    // MIME type), so it is self-contained; EXR files stay beside it.
-    std::map<std::string, int> embedded;  // output path -> its number among the scene's embedded files
-    auto mime_of = [](const std::string& format) -> std::string {
-        if (format == "ktx2") return "image/ktx2";
-        if (format == "png") return "image/png";
-        if (format == "dds") return "image/vnd-ms.dds";
-        return {};
-    };
+// The MIME type under which a .glb carries a baked texture of `format` on a buffer view (KTX2, DDS, PNG);
+// "" for the formats that stay beside it (EXR).
+std::string embedded_mime_type(const std::string& format) {
+    if (format == "ktx2") return "image/ktx2";
+    if (format == "png") return "image/png";
+    if (format == "dds") return "image/vnd-ms.dds";
+    return {};
+}
 
-    // Material extensions pointing at the files written during planning: the base layer's properties at
-    // the top of the object, the clear coat's in "clearcoat" (io/gltf/SPECBAKE_EXTENSION.md).
+// Material extensions pointing at the files written during planning: the base layer's properties at the
+// top of the object, the clear coat's in "clearcoat" (io/gltf/SPECBAKE_EXTENSION.md). In a .glb the
+// textures with a MIME type go on buffer views, so it is self-contained (recorded in bake.embedded).
+std::map<int, json> material_texture_extensions(SceneBake& bake, io::GltfScene& scene, const ScenePlan& plan,
+                                                const PlanOptions& options, bool glb) {
     const std::vector<io::MaterialInfo> materials = scene.materials();
     std::map<int, json> extension_of_material;
-    for (size_t i = 0; i < plan->textures.size(); ++i) {
-        const TextureDecision& d = plan->textures[i];
+    for (size_t i = 0; i < plan.textures.size(); ++i) {
+        const TextureDecision& d = plan.textures[i];
         if (!d.bake) continue;
         const size_t owner = d.same_as >= 0 ? size_t(d.same_as) : i;
+        SPECBAKE_ASSERT(d.material >= 0 && size_t(d.material) < materials.size() && owner < plan.textures.size());
         const io::MaterialInfo& mat = materials[size_t(d.material)];
         const bool coat = d.layer == "clearcoat";
         const io::TextureSlot& normal = coat ? mat.clearcoat.normal : mat.normal;
@@ -206,18 +209,18 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         else
             ext["source"]["roughness"] = d.roughness_value;
         if (!normal.transform.is_null()) ext["KHR_texture_transform"] = normal.transform;
-        const std::string& owner_name = plan->textures[owner].material_name;
+        const std::string& owner_name = plan.textures[owner].material_name;
         if (options.material_texture_settings.count(owner_name))  // differs from the root's "textures"
-            ext["settings"] = texture_settings_json(options.texture_settings_for(owner_name), job.texture_format);
+            ext["settings"] = texture_settings_json(options.texture_settings_for(owner_name), bake.job.texture_format);
         ext["outputs"] = json::array();
-        for (const io::ManifestOutput& o : files_by_stem.at(d.stem)) {
+        for (const io::ManifestOutput& o : bake.files_by_stem.at(d.stem)) {
             json entry = {{"kind", o.kind}, {"uri", o.path}, {"format", o.format}, {"width", o.width},
                           {"height", o.height}, {"mips", o.mips}, {"channels", o.channels}};
             // Block-compressed (`--block bc`, `--block astc`): the GPU format, since BC5 / ASTC hold the normal's x, y only.
             if (o.extra.value("block_compression", "none") != "none") entry["gpuFormat"] = o.extra["gpu_format"];
-            if (const std::string mime = mime_of(o.format); glb && !mime.empty()) {
-                const int k = scene.embed_baked_image(out_dir / o.path, mime, o.path);
-                embedded[o.path] = k;
+            if (const std::string mime = embedded_mime_type(o.format); glb && !mime.empty()) {
+                const int k = scene.embed_baked_image(bake.out_dir / o.path, mime, o.path);
+                bake.embedded[o.path] = k;
                 entry.erase("uri");
                 entry["embedded"] = k;  // the scene writer puts the buffer view's index here
                 entry["mimeType"] = mime;
@@ -229,103 +232,168 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
         if (coat) target["clearcoat"] = std::move(ext);
         else target.update(ext);
     }
-    if (auto r = add_glint_outputs(*plan, out_dir, final_dir, say, files_by_stem, extension_of_material, written,
-                                   result.outputs);
-        !r)
-        return r.error();
-    if (job.gltf_mode == GltfMode::Replace) {
-        auto basisu = find_basisu(job.basisu);
-        if (!basisu) return basisu.error();
-        for (const TextureDecision& d : plan->textures) {
-            if (!d.bake || d.layer != "base" || !replace_by_stem.count(d.stem)) continue;
-            ReplaceLayer layer = replace_by_stem.at(d.stem);
-            layer.material = d.material;
-            layer.roughness_from_texture = d.roughness_texture_used;
-            layer.texcoord = d.texcoord;
-            layer.transform = materials[size_t(d.material)].normal.transform;
-            say("encoding UASTC textures of material " + std::to_string(d.material) + " of " + input.string());
-            const size_t before = result.outputs.size();
-            const io::Supercompression& supercompression = job.texture_format.supercompression;
-            const int zstd = supercompression.zstd ? supercompression.zstd_level : 0;
-            if (auto r = replace_with_basisu(scene, layer, *basisu, out_dir, glb, result.outputs, warnings, zstd); !r)
-                return r.error();
-            for (size_t k = before; k < result.outputs.size(); ++k) {
-                written.push_back(out_dir / result.outputs[k].path);
-                if (glb) embedded[result.outputs[k].path] = -1;  // on a buffer view as a glTF image
-            }
+    return extension_of_material;
+}
+
+// --gltf-mode replace: each baked base layer's textures encoded as UASTC KTX2 by basisu and put in the
+// material's own slots.
+Result<void> replace_with_uastc(SceneBake& bake, io::GltfScene& scene, const ScenePlan& plan, bool glb) {
+    const SceneJob& job = bake.job;
+    auto basisu = find_basisu(job.basisu);
+    if (!basisu) return basisu.error();
+    const std::vector<io::MaterialInfo> materials = scene.materials();
+    std::vector<io::ManifestOutput>& outputs = bake.result.outputs;
+    for (const TextureDecision& d : plan.textures) {
+        if (!d.bake || d.layer != "base" || !bake.replace_by_stem.count(d.stem)) continue;
+        ReplaceLayer layer = bake.replace_by_stem.at(d.stem);
+        layer.material = d.material;
+        layer.roughness_from_texture = d.roughness_texture_used;
+        layer.texcoord = d.texcoord;
+        layer.transform = materials[size_t(d.material)].normal.transform;
+        bake.say("encoding UASTC textures of material " + std::to_string(d.material) + " of " + bake.input.string());
+        const size_t before = outputs.size();
+        const io::Supercompression& supercompression = job.texture_format.supercompression;
+        const int zstd = supercompression.zstd ? supercompression.zstd_level : 0;
+        if (auto r = replace_with_basisu(scene, layer, *basisu, bake.out_dir, glb, outputs, bake.warnings, zstd); !r)
+            return r.error();
+        for (size_t k = before; k < outputs.size(); ++k) {
+            bake.written.push_back(bake.out_dir / outputs[k].path);
+            if (glb) bake.embedded[outputs[k].path] = -1;  // on a buffer view as a glTF image
         }
     }
-    for (const auto& [material, ext] : extension_of_material) scene.set_material_extension(material, ext);
-    const bool any_texture = !extension_of_material.empty();
-    if (baked_primitives > 0 || any_texture) scene.set_root_extension(root_extension(job, any_texture));
+    return {};
+}
 
-    // Hashes of the inputs, asked for only now: the scene file's is computed in the background since the
-    // load, the other files the loader read come hashed with the scene, the rest (images, files read
-    // through Assimp) are hashed together here.
+// Hashes of the inputs, asked for only now: the scene file's is computed in the background since the load,
+// the other files the loader read come hashed with the scene, the rest (images, files read through
+// Assimp) are hashed together here.
+Result<std::vector<io::ManifestInput>> hash_inputs(const io::GltfScene& scene, const std::vector<fs::path>& inputs) {
     std::vector<fs::path> unhashed;
     for (const fs::path& in : inputs)
         if (scene.content_hash(in).empty()) unhashed.push_back(in);
     auto hashes = io::sha256_files(unhashed);
     if (!hashes) return hashes.error();
+    std::vector<io::ManifestInput> hashed;
     for (size_t i = 0, next = 0; i < inputs.size(); ++i) {
         std::string hash = scene.content_hash(inputs[i]);
-        result.inputs.push_back({inputs[i].string(), hash.empty() ? (*hashes)[next++] : std::move(hash)});
+        SPECBAKE_ASSERT(!hash.empty() || next < hashes->size());
+        hashed.push_back({inputs[i].string(), hash.empty() ? (*hashes)[next++] : std::move(hash)});
     }
+    return hashed;
+}
+
+// The textures now inside the GLB leave the folder and the outputs; returns their manifest entries, which
+// the manifest lists under the scene's entry.
+Result<json> take_embedded_outputs(SceneBake& bake) {
+    json inside = json::array();
+    if (bake.embedded.empty()) return inside;
+    std::vector<io::ManifestOutput> kept;
+    for (io::ManifestOutput& o : bake.result.outputs) {
+        const auto it = bake.embedded.find(o.path);
+        if (it == bake.embedded.end()) {
+            kept.push_back(std::move(o));
+            continue;
+        }
+        std::error_code ec;
+        fs::remove(bake.out_dir / o.path, ec);
+        if (ec) return make_error((bake.out_dir / o.path).string() + ": cannot remove: " + ec.message());
+        bake.written.erase(std::remove(bake.written.begin(), bake.written.end(), bake.out_dir / o.path), bake.written.end());
+        json e = {{"name", o.path}, {"mimeType", embedded_mime_type(o.format)}, {"kind", o.kind},
+                  {"format", o.format}, {"width", o.width}, {"height", o.height}, {"mips", o.mips},
+                  {"channels", o.channels}, {"sha256", o.sha256}};
+        for (const auto& [key, value] : o.extra.items()) e[key] = value;
+        inside.push_back(std::move(e));
+    }
+    bake.result.outputs = std::move(kept);
+    return inside;
+}
+
+// The manifest entries of the files the scene writer wrote: the scene first (its entry's extra is
+// `scene_extra`), then its buffers and copied images.
+void add_scene_file_outputs(SceneBake& bake, const std::vector<io::GltfScene::WrittenFile>& files,
+                            const json& scene_extra) {
+    for (const io::GltfScene::WrittenFile& f : files) bake.written.push_back(f.path);
+    for (size_t i = 0; i < files.size(); ++i) {
+        const fs::path& f = files[i].path;
+        io::ManifestOutput o;
+        o.sha256 = files[i].sha256;
+        o.kind = i == 0 ? "scene" : (std::string(format_of(f)) == "bin" ? "buffer" : "image");
+        o.path = io::relative_path(f, bake.out_dir);
+        o.format = format_of(f);
+        if (!files[i].renamed_from.empty()) o.extra = {{"renamed_from", files[i].renamed_from}};
+        if (i == 0) o.extra = scene_extra;
+        bake.result.outputs.push_back(std::move(o));
+    }
+}
+
+// Writes into `out_dir` (staged) what belongs in `final_dir`.
+Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, const fs::path& out_dir,
+                                   const fs::path& final_dir, std::vector<fs::path>& written,
+                                   std::vector<std::string>& warnings) {
+    SceneBake bake(job, input, out_dir, final_dir, written, warnings);
+    bake.say("reading " + input.string());
+    auto loaded = load_scene(input, job.plan.input_policy);
+    if (!loaded) return loaded.error();
+    for (const std::string& n : loaded->notes) warnings.push_back(n);
+    io::GltfScene& scene = loaded->scene;
+
+    std::vector<fs::path> inputs{input};
+    for (const fs::path& r : scene.resource_files()) inputs.push_back(r);
+    if (auto r = io::check_output_not_input(final_dir, inputs); !r) return r.error();
+
+    PlanOptions options = job.plan;
+    options.texture_sink = texture_sink(bake, scene, options);
+    if (job.gltf_mode != GltfMode::Replace && io::EncodedTexture::supports(job.texture_format.container))
+        options.texture_encoder = texture_encoder(bake);
+    // Materials that ask for glints get slope-space LEAN moments of their normal map (C21 Eq. 16).
+    if (auto r = add_glint_lean_settings(scene, options); !r) return r.error();
+    bake.say("planning " + input.string());
+    auto plan = make_plan(scene, options, loaded->roughness_known);
+    if (!plan) return plan.error();
+    for (const std::string& n : plan->notes) warnings.push_back(n);
+    auto baked_primitives = move_curvature_into_scene(*plan, scene);
+    if (!baked_primitives) return baked_primitives.error();
+
+    std::string ext = loaded->is_gltf && scene.source_is_binary() ? ".glb" : ".gltf";
+    if (job.format == SceneFormat::Gltf) ext = ".gltf";
+    if (job.format == SceneFormat::Glb) ext = ".glb";
+    const bool glb = ext == ".glb";
+    std::map<int, json> extension_of_material = material_texture_extensions(bake, scene, *plan, options, glb);
+    if (auto r = add_glint_outputs(*plan, out_dir, final_dir, bake.say, bake.files_by_stem, extension_of_material,
+                                   written, bake.result.outputs);
+        !r)
+        return r.error();
+    if (job.gltf_mode == GltfMode::Replace)
+        if (auto r = replace_with_uastc(bake, scene, *plan, glb); !r) return r.error();
+    for (const auto& [material, ext] : extension_of_material) scene.set_material_extension(material, ext);
+    const bool any_texture = !extension_of_material.empty();
+    if (*baked_primitives > 0 || any_texture) scene.set_root_extension(root_extension(job, any_texture));
+    auto hashed = hash_inputs(scene, inputs);
+    if (!hashed) return hashed.error();
+    bake.result.inputs = std::move(*hashed);
 
     const fs::path out_file = out_dir / (input.stem().string() + ext);
-    say("writing " + (final_dir / out_file.filename()).string());
+    bake.say("writing " + (final_dir / out_file.filename()).string());
     // Copied images never take the name of a file this bake writes: the textures, the manifest.
     std::vector<std::string> reserved{"manifest.json"};
-    for (const io::ManifestOutput& o : result.outputs) reserved.push_back(o.path);
+    for (const io::ManifestOutput& o : bake.result.outputs) reserved.push_back(o.path);
     auto files = scene.write(out_file, reserved);
     if (!files) return files.error();
-    // The textures now inside the GLB leave the folder; the manifest lists them under the scene's entry.
-    json inside = json::array();
-    if (!embedded.empty()) {
-        std::vector<io::ManifestOutput> kept;
-        for (io::ManifestOutput& o : result.outputs) {
-            const auto it = embedded.find(o.path);
-            if (it == embedded.end()) {
-                kept.push_back(std::move(o));
-                continue;
-            }
-            std::error_code ec;
-            fs::remove(out_dir / o.path, ec);
-            if (ec) return make_error((out_dir / o.path).string() + ": cannot remove: " + ec.message());
-            written.erase(std::remove(written.begin(), written.end(), out_dir / o.path), written.end());
-            json e = {{"name", o.path}, {"mimeType", mime_of(o.format)}, {"kind", o.kind},
-                      {"format", o.format}, {"width", o.width}, {"height", o.height}, {"mips", o.mips},
-                      {"channels", o.channels}, {"sha256", o.sha256}};
-            for (const auto& [key, value] : o.extra.items()) e[key] = value;
-            inside.push_back(std::move(e));
-        }
-        result.outputs = std::move(kept);
-    }
-    for (const io::GltfScene::WrittenFile& f : *files) written.push_back(f.path);
-    for (size_t i = 0; i < files->size(); ++i) {
-        const fs::path& f = (*files)[i].path;
-        io::ManifestOutput o;
-        o.sha256 = (*files)[i].sha256;
-        o.kind = i == 0 ? "scene" : (std::string(format_of(f)) == "bin" ? "buffer" : "image");
-        o.path = io::relative_path(f, out_dir);
-        o.format = format_of(f);
-        if (!(*files)[i].renamed_from.empty()) o.extra = {{"renamed_from", (*files)[i].renamed_from}};
-        if (i == 0) {
-            size_t vertices = 0;
-            for (const auto& [index, work] : plan->work) vertices += work.mesh.vertex_count();
-            o.extra = {{"curvature_primitives", baked_primitives},
-                       {"curvature_vertices", vertices},
-                       {"curvature_space",
-                        "object: _SPECAA_CURVATURE is in 1/object-space length; a node scale s divides it by s "
-                        "in world space"},
-                       {"source_format", loaded->is_gltf ? (scene.source_is_binary() ? "glb" : "gltf")
-                                                         : lower_extension(input).substr(1)}};
-            if (!inside.empty()) o.extra["embedded_images"] = inside;
-        }
-        result.outputs.push_back(std::move(o));
-    }
-    result.plan = std::move(*plan);
-    return result;
+    auto inside = take_embedded_outputs(bake);
+    if (!inside) return inside.error();
+    size_t vertices = 0;
+    for (const auto& [index, work] : plan->work) vertices += work.mesh.vertex_count();
+    json scene_extra = {{"curvature_primitives", *baked_primitives},
+                        {"curvature_vertices", vertices},
+                        {"curvature_space",
+                         "object: _SPECAA_CURVATURE is in 1/object-space length; a node scale s divides it by s "
+                         "in world space"},
+                        {"source_format", loaded->is_gltf ? (scene.source_is_binary() ? "glb" : "gltf")
+                                                          : lower_extension(input).substr(1)}};
+    if (!inside->empty()) scene_extra["embedded_images"] = *inside;
+    add_scene_file_outputs(bake, *files, scene_extra);
+    bake.result.plan = std::move(*plan);
+    return std::move(bake.result);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include "io/files/input_policy.h"
 #include "io/image/image_io.h"
 #include "io/files/sha256.h"
+#include "core/huge_pages.h"
 
 #include <tbb/parallel_for.h>
 #include <sys/mman.h>
@@ -153,10 +154,7 @@ int chain_channels(const TextureBakeShape& shape, Chain c) {
 
 // Returns the whole pages of [p, p + bytes) to the system (they read as zeroes afterwards).
 void release_pages(const uint8_t* p, size_t bytes) {
-    const uintptr_t page = uintptr_t(sysconf(_SC_PAGESIZE));
-    const uintptr_t from = (reinterpret_cast<uintptr_t>(p) + page - 1) & ~(page - 1);
-    const uintptr_t to = (reinterpret_cast<uintptr_t>(p) + bytes) & ~(page - 1);
-    if (to > from) madvise(reinterpret_cast<void*>(from), to - from, MADV_DONTNEED);
+    detail::advise_whole_pages(p, bytes, uintptr_t(sysconf(_SC_PAGESIZE)), MADV_DONTNEED);
 }
 
 // The maps of `in` as the bake reads them: the 8-bit views where set, else the float images.

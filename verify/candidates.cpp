@@ -26,12 +26,9 @@ const char* kDefaultNdf = "#define SIM_NDF(h, A, a) specaa_default_D(h, A, s)\n"
 
 void add_variants(std::vector<SimCandidate>& c, bool normal_mapped);
 
-}  // namespace
-
-std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool variants) {
-    const bool normal_mapped = std::any_of(scene.objects.begin(), scene.objects.end(),
-                                           [](const SimObject& o) { return o.material.normal_map >= 0; });
-    std::vector<SimCandidate> c;
+// The unfiltered baseline, the derivative-based rules of K16 and TK21, and the peers' rules (VAREF,
+// Filament).
+void add_derivative_and_peer_candidates(std::vector<SimCandidate>& c) {
     c.push_back({"none", "none", "unfiltered GGX", {"", "A = vec3(a, a, 0.0);", "exact", ""}, "", ""});
     c.push_back(derivative("slope", "K16, TK21 Eq. (2)", "A = specaa_slope(vec2(a), hTS);"));
     c.push_back(derivative("slope-aa", "K16, TK21 Listing 3 in slope space",
@@ -69,6 +66,10 @@ std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool varia
                   "        A = vec3(f, f, 0.0);",
                   "exact", ""},
                  "", ""});
+}
+
+// The rules that read baked data: curvature, and where the scene is normal-mapped the roughness mips.
+void add_baked_candidates(std::vector<SimCandidate>& c, bool normal_mapped) {
     c.push_back({"baked-curvature", "baked", "SPEC Sec. 4-5: _SPECAA_CURVATURE kernel, TK21 Eq. (3)",
                  {"#define SPECAA_USE_CURVATURE\n", kIsotropicDefault, "exact", ""}, "", "exact"});
     c.push_back({"baked-curvature-matrix", "baked", "SPEC Sec. 4-5: anisotropic _SPECAA_CURVATURE kernel, TK21 Eq. (3)",
@@ -79,6 +80,11 @@ std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool varia
                       "exact", "mean-projected"},
                      "mean-projected", ""});
     }
+}
+
+// The default rule (the matrix form) with its NDFs and baked inputs, and its isotropic, curvature, tails
+// and clamped forms.
+void add_default_candidates(std::vector<SimCandidate>& c, bool normal_mapped) {
     // The matrix form with the NDF `ndf` defines; where the scene is normal-mapped, with the baked data
     // `baked` binds: the Sigma kernel mips or t mips with the material's roughness, or the baked roughness.
     enum class Baked { Kernel, IsotropicKernel, Roughness };
@@ -144,17 +150,30 @@ std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool varia
                   "        A = vec3(m1 * v.x * v.x + m2 * v.y * v.y, m1 * v.y * v.y + m2 * v.x * v.x, (m1 - m2) * v.x * v.y);",
                   "exact", "mean-projected"},
                  normal_mapped ? "mean-projected" : "", ""});
-    if (variants) add_variants(c, normal_mapped);
-    if (!has_exact_curvature(scene)) {
-        // Scene files: curvature comes from the default estimator, as `specbake bake` writes it, and is
-        // timed as that candidate's bake; its own variant row would repeat "baked-curvature".
-        std::erase_if(c, [](const SimCandidate& x) { return x.name == "baked-curvature/shape-operator"; });
-        for (SimCandidate& x : c) {
-            if (x.curvature_bake != "exact") continue;
-            x.curvature_bake = "shape-operator";
-            x.shader.curvature_source = "shape-operator";
-        }
+}
+
+// Scene files: curvature comes from the default estimator, as `specbake bake` writes it, and is timed as
+// the candidates' bake; its own variant row would repeat "baked-curvature".
+void use_estimated_curvature(std::vector<SimCandidate>& c) {
+    std::erase_if(c, [](const SimCandidate& x) { return x.name == "baked-curvature/shape-operator"; });
+    for (SimCandidate& x : c) {
+        if (x.curvature_bake != "exact") continue;
+        x.curvature_bake = "shape-operator";
+        x.shader.curvature_source = "shape-operator";
     }
+}
+
+}  // namespace
+
+std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool variants) {
+    const bool normal_mapped = std::any_of(scene.objects.begin(), scene.objects.end(),
+                                           [](const SimObject& o) { return o.material.normal_map >= 0; });
+    std::vector<SimCandidate> c;
+    add_derivative_and_peer_candidates(c);
+    add_baked_candidates(c, normal_mapped);
+    add_default_candidates(c, normal_mapped);
+    if (variants) add_variants(c, normal_mapped);
+    if (!has_exact_curvature(scene)) use_estimated_curvature(c);
     return c;
 }
 

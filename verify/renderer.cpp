@@ -1,5 +1,7 @@
 #include "verify/renderer.h"
 
+#include "verify/float3_math_internal.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -11,16 +13,6 @@ namespace specbake::verify {
 namespace {
 
 using Mat4 = std::array<float, 16>;  // column-major, as glUniformMatrix4fv expects
-
-Float3 sub(Float3 a, Float3 b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-float dot3(Float3 a, Float3 b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Float3 cross3(Float3 a, Float3 b) {
-    return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-Float3 unit(Float3 a) {
-    const float l = std::sqrt(dot3(a, a));
-    return {a[0] / l, a[1] / l, a[2] / l};
-}
 
 // Right-handed look-at times OpenGL perspective projection (depth to [-1, 1]).
 Mat4 view_projection(const SimCamera& c, float aspect, float near_plane, float far_plane) {

@@ -1,5 +1,7 @@
 #include "verify/scene.h"
 
+#include "verify/float3_math_internal.h"
+
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -10,11 +12,6 @@ namespace specbake::verify {
 namespace {
 
 constexpr float kPi = std::numbers::pi_v<float>;
-
-Float3 normalized(Float3 v) {
-    const float len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    return {v[0] / len, v[1] / len, v[2] / len};
-}
 
 // One vertex of a parametric surface: position, unit normal, unit tangent along increasing u (w = +1,
 // B = cross(N, T)) and the curvature attribute (k1, k2, d) with d in the (T, B) frame.
@@ -61,7 +58,7 @@ SimObject make_sphere(float radius, Float3 centre, int nu, int nv) {
         const Float3 n{std::sin(theta) * std::cos(phi), std::cos(theta), -std::sin(theta) * std::sin(phi)};
         return SurfacePoint{{centre[0] + radius * n[0], centre[1] + radius * n[1], centre[2] + radius * n[2]},
                             n,
-                            normalized({-std::sin(phi), 0.0f, -std::cos(phi)}),
+                            unit({-std::sin(phi), 0.0f, -std::cos(phi)}),
                             {1.0f / radius, 1.0f / radius, 1.0f, 0.0f}};
     });
 }
@@ -97,13 +94,13 @@ Image make_bump_normal_map(int size, float slope_scale, uint32_t seed) {
         float kx, ky, phase, amplitude;
     };
     std::mt19937 rng(seed);
-    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    std::uniform_real_distribution<float> uniform01(0.0f, 1.0f);
     std::vector<Wave> waves;
     const int max_frequency = size / 4;
     for (int w = 0; w < 48; ++w) {
-        const float f = 4.0f * std::pow(float(max_frequency) / 4.0f, unit(rng));
-        const float angle = 2 * kPi * unit(rng);
-        waves.push_back({std::round(f * std::cos(angle)), std::round(f * std::sin(angle)), 2 * kPi * unit(rng),
+        const float f = 4.0f * std::pow(float(max_frequency) / 4.0f, uniform01(rng));
+        const float angle = 2 * kPi * uniform01(rng);
+        waves.push_back({std::round(f * std::cos(angle)), std::round(f * std::sin(angle)), 2 * kPi * uniform01(rng),
                          1.0f / std::max(1.0f, f)});
     }
     Image map(size, size, 3);
@@ -117,7 +114,7 @@ Image make_bump_normal_map(int size, float slope_scale, uint32_t seed) {
                 dhdx += w.amplitude * std::cos(arg) * w.kx / k;
                 dhdy += w.amplitude * std::cos(arg) * w.ky / k;
             }
-            const Float3 n = normalized({-slope_scale * dhdx, -slope_scale * dhdy, 1.0f});
+            const Float3 n = unit({-slope_scale * dhdx, -slope_scale * dhdy, 1.0f});
             float* t = map.texel(x, y);
             for (int c = 0; c < 3; ++c) t[c] = 0.5f * (n[c] + 1.0f);
         }
@@ -131,14 +128,14 @@ Image make_bump_normal_map(int size, float slope_scale, uint32_t seed) {
 // Gaussian-profile trough 1.2 texels wide; slopes up to ~1.
 Image make_scratch_normal_map(int size, uint32_t seed) {
     std::mt19937 rng(seed);
-    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    std::uniform_real_distribution<float> uniform01(0.0f, 1.0f);
     std::vector<float> height(size_t(size) * size_t(size), 0.0f);
     auto at = [&](int x, int y) -> float& {  // periodic
         return height[size_t((y % size + size) % size) * size_t(size) + size_t((x % size + size) % size)];
     };
     for (int g = 0; g < 90; ++g) {
-        const float x0 = unit(rng) * float(size), y0 = unit(rng) * float(size), angle = kPi * unit(rng);
-        const float length = (0.1f + 0.4f * unit(rng)) * float(size), depth = 0.5f + unit(rng);
+        const float x0 = uniform01(rng) * float(size), y0 = uniform01(rng) * float(size), angle = kPi * uniform01(rng);
+        const float length = (0.1f + 0.4f * uniform01(rng)) * float(size), depth = 0.5f + uniform01(rng);
         const float dx = std::cos(angle), dy = std::sin(angle);
         for (float t = 0; t < length; t += 0.5f) {
             const float cx = x0 + dx * t, cy = y0 + dy * t;
@@ -154,7 +151,7 @@ Image make_scratch_normal_map(int size, uint32_t seed) {
     Image map(size, size, 3);
     for (int y = 0; y < size; ++y)
         for (int x = 0; x < size; ++x) {
-            const Float3 n = normalized({-0.5f * (at(x + 1, y) - at(x - 1, y)), -0.5f * (at(x, y + 1) - at(x, y - 1)), 1.0f});
+            const Float3 n = unit({-0.5f * (at(x + 1, y) - at(x - 1, y)), -0.5f * (at(x, y + 1) - at(x, y - 1)), 1.0f});
             float* t = map.texel(x, y);
             for (int c = 0; c < 3; ++c) t[c] = 0.5f * (n[c] + 1.0f);
         }
@@ -171,7 +168,7 @@ Image make_ridge_normal_map(int size) {
         for (int x = 0; x < size; ++x) {
             const float u = (float(x) + 0.5f) / float(size), v = (float(y) + 0.5f) / float(size);
             const float a = amplitude * std::cos(2 * kPi * (kx * u + ky * v));
-            const Float3 n = normalized({-a * kx / k, -a * ky / k, 1.0f});
+            const Float3 n = unit({-a * kx / k, -a * ky / k, 1.0f});
             float* t = map.texel(x, y);
             for (int c = 0; c < 3; ++c) t[c] = 0.5f * (n[c] + 1.0f);
         }
@@ -218,7 +215,7 @@ Result<SimScene> make_builtin_scene(std::string_view name, float roughness, floa
         return make_error("tessellation must be in (0, 16], got " + std::to_string(tessellation));
     SimScene scene;
     scene.name = std::string(name);
-    const Float3 key_light = normalized({-0.45f, 0.65f, 0.6f});
+    const Float3 key_light = unit({-0.45f, 0.65f, 0.6f});
     if (name == "sphere" || name == "bumpy-sphere" || name == "scratched-sphere") {
         scene.objects.push_back(make_sphere(1.0f, {0, 0, 0}, scaled(256, tessellation), scaled(128, tessellation)));
         scene.camera = {{0.0f, 0.4f, 3.6f}, {0, 0, 0}, {0, 1, 0}, 40.0f};
@@ -259,7 +256,7 @@ Result<SimScene> make_builtin_scene(std::string_view name, float roughness, floa
         // where view and light graze the surface, where slope-space derivatives blow up (TK21 Sec. 3).
         scene.objects.push_back(make_cylinder(0.5f, 12.0f, scaled(256, tessellation), scaled(128, tessellation)));
         scene.camera = {{5.8f, 0.75f, 0.9f}, {0.0f, 0.0f, 0.0f}, {0, 1, 0}, 40.0f};
-        scene.lights.push_back(directional_light(normalized({-1.0f, 0.35f, -0.25f})));
+        scene.lights.push_back(directional_light(unit({-1.0f, 0.35f, -0.25f})));
         scene.object_radius = 0.5f;
     } else if (name == "torus") {
         scene.objects.push_back(make_torus(1.0f, 0.35f, scaled(256, tessellation), scaled(96, tessellation)));
@@ -314,7 +311,7 @@ SimCamera camera_at_frame(const SimScene& scene, int frame, int height) {
     const float pixel_angle = 2.0f * std::tan(0.5f * camera.fov_y_degrees * kPi / 180.0f) / float(height);
     const float angle = float(frame) * scene.motion_pixels * pixel_angle * distance / scene.object_radius;
     // Rotate the offset about the up axis (Rodrigues).
-    const Float3 k = normalized(camera.up);
+    const Float3 k = unit(camera.up);
     const float c = std::cos(angle), s = std::sin(angle);
     const float kd = k[0] * offset[0] + k[1] * offset[1] + k[2] * offset[2];
     const Float3 kx{k[1] * offset[2] - k[2] * offset[1], k[2] * offset[0] - k[0] * offset[2],

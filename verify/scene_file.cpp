@@ -1,5 +1,8 @@
 #include "verify/scene_file.h"
 
+#include "verify/float3_math_internal.h"
+
+#include "io/files/file_name.h"
 #include "io/gltf/glint_extension.h"
 #include "io/gltf/gltf_scene.h"
 #include "io/image/image_io.h"
@@ -69,14 +72,6 @@ Mat4 local_transform(const nlohmann::json& node) {
 
 Float3 column(const Mat4& m, int c) { return {float(m[c * 4]), float(m[c * 4 + 1]), float(m[c * 4 + 2])}; }
 
-Float3 unit(Float3 v) {
-    const float l = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    return l > 0 ? Float3{v[0] / l, v[1] / l, v[2] / l} : Float3{0, 0, 1};
-}
-float dot3(Float3 a, Float3 b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Float3 cross3(Float3 a, Float3 b) {
-    return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
 
 // Positions by M, normals by the inverse transpose of its 3x3 part, tangents by the 3x3 part with the
 // handedness flipped when M mirrors. Fails when the 3x3 part is singular.
@@ -257,38 +252,32 @@ struct GltfContents {
     std::optional<FileCamera> camera;
 };
 
-Result<void> load_gltf(const fs::path& path, const io::InputPolicy& policy, SimScene& scene, GltfContents& out) {
-    auto loaded = io::GltfScene::load(path, policy);
-    if (!loaded) return loaded.error();
-    // io::GltfScene reads primitives, materials and images; the node graph, cameras and lights, which only
-    // the simulator needs, are read from the same JSON here.
-    auto json = read_gltf_json(path);
-    if (!json) return json.error();
-    const nlohmann::json& j = *json;
-    const std::string file = path.filename().string();
-
+// The scene's materials into out.materials: roughness (clamped to the simulator's minimum), normal and
+// roughness maps through the cache, and the glints of the materials that ask for them (SPECBAKE_glints,
+// io/gltf/SPECBAKE_EXTENSION.md).
+Result<void> load_gltf_materials(const io::GltfScene& loaded, const fs::path& path, const io::InputLimits& limits,
+                                 SimScene& scene, GltfContents& out) {
     MapCache cache(scene);
     std::map<int, Image> decoded;
     int clamped_materials = 0;
-    for (const io::MaterialInfo& m : loaded->materials()) {
+    for (const io::MaterialInfo& m : loaded.materials()) {
         LoadedMaterial mat;
         mat.roughness = float(std::clamp(m.roughness_factor, 0.0, 1.0));
         if (mat.roughness < kMinRoughness) ++clamped_materials;
         std::string error;
-        if (auto image = slot_image(*loaded, m.normal, "normal", policy.limits, decoded, scene.notes, error)) {
+        if (auto image = slot_image(loaded, m.normal, "normal", limits, decoded, scene.notes, error)) {
             auto index = cache.normal_map("image" + std::to_string(m.normal.image), *image, m.normal_scale);
-            if (!index) return make_error(loaded->image_label(m.normal.image) + ": " + index.error().message);
+            if (!index) return make_error(loaded.image_label(m.normal.image) + ": " + index.error().message);
             mat.normal_map = *index;
         }
         if (!error.empty()) return make_error(error);
-        if (auto image = slot_image(*loaded, m.metallic_roughness, "metallicRoughness", policy.limits, decoded,
-                                    scene.notes, error))
+        if (auto image = slot_image(loaded, m.metallic_roughness, "metallicRoughness", limits, decoded, scene.notes,
+                                    error))
             mat.roughness_map = cache.roughness_map("image" + std::to_string(m.metallic_roughness.image), *image,
                                                     image->channels >= 2 ? 1 : 0, mat.roughness);
         if (!error.empty()) return make_error(error);
         mat.roughness = std::max(mat.roughness, kMinRoughness);
         if (!m.glints.is_null()) {
-            // Glints only for the materials that ask for them (SPECBAKE_glints, io/gltf/SPECBAKE_EXTENSION.md).
             const std::string where = path.string() + ": material " + std::to_string(out.materials.size());
             auto g = io::parse_glint_extension(m.glints, where);
             if (!g) return g.error();
@@ -301,16 +290,13 @@ Result<void> load_gltf(const fs::path& path, const io::InputPolicy& policy, SimS
         }
         out.materials.push_back(mat);
     }
-    note_clamps(scene, file, clamped_materials, cache.clamped_texels);
+    note_clamps(scene, path.filename().string(), clamped_materials, cache.clamped_texels);
+    return {};
+}
 
-    // Lights of KHR_lights_punctual, placed by the nodes that reference them.
-    const nlohmann::json* light_defs = nullptr;
-    if (j.contains("extensions") && j["extensions"].contains("KHR_lights_punctual") &&
-        j["extensions"]["KHR_lights_punctual"].contains("lights"))
-        light_defs = &j["extensions"]["KHR_lights_punctual"]["lights"];
-
-    const nlohmann::json empty = nlohmann::json::array();
-    const nlohmann::json& nodes = j.contains("nodes") ? j["nodes"] : empty;
+// The nodes a walk of the glTF's node graph starts from: the default scene's (or the first's), or without
+// scenes every node that is no node's child.
+std::vector<int> root_nodes(const nlohmann::json& j, const nlohmann::json& nodes) {
     std::vector<int> roots;
     if (j.contains("scenes") && j["scenes"].is_array() && !j["scenes"].empty()) {
         const int s = int(number_or(j, "scene", 0));
@@ -322,6 +308,66 @@ Result<void> load_gltf(const fs::path& path, const io::InputPolicy& policy, SimS
             if (n.contains("children")) for (const auto& c : n["children"]) child[size_t(c.get<int>())] = true;
         for (size_t n = 0; n < nodes.size(); ++n) if (!child[n]) roots.push_back(int(n));
     }
+    return roots;
+}
+
+// A KHR_lights_punctual light `def` placed by a node with world transform `world`.
+SimLight punctual_light(const nlohmann::json& def, const Mat4& world) {
+    SimLight light;
+    const std::string type = def.value("type", "");
+    light.type = type == "point" ? SimLight::Type::Point
+                 : type == "spot" ? SimLight::Type::Spot
+                                  : SimLight::Type::Directional;
+    double rgb[3] = {1, 1, 1};
+    if (def.contains("color")) for (int i = 0; i < 3; ++i) rgb[i] = def["color"][i].get<double>();
+    // Luminance of the light colour (Rec. 709 weights) times its intensity.
+    light.radiance = float(number_or(def, "intensity", 1.0) * (0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]));
+    light.range = float(number_or(def, "range", 0.0));
+    const Float3 minus_z = unit(column(world, 2));
+    light.position = column(world, 3);
+    if (light.type == SimLight::Type::Directional) light.direction = minus_z;  // towards the light
+    else light.direction = {-minus_z[0], -minus_z[1], -minus_z[2]};            // spot axis
+    if (def.contains("spot")) {
+        light.inner_cone = float(number_or(def["spot"], "innerConeAngle", 0.0));
+        light.outer_cone = float(number_or(def["spot"], "outerConeAngle", std::numbers::pi / 4));
+    }
+    return light;
+}
+
+// The first perspective camera a node references becomes the scene's camera (an orthographic one is
+// noted and skipped).
+void read_node_camera(const nlohmann::json& j, const nlohmann::json& node, const Mat4& world, const std::string& file,
+                      SimScene& scene, GltfContents& out) {
+    const int c = node["camera"].get<int>();
+    if (!j.contains("cameras") || c < 0 || size_t(c) >= j["cameras"].size()) return;
+    const nlohmann::json& cam = j["cameras"][size_t(c)];
+    if (cam.value("type", "") == "perspective" && cam.contains("perspective"))
+        out.camera = FileCamera{world, number_or(cam["perspective"], "yfov", 0.7)};
+    else
+        scene.notes.push_back(file + ": camera " + std::to_string(c) +
+                              " is orthographic, not simulated (automatic orbit instead)");
+}
+
+Result<void> load_gltf(const fs::path& path, const io::InputPolicy& policy, SimScene& scene, GltfContents& out) {
+    auto loaded = io::GltfScene::load(path, policy);
+    if (!loaded) return loaded.error();
+    // io::GltfScene reads primitives, materials and images; the node graph, cameras and lights, which only
+    // the simulator needs, are read from the same JSON here.
+    auto json = read_gltf_json(path);
+    if (!json) return json.error();
+    const nlohmann::json& j = *json;
+    const std::string file = path.filename().string();
+    if (auto materials = load_gltf_materials(*loaded, path, policy.limits, scene, out); !materials) return materials;
+
+    // Lights of KHR_lights_punctual, placed by the nodes that reference them.
+    const nlohmann::json* light_defs = nullptr;
+    if (j.contains("extensions") && j["extensions"].contains("KHR_lights_punctual") &&
+        j["extensions"]["KHR_lights_punctual"].contains("lights"))
+        light_defs = &j["extensions"]["KHR_lights_punctual"]["lights"];
+
+    const nlohmann::json empty = nlohmann::json::array();
+    const nlohmann::json& nodes = j.contains("nodes") ? j["nodes"] : empty;
+    const std::vector<int> roots = root_nodes(j, nodes);
     const auto primitives = loaded->primitives();
     bool skinned_or_animated = j.contains("animations") && !j["animations"].empty();
     std::vector<std::pair<int, Mat4>> stack;
@@ -350,42 +396,10 @@ Result<void> load_gltf(const fs::path& path, const io::InputPolicy& policy, SimS
                 out.instances.push_back({std::move(*tri), world, p.label});
             }
         }
-        if (node.contains("camera") && !out.camera) {
-            const int c = node["camera"].get<int>();
-            if (j.contains("cameras") && c >= 0 && size_t(c) < j["cameras"].size()) {
-                const nlohmann::json& cam = j["cameras"][size_t(c)];
-                if (cam.value("type", "") == "perspective" && cam.contains("perspective"))
-                    out.camera = FileCamera{world, number_or(cam["perspective"], "yfov", 0.7)};
-                else
-                    scene.notes.push_back(file + ": camera " + std::to_string(c) +
-                                          " is orthographic, not simulated (automatic orbit instead)");
-            }
-        }
+        if (node.contains("camera") && !out.camera) read_node_camera(j, node, world, file, scene, out);
         if (light_defs && node.contains("extensions") && node["extensions"].contains("KHR_lights_punctual")) {
             const int l = node["extensions"]["KHR_lights_punctual"].value("light", -1);
-            if (l >= 0 && size_t(l) < light_defs->size()) {
-                const nlohmann::json& def = (*light_defs)[size_t(l)];
-                SimLight light;
-                const std::string type = def.value("type", "");
-                light.type = type == "point" ? SimLight::Type::Point
-                             : type == "spot" ? SimLight::Type::Spot
-                                              : SimLight::Type::Directional;
-                double rgb[3] = {1, 1, 1};
-                if (def.contains("color")) for (int i = 0; i < 3; ++i) rgb[i] = def["color"][i].get<double>();
-                // Luminance of the light colour (Rec. 709 weights) times its intensity.
-                light.radiance = float(number_or(def, "intensity", 1.0) *
-                                       (0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]));
-                light.range = float(number_or(def, "range", 0.0));
-                const Float3 minus_z = unit(column(world, 2));
-                light.position = column(world, 3);
-                if (light.type == SimLight::Type::Directional) light.direction = minus_z;  // towards the light
-                else light.direction = {-minus_z[0], -minus_z[1], -minus_z[2]};            // spot axis
-                if (def.contains("spot")) {
-                    light.inner_cone = float(number_or(def["spot"], "innerConeAngle", 0.0));
-                    light.outer_cone = float(number_or(def["spot"], "outerConeAngle", std::numbers::pi / 4));
-                }
-                scene.lights.push_back(light);
-            }
+            if (l >= 0 && size_t(l) < light_defs->size()) scene.lights.push_back(punctual_light((*light_defs)[size_t(l)], world));
         }
         if (node.contains("children"))
             for (auto c = node["children"].rbegin(); c != node["children"].rend(); ++c)
@@ -452,8 +466,7 @@ Result<SimScene> load_sim_scene(const fs::path& path, const io::InputPolicy& pol
     scene.name = path.stem().string();
     scene.from_file = true;
     GltfContents contents;
-    std::string ext = path.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    const std::string ext = io::lower_extension(path);
     auto loaded = ext == ".gltf" || ext == ".glb" ? load_gltf(path, policy, scene, contents)
                                                   : load_imported(path, policy, scene, contents);
     if (!loaded) return loaded.error();

@@ -2,12 +2,14 @@
 
 #include "verify/renderer.h"
 #include "verify/spirv.h"
+#include "core/assert.h"
 #include "core/text_format.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <optional>
 
@@ -56,16 +58,7 @@ void keep_nearest(const SimImage& gt, const SimImage& candidate, SimImage& best,
     }
 }
 
-}  // namespace
-
-Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& options) {
-    if (options.frames < 1 || options.frames > 1024) return make_error("--frames must be in [1, 1024]");
-    if (options.spp < 1 || options.spp > 65536) return make_error("--spp must be in [1, 65536]");
-    auto renderer_result = SimRenderer::create(scene, options.width, options.height, options.include_glsl);
-    if (!renderer_result) return renderer_result.error();
-    SimRenderer& renderer = **renderer_result;
-    renderer.set_ground_truth_footprint(options.footprint_ground_truth);
-
+SceneReport empty_report(const SimScene& scene, const VerifyOptions& options) {
     SceneReport report;
     report.scene = scene.name;
     report.roughness = scene.objects.empty() ? 0.0f : scene.objects[0].material.roughness;
@@ -75,15 +68,21 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
     report.height = options.height;
     report.spp = ground_truth_layout(options.spp, options.width, options.height).samples();
     report.frames = options.frames;
+    return report;
+}
 
+// The candidates the scene gets: the simulator's (unless it simulates glints only) and the glint ones where
+// a material asks for them (SPEC Sec. 6), narrowed to --only (plus the baselines), with --define's lines
+// in front of every non-baseline shader. Notes the --only names that do not apply.
+std::vector<SimCandidate> select_candidates(const SimScene& scene, const VerifyOptions& options,
+                                            std::vector<std::string>& notes) {
     std::vector<SimCandidate> candidates;
     if (!scene.glints_only) candidates = simulator_candidates(scene, options.variants);
-    // Glints only where a material asks for them (SPEC Sec. 6).
     for (SimCandidate& c : glint_candidates(scene)) candidates.push_back(std::move(c));
     if (!options.only.empty()) {
         for (const std::string& name : options.only) {
             if (std::none_of(candidates.begin(), candidates.end(), [&](const SimCandidate& c) { return c.name == name; }))
-                report.notes.push_back("candidate '" + name + "' does not apply to " + scene.name);
+                notes.push_back("candidate '" + name + "' does not apply to " + scene.name);
         }
         std::erase_if(candidates, [&](const SimCandidate& c) {
             return c.name != baseline_of(c.family) &&
@@ -102,26 +101,33 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
             if (curvature && c.curvature_bake.empty()) c.curvature_bake = c.shader.curvature_source = estimator;
         }
     }
-    const bool any_glint = std::any_of(candidates.begin(), candidates.end(), [](const SimCandidate& c) { return c.shader.glint; });
-    const bool any_ggx = std::any_of(candidates.begin(), candidates.end(), [](const SimCandidate& c) { return !c.shader.glint; });
-    if (any_glint) {
-        auto dictionary = shared_glint_dictionary(options.glint_dictionary);
-        if (!dictionary) return make_error(scene.name + ": glint dictionary: " + dictionary.error().message);
-        // One target per scene: the first glint material's (the include selects it at compile time).
-        bool ggx = false, first = true, mixed = false;
-        for (const SimObject& o : scene.objects) {
-            if (!o.material.glints.enabled) continue;
-            if (first) ggx = o.material.glints.ggx;
-            else mixed |= o.material.glints.ggx != ggx;
-            first = false;
-        }
-        if (mixed)
-            report.notes.push_back(std::string("glint materials with both targets: all simulated with the ") +
-                                   (ggx ? "GGX" : "Beckmann") + " target of the first");
-        if (auto set = renderer.set_glint_dictionary(**dictionary, ggx); !set) return set.error();
-    }
+    return candidates;
+}
 
-    // Bakes (timed): texture bakes per texture set, curvature estimates per object.
+// The glint dictionary and target for the renderer. One target per scene: the first glint material's (the
+// include selects it at compile time); a note when materials ask for both.
+Result<void> set_glint_target(SimRenderer& renderer, const SimScene& scene, const VerifyOptions& options,
+                              std::vector<std::string>& notes) {
+    auto dictionary = shared_glint_dictionary(options.glint_dictionary);
+    if (!dictionary) return make_error(scene.name + ": glint dictionary: " + dictionary.error().message);
+    bool ggx = false, first = true, mixed = false;
+    for (const SimObject& o : scene.objects) {
+        if (!o.material.glints.enabled) continue;
+        if (first) ggx = o.material.glints.ggx;
+        else mixed |= o.material.glints.ggx != ggx;
+        first = false;
+    }
+    if (mixed)
+        notes.push_back(std::string("glint materials with both targets: all simulated with the ") +
+                        (ggx ? "GGX" : "Beckmann") + " target of the first");
+    return renderer.set_glint_dictionary(**dictionary, ggx);
+}
+
+// The bakes the candidates read, handed to the renderer and timed: texture bakes per texture set,
+// curvature estimates per object. Returns the milliseconds per bake key ("curvature:" + estimator for
+// the curvature ones).
+Result<std::map<std::string, double>> run_bakes(const SimScene& scene, const std::vector<SimCandidate>& candidates,
+                                                SimRenderer& renderer) {
     std::map<std::string, double> bake_ms;
     const std::vector<SimTextureSet> sets = texture_sets(scene);
     for (const SimTextureBake& bake : texture_bakes_for(candidates)) {
@@ -148,67 +154,74 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
         }
         bake_ms["curvature:" + bake.key] = total;
     }
+    return bake_ms;
+}
 
-    const auto say = [&](const std::string& line) {
-        if (options.progress) options.progress(scene.name + ": " + line);
-    };
-    if (!bake_ms.empty()) {
-        std::string done;
-        for (const auto& [key, ms] : bake_ms) done += (done.empty() ? "" : ", ") + key + format_double(" %.0f ms", ms);
-        say("baked " + done);
-    }
-
-    // Compile every candidate before rendering so a shader error fails fast.
+// Every candidate's program, compiled before rendering so a shader error fails fast.
+Result<std::vector<int>> compile_candidates(SimRenderer& renderer, const std::vector<SimCandidate>& candidates) {
     std::vector<int> ids;
     for (const SimCandidate& c : candidates) {
         auto id = renderer.compile_candidate(c.shader);
         if (!id) return make_error("candidate '" + c.name + "': " + id.error().message);
         ids.push_back(*id);
     }
+    return ids;
+}
 
+// The scores gathered over the frames: per candidate, and for the limit and floor rows.
+struct FrameScores {
+    std::vector<SimMetricsAccumulator> candidates;
+    SimMetricsAccumulator limit, floor;
+    SimImage limit_image, floor_image;  // frame 0's, with --keep-images
+    int floor_spp = 1;
+    double glint_radiance = 0;          // summed over the glint ground truth of every frame
+};
+
+// What to render per frame: the candidates' programs, and which ground truths and reference rows.
+struct FramePrograms {
+    const std::vector<SimCandidate>& candidates;
+    const std::vector<int>& ids;
     std::optional<int> limit_id;
-    if (options.limit) {
-        auto id = renderer.compile_candidate(limit_shader());
-        if (!id) return make_error("limit row: " + id.error().message);
-        limit_id = *id;
-    }
-    SimMetricsAccumulator limit_accumulator;
-    SimImage limit_image;
+    bool any_ggx = false, any_glint = false;
+};
 
-    std::vector<SimMetricsAccumulator> accumulators(candidates.size());
-    SimMetricsAccumulator floor_accumulator;
-    SimImage floor_image;
-    const int floor_spp = std::max(1, report.spp / 4);
-    report.candidates.resize(candidates.size());
-    double gt_total = 0, glint_total = 0, glint_radiance = 0;
+// Renders every frame: the ground truths (timed into the report), every candidate against its ground
+// truth, the limit row's grid of kernels and the floor's quarter-sample ground truth.
+FrameScores render_frames(SimRenderer& renderer, const FramePrograms& programs, const VerifyOptions& options,
+                          const std::function<void(const std::string&)>& say, SceneReport& report) {
+    const std::vector<SimCandidate>& candidates = programs.candidates;
+    FrameScores scores;
+    scores.candidates.resize(candidates.size());
+    scores.floor_spp = std::max(1, report.spp / 4);
+    double gt_total = 0, glint_total = 0;
     for (int frame = 0; frame < options.frames; ++frame) {
         auto frame_start = std::chrono::steady_clock::now();
         SimImage gt, glint_gt;
-        if (any_ggx) gt = renderer.render_ground_truth(frame, report.spp);
+        if (programs.any_ggx) gt = renderer.render_ground_truth(frame, report.spp);
         gt_total += ms_since(frame_start);
         frame_start = std::chrono::steady_clock::now();
-        if (any_glint) glint_gt = renderer.render_glint_ground_truth(frame, report.spp);
+        if (programs.any_glint) glint_gt = renderer.render_glint_ground_truth(frame, report.spp);
         glint_total += ms_since(frame_start);
-        for (size_t k = 0; k < glint_gt.texel_count(); ++k) glint_radiance += glint_gt.pixels[2 * k];
+        for (size_t k = 0; k < glint_gt.texel_count(); ++k) scores.glint_radiance += glint_gt.pixels[2 * k];
         for (size_t i = 0; i < candidates.size(); ++i) {
-            SimImage image = renderer.render_candidate(ids[i], frame);
-            accumulators[i].add_frame(candidates[i].shader.glint ? glint_gt : gt, image);
+            SimImage image = renderer.render_candidate(programs.ids[i], frame);
+            scores.candidates[i].add_frame(candidates[i].shader.glint ? glint_gt : gt, image);
             if (frame == 0 && options.keep_images) report.candidates[i].image = std::move(image);
         }
-        if (limit_id && any_ggx) {
+        if (programs.limit_id && programs.any_ggx) {
             SimImage best;
             for (int k = 0; k < kLimitKernels; ++k) {
-                renderer.set_candidate_uniform(*limit_id, "uLimitKernel", limit_kernel(k));
-                keep_nearest(gt, renderer.render_candidate(*limit_id, frame), best, k == 0);
+                renderer.set_candidate_uniform(*programs.limit_id, "uLimitKernel", limit_kernel(k));
+                keep_nearest(gt, renderer.render_candidate(*programs.limit_id, frame), best, k == 0);
             }
-            limit_accumulator.add_frame(gt, best);
-            if (frame == 0 && options.keep_images) limit_image = std::move(best);
+            scores.limit.add_frame(gt, best);
+            if (frame == 0 && options.keep_images) scores.limit_image = std::move(best);
         }
-        if (options.floor && any_ggx) {
+        if (options.floor && programs.any_ggx) {
             const auto floor_start = std::chrono::steady_clock::now();
-            SimImage quarter = renderer.render_ground_truth(frame, floor_spp, 1);
-            floor_accumulator.add_frame(gt, quarter);
-            if (frame == 0 && options.keep_images) floor_image = std::move(quarter);
+            SimImage quarter = renderer.render_ground_truth(frame, scores.floor_spp, 1);
+            scores.floor.add_frame(gt, quarter);
+            if (frame == 0 && options.keep_images) scores.floor_image = std::move(quarter);
             gt_total += ms_since(floor_start);
         }
         if (frame == 0 && options.keep_images) {
@@ -219,23 +232,27 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
             std::to_string(candidates.size()) + " candidates rendered");
         if (options.frame_done) options.frame_done(frame + 1, options.frames);
     }
-    if (any_glint && !(glint_radiance > 0))
-        report.notes.push_back("the glint ground truth is black (no glint material reflects a light towards the camera): "
-                               "the glint rows score nothing");
     report.ground_truth_ms = gt_total;
     report.glint_ground_truth_ms = glint_total;
+    return scores;
+}
 
+// Each candidate's row: its metrics, its bakes' time and (with --spirv and the tools on PATH) its
+// SPIR-V instruction count.
+void fill_candidate_rows(const std::vector<SimCandidate>& candidates, std::vector<SimMetricsAccumulator>& scores,
+                         std::map<std::string, double>& bake_ms, SimRenderer& renderer, const VerifyOptions& options,
+                         SceneReport& report) {
     const bool spirv = options.spirv && spirv_tools_available();
     if (options.spirv && !spirv)
         report.notes.push_back("SPIR-V counts skipped: glslangValidator, spirv-opt or spirv-dis not on PATH");
-    std::map<std::string, double> baseline_ms;
+    SPECBAKE_ASSERT(report.candidates.size() == candidates.size() && scores.size() == candidates.size());
     for (size_t i = 0; i < candidates.size(); ++i) {
         const SimCandidate& c = candidates[i];
         CandidateReport& row = report.candidates[i];
         row.name = c.name;
         row.family = c.family;
         row.source = c.source;
-        row.metrics = accumulators[i].finish();
+        row.metrics = scores[i].finish();
         if (!c.texture_bake.empty()) row.bake_ms = bake_ms[c.texture_bake];
         if (!c.curvature_bake.empty() && c.curvature_bake != "exact")
             row.bake_ms = row.bake_ms.value_or(0.0) + bake_ms["curvature:" + c.curvature_bake];
@@ -245,42 +262,103 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
             else report.notes.push_back(c.name + ": " + count.error().message);
         }
     }
-    if (options.timing_repeats > 0) {
-        say("timing " + std::to_string(candidates.size()) + " candidates x " + std::to_string(options.timing_repeats));
-        // Round robin over the candidates, so load changes on a shared machine hit all of them alike;
-        // each sample is 4 back-to-back frames, the reported time the median sample per frame.
-        constexpr int kDrawsPerSample = 4;
-        std::vector<std::vector<double>> samples(candidates.size());
-        for (int rep = 0; rep < options.timing_repeats; ++rep)
-            for (size_t i = 0; i < candidates.size(); ++i)
-                samples[i].push_back(renderer.time_candidate(ids[i], kDrawsPerSample) / kDrawsPerSample);
-        for (size_t i = 0; i < candidates.size(); ++i) {
-            auto& v = samples[i];
-            std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
-            report.candidates[i].frame_ms = v[v.size() / 2];
-            baseline_ms[candidates[i].name] = v[v.size() / 2];
-        }
+}
+
+// Frame times per candidate, into its row; returns them by candidate name. Round robin over the
+// candidates, so load changes on a shared machine hit all of them alike; each sample is 4 back-to-back
+// frames, the reported time the median sample per frame.
+std::map<std::string, double> time_candidates(SimRenderer& renderer, const FramePrograms& programs, int repeats,
+                                              SceneReport& report) {
+    const std::vector<SimCandidate>& candidates = programs.candidates;
+    std::map<std::string, double> frame_ms;
+    constexpr int kDrawsPerSample = 4;
+    std::vector<std::vector<double>> samples(candidates.size());
+    for (int rep = 0; rep < repeats; ++rep)
+        for (size_t i = 0; i < candidates.size(); ++i)
+            samples[i].push_back(renderer.time_candidate(programs.ids[i], kDrawsPerSample) / kDrawsPerSample);
+    for (size_t i = 0; i < candidates.size(); ++i) {
+        auto& v = samples[i];
+        std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+        report.candidates[i].frame_ms = v[v.size() / 2];
+        frame_ms[candidates[i].name] = v[v.size() / 2];
     }
-    if (limit_id && any_ggx) {
+    return frame_ms;
+}
+
+// The limit and floor rows, after the candidates'.
+void add_reference_rows(FrameScores& scores, const FramePrograms& programs, const VerifyOptions& options,
+                        SceneReport& report) {
+    if (programs.limit_id && programs.any_ggx) {
         CandidateReport row;
         row.name = "limit";
         row.family = "limit";
         row.source = "best of " + std::to_string(kLimitKernels) +
                      " isotropic GGX lobes about the shading normal per pixel and frame (a lower bound, verify_job.cpp)";
-        row.metrics = limit_accumulator.finish();
-        row.image = std::move(limit_image);
+        row.metrics = scores.limit.finish();
+        row.image = std::move(scores.limit_image);
         report.candidates.push_back(std::move(row));
     }
-    if (options.floor && any_ggx) {
+    if (options.floor && programs.any_ggx) {
         CandidateReport row;
         row.name = "floor";
         row.family = "floor";
-        row.source = "ground truth at " + std::to_string(ground_truth_layout(floor_spp, options.width, options.height).samples()) +
+        row.source = "ground truth at " +
+                     std::to_string(ground_truth_layout(scores.floor_spp, options.width, options.height).samples()) +
                      " spp (independent jitter) against the full one";
-        row.metrics = floor_accumulator.finish();
-        row.image = std::move(floor_image);
+        row.metrics = scores.floor.finish();
+        row.image = std::move(scores.floor_image);
         report.candidates.push_back(std::move(row));
     }
+}
+
+}  // namespace
+
+Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& options) {
+    if (options.frames < 1 || options.frames > 1024) return make_error("--frames must be in [1, 1024]");
+    if (options.spp < 1 || options.spp > 65536) return make_error("--spp must be in [1, 65536]");
+    auto renderer_result = SimRenderer::create(scene, options.width, options.height, options.include_glsl);
+    if (!renderer_result) return renderer_result.error();
+    SimRenderer& renderer = **renderer_result;
+    renderer.set_ground_truth_footprint(options.footprint_ground_truth);
+
+    SceneReport report = empty_report(scene, options);
+    const std::vector<SimCandidate> candidates = select_candidates(scene, options, report.notes);
+    const bool any_glint = std::any_of(candidates.begin(), candidates.end(), [](const SimCandidate& c) { return c.shader.glint; });
+    const bool any_ggx = std::any_of(candidates.begin(), candidates.end(), [](const SimCandidate& c) { return !c.shader.glint; });
+    if (any_glint)
+        if (auto set = set_glint_target(renderer, scene, options, report.notes); !set) return set.error();
+    auto bake_ms = run_bakes(scene, candidates, renderer);
+    if (!bake_ms) return bake_ms.error();
+
+    const std::function<void(const std::string&)> say = [&](const std::string& line) {
+        if (options.progress) options.progress(scene.name + ": " + line);
+    };
+    if (!bake_ms->empty()) {
+        std::string done;
+        for (const auto& [key, ms] : *bake_ms) done += (done.empty() ? "" : ", ") + key + format_double(" %.0f ms", ms);
+        say("baked " + done);
+    }
+    auto ids = compile_candidates(renderer, candidates);
+    if (!ids) return ids.error();
+    FramePrograms programs{candidates, *ids, std::nullopt, any_ggx, any_glint};
+    if (options.limit) {
+        auto id = renderer.compile_candidate(limit_shader());
+        if (!id) return make_error("limit row: " + id.error().message);
+        programs.limit_id = *id;
+    }
+
+    report.candidates.resize(candidates.size());
+    FrameScores scores = render_frames(renderer, programs, options, say, report);
+    if (any_glint && !(scores.glint_radiance > 0))
+        report.notes.push_back("the glint ground truth is black (no glint material reflects a light towards the camera): "
+                               "the glint rows score nothing");
+    fill_candidate_rows(candidates, scores.candidates, *bake_ms, renderer, options, report);
+    std::map<std::string, double> baseline_ms;
+    if (options.timing_repeats > 0) {
+        say("timing " + std::to_string(candidates.size()) + " candidates x " + std::to_string(options.timing_repeats));
+        baseline_ms = time_candidates(renderer, programs, options.timing_repeats, report);
+    }
+    add_reference_rows(scores, programs, options, report);
     for (CandidateReport& row : report.candidates) {
         auto base = baseline_ms.find(baseline_of(row.family));
         if (row.frame_ms && base != baseline_ms.end() && base->second > 0) row.frame_relative = *row.frame_ms / base->second;

@@ -82,10 +82,9 @@ MappedFile& MappedFile::operator=(MappedFile&& other) noexcept {
 
 void MappedFile::release_pages(size_t offset, size_t size) const {
     if (!data_ || offset >= size_) return;
-    const size_t page = size_t(::sysconf(_SC_PAGESIZE));
-    const size_t begin = (offset + page - 1) / page * page;  // whole pages inside the range only
-    const size_t end = std::min(size_, offset + size) / page * page;
-    if (end > begin) ::madvise(const_cast<uint8_t*>(data_) + begin, end - begin, MADV_DONTNEED);
+    // The mapping starts on a page, so the whole pages of the range are those of its offsets.
+    detail::advise_whole_pages(data_ + offset, std::min(size_ - offset, size), uintptr_t(::sysconf(_SC_PAGESIZE)),
+                               MADV_DONTNEED);
 }
 
 void MappedFile::prefetch(size_t offset, size_t size) const {

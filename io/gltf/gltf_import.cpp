@@ -9,6 +9,60 @@
 namespace specbake::io {
 using gltf::kModeTriangles;
 
+namespace {
+
+// The scene of the imported node hierarchy, its nodes appended to m.nodes: one glTF node per imported node;
+// a node with several meshes gets one child per mesh (a glTF node holds at most one mesh); a mesh no node
+// places gets a root node of its own.
+tinygltf::Scene node_hierarchy(const ImportedScene& imported, tinygltf::Model& m) {
+    const std::array<float, 16> identity{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    tinygltf::Scene root;
+    std::vector<int> node_index(imported.nodes.size(), -1);
+    for (size_t i = 0; i < imported.nodes.size(); ++i) {
+        const ImportedNode& in = imported.nodes[i];
+        tinygltf::Node node;
+        node.name = in.name;
+        if (in.local_transform != identity) node.matrix.assign(in.local_transform.begin(), in.local_transform.end());
+        m.nodes.push_back(node);
+        node_index[i] = int(m.nodes.size() - 1);
+    }
+    std::vector<bool> placed(imported.meshes.size(), false);
+    for (size_t i = 0; i < imported.nodes.size(); ++i) {
+        const ImportedNode& in = imported.nodes[i];
+        const int self = node_index[i];
+        std::vector<int> meshes;
+        for (int mi : in.meshes)
+            if (mi >= 0 && size_t(mi) < imported.meshes.size()) meshes.push_back(mi);
+        if (meshes.size() == 1) {
+            m.nodes[size_t(self)].mesh = meshes[0];
+        } else {
+            for (int mi : meshes) {
+                tinygltf::Node child;
+                child.name = m.meshes[size_t(mi)].name;
+                child.mesh = mi;
+                m.nodes.push_back(child);
+                m.nodes[size_t(self)].children.push_back(int(m.nodes.size() - 1));
+            }
+        }
+        for (int mi : meshes) placed[size_t(mi)] = true;
+        if (in.parent >= 0 && size_t(in.parent) < imported.nodes.size() && size_t(in.parent) != i)
+            m.nodes[size_t(node_index[size_t(in.parent)])].children.push_back(self);
+        else
+            root.nodes.push_back(self);
+    }
+    for (size_t mi = 0; mi < placed.size(); ++mi) {
+        if (placed[mi]) continue;
+        tinygltf::Node node;
+        node.name = m.meshes[mi].name;
+        node.mesh = int(mi);
+        m.nodes.push_back(node);
+        root.nodes.push_back(int(m.nodes.size() - 1));
+    }
+    return root;
+}
+
+}  // namespace
+
 Result<GltfScene> GltfScene::from_imported(const ImportedScene& imported) {
     GltfScene scene;
     scene.impl_->source = imported.path;
@@ -84,52 +138,7 @@ Result<GltfScene> GltfScene::from_imported(const ImportedScene& imported) {
     }
     if (m.meshes.empty()) return make_error(imported.path + ": contains no triangle meshes");
 
-    // Node hierarchy: one glTF node per imported node; a node with several meshes gets one child per mesh
-    // (a glTF node holds at most one mesh).
-    const std::array<float, 16> identity{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
-    tinygltf::Scene root;
-    std::vector<int> node_index(imported.nodes.size(), -1);
-    for (size_t i = 0; i < imported.nodes.size(); ++i) {
-        const ImportedNode& in = imported.nodes[i];
-        tinygltf::Node node;
-        node.name = in.name;
-        if (in.local_transform != identity) node.matrix.assign(in.local_transform.begin(), in.local_transform.end());
-        m.nodes.push_back(node);
-        node_index[i] = int(m.nodes.size() - 1);
-    }
-    std::vector<bool> placed(imported.meshes.size(), false);
-    for (size_t i = 0; i < imported.nodes.size(); ++i) {
-        const ImportedNode& in = imported.nodes[i];
-        const int self = node_index[i];
-        std::vector<int> meshes;
-        for (int mi : in.meshes)
-            if (mi >= 0 && size_t(mi) < imported.meshes.size()) meshes.push_back(mi);
-        if (meshes.size() == 1) {
-            m.nodes[size_t(self)].mesh = meshes[0];
-        } else {
-            for (int mi : meshes) {
-                tinygltf::Node child;
-                child.name = m.meshes[size_t(mi)].name;
-                child.mesh = mi;
-                m.nodes.push_back(child);
-                m.nodes[size_t(self)].children.push_back(int(m.nodes.size() - 1));
-            }
-        }
-        for (int mi : meshes) placed[size_t(mi)] = true;
-        if (in.parent >= 0 && size_t(in.parent) < imported.nodes.size() && size_t(in.parent) != i)
-            m.nodes[size_t(node_index[size_t(in.parent)])].children.push_back(self);
-        else
-            root.nodes.push_back(self);
-    }
-    for (size_t mi = 0; mi < placed.size(); ++mi) {
-        if (placed[mi]) continue;
-        tinygltf::Node node;
-        node.name = m.meshes[mi].name;
-        node.mesh = int(mi);
-        m.nodes.push_back(node);
-        root.nodes.push_back(int(m.nodes.size() - 1));
-    }
-    m.scenes.push_back(root);
+    m.scenes.push_back(node_hierarchy(imported, m));
     m.defaultScene = 0;
     return scene;
 }

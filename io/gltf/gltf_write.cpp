@@ -2,6 +2,8 @@
 // array set from the plan, and every file (scene, buffers, image copies) written atomically together.
 #include "io/gltf/gltf_internal.h"
 
+#include "io/files/file_name.h"
+
 #include <algorithm>
 #include <cctype>
 #include <set>
@@ -14,11 +16,7 @@ using nlohmann::json;
 
 Result<std::vector<GltfScene::WrittenFile>> GltfScene::write(const fs::path& path,
                                                              const std::vector<std::string>& reserved) const {
-    const std::string ext = [&] {
-        std::string e = path.extension().string();
-        std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-        return e;
-    }();
+    const std::string ext = lower_extension(path);
     if (ext != ".gltf" && ext != ".glb") return make_error(path.string() + ": output must end in .gltf or .glb");
     const bool glb = ext == ".glb";
     const fs::path out_dir = path.parent_path().empty() ? fs::path(".") : path.parent_path();

@@ -1,6 +1,7 @@
 #include "io/mesh_import/mesh_import.h"
 
 #include "io/mesh_import/assimp_policy_io_internal.h"
+#include "io/files/file_name.h"
 #include "io/files/input_policy.h"
 
 #include <assimp/Importer.hpp>
@@ -21,8 +22,7 @@ using io::over_limit;
 namespace {
 
 bool is_gltf(const std::string& path) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    const std::string ext = io::lower_extension(path);
     return ext == ".gltf" || ext == ".glb";
 }
 
@@ -158,30 +158,14 @@ Result<TriMesh> read_mesh(const aiMesh& am, const std::string& path, size_t inde
     return m;
 }
 
-}  // namespace
-
-Result<ImportedScene> import_mesh(const std::string& path, const MeshImportOptions& options,
-                                  const io::InputPolicy& policy) {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec)) return make_error(path + ": no such file");
-    const io::InputLimits& limits = policy.limits;
-    if (auto ply = check_ply_header(path, limits); !ply) return ply.error();
-
-    Assimp::Importer importer;
-    // Every file Assimp opens (the asset, an OBJ's .mtl, a glTF's buffers) passes the path policy.
-    io::AssimpReads reads;
-    importer.SetIOHandler(io::new_policy_io_system(path, policy, reads));
-    importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-    unsigned flags = aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_ValidateDataStructure;
-    const bool join = options.join == VertexJoin::Always || (options.join == VertexJoin::Auto && !is_gltf(path));
-    if (join) flags |= aiProcess_JoinIdenticalVertices;
-
+// Reads `path` with `importer`: read and validated first, post-processed (with `flags`) second. Assimp's
+// PLY reader turns a broken face list into faces without indices, which its validation lets through and
+// its triangulation stops the process on (an assertion). Such a file is refused in between, and the
+// primitive types are recomputed from the faces (the steps run in Assimp's own order either way). Null
+// when Assimp could not read the file (its error string says why).
+Result<const aiScene*> read_and_post_process(Assimp::Importer& importer, const std::string& path, unsigned flags) {
     const aiScene* scene = nullptr;
     try {
-        // Read and validated first, post-processed second: Assimp's PLY reader turns a broken face list
-        // into faces without indices, which its validation lets through and its triangulation stops the
-        // process on (an assertion). Such a file is refused in between, and the primitive types are
-        // recomputed from the faces (the steps run in Assimp's own order either way).
         scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
         if (scene) {
             for (unsigned i = 0; i < scene->mNumMeshes; ++i) {
@@ -203,38 +187,35 @@ Result<ImportedScene> import_mesh(const std::string& path, const MeshImportOptio
     } catch (const std::exception& e) {
         return make_error(path + ": " + e.what());
     }
-    // Assimp goes on without a file it could not open (an OBJ without its .mtl gets default materials), so
-    // a refusal is an error whether or not the import succeeded.
-    if (!reads.refused.empty()) return make_error(path + ": " + reads.refused);
-    if (!scene) {
-        std::string why = importer.GetErrorString();
-        while (!why.empty() && std::isspace(static_cast<unsigned char>(why.back()))) why.pop_back();
-        if (why.empty()) why = "unreadable or unsupported mesh file";
-        return make_error(path + ": " + why);
-    }
-    if (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) return make_error(path + ": incomplete scene (no meshes)");
+    return scene;
+}
 
-    // Assimp's loaders allocate as they parse; the counts are checked as soon as they are known, before
-    // this copies the meshes (see check_ply_header for the one format checked before parsing).
-    if (scene->mNumMeshes > limits.primitives)
-        return make_error(path + ": mesh count " + over_limit("primitives", scene->mNumMeshes, limits.primitives));
+// Assimp's loaders allocate as they parse; the counts are checked as soon as they are known, before the
+// meshes are copied (see check_ply_header for the one format checked before parsing).
+Result<void> check_scene_counts(const aiScene& scene, const std::string& path, const io::InputLimits& limits) {
+    if (scene.mNumMeshes > limits.primitives)
+        return make_error(path + ": mesh count " + over_limit("primitives", scene.mNumMeshes, limits.primitives));
     uint64_t vertices = 0, faces = 0;
-    for (size_t i = 0; i < scene->mNumMeshes; ++i) {
-        vertices += scene->mMeshes[i]->mNumVertices;
-        faces += scene->mMeshes[i]->mNumFaces;
+    for (size_t i = 0; i < scene.mNumMeshes; ++i) {
+        vertices += scene.mMeshes[i]->mNumVertices;
+        faces += scene.mMeshes[i]->mNumFaces;
     }
     if (vertices > limits.vertices) return make_error(path + ": vertex count " + over_limit("vertices", vertices, limits.vertices));
     if (faces > limits.faces) return make_error(path + ": face count " + over_limit("faces", faces, limits.faces));
+    return {};
+}
 
-    ImportedScene out;
-    out.path = path;
-    out.files = std::move(reads.files);
+// The scene's materials. Every texture reference resolves like the files Assimp opened, used by the bake
+// or not (embedded textures, "*N", stay as they are); the files of the ones read are kept. Assimp appends
+// a default material: always for glTF (unnamed), for other formats when some mesh has none (named
+// AI_DEFAULT_MATERIAL_NAME). It is not in the file, so it is left out (primitives using it get material -1).
+Result<std::vector<ImportedMaterial>> read_materials(const aiScene& scene, const std::string& path,
+                                                     const io::InputPolicy& policy) {
+    std::vector<ImportedMaterial> materials;
     const std::filesystem::path folder = std::filesystem::path(path).parent_path();
-    for (size_t i = 0; i < scene->mNumMaterials; ++i) {
-        const aiMaterial& am = *scene->mMaterials[i];
+    for (size_t i = 0; i < scene.mNumMaterials; ++i) {
+        const aiMaterial& am = *scene.mMaterials[i];
         ImportedMaterial m = read_material(am);
-        // Every texture reference resolves like the files Assimp opened, used by the bake or not (embedded
-        // textures, "*N", stay as they are); the files of the ones read are kept.
         for (int type = aiTextureType_NONE; type <= int(AI_TEXTURE_TYPE_MAX); ++type) {
             for (unsigned k = 0; k < am.GetTextureCount(aiTextureType(type)); ++k) {
                 aiString tex;
@@ -249,16 +230,18 @@ Result<ImportedScene> import_mesh(const std::string& path, const MeshImportOptio
                 if (m.has_roughness_texture && ref == m.roughness_texture) m.roughness_texture_file = *resolved;
             }
         }
-        out.materials.push_back(std::move(m));
+        materials.push_back(std::move(m));
     }
-    // Assimp appends a default material: always for glTF (unnamed), for other formats when some mesh has
-    // none (named AI_DEFAULT_MATERIAL_NAME). It is not in the file, so primitives using it get material -1.
-    if (!out.materials.empty() && (is_gltf(path) || out.materials.back().name == AI_DEFAULT_MATERIAL_NAME))
-        out.materials.pop_back();
+    if (!materials.empty() && (is_gltf(path) || materials.back().name == AI_DEFAULT_MATERIAL_NAME)) materials.pop_back();
+    return materials;
+}
 
-    std::vector<int> mesh_slot(scene->mNumMeshes, -1);
-    for (size_t i = 0; i < scene->mNumMeshes; ++i) {
-        const aiMesh& am = *scene->mMeshes[i];
+// The meshes with triangles into out.meshes (the others noted and skipped); returns each Assimp mesh's
+// index in out.meshes, -1 for a skipped one.
+Result<std::vector<int>> read_meshes(const aiScene& scene, const std::string& path, ImportedScene& out) {
+    std::vector<int> mesh_slot(scene.mNumMeshes, -1);
+    for (size_t i = 0; i < scene.mNumMeshes; ++i) {
+        const aiMesh& am = *scene.mMeshes[i];
         if (!(am.mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) {
             out.notes.push_back("mesh '" + std::string(am.mName.C_Str()) + "' has no triangles (points or lines), skipped");
             continue;
@@ -273,12 +256,15 @@ Result<ImportedScene> import_mesh(const std::string& path, const MeshImportOptio
         mesh_slot[i] = int(out.meshes.size());
         out.meshes.push_back(std::move(m.value()));
     }
-    if (out.meshes.empty()) return make_error(path + ": no triangles in the file");
+    return mesh_slot;
+}
 
-    // The node hierarchy, depth first in child order, without recursion (a deep hierarchy is a file's
-    // choice, the stack's depth is not); its size is bounded by the node limit.
+// The node hierarchy into out.nodes, depth first in child order, without recursion (a deep hierarchy is a
+// file's choice, the stack's depth is not); its size is bounded by the node limit.
+Result<void> read_nodes(const aiScene& scene, const std::string& path, const std::vector<int>& mesh_slot,
+                        const io::InputLimits& limits, ImportedScene& out) {
     std::vector<std::pair<const aiNode*, int>> stack;
-    if (scene->mRootNode) stack.push_back({scene->mRootNode, -1});
+    if (scene.mRootNode) stack.push_back({scene.mRootNode, -1});
     while (!stack.empty()) {
         const auto [node, parent] = stack.back();
         stack.pop_back();
@@ -300,6 +286,51 @@ Result<ImportedScene> import_mesh(const std::string& path, const MeshImportOptio
         out.nodes.push_back(std::move(n));
         for (unsigned k = node->mNumChildren; k-- > 0;) stack.push_back({node->mChildren[k], self});
     }
+    return {};
+}
+
+}  // namespace
+
+Result<ImportedScene> import_mesh(const std::string& path, const MeshImportOptions& options,
+                                  const io::InputPolicy& policy) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) return make_error(path + ": no such file");
+    const io::InputLimits& limits = policy.limits;
+    if (auto ply = check_ply_header(path, limits); !ply) return ply.error();
+
+    Assimp::Importer importer;
+    // Every file Assimp opens (the asset, an OBJ's .mtl, a glTF's buffers) passes the path policy.
+    io::AssimpReads reads;
+    importer.SetIOHandler(io::new_policy_io_system(path, policy, reads));
+    importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+    unsigned flags = aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_ValidateDataStructure;
+    const bool join = options.join == VertexJoin::Always || (options.join == VertexJoin::Auto && !is_gltf(path));
+    if (join) flags |= aiProcess_JoinIdenticalVertices;
+    auto read = read_and_post_process(importer, path, flags);
+    if (!read) return read.error();
+    const aiScene* scene = *read;
+    // Assimp goes on without a file it could not open (an OBJ without its .mtl gets default materials), so
+    // a refusal is an error whether or not the import succeeded.
+    if (!reads.refused.empty()) return make_error(path + ": " + reads.refused);
+    if (!scene) {
+        std::string why = importer.GetErrorString();
+        while (!why.empty() && std::isspace(static_cast<unsigned char>(why.back()))) why.pop_back();
+        if (why.empty()) why = "unreadable or unsupported mesh file";
+        return make_error(path + ": " + why);
+    }
+    if (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) return make_error(path + ": incomplete scene (no meshes)");
+    if (auto counts = check_scene_counts(*scene, path, limits); !counts) return counts.error();
+
+    ImportedScene out;
+    out.path = path;
+    out.files = std::move(reads.files);
+    auto materials = read_materials(*scene, path, policy);
+    if (!materials) return materials.error();
+    out.materials = std::move(*materials);
+    auto mesh_slot = read_meshes(*scene, path, out);
+    if (!mesh_slot) return mesh_slot.error();
+    if (out.meshes.empty()) return make_error(path + ": no triangles in the file");
+    if (auto nodes = read_nodes(*scene, path, *mesh_slot, limits, out); !nodes) return nodes.error();
     return out;
 }
 

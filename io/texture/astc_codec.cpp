@@ -33,8 +33,6 @@ bool astc_block_supported(int side) { return side == 4 || side == 6 || side == 8
 
 uint32_t astc_vk_format(int side) { return side == 4 ? 157 : side == 6 ? 165 : side == 8 ? 171 : 0; }
 
-int astc_side_of_vk_format(uint32_t vk) { return vk == 157 ? 4 : vk == 165 ? 6 : vk == 171 ? 8 : 0; }
-
 uint64_t astc_level_bytes(int side, uint64_t w, uint64_t h) {
     const uint64_t s = uint64_t(side);
     return (w + s - 1) / s * ((h + s - 1) / s) * 16;

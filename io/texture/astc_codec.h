@@ -16,8 +16,6 @@ namespace specbake::io {
 bool astc_block_supported(int side);
 // VK_FORMAT_ASTC_{4x4,6x6,8x8}_UNORM_BLOCK: 157, 165, 171; 0 for other sides.
 uint32_t astc_vk_format(int side);
-// The footprint side of an ASTC UNORM vkFormat specbake reads (157, 165, 171), else 0.
-int astc_side_of_vk_format(uint32_t vk);
 // Bytes of a w x h level: 16 per block, blocks covering the level (edges padded).
 uint64_t astc_level_bytes(int side, uint64_t w, uint64_t h);
 

@@ -1,5 +1,6 @@
 #include "io/texture/dds.h"
 
+#include "core/assert.h"
 #include "io/texture/byte_order.h"
 #include "io/texture/texel_encoding.h"
 
@@ -126,8 +127,11 @@ std::vector<uint8_t> encode_dds(const MipChain& chain, TexelEncoding encoding) {
     const ContainerLayout layout = dds_layout(chain.width(), chain.height(), levels, encoding, channels);
     std::vector<uint8_t> b(layout.total);
     dds_write_header(b.data(), layout, chain.width(), chain.height(), encoding, channels);
+    SPECBAKE_ASSERT(layout.level_offset.size() == size_t(levels));
     for (int L = 0; L < levels; ++L) {
         const Image& level = chain.levels[size_t(L)];
+        SPECBAKE_ASSERT(level.channels == channels && level.width == std::max(1, chain.width() >> L) &&
+                        level.height == std::max(1, chain.height() >> L) && layout.level_offset[size_t(L)] < b.size());
         uint8_t* dst = b.data() + layout.level_offset[size_t(L)];
         encode_texels_into(level.pixels.data(), level.texel_count(), channels, 0, channels, encoding,
                            layout.stored_channels, 1.0f, dst);

@@ -1,5 +1,6 @@
 #include "io/texture/ktx2.h"
 
+#include "core/assert.h"
 #include "io/texture/byte_order.h"
 #include "io/texture/texel_encoding.h"
 
@@ -225,8 +226,11 @@ std::vector<uint8_t> encode_ktx2(const MipChain& chain, TexelEncoding encoding) 
     const ContainerLayout layout = ktx2_layout(chain.width(), chain.height(), levels, encoding, channels);
     std::vector<uint8_t> b(layout.total);
     ktx2_write_header(b.data(), layout, chain.width(), chain.height(), encoding, channels);
+    SPECBAKE_ASSERT(layout.level_offset.size() == size_t(levels));
     for (int i = 0; i < levels; ++i) {
         const Image& level = chain.levels[size_t(i)];
+        SPECBAKE_ASSERT(level.channels == channels && level.width == std::max(1, chain.width() >> i) &&
+                        level.height == std::max(1, chain.height() >> i) && layout.level_offset[size_t(i)] < b.size());
         encode_texels_into(level.pixels.data(), level.texel_count(), channels, 0, channels, encoding,
                            layout.stored_channels, 1.0f, b.data() + layout.level_offset[size_t(i)]);
     }
@@ -240,6 +244,7 @@ std::vector<uint8_t> encode_ktx2_array(const MipChain& stacked, int layers, Texe
     const ContainerLayout layout = ktx2_layout(stacked.width(), height, levels, encoding, channels, layers);
     std::vector<uint8_t> b(layout.total);
     ktx2_write_header(b.data(), layout, stacked.width(), height, encoding, channels, layers);
+    SPECBAKE_ASSERT(layout.level_offset.size() == size_t(levels) && stacked.height() % layers == 0);
     for (int i = 0; i < levels; ++i) {
         // KTX2 Sec. 3.9: within a level, layer after layer, each row after row: the stacked image as it is.
         const Image& level = stacked.levels[size_t(i)];

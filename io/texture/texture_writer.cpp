@@ -355,14 +355,10 @@ Result<void> EncodedTexture::compress_rows(int level, int rows) {
         return {};
     }
     // Whole 2 MiB pages (the huge pages the buffer was hinted for) wholly behind the window.
-    constexpr uintptr_t kPage = uintptr_t(2) << 20;
-    if (z.in_pos > z.window) {
-        const uintptr_t from = (reinterpret_cast<uintptr_t>(start) + z.released + kPage - 1) & ~(kPage - 1);
-        const uintptr_t to = (reinterpret_cast<uintptr_t>(start) + z.in_pos - z.window) & ~(kPage - 1);
-        if (to > from) {
-            madvise(reinterpret_cast<void*>(from), to - from, MADV_DONTNEED);
-            z.released = to - reinterpret_cast<uintptr_t>(start);
-        }
+    if (z.in_pos > z.window + z.released) {
+        const void* to = detail::advise_whole_pages(start + z.released, z.in_pos - z.window - z.released,
+                                                    uintptr_t(2) << 20, MADV_DONTNEED);
+        if (to) z.released = size_t(static_cast<const uint8_t*>(to) - start);
     }
     return {};
 }
