@@ -83,6 +83,7 @@ Result<TextureBakeResult> bake_validated(const TextureMap& normal, const Texture
         notes.z_reason = "constant full-scale blue channel";
     }
     notes.z_reconstructed = dec.reconstruct;
+    notes.z_decode = dec.reconstruct ? "rebuilt from x and y (" + notes.z_reason + ")" : "stored blue channel";
     if (!dec.reconstruct && looks_srgb_encoded(normal)) {
         notes.looks_srgb = true;
         notes.warnings.push_back(

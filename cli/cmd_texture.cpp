@@ -113,7 +113,9 @@ int run_texture(const TextureOptions& o, const PipelineFlags& pipe) {
     s.max_kernel = o.max_kernel;
     s.normal_y = o.normal_y == "-y" ? NormalGreen::MinusY : NormalGreen::PlusY;
     s.reconstruct_z = o.reconstruct_z == "always" ? ReconstructZ::Always
-                      : o.reconstruct_z == "never" ? ReconstructZ::Never : ReconstructZ::Auto;
+                      : o.reconstruct_z == "never" ? ReconstructZ::Never
+                      : o.reconstruct_z == "gltf"  ? ReconstructZ::Gltf
+                                                   : ReconstructZ::Auto;
     s.wrap = o.wrap == "clamp" ? WrapMode::Clamp : o.wrap == "mirror" ? WrapMode::Mirror : WrapMode::Repeat;
     s.anisotropic = o.anisotropic;
     s.lean_space = o.lean_space == "slope" ? LeanSpace::Slope : LeanSpace::Projected;
@@ -169,7 +171,8 @@ int run_texture(const TextureOptions& o, const PipelineFlags& pipe) {
         return kExitFailed;
     }
     if (outcome->notes.z_reconstructed)
-        std::fprintf(stderr, "specbake: note: z reconstructed from x and y (%s)\n", outcome->notes.z_reason.c_str());
+        std::fprintf(stderr, "specbake: note: z reconstructed from x and y (%s); a glTF viewer shades the stored "
+                     "blue channel (--reconstruct-z gltf)\n", outcome->notes.z_reason.c_str());
     if (!quiet) {
         for (const io::ManifestOutput& out : outcome->manifest.outputs)
             std::printf("%-9s %s  %dx%d, %d mips, %d channels\n", out.kind.c_str(),
@@ -217,8 +220,10 @@ void add_texture_command(CLI::App& app, std::function<int()>& run) {
     sub->add_option("--normal-y", o->normal_y, "Green channel convention: +y (OpenGL/glTF, default) or -y (DirectX)")
         ->check(CLI::IsMember({"+y", "-y"}));
     sub->add_option("--reconstruct-z", o->reconstruct_z,
-                    "auto (default: for 2-channel maps and maps whose blue is constant at full scale), always, never")
-        ->check(CLI::IsMember({"auto", "always", "never"}));
+                    "auto (default: for 2-channel maps and maps whose blue is constant at full scale), always, never, "
+                    "gltf (the stored blue channel, as glTF viewers and scene bakes decode it; rebuilt only for "
+                    "2-channel maps)")
+        ->check(CLI::IsMember({"auto", "always", "never", "gltf"}));
     sub->add_option("--wrap", o->wrap,
                     "Addressing the textures are sampled with: repeat (default), clamp, mirror. Footprints lie "
                     "inside the map, so it does not change values; it is recorded in the manifest and EXR files")

@@ -34,7 +34,7 @@ struct SceneCliOptions {
     std::string filter = "projected";
     double max_kernel = 0.0;
     std::string normal_y = "+y";
-    std::string reconstruct_z = "auto";
+    std::string reconstruct_z = "gltf";
     bool anisotropic = true;
     std::string lean_space = "projected";
     std::vector<std::string> outputs{"roughness", "kernel", "lean", "normal"};
@@ -92,8 +92,10 @@ inline void add_material_options(CLI::App* sub, SceneCliOptions& o) {
     sub->add_option("--normal-y", o.normal_y, "Normal-map green convention: +y (OpenGL/glTF) or -y (DirectX)")
         ->check(CLI::IsMember({"+y", "-y"}))
         ->capture_default_str();
-    sub->add_option("--reconstruct-z", o.reconstruct_z, "Rebuild normal z from x, y")
-        ->check(CLI::IsMember({"auto", "always", "never"}))
+    sub->add_option("--reconstruct-z", o.reconstruct_z,
+                    "Normal z: gltf (the stored blue channel, as glTF viewers shade it; rebuilt only for a "
+                    "two-channel map), auto (also rebuilt where blue is constant full scale), always, never")
+        ->check(CLI::IsMember({"gltf", "auto", "always", "never"}))
         ->capture_default_str();
     sub->add_flag("--anisotropic,!--isotropic-kernel", o.anisotropic,
                   "Kernel texture holds Sigma (xx, yy, xy) (default, what the default rule reads); --isotropic-kernel: t only");
@@ -122,9 +124,10 @@ inline std::string set_texture_setting(TextureBakeSettings& t, const std::string
         t.filter = value == "approx" ? RoughnessFilterMode::Approx : RoughnessFilterMode::Projected;
     } else if (key == "normal-y" && one_of({"+y", "-y"})) {
         t.normal_y = value == "-y" ? NormalGreen::MinusY : NormalGreen::PlusY;
-    } else if (key == "reconstruct-z" && one_of({"auto", "always", "never"})) {
+    } else if (key == "reconstruct-z" && one_of({"gltf", "auto", "always", "never"})) {
         t.reconstruct_z = value == "always" ? ReconstructZ::Always
                           : value == "never" ? ReconstructZ::Never
+                          : value == "gltf"  ? ReconstructZ::Gltf
                                              : ReconstructZ::Auto;
     } else if (key == "anisotropic" && one_of({"true", "false", "1", "0"})) {
         t.anisotropic = value == "true" || value == "1";
@@ -184,7 +187,8 @@ inline Result<SceneJob> make_scene_job(const SceneCliOptions& o) {
     t.normal_y = o.normal_y == "-y" ? NormalGreen::MinusY : NormalGreen::PlusY;
     t.reconstruct_z = o.reconstruct_z == "always" ? ReconstructZ::Always
                       : o.reconstruct_z == "never" ? ReconstructZ::Never
-                                                   : ReconstructZ::Auto;
+                      : o.reconstruct_z == "auto"  ? ReconstructZ::Auto
+                                                   : ReconstructZ::Gltf;
     t.anisotropic = o.anisotropic;
     t.lean_space = o.lean_space == "slope" ? LeanSpace::Slope : LeanSpace::Projected;
     auto has = [&](const char* k) { return std::find(o.outputs.begin(), o.outputs.end(), k) != o.outputs.end(); };

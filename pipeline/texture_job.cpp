@@ -278,8 +278,10 @@ nlohmann::json texture_settings_json(const TextureBakeSettings& s, io::TextureCo
     j["filter"] = s.filter == RoughnessFilterMode::Projected ? "projected" : "approx";
     j["max_kernel"] = s.max_kernel ? nlohmann::json(*s.max_kernel) : nlohmann::json(nullptr);
     j["normal_y"] = s.normal_y == NormalGreen::PlusY ? "+y" : "-y";
-    j["reconstruct_z"] = s.reconstruct_z == ReconstructZ::Auto ? "auto"
-                         : s.reconstruct_z == ReconstructZ::Always ? "always" : "never";
+    j["reconstruct_z"] = s.reconstruct_z == ReconstructZ::Auto     ? "auto"
+                         : s.reconstruct_z == ReconstructZ::Always ? "always"
+                         : s.reconstruct_z == ReconstructZ::Gltf   ? "gltf"
+                                                                   : "never";
     j["wrap"] = wrap_name(s.wrap);
     j["anisotropic"] = s.anisotropic;
     j["lean_space"] = s.lean_space == LeanSpace::Projected ? "projected" : "slope";
@@ -568,6 +570,7 @@ Result<TextureJobOutcome> run_texture_job(const TextureJob& job) {
     nlohmann::json facts;
     facts["z_reconstructed"] = notes.z_reconstructed;
     if (notes.z_reconstructed) facts["z_reason"] = notes.z_reason;
+    facts["z_decode"] = notes.z_decode;
     facts["looks_srgb"] = notes.looks_srgb;
     facts["roughness_is_orm"] = notes.roughness_is_orm;
     facts["roughness_resampled"] = notes.roughness_resampled;
