@@ -102,6 +102,17 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
             if (curvature && c.curvature_bake.empty()) c.curvature_bake = c.shader.curvature_source = estimator;
         }
     }
+    if (!options.default_variants.empty()) {
+        const auto base = std::find_if(candidates.begin(), candidates.end(), [](const SimCandidate& c) { return c.name == "default"; });
+        if (base == candidates.end()) return make_error("--variant needs the default candidate (add it to --only)");
+        const SimCandidate copy = *base;
+        for (const auto& [label, lines] : options.default_variants) {
+            SimCandidate v = copy;
+            v.name = "default:" + label;
+            v.shader.defines = lines + v.shader.defines;
+            candidates.push_back(std::move(v));
+        }
+    }
     const bool any_glint = std::any_of(candidates.begin(), candidates.end(), [](const SimCandidate& c) { return c.shader.glint; });
     const bool any_ggx = std::any_of(candidates.begin(), candidates.end(), [](const SimCandidate& c) { return !c.shader.glint; });
     if (any_glint) {
@@ -236,6 +247,10 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
         row.family = c.family;
         row.source = c.source;
         row.metrics = accumulators[i].finish();
+        if (options.pixel_maps) {
+            row.pixel_flicker = accumulators[i].pixel_flicker();
+            row.pixel_temporal_error = accumulators[i].pixel_temporal_error();
+        }
         if (!c.texture_bake.empty()) row.bake_ms = bake_ms[c.texture_bake];
         if (!c.curvature_bake.empty() && c.curvature_bake != "exact")
             row.bake_ms = row.bake_ms.value_or(0.0) + bake_ms["curvature:" + c.curvature_bake];
@@ -278,6 +293,10 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
         row.source = "ground truth at " + std::to_string(ground_truth_layout(floor_spp, options.width, options.height).samples()) +
                      " spp (independent jitter) against the full one";
         row.metrics = floor_accumulator.finish();
+        if (options.pixel_maps) {
+            row.pixel_flicker = floor_accumulator.pixel_flicker();
+            row.pixel_temporal_error = floor_accumulator.pixel_temporal_error();
+        }
         row.image = std::move(floor_image);
         report.candidates.push_back(std::move(row));
     }
