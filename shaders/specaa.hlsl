@@ -83,6 +83,8 @@
 //   SPECAA_KERNEL_LOD_BIAS b        the Sigma kernel texel sampled with this LOD bias (the mip the
 //                                   hardware picks against a finer or coarser footprint).
 //   SPECAA_GATE_PIXEL_KERNEL        the per-pixel kernel faded out like the baked one (SPECAA_KERNEL_GATE).
+//   SPECAA_BLEND_FROM_BAKED_SPREAD  opt-in: specaa_default_D's blend weight from the baked spread alone,
+//                                   not from all of K = A - a I (the per-pixel kernel included).
 // Textures are sampled with implicit derivatives, so the hardware selects the mip: the baked mips are
 // the footprint filter of the normal map, the per-pixel kernel adds the geometric curvature.
 //
@@ -881,7 +883,20 @@ float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, SpecaaSurface s) {
         A = roughA;
     }
 #endif
-    float w = SPECAA_SATURATE(lod) * SPECAA_SATURATE(SPECAA_GGX_SPREAD * specaa_sym_max_eigenvalue(A - SPECAA_FLOAT3(a, a, 0.0)));
+    // The blend weight is judged on all of K = A - a I, the per-pixel kernel included. Opt-in
+    // SPECAA_BLEND_FROM_BAKED_SPREAD judges it on the baked spread alone: the pixel kernel is the image of
+    // the Gaussian pixel filter under the surface's curvature (TK21 Eq. 3), for which the convolution is
+    // exact, and a large one (rims, strongly curved small parts: up to kappa) otherwise switches the pixel
+    // to GGX(A), whose tails put a flickering halo around highlights and along rims on models outside the
+    // bench's corpus; but where the clamped pixel kernel hides geometry a pixel wide (domes of mesh), GGX(A)
+    // is what fits, and the bench's NormalTangentTest far fails without it (README "Do no harm in the field").
+    SPECAA_FLOAT3 spread = A - SPECAA_FLOAT3(a, a, 0.0);
+#if defined(SPECAA_BLEND_FROM_BAKED_SPREAD) && defined(SPECAA_KERNEL_TEXTURE) && defined(SPECAA_KERNEL_ANISOTROPIC) && defined(SPECAA_KERNEL_TWO_LOBES)
+    spread = roughK;
+#elif defined(SPECAA_BLEND_FROM_BAKED_SPREAD)
+    spread = specaa_baked_kernel_matrix(s);
+#endif
+    float w = SPECAA_SATURATE(lod) * SPECAA_SATURATE(SPECAA_GGX_SPREAD * specaa_sym_max_eigenvalue(spread));
 #else
     float w = 0.0;
 #endif

@@ -104,9 +104,9 @@ Result<SceneReport> run_verify(const SimScene& scene, const VerifyOptions& optio
     }
     if (!options.default_variants.empty()) {
         const auto base = std::find_if(candidates.begin(), candidates.end(), [](const SimCandidate& c) { return c.name == "default"; });
-        if (base == candidates.end()) return make_error("--variant needs the default candidate (add it to --only)");
-        const SimCandidate copy = *base;
-        for (const auto& [label, lines] : options.default_variants) {
+        if (base == candidates.end()) report.notes.push_back("--variant: no default candidate on " + scene.name + ", variants skipped");
+        const SimCandidate copy = base == candidates.end() ? SimCandidate{} : *base;
+        for (const auto& [label, lines] : base == candidates.end() ? decltype(options.default_variants){} : options.default_variants) {
             SimCandidate v = copy;
             v.name = "default:" + label;
             v.shader.defines = lines + v.shader.defines;
