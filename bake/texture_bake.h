@@ -27,13 +27,16 @@ namespace specbake {
 
 enum class RoughnessFilterMode { Projected, Approx };  // SPEC Sec. 3: TK21 Eq. (4)-(7) closed form | Eq. (9)
 enum class NormalGreen { PlusY, MinusY };               // +Y: OpenGL/glTF (default), -Y: DirectX
-enum class ReconstructZ { Auto, Always, Never };        // Auto: two channels or constant full-scale blue
+// Auto: two channels or constant full-scale blue. Gltf: the glTF decode, n = normalize(2c - 1) with the
+// stored blue channel whatever it holds (glTF 2.0 Sec. 3.9.3; what the viewer shades), z rebuilt only for
+// a two-channel map (scene bakes).
+enum class ReconstructZ { Auto, Always, Never, Gltf };
 enum class LeanSpace { Projected, Slope };              // SPEC Sec. 3 LEAN texture: projected (default) | slope
 
 // The CLI, config and manifest spellings, in enum order.
 inline constexpr std::array<std::string_view, 2> kRoughnessFilterModeNames{"projected", "approx"};
 inline constexpr std::array<std::string_view, 2> kNormalGreenNames{"+y", "-y"};
-inline constexpr std::array<std::string_view, 3> kReconstructZNames{"auto", "always", "never"};
+inline constexpr std::array<std::string_view, 4> kReconstructZNames{"auto", "always", "never", "gltf"};
 inline constexpr std::array<std::string_view, 2> kLeanSpaceNames{"projected", "slope"};
 inline std::string_view to_string(RoughnessFilterMode m) { return kRoughnessFilterModeNames[size_t(m)]; }
 inline std::string_view to_string(NormalGreen g) { return kNormalGreenNames[size_t(g)]; }
@@ -88,6 +91,7 @@ struct TextureBakeSettings {
 struct TextureBakeNotes {
     bool z_reconstructed = false;         // z rebuilt from x, y (two channels, constant blue, or asked for)
     std::string z_reason;                 // "two-channel map", "constant full-scale blue channel", "requested"
+    std::string z_decode;                 // how z was read: "rebuilt (REASON)" or "stored blue channel"
     bool looks_srgb = false;              // decoded vectors are far from unit length unless sRGB-decoded first
     bool roughness_is_orm = false;        // roughness came from a 3+ channel map; R and B carried through
     bool roughness_resampled = false;     // roughness map resolution differs from the normal map's

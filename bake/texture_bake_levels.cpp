@@ -81,6 +81,7 @@ Result<void> set_up_decoder(Decoder& dec, const BakeInputs& in, const TextureBak
         notes.z_reason = "constant full-scale blue channel";
     }
     notes.z_reconstructed = dec.reconstruct;
+    notes.z_decode = dec.reconstruct ? "rebuilt from x and y (" + notes.z_reason + ")" : "stored blue channel";
     if (!dec.reconstruct && looks_srgb_encoded(normal)) {
         notes.looks_srgb = true;
         notes.warnings.push_back(

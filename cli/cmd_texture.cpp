@@ -143,7 +143,8 @@ int run_texture(const TextureOptions& o, const PipelineFlags& pipe) {
         return kExitFailed;
     }
     if (outcome->notes.z_reconstructed)
-        std::fprintf(stderr, "specbake: note: z reconstructed from x and y (%s)\n", outcome->notes.z_reason.c_str());
+        std::fprintf(stderr, "specbake: note: z reconstructed from x and y (%s); a glTF viewer shades the stored "
+                     "blue channel (--reconstruct-z gltf)\n", outcome->notes.z_reason.c_str());
     if (!quiet) {
         for (const io::ManifestOutput& out : outcome->manifest.outputs)
             std::printf("%-9s %s  %dx%d, %d mips, %d channels\n", out.kind.c_str(),
@@ -193,7 +194,9 @@ void add_texture_command(CLI::App& app, std::function<int()>& run) {
     sub->add_option("--normal-y", o->normal_y, "Green channel convention: +y (OpenGL/glTF, default) or -y (DirectX)")
         ->check(is_member_of(kNormalGreenNames));
     sub->add_option("--reconstruct-z", o->reconstruct_z,
-                    "auto (default: for 2-channel maps and maps whose blue is constant at full scale), always, never")
+                    "auto (default: for 2-channel maps and maps whose blue is constant at full scale), always, never, "
+                    "gltf (the stored blue channel, as glTF viewers and scene bakes decode it; rebuilt only for "
+                    "2-channel maps)")
         ->check(is_member_of(kReconstructZNames));
     sub->add_option("--wrap", o->wrap,
                     "Addressing the textures are sampled with: repeat (default), clamp, mirror. Footprints lie "

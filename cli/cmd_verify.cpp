@@ -32,6 +32,7 @@ struct VerifyCommandOptions {
     SimCommandOptions sim;
     std::vector<std::string> only;
     std::string strip;
+    std::string harm_map;
     float distance = 1.0f;
 };
 
@@ -39,6 +40,7 @@ int run_verify_command(const VerifyCommandOptions& o) {
     VerifyOptions options;
     if (!apply_sim_command_options(o.sim, options)) return kExitUsage;
     options.only = o.only;
+    options.pixel_maps = !o.harm_map.empty();
     // Frames done / total on a terminal; the stage lines as plain lines otherwise.
     ProgressDisplay display(size_t(options.frames), progress_mode(run_settings()), "frames",
                             ProgressDisplay::Lines::activity);
@@ -113,6 +115,33 @@ int run_verify_command(const VerifyCommandOptions& o) {
             }
         }
     }
+    if (!o.harm_map.empty()) {
+        const CandidateReport* none = nullptr;
+        std::vector<HarmTile> tiles;
+        for (const CandidateReport& c : report->candidates) {
+            if (c.family == "glint" || c.family == "limit" || c.pixel_flicker.empty()) continue;
+            if (c.name == "none") none = &c;
+            else tiles.push_back({c.name, &c.pixel_flicker, &c.pixel_temporal_error});
+        }
+        if (none && !tiles.empty()) {
+            std::vector<HarmReport> summaries;
+            const Image map = make_harm_map(report->ground_truth, {"none", &none->pixel_flicker, &none->pixel_temporal_error},
+                                            tiles, &summaries);
+            if (auto written = write_strip_png(map, o.harm_map); !written) {
+                print_error(written.error().message);
+                return kExitFailed;
+            }
+            std::printf("\nHarm map %s: per pixel, candidate minus none (tone-mapped), as fractions of none's sum: "
+                        "excess (of it within 2 px of the silhouette) / relief\n\n",
+                        o.harm_map.c_str());
+            std::printf("| candidate | flicker excess | at silhouette | flicker relief | t-err excess | at silhouette | t-err relief |\n");
+            std::printf("|---|---:|---:|---:|---:|---:|---:|\n");
+            for (const HarmReport& h : summaries)
+                std::printf("| %s | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f |\n", h.label.c_str(), h.flicker.excess,
+                            h.flicker.edge_excess, h.flicker.relief, h.temporal_error.excess,
+                            h.temporal_error.edge_excess, h.temporal_error.relief);
+        }
+    }
     return kExitOk;
 }
 
@@ -141,6 +170,10 @@ void add_verify_command(CLI::App& app, std::function<int()>& run) {
     sub->add_option("--only", o->only, "Only these candidates (plus 'none'), e.g. --only projected,default")
         ->delimiter(',');
     sub->add_option("--strip", o->strip, "Also write the image strip (frame 0) to this PNG file");
+    sub->add_option("--harm-map", o->harm_map,
+                    "Also write the harm map to this PNG file: per pixel, where each candidate's tone-mapped flicker "
+                    "and temporal error exceed no filtering's (red) or fall below it (blue), and print where the "
+                    "excess lies");
     sub->footer("Examples:\n"
                 "  specbake verify scene.glb --strip scene.png\n"
                 "  specbake verify --builtin torus --alpha 0.01 --strip torus.png\n"

@@ -33,7 +33,7 @@ struct SceneCliOptions {
     std::string filter = "projected";
     double max_kernel = 0.0;
     std::string normal_y = "+y";
-    std::string reconstruct_z = "auto";
+    std::string reconstruct_z = "gltf";
     bool anisotropic = true;
     std::string lean_space = "projected";
     std::vector<std::string> outputs{"roughness", "kernel", "lean", "normal"};
@@ -91,7 +91,9 @@ inline void add_material_options(CLI::App* sub, SceneCliOptions& o) {
     sub->add_option("--normal-y", o.normal_y, "Normal-map green convention: +y (OpenGL/glTF) or -y (DirectX)")
         ->check(is_member_of(kNormalGreenNames))
         ->capture_default_str();
-    sub->add_option("--reconstruct-z", o.reconstruct_z, "Rebuild normal z from x, y")
+    sub->add_option("--reconstruct-z", o.reconstruct_z,
+                    "Normal z: gltf (the stored blue channel, as glTF viewers shade it; rebuilt only for a "
+                    "two-channel map), auto (also rebuilt where blue is constant full scale), always, never")
         ->check(is_member_of(kReconstructZNames))
         ->capture_default_str();
     sub->add_flag("--anisotropic,!--isotropic-kernel", o.anisotropic,

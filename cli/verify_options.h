@@ -26,6 +26,7 @@ struct SimCommandOptions {
     bool no_floor = false;
     bool no_limit = false;
     std::vector<std::string> defines;  // NAME or NAME=VALUE
+    std::vector<std::string> variants;  // LABEL:NAME[=VALUE][+NAME[=VALUE]...]
 };
 
 inline void add_sim_command_options(CLI::App* sub, SimCommandOptions& o) {
@@ -53,6 +54,10 @@ inline void add_sim_command_options(CLI::App* sub, SimCommandOptions& o) {
                     "Compile every candidate but the baseline with '#define NAME VALUE' (repeatable): try the "
                     "include's settings on a scene, e.g. --define SPECAA_KERNEL_TWO_LOBES --define SPECAA_KAPPA=1.0")
         ->type_name("NAME[=VALUE]");
+    sub->add_option("--variant", o.variants,
+                    "Also score a copy of the default named default:LABEL compiled with these defines (repeatable; "
+                    "'+' separates defines), e.g. --variant nopix:SPECAA_NO_PIXEL_KERNEL --variant g1:SPECAA_KERNEL_GATE=1")
+        ->type_name("LABEL:NAME[=VALUE][+NAME[=VALUE]]");
 }
 
 // "NAME" or "NAME=VALUE" as the line "#define NAME VALUE"; an error message for anything else (NAME a C
@@ -100,6 +105,26 @@ inline bool apply_sim_command_options(const SimCommandOptions& o, verify::Verify
             return false;
         }
         v.defines += line;
+    }
+    v.default_variants.clear();
+    for (const std::string& spec : o.variants) {
+        const size_t colon = spec.find(':');
+        if (colon == std::string::npos || colon == 0) {
+            print_error("--variant '" + spec + "': expected LABEL:NAME[=VALUE][+NAME[=VALUE]]");
+            return false;
+        }
+        std::string lines, rest = spec.substr(colon + 1);
+        while (!rest.empty()) {
+            const size_t plus = rest.find('+');
+            std::string line, error;
+            if (!define_line(rest.substr(0, plus), line, error)) {
+                print_error(error);
+                return false;
+            }
+            lines += line;
+            rest = plus == std::string::npos ? "" : rest.substr(plus + 1);
+        }
+        v.default_variants.emplace_back(spec.substr(0, colon), lines);
     }
     return true;
 }

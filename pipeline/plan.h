@@ -66,6 +66,13 @@ struct EncodedTextureBake {
 using TextureBakeEncoder =
     std::function<Result<EncodedTextureBake>(const TextureDecision&, const TextureWork&, const TextureBakeSettings&)>;
 
+// TextureBakeSettings with the glTF normal decode (scene bakes: what a glTF viewer shades).
+inline TextureBakeSettings gltf_texture_settings() {
+    TextureBakeSettings s;
+    s.reconstruct_z = ReconstructZ::Gltf;
+    return s;
+}
+
 struct PlanOptions {
     bool textures = true;                 // false: curvature only (`specbake mesh`)
     bool check_material = true;           // false: curvature regardless of material roughness (`specbake mesh`)
@@ -76,7 +83,9 @@ struct PlanOptions {
     int threads = 0;
     // What the scene may make the job read and allocate: the scene is loaded and its images decoded under it.
     io::InputPolicy input_policy;
-    TextureBakeSettings texture_settings;  // the statistic is measured with the settings the bake uses
+    // The statistic is measured with the settings the bake uses. Scene bakes decode normal textures as glTF
+    // does (the stored blue channel, ReconstructZ::Gltf) unless told otherwise.
+    TextureBakeSettings texture_settings = gltf_texture_settings();
     // Settings of the materials named here (config [materials.NAME]); every other material uses
     // texture_settings.
     std::map<std::string, TextureBakeSettings> material_texture_settings;

@@ -578,6 +578,7 @@ nlohmann::json input_facts(const TextureBakeNotes& notes, const std::string& nor
     nlohmann::json facts;
     facts["z_reconstructed"] = notes.z_reconstructed;
     if (notes.z_reconstructed) facts["z_reason"] = notes.z_reason;
+    facts["z_decode"] = notes.z_decode;
     facts["looks_srgb"] = notes.looks_srgb;
     facts["roughness_is_orm"] = notes.roughness_is_orm;
     facts["roughness_resampled"] = notes.roughness_resampled;

@@ -23,6 +23,7 @@
 #define SPECAA_TEXTURE_PARAMS(tex, smp) Texture2D tex, SamplerState smp
 #define SPECAA_TEXTURE_ARGS(tex, smp) tex, smp
 #define SPECAA_SAMPLE(tex, smp, uv) tex.Sample(smp, uv)
+#define SPECAA_SAMPLE_BIAS(tex, smp, uv, bias) tex.SampleBias(smp, uv, bias)
 // Level of detail the sampler computes for uv (relative to level 0, not clamped to the mip range).
 #define SPECAA_QUERY_LOD(tex, smp, uv) tex.CalculateLevelOfDetailUnclamped(smp, uv)
 #define SPECAA_UINT3 uint3
@@ -75,6 +76,15 @@
 //   SPECAA_USE_CURVATURE            per-pixel kernel from _SPECAA_CURVATURE (SPEC Sec. 4) and the
 //                                   position derivatives instead of normal derivatives.
 //   SPECAA_NO_PIXEL_KERNEL          baked data only (no per-pixel kernel).
+//   Diagnostics (to attribute an error to one part of the default; not for shipping):
+//   SPECAA_NO_BAKED_KERNEL          the baked kernel/LEAN spread is taken as zero (the per-pixel kernel only).
+//   SPECAA_DEFAULT_D_WEIGHT w       specaa_default_D with this blend weight everywhere (0: the convolved
+//                                   NDF, 1: GGX(A)).
+//   SPECAA_KERNEL_LOD_BIAS b        the Sigma kernel texel sampled with this LOD bias (the mip the
+//                                   hardware picks against a finer or coarser footprint).
+//   SPECAA_GATE_PIXEL_KERNEL        the per-pixel kernel faded out like the baked one (SPECAA_KERNEL_GATE).
+//   SPECAA_BLEND_FROM_BAKED_SPREAD  opt-in: specaa_default_D's blend weight from the baked spread alone,
+//                                   not from all of K = A - a I (the per-pixel kernel included).
 // Textures are sampled with implicit derivatives, so the hardware selects the mip: the baked mips are
 // the footprint filter of the normal map, the per-pixel kernel adds the geometric curvature.
 //
@@ -411,7 +421,11 @@ float specaa_sample_kernel_rough_share(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_F
 
 // Both from one fetch: (Sigma.xx, Sigma.yy, Sigma.xy, g), Sigma clamped to PSD (zero if not finite).
 SPECAA_FLOAT4 specaa_sample_kernel_texel(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
+#if defined(SPECAA_KERNEL_LOD_BIAS)
+    SPECAA_FLOAT4 t = SPECAA_SAMPLE_BIAS(tex, smp, uv, SPECAA_KERNEL_LOD_BIAS);
+#else
     SPECAA_FLOAT4 t = SPECAA_SAMPLE(tex, smp, uv);
+#endif
     SPECAA_FLOAT3 sigma = specaa_sym_clamp_psd(t.rgb);
     return SPECAA_FLOAT4(SPECAA_SELECT3(specaa_is_finite3(sigma), sigma, SPECAA_FLOAT3(0.0, 0.0, 0.0)),
                          specaa_rough_share(t.a));
@@ -679,7 +693,9 @@ float specaa_base_alpha2(SpecaaSurface s) {
 // The normal map's spread at this fragment's mip as a kernel matrix, before the gate below (0 without
 // kernel/LEAN data); an isotropic kernel texture gives K = t I.
 SPECAA_FLOAT3 specaa_baked_spread_matrix(SpecaaSurface s) {
-#if defined(SPECAA_LEAN_TEXTURE0)
+#if defined(SPECAA_NO_BAKED_KERNEL)
+    return SPECAA_FLOAT3(0.0, 0.0, 0.0);
+#elif defined(SPECAA_LEAN_TEXTURE0)
     return 2.0 * specaa_sample_lean(SPECAA_TEXTURE_ARGS(SPECAA_LEAN_TEXTURE0, SPECAA_SAMPLER),
                                     SPECAA_TEXTURE_ARGS(SPECAA_LEAN_TEXTURE1, SPECAA_SAMPLER), s.uv);
 #elif defined(SPECAA_KERNEL_TEXTURE) && defined(SPECAA_KERNEL_ANISOTROPIC)
@@ -805,7 +821,12 @@ SPECAA_FLOAT3 specaa_widened_matrix(float a, SPECAA_FLOAT3 K) {
 // specaa_ggx_D with tau = a^2 of the unfiltered material). Same composition as specaa_filtered_alpha2, with the per-pixel
 // kernel kept anisotropic.
 SPECAA_FLOAT3 specaa_filtered_alpha2_matrix(SpecaaSurface s) {
+#if defined(SPECAA_GATE_PIXEL_KERNEL)
+    float a = specaa_base_alpha2(s);
+    return specaa_widened_matrix(a, specaa_baked_kernel_matrix(s) + specaa_gate_baked_kernel(specaa_pixel_kernel_matrix(s), a));
+#else
     return specaa_widened_matrix(specaa_base_alpha2(s), specaa_baked_kernel_matrix(s) + specaa_pixel_kernel_matrix(s));
+#endif
 }
 
 // Level of detail the hardware samples a texture at uv (negative under magnification).
@@ -856,17 +877,34 @@ float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, SpecaaSurface s) {
     share = k.w;
     SPECAA_FLOAT3 pixel = specaa_pixel_kernel_matrix(s);
     SPECAA_FLOAT3 flatA = specaa_widened_matrix(a, pixel);
-    SPECAA_FLOAT3 roughA = specaa_widened_matrix(a, specaa_gate_baked_kernel((2.0 / max(share, 1.0e-3)) * k.xyz, a) + pixel);
+    SPECAA_FLOAT3 roughK = specaa_gate_baked_kernel((2.0 / max(share, 1.0e-3)) * k.xyz, a);
+    SPECAA_FLOAT3 roughA = specaa_widened_matrix(a, roughK + pixel);
     if (share < 1.0) {
         flatD = specaa_convolved_D(h, flatA, a);
         A = roughA;
     }
 #endif
-    float w = SPECAA_SATURATE(lod) * SPECAA_SATURATE(SPECAA_GGX_SPREAD * specaa_sym_max_eigenvalue(A - SPECAA_FLOAT3(a, a, 0.0)));
+    // The blend weight is judged on all of K = A - a I, the per-pixel kernel included. Opt-in
+    // SPECAA_BLEND_FROM_BAKED_SPREAD judges it on the baked spread alone: the pixel kernel is the image of
+    // the Gaussian pixel filter under the surface's curvature (TK21 Eq. 3), for which the convolution is
+    // exact, and a large one (rims, strongly curved small parts: up to kappa) otherwise switches the pixel
+    // to GGX(A), whose tails put a flickering halo around highlights and along rims on models outside the
+    // bench's corpus; but where the clamped pixel kernel hides geometry a pixel wide (domes of mesh), GGX(A)
+    // is what fits, and the bench's NormalTangentTest far fails without it (docs/accuracy.md#do-no-harm-in-the-field).
+    SPECAA_FLOAT3 spread = A - SPECAA_FLOAT3(a, a, 0.0);
+#if defined(SPECAA_BLEND_FROM_BAKED_SPREAD) && defined(SPECAA_KERNEL_TEXTURE) && defined(SPECAA_KERNEL_ANISOTROPIC) && defined(SPECAA_KERNEL_TWO_LOBES)
+    spread = roughK;
+#elif defined(SPECAA_BLEND_FROM_BAKED_SPREAD)
+    spread = specaa_baked_kernel_matrix(s);
+#endif
+    float w = SPECAA_SATURATE(lod) * SPECAA_SATURATE(SPECAA_GGX_SPREAD * specaa_sym_max_eigenvalue(spread));
 #else
     float w = 0.0;
 #endif
     w = SPECAA_SELECT(w == w, w, 1.0);
+#if defined(SPECAA_DEFAULT_D_WEIGHT)
+    w = SPECAA_DEFAULT_D_WEIGHT;
+#endif
     float ggx = specaa_ggx_D(h, A, a * a);
     float roughD = ggx;
     if (w < 1.0) roughD = ggx + (1.0 - w) * (specaa_convolved_D(h, A, a) - ggx);

@@ -246,6 +246,9 @@ std::vector<SimTextureBake> texture_bakes_for(const std::vector<SimCandidate>& c
                                              : IsotropicReduction::Mean;
         s.filter = k.ends_with("approx") ? RoughnessFilterMode::Approx : RoughnessFilterMode::Projected;
         s.outputs.normal = false;
+        // The simulator shades the glTF decode (scene_file.cpp: the stored blue channel), so the bake reads
+        // the same normals.
+        s.reconstruct_z = ReconstructZ::Gltf;
         // The glint materials' LEAN (pipeline/glint_bake.h): slope space, the base roughness folded in.
         if (k == "slope-lean") s.lean_space = LeanSpace::Slope;
         s.anisotropic = !k.ends_with("isotropic-kernel");

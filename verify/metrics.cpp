@@ -97,4 +97,22 @@ SimMetrics SimMetricsAccumulator::finish() const {
     return m;
 }
 
+std::vector<float> SimMetricsAccumulator::pixel_flicker() const {
+    std::vector<float> out(history_.size(), std::nanf(""));
+    for (size_t i = 0; i < history_.size(); ++i) {
+        const PixelHistory& h = history_[i];
+        if (h.count != frames_ || frames_ < 2) continue;
+        const double k = double(h.count);
+        out[i] = float(std::sqrt(std::max(0.0, h.sum_sq / k - (h.sum / k) * (h.sum / k))));
+    }
+    return out;
+}
+
+std::vector<float> SimMetricsAccumulator::pixel_temporal_error() const {
+    std::vector<float> out(history_.size(), std::nanf(""));
+    for (size_t i = 0; i < history_.size(); ++i)
+        if (history_[i].pairs > 0) out[i] = float(std::sqrt(history_[i].pair_sq_tm / (2.0 * history_[i].pairs)));
+    return out;
+}
+
 }  // namespace specbake::verify

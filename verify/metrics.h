@@ -38,6 +38,11 @@ class SimMetricsAccumulator {
 public:
     void add_frame(const SimImage& ground_truth, const SimImage& candidate);
     SimMetrics finish() const;
+    // Per pixel (row-major, width x height of the frames): the temporal standard deviation of T(c) - T(g)
+    // (the flicker's pixel term; NaN where a frame did not score the pixel) and the Allan deviation of
+    // T(c) - T(g) over consecutive frame pairs (the temporal error's pixel term; NaN without a pair).
+    std::vector<float> pixel_flicker() const;
+    std::vector<float> pixel_temporal_error() const;
 
 private:
     struct PixelHistory {

@@ -117,6 +117,121 @@ Image make_strip(const SimImage& gt, const std::vector<StripTile>& candidates) {
     return strip;
 }
 
+namespace {
+
+HarmSummary harm_summary(const std::vector<float>& c, const std::vector<float>& b, const std::vector<bool>& edge) {
+    HarmSummary h;
+    double base = 0;
+    for (size_t i = 0; i < c.size() && i < b.size(); ++i) {
+        if (!std::isfinite(c[i]) || !std::isfinite(b[i])) continue;
+        base += b[i];
+        const double d = double(c[i]) - double(b[i]);
+        if (d > 0) {
+            h.excess += d;
+            if (edge[i]) h.edge_excess += d;
+        } else {
+            h.relief -= d;
+        }
+        ++h.pixels;
+    }
+    if (base > 0) {
+        h.excess /= base;
+        h.relief /= base;
+        h.edge_excess /= base;
+    }
+    return h;
+}
+
+double finite_mean(const std::vector<float>& v) {
+    double sum = 0;
+    long long n = 0;
+    for (float x : v)
+        if (std::isfinite(x)) sum += x, ++n;
+    return n > 0 ? sum / double(n) : 0.0;
+}
+
+}  // namespace
+
+Image make_harm_map(const SimImage& gt, const HarmTile& baseline, const std::vector<HarmTile>& candidates,
+                    std::vector<HarmReport>* summaries) {
+    // Cropped to the object (the pixels the ground truth covers, 4 pixels of margin), magnified to about
+    // 384 pixels: at the far distance a model is a few dozen pixels wide.
+    int x_lo = gt.width, x_hi = -1, y_lo = gt.height, y_hi = -1;
+    for (int y = 0; y < gt.height; ++y)
+        for (int x = 0; x < gt.width; ++x)
+            if (gt.texel(x, y)[1] > 0.0f) x_lo = std::min(x_lo, x), x_hi = std::max(x_hi, x), y_lo = std::min(y_lo, y), y_hi = std::max(y_hi, y);
+    if (x_hi < 0) x_lo = 0, x_hi = gt.width - 1, y_lo = 0, y_hi = gt.height - 1;
+    x_lo = std::max(0, x_lo - 4), y_lo = std::max(0, y_lo - 4);
+    x_hi = std::min(gt.width - 1, x_hi + 4), y_hi = std::min(gt.height - 1, y_hi + 4);
+    const int crop_w = x_hi - x_lo + 1, crop_h = y_hi - y_lo + 1;
+    const int zoom = std::clamp(384 / std::max(crop_w, crop_h), 1, 12);
+    const int w = crop_w * zoom, h = crop_h * zoom, gap = 4;
+    const int tile_w = std::max(w, 64 * 4 * kScale) + gap, tile_h = h + kLabelHeight;  // room for 64 characters
+    Image map(3 * tile_w, std::max<int>(1, int(candidates.size())) * tile_h, 3);
+    // Silhouette band: within 2 pixels of a pixel the ground truth does not fully cover.
+    std::vector<bool> edge(gt.texel_count(), false);
+    for (int y = 0; y < gt.height; ++y)
+        for (int x = 0; x < gt.width; ++x)
+            for (int dy = -2; dy <= 2 && !edge[size_t(y) * gt.width + x]; ++dy)
+                for (int dx = -2; dx <= 2; ++dx) {
+                    const int u = std::clamp(x + dx, 0, gt.width - 1), v = std::clamp(y + dy, 0, gt.height - 1);
+                    if (gt.texel(u, v)[1] < 0.999f) {
+                        edge[size_t(y) * gt.width + x] = true;
+                        break;
+                    }
+                }
+    std::vector<float> values;
+    for (size_t i = 0; i < gt.texel_count(); ++i)
+        if (gt.pixels[2 * i + 1] > 0.0f) values.push_back(gt.pixels[2 * i]);
+    float p99 = 1.0f;
+    if (!values.empty()) {
+        const size_t k = size_t(0.99 * double(values.size() - 1));
+        std::nth_element(values.begin(), values.begin() + long(k), values.end());
+        p99 = std::max(values[k], 1e-6f);
+    }
+    const auto tone = [p99](float x) { return (x / p99) / (1.0f + x / p99); };
+    const double scale_flicker = 2.0 * std::max(finite_mean(*baseline.flicker), 1e-9);
+    const double scale_terr = 2.0 * std::max(finite_mean(*baseline.temporal_error), 1e-9);
+    for (size_t c = 0; c < candidates.size(); ++c) {
+        const int row = int(c) * tile_h;
+        // Column 0: the ground truth; columns 1, 2: flicker and temporal error against the baseline.
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x)
+                std::fill_n(map.texel(x, row + kLabelHeight + y), 3, srgb(tone(gt.texel(x_lo + x / zoom, y_lo + y / zoom)[0])));
+        draw_text(map, 2, row + 3, "ground truth");
+        const std::vector<float>* mine[2] = {candidates[c].flicker, candidates[c].temporal_error};
+        const std::vector<float>* base[2] = {baseline.flicker, baseline.temporal_error};
+        const double scale[2] = {scale_flicker, scale_terr};
+        const char* what[2] = {"flicker tm", "t-err tm"};
+        for (int m = 0; m < 2; ++m) {
+            const int x0 = (m + 1) * tile_w;
+            const auto [first, second] = wrap_label(candidates[c].label + " - " + baseline.label, size_t(std::max(1, (tile_w - gap) / (4 * kScale))));
+            draw_text(map, x0 + 2, row + 3, first + " " + what[m]);
+            draw_text(map, x0 + 2, row + 3 + kLineHeight, second);
+            for (int y = 0; y < h; ++y)
+                for (int x = 0; x < w; ++x) {
+                    const int px = x_lo + x / zoom, py = y_lo + y / zoom;
+                    const size_t i = size_t(py) * gt.width + size_t(px);
+                    float* o = map.texel(x0 + x, row + kLabelHeight + y);
+                    const float cv = (*mine[m])[i], bv = (*base[m])[i];
+                    if (!std::isfinite(cv) || !std::isfinite(bv)) {
+                        std::fill_n(o, 3, 0.0f);
+                        continue;
+                    }
+                    const float g = 0.3f * srgb(tone(gt.texel(px, py)[0]));
+                    const float d = float((double(cv) - double(bv)) / scale[m]);
+                    o[0] = std::clamp(g + std::max(d, 0.0f) * (1.0f - g), 0.0f, 1.0f);
+                    o[1] = g;
+                    o[2] = std::clamp(g + std::max(-d, 0.0f) * (1.0f - g), 0.0f, 1.0f);
+                }
+        }
+        if (summaries)
+            summaries->push_back({candidates[c].label, harm_summary(*candidates[c].flicker, *baseline.flicker, edge),
+                                  harm_summary(*candidates[c].temporal_error, *baseline.temporal_error, edge)});
+    }
+    return map;
+}
+
 Result<void> write_strip_png(const Image& strip, const std::filesystem::path& path) {
     // io::write_texture writes `<stem>_mip0.png` atomically into a folder; a private folder next to the
     // destination keeps that name out of sight, and the rename onto `path` is atomic too.

@@ -101,6 +101,21 @@ std::vector<SimCandidate> select_candidates(const SimScene& scene, const VerifyO
             if (curvature && c.curvature_bake.empty()) c.curvature_bake = c.shader.curvature_source = estimator;
         }
     }
+    if (!options.default_variants.empty()) {
+        const auto base = std::find_if(candidates.begin(), candidates.end(),
+                                       [](const SimCandidate& c) { return c.name == "default"; });
+        if (base == candidates.end()) {
+            notes.push_back("--variant: no default candidate on " + scene.name + ", variants skipped");
+        } else {
+            const SimCandidate copy = *base;
+            for (const auto& [label, lines] : options.default_variants) {
+                SimCandidate v = copy;
+                v.name = "default:" + label;
+                v.shader.defines = lines + v.shader.defines;
+                candidates.push_back(std::move(v));
+            }
+        }
+    }
     return candidates;
 }
 
@@ -253,6 +268,10 @@ void fill_candidate_rows(const std::vector<SimCandidate>& candidates, std::vecto
         row.family = c.family;
         row.source = c.source;
         row.metrics = scores[i].finish();
+        if (options.pixel_maps) {
+            row.pixel_flicker = scores[i].pixel_flicker();
+            row.pixel_temporal_error = scores[i].pixel_temporal_error();
+        }
         if (!c.texture_bake.empty()) row.bake_ms = bake_ms[c.texture_bake];
         if (!c.curvature_bake.empty() && c.curvature_bake != "exact")
             row.bake_ms = row.bake_ms.value_or(0.0) + bake_ms["curvature:" + c.curvature_bake];
@@ -306,6 +325,10 @@ void add_reference_rows(FrameScores& scores, const FramePrograms& programs, cons
                      std::to_string(ground_truth_layout(scores.floor_spp, options.width, options.height).samples()) +
                      " spp (independent jitter) against the full one";
         row.metrics = scores.floor.finish();
+        if (options.pixel_maps) {
+            row.pixel_flicker = scores.floor.pixel_flicker();
+            row.pixel_temporal_error = scores.floor.pixel_temporal_error();
+        }
         row.image = std::move(scores.floor_image);
         report.candidates.push_back(std::move(row));
     }

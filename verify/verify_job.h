@@ -26,6 +26,9 @@ struct VerifyOptions {
     bool variants = true;     // include the bake variants
     std::vector<std::string> only;  // candidate names to keep ("none" is always kept); empty: all
     bool keep_images = true;  // keep frame 0 of every image for strips
+    // Keep every candidate's per-pixel tone-mapped flicker and temporal error (CandidateReport) for the
+    // harm map (strips.h, `verify --harm-map`).
+    bool pixel_maps = false;
     // The glint dictionary of scenes whose materials ask for glints (shared_glint_dictionary: baked once
     // per process); the defaults are what `specbake glints` and `bake` write.
     GlintDictionarySettings glint_dictionary;
@@ -38,6 +41,10 @@ struct VerifyOptions {
     // Lines "#define NAME VALUE" put before every candidate's own defines, but not the baselines' (none,
     // glint-c20) or the ground truths' (`--define`).
     std::string defines;
+    // Copies of the "default" candidate, each named "default:LABEL" and compiled with its own extra
+    // "#define" lines (after `defines`): several variants of the rule scored against one ground truth
+    // (`verify --variant`), for attributing an error to one part of the rule.
+    std::vector<std::pair<std::string, std::string>> default_variants;
     // Ground-truth samples integrate the highlight over their stratum (false: point samples).
     bool footprint_ground_truth = true;
     // Receives one line per finished stage (bakes, each ground-truth frame, timing); may be empty.
@@ -54,6 +61,8 @@ struct CandidateReport {
     std::optional<double> frame_ms;       // median render time on this context
     std::optional<double> frame_relative; // frame_ms / frame_ms of "none"
     SimImage image;                       // frame 0 (when keep_images)
+    // With VerifyOptions::pixel_maps: per pixel T(c) - T(g)'s temporal std and Allan deviation (metrics.h).
+    std::vector<float> pixel_flicker, pixel_temporal_error;
 };
 
 struct SceneReport {

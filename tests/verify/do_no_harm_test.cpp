@@ -53,6 +53,9 @@ void expect_default_no_worse(const SimScene& scene, int size = 64, bool tone_map
     }
 }
 
+// Settings of the field models' checks (the issue's: 256x256, 256 spp, 8 frames).
+constexpr int kFieldSize = 256, kFieldSpp = 256, kFieldFrames = 8;
+
 void shared_model(const char* name, int size = 64, bool tone_mapped = false, const std::string& distance = "far",
                   int spp = 64, int frames = 3) {
     const fs::path file = fs::path(SPECBAKE_ASSETS_DIR) / "gltf" / name / (std::string(name) + ".gltf");
@@ -153,6 +156,52 @@ TEST(VerifyDoNoHarm, DefaultNoWorseThanNoneOnARoughBumpMappedSphere) {
 TEST(VerifyDoNoHarm, DefaultNoWorseThanNoneOnNormalTangentMirrorTestNearToneMapped) {
     SPECBAKE_REQUIRE_GL();
     shared_model("NormalTangentMirrorTest", 128, true, "near", 64, 4);
+}
+
+// Models outside the bench's corpus (docs/accuracy.md#do-no-harm-in-the-field), far distance, the settings.
+// Cause A there: the default's GGX(A) share is judged on all of K = A - a I, pixel kernel included, so
+// strongly curved parts (the lamp's twisted stem, the olives' rims) get GGX(A)'s heavy tails, a halo that
+// moves with the image and raises the tone-mapped temporal error above no filtering's (Lamp far 1.05x,
+// olives far 1.22x). With the blend judged on the baked spread alone (opt-in
+// SPECAA_BLEND_FROM_BAKED_SPREAD; not the default: it fails NormalTangentTest far) both pairs hold every
+// measure. The test pins both halves: if the default stops failing, the cause is gone and the default
+// check belongs in VerifyDoNoHarm; if the opt-in fails, the attribution is wrong.
+void expect_blend_from_baked_spread_holds(const char* name, const std::string& distance, int size, int spp, int frames) {
+    const fs::path file = fs::path(SPECBAKE_ASSETS_DIR) / "gltf" / name / (std::string(name) + ".gltf");
+    if (!fs::exists(file)) GTEST_SKIP() << file << " not found: shared assets absent, do-no-harm not checked on it";
+    auto scene = load_sim_scene(file);
+    ASSERT_TRUE(scene.ok()) << scene.error().message;
+    const SimScene at = at_distance(*scene, distance, distance_factor(distance));
+    for (const bool baked_spread : {true, false}) {
+        VerifyOptions options = test::small_verify(size, size, spp, frames);
+        options.only = {"default"};
+        if (baked_spread) options.defines = "#define SPECAA_BLEND_FROM_BAKED_SPREAD\n";
+        auto report = run_verify(at, options);
+        ASSERT_TRUE(report.ok()) << report.error().message;
+        const SimMetrics* none = metrics_of(*report, "none");
+        const SimMetrics* def = metrics_of(*report, "default");
+        ASSERT_TRUE(none && def);
+        if (baked_spread) {
+            EXPECT_LE(def->rmse, 1.02 * none->rmse) << name;
+            EXPECT_LE(def->flicker_linear, none->flicker_linear) << name;
+            EXPECT_LE(def->flicker, none->flicker) << name;
+            EXPECT_LE(def->temporal_error_linear, none->temporal_error_linear) << name;
+            EXPECT_LE(def->temporal_error, none->temporal_error) << name;
+        } else {
+            EXPECT_GT(def->temporal_error, none->temporal_error)
+                << name << ": the default no longer raises the tone-mapped temporal error here (cause A gone?)";
+        }
+    }
+}
+
+TEST(VerifyDoNoHarmField, BlendFromTheBakedSpreadHoldsOnLightsPunctualLampFar) {
+    SPECBAKE_REQUIRE_GL();
+    expect_blend_from_baked_spread_holds("LightsPunctualLamp", "far", kFieldSize, kFieldSpp, kFieldFrames);
+}
+
+TEST(VerifyDoNoHarmField, BlendFromTheBakedSpreadHoldsOnIridescentDishWithOlivesFar) {
+    SPECBAKE_REQUIRE_GL();
+    expect_blend_from_baked_spread_holds("IridescentDishWithOlives", "far", kFieldSize, kFieldSpp, kFieldFrames);
 }
 
 // Mixed texels: sparse grooves on a flat field (the built-in scratched sphere), alpha 0.05, 128x128, 64 spp,

@@ -4,6 +4,7 @@
 // a built-in-style scene, far point and spot lights against a directional light of equal irradiance,
 // texture values decoded and scaled by hand.
 #include "verify/verify_job.h"
+#include "bake/texture_bake.h"
 #include "verify/renderer.h"
 #include "verify/scene.h"
 #include "verify/scene_file.h"
@@ -322,6 +323,69 @@ TEST(VerifySceneFile, MaterialTexturesAreDecodedWithTheirFactorAndScale) {
     EXPECT_NEAR(2.0 * n[2] - 1.0, 0.8 / l, 1e-3);
     EXPECT_EQ(scene->objects[0].material.normal_map, 0);
     EXPECT_EQ(scene->objects[0].material.roughness_map, 0);
+}
+
+// A normal map whose blue channel is constant 255 (an embossed map written with z = 1): glTF viewers and
+// the simulator shade normalize(2c - 1) with that stored blue (glTF 2.0 Sec. 3.9.3), not z rebuilt from x
+// and y. The bake with the glTF decode (what scene bakes use) must give the same kernel mips as a bake of
+// the simulator's own decoded map; rebuilding z (`--reconstruct-z auto`) gives a larger spread.
+TEST(VerifySceneFile, SceneBakesDecodeNormalMapsAsTheSimulatorDoes) {
+    TempDir dir;
+    constexpr int kSize = 32;
+    Image normal(kSize, kSize, 3);
+    for (int y = 0; y < kSize; ++y)
+        for (int x = 0; x < kSize; ++x) {
+            // Embossed bumps: slopes up to ~0.6 in x and y, 8-bit codes, blue fixed at 255.
+            const double sx = 0.6 * std::sin(2.0 * kPi * x / 8.0), sy = 0.5 * std::cos(2.0 * kPi * y / 6.0);
+            normal.texel(x, y)[0] = float(std::round(255.0 * 0.5 * (sx + 1.0)) / 255.0);
+            normal.texel(x, y)[1] = float(std::round(255.0 * 0.5 * (sy + 1.0)) / 255.0);
+            normal.texel(x, y)[2] = 1.0f;
+        }
+    ASSERT_TRUE(io::write_image(dir.path() / "normal.png", normal, 8).ok());
+    const fs::path path = write_sphere_gltf(dir.path(), {}, {{"normalTexture", {{"index", 0}}}});
+    {
+        std::ifstream in(path);
+        json gltf = json::parse(in);
+        gltf["images"] = json::array({{{"uri", "normal.png"}}});
+        gltf["textures"] = json::array({{{"source", 0}}});
+        std::ofstream(path) << gltf.dump(1);
+    }
+    auto scene = load_sim_scene(path);
+    ASSERT_TRUE(scene.ok()) << scene.error().message;
+    ASSERT_EQ(scene->normal_maps.size(), 1u);
+    auto decoded = io::read_image(dir.path() / "normal.png");
+    ASSERT_TRUE(decoded.ok()) << decoded.error().message;
+
+    TextureBakeSettings gltf_decode;
+    gltf_decode.reconstruct_z = ReconstructZ::Gltf;
+    TextureBakeSettings auto_decode = gltf_decode;
+    auto_decode.reconstruct_z = ReconstructZ::Auto;
+    auto from_file = bake_texture(*decoded, nullptr, 0, 0.2f, gltf_decode);
+    auto from_simulator = bake_texture(scene->normal_maps[0], nullptr, 0, 0.2f, gltf_decode);
+    auto rebuilt = bake_texture(*decoded, nullptr, 0, 0.2f, auto_decode);
+    ASSERT_TRUE(from_file.ok() && from_simulator.ok() && rebuilt.ok());
+    EXPECT_FALSE(from_file->notes.z_reconstructed);
+    EXPECT_EQ(from_file->notes.z_decode, "stored blue channel");
+    EXPECT_TRUE(rebuilt->notes.z_reconstructed);
+    EXPECT_EQ(rebuilt->notes.z_reason, "constant full-scale blue channel");
+    ASSERT_EQ(from_file->kernel.levels.size(), from_simulator->kernel.levels.size());
+    double trace_file = 0, trace_rebuilt = 0;
+    for (size_t level = 1; level < from_file->kernel.levels.size(); ++level) {
+        const Image& a = from_file->kernel.levels[level];
+        const Image& b = from_simulator->kernel.levels[level];
+        const Image& c = rebuilt->kernel.levels[level];
+        ASSERT_EQ(a.pixels.size(), b.pixels.size());
+        for (size_t t = 0; t < a.texel_count(); ++t) {
+            // Sigma (xx, yy, xy): the simulator's map holds the same unit normals, re-encoded as floats.
+            for (int ch = 0; ch < 3; ++ch)
+                EXPECT_NEAR(a.pixels[4 * t + size_t(ch)], b.pixels[4 * t + size_t(ch)], 2e-5) << level << " " << t;
+            trace_file += a.pixels[4 * t] + a.pixels[4 * t + 1];
+            trace_rebuilt += c.pixels[4 * t] + c.pixels[4 * t + 1];
+        }
+    }
+    // Rebuilding z tilts every normal further than (2c - 1) normalised does (z = sqrt(1 - x^2 - y^2) < 1):
+    // the projected spread grows.
+    EXPECT_GT(trace_rebuilt, 1.05 * trace_file);
 }
 
 TEST(VerifySceneFile, EveryCandidateRunsOnASceneFileWithEstimatedCurvature) {
