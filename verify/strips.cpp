@@ -10,6 +10,19 @@
 namespace specbake::verify {
 namespace {
 
+// The 99th percentile of the ground truth's radiance over the pixels the object covers (1 when it covers
+// none): the white point of the strips' and harm maps' tone mapping.
+float covered_p99(const SimImage& gt) {
+    std::vector<float> values;
+    for (size_t i = 0; i < gt.texel_count(); ++i)
+        if (gt.pixels[2 * i + 1] > 0.0f) values.push_back(gt.pixels[2 * i]);
+    if (values.empty()) return 1.0f;
+    const size_t k = size_t(0.99 * double(values.size() - 1));
+    std::nth_element(values.begin(), values.begin() + long(k), values.end());
+    return std::max(values[k], 1e-6f);
+}
+
+
 // 3 x 5 pixel glyphs, one row per 3-bit value (bit 2 = left column).
 struct Glyph {
     char c;
@@ -83,15 +96,7 @@ Image make_strip(const SimImage& gt, const std::vector<StripTile>& candidates) {
     const int columns = 1 + int(candidates.size());
     const int tile_w = w + gap, tile_h = h + kLabelHeight;
     Image strip(columns * tile_w, 2 * tile_h, 3);
-    std::vector<float> values;
-    for (size_t i = 0; i < gt.texel_count(); ++i)
-        if (gt.pixels[2 * i + 1] > 0.0f) values.push_back(gt.pixels[2 * i]);
-    float p99 = 1.0f;
-    if (!values.empty()) {
-        const size_t k = size_t(0.99 * double(values.size() - 1));
-        std::nth_element(values.begin(), values.begin() + long(k), values.end());
-        p99 = std::max(values[k], 1e-6f);
-    }
+    const float p99 = covered_p99(gt);
     const auto tone = [p99](float x) { return (x / p99) / (1.0f + x / p99); };
     const auto put_image = [&](const SimImage& im, int column) {
         for (int y = 0; y < h; ++y)
@@ -180,15 +185,7 @@ Image make_harm_map(const SimImage& gt, const HarmTile& baseline, const std::vec
                         break;
                     }
                 }
-    std::vector<float> values;
-    for (size_t i = 0; i < gt.texel_count(); ++i)
-        if (gt.pixels[2 * i + 1] > 0.0f) values.push_back(gt.pixels[2 * i]);
-    float p99 = 1.0f;
-    if (!values.empty()) {
-        const size_t k = size_t(0.99 * double(values.size() - 1));
-        std::nth_element(values.begin(), values.begin() + long(k), values.end());
-        p99 = std::max(values[k], 1e-6f);
-    }
+    const float p99 = covered_p99(gt);
     const auto tone = [p99](float x) { return (x / p99) / (1.0f + x / p99); };
     const double scale_flicker = 2.0 * std::max(finite_mean(*baseline.flicker), 1e-9);
     const double scale_terr = 2.0 * std::max(finite_mean(*baseline.temporal_error), 1e-9);
