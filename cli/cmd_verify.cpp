@@ -30,7 +30,6 @@ struct VerifyCommandOptions {
     std::string builtin;
     float alpha = 0.05f;
     SimCommandOptions sim;
-    std::vector<std::string> only;
     std::string strip;
     std::string harm_map;
     float distance = 1.0f;
@@ -39,7 +38,6 @@ struct VerifyCommandOptions {
 int run_verify_command(const VerifyCommandOptions& o) {
     VerifyOptions options;
     if (!apply_sim_command_options(o.sim, options)) return kExitUsage;
-    options.only = o.only;
     options.pixel_maps = !o.harm_map.empty();
     // Frames done / total on a terminal; the stage lines as plain lines otherwise.
     ProgressDisplay display(size_t(options.frames), progress_mode(run_settings()), "frames",
@@ -167,8 +165,6 @@ void add_verify_command(CLI::App& app, std::function<int()>& run) {
                     "Camera distance as a factor of the scene's own (bench: near 0.55, mid 1, far 3)")
         ->capture_default_str()
         ->check(CLI::Range(0.05f, 100.0f));
-    sub->add_option("--only", o->only, "Only these candidates (plus 'none'), e.g. --only projected,default")
-        ->delimiter(',');
     sub->add_option("--strip", o->strip, "Also write the image strip (frame 0) to this PNG file");
     sub->add_option("--harm-map", o->harm_map,
                     "Also write the harm map to this PNG file: per pixel, where each candidate's tone-mapped flicker "

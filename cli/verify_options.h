@@ -27,6 +27,7 @@ struct SimCommandOptions {
     bool no_limit = false;
     std::vector<std::string> defines;  // NAME or NAME=VALUE
     std::vector<std::string> variants;  // LABEL:NAME[=VALUE][+NAME[=VALUE]...]
+    std::vector<std::string> only;      // candidate names to keep besides the baselines; empty: all
 };
 
 inline void add_sim_command_options(CLI::App* sub, SimCommandOptions& o) {
@@ -54,6 +55,8 @@ inline void add_sim_command_options(CLI::App* sub, SimCommandOptions& o) {
                     "Compile every candidate but the baseline with '#define NAME VALUE' (repeatable): try the "
                     "include's settings on a scene, e.g. --define SPECAA_KERNEL_TWO_LOBES --define SPECAA_KAPPA=1.0")
         ->type_name("NAME[=VALUE]");
+    sub->add_option("--only", o.only, "Only these candidates (plus 'none'), e.g. --only projected,default")
+        ->delimiter(',');
     sub->add_option("--variant", o.variants,
                     "Also score a copy of the default named default:LABEL compiled with these defines (repeatable; "
                     "'+' separates defines), e.g. --variant nopix:SPECAA_NO_PIXEL_KERNEL --variant g1:SPECAA_KERNEL_GATE=1")
@@ -97,6 +100,7 @@ inline bool apply_sim_command_options(const SimCommandOptions& o, verify::Verify
     v.footprint_ground_truth = o.ground_truth == "footprint";
     v.floor = !o.no_floor;
     v.limit = !o.no_limit;
+    v.only = o.only;
     v.defines.clear();
     for (const std::string& d : o.defines) {
         std::string line, error;

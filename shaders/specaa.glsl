@@ -36,6 +36,7 @@ float specaa_lod_from_derivatives(vec2 size, vec2 uv) {
 #endif
 #define SPECAA_SAMPLE(tex, smp, uv) texture(tex, uv)
 #define SPECAA_SAMPLE_BIAS(tex, smp, uv, bias) texture(tex, uv, bias)
+#define SPECAA_SAMPLE_GRAD(tex, smp, uv, gx, gy) textureGrad(tex, uv, gx, gy)
 #define SPECAA_UINT3 uvec3
 // Glint dictionary (2D texture array) parameters and its explicit-gradient read.
 #define SPECAA_TEXTURE_ARRAY_PARAMS(tex, smp) sampler2DArray tex
@@ -93,6 +94,8 @@ float specaa_lod_from_derivatives(vec2 size, vec2 uv) {
 //   SPECAA_KERNEL_LOD_BIAS b        the Sigma kernel texel sampled with this LOD bias (the mip the
 //                                   hardware picks against a finer or coarser footprint).
 //   SPECAA_GATE_PIXEL_KERNEL        the per-pixel kernel faded out like the baked one (SPECAA_KERNEL_GATE).
+//   SPECAA_KERNEL_AREA_LOD          the Sigma kernel texel sampled at the mip of the footprint's area, not of
+//                                   its major axis (the hardware's isotropic choice).
 //   SPECAA_BLEND_FROM_BAKED_SPREAD  opt-in: specaa_default_D's blend weight from the baked spread alone,
 //                                   not from all of K = A - a I (the per-pixel kernel included).
 // Textures are sampled with implicit derivatives, so the hardware selects the mip: the baked mips are
@@ -433,6 +436,13 @@ float specaa_sample_kernel_rough_share(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_F
 SPECAA_FLOAT4 specaa_sample_kernel_texel(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
 #if defined(SPECAA_KERNEL_LOD_BIAS)
     SPECAA_FLOAT4 t = SPECAA_SAMPLE_BIAS(tex, smp, uv, SPECAA_KERNEL_LOD_BIAS);
+#elif defined(SPECAA_KERNEL_AREA_LOD)
+    // The derivatives scaled by sqrt(area) / major axis: the isotropic LOD of the result is the footprint's
+    // area, not its major axis.
+    SPECAA_FLOAT2 gx = SPECAA_DDX(uv), gy = SPECAA_DDY(uv);
+    float major2 = max(dot(gx, gx), dot(gy, gy));
+    float scale = sqrt(abs(gx.x * gy.y - gx.y * gy.x) / max(major2, 1.0e-30));
+    SPECAA_FLOAT4 t = SPECAA_SAMPLE_GRAD(tex, smp, uv, gx * scale, gy * scale);
 #else
     SPECAA_FLOAT4 t = SPECAA_SAMPLE(tex, smp, uv);
 #endif

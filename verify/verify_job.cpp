@@ -89,12 +89,15 @@ std::vector<SimCandidate> select_candidates(const SimScene& scene, const VerifyO
                    std::find(options.only.begin(), options.only.end(), c.name) == options.only.end();
         });
     }
+    // With SPECAA_USE_CURVATURE a candidate reads _SPECAA_CURVATURE: the analytic one, or for a scene file the
+    // default estimator's, as for the candidates that ask for curvature themselves.
+    const auto uses_curvature = [](const std::string& lines) {
+        return lines.find("#define SPECAA_USE_CURVATURE\n") != std::string::npos ||
+               lines.find("#define SPECAA_USE_CURVATURE ") != std::string::npos;
+    };
+    const std::string estimator = has_exact_curvature(scene) ? "exact" : "shape-operator";
     if (!options.defines.empty()) {
-        // With SPECAA_USE_CURVATURE every candidate reads _SPECAA_CURVATURE: the analytic one, or for a scene
-        // file the default estimator's, as for the candidates that ask for curvature themselves.
-        const bool curvature = options.defines.find("#define SPECAA_USE_CURVATURE\n") != std::string::npos ||
-                               options.defines.find("#define SPECAA_USE_CURVATURE ") != std::string::npos;
-        const std::string estimator = has_exact_curvature(scene) ? "exact" : "shape-operator";
+        const bool curvature = uses_curvature(options.defines);
         for (SimCandidate& c : candidates) {
             if (c.name == baseline_of(c.family)) continue;
             c.shader.defines = options.defines + c.shader.defines;
@@ -112,6 +115,7 @@ std::vector<SimCandidate> select_candidates(const SimScene& scene, const VerifyO
                 SimCandidate v = copy;
                 v.name = "default:" + label;
                 v.shader.defines = lines + v.shader.defines;
+                if (uses_curvature(lines) && v.curvature_bake.empty()) v.curvature_bake = v.shader.curvature_source = estimator;
                 candidates.push_back(std::move(v));
             }
         }

@@ -65,6 +65,25 @@ TEST(ShaderCompile, GlslIncludeCompilesAsVersion330) {
     EXPECT_EQ(run_command("glslangValidator -S frag '" + path.string() + "'", out), 0) << out;
 }
 
+// The diagnostic switches of the default (verify --variant) compile in both languages with the minimal
+// examples' bindings, each on its own.
+TEST(ShaderCompile, DiagnosticSwitchesCompileToValidSpirvInBothLanguages) {
+    SPECBAKE_REQUIRE_TOOLS();
+    TempDir dir;
+    const std::string spv = (dir.path() / "x.spv").string();
+    for (const char* define : {"SPECAA_NO_BAKED_KERNEL", "SPECAA_DEFAULT_D_WEIGHT=0.0", "SPECAA_KERNEL_LOD_BIAS=-1.0",
+                               "SPECAA_GATE_PIXEL_KERNEL", "SPECAA_BLEND_FROM_BAKED_SPREAD", "SPECAA_KERNEL_AREA_LOD"}) {
+        std::string out;
+        EXPECT_EQ(run_command(std::string("glslangValidator -G -S frag -D") + define + " -I'" + kShaders + "' '" +
+                                  kShaders + "/examples/minimal.frag' -o '" + spv +
+                                  "' && spirv-val --target-env opengl4.5 '" + spv + "'",
+                              out), 0) << define << "\n" << out;
+        EXPECT_EQ(run_command(std::string("glslangValidator -V -D -e main -S frag -D") + define + " -I'" + kShaders +
+                                  "' '" + kShaders + "/examples/minimal.hlsl' -o '" + spv + "' && spirv-val '" + spv + "'",
+                              out), 0) << define << "\n" << out;
+    }
+}
+
 // With the baked roughness bound the default NDF samples its level of detail (textureQueryLod is GLSL
 // 4.00): the include must still compile as GLSL 3.30 with the driver itself, which (unlike
 // glslangValidator) holds to the version, and as 4.50; with the kernel mips as well.

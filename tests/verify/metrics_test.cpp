@@ -1,5 +1,6 @@
 // Simulator building blocks against independent computations: metrics on synthetic images, the ground
 // truth's sample layout, the camera motion, and the built-in scenes' analytic geometry.
+#include "verify/bench_job.h"
 #include "verify/metrics.h"
 #include "verify/renderer.h"
 #include "verify/scene.h"
@@ -175,6 +176,45 @@ TEST(VerifyScenes, AnalyticGeometryIsConsistent) {
     }
     EXPECT_FALSE(make_builtin_scene("teapot", 0.3f).ok());
     EXPECT_FALSE(make_builtin_scene("sphere", 1.5f).ok());
+}
+
+
+// The bench's do-no-harm table names, per scene, every measure whose ratio to no filtering exceeds its goal
+// (RMSE 1.02x, the others 1.00x), gives the default's energy and the floor's ratios, and counts the scenes
+// that hold. Ratios computed by hand from the rows below.
+TEST(VerifyBenchSummary, DoNoHarmTableNamesEveryFailingMeasureWithItsFloor) {
+    const auto row = [](const char* name, double rmse, double flicker_linear, double flicker, double terr_linear,
+                        double terr, double energy) {
+        CandidateReport c;
+        c.name = c.family = name;
+        c.metrics.rmse = rmse;
+        c.metrics.flicker_linear = flicker_linear;
+        c.metrics.flicker = flicker;
+        c.metrics.temporal_error_linear = terr_linear;
+        c.metrics.temporal_error = terr;
+        c.metrics.energy_ratio = energy;
+        return c;
+    };
+    BenchReport report;
+    SceneReport harmed;
+    harmed.scene = "lamp@far";
+    harmed.from_file = true;
+    harmed.candidates = {row("none", 1.0, 0.2, 0.1, 0.4, 0.01, 1.3), row("default", 1.021, 0.1, 0.11, 0.2, 0.0125, 0.8),
+                         row("floor", 0.05, 0.02, 0.01, 0.1, 0.004, 1.0)};
+    SceneReport holding;
+    holding.scene = "box@near";
+    holding.from_file = true;
+    holding.candidates = {row("none", 2.0, 0.2, 0.1, 0.4, 0.02, 1.0), row("default", 1.0, 0.1, 0.05, 0.2, 0.02, 1.0)};
+    report.scenes = {harmed, holding};
+    const std::string md = bench_summary_markdown(report);
+    EXPECT_NE(md.find("| lamp@far | 1.021 | 0.500 | 1.100 | 0.500 | 1.250 | 0.80 | **RMSE, flicker (tm), t-err (tm)** "
+                      "| 0.050 | 0.100 | 0.100 | 0.250 | 0.400 |"),
+              std::string::npos)
+        << md;
+    EXPECT_NE(md.find("| box@near | 0.500 | 0.500 | 0.500 | 0.500 | 1.000 | 1.00 | holds | - | - | - | - | - |"),
+              std::string::npos)
+        << md;
+    EXPECT_NE(md.find("The default holds on 1 of 2 scenes."), std::string::npos) << md;
 }
 
 }  // namespace

@@ -430,6 +430,30 @@ TEST(VerifySceneFile, EveryCandidateRunsOnASceneFileWithEstimatedCurvature) {
     EXPECT_TRUE(baked_curvature);
 }
 
+// A --variant whose defines ask for SPECAA_USE_CURVATURE gets the estimated curvature bound, as --define does:
+// on a glossy sphere from a file its per-pixel kernel then removes most of no filtering's error (unbound, the
+// attribute reads as zero curvature and the row equals none's).
+TEST(VerifySceneFile, VariantAskingForCurvatureReadsTheEstimatedCurvature) {
+    SPECBAKE_REQUIRE_GL();
+    TempDir dir;
+    const fs::path path = write_sphere_gltf(dir.path(), {}, {{"pbrMetallicRoughness", {{"roughnessFactor", 0.1}}}});
+    auto scene = load_sim_scene(path);
+    ASSERT_TRUE(scene.ok()) << scene.error().message;
+    ASSERT_FALSE(has_exact_curvature(*scene));
+    VerifyOptions options = test::small_verify(64, 64, 64, 2);
+    options.only = {"default"};
+    options.default_variants = {{"curv", "#define SPECAA_USE_CURVATURE\n"}};
+    auto report = run_verify(*scene, options);
+    ASSERT_TRUE(report.ok()) << report.error().message;
+    const SimMetrics *none = nullptr, *curv = nullptr;
+    for (const CandidateReport& c : report->candidates) {
+        if (c.name == "none") none = &c.metrics;
+        if (c.name == "default:curv") curv = &c.metrics;
+    }
+    ASSERT_TRUE(none && curv);
+    EXPECT_LT(curv->rmse, 0.6 * none->rmse);
+}
+
 TEST(VerifySceneFile, MaterialsWithoutANormalMapKeepTheirRoughnessInBakedCandidates) {
     SPECBAKE_REQUIRE_GL();
     // Two spheres side by side, only the right one normal-mapped: nothing is baked for the left one, so the
