@@ -185,6 +185,5 @@ TEST(VerifySimulation, CurvatureDefineBindsTheCurvatureOfEveryCandidate) {
     EXPECT_LT(metrics(*r, "default").rmse, 0.8 * metrics(*r, "none").rmse);
 }
 
-
 }  // namespace
 }  // namespace specbake::verify
