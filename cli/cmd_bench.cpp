@@ -159,13 +159,18 @@ void add_bench_command(CLI::App& app, std::function<int()>& run) {
                 "  specbake bench --scenes torus,cylinder --alpha 0.01 --size 256x256 --spp 1024 --frames 16 -o big\n");
     sub->callback([&run, o, sub] {
         o->command_line = "specbake bench";
+        // As it can be run again: flags alone, comma-separated lists joined, other repeated options repeated.
         for (CLI::Option* opt : sub->get_options()) {
             if (opt->count() == 0 || opt->get_name() == "--help") continue;
-            if (opt->get_name() != "files") o->command_line += " " + opt->get_name();
-            if (opt->get_type_size() != 0) {
+            const bool positional = opt->get_name() == "files";
+            if (opt->get_items_expected_max() == 0) {
+                o->command_line += " " + opt->get_name();
+            } else if (positional || opt->get_delimiter() == ',') {
                 std::string joined;
                 for (const std::string& r : opt->results()) joined += (joined.empty() ? "" : ",") + r;
-                o->command_line += " " + joined;
+                o->command_line += (positional ? " " : " " + opt->get_name() + " ") + joined;
+            } else {
+                for (const std::string& r : opt->results()) o->command_line += " " + opt->get_name() + " " + r;
             }
         }
         run = [o] { return run_bench_command(*o); };
