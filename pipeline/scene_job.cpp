@@ -300,8 +300,11 @@ Result<void> replace_with_uastc(SceneBake& bake, io::GltfScene& scene, const Sce
         layer.transform = io::uv_transform_json(normal);
         layer.normal_scale = d.normal_scale;
         layer.roughness_factor = d.roughness_factor;
-        if (auto first = encoded_by_stem.find(d.normal_outputs_stem); first != encoded_by_stem.end())
+        if (auto first = encoded_by_stem.find(d.normal_outputs_stem); first != encoded_by_stem.end()) {
             layer.normal_from = &first->second;  // the same mean-normal chain, encoded once
+            for (const std::string& uri : {first->second.normal_uri, first->second.normal_fallback_uri})
+                if (!uri.empty()) bake.used_by(uri, d.material);
+        }
         bake.say("encoding UASTC textures of material " + std::to_string(d.material) + " of " + bake.input.string());
         const size_t before = outputs.size();
         const io::Supercompression& supercompression = job.texture_format.supercompression;

