@@ -32,11 +32,13 @@ MipChain metallic_roughness_layout(const MipChain& roughness) {
 
 }  // namespace
 
-Result<void> replace_with_basisu(io::GltfScene& scene, const ReplaceLayer& layer, const fs::path& basisu,
-                                 const fs::path& dir, bool embed, std::vector<io::ManifestOutput>& outputs,
-                                 std::vector<std::string>& warnings, int zstd_level) {
+Result<io::GltfScene::BasisuTextures> replace_with_basisu(io::GltfScene& scene, const ReplaceLayer& layer,
+                                                          const fs::path& basisu, const fs::path& dir, bool embed,
+                                                          std::vector<io::ManifestOutput>& outputs,
+                                                          std::vector<std::string>& warnings, int zstd_level) {
     const std::vector<io::MaterialInfo> materials = scene.materials();
-    if (layer.material < 0 || size_t(layer.material) >= materials.size() || layer.normal.levels.empty()) return {};
+    if (layer.material < 0 || size_t(layer.material) >= materials.size() || layer.normal.levels.empty())
+        return io::GltfScene::BasisuTextures{};
     const io::MaterialInfo& mat = materials[size_t(layer.material)];
     const Image& top = layer.normal.levels.front();
     const std::string label = "material " + std::to_string(layer.material) + (mat.name.empty() ? "" : " (" + mat.name + ")");
@@ -44,7 +46,7 @@ Result<void> replace_with_basisu(io::GltfScene& scene, const ReplaceLayer& layer
         warnings.push_back(label + ": not replaced (--gltf-mode replace): its textures are " + std::to_string(top.width) +
                            "x" + std::to_string(top.height) + ", and KHR_texture_basisu needs sizes that are multiples of 4; "
                            "the baked textures stay in SPECBAKE_specular_aa");
-        return {};
+        return io::GltfScene::BasisuTextures{};
     }
     io::GltfScene::BasisuTextures t;
     t.texcoord = layer.texcoord;
@@ -75,33 +77,49 @@ Result<void> replace_with_basisu(io::GltfScene& scene, const ReplaceLayer& layer
         uri = name;
         return {};
     };
-    if (auto r = write(layer.normal, "normal", t.normal_uri); !r) return r;
-    // A metallic-roughness texture mapped unlike the normal map was not filtered (the bake used a constant
-    // roughness), and replacing it would move its metallic channel into the normal map's texture space.
+    // Level 0 of a baked chain as the slot's fallback source (see the header).
+    auto write_fallback = [&](const Image& level0, const std::string& kind, int bits, std::string& uri) -> Result<void> {
+        uri = layer.stem + "_" + kind + "_fallback.png";
+        const int depth = bits > 8 ? 16 : 8;
+        if (auto w = io::write_image(dir / uri, level0, depth); !w) return w.error();
+        io::ManifestOutput o;
+        o.kind = kind + "_fallback";
+        o.path = uri;
+        o.format = "png";
+        o.width = level0.width;
+        o.height = level0.height;
+        o.mips = 1;
+        o.channels = level0.channels;
+        o.extra = {{"gltf", kind == "normal" ? "normalTexture source (without KHR_texture_basisu)"
+                                             : "metallicRoughnessTexture source (without KHR_texture_basisu)"}};
+        outputs.push_back(std::move(o));
+        return {};
+    };
+    if (layer.normal_from) {
+        t.normal_uri = layer.normal_from->normal_uri;
+        t.normal_fallback_uri = layer.normal_from->normal_fallback_uri;
+    } else {
+        if (auto r = write(layer.normal, "normal", t.normal_uri); !r) return r.error();
+        if (mat.normal.image < 0 || layer.normal_scale != 1.0)
+            if (auto r = write_fallback(layer.normal.levels.front(), "normal", layer.normal_bits, t.normal_fallback_uri); !r)
+                return r.error();
+    }
+    // A metallic-roughness texture mapped unlike the normal map was not filtered (the bake wrote no roughness),
+    // and replacing it would move its metallic channel into the normal map's texture space.
     if (mat.metallic_roughness.texture >= 0 && !layer.roughness_from_texture) {
         warnings.push_back(label + ": metallicRoughnessTexture kept (--gltf-mode replace): it is mapped unlike the "
-                           "normal texture, so the bake used a constant roughness");
+                           "normal texture, so its roughness is not replaced");
     } else if (!layer.roughness.levels.empty()) {  // empty when --outputs leaves roughness out
         const MipChain mr = metallic_roughness_layout(layer.roughness);
-        if (auto r = write(mr, "roughness", t.roughness_uri); !r) return r;
-        if (mat.metallic_roughness.image < 0) {
-            t.roughness_fallback_uri = layer.stem + "_roughness_fallback.png";
-            if (auto w = io::write_image(dir / t.roughness_fallback_uri, mr.levels.front(), 8); !w) return w.error();
-            io::ManifestOutput o;
-            o.kind = "roughness_fallback";
-            o.path = t.roughness_fallback_uri;
-            o.format = "png";
-            o.width = mr.levels.front().width;
-            o.height = mr.levels.front().height;
-            o.mips = 1;
-            o.channels = 3;
-            outputs.push_back(std::move(o));
-        }
+        if (auto r = write(mr, "roughness", t.roughness_uri); !r) return r.error();
+        if (mat.metallic_roughness.image < 0 || layer.roughness_factor != 1.0)
+            if (auto r = write_fallback(mr.levels.front(), "roughness", layer.roughness_bits, t.roughness_fallback_uri); !r)
+                return r.error();
     }
     std::error_code ec;
     fs::remove_all(scratch, ec);
     scene.use_basisu_textures(layer.material, t);
-    return {};
+    return t;
 }
 
 }  // namespace specbake

@@ -26,6 +26,11 @@ double half_quantisation_step(int bits, bool is_float) {
     return 0.5 / (std::ldexp(1.0, std::clamp(bits, 1, 16)) - 1.0);
 }
 
+// "<file>: material 2 'Name'", for notes.
+std::string material_label(const io::GltfScene& scene, int material, const std::string& name) {
+    return scene.source().string() + ": material " + std::to_string(material) + (name.empty() ? "" : " '" + name + "'");
+}
+
 std::string sanitize(const std::string& name) {
     std::string out;
     for (char c : name) out.push_back(std::isalnum(uint8_t(c)) || c == '-' ? c : '_');
@@ -34,6 +39,15 @@ std::string sanitize(const std::string& name) {
 }
 
 }  // namespace
+
+TextureBakeSettings layer_bake_settings(const TextureDecision& d, TextureBakeSettings s) {
+    if (d.roughness_mapped_apart) s.outputs.roughness = false;  // its statistic is measured all the same
+    if (!d.normal_outputs_stem.empty()) {                        // these depend on the normal map alone
+        s.outputs.kernel = s.outputs.normal = false;
+        if (s.lean_space != LeanSpace::Slope) s.outputs.lean = false;
+    }
+    return s;
+}
 
 double roughness_gain(double r, double kappa) {
     const double a = std::pow(std::clamp(r, 0.0, 1.0), 4.0);
@@ -78,6 +92,15 @@ public:
         is_float_[image] = decoded->info.is_float;
         return &plan_.decoded_images.emplace(image, std::move(decoded->image)).first->second;
     }
+    // The first image of the scene stored in the same file as `image` (`image` itself when none is, or when
+    // it is embedded): several image entries naming one file are decoded and baked once.
+    int first_of_file(int image) {
+        const std::filesystem::path file = image >= 0 ? scene_.image_file(image) : std::filesystem::path();
+        if (file.empty()) return image;
+        std::error_code ec;
+        const std::filesystem::path canonical = std::filesystem::weakly_canonical(file, ec);
+        return first_by_file_.emplace(ec ? file.lexically_normal() : canonical, image).first->second;
+    }
     // Why `image` could not be decoded ("" when it was).
     const std::string& error(int image) { return errors_[image]; }
     bool is_float(int image) { return is_float_[image]; }
@@ -88,6 +111,7 @@ private:
     ScenePlan& plan_;
     std::map<int, bool> is_float_;
     std::map<int, std::string> errors_;
+    std::map<std::filesystem::path, int> first_by_file_;
 };
 
 // The layers whose normals a texture bake can filter: the base (normalTexture, roughness from
@@ -204,7 +228,13 @@ Result<void> bake_and_decide_texture(TextureDecision& d, int index, const std::s
                                      const PlanOptions& options, ScenePlan& plan) {
     TextureWork& w = plan.texture_work.at(index);
     TextureBakeSettings s = options.texture_settings_for(material);
+    if (d.roughness_mapped_apart && !s.outputs.kernel && !s.outputs.lean && !s.outputs.normal) {
+        d.reason = "roughness is the only output asked for" + reason_note;
+        plan.texture_work.erase(index);
+        return {};
+    }
     if (!options.texture_sink && !options.texture_encoder) s.outputs = TextureOutputs{true, false, false, false};
+    else s = layer_bake_settings(d, s);
     Result<TextureBakeResult> baked = make_error("");
     Result<EncodedTextureBake> encoded = make_error("");
     if (options.texture_encoder) {
@@ -244,7 +274,10 @@ Result<void> bake_and_decide_texture(TextureDecision& d, int index, const std::s
 
 // The inputs a layer's texture bake is keyed by: layers with equal keys share one bake. Materials with
 // their own settings share a bake only with themselves (the name is part of the key).
-using TextureBakeKey = std::tuple<int, int, float, float, double, std::string>;
+using TextureBakeKey = std::tuple<int, int, float, float, double, bool, std::string>;
+// What the kernel, normal and projected LEAN outputs depend on: the normal map, its scale, the layer and
+// the settings. Layers with equal keys and different roughness share those files.
+using NormalBakeKey = std::tuple<int, double, std::string, std::string>;
 
 // The texture decisions, one per material and layer, each bake run (and handed on) as it is decided.
 Result<void> decide_textures(const io::GltfScene& scene, const PlanOptions& options,
@@ -253,6 +286,7 @@ Result<void> decide_textures(const io::GltfScene& scene, const PlanOptions& opti
                              ImageDecoder& images, ScenePlan& plan) {
     const std::string stem = scene.source().stem().string();
     std::map<TextureBakeKey, int> bakes_by_inputs;
+    std::map<NormalBakeKey, int> normal_bakes;  // -> the bake that wrote those files
     for (size_t m = 0; m < materials.size(); ++m) {
         const io::MaterialInfo& mat = materials[m];
         const std::vector<Layer> layers = layers_of(mat);
@@ -270,45 +304,63 @@ Result<void> decide_textures(const io::GltfScene& scene, const PlanOptions& opti
             const std::string normal_name = coat ? "clearcoat normal texture" : "normal texture";
             if (std::string skip = texture_skip_reason(mat, int(m), layer, coat, infos); !skip.empty()) {
                 d.reason = std::move(skip);
-            } else if (const Image* normal = images.decode(layer.normal->image); !normal) {
-                d.reason = normal_name + " cannot be decoded: " + images.error(layer.normal->image);
-                plan.notes.push_back(images.error(layer.normal->image));
+            } else if (const Image* normal = images.decode(images.first_of_file(layer.normal->image)); !normal) {
+                d.reason = normal_name + " cannot be decoded: " + images.error(images.first_of_file(layer.normal->image));
+                plan.notes.push_back(images.error(images.first_of_file(layer.normal->image)));
             } else {
-                d.normal_image = layer.normal->image;
+                d.normal_image = images.first_of_file(layer.normal->image);
                 const Image* rough = nullptr;
                 std::string mapping_note;
                 if (layer.roughness->image >= 0) {
-                    const bool same_mapping = layer.roughness->texcoord == layer.normal->texcoord &&
-                                              !layer.roughness->transformed && !layer.normal->transformed;
-                    if (!same_mapping) {
-                        mapping_note = "; roughness texture is mapped differently from the " + normal_name +
-                                       ", so the layer's lowest roughness is used as a constant";
-                    } else if ((rough = images.decode(layer.roughness->image)) != nullptr) {
-                        d.roughness_image = layer.roughness->image;
+                    if (!io::same_uv_mapping(*layer.roughness, *layer.normal)) {
+                        // A roughness filtered in the normal texture's UV space would move the roughness
+                        // map's texels, and a constant would drop it: the material keeps its roughness.
+                        d.roughness_mapped_apart = true;
+                        const std::string roughness_name = coat ? "clearcoatRoughnessTexture" : "metallicRoughnessTexture";
+                        plan.notes.push_back(material_label(scene, int(m), mat.name) + ": " + roughness_name + " (" +
+                                             io::uv_mapping_label(*layer.roughness) + ") is mapped unlike " +
+                                             (coat ? "clearcoatNormalTexture" : "normalTexture") + " (" +
+                                             io::uv_mapping_label(*layer.normal) +
+                                             "): its roughness is not replaced; the kernel and normal outputs are baked");
+                        mapping_note = "; " + roughness_name + " is mapped unlike the " + normal_name +
+                                       ": no roughness output, the decision uses the layer's lowest roughness";
+                    } else if ((rough = images.decode(images.first_of_file(layer.roughness->image))) != nullptr) {
+                        d.roughness_image = images.first_of_file(layer.roughness->image);
                         d.roughness_texture_used = true;
                     }
                 }
                 d.roughness_value = float(std::clamp(roughness.per_layer[m][l], 0.0, 1.0));
                 const int bits_image = d.roughness_texture_used ? d.roughness_image : d.normal_image;
                 d.threshold = half_quantisation_step(plan.image_bits[bits_image], images.is_float(bits_image));
+                d.normal_scale = layer.normal_scale;
+                const std::string settings_name =
+                    options.material_texture_settings.count(mat.name) ? mat.name : std::string();
+                // A layer mapped apart writes no roughness: its lowest roughness only feeds the statistic.
                 const TextureBakeKey key(d.normal_image, d.roughness_image,
-                                         d.roughness_texture_used ? d.roughness_factor : d.roughness_value,
+                                         d.roughness_mapped_apart      ? 0.0f
+                                         : d.roughness_texture_used ? d.roughness_factor
+                                                                    : d.roughness_value,
                                          d.roughness_texture_used ? 1.0f : 0.0f, layer.normal_scale,
-                                         options.material_texture_settings.count(mat.name) ? mat.name : std::string());
+                                         d.roughness_mapped_apart, settings_name);
+                const NormalBakeKey normal_key(d.normal_image, layer.normal_scale, layer.name, settings_name);
                 if (auto it = bakes_by_inputs.find(key); it != bakes_by_inputs.end()) {
                     const TextureDecision& first = plan.textures[size_t(it->second)];
                     d.same_as = it->second;
                     d.bake = first.bake;
                     d.max_roughness_change = first.max_roughness_change;
                     d.stem = first.stem;
+                    d.normal_outputs_stem = first.normal_outputs_stem;
                     d.reason = "same inputs as material " + std::to_string(first.material) +
                                (first.layer == "base" ? "" : " (" + first.layer + ")") + ": " + first.reason;
                 } else {
                     const int index = int(plan.textures.size());
+                    if (auto n = normal_bakes.find(normal_key); n != normal_bakes.end() && !d.roughness_mapped_apart)
+                        d.normal_outputs_stem = plan.textures[size_t(n->second)].stem;
                     set_texture_inputs(plan.texture_work[index], d, layer, normal, rough, plan);
                     if (auto ok = bake_and_decide_texture(d, index, mat.name, mapping_note, scene, options, plan); !ok)
                         return ok;
                     bakes_by_inputs[key] = index;
+                    if (d.bake && d.normal_outputs_stem.empty()) normal_bakes.emplace(normal_key, index);
                 }
             }
             plan.textures.push_back(std::move(d));
@@ -352,10 +404,48 @@ Result<void> measure_curvature(CurvatureDecision& d, size_t primitive, TriMesh m
     return {};
 }
 
+// The TEXCOORD set a primitive's generated tangents follow: its normal texture's (glTF 2.0, "the
+// tangent vectors are calculated ... using the texture coordinates of the normal texture"), the base
+// layer's or else the coat's of its material; 0 when it has none. When the primitive has no TANGENT and the
+// normal textures of the materials it can show (its coat's, its KHR_materials_variants materials') use other
+// sets, no one frame fits them all: a note names them.
+int tangent_uv_set(const io::PrimitiveInfo& p, const std::vector<io::MaterialInfo>& materials,
+                   std::vector<std::string>& notes) {
+    struct Use {
+        std::string what;
+        int set;
+    };
+    std::vector<Use> uses;
+    std::vector<int> shown{p.material};
+    shown.insert(shown.end(), p.variant_materials.begin(), p.variant_materials.end());
+    for (int m : shown) {
+        if (m < 0 || size_t(m) >= materials.size()) continue;
+        const io::MaterialInfo& mat = materials[size_t(m)];
+        const std::string label = "material " + std::to_string(m) + (mat.name.empty() ? "" : " '" + mat.name + "'");
+        if (mat.normal.texture >= 0) uses.push_back({label + " normalTexture", mat.normal.texcoord});
+        if (mat.clearcoat.active() && mat.clearcoat.normal.texture >= 0)
+            uses.push_back({label + " clearcoatNormalTexture", mat.clearcoat.normal.texcoord});
+    }
+    if (uses.empty()) return 0;
+    const int set = uses.front().set;
+    if (!p.has_tangent) {
+        std::string others;
+        for (const Use& u : uses)
+            if (u.set != set) others += (others.empty() ? "" : ", ") + u.what + " uses TEXCOORD_" + std::to_string(u.set);
+        if (!others.empty())
+            notes.push_back(p.label + ": its materials' normal textures use different texture coordinates: generated "
+                            "tangents follow TEXCOORD_" + std::to_string(set) + " (" + uses.front().what + "), but " +
+                            others + "; author TANGENT for this primitive");
+    }
+    const bool present = std::find(p.texcoords.begin(), p.texcoords.end(), set) != p.texcoords.end();
+    return present ? set : 0;
+}
+
 // The curvature decisions, one per primitive.
 Result<void> decide_curvature(const io::GltfScene& scene, const PlanOptions& options,
-                              const std::vector<io::PrimitiveInfo>& infos, const MaterialRoughness& roughness,
-                              const std::vector<bool>& roughness_known, ScenePlan& plan) {
+                              const std::vector<io::PrimitiveInfo>& infos, const std::vector<io::MaterialInfo>& materials,
+                              const MaterialRoughness& roughness, const std::vector<bool>& roughness_known,
+                              ScenePlan& plan) {
     std::map<std::string, size_t> measured_geometry;  // geometry key -> first primitive measured
     for (size_t i = 0; i < infos.size(); ++i) {
         const io::PrimitiveInfo& p = infos[i];
@@ -375,8 +465,11 @@ Result<void> decide_curvature(const io::GltfScene& scene, const PlanOptions& opt
 
         const bool surface = p.mode >= kModeTriangles && p.mode <= kModeFan;
         std::optional<TriMesh> mesh;
+        if (surface) d.tangent_texcoord = tangent_uv_set(p, materials, plan.notes);
+        // Generated tangents, and the curvature directions in their frame, depend on the UV set too.
+        const std::string geometry_key = p.geometry_key + " tangents TEXCOORD_" + std::to_string(d.tangent_texcoord);
         if (surface) {  // every surface is read, baked or not: the output must not carry invalid indices
-            auto read = scene.primitive_mesh(p.ref);
+            auto read = scene.primitive_mesh(p.ref, d.tangent_texcoord);
             if (!read) return read.error();
             mesh = std::move(*read);
         }
@@ -387,7 +480,7 @@ Result<void> decide_curvature(const io::GltfScene& scene, const PlanOptions& opt
         } else if (options.check_material && known && *d.roughness_gain < options.min_roughness_gain) {
             d.reason = "material too rough to alias: the largest geometric kernel raises roughness " +
                        format_number(*d.min_roughness) + " by less than the threshold";
-        } else if (auto same = measured_geometry.find(p.geometry_key); same != measured_geometry.end()) {
+        } else if (auto same = measured_geometry.find(geometry_key); same != measured_geometry.end()) {
             // Same vertex data as an earlier primitive: same measurement, same curvature.
             const CurvatureDecision& first = plan.primitives[same->second];
             d.relative_curvature = first.relative_curvature;
@@ -399,7 +492,7 @@ Result<void> decide_curvature(const io::GltfScene& scene, const PlanOptions& opt
                        std::to_string(first.ref.primitive) + ")";
             if (d.bake) plan.work[i] = plan.work.at(same->second);
         } else {
-            measured_geometry[p.geometry_key] = i;
+            measured_geometry[geometry_key] = i;
             if (auto ok = measure_curvature(d, i, std::move(*mesh), p, known, options, plan); !ok) return ok;
         }
         plan.primitives.push_back(std::move(d));
@@ -420,7 +513,8 @@ Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& optio
     if (options.textures) {
         if (auto ok = decide_textures(scene, options, materials, infos, roughness, images, plan); !ok) return ok.error();
     }
-    if (auto ok = decide_curvature(scene, options, infos, roughness, roughness_known, plan); !ok) return ok.error();
+    if (auto ok = decide_curvature(scene, options, infos, materials, roughness, roughness_known, plan); !ok)
+        return ok.error();
     auto glints = plan_glints(scene, options.material_glints);
     if (!glints) return glints.error();
     plan.glints = std::move(*glints);
@@ -444,7 +538,9 @@ nlohmann::json plan_to_json(const ScenePlan& plan) {
         if (d.normal_image >= 0) e["normal_image"] = d.normal_image;
         if (d.roughness_texture_used) e["roughness_image"] = d.roughness_image;
         else if (d.normal_image >= 0) e["roughness_value"] = d.roughness_value;
+        if (d.roughness_mapped_apart) e["roughness_replaced"] = false;
         if (d.bake) e["stem"] = d.stem;
+        if (d.bake && !d.normal_outputs_stem.empty()) e["normal_outputs_stem"] = d.normal_outputs_stem;
         j["textures"].push_back(std::move(e));
     }
     j["primitives"] = json::array();
@@ -462,6 +558,7 @@ nlohmann::json plan_to_json(const ScenePlan& plan) {
         e["relative_curvature"] = d.relative_curvature ? json(*d.relative_curvature) : json(nullptr);
         if (d.bake) {
             e["generated_tangents"] = d.generates_tangents;
+            if (d.generates_tangents) e["tangent_texcoord"] = d.tangent_texcoord;
             e["repaired_normals"] = d.repairs_normals;
         }
         if (!d.mesh_report.empty()) e["mesh_report"] = d.mesh_report;

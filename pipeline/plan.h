@@ -124,11 +124,20 @@ struct TextureDecision {
     int normal_image = -1;
     int roughness_image = -1;                    // -1: constant roughness (factor)
     bool roughness_texture_used = false;         // false when the roughness map is absent or mapped differently
+    // The roughness texture's UV mapping differs from the normal texture's (io::same_uv_mapping): no roughness
+    // output is written (the material keeps its own roughness); roughness_value, the layer's lowest
+    // roughness, only stands in for the decision's statistic.
+    bool roughness_mapped_apart = false;
     float roughness_value = 1.0f;                // constant roughness when no roughness map is used
     float roughness_factor = 1.0f;
+    double normal_scale = 1.0;                   // normalTexture.scale (the coat's for the coat), applied to the map
     int texcoord = 0;
     std::string stem;                            // output file stem
     int same_as = -1;                            // index in ScenePlan::textures of the identical bake reused
+    // The stem of an earlier bake of the same normal map (same scale, layer and settings) whose kernel,
+    // normal and projected LEAN files this layer uses: its own bake then writes its roughness (and a
+    // slope-space LEAN) only. Empty when the layer writes them itself.
+    std::string normal_outputs_stem;
 };
 
 struct CurvatureDecision {
@@ -144,6 +153,7 @@ struct CurvatureDecision {
     double relative_curvature_threshold = 0.0;
     double min_instance_scale = 1.0, max_instance_scale = 1.0;
     bool generates_tangents = false;
+    int tangent_texcoord = 0;                     // TEXCOORD set tangents are generated from (the normal texture's)
     bool repairs_normals = false;                 // zero / non-finite authored normals replaced in the output
     std::string mesh_report;
 };
@@ -187,6 +197,10 @@ Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& optio
 nlohmann::json plan_to_json(const ScenePlan& plan);
 // A human-readable table (one line per decision).
 std::string plan_to_table(const ScenePlan& plan);
+
+// The settings a kept layer's own bake writes with: `s` less the roughness output when its roughness texture
+// is mapped apart, less the kernel, normal and projected LEAN when it shares them (normal_outputs_stem).
+TextureBakeSettings layer_bake_settings(const TextureDecision& d, TextureBakeSettings s);
 
 // r' - r for the clamped kernel kappa at roughness r (condition 1 above).
 double roughness_gain(double r, double kappa);

@@ -84,7 +84,19 @@ struct SceneBake {
     std::map<std::string, std::vector<io::ManifestOutput>> files_by_stem;
     std::map<std::string, ReplaceLayer> replace_by_stem;  // --gltf-mode replace: the chains it encodes
     std::map<std::string, int> embedded;  // output path -> its number among the scene's embedded files
+    // The materials each texture file serves (manifest "materials": one entry per file, every user listed).
+    std::map<std::string, std::vector<int>> materials_of_file;
+    void used_by(const std::string& path, int material) {
+        std::vector<int>& m = materials_of_file[path];
+        if (std::find(m.begin(), m.end(), material) == m.end()) m.push_back(material);
+    }
 };
+
+// Each texture file's manifest entry lists the materials that use it.
+void record_material_users(SceneBake& bake) {
+    for (io::ManifestOutput& o : bake.result.outputs)
+        if (auto it = bake.materials_of_file.find(o.path); it != bake.materials_of_file.end()) o.extra["materials"] = it->second;
+}
 
 // The plan's texture sink: the plan measures its statistic on the full bake and this writes each kept bake
 // right away (and keeps, for --gltf-mode replace, the chains the replacement encodes).
@@ -109,9 +121,16 @@ TextureBakeSink texture_sink(SceneBake& bake, const io::GltfScene& scene, const 
             r.stem = d.stem;
             r.roughness = baked.roughness;
             r.normal = baked.normal;
+            if (!d.normal_outputs_stem.empty()) {  // baked once, with the earlier layer of the same normal map
+                auto first = bake.replace_by_stem.find(d.normal_outputs_stem);
+                if (first != bake.replace_by_stem.end()) r.normal = first->second.normal;
+            }
+            r.normal_bits = w.normal_bits;
+            r.roughness_bits = w.roughness_bits;
         }
-        auto out = write_texture_outputs(std::move(baked), in, options.texture_settings_for(d.material_name),
-                                         job.texture_format, bake.out_dir, d.stem, job.progress);
+        const TextureBakeSettings settings = layer_bake_settings(d, options.texture_settings_for(d.material_name));
+        auto out = write_texture_outputs(std::move(baked), in, settings, job.texture_format, bake.out_dir, d.stem,
+                                         job.progress);
         if (!out) return out.error();
         for (const io::ManifestOutput& o : out->outputs) bake.written.push_back(bake.out_dir / o.path);
         bake.result.outputs.insert(bake.result.outputs.end(), out->outputs.begin(), out->outputs.end());
@@ -200,20 +219,38 @@ std::map<int, json> material_texture_extensions(SceneBake& bake, io::GltfScene& 
         const io::MaterialInfo& mat = materials[size_t(d.material)];
         const bool coat = d.layer == "clearcoat";
         const io::TextureSlot& normal = coat ? mat.clearcoat.normal : mat.normal;
-        json ext = {{"texCoord", d.texcoord},
-                    {"roughnessChannel", d.roughness_texture_used ? 1 : 0},
+        // What the baked textures hold and where they lie (io/gltf/SPECBAKE_EXTENSION.md): the factors folded
+        // into them, their UV mapping (the normal texture's), and whether a roughness output replaces the
+        // material's roughness.
+        json ext = {{"texCoord", d.texcoord}, {"roughnessReplaced", !d.roughness_mapped_apart},
                     {"source", {{coat ? "clearcoatNormalTexture" : "normalTexture", normal.texture}}}};
+        json folded = {{"normalScale", d.normal_scale}};
+        if (!d.roughness_mapped_apart) {
+            ext["roughnessChannel"] = d.roughness_texture_used ? 1 : 0;
+            folded["roughnessFactor"] = d.roughness_factor;
+        }
+        ext["folded"] = std::move(folded);
         if (d.roughness_texture_used)
             ext["source"][coat ? "clearcoatRoughnessTexture" : "metallicRoughnessTexture"] =
                 coat ? mat.clearcoat.roughness.texture : mat.metallic_roughness.texture;
-        else
+        else if (!d.roughness_mapped_apart)
             ext["source"]["roughness"] = d.roughness_value;
-        if (!normal.transform.is_null()) ext["KHR_texture_transform"] = normal.transform;
+        if (const json t = io::uv_transform_json(normal); !t.is_null()) ext["KHR_texture_transform"] = t;
         const std::string& owner_name = plan.textures[owner].material_name;
         if (options.material_texture_settings.count(owner_name))  // differs from the root's "textures"
             ext["settings"] = texture_settings_json(options.texture_settings_for(owner_name), bake.job.texture_format);
         ext["outputs"] = json::array();
-        for (const io::ManifestOutput& o : bake.files_by_stem.at(d.stem)) {
+        // Its own files, then those it shares with an earlier bake of the same normal map (the kinds it
+        // did not write itself).
+        std::vector<io::ManifestOutput> files = bake.files_by_stem.at(d.stem);
+        if (!d.normal_outputs_stem.empty()) {
+            std::set<std::string> own;
+            for (const io::ManifestOutput& o : files) own.insert(o.kind);
+            for (const io::ManifestOutput& o : bake.files_by_stem.at(d.normal_outputs_stem))
+                if (!own.count(o.kind)) files.push_back(o);
+        }
+        for (const io::ManifestOutput& o : files) {
+            bake.used_by(o.path, d.material);
             json entry = {{"kind", o.kind}, {"uri", o.path}, {"format", o.format}, {"width", o.width},
                           {"height", o.height}, {"mips", o.mips}, {"channels", o.channels}};
             // Block-compressed (`--block bc`, `--block astc`): the GPU format, since BC5 / ASTC hold the normal's x, y only.
@@ -243,20 +280,41 @@ Result<void> replace_with_uastc(SceneBake& bake, io::GltfScene& scene, const Sce
     if (!basisu) return basisu.error();
     const std::vector<io::MaterialInfo> materials = scene.materials();
     std::vector<io::ManifestOutput>& outputs = bake.result.outputs;
+    std::map<std::string, io::GltfScene::BasisuTextures> encoded_by_stem;  // one encode per shared bake
+    std::map<std::string, std::vector<std::string>> files_of_stem;
     for (const TextureDecision& d : plan.textures) {
         if (!d.bake || d.layer != "base" || !bake.replace_by_stem.count(d.stem)) continue;
+        const io::TextureSlot& normal = materials[size_t(d.material)].normal;
+        if (auto it = encoded_by_stem.find(d.stem); it != encoded_by_stem.end()) {
+            io::GltfScene::BasisuTextures t = it->second;
+            t.texcoord = d.texcoord;
+            t.transform = io::uv_transform_json(normal);
+            scene.use_basisu_textures(d.material, t);
+            for (const std::string& f : files_of_stem[d.stem]) bake.used_by(f, d.material);
+            continue;
+        }
         ReplaceLayer layer = bake.replace_by_stem.at(d.stem);
         layer.material = d.material;
         layer.roughness_from_texture = d.roughness_texture_used;
         layer.texcoord = d.texcoord;
-        layer.transform = materials[size_t(d.material)].normal.transform;
+        layer.transform = io::uv_transform_json(normal);
+        layer.normal_scale = d.normal_scale;
+        layer.roughness_factor = d.roughness_factor;
+        if (auto first = encoded_by_stem.find(d.normal_outputs_stem); first != encoded_by_stem.end()) {
+            layer.normal_from = &first->second;  // the same mean-normal chain, encoded once
+            for (const std::string& uri : {first->second.normal_uri, first->second.normal_fallback_uri})
+                if (!uri.empty()) bake.used_by(uri, d.material);
+        }
         bake.say("encoding UASTC textures of material " + std::to_string(d.material) + " of " + bake.input.string());
         const size_t before = outputs.size();
         const io::Supercompression& supercompression = job.texture_format.supercompression;
         const int zstd = supercompression.zstd ? supercompression.zstd_level : 0;
-        if (auto r = replace_with_basisu(scene, layer, *basisu, bake.out_dir, glb, outputs, bake.warnings, zstd); !r)
-            return r.error();
+        auto used = replace_with_basisu(scene, layer, *basisu, bake.out_dir, glb, outputs, bake.warnings, zstd);
+        if (!used) return used.error();
+        if (!used->normal_uri.empty()) encoded_by_stem[d.stem] = *used;
         for (size_t k = before; k < outputs.size(); ++k) {
+            files_of_stem[d.stem].push_back(outputs[k].path);
+            bake.used_by(outputs[k].path, d.material);
             bake.written.push_back(bake.out_dir / outputs[k].path);
             if (glb) bake.embedded[outputs[k].path] = -1;  // on a buffer view as a glTF image
         }
@@ -366,6 +424,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
     if (job.gltf_mode == GltfMode::Replace)
         if (auto r = replace_with_uastc(bake, scene, *plan, glb); !r) return r.error();
     for (const auto& [material, ext] : extension_of_material) scene.set_material_extension(material, ext);
+    record_material_users(bake);
     const bool any_texture = !extension_of_material.empty();
     if (*baked_primitives > 0 || any_texture) scene.set_root_extension(root_extension(job, any_texture));
     auto hashed = hash_inputs(scene, inputs);

@@ -17,10 +17,12 @@ void add_used(tinygltf::Model& m, const std::string& name) {
         m.extensionsUsed.push_back(name);
 }
 
-// A new image for the file `uri`; with `embed_from` set it is recorded as that folder's file, so a GLB
-// carries it on a buffer view (io/gltf/gltf_buffers.cpp) like the input's external images.
+// The image for the file `uri` (one per file: a second call returns the first); with `embed_from` set it is
+// recorded as that folder's file, so a GLB carries it on a buffer view (io/gltf/gltf_buffers.cpp) like the
+// input's external images.
 int add_image(gltf::SceneState& scene, const std::string& uri, const std::string& mime,
               const std::filesystem::path& embed_from) {
+    if (auto it = scene.basisu_images.find(uri); it != scene.basisu_images.end()) return it->second;
     tinygltf::Model& m = scene.model;
     tinygltf::Image img;
     img.uri = uri;
@@ -28,13 +30,18 @@ int add_image(gltf::SceneState& scene, const std::string& uri, const std::string
     m.images.push_back(std::move(img));
     scene.image_paths.resize(m.images.size());
     if (!embed_from.empty()) scene.image_paths.back() = embed_from / uri;
+    scene.basisu_images[uri] = int(m.images.size()) - 1;
     return int(m.images.size()) - 1;
 }
 
-// A new texture for the KTX2 file `uri`, replacing texture `old` (-1: none) of a slot.
+// A new texture for the KTX2 file `uri`, replacing texture `old` (-1: none) of a slot; its fallback
+// source is the PNG `fallback_uri`, or the old texture's image when that is empty.
 int add_basisu_texture(gltf::SceneState& scene, int old, const std::string& uri, const std::string& fallback_uri,
                        const std::filesystem::path& embed_from) {
     tinygltf::Model& m = scene.model;
+    const int old_source = old >= 0 && size_t(old) < m.textures.size() ? m.textures[size_t(old)].source : -1;
+    const std::pair<std::string, std::string> key{uri, fallback_uri.empty() ? "image " + std::to_string(old_source) : fallback_uri};
+    if (auto it = scene.basisu_textures.find(key); it != scene.basisu_textures.end()) return it->second;
     tinygltf::Sampler sampler;
     sampler.magFilter = kLinear;
     sampler.minFilter = kLinearMipmapLinear;  // the baked levels are what must be sampled
@@ -48,7 +55,7 @@ int add_basisu_texture(gltf::SceneState& scene, int old, const std::string& uri,
         }
         fallback = t.source;
     }
-    if (fallback < 0) fallback = add_image(scene, fallback_uri, "image/png", embed_from);
+    if (!fallback_uri.empty()) fallback = add_image(scene, fallback_uri, "image/png", embed_from);
     m.samplers.push_back(sampler);
     tinygltf::Texture tex;
     tex.sampler = int(m.samplers.size()) - 1;
@@ -57,6 +64,7 @@ int add_basisu_texture(gltf::SceneState& scene, int old, const std::string& uri,
     ext["source"] = tinygltf::Value(add_image(scene, uri, "image/ktx2", embed_from));
     tex.extensions[kBasisu] = tinygltf::Value(std::move(ext));
     m.textures.push_back(std::move(tex));
+    scene.basisu_textures[key] = int(m.textures.size()) - 1;
     return int(m.textures.size()) - 1;
 }
 

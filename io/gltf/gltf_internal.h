@@ -58,6 +58,10 @@ struct SceneState {
         std::string mime_type, name;  // the name goes on the buffer view
     };
     std::vector<BakedImage> baked_images;
+    // The textures use_basisu_textures made, by KTX2 file and fallback: materials sharing one bake share one
+    // texture and one image per file.
+    std::map<std::pair<std::string, std::string>, int> basisu_textures;
+    std::map<std::string, int> basisu_images;  // by URI: one image per file
     // The scene file's own hash is computed in the background from its bytes (mapped until then) while the
     // caller plans and bakes; content_hash() collects it.
     MappedFile source_bytes;

@@ -2,6 +2,10 @@
 // KHR_texture_transform), their factors, and KHR_materials_clearcoat.
 #include "io/gltf/gltf_internal.h"
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
 namespace specbake::io {
 using gltf::from_value;
 using gltf::to_value;
@@ -20,7 +24,15 @@ std::vector<MaterialInfo> GltfScene::materials() const {
         s.transformed = it != ext.end();
         if (s.transformed) {
             s.transform = from_value(it->second);
-            if (it->second.Has("texCoord")) s.texcoord = it->second.Get("texCoord").GetNumberAsInt();
+            const json& t = s.transform;
+            if (t.contains("texCoord") && t["texCoord"].is_number_integer()) s.texcoord = t["texCoord"].get<int>();
+            auto pair = [&](const char* key, std::array<double, 2>& v) {
+                if (t.contains(key) && t[key].is_array() && t[key].size() == 2 && t[key][0].is_number() && t[key][1].is_number())
+                    v = {t[key][0].get<double>(), t[key][1].get<double>()};
+            };
+            pair("offset", s.offset);
+            pair("scale", s.scale);
+            if (t.contains("rotation") && t["rotation"].is_number()) s.rotation = t["rotation"].get<double>();
         }
         return s;
     };
@@ -34,6 +46,7 @@ std::vector<MaterialInfo> GltfScene::materials() const {
         return slot(info["index"].get<int>(), texcoord, ext);
     };
     std::vector<MaterialInfo> out;
+    out.reserve(m.materials.size());
     for (const tinygltf::Material& mat : m.materials) {
         MaterialInfo info;
         info.name = mat.name;
@@ -66,6 +79,42 @@ std::vector<MaterialInfo> GltfScene::materials() const {
         out.push_back(std::move(info));
     }
     return out;
+}
+
+namespace {
+
+bool nearly_equal(double a, double b) { return std::abs(a - b) <= 1e-6 * std::max({1.0, std::abs(a), std::abs(b)}); }
+
+bool identity_transform(const TextureSlot& s) {
+    return nearly_equal(s.offset[0], 0) && nearly_equal(s.offset[1], 0) && nearly_equal(s.rotation, 0) &&
+           nearly_equal(s.scale[0], 1) && nearly_equal(s.scale[1], 1);
+}
+
+std::string number(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.6g", v);
+    return buf;
+}
+
+}  // namespace
+
+bool same_uv_mapping(const TextureSlot& a, const TextureSlot& b) {
+    return a.texcoord == b.texcoord && nearly_equal(a.offset[0], b.offset[0]) && nearly_equal(a.offset[1], b.offset[1]) &&
+           nearly_equal(a.rotation, b.rotation) && nearly_equal(a.scale[0], b.scale[0]) &&
+           nearly_equal(a.scale[1], b.scale[1]);
+}
+
+std::string uv_mapping_label(const TextureSlot& s) {
+    std::string label = "TEXCOORD_" + std::to_string(s.texcoord);
+    if (!identity_transform(s))
+        label += " offset (" + number(s.offset[0]) + ", " + number(s.offset[1]) + ") rotation " + number(s.rotation) +
+                 " scale (" + number(s.scale[0]) + ", " + number(s.scale[1]) + ")";
+    return label;
+}
+
+json uv_transform_json(const TextureSlot& s) {
+    if (identity_transform(s)) return nullptr;
+    return {{"offset", {s.offset[0], s.offset[1]}}, {"rotation", s.rotation}, {"scale", {s.scale[0], s.scale[1]}}};
 }
 
 }  // namespace specbake::io

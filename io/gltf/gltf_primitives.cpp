@@ -92,8 +92,15 @@ std::vector<PrimitiveInfo> GltfScene::primitives() const {
             info.geometry_key = "mode " + std::to_string(info.mode) + " indices " + std::to_string(p.indices);
             for (const auto& [name, acc] : p.attributes) {
                 if (name.rfind("TEXCOORD_", 0) == 0) info.texcoords.push_back(std::atoi(name.c_str() + 9));
-                if (name == "POSITION" || name == "NORMAL" || name == "TANGENT" || name == "TEXCOORD_0")
+                // Every UV set: generated tangents follow the normal texture's, which may be any of them.
+                if (name == "POSITION" || name == "NORMAL" || name == "TANGENT" || name.rfind("TEXCOORD_", 0) == 0)
                     info.geometry_key += " " + name + " " + std::to_string(acc);
+            }
+            if (auto it = p.extensions.find("KHR_materials_variants"); it != p.extensions.end() && it->second.Has("mappings")) {
+                const tinygltf::Value& mappings = it->second.Get("mappings");
+                for (size_t k = 0; mappings.IsArray() && k < mappings.ArrayLen(); ++k)
+                    if (mappings.Get(int(k)).Has("material"))
+                        info.variant_materials.push_back(mappings.Get(int(k)).Get("material").GetNumberAsInt());
             }
             std::sort(info.texcoords.begin(), info.texcoords.end());
             info.instances = instances[mi];
@@ -107,7 +114,7 @@ std::vector<PrimitiveInfo> GltfScene::primitives() const {
     return out;
 }
 
-Result<TriMesh> GltfScene::primitive_mesh(PrimitiveRef ref) const {
+Result<TriMesh> GltfScene::primitive_mesh(PrimitiveRef ref, int uv_set) const {
     const tinygltf::Model& m = impl_->model;
     if (ref.mesh < 0 || size_t(ref.mesh) >= m.meshes.size() || ref.primitive < 0 ||
         size_t(ref.primitive) >= m.meshes[size_t(ref.mesh)].primitives.size())
@@ -137,11 +144,12 @@ Result<TriMesh> GltfScene::primitive_mesh(PrimitiveRef ref) const {
     if (auto r = read("POSITION", 3, t.positions); !r) return r.error();
     if (auto r = read("NORMAL", 3, t.normals); !r) return r.error();
     if (auto r = read("TANGENT", 4, t.tangents); !r) return r.error();
-    if (auto r = read("TEXCOORD_0", 2, t.uv0); !r) return r.error();
+    const std::string uv_name = "TEXCOORD_" + std::to_string(std::max(0, uv_set));
+    if (auto r = read(uv_name.c_str(), 2, t.uv0); !r) return r.error();
     const size_t n = t.vertex_count();
     if (!t.normals.empty() && t.normals.size() != n * 3) return make_error(t.name + ": NORMAL count differs from POSITION count");
     if (!t.tangents.empty() && t.tangents.size() != n * 4) return make_error(t.name + ": TANGENT count differs from POSITION count");
-    if (!t.uv0.empty() && t.uv0.size() != n * 2) return make_error(t.name + ": TEXCOORD_0 count differs from POSITION count");
+    if (!t.uv0.empty() && t.uv0.size() != n * 2) return make_error(t.name + ": " + uv_name + " count differs from POSITION count");
 
     std::vector<uint32_t> order;
     if (p.indices >= 0) {

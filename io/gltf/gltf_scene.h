@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -41,6 +42,8 @@ struct PrimitiveInfo {
     bool has_tangent = false;
     bool has_curvature = false;  // the input already carries _SPECAA_CURVATURE
     std::vector<int> texcoords;  // n of every TEXCOORD_n present
+    // The materials KHR_materials_variants maps the primitive to (besides `material`), in file order.
+    std::vector<int> variant_materials;
     // Equal for primitives that read the same vertex and index data (same accessors and mode), which
     // then share one curvature and one appended accessor.
     std::string geometry_key;
@@ -51,14 +54,30 @@ struct PrimitiveInfo {
     int instances = 0;
 };
 
-// A texture slot of a material: the image it samples and the texture coordinate set.
+// A texture slot of a material: the image it samples and its UV mapping, uv' = T(offset) R(rotation)
+// S(scale) TEXCOORD_texcoord (KHR_texture_transform, whose texCoord overrides the slot's; its defaults when
+// a value or the extension is absent).
 struct TextureSlot {
     int texture = -1;  // glTF texture index, -1 when the slot is empty
     int image = -1;    // glTF image index, -1 when the texture has no (decodable) source
     int texcoord = 0;
     bool transformed = false;  // KHR_texture_transform on the slot
     nlohmann::json transform;  // that extension object, null when absent
+    std::array<double, 2> offset{0.0, 0.0};
+    double rotation = 0.0;     // radians, counter-clockwise
+    std::array<double, 2> scale{1.0, 1.0};
 };
+
+// Whether two slots sample their images at the same UV for every vertex: the same TEXCOORD set and the same
+// transform (values equal to 1e-6 relative, so float round trips of one authored value compare equal). Two
+// slots with a transform each that is the same tiling are aligned; the presence of the extension is not the
+// test.
+bool same_uv_mapping(const TextureSlot& a, const TextureSlot& b);
+// The mapping for messages: "TEXCOORD_1", or "TEXCOORD_0 offset (0.5, 0) rotation 0 scale (4, 4)".
+std::string uv_mapping_label(const TextureSlot& slot);
+// The transform as the baked textures' KHR_texture_transform (offset, rotation, scale, every value
+// written), null when it is the identity.
+nlohmann::json uv_transform_json(const TextureSlot& slot);
 
 // KHR_materials_clearcoat of a material: the coat's own normal texture and roughness.
 struct ClearcoatInfo {
@@ -118,8 +137,9 @@ public:
 
     // Reads a primitive as TriMesh: every accessor type, normalisation, stride and sparse substitution
     // resolved to float/uint32, vertices in file order, strips and fans expanded to triangle lists.
+    // TriMesh::uv0 holds TEXCOORD_<uv_set> (the set generated tangents follow: the normal texture's).
     // The error names the file, mesh and primitive and the problem (index out of range, bad accessor ...).
-    Result<TriMesh> primitive_mesh(PrimitiveRef ref) const;
+    Result<TriMesh> primitive_mesh(PrimitiveRef ref, int uv_set = 0) const;
 
     // The encoded bytes of an image (external file, data URI or buffer view), as stored.
     Result<std::vector<uint8_t>> image_bytes(int image) const;
@@ -137,12 +157,12 @@ public:
     void set_material_extension(int material, const nlohmann::json& extension);
     // glTF-valid replacement (`bake --gltf-mode replace`): the material's normalTexture and
     // metallicRoughnessTexture become new textures whose KHR_texture_basisu source is the given KTX2 file
-    // (UASTC), with a fallback `source` (the texture's old image, or `*_fallback_uri` as PNG), a trilinear
+    // (UASTC), with a fallback `source` (`*_fallback_uri` as PNG, or the texture's old image when empty), a trilinear
     // sampler (the old sampler's wrapping), the baked textures' texCoord and transform; normal scale and
     // roughnessFactor become 1 (the bake applied them). An empty URI leaves that slot alone.
     struct BasisuTextures {
         std::string normal_uri, roughness_uri;
-        std::string normal_fallback_uri, roughness_fallback_uri;  // used when the slot had no image
+        std::string normal_fallback_uri, roughness_fallback_uri;  // empty: the slot's old image is the fallback
         int texcoord = 0;
         nlohmann::json transform;  // KHR_texture_transform of the baked textures, null when none
         // For a .glb output: the folder holding the files the URIs name. They then go on buffer views of the
