@@ -234,7 +234,28 @@ void main() {
 )";
 
 // The NDF is GGX with the filtered matrix unless the candidate's defines name another (SIM_NDF).
+// SIM_HORIZON_BOUND (a diagnostic, verify --variant): the spread the filter adds along the view's
+// tangential direction is bounded by (n.v)^2, the squared projected distance from the shading normal to the
+// view's horizon: normals past it face away and are in no pixel's footprint
+// (docs/accuracy.md#the-whole-corpus-at-bench-settings).
 constexpr const char* kCandidateMainTail = R"(
+#ifdef SIM_HORIZON_BOUND
+        {
+            vec2 d = vTS.xy;
+            float l2 = dot(d, d);
+            if (l2 > 1.0e-12) {
+                d *= inversesqrt(l2);
+                vec3 K = A - vec3(a, a, 0.0);
+                float kvv = d.x * d.x * K.x + 2.0 * d.x * d.y * K.z + d.y * d.y * K.y;
+                float bound = vTS.z * vTS.z;
+                if (kvv > bound) {
+                    mat2 P = mat2(1.0) - outerProduct(d, d);
+                    mat2 Km = P * mat2(K.x, K.z, K.z, K.y) * P + bound * outerProduct(d, d);
+                    A = vec3(a + Km[0][0], a + Km[1][1], Km[0][1]);
+                }
+            }
+        }
+#endif
 #ifndef SIM_NDF
 #define SIM_NDF(h, A, a) specaa_ggx_D(h, A, (a) * (a))
 #endif
