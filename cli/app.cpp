@@ -13,7 +13,13 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <condition_variable>
 #include <cstdio>
+#include <cstring>
+#include <mutex>
+#include <system_error>
+#include <thread>
 #include <exception>
 #include <iterator>
 #include <memory>
@@ -193,6 +199,48 @@ std::optional<int> apply_global_flags(const GlobalFlags& flags, const ConfigFile
     return std::nullopt;
 }
 
+// How many threads this process can run at once, up to `wanted` (itself included): starts wanted - 1
+// threads that wait, and stops at the first that cannot be created (a process or memory limit). The thread
+// pool then never tries to start a thread the system refuses, which would end the process.
+int startable_threads(int wanted) {
+    std::vector<std::thread> started;
+    std::mutex m;
+    std::condition_variable cv;
+    bool go = false;
+    for (int i = 1; i < wanted; ++i) {
+        try {
+            started.emplace_back([&] {
+                std::unique_lock<std::mutex> lock(m);
+                cv.wait(lock, [&] { return go; });
+            });
+        } catch (const std::system_error&) {
+            break;
+        }
+    }
+    {
+        std::lock_guard<std::mutex> lock(m);
+        go = true;
+    }
+    cv.notify_all();
+    for (std::thread& t : started) t.join();
+    return int(started.size()) + 1;
+}
+
+// More threads than this never make a bake faster and only cost memory for their stacks.
+constexpr int kMaxJobs = 256;
+
+// The thread count of the run: -j (capped at kMaxJobs) or every core, lowered to what the system lets the
+// process start, with a warning when -j asked for more than that.
+int usable_jobs(int asked) {
+    const int cores = std::max(1, int(std::thread::hardware_concurrency()));
+    const int wanted = asked > 0 ? std::min(asked, kMaxJobs) : cores;
+    const int startable = startable_threads(wanted);
+    if (startable < wanted && asked > 0)
+        print_warning("-j " + std::to_string(asked) + ": only " + std::to_string(startable) +
+                      " threads can be started (process or memory limit); using " + std::to_string(startable));
+    return startable < wanted || asked > 0 ? startable : 0;
+}
+
 }  // namespace
 
 void print_error(const std::string& message) { print_line(stderr, "specbake: error: " + message); }
@@ -243,15 +291,24 @@ int run_cli(int argc, char** argv) {
         return kExitUsage;
     }
     if (auto usage = apply_global_flags(flags, *formatter, settings)) return *usage;
+    settings.jobs = usable_jobs(settings.jobs);
     std::optional<tbb::global_control> thread_limit;
     if (settings.jobs > 0) thread_limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(settings.jobs));
 
+    int code = kExitFailed;
     try {
-        return run();
+        code = run();
     } catch (const std::exception& e) {
         print_error(std::string("internal error: ") + e.what());
-        return kExitFailed;
+        code = kExitFailed;
     }
+    // What was printed must have arrived: a full disk or closed pipe behind stdout fails the run.
+    if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+        const int err = errno;
+        print_error(std::string("standard output: cannot write: ") + std::strerror(err ? err : EIO));
+        if (code == kExitOk) code = kExitFailed;
+    }
+    return code;
 }
 
 }  // namespace specbake::cli

@@ -1,6 +1,7 @@
 #include "cli/batch.h"
 
 #include "cli/progress.h"
+#include "io/output/bake_output.h"
 #include "io/output/depfile.h"
 #include "pipeline/concurrency.h"
 
@@ -66,6 +67,9 @@ Result<void> write_manifest_depfile(const PipelineFlags& flags, const std::files
     for (const std::string& in : recorded_inputs)
         deps.push_back(io::resolve_recorded_input(in, output_dir).lexically_normal().generic_string());
     const std::vector<std::string> targets{(output_dir / "manifest.json").lexically_normal().generic_string()};
+    // Inputs found while baking (a scene's textures) are checked here as well: never overwritten.
+    const std::vector<std::filesystem::path> dep_paths(deps.begin(), deps.end());
+    if (auto ok = io::check_depfile_path(flags.depfile, output_dir, dep_paths); !ok) return ok.error();
     return io::write_depfile(flags.depfile, targets, deps);
 }
 

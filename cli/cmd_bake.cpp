@@ -24,8 +24,11 @@ int run_scene_command(const SceneCliOptions& o, const PipelineFlags& pipe, bool 
         job.plan.textures = false;
         job.plan.check_material = false;
     }
-    std::vector<std::string> scenes(job.scenes.begin(), job.scenes.end());
-    auto lock = io::lock_output_folder(job.output_dir, pipe.depfile, [](const std::string& line) { print_info(line); });
+    std::vector<std::string> scenes;
+    for (const std::filesystem::path& s : job.scenes) scenes.push_back(io::recorded_input_path(s, job.output_dir));
+    job.depfile = pipe.depfile;
+    auto lock = io::lock_output_folder(job.output_dir, pipe.depfile, job.scenes,
+                                       [](const std::string& line) { print_info(line); });
     if (!lock) {
         print_error(lock.error().message);
         return kExitFailed;
@@ -49,6 +52,8 @@ int run_scene_command(const SceneCliOptions& o, const PipelineFlags& pipe, bool 
     for (const std::string& w : outcome->warnings) print_warning(w);
     for (const std::string& e : outcome->errors) print_error(e);
     for (const io::ManifestInput& in : outcome->manifest.inputs) scenes.push_back(in.path);
+    // Nothing baked, nothing committed: no depfile either (the failed action reruns anyway).
+    if (outcome->plans.empty()) return kExitFailed;
     if (auto d = write_manifest_depfile(pipe, job.output_dir, scenes); !d) {
         print_error(d.error().message);
         return kExitFailed;
@@ -82,9 +87,9 @@ void add_bake_command(CLI::App& app, std::function<int()>& run) {
     auto* sub = app.add_subcommand(
         "bake", "Bake scenes: per-vertex curvature (_SPECAA_CURVATURE) and filtered material textures, glTF out.");
     auto o = std::make_shared<SceneCliOptions>();
+    // A missing scene is the failure of that input (exit 1, the others baked), not a usage error.
     sub->add_option("scenes", o->scenes, "glTF/GLB scenes, or FBX, OBJ, PLY, DAE, STL, ... (read through Assimp)")
-        ->required()
-        ->check(CLI::ExistingFile);
+        ->required();
     sub->add_option("-o,--output", o->output_dir, "Output folder (must not hold an input); one scene is written "
                                                    "into it directly, several into one subfolder each")
         ->required();
@@ -104,6 +109,10 @@ void add_bake_command(CLI::App& app, std::function<int()>& run) {
     sub->add_option("--basisu", o->basisu,
                     "Basis Universal encoder for --gltf-mode replace (default: $SPECBAKE_BASISU, else basisu on the PATH)");
     add_block_options(*sub, o->blocks, "baked textures");
+    sub->add_flag("--allow-unreadable-textures", o->allow_unreadable_textures,
+                  "A normal or roughness texture that cannot be read, decoded or is over a --limit is a warning "
+                  "(the layer is left unbaked) instead of failing the scene; the manifest lists it as skipped, "
+                  "so the next run bakes again (for batches that must not stop on one bad asset)");
     add_curvature_options(sub, *o);
     add_material_options(sub, *o);
     auto pipe = std::make_shared<PipelineFlags>();

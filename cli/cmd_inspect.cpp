@@ -33,16 +33,18 @@ bool is_manifest(const fs::path& p) { return p.extension() == ".json"; }
 
 int run_check(const InspectOptions& o) {
     const io::InputLimits& limits = run_settings().input_policy.limits;
+    // -q: the errors alone (and the exit code); -v adds nothing here.
+    const bool quiet = run_settings().verbosity == Verbosity::quiet;
     int failed = 0;
     for (const std::string& f : o.files) {
         const fs::path p = resolve(f);
         std::vector<std::string> problems;
         if (is_manifest(p)) {
             FolderCheck c = check_manifest_folder(p, limits, [&](const std::string& line) {
-                if (!o.json) std::fprintf(stderr, "specbake: %s\n", line.c_str());
+                if (!o.json && !quiet) std::fprintf(stderr, "specbake: %s\n", line.c_str());
             });
             for (const std::string& note : c.notes)
-                if (!o.json) std::fprintf(stderr, "specbake: note: %s\n", note.c_str());
+                if (!o.json && !quiet) std::fprintf(stderr, "specbake: note: %s\n", note.c_str());
             problems = std::move(c.problems);
         } else {
             auto r = io::check_texture_file(p, limits);
@@ -50,7 +52,7 @@ int run_check(const InspectOptions& o) {
         }
         for (const std::string& problem : problems) print_error(problem);
         failed += !problems.empty();
-        if (problems.empty() && !o.json) std::printf("%s: ok\n", p.string().c_str());
+        if (problems.empty() && !o.json && !quiet) std::printf("%s: ok\n", p.string().c_str());
     }
     if (o.json) std::printf("%s\n", json{{"checked", o.files.size()}, {"malformed", failed}}.dump(2).c_str());
     return failed ? kExitFailed : kExitOk;

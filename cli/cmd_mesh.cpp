@@ -17,7 +17,7 @@ void add_mesh_command(CLI::App& app, std::function<int()>& run) {
     auto* sub = app.add_subcommand(
         "mesh", "Add per-vertex curvature (_SPECAA_CURVATURE, and TANGENT where missing) to a mesh; glTF out.");
     auto o = std::make_shared<SceneCliOptions>();
-    sub->add_option("file", o->scenes, "glTF/GLB, FBX, OBJ, PLY, DAE, STL, ...")->required()->check(CLI::ExistingFile);
+    sub->add_option("file", o->scenes, "glTF/GLB, FBX, OBJ, PLY, DAE, STL, ...")->required();
     sub->add_option("-o,--output", o->output_dir, "Output folder (must not hold the input)")->required();
     sub->add_option("--format", o->format, "Scene format written: same, gltf or glb")
         ->check(is_member_of(kSceneFormatNames))

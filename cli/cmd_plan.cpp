@@ -25,6 +25,9 @@ int run_plan(const SceneCliOptions& o) {
         }
         if (o.json) all.push_back(plan_to_json(*plan));
         else std::fputs(plan_to_table(*plan).c_str(), stdout);
+        // What would fail the bake fails the plan too.
+        for (const std::string& e : plan->input_errors) print_error(e);
+        if (!plan->input_errors.empty()) status = kExitFailed;
     }
     if (o.json) std::printf("%s\n", all.dump(2).c_str());
     return status;
@@ -35,7 +38,7 @@ int run_plan(const SceneCliOptions& o) {
 void add_plan_command(CLI::App& app, std::function<int()>& run) {
     auto* sub = app.add_subcommand("plan", "Show what 'bake' would compute for each material and primitive, and why.");
     auto o = std::make_shared<SceneCliOptions>();
-    sub->add_option("scenes", o->scenes, "glTF/GLB scenes or other mesh files")->required()->check(CLI::ExistingFile);
+    sub->add_option("scenes", o->scenes, "glTF/GLB scenes or other mesh files")->required();
     sub->add_flag("--json", o->json, "Print the plan as JSON (the form recorded in manifest.json)");
     add_curvature_options(sub, *o);
     add_material_options(sub, *o);

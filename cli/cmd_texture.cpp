@@ -110,7 +110,11 @@ int run_texture(const TextureOptions& o, const PipelineFlags& pipe) {
     s.outputs = *outputs;
     TextureJobRecord record = texture_job_record(job);
     std::vector<std::string>& inputs = record.inputs;
-    auto lock = io::lock_output_folder(job.output_dir, pipe.depfile, [](const std::string& line) { print_info(line); });
+    std::vector<fs::path> input_files;
+    if (!job.demo) input_files.push_back(job.normal);
+    if (job.roughness) input_files.push_back(*job.roughness);
+    auto lock = io::lock_output_folder(job.output_dir, pipe.depfile, input_files,
+                                       [](const std::string& line) { print_info(line); });
     if (!lock) {
         print_error(lock.error().message);
         return kExitFailed;

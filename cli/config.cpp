@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <set>
 #include <sstream>
 
 namespace specbake {
@@ -156,8 +157,23 @@ Result<nlohmann::json> parse_config_text(const std::string& text, const std::str
         return make_error(source_name + ": not valid UTF-8 (byte " + std::to_string(bad) + ")");
     const size_t first = text.find_first_not_of(" \t\r\n");
     if (first != std::string::npos && text[first] == '{') {
-        nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
+        // JSON allows a key twice (the parser keeps the last); TOML does not, and neither does a config:
+        // which of two values counts must not depend on the format.
+        std::vector<std::set<std::string>> open_objects;
+        std::string duplicate;
+        auto check_keys = [&](int, nlohmann::json::parse_event_t event, nlohmann::json& parsed) {
+            using Event = nlohmann::json::parse_event_t;
+            if (event == Event::object_start) open_objects.emplace_back();
+            else if (event == Event::object_end && !open_objects.empty()) open_objects.pop_back();
+            else if (event == Event::key && !open_objects.empty() && parsed.is_string() &&
+                     !open_objects.back().insert(parsed.get<std::string>()).second && duplicate.empty())
+                duplicate = parsed.get<std::string>();
+            return true;
+        };
+        nlohmann::json j = nlohmann::json::parse(text, check_keys, false);
         if (j.is_discarded() || !j.is_object()) return make_error(source_name + ": not valid JSON");
+        if (!duplicate.empty())
+            return make_error(source_name + ": key '" + duplicate + "' appears twice in one object");
         return j;
     }
     std::vector<CLI::ConfigItem> items;

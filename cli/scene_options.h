@@ -41,6 +41,7 @@ struct SceneCliOptions {
     double min_relative_curvature = 0.05;
     double kappa = 0.18;
     bool json = false;
+    bool allow_unreadable_textures = false;  // `bake --allow-unreadable-textures`
 };
 
 // Finite numbers >= 0 / > 0: CLI::NonNegativeNumber and CLI::PositiveNumber let NaN through (every
@@ -147,12 +148,21 @@ inline std::string set_texture_setting(TextureBakeSettings& t, const std::string
 // settings on top of the command-line ones; a bad key or value there is an error naming it.
 inline Result<SceneJob> make_scene_job(const SceneCliOptions& o) {
     SceneJob job;
-    for (const std::string& s : o.scenes) job.scenes.emplace_back(s);
+    // A scene listed twice (however spelled) is baked once.
+    std::vector<std::filesystem::path> seen;
+    for (const std::string& s : o.scenes) {
+        std::error_code ec;
+        const std::filesystem::path key = std::filesystem::weakly_canonical(std::filesystem::absolute(s, ec), ec);
+        if (std::find(seen.begin(), seen.end(), key) != seen.end()) continue;
+        seen.push_back(key);
+        job.scenes.emplace_back(s);
+    }
     job.output_dir = o.output_dir;
     job.format = *parse_scene_format(o.format);
     job.texture_format.container = io::parse_container(o.container).value_or(io::TextureContainer::Ktx2);
     job.gltf_mode = *parse_gltf_mode(o.gltf_mode);
     job.basisu = o.basisu;
+    job.unreadable_textures_are_warnings = o.allow_unreadable_textures;
     if (auto ok = apply_block_options(o.blocks, "--container", job.texture_format); !ok)
         return ok.error();
     PlanOptions& p = job.plan;

@@ -11,7 +11,9 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <optional>
+#include <span>
 
 namespace specbake {
 namespace fs = std::filesystem;
@@ -69,6 +71,54 @@ void finish_output(const fs::path& file, const io::ManifestOutput& o, const std:
     if (shape && !r.problem && layers != shape->layers)
         r.problem = file.string() + ": " + std::to_string(shape->layers) + " layers, the manifest entry says " +
                     std::to_string(layers);
+}
+
+uint32_t le32(std::span<const uint8_t> b, size_t at) {
+    return uint32_t(b[at]) | uint32_t(b[at + 1]) << 8 | uint32_t(b[at + 2]) << 16 | uint32_t(b[at + 3]) << 24;
+}
+
+// The textures a .glb carries on its buffer views (the scene entry's "embedded_images", each on the view
+// named like it): their bytes against the entry's hash, and KTX2/DDS headers against its size and mips. The
+// GLB's own hash covers its bytes, not what the manifest says about the textures inside it.
+std::optional<std::string> check_embedded_images(const fs::path& file, std::span<const uint8_t> glb,
+                                                 const nlohmann::json& entries, const io::InputLimits& limits) {
+    const std::string name = file.string();
+    if (glb.size() < 20 || le32(glb, 0) != 0x46546C67u) return name + ": embedded images listed, but not a GLB";
+    const uint64_t json_length = le32(glb, 12);
+    if (le32(glb, 16) != 0x4E4F534Au || 20 + json_length > glb.size()) return name + ": GLB JSON chunk out of bounds";
+    const size_t bin_at = size_t(20 + json_length);
+    std::span<const uint8_t> bin;
+    if (bin_at + 8 <= glb.size() && le32(glb, bin_at + 4) == 0x004E4942u) {
+        const uint64_t bin_length = le32(glb, bin_at);
+        if (bin_at + 8 + bin_length > glb.size()) return name + ": GLB BIN chunk out of bounds";
+        bin = glb.subspan(bin_at + 8, size_t(bin_length));
+    }
+    const nlohmann::json doc = nlohmann::json::parse(glb.begin() + 20, glb.begin() + 20 + std::ptrdiff_t(json_length), nullptr, false);
+    if (doc.is_discarded() || !doc.is_object()) return name + ": GLB JSON chunk is not valid JSON";
+    const nlohmann::json views = doc.value("bufferViews", nlohmann::json::array());
+    if (!entries.is_array()) return name + ": embedded_images is not a list";
+    for (const nlohmann::json& e : entries) {
+        const std::string image = e.is_object() ? e.value("name", "") : "";
+        const nlohmann::json* view = nullptr;
+        for (const nlohmann::json& v : views)
+            if (v.is_object() && v.value("name", "") == image && v.value("buffer", -1) == 0) view = &v;
+        if (image.empty() || !view) return name + ": embedded image '" + image + "' has no buffer view of that name";
+        const uint64_t offset = view->value("byteOffset", uint64_t(0)), length = view->value("byteLength", uint64_t(0));
+        if (length > bin.size() || offset > bin.size() - length) return name + ": embedded image '" + image + "' lies outside the BIN chunk";
+        const std::span<const uint8_t> bytes = bin.subspan(size_t(offset), size_t(length));
+        if (io::sha256_hex(bytes) != e.value("sha256", ""))
+            return name + ": embedded image '" + image + "': content differs from the manifest's hash";
+        const std::string format = e.value("format", "");
+        if (format != "ktx2" && format != "dds") continue;
+        auto shape = io::check_container_shape(bytes, name + ": embedded image '" + image + "'", limits);
+        if (!shape) return shape.error().message;
+        const int width = e.value("width", 0), height = e.value("height", 0), mips = e.value("mips", 0),
+                  channels = e.value("channels", 0);
+        if ((width && width != shape->width) || (height && height != shape->height) || (mips && mips != shape->mips) ||
+            (channels && channels > shape->channels))
+            return name + ": embedded image '" + image + "': size, channels or mips differ from the manifest entry";
+    }
+    return std::nullopt;
 }
 
 }  // namespace
@@ -131,6 +181,14 @@ FolderCheck check_manifest_folder(const fs::path& manifest_path, const io::Input
     tbb::parallel_for(size_t(0), hashed.size(), [&](size_t k) {
         const size_t i = hashed[k];
         finish_output(files[i], outputs[i], digests[k], checks[i]);
+        if (!checks[i].problem && outputs[i].extra.contains("embedded_images")) {
+            try {
+                checks[i].problem = check_embedded_images(files[i], checks[i].mapped.bytes(),
+                                                          outputs[i].extra["embedded_images"], limits);
+            } catch (const nlohmann::json::exception& e) {
+                checks[i].problem = files[i].string() + ": embedded images: " + e.what();
+            }
+        }
     });
     for (const FileCheck& c : checks) {
         if (c.problem) out.problems.push_back(*c.problem);

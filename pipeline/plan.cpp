@@ -133,8 +133,18 @@ std::vector<Layer> layers_of(const io::MaterialInfo& mat) {
     return layers;
 }
 
+// "SCENE: material M 'NAME' (LAYER) WHAT: PROBLEM", the line of ScenePlan::input_errors.
+std::string input_error(const io::GltfScene& scene, size_t material, const io::MaterialInfo& mat, const Layer& layer,
+                        const std::string& what, const std::string& problem) {
+    std::string line = scene.source().string() + ": material " + std::to_string(material);
+    if (!mat.name.empty()) line += " '" + mat.name + "'";
+    if (std::string(layer.name) != "base") line += std::string(" (") + layer.name + ")";
+    return line + " " + what + ": " + problem;
+}
+
 // Lowest perceptual roughness of a layer: its roughness factor times its smallest G texel.
-double lowest_roughness(const Layer& layer, ImageDecoder& images, ScenePlan& plan) {
+double lowest_roughness(const io::GltfScene& scene, size_t material, const io::MaterialInfo& mat, const Layer& layer,
+                        ImageDecoder& images, ScenePlan& plan) {
     double r = layer.roughness_factor;
     if (layer.roughness->image >= 0) {
         if (const Image* img = images.decode(layer.roughness->image)) {
@@ -143,9 +153,10 @@ double lowest_roughness(const Layer& layer, ImageDecoder& images, ScenePlan& pla
             for (size_t i = 0; i < img->texel_count(); ++i)
                 lo = std::min(lo, img->pixels[i * size_t(img->channels) + size_t(ch)]);
             r *= std::clamp(double(lo), 0.0, 1.0);
-        } else {
-            plan.notes.push_back(images.error(layer.roughness->image) + " (" + layer.name +
-                                 " roughness texture not read; its roughness factor used alone)");
+        } else if (std::string(layer.name) == "base" || mat.clearcoat.active()) {
+            // A coat with clearcoatFactor 0 does not count, so its texture is not needed.
+            plan.input_errors.push_back(input_error(scene, material, mat, layer, "roughness texture",
+                                                    images.error(layer.roughness->image)));
         }
     }
     return r;
@@ -158,12 +169,12 @@ struct MaterialRoughness {
     std::vector<std::optional<double>> lowest;
 };
 
-MaterialRoughness lowest_material_roughness(const std::vector<io::MaterialInfo>& materials, ImageDecoder& images,
-                                            ScenePlan& plan) {
+MaterialRoughness lowest_material_roughness(const io::GltfScene& scene, const std::vector<io::MaterialInfo>& materials,
+                                            ImageDecoder& images, ScenePlan& plan) {
     MaterialRoughness out{std::vector<std::vector<double>>(materials.size()),
                           std::vector<std::optional<double>>(materials.size())};
     for (size_t m = 0; m < materials.size(); ++m) {
-        for (const Layer& layer : layers_of(materials[m])) out.per_layer[m].push_back(lowest_roughness(layer, images, plan));
+        for (const Layer& layer : layers_of(materials[m])) out.per_layer[m].push_back(lowest_roughness(scene, m, materials[m], layer, images, plan));
         double r = out.per_layer[m][0];
         if (materials[m].clearcoat.active()) r = std::min(r, out.per_layer[m][1]);
         out.lowest[m] = r;
@@ -252,7 +263,10 @@ Result<void> bake_and_decide_texture(TextureDecision& d, int index, const std::s
     }
     if (!baked) {
         d.reason = scene.image_label(d.normal_image) + ": " + baked.error().message;
-        plan.notes.push_back(d.reason);
+        // The texture this layer needs is not baked: as much an input failure as an unreadable image.
+        plan.input_errors.push_back(scene.source().string() + ": material " + std::to_string(d.material) +
+                                    (d.material_name.empty() ? "" : " '" + d.material_name + "'") +
+                                    (d.layer == "base" ? "" : " (" + d.layer + ")") + " texture bake: " + d.reason);
     } else {
         d.max_roughness_change = baked->max_roughness_change;
         d.bake = baked->max_roughness_change >= d.threshold;
@@ -305,8 +319,9 @@ Result<void> decide_textures(const io::GltfScene& scene, const PlanOptions& opti
             if (std::string skip = texture_skip_reason(mat, int(m), layer, coat, infos); !skip.empty()) {
                 d.reason = std::move(skip);
             } else if (const Image* normal = images.decode(images.first_of_file(layer.normal->image)); !normal) {
-                d.reason = normal_name + " cannot be decoded: " + images.error(images.first_of_file(layer.normal->image));
-                plan.notes.push_back(images.error(images.first_of_file(layer.normal->image)));
+                const std::string error = images.error(images.first_of_file(layer.normal->image));
+                d.reason = normal_name + " cannot be decoded: " + error;
+                plan.input_errors.push_back(input_error(scene, m, mat, layer, normal_name, error));
             } else {
                 d.normal_image = images.first_of_file(layer.normal->image);
                 const Image* rough = nullptr;
@@ -509,7 +524,9 @@ Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& optio
     const std::vector<io::PrimitiveInfo> infos = scene.primitives();
     const std::vector<io::MaterialInfo> materials = scene.materials();
     ImageDecoder images(scene, options.input_policy.limits, plan);
-    const MaterialRoughness roughness = lowest_material_roughness(materials, images, plan);
+    const MaterialRoughness roughness = lowest_material_roughness(scene, materials, images, plan);
+    // Curvature regardless of the material (`specbake mesh`) needs no roughness texture.
+    if (!options.textures && !options.check_material) plan.input_errors.clear();
     if (options.textures) {
         if (auto ok = decide_textures(scene, options, materials, infos, roughness, images, plan); !ok) return ok.error();
     }

@@ -180,6 +180,10 @@ struct ScenePlan {
     std::vector<TextureDecision> textures;        // per material: base layer, then clear coat if it has one
     std::vector<CurvatureDecision> primitives;    // one per primitive
     std::vector<std::string> notes;               // import notes, warnings
+    // Images a material needs (normal or roughness texture of a layer the plan considers) that could not be
+    // read, decoded or are over a limit: one line each naming the scene, the material and the file. A bake
+    // fails on them (the texture would silently be missing) unless told to take them as warnings.
+    std::vector<std::string> input_errors;
     std::map<size_t, PrimitiveWork> work;         // by index into `primitives`, for the ones to bake
     std::vector<GlintDecision> glints;            // only the materials that ask for glints
     std::map<int, TextureWork> texture_work;      // by index in `textures`, for the texture bakes to run

@@ -58,6 +58,8 @@ json root_extension(const SceneJob& job, bool textures) {
 struct SceneResult {
     std::vector<io::ManifestOutput> outputs;  // paths relative to the scene's output folder
     std::vector<io::ManifestInput> inputs;    // hashed
+    std::vector<std::string> skipped;         // input failures taken as warnings
+    std::vector<std::string> material_names;  // of the scene, for the check of config [materials.NAME]
     ScenePlan plan;
 };
 
@@ -325,7 +327,8 @@ Result<void> replace_with_uastc(SceneBake& bake, io::GltfScene& scene, const Sce
 // Hashes of the inputs, asked for only now: the scene file's is computed in the background since the load,
 // the other files the loader read come hashed with the scene, the rest (images, files read through
 // Assimp) are hashed together here.
-Result<std::vector<io::ManifestInput>> hash_inputs(const io::GltfScene& scene, const std::vector<fs::path>& inputs) {
+Result<std::vector<io::ManifestInput>> hash_inputs(const io::GltfScene& scene, const std::vector<fs::path>& inputs,
+                                                   const fs::path& output_dir) {
     std::vector<fs::path> unhashed;
     for (const fs::path& in : inputs)
         if (scene.content_hash(in).empty()) unhashed.push_back(in);
@@ -335,7 +338,7 @@ Result<std::vector<io::ManifestInput>> hash_inputs(const io::GltfScene& scene, c
     for (size_t i = 0, next = 0; i < inputs.size(); ++i) {
         std::string hash = scene.content_hash(inputs[i]);
         SPECBAKE_ASSERT(!hash.empty() || next < hashes->size());
-        hashed.push_back({inputs[i].string(), hash.empty() ? (*hashes)[next++] : std::move(hash)});
+        hashed.push_back({io::recorded_input_path(inputs[i], output_dir), hash.empty() ? (*hashes)[next++] : std::move(hash)});
     }
     return hashed;
 }
@@ -398,6 +401,8 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
     std::vector<fs::path> inputs{input};
     for (const fs::path& r : scene.resource_files()) inputs.push_back(r);
     if (auto r = io::check_output_not_input(final_dir, inputs); !r) return r.error();
+    if (!job.depfile.empty())
+        if (auto r = io::check_depfile_path(job.depfile, job.output_dir, inputs); !r) return r.error();
 
     PlanOptions options = job.plan;
     options.texture_sink = texture_sink(bake, scene, options);
@@ -409,6 +414,18 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
     auto plan = make_plan(scene, options, loaded->roughness_known);
     if (!plan) return plan.error();
     for (const std::string& n : plan->notes) warnings.push_back(n);
+    if (!plan->input_errors.empty()) {
+        if (!job.unreadable_textures_are_warnings) {
+            // The first names the scene, the material and the file; the rest follow as warnings.
+            for (size_t i = 1; i < plan->input_errors.size(); ++i) warnings.push_back(plan->input_errors[i]);
+            return make_error(plan->input_errors.front() +
+                              (plan->input_errors.size() > 1
+                                   ? " (and " + std::to_string(plan->input_errors.size() - 1) + " more)"
+                                   : std::string()));
+        }
+        for (const std::string& e : plan->input_errors) warnings.push_back(e);
+        bake.result.skipped = plan->input_errors;
+    }
     auto baked_primitives = move_curvature_into_scene(*plan, scene);
     if (!baked_primitives) return baked_primitives.error();
 
@@ -427,7 +444,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
     record_material_users(bake);
     const bool any_texture = !extension_of_material.empty();
     if (*baked_primitives > 0 || any_texture) scene.set_root_extension(root_extension(job, any_texture));
-    auto hashed = hash_inputs(scene, inputs);
+    auto hashed = hash_inputs(scene, inputs, job.output_dir);
     if (!hashed) return hashed.error();
     bake.result.inputs = std::move(*hashed);
 
@@ -451,6 +468,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
                                                           : lower_extension(input).substr(1)}};
     if (!inside->empty()) scene_extra["embedded_images"] = *inside;
     add_scene_file_outputs(bake, *files, scene_extra);
+    for (const io::MaterialInfo& m : scene.materials()) bake.result.material_names.push_back(m.name);
     bake.result.plan = std::move(*plan);
     return std::move(bake.result);
 }
@@ -549,7 +567,8 @@ Result<SceneJobOutcome> run_scene_job(const SceneJob& job) {
             return make_error(s.string() + ": another scene has the same name '" + s.stem().string() +
                               "'; each scene gets its own folder named after it, so names must differ");
 
-    std::vector<std::string> identity(job.scenes.begin(), job.scenes.end());
+    std::vector<std::string> identity;
+    for (const fs::path& s : job.scenes) identity.push_back(io::recorded_input_path(s, job.output_dir));
     auto out = io::BakeOutput::open(job.output_dir, job.lock, identity, job.replace, job.progress);
     if (!out) return out.error();
     // The scenes are baked side by side (each one's own parallel loops still use every thread) into the
@@ -594,10 +613,23 @@ Result<SceneJobOutcome> run_scene_job(const SceneJob& job) {
             outcome.manifest.outputs.push_back(std::move(o));
         }
         outcome.manifest.inputs.insert(outcome.manifest.inputs.end(), result.inputs.begin(), result.inputs.end());
+        outcome.manifest.skipped.insert(outcome.manifest.skipped.end(), result.skipped.begin(), result.skipped.end());
         outcome.manifest.plan.push_back(plan_to_json(result.plan));
+        outcome.manifest.plan.back()["scene"] = io::recorded_input_path(input, job.output_dir);
         outcome.plans.push_back(std::move(result.plan));
     }
     if (outcome.plans.empty()) return outcome;
+    // A config table for a material no baked scene has is most likely a misspelt name.
+    std::set<std::string> names;
+    for (const Baked& b : baked)
+        if (b.result) names.insert(b.result->material_names.begin(), b.result->material_names.end());
+    std::set<std::string> configured;
+    for (const auto& [name, settings] : job.plan.material_texture_settings) configured.insert(name);
+    for (const auto& [name, glints] : job.plan.material_glints) configured.insert(name);
+    for (const std::string& name : configured)
+        if (!names.count(name))
+            outcome.warnings.push_back("config: [materials." + name + "]: no material of the baked scene" +
+                                       (job.scenes.size() > 1 ? "s" : "") + " is called '" + name + "'");
     if (auto r = io::write_manifest(out->stage(), outcome.manifest); !r) return out->final_names(r.error());
     if (auto r = out->commit(); !r) return r.error();
     return outcome;

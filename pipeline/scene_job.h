@@ -57,8 +57,15 @@ struct SceneJob {
     ProgressFn progress;                   // called from the threads baking the scenes
     // The output folder's lock when the caller already holds it (else the job takes it, io/output/bake_output.h).
     const io::OutputLock* lock = nullptr;
+    // The dependency file the command writes afterwards (empty: none): a scene whose inputs include it
+    // fails before anything is baked, since writing it would overwrite that input.
+    std::filesystem::path depfile;
     // Replace a bake of other scenes that output_dir holds (refused otherwise).
     bool replace = false;
+    // An image a material needs that cannot be read, decoded or is over a limit fails its scene (one line
+    // naming the scene, the material and the file). True (`--allow-unreadable-textures`): a warning, the
+    // layer is left unbaked, and the manifest records it as skipped, so the next run bakes again.
+    bool unreadable_textures_are_warnings = false;
     // Called from the baking thread when scene i is finished (error empty on success).
     std::function<void(size_t scene, const std::string& error)> scene_finished;
 };
@@ -91,7 +98,8 @@ struct SceneJobOutcome {
 // (io/output/bake_output.h); when every scene fails the folder is unchanged.
 Result<SceneJobOutcome> run_scene_job(const SceneJob& job);
 
-// The plan of one scene, as `specbake plan` prints it (the scene read under options.input_policy).
+// The plan of one scene, as `specbake plan` prints it (the scene read under options.input_policy). Images
+// a material needs that cannot be read are in its input_errors, which a bake fails on.
 Result<ScenePlan> plan_scene(const std::filesystem::path& path, const PlanOptions& options);
 
 // The settings block of the manifest.

@@ -303,8 +303,8 @@ TextureJobRecord texture_job_record(const TextureJob& job) {
         record.settings["demo"] = true;
         record.inputs = {kDemoNormalName, kDemoOrmName};
     } else {
-        record.inputs.push_back(job.normal.string());
-        if (job.roughness) record.inputs.push_back(job.roughness->string());
+        record.inputs.push_back(io::recorded_input_path(job.normal, job.output_dir));
+        if (job.roughness) record.inputs.push_back(io::recorded_input_path(*job.roughness, job.output_dir));
     }
     if (job.demo || job.roughness) record.settings["roughness_channel"] = job.roughness_channel;
     else record.settings["roughness_value"] = job.roughness_value;
@@ -500,14 +500,14 @@ Result<void> read_job_maps(const TextureJob& job, JobMaps& maps) {
     if (!n_hash) return n_hash.error();
     maps.normal = std::move(*n);
     maps.normal_name = job.normal.string();
-    maps.entries.push_back({job.normal.string(), *n_hash});
+    maps.entries.push_back({io::recorded_input_path(job.normal, job.output_dir), *n_hash});
     if (job.roughness) {
         if (!r) return r.error();
         if (!r_hash) return r_hash.error();
         maps.roughness = std::move(*r);
         maps.roughness_name = job.roughness->string();
         maps.have_roughness = true;
-        maps.entries.push_back({job.roughness->string(), *r_hash});
+        maps.entries.push_back({io::recorded_input_path(*job.roughness, job.output_dir), *r_hash});
     }
     return {};
 }
@@ -591,7 +591,9 @@ nlohmann::json input_facts(const TextureBakeNotes& notes, const std::string& nor
 Result<TextureJobOutcome> run_texture_job(const TextureJob& job) {
     if (auto ok = check_texture_job(job); !ok) return ok.error();
     auto out = io::BakeOutput::open(job.output_dir, job.lock,
-                                    {job.demo ? std::string(io::kDemoIdentity) : job.normal.string()}, job.replace,
+                                    {job.demo ? std::string(io::kDemoIdentity)
+                                              : io::recorded_input_path(job.normal, job.output_dir)},
+                                    job.replace,
                                     job.progress);
     if (!out) return out.error();
 
@@ -606,6 +608,7 @@ Result<TextureJobOutcome> run_texture_job(const TextureJob& job) {
     if (!written) return written.error();
 
     manifest.plan.push_back(texture_decision(in, maps.have_roughness, written->max_roughness_change));
+    if (!job.demo) manifest.plan.back()["target"] = io::recorded_input_path(job.normal, job.output_dir);
     manifest.settings["input_facts"] = input_facts(written->notes, maps.normal.info.color_space);
     manifest.outputs = written->outputs;
     if (job.progress) job.progress("writing manifest.json");

@@ -44,7 +44,22 @@ AtomicOutput::~AtomicOutput() {
     unregister_cleanup(temp_);
 }
 
+Result<void> check_replaceable(const fs::path& path) {
+    struct stat st {};
+    if (::lstat(path.c_str(), &st) != 0) return {};  // nothing there (or nothing reachable): created
+    if (S_ISREG(st.st_mode)) return {};
+    const char* what = S_ISLNK(st.st_mode)    ? "a symbolic link"
+                       : S_ISDIR(st.st_mode)  ? "a folder"
+                       : S_ISFIFO(st.st_mode) ? "a FIFO (named pipe)"
+                       : S_ISCHR(st.st_mode)  ? "a character device"
+                       : S_ISBLK(st.st_mode)  ? "a block device"
+                       : S_ISSOCK(st.st_mode) ? "a socket"
+                                              : "not a regular file";
+    return make_error(path.string() + ": is " + what + "; specbake replaces only regular files");
+}
+
 Result<void> AtomicOutput::commit() {
+    if (auto ok = check_replaceable(final_); !ok) return ok;
     std::error_code ec;
     if (!fs::exists(temp_, ec)) return make_error(final_.string() + ": nothing was written");
     fs::rename(temp_, final_, ec);
@@ -92,7 +107,7 @@ Result<void> check_writable(const fs::path& path) {
     std::error_code ec;
     if (path.has_parent_path()) fs::create_directories(path.parent_path(), ec);
     if (ec) return make_error(path.string() + ": cannot create its folder: " + ec.message());
-    if (fs::is_directory(path, ec)) return make_error(path.string() + ": is a folder, not a file");
+    if (auto ok = check_replaceable(path); !ok) return ok;
     AtomicOutput probe(path);
     const int fd = ::open(probe.temp_path().c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
     if (fd < 0) return make_error(path.string() + ": cannot be written: " + std::strerror(errno));

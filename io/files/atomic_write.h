@@ -40,6 +40,10 @@ Result<void> write_bytes_to(const std::filesystem::path& file, const std::filesy
 Result<void> write_pieces_to(const std::filesystem::path& file, const std::filesystem::path& name,
                              std::span<const std::span<const uint8_t>> pieces);
 
+// Fails when `path` exists and is not a regular file: an output replaces a regular file only, never a
+// FIFO, device, socket, folder or symbolic link (the rename would swap the node or link for a file).
+Result<void> check_replaceable(const std::filesystem::path& path);
+
 // Fails, naming `path` and the system's reason, when a file could not be written there (missing folders
 // are created): lets a command refuse before it works rather than after.
 Result<void> check_writable(const std::filesystem::path& path);

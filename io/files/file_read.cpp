@@ -15,31 +15,80 @@
 namespace specbake::io {
 namespace fs = std::filesystem;
 
+namespace {
+
+std::string not_regular(const fs::path& path, mode_t mode) {
+    const char* what = S_ISDIR(mode)    ? "is a folder, not a file"
+                       : S_ISFIFO(mode) ? "is a FIFO (named pipe), not a regular file"
+                       : S_ISCHR(mode)  ? "is a character device, not a regular file"
+                       : S_ISBLK(mode)  ? "is a block device, not a regular file"
+                       : S_ISSOCK(mode) ? "is a socket, not a regular file"
+                                        : "is not a regular file";
+    return path.string() + ": " + what;
+}
+
+std::string open_problem(const fs::path& path, int err) {
+    if (err == ENOENT) return path.string() + ": no such file";
+    if (err == ELOOP) return path.string() + ": symbolic link loop (too many levels of symbolic links)";
+    if (err == ENAMETOOLONG) return path.string() + ": path too long";
+    return path.string() + ": cannot open for reading: " + std::strerror(err);
+}
+
+}  // namespace
+
+Result<void> check_regular_input(const fs::path& path) {
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0) return make_error(open_problem(path, errno));
+    if (!S_ISREG(st.st_mode)) return make_error(not_regular(path, st.st_mode));
+    return {};
+}
+
+Result<int> open_regular_input(const fs::path& path) {
+    if (auto ok = check_regular_input(path); !ok) return ok.error();
+    // Checked again on the descriptor: the name may have been replaced in between.
+    const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
+    if (fd < 0) return make_error(open_problem(path, errno));
+    struct stat st {};
+    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        const mode_t mode = st.st_mode;
+        ::close(fd);
+        return make_error(not_regular(path, mode));
+    }
+    ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) & ~O_NONBLOCK);
+    return fd;
+}
+
 Result<std::vector<uint8_t>> read_file(const fs::path& path) {
-    std::error_code ec;
-    if (!fs::exists(path, ec)) return make_error(path.string() + ": no such file");
-    if (fs::is_directory(path, ec)) return make_error(path.string() + ": is a folder, not a file");
-    std::ifstream f(path, std::ios::binary);
-    if (!f) return make_error(path.string() + ": cannot open for reading");
-    f.seekg(0, std::ios::end);
-    const std::streamoff size = f.tellg();
-    if (size < 0) return make_error(path.string() + ": cannot determine the file size");
-    f.seekg(0, std::ios::beg);
+    auto opened = open_regular_input(path);
+    if (!opened) return opened.error();
+    const int fd = *opened;
+    struct stat st {};
+    if (::fstat(fd, &st) != 0 || st.st_size < 0) {
+        ::close(fd);
+        return make_error(path.string() + ": cannot determine the file size");
+    }
     // Scene files are tens of MB: the buffer is faulted in as huge pages where the kernel has them.
     std::vector<uint8_t> bytes;
-    detail::reserve_huge_pages(bytes, static_cast<size_t>(size));
-    bytes.resize(static_cast<size_t>(size));
-    f.read(reinterpret_cast<char*>(bytes.data()), size);
-    if (!f) return make_error(path.string() + ": read failed");
+    detail::reserve_huge_pages(bytes, static_cast<size_t>(st.st_size));
+    bytes.resize(static_cast<size_t>(st.st_size));
+    size_t done = 0;
+    while (done < bytes.size()) {
+        const ssize_t n = ::read(fd, bytes.data() + done, bytes.size() - done);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) {
+            ::close(fd);
+            return make_error(path.string() + ": read failed" + (n < 0 ? std::string(": ") + std::strerror(errno) : " (file shrank)"));
+        }
+        done += size_t(n);
+    }
+    ::close(fd);
     return bytes;
 }
 
 Result<MappedFile> MappedFile::open(const fs::path& path) {
-    std::error_code ec;
-    if (!fs::exists(path, ec)) return make_error(path.string() + ": no such file");
-    if (fs::is_directory(path, ec)) return make_error(path.string() + ": is a folder, not a file");
-    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0) return make_error(path.string() + ": cannot open for reading: " + std::strerror(errno));
+    auto opened = open_regular_input(path);
+    if (!opened) return opened.error();
+    const int fd = *opened;
     struct stat st {};
     if (::fstat(fd, &st) != 0 || st.st_size < 0) {
         ::close(fd);
@@ -47,7 +96,7 @@ Result<MappedFile> MappedFile::open(const fs::path& path) {
     }
     MappedFile file;
     if (st.st_size > 0) {
-        void* p = S_ISREG(st.st_mode) ? ::mmap(nullptr, size_t(st.st_size), PROT_READ, MAP_PRIVATE, fd, 0) : MAP_FAILED;
+        void* p = ::mmap(nullptr, size_t(st.st_size), PROT_READ, MAP_PRIVATE, fd, 0);
         if (p != MAP_FAILED) {
             file.data_ = static_cast<const uint8_t*>(p);
             file.size_ = size_t(st.st_size);

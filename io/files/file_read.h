@@ -10,7 +10,16 @@
 
 namespace specbake::io {
 
-// Reads a whole file; the error names the file.
+// Fails unless `path` names a regular file (symbolic links followed): a FIFO, device or socket would
+// block a reader or never end, and a folder is not a file. The error names the file and says what it is
+// ("is a FIFO (named pipe), not a regular file", "symbolic link loop", "no such file", ...).
+Result<void> check_regular_input(const std::filesystem::path& path);
+
+// Opens `path` for reading without blocking on a FIFO (O_NONBLOCK) and checks, on the descriptor, that it
+// is a regular file; the descriptor (blocking again) or the error of check_regular_input.
+Result<int> open_regular_input(const std::filesystem::path& path);
+
+// Reads a whole regular file; the error names the file.
 Result<std::vector<uint8_t>> read_file(const std::filesystem::path& path);
 
 // A whole file mapped read-only: its bytes without a copy into fresh memory (a 28 MB scene is otherwise

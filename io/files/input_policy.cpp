@@ -132,13 +132,15 @@ Result<fs::path> resolve_in_folder(const fs::path& folder, const std::string& de
 }
 
 Result<void> check_output_not_input(const fs::path& output_dir, std::span<const fs::path> inputs) {
-    std::error_code ec;
-    const fs::path out = fs::weakly_canonical(output_dir, ec);
+    // Compared as files (device and inode, through stat on the paths as given), not as canonical paths:
+    // those cannot be computed under a working folder longer than PATH_MAX, and two failed computations
+    // would compare equal. A folder that does not exist yet holds nothing.
     for (const fs::path& in : inputs) {
-        const fs::path inc = fs::weakly_canonical(in, ec);
-        if (inc == out)
+        std::error_code ec;
+        if (fs::equivalent(in, output_dir, ec))
             return make_error(output_dir.string() + ": the output is an input file; inputs are never overwritten");
-        if (inc.parent_path() == out)
+        const fs::path folder = in.has_parent_path() ? in.parent_path() : fs::path(".");
+        if (fs::equivalent(folder, output_dir, ec))
             return make_error(output_dir.string() + ": the output folder holds the input " + in.string() +
                               "; choose another folder so inputs are never overwritten");
     }

@@ -22,6 +22,15 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// A file checked into Git LFS but not fetched holds this text instead of the image.
+constexpr char kLfsPointerPrefix[] = "version https://git-lfs.github.com/spec/";
+constexpr const char* kLfsPointerProblem = "is a Git LFS pointer file, not the image (fetch it: git lfs pull)";
+
+bool is_lfs_pointer(std::span<const uint8_t> bytes) {
+    const size_t n = sizeof kLfsPointerPrefix - 1;
+    return bytes.size() >= n && std::equal(bytes.begin(), bytes.begin() + n, kLfsPointerPrefix);
+}
+
 uint32_t be32(const uint8_t* p) { return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3]; }
 
 // CRC-32 of ISO 3309 / PNG Annex D, table-driven.
@@ -150,17 +159,21 @@ Result<void> check_png_image_data(std::span<const uint8_t> b, const std::string&
 Result<DecodedImage> decode_image(const fs::path& path, const InputLimits& limits, bool keep_8bit) {
     const std::string name = path.string();
     std::error_code ec;
-    if (!fs::exists(path, ec)) return make_error(name + ": no such file");
     if (fs::is_directory(path, ec)) return make_error(name + ": is a folder, not an image");
+    if (auto ok = check_regular_input(path); !ok) return ok.error();
     {
         std::ifstream f(path, std::ios::binary);
-        char head[8] = {};
+        char head[sizeof kLfsPointerPrefix] = {};
         // PNG and JPEG are checked from their bytes before a decoder sees them (check_png_structure,
         // check_jpeg_markers), so they are decoded from memory like embedded images.
         const bool read = bool(f.read(head, 8));
+        f.read(head + 8, sizeof head - 9);
+        if (is_lfs_pointer(std::span<const uint8_t>(reinterpret_cast<const uint8_t*>(head), sizeof head - 1)))
+            return make_error(name + ": " + kLfsPointerProblem);
+        if (!read) return make_error(name + (fs::file_size(path, ec) == 0 ? ": is empty (0 bytes)" : ": is too short to be an image"));
         const bool png = static_cast<uint8_t>(head[0]) == 0x89 && head[1] == 'P';
         const bool jpeg = static_cast<uint8_t>(head[0]) == 0xFF && static_cast<uint8_t>(head[1]) == 0xD8;
-        if (read && (png || jpeg)) {
+        if (png || jpeg) {
             f.close();
             auto bytes = MappedFile::open(path);
             if (!bytes) return bytes.error();
@@ -175,6 +188,7 @@ Result<DecodedImage> decode_image(const fs::path& path, const InputLimits& limit
 Result<DecodedImage> decode_image_memory(std::span<const uint8_t> bytes, const std::string& name_for_errors,
                                          const InputLimits& limits, bool keep_8bit) {
     if (bytes.empty()) return make_error(name_for_errors + ": no image data");
+    if (is_lfs_pointer(bytes)) return make_error(name_for_errors + ": " + kLfsPointerProblem);
     if (auto ok = check_png_structure(bytes, name_for_errors, limits); !ok) return ok.error();
     // Plain PNGs (most texture libraries) without loading OpenImageIO; the same values and facts.
     if (auto png = decode_plain_png(bytes, keep_8bit)) return std::move(*png);

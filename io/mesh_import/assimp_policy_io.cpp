@@ -1,5 +1,6 @@
 // new_policy_io_system(): Assimp's default file access behind the path policy.
 #include "io/mesh_import/assimp_policy_io_internal.h"
+#include "io/files/file_read.h"
 
 #include <assimp/DefaultIOSystem.h>
 #include <assimp/IOStream.hpp>
@@ -29,6 +30,8 @@ public:
         if (!mode || std::strchr(mode, 'w') || std::strchr(mode, 'a') || std::strchr(mode, '+')) return nullptr;
         const std::optional<fs::path> path = resolve(file);
         if (!path) return nullptr;
+        // A FIFO or device would block the importer (or never end): only regular files are opened.
+        if (!check_regular_input(*path)) return nullptr;
         Assimp::IOStream* stream = DefaultIOSystem::Open(path->c_str(), mode);
         if (stream && absolute_normal(*path) != asset_ &&
             std::find(reads_.files.begin(), reads_.files.end(), *path) == reads_.files.end())

@@ -2,6 +2,7 @@
 
 #include "io/mesh_import/assimp_policy_io_internal.h"
 #include "io/files/file_name.h"
+#include "io/files/file_read.h"
 #include "io/files/input_policy.h"
 
 #include <assimp/Importer.hpp>
@@ -293,8 +294,7 @@ Result<void> read_nodes(const aiScene& scene, const std::string& path, const std
 
 Result<ImportedScene> import_mesh(const std::string& path, const MeshImportOptions& options,
                                   const io::InputPolicy& policy) {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec)) return make_error(path + ": no such file");
+    if (auto ok = io::check_regular_input(path); !ok) return ok.error();
     const io::InputLimits& limits = policy.limits;
     if (auto ply = check_ply_header(path, limits); !ply) return ply.error();
 

@@ -11,8 +11,11 @@
 
 namespace specbake::io {
 
-// Escapes one path for a depfile: a space becomes "\ " (backslashes right before it doubled), '#'
-// becomes "\#", '$' becomes "$$". Paths holding a newline cannot be written and give an error.
+// Escapes one path for a depfile that GNU Make (4.3) and Ninja (1.11) both read back as that path: a
+// space becomes "\ " (backslashes right before it doubled), '#' "\#", ':' "\:", '$' "$$", a leading '~'
+// "./~"; every other byte, UTF-8 included, is written as it is. A path neither tool can read back the same
+// (a line break, tab, ; | = [ * ? & ' " < > ^ `, a trailing backslash or ':', a backslash before '#' or
+// ':', a trailing "(...)") gives an error naming the path and the character (docs/build-pipelines.md#depfiles).
 Result<std::string> escape_depfile_path(const std::string& path);
 
 // The depfile text: targets in the given order (Ninja matches the first against the action's first

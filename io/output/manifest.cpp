@@ -16,6 +16,7 @@ json to_json(const Manifest& m) {
     j["plan"] = m.plan;
     j["inputs"] = json::array();
     for (const ManifestInput& in : m.inputs) j["inputs"].push_back({{"path", in.path}, {"sha256", in.sha256}});
+    if (!m.skipped.empty()) j["skipped"] = m.skipped;
     j["outputs"] = json::array();
     for (const ManifestOutput& o : m.outputs) {
         json e = {{"kind", o.kind},   {"path", o.path},         {"format", o.format},
@@ -35,6 +36,7 @@ Result<Manifest> manifest_from_json(const json& j, const std::string& source_nam
         m.settings = j.value("settings", json::object());
         m.plan = j.value("plan", json::array());
         for (const json& in : j.at("inputs")) m.inputs.push_back({in.at("path"), in.at("sha256")});
+        if (j.contains("skipped")) m.skipped = j.at("skipped").get<std::vector<std::string>>();
         for (const json& e : j.at("outputs")) {
             ManifestOutput o;
             o.kind = e.at("kind");
@@ -60,9 +62,13 @@ Result<Manifest> manifest_from_json(const json& j, const std::string& source_nam
 }
 
 std::string relative_path(const fs::path& file, const fs::path& dir) {
-    std::error_code ec;
-    fs::path rel = fs::relative(fs::weakly_canonical(file, ec), fs::weakly_canonical(dir, ec), ec);
-    if (ec || rel.empty()) rel = file;
+    std::error_code ec_file, ec_dir, ec;
+    const fs::path f = fs::weakly_canonical(file, ec_file), d = fs::weakly_canonical(dir, ec_dir);
+    fs::path rel;
+    if (!ec_file && !ec_dir) rel = fs::relative(f, d, ec);
+    // No canonical path under a working folder longer than PATH_MAX: the paths as given, lexically.
+    if (ec_file || ec_dir || ec || rel.empty()) rel = file.lexically_normal().lexically_relative(dir.lexically_normal());
+    if (rel.empty()) rel = file;
     return rel.generic_string();
 }
 
@@ -84,6 +90,17 @@ Result<Manifest> read_manifest(const fs::path& manifest_path) {
     json j = json::parse(bytes->begin(), bytes->end(), nullptr, false);
     if (j.is_discarded()) return make_error(manifest_path.string() + ": not valid JSON");
     return manifest_from_json(j, manifest_path.string());
+}
+
+std::string recorded_input_path(const fs::path& file, const fs::path& output_dir) {
+    std::error_code ec_in, ec_out;
+    fs::path in = fs::absolute(file, ec_in).lexically_normal();
+    fs::path out = fs::absolute(output_dir, ec_out).lexically_normal();
+    // Under a working folder longer than PATH_MAX no absolute path exists: two relative paths are still
+    // related lexically.
+    if (ec_in || ec_out) in = file.lexically_normal(), out = output_dir.lexically_normal();
+    const fs::path rel = in.lexically_relative(out);
+    return (rel.empty() ? in : rel).generic_string();
 }
 
 }  // namespace specbake::io

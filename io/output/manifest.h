@@ -14,7 +14,7 @@
 namespace specbake::io {
 
 struct ManifestInput {
-    std::string path;    // as given on the command line, or relative to the manifest folder when inside it
+    std::string path;    // recorded_input_path(): relative to the manifest's folder
     std::string sha256;
 };
 
@@ -37,6 +37,9 @@ struct Manifest {
     nlohmann::json plan = nlohmann::json::array();
     std::vector<ManifestInput> inputs;
     std::vector<ManifestOutput> outputs;
+    // Input failures a bake was told to take as warnings (`bake --allow-unreadable-textures`): what the
+    // folder lacks. Written only when not empty; a manifest that lists any is never up to date.
+    std::vector<std::string> skipped;
 };
 
 nlohmann::json to_json(const Manifest& m);
@@ -47,6 +50,13 @@ Result<Manifest> manifest_from_json(const nlohmann::json& j, const std::string& 
 // of the bytes it wrote and is kept.
 Result<void> write_manifest(const std::filesystem::path& dir, Manifest manifest);
 Result<Manifest> read_manifest(const std::filesystem::path& manifest_path);
+
+// How a manifest in `output_dir` records the input `file` (docs/build-pipelines.md#manifest-paths): its
+// path relative to the output folder, with '/' separators, both made absolute from the working folder and
+// lexically normal (symbolic links are not resolved). So the same bake gives the same text from any working
+// folder and any spelling of the paths (./a/x.gltf, a/x.gltf, /abs/a/x.gltf), and a tree moved as a whole
+// (a sandbox, a cache restored elsewhere) keeps its manifests valid.
+std::string recorded_input_path(const std::filesystem::path& file, const std::filesystem::path& output_dir);
 
 // Path of `file` relative to `dir`, with '/' separators.
 std::string relative_path(const std::filesystem::path& file, const std::filesystem::path& dir);

@@ -290,6 +290,7 @@ Result<void> OutputTransaction::record(const std::vector<std::string>& previous_
         const fs::path to = dir_ / rel;
         if (fs::is_directory(fs::symlink_status(to, ec)))
             return make_error(to.string() + ": is a folder; cannot replace it with a file");
+        if (auto ok = check_replaceable(to); !ok) return ok;
         for (fs::path p = to.parent_path(); p != dir_ && p.string().size() > dir_.string().size(); p = p.parent_path())
             if (fs::exists(fs::symlink_status(p, ec)) && !fs::is_directory(p, ec))
                 return make_error(p.string() + ": is a file; cannot put " + to.string() + " into it");

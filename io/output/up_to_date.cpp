@@ -28,9 +28,8 @@ nlohmann::json without_keys(nlohmann::json settings, const std::vector<std::stri
 
 fs::path resolve_recorded_input(const std::string& recorded, const fs::path& output_dir) {
     const fs::path p(recorded);
-    std::error_code ec;
-    if (p.is_absolute() || fs::exists(p, ec)) return p;
-    return output_dir / p;
+    if (p.is_absolute()) return p;
+    return (output_dir / p).lexically_normal();
 }
 
 Freshness check_up_to_date(const FreshnessQuery& query) {
@@ -51,6 +50,9 @@ Freshness check_up_to_date(const FreshnessQuery& query) {
         if (!recorded) return stale("input " + given + " is not in the manifest");
     }
     if (manifest->inputs.empty()) return stale("the manifest lists no inputs");
+    if (!manifest->skipped.empty())
+        return stale("the last bake skipped " + std::to_string(manifest->skipped.size()) + " input(s): " +
+                     manifest->skipped.front());
 
     // Every input and output hashed at once (in parallel); the first difference in manifest order is reported.
     const size_t n_in = manifest->inputs.size(), n_out = manifest->outputs.size();

@@ -1,7 +1,7 @@
 // Incremental builds by content: outputs are up to date when the manifest in their folder records the
 // same tool version, the same settings, the same inputs with unchanged SHA-256, and every output is
-// present with the hash the manifest recorded. Timestamps play no part, so a fresh checkout or a
-// restored cache is recognised as up to date as well.
+// present with the hash the manifest recorded, and the bake skipped nothing (Manifest::skipped).
+// Timestamps play no part, so a fresh checkout or a restored cache is recognised as up to date as well.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -14,7 +14,7 @@ namespace specbake::io {
 
 struct FreshnessQuery {
     std::filesystem::path output_dir;  // folder holding manifest.json
-    std::vector<std::string> inputs;   // the inputs the command was given, spelled as the manifest records them
+    std::vector<std::string> inputs;   // the inputs the command was given, as recorded_input_path() spells them
     nlohmann::json settings;           // exactly what the command would write as the manifest's "settings"
     std::string tool_version;
     // Settings keys the command derives from the inputs while baking (facts about the input files); they
@@ -29,12 +29,12 @@ struct Freshness {
 };
 
 // Compares the query with `output_dir/manifest.json`. A relative recorded input is looked up from the
-// working folder, then from the manifest folder. Inputs the manifest adds to the given ones (textures a
+// manifest folder (io/output/manifest.h, recorded_input_path). Inputs the manifest adds to the given ones (textures a
 // scene references) must still hash the same.
 Freshness check_up_to_date(const FreshnessQuery& query);
 
-// Where a path recorded in a manifest of `output_dir` is found: as given when absolute or present from the
-// working folder, else relative to the manifest folder.
+// Where a path recorded in a manifest of `output_dir` is found: as given when absolute, else relative to
+// the manifest folder (lexically normal, so "out/../a/x.png" reads "a/x.png").
 std::filesystem::path resolve_recorded_input(const std::string& recorded, const std::filesystem::path& output_dir);
 
 // Sets the manifest's modification time to now, so timestamp-based tools (Make, Ninja) see the skipped

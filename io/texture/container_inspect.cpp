@@ -568,6 +568,7 @@ Result<TextureShape> check_container_shape(std::span<const uint8_t> bytes, const
 }
 
 Result<TextureShape> read_image_shape(const std::filesystem::path& path) {
+    if (auto ok = check_regular_input(path); !ok) return ok.error();
     auto api = oiio::api();
     if (!api) return make_error(path.string() + ": " + api.error().message);
     return (*api)->read_shape(path.string());
