@@ -1,6 +1,7 @@
 // specbake bench: the accuracy/cost table of every candidate on the built-in scenes and given scene files
 // (SPEC Sec. 8).
 #include "cli/command.h"
+#include "io/files/file_read.h"
 #include "verify/gl_context.h"
 #include "verify/bench_job.h"
 #include "verify/scene.h"
@@ -78,7 +79,14 @@ int run_bench_command(const BenchCommandOptions& given) {
     v.keep_images = !o.output.empty();
     options.scenes = o.scenes;
     options.no_builtin = o.no_builtin;
-    for (const std::string& f : o.files) options.scene_files.emplace_back(f);
+    // A missing or unreadable scene file fails before the long run starts (exit 1, as for every command).
+    for (const std::string& f : o.files) {
+        if (auto regular = io::check_regular_input(f); !regular) {
+            print_error(regular.error().message);
+            return kExitFailed;
+        }
+        options.scene_files.emplace_back(f);
+    }
     const size_t file_runs = options.scene_files.size() * options.distances.size();
     options.alpha = o.alpha;
     options.glint_alpha = o.glint_alpha;
@@ -128,8 +136,7 @@ void add_bench_command(CLI::App& app, std::function<int()>& run) {
     auto o = std::make_shared<BenchCommandOptions>();
     sub->add_option("files", o->files,
                     "Scene files (glTF/GLB or any mesh Assimp reads), each simulated with its own materials, "
-                    "lights and camera")
-        ->check(CLI::ExistingFile);
+                    "lights and camera");
     sub->add_flag("--no-builtin", o->no_builtin, "Only the given scene files, no built-in scenes");
     sub->add_option("--scenes", o->scenes,
                     "Built-in scenes (default: sphere,cylinder,torus,bumpy-sphere and the glint scenes "

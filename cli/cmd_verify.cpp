@@ -9,6 +9,7 @@
 #include "verify/strips.h"
 #include "verify/bench_job.h"
 #include "core/text_format.h"
+#include "io/files/file_read.h"
 
 #include <algorithm>
 #include <cmath>
@@ -48,6 +49,13 @@ int run_verify_command(const VerifyCommandOptions& o) {
     if (o.scene_file.empty() == o.builtin.empty()) {
         print_error("give either a scene file or --builtin NAME (see specbake verify --help)");
         return kExitUsage;
+    }
+    // A missing or unreadable scene is a failed input (exit 1), as for every command, not a usage error.
+    if (!o.scene_file.empty()) {
+        if (auto regular = io::check_regular_input(o.scene_file); !regular) {
+            print_error(regular.error().message);
+            return kExitFailed;
+        }
     }
     auto scene = o.builtin.empty() ? load_sim_scene(o.scene_file, run_settings().input_policy)
                                    : make_builtin_scene(o.builtin, std::sqrt(o.alpha));
@@ -152,8 +160,7 @@ void add_verify_command(CLI::App& app, std::function<int()>& run) {
     auto o = std::make_shared<VerifyCommandOptions>();
     auto* file = sub->add_option("scene", o->scene_file,
                                  "Scene file: glTF/GLB (its KHR_lights_punctual lights, first perspective camera, "
-                                 "roughness and normal textures) or any mesh Assimp reads")
-                     ->check(CLI::ExistingFile);
+                                 "roughness and normal textures) or any mesh Assimp reads");
     sub->add_option("--builtin", o->builtin, "Built-in analytic scene: sphere, cylinder, torus, bumpy-sphere, scratched-sphere; glints (C21): "
                     "glitter-sphere, glitter-plane")
         ->excludes(file);

@@ -475,6 +475,8 @@ TEST(FarmExitCodes, AMissingInputIsOneAndABadOptionTwoForEveryCommand) {
         {"texture", "--normal", (dir / "missing.png").string(), "-o", (dir / "o3").string()},
         {"inspect", (dir / "missing.png").string()},
         {"inspect", "--check", (dir / "missing.png").string()},
+        {"verify", missing},
+        {"bench", "--no-builtin", "--no-corpus", missing},
     };
     for (const auto& args : missing_runs) {
         SCOPED_TRACE(args[0] + " " + args[1]);
@@ -482,7 +484,8 @@ TEST(FarmExitCodes, AMissingInputIsOneAndABadOptionTwoForEveryCommand) {
         EXPECT_EQ(r.exit_code, 1) << r.err;
         EXPECT_NE(line_naming(r.err, {"error", "missing.", "no such file"}), "") << r.err;
     }
-    for (const char* command : {"bake", "mesh", "plan", "texture", "inspect", "shader", "filter", "glints"}) {
+    for (const char* command :
+         {"bake", "mesh", "plan", "texture", "inspect", "shader", "filter", "glints", "verify", "bench"}) {
         SCOPED_TRACE(command);
         const RunResult r = run_bounded({command, "--no-such-option"}, dir);
         EXPECT_EQ(r.exit_code, 2) << r.err;
