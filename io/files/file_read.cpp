@@ -58,19 +58,35 @@ Result<int> open_regular_input(const fs::path& path) {
     return fd;
 }
 
-Result<std::vector<uint8_t>> read_file(const fs::path& path) {
+namespace {
+
+// A regular file opened for reading (open_regular_input) and its size in bytes.
+struct OpenedFile {
+    int fd = -1;
+    size_t size = 0;
+};
+
+Result<OpenedFile> open_regular_input_with_size(const fs::path& path) {
     auto opened = open_regular_input(path);
     if (!opened) return opened.error();
-    const int fd = *opened;
     struct stat st {};
-    if (::fstat(fd, &st) != 0 || st.st_size < 0) {
-        ::close(fd);
+    if (::fstat(*opened, &st) != 0 || st.st_size < 0) {
+        ::close(*opened);
         return make_error(path.string() + ": cannot determine the file size");
     }
+    return OpenedFile{*opened, static_cast<size_t>(st.st_size)};
+}
+
+}  // namespace
+
+Result<std::vector<uint8_t>> read_file(const fs::path& path) {
+    auto opened = open_regular_input_with_size(path);
+    if (!opened) return opened.error();
+    const int fd = opened->fd;
     // Scene files are tens of MB: the buffer is faulted in as huge pages where the kernel has them.
     std::vector<uint8_t> bytes;
-    detail::reserve_huge_pages(bytes, static_cast<size_t>(st.st_size));
-    bytes.resize(static_cast<size_t>(st.st_size));
+    detail::reserve_huge_pages(bytes, opened->size);
+    bytes.resize(opened->size);
     size_t done = 0;
     while (done < bytes.size()) {
         const ssize_t n = ::read(fd, bytes.data() + done, bytes.size() - done);
@@ -86,24 +102,19 @@ Result<std::vector<uint8_t>> read_file(const fs::path& path) {
 }
 
 Result<MappedFile> MappedFile::open(const fs::path& path) {
-    auto opened = open_regular_input(path);
+    auto opened = open_regular_input_with_size(path);
     if (!opened) return opened.error();
-    const int fd = *opened;
-    struct stat st {};
-    if (::fstat(fd, &st) != 0 || st.st_size < 0) {
-        ::close(fd);
-        return make_error(path.string() + ": cannot determine the file size");
-    }
+    const int fd = opened->fd;
     MappedFile file;
-    if (st.st_size > 0) {
-        void* p = ::mmap(nullptr, size_t(st.st_size), PROT_READ, MAP_PRIVATE, fd, 0);
+    if (opened->size > 0) {
+        void* p = ::mmap(nullptr, opened->size, PROT_READ, MAP_PRIVATE, fd, 0);
         if (p != MAP_FAILED) {
             file.data_ = static_cast<const uint8_t*>(p);
-            file.size_ = size_t(st.st_size);
+            file.size_ = opened->size;
         }
     }
     ::close(fd);  // a mapping stays valid
-    if (!file.data_ && st.st_size > 0) {
+    if (!file.data_ && opened->size > 0) {
         auto read = read_file(path);
         if (!read) return read.error();
         file.read_ = std::move(*read);
