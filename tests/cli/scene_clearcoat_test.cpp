@@ -7,6 +7,7 @@
 #include "io/image/image_io.h"
 #include "io/output/manifest.h"
 #include "scene_test_util.h"
+#include "tests/io/procedural_images.h"
 
 #include <assimp/Importer.hpp>
 #include <assimp/scene.h>
@@ -24,19 +25,7 @@ namespace {
 constexpr int kMapSize = 64;
 
 // Ripples along x and y: the normal map whose statistics the test computes independently.
-Image ripple_normal_map() {
-    Image img(kMapSize, kMapSize, 3);
-    for (int y = 0; y < kMapSize; ++y)
-        for (int x = 0; x < kMapSize; ++x) {
-            const double sx = 0.6 * std::sin(2 * M_PI * x / 8.0), sy = 0.3 * std::cos(2 * M_PI * y / 16.0);
-            const double len = std::sqrt(sx * sx + sy * sy + 1.0);
-            float* t = img.texel(x, y);
-            t[0] = float(0.5 * (-sx / len + 1.0));
-            t[1] = float(0.5 * (-sy / len + 1.0));
-            t[2] = float(0.5 * (1.0 / len + 1.0));
-        }
-    return img;
-}
+Image ripple_normal_map() { return specbake::testing::sine_normal_map(kMapSize, 0.6, 0.3); }
 
 // A glossy-coated sphere: base roughness 0.9 without a normal map, a coat of roughness `coat_roughness`
 // with the ripple map as clearcoatNormalTexture.

@@ -8,6 +8,7 @@
 #include "io/output/manifest.h"
 #include "pipeline/scene_job.h"
 #include "scene_test_util.h"
+#include "tests/io/procedural_images.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -25,19 +26,7 @@ namespace {
 constexpr int kMap = 64;
 
 // Bumps of period 8 and 16 texels: a map whose bake changes roughness everywhere.
-Image bumpy_normal_map() {
-    Image img(kMap, kMap, 3);
-    for (int y = 0; y < kMap; ++y)
-        for (int x = 0; x < kMap; ++x) {
-            const double sx = 0.5 * std::sin(2 * M_PI * x / 8.0), sy = 0.4 * std::cos(2 * M_PI * y / 16.0);
-            const double len = std::sqrt(sx * sx + sy * sy + 1.0);
-            float* t = img.texel(x, y);
-            t[0] = float(0.5 * (-sx / len + 1.0));
-            t[1] = float(0.5 * (-sy / len + 1.0));
-            t[2] = float(0.5 * (1.0 / len + 1.0));
-        }
-    return img;
-}
+Image bumpy_normal_map() { return specbake::testing::sine_normal_map(kMap, 0.5, 0.4); }
 
 // R = occlusion, G = roughness from 0.1 to 0.9 across x, B = metallic.
 Image orm_map() {

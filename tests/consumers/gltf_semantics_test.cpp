@@ -7,6 +7,7 @@
 #include "consumer_harness.h"
 
 #include "io/image/image_io.h"
+#include "tests/io/procedural_images.h"
 
 #include <map>
 
@@ -16,19 +17,7 @@ namespace {
 constexpr int kMap = 64;
 constexpr double kNormalScale = 0.3, kRoughnessFactor = 0.5;
 
-Image bumpy_normal_map() {
-    Image img(kMap, kMap, 3);
-    for (int y = 0; y < kMap; ++y)
-        for (int x = 0; x < kMap; ++x) {
-            const double sx = 0.8 * std::sin(2 * M_PI * x / 8.0), sy = 0.6 * std::cos(2 * M_PI * y / 16.0);
-            const double len = std::sqrt(sx * sx + sy * sy + 1.0);
-            float* t = img.texel(x, y);
-            t[0] = float(0.5 * (-sx / len + 1.0));
-            t[1] = float(0.5 * (-sy / len + 1.0));
-            t[2] = float(0.5 * (1.0 / len + 1.0));
-        }
-    return img;
-}
+Image bumpy_normal_map() { return specbake::testing::sine_normal_map(kMap, 0.8, 0.6); }
 
 Image orm_map() {
     Image img(kMap, kMap, 3);
