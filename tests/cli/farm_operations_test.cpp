@@ -513,9 +513,7 @@ TEST(FarmExitCodes, WriteErrorsOnStandardOutputFailTheRun) {
 
 // A thread count the system cannot give falls back to the threads it can: no abort, outputs as usual.
 TEST(FarmExitCodes, ThreadsThatCannotBeCreatedFallBack) {
-#if defined(__SANITIZE_ADDRESS__)
-    GTEST_SKIP() << "AddressSanitizer reserves more address space than the limit below";
-#endif
+    if (kAddressSanitizer) GTEST_SKIP() << "AddressSanitizer reserves more address space than the limit below";
     const fs::path dir = temp_dir("farm_threads");
     write_bumpy_normals(dir / "n.png");
     write_triangle_scene(dir / "s.gltf", "n.png");

@@ -130,17 +130,6 @@ std::string glb_of(std::string json_text) {
 // Under AddressSanitizer the executable reserves terabytes of shadow address space (so no RLIMIT_AS) and
 // its resident set carries the shadow and the allocator's quarantine: the peak bound is wider there, still
 // far below the gigabytes the findings reached.
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kAddressSanitizer = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-constexpr bool kAddressSanitizer = true;
-#else
-constexpr bool kAddressSanitizer = false;
-#endif
-#else
-constexpr bool kAddressSanitizer = false;
-#endif
 constexpr long kPeakRssLimitKb = (kAddressSanitizer ? 1024 : 200) * 1024;
 
 struct Measured {

@@ -22,6 +22,20 @@ namespace scene_test {
 
 namespace fs = std::filesystem;
 
+// Whether these tests (and so the specbake they run, built with the same flags) use AddressSanitizer: GCC
+// defines __SANITIZE_ADDRESS__, clang answers __has_feature.
+#if defined(__SANITIZE_ADDRESS__)
+inline constexpr bool kAddressSanitizer = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+inline constexpr bool kAddressSanitizer = true;
+#else
+inline constexpr bool kAddressSanitizer = false;
+#endif
+#else
+inline constexpr bool kAddressSanitizer = false;
+#endif
+
 inline fs::path temp_dir(const std::string& name) {
     fs::path d = fs::temp_directory_path() / ("specbake_scene_" + name + "_" + std::to_string(::getpid()));
     fs::remove_all(d);
