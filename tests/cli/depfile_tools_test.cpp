@@ -19,11 +19,6 @@ using nlohmann::json;
 
 namespace {
 
-void write_bytes(const fs::path& p, const std::string& bytes) {
-    fs::create_directories(p.parent_path());
-    std::ofstream(p, std::ios::binary) << bytes;
-}
-
 void write_normals_png(const fs::path& p) {
     fs::create_directories(p.parent_path());
     std::vector<uint8_t> px(4 * 4 * 3);

@@ -23,11 +23,6 @@ using nlohmann::json;
 
 namespace {
 
-void write_bytes(const fs::path& p, const std::string& bytes) {
-    fs::create_directories(p.parent_path());
-    std::ofstream(p, std::ios::binary) << bytes;
-}
-
 // An 8x8 RGB normal map whose normals tilt in a checkerboard: on a glossy material its filtered roughness
 // differs from the material's, so the bake writes textures. Written by OpenImageIO, as PNG or JPEG by the
 // extension of `p`.

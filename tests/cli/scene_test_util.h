@@ -49,6 +49,12 @@ struct RunResult {
     std::string out, err;
 };
 
+// Writes `bytes` to `p`, creating its folder.
+inline void write_bytes(const fs::path& p, const std::string& bytes) {
+    fs::create_directories(p.parent_path());
+    std::ofstream(p, std::ios::binary) << bytes;
+}
+
 inline std::string slurp(const fs::path& p) {
     std::ifstream in(p, std::ios::binary);
     std::stringstream ss;
