@@ -1,17 +1,28 @@
-# Writes shaders/specaa.glsl and shaders/specaa.hlsl from the language prologues and the shared body (the
-# filters, then the glints) in shaders/src/ (one source of truth). With -DCHECK=ON it only compares and fails when a committed file
-# differs from what the sources generate.
+# Writes shaders/specaa.glsl, shaders/specaa_es.glsl (GLSL ES 3.00, WebGL 2) and shaders/specaa.hlsl from the
+# language prologues and the shared body (the filters, then the glints) in shaders/src/ (one source of truth):
+# each is its prologue, the language's macros (both GLSL variants share macros_glsl.inc), then the body. With
+# -DCHECK=ON it only compares and fails when a committed file differs from what the sources generate.
 #   cmake -P shaders/generate.cmake            regenerate
-#   cmake -DCHECK=ON -P shaders/generate.cmake check (run by the GL test suite)
+#   cmake -DCHECK=ON -P shaders/generate.cmake check (run by the build and the GL test suite)
 cmake_minimum_required(VERSION 3.22)
 get_filename_component(_dir "${CMAKE_CURRENT_LIST_FILE}" DIRECTORY)
 file(READ "${_dir}/src/specaa_body.inc" _body)
 file(READ "${_dir}/src/specaa_glints.inc" _glints)
 set(_stale "")
-foreach(_lang glsl hlsl)
-  file(READ "${_dir}/src/prologue_${_lang}.inc" _prologue)
-  set(_text "${_prologue}${_body}${_glints}")
-  set(_out "${_dir}/specaa.${_lang}")
+file(READ "${_dir}/src/macros_glsl.inc" _macros_glsl)
+# variant|prologue|macros|output
+foreach(_variant "glsl|glsl|glsl|specaa.glsl" "glsl_es|glsl_es|glsl|specaa_es.glsl" "hlsl|hlsl||specaa.hlsl")
+  string(REPLACE "|" ";" _fields "${_variant}")
+  list(GET _fields 1 _prologue_name)
+  list(GET _fields 2 _macros_name)
+  list(GET _fields 3 _file)
+  file(READ "${_dir}/src/prologue_${_prologue_name}.inc" _prologue)
+  set(_macros "")
+  if(_macros_name)
+    set(_macros "${_macros_${_macros_name}}")
+  endif()
+  set(_text "${_prologue}${_macros}${_body}${_glints}")
+  set(_out "${_dir}/${_file}")
   if(CHECK)
     if(EXISTS "${_out}")
       file(READ "${_out}" _current)
