@@ -87,6 +87,8 @@ const server = createServer((req, res) => {
     }
     if (url.pathname === '/job.json') return serveFile(res, dirname(resolve(jobPath)), jobPath.split(/[\\/]/).pop());
     if (url.pathname.startsWith('/data/')) return serveFile(res, dataDir, url.pathname.slice(6));
+    // The project's own browser modules (web/three/), as an application would serve them.
+    if (url.pathname.startsWith('/web/')) return serveFile(res, resolve(here, '../../web'), url.pathname.slice(5));
     return serveFile(res, here, url.pathname.slice(1));
 });
 
