@@ -230,10 +230,17 @@ export class SpecbakeSpecularAAPlugin {
         return this._chains.get(key);
     }
 
-    async _layerState(binding) {
+    // The binding with its chain loaded; a chain that is not KTX2, or a layer whose normal map three.js did
+    // not get (the chains are in its UV space), binds no baked data, with a warning naming the material.
+    async _layerState(binding, hasNormalMap, name) {
         if (!binding) return null;
         if (binding.kind === 'none') return { ...binding, texture: null };
-        if (binding.output.format !== 'ktx2') return { kind: 'none', texture: null, note: `${binding.output.format} output not loaded` };
+        const why = binding.output.format !== 'ktx2' ? `its ${binding.output.format} ${binding.kind} chain is not loaded (bake KTX2)`
+            : !hasNormalMap ? 'the material has no normal map, whose UV the baked chains use' : '';
+        if (why) {
+            console.warn(`${EXTENSION_NAME}: ${name}: ${why}; the pixel kernel alone filters it`);
+            return { kind: 'none', texture: null };
+        }
         return { ...binding, texture: await this._loadChain(binding.output) };
     }
 
@@ -278,7 +285,7 @@ export class SpecbakeSpecularAAPlugin {
     async _patch(material, ext, name) {
         // Base layer: baked only when the extension has its properties; a patched material always filters the
         // base with the pixel kernel of the vertex normal (the include's default without baked data).
-        const base = await this._layerState(ext.outputs ? chooseBinding(ext) : { kind: 'none' });
+        const base = await this._layerState(ext.outputs ? chooseBinding(ext) : { kind: 'none' }, !!material.normalMap, name);
         // The coat binds its baked roughness only (the include's textures are the base's); without one, its
         // own roughness is filtered by the pixel kernel.
         const coatRoughness = (ext.clearcoat?.outputs ?? []).find((o) => o.kind === 'roughness');
@@ -286,7 +293,8 @@ export class SpecbakeSpecularAAPlugin {
             : coatRoughness && ext.clearcoat.roughnessReplaced
                 ? { kind: 'roughness', output: coatRoughness, channel: ext.clearcoat.roughnessChannel ?? 0 }
                 : { kind: 'none' };
-        const coat = material.isMeshPhysicalMaterial && material.clearcoat > 0 ? await this._layerState(coatLayer) : null;
+        const coat = material.isMeshPhysicalMaterial && material.clearcoat > 0
+            ? await this._layerState(coatLayer, !!material.clearcoatNormalMap, `${name} (clear coat)`) : null;
         patchMaterial(material, {
             enabled: this.enabledByDefault,
             base: { kind: base.kind, anisotropic: base.anisotropic, channel: base.channel },
