@@ -2,7 +2,8 @@
 // three.js's GLTFLoader (KTX2Loader set), with specbake's plugin (web/three/specbake-three.js) and without,
 // and rendered under a directional, a point, a spot and a hemisphere light and a prefiltered environment
 // (PMREM of RoomEnvironment) into an RGBA32F target: patched, patched with every material opted out, and
-// unpatched, and the unpatched scene at 8 x 8 samples per pixel (box filter) as the ground truth. Reports
+// unpatched, and the unpatched scene at 16 x 16 samples per pixel (box filter) with its textures read at full
+// resolution as the ground truth. Reports
 // shader errors, the plugin's report, the filters of the bound chains, and per image the mean, whether any
 // value is not finite, the largest difference to the unpatched image and the RMSE to the ground truth.
 import * as THREE from 'three';
@@ -32,11 +33,11 @@ renderer.debug.checkShaderErrors = true;
 const ktx2 = new KTX2Loader().setTranscoderPath('/node_modules/three/examples/jsm/libs/basis/').detectSupport(renderer);
 const environment = new THREE.PMREMGenerator(renderer).fromScene(new RoomEnvironment(), 0.04).texture;
 const target = new THREE.WebGLRenderTarget(size, size, { type: THREE.FloatType, format: THREE.RGBAFormat });
-const supersampling = 8;
+const supersampling = 16;
 const bigTarget = new THREE.WebGLRenderTarget(size * supersampling, size * supersampling,
     { type: THREE.FloatType, format: THREE.RGBAFormat });
 
-// The image at `size` x `size`, or with `ground` the mean of 8 x 8 samples per pixel: the pixel
+// The image at `size` x `size`, or with `ground` the mean of 16 x 16 samples per pixel: the pixel
 // integral the filtering approximates, from three.js's own unfiltered shading.
 function render(root, ground = false) {
     const scene = new THREE.Scene();
@@ -100,6 +101,16 @@ async function checkScene(entry) {
     patchedLoader.register((parser) => (plugin = new SpecbakeSpecularAAPlugin(parser)));
     const patched = await patchedLoader.loadAsync(`/data/${entry.path}`);
     const plain = await new GLTFLoader().setKTX2Loader(ktx2).loadAsync(`/data/${entry.path}`);
+    // The ground truth's copy reads every texture at its full resolution (no mips): the supersampling, not
+    // the mip chain, averages the normal map over each pixel.
+    const unfiltered = await new GLTFLoader().setKTX2Loader(ktx2).loadAsync(`/data/${entry.path}`);
+    for (const m of materialsOf(unfiltered.scene)) {
+        for (const slot of ['map', 'normalMap', 'roughnessMap', 'metalnessMap', 'clearcoatNormalMap', 'clearcoatRoughnessMap']) {
+            if (!m[slot]) continue;
+            m[slot].minFilter = THREE.LinearFilter;
+            m[slot].needsUpdate = true;
+        }
+    }
     const materials = materialsOf(patched.scene);
     const chains = [];
     for (const m of materials) {
@@ -110,7 +121,7 @@ async function checkScene(entry) {
                 levels: t.mipmaps?.length ?? 0, generateMipmaps: t.generateMipmaps, type: t.type });
         }
     }
-    const ground = render(plain.scene, true);
+    const ground = render(unfiltered.scene, true);
     const reference = render(plain.scene);
     const programsBefore = renderer.info.programs.length;
     const on = render(patched.scene);
