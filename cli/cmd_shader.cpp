@@ -1,5 +1,5 @@
-// specbake shader: writes the runtime shader include (GLSL or HLSL) that is embedded in the executable,
-// byte for byte identical to shaders/specaa.glsl and shaders/specaa.hlsl of the source tree.
+// specbake shader: writes the runtime shader include (GLSL, GLSL ES or HLSL) that is embedded in the
+// executable, byte for byte identical to shaders/specaa.glsl, specaa_es.glsl and specaa.hlsl of the source tree.
 #include "cli/command.h"
 
 #include "io/files/atomic_write.h"
@@ -14,6 +14,8 @@ namespace specbake::cli {
 // Defined in the build-generated shader_embed.cpp (shaders/embed.cmake).
 extern const unsigned char kSpecaaGlsl[];
 extern const std::size_t kSpecaaGlslSize;
+extern const unsigned char kSpecaaGlslEs[];
+extern const std::size_t kSpecaaGlslEsSize;
 extern const unsigned char kSpecaaHlsl[];
 extern const std::size_t kSpecaaHlslSize;
 
@@ -25,9 +27,12 @@ struct ShaderOptions {
 };
 
 int run_shader(const ShaderOptions& opts) {
-    const bool glsl = opts.lang == "glsl";
-    const std::string text(reinterpret_cast<const char*>(glsl ? kSpecaaGlsl : kSpecaaHlsl),
-                           glsl ? kSpecaaGlslSize : kSpecaaHlslSize);
+    const auto embedded = [](const unsigned char* bytes, std::size_t size) {
+        return std::string(reinterpret_cast<const char*>(bytes), size);
+    };
+    const std::string text = opts.lang == "glsl"      ? embedded(kSpecaaGlsl, kSpecaaGlslSize)
+                             : opts.lang == "glsl-es" ? embedded(kSpecaaGlslEs, kSpecaaGlslEsSize)
+                                                      : embedded(kSpecaaHlsl, kSpecaaHlslSize);
     if (opts.output.empty()) {
         if (std::fwrite(text.data(), 1, text.size(), stdout) != text.size() || std::fflush(stdout) != 0) {
             print_error("could not write the shader include to standard output");
@@ -46,17 +51,22 @@ int run_shader(const ShaderOptions& opts) {
 
 void add_shader_command(CLI::App& app, std::function<int()>& run) {
     auto* sub = app.add_subcommand(
-        "shader", "Write the runtime shader include (GLSL or HLSL) for specular anti-aliasing in an engine.");
+        "shader", "Write the runtime shader include (GLSL, GLSL ES or HLSL) for specular anti-aliasing in an engine.");
     auto opts = std::make_shared<ShaderOptions>();
-    sub->add_option("--lang", opts->lang, "Shading language of the include")
+    sub->add_option("--lang", opts->lang,
+                    "Shading language of the include: glsl (GLSL 3.30+), glsl-es (GLSL ES 3.00+: WebGL 2, "
+                    "OpenGL ES 3), hlsl (Shader Model 5+)")
         ->required()
-        ->check(CLI::IsMember({"glsl", "hlsl"}));
+        ->check(CLI::IsMember({"glsl", "glsl-es", "hlsl"}));
     sub->add_option("-o,--output", opts->output,
                     "Write to FILE (atomically: a temporary file renamed into place) instead of standard output");
     sub->footer(
         "Examples:\n"
         "  specbake shader --lang glsl -o shaders/specaa.glsl\n"
-        "  specbake shader --lang hlsl > specaa.hlsl");
+        "  specbake shader --lang hlsl > specaa.hlsl\n"
+        "  specbake shader --lang glsl-es -o web/specaa_es.glsl\n"
+        "    WebGL 2: no #include there, so concatenate '#version 300 es', your #defines and highp sampler\n"
+        "    uniforms, the include's text, then your shader (docs/shader-include.md#webgl-2-and-opengl-es).");
     sub->callback([&run, opts] { run = [opts] { return run_shader(*opts); }; });
 }
 

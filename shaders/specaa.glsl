@@ -23,9 +23,10 @@
 #define SPECAA_TEXTURE_PARAMS(tex, smp) sampler2D tex
 #define SPECAA_TEXTURE_ARGS(tex, smp) tex
 // Level of detail the sampler computes for uv (relative to level 0, not clamped to the mip range):
-// textureQueryLod from GLSL 4.00; before it the isotropic LOD of the GL spec (Sec. 8.14) from the UV
-// derivatives and the level-0 size (textureSize, GLSL 1.30).
-#if __VERSION__ >= 400
+// textureQueryLod from GLSL 4.00; before it, and in GLSL ES (which has no textureQueryLod at any version),
+// the isotropic LOD of the GL spec (Sec. 8.14) from the UV derivatives and the level-0 size (textureSize,
+// GLSL 1.30 and ES 3.00): log2 of the footprint's major axis in texels.
+#if __VERSION__ >= 400 && !defined(GL_ES)
 #define SPECAA_QUERY_LOD(tex, smp, uv) textureQueryLod(tex, uv).y
 #else
 #define SPECAA_QUERY_LOD(tex, smp, uv) specaa_lod_from_derivatives(vec2(textureSize(tex, 0)), uv)

@@ -1,5 +1,6 @@
 // Runs three.js's loaders on specbake outputs in headless Chromium (WebGL 2 on SwiftShader): serves this
-// folder and a data folder on 127.0.0.1, opens browser_page.html, which posts back what it read.
+// folder and a data folder on 127.0.0.1, opens browser_page.html (or the page JOB.json names in "page",
+// e.g. browser_shaders.html), which posts back what it read.
 // Usage: node browser_check.mjs JOB.json DATA_DIR RESULT.json [TIMEOUT_SECONDS]
 // Exit 0: RESULT.json written; 3: no Chromium installed (the caller skips); 1: any other failure (stderr).
 import { spawn, spawnSync } from 'node:child_process';
@@ -16,6 +17,11 @@ if (!jobPath || !dataDir || !resultPath) {
 }
 const timeoutMs = 1000 * Number(timeoutArg || 150);
 const here = dirname(fileURLToPath(import.meta.url));
+const page = JSON.parse(readFileSync(jobPath, 'utf8')).page ?? 'browser_page.html';
+if (!/^[\w-]+\.html$/.test(page)) {
+    process.stderr.write(`JOB.json names a page that is not an .html file of ${here}: ${page}\n`);
+    process.exit(1);
+}
 
 function findChromium() {
     const names = process.env.SPECBAKE_CHROMIUM ? [process.env.SPECBAKE_CHROMIUM] : ['chromium', 'chromium-browser', 'google-chrome'];
@@ -81,6 +87,8 @@ const server = createServer((req, res) => {
     }
     if (url.pathname === '/job.json') return serveFile(res, dirname(resolve(jobPath)), jobPath.split(/[\\/]/).pop());
     if (url.pathname.startsWith('/data/')) return serveFile(res, dataDir, url.pathname.slice(6));
+    // The project's own browser modules (web/three/), as an application would serve them.
+    if (url.pathname.startsWith('/web/')) return serveFile(res, resolve(here, '../../web'), url.pathname.slice(5));
     return serveFile(res, here, url.pathname.slice(1));
 });
 
@@ -90,7 +98,7 @@ server.listen(0, '127.0.0.1', () => {
     const args = ['--headless=new', '--no-sandbox', `--user-data-dir=${profile}`, '--use-angle=swiftshader',
         '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist', '--no-first-run', '--no-default-browser-check',
         '--disable-extensions', '--disable-background-networking', '--disable-component-update', '--disable-sync',
-        '--mute-audio', '--window-size=256,256', `http://127.0.0.1:${port}/browser_page.html`];
+        '--mute-audio', '--window-size=256,256', `http://127.0.0.1:${port}/${page}`];
     browser = spawn(chromium, args, { stdio: ['ignore', 'ignore', 'pipe'] });
     let stderr = '';
     browser.stderr.on('data', (d) => { stderr = (stderr + d).slice(-4000); });

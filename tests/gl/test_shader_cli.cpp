@@ -1,4 +1,5 @@
-// specbake shader: the embedded include is byte-identical to shaders/specaa.{glsl,hlsl}, on stdout and
+// specbake shader: the embedded include is byte-identical to shaders/specaa.glsl, specaa_es.glsl and
+// specaa.hlsl, on stdout and
 // with -o (atomic); bad arguments give one error line and a non-zero exit without touching files.
 #include "gl/gl_harness.h"
 
@@ -18,8 +19,8 @@ std::string read_all(const std::filesystem::path& path) {
 
 TEST(ShaderCli, WritesTheIncludesByteForByte) {
     TempDir dir;
-    for (const std::string lang : {"glsl", "hlsl"}) {
-        const std::string expected = read_source_file("shaders/specaa." + lang);
+    for (const std::string lang : {"glsl", "glsl-es", "hlsl"}) {
+        const std::string expected = read_source_file(lang == "glsl-es" ? "shaders/specaa_es.glsl" : "shaders/specaa." + lang);
         ASSERT_FALSE(expected.empty());
         const auto file = dir.path() / ("specaa." + lang);
         std::string out;
@@ -31,7 +32,7 @@ TEST(ShaderCli, WritesTheIncludesByteForByte) {
         EXPECT_EQ(read_all(piped), expected) << lang;
     }
     // Only the requested files exist: no temporary file left behind.
-    EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), std::filesystem::directory_iterator()), 4);
+    EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), std::filesystem::directory_iterator()), 6);
 }
 
 TEST(ShaderCli, ReplacesAnExistingFileCompletely) {

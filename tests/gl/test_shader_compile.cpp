@@ -30,12 +30,16 @@ TEST(ShaderCompile, GeneratedIncludesMatchSources) {
     const int status = run_command(std::string("'") + SPECBAKE_CMAKE_COMMAND + "' -DCHECK=ON -P '" + kShaders +
                                        "/generate.cmake'", out);
     EXPECT_EQ(status, 0) << out;
-    // Both languages share the body (the filters, then the glints) byte for byte after their prologues.
-    const std::string glsl = read_source_file("shaders/specaa.glsl"), hlsl = read_source_file("shaders/specaa.hlsl");
+    // All three share the body (the filters, then the glints) byte for byte after their prologues, and both
+    // GLSL variants the GLSL macros before it.
+    const std::string glsl = read_source_file("shaders/specaa.glsl"), hlsl = read_source_file("shaders/specaa.hlsl"),
+                      glsl_es = read_source_file("shaders/specaa_es.glsl");
     const std::string body =
         read_source_file("shaders/src/specaa_body.inc") + read_source_file("shaders/src/specaa_glints.inc");
+    const std::string glsl_tail = read_source_file("shaders/src/macros_glsl.inc") + body;
     ASSERT_FALSE(body.empty());
-    EXPECT_EQ(glsl.substr(glsl.size() - body.size()), body);
+    EXPECT_EQ(glsl.substr(glsl.size() - glsl_tail.size()), glsl_tail);
+    EXPECT_EQ(glsl_es.substr(glsl_es.size() - glsl_tail.size()), glsl_tail);
     EXPECT_EQ(hlsl.substr(hlsl.size() - body.size()), body);
 }
 

@@ -1,0 +1,1212 @@
+// specaa_es.glsl: specbake runtime include for specular anti-aliasing (GLSL ES 3.00 or later: WebGL 2).
+// Generated from shaders/src/ by shaders/generate.cmake; edit the sources there, not this file.
+// The API is documented below the language macros; SPECAA_* macros map the shared body to GLSL.
+// It sets highp as the default precision of float, int, sampler2D and sampler2DArray: the edge policy
+// reads the bits of 32-bit floats, and GLSL ES has no default precision for float and sampler2DArray in
+// fragment shaders. Code after the include inherits these defaults; declare the baked textures' samplers
+// highp before it (a lowp sampler returns lowp texels).
+#ifndef SPECAA_INCLUDED
+#define SPECAA_INCLUDED
+precision highp float;
+precision highp int;
+precision highp sampler2D;
+precision highp sampler2DArray;
+
+#define SPECAA_FLOAT2 vec2
+#define SPECAA_FLOAT3 vec3
+#define SPECAA_FLOAT4 vec4
+#define SPECAA_UINT2 uvec2
+#define SPECAA_UINT3 uvec3
+#define SPECAA_UINT4 uvec4
+#define SPECAA_SATURATE(x) clamp((x), 0.0, 1.0)
+#define SPECAA_DDX(x) dFdx(x)
+// The bits of a float as uint (the edge policy tests finiteness on them).
+#define SPECAA_AS_UINT(x) floatBitsToUint(x)
+#define SPECAA_DDY(x) dFdy(x)
+// Component-wise selection c ? a : b without control flow (GLSL's ?: compiles to a branch).
+#define SPECAA_SELECT(c, a, b) mix((b), (a), (c))
+#define SPECAA_SELECT2(c, a, b) mix((b), (a), bvec2(c))
+#define SPECAA_SELECT3(c, a, b) mix((b), (a), bvec3(c))
+// Texture parameters: GLSL passes one combined sampler; the sampler-state argument is dropped.
+#define SPECAA_TEXTURE_PARAMS(tex, smp) sampler2D tex
+#define SPECAA_TEXTURE_ARGS(tex, smp) tex
+// Level of detail the sampler computes for uv (relative to level 0, not clamped to the mip range):
+// textureQueryLod from GLSL 4.00; before it, and in GLSL ES (which has no textureQueryLod at any version),
+// the isotropic LOD of the GL spec (Sec. 8.14) from the UV derivatives and the level-0 size (textureSize,
+// GLSL 1.30 and ES 3.00): log2 of the footprint's major axis in texels.
+#if __VERSION__ >= 400 && !defined(GL_ES)
+#define SPECAA_QUERY_LOD(tex, smp, uv) textureQueryLod(tex, uv).y
+#else
+#define SPECAA_QUERY_LOD(tex, smp, uv) specaa_lod_from_derivatives(vec2(textureSize(tex, 0)), uv)
+float specaa_lod_from_derivatives(vec2 size, vec2 uv) {
+    vec2 dx = dFdx(uv) * size, dy = dFdy(uv) * size;
+    return 0.5 * log2(max(dot(dx, dx), dot(dy, dy)));
+}
+#endif
+#define SPECAA_SAMPLE(tex, smp, uv) texture(tex, uv)
+#define SPECAA_SAMPLE_BIAS(tex, smp, uv, bias) texture(tex, uv, bias)
+#define SPECAA_SAMPLE_GRAD(tex, smp, uv, gx, gy) textureGrad(tex, uv, gx, gy)
+#define SPECAA_UINT3 uvec3
+// Glint dictionary (2D texture array) parameters and its explicit-gradient read.
+#define SPECAA_TEXTURE_ARRAY_PARAMS(tex, smp) sampler2DArray tex
+#define SPECAA_TEXTURE_ARRAY_ARGS(tex, smp) tex
+#define SPECAA_SAMPLE_ARRAY_GRAD(tex, smp, uvw, gx, gy) textureGrad(tex, uvw, gx, gy)
+
+// ===================================================================================================
+// specbake runtime include: specular anti-aliasing by NDF filtering (SPEC Sec. 5).
+//
+// Conventions (SPEC Sec. 2). Perceptual roughness r (glTF), alpha = r^2, squared roughness a = alpha^2.
+// A roughness matrix is a symmetric 2x2 matrix [[xx, xy], [xy, yy]] in the tangent frame, stored as
+// float3(xx, yy, xy), in squared-roughness units (A = diag(alpha_x^2, alpha_y^2) when axis-aligned;
+// A = 2 x slope covariance, TK21 Sec. 2.1). A "kernel matrix" K = 2 Sigma is what filtering adds to a
+// roughness matrix (TK21 Eq. 3 and 6); an isotropic kernel t is what it adds to a scalar a (TK21 Eq. 10,
+// 13, 14; SPEC Sec. 3: t = tr(Sigma) for the mean reduction). Tangent-space vectors: z along the normal.
+//
+// Configuration (define before including):
+//   SPECAA_SIGMA2   pixel-filter variance in pixels^2, default 1/(2 pi) (TK21 App. B).
+//   SPECAA_KAPPA    clamp of derivative-based kernels, default 0.18 (TK21 Eq. 10, K16).
+//   SPECAA_GGX_SPREAD  specaa_default_D with a kernel or LEAN texture: GGX(A) where the minified
+//                   footprint's spread k_max exceeds 1 / this, default 8.
+//   Baked data for the default entry point (at most one of the roughness texture and kernel/LEAN):
+//   SPECAA_ROUGHNESS_TEXTURE name   baked filtered roughness mips (perceptual r), channel
+//                                   SPECAA_ROUGHNESS_CHANNEL (default g: the RGBA ORM layout, A = 1;
+//                                   define it as r for the one-channel R8/R16 file).
+//   SPECAA_KERNEL_TEXTURE name      baked projected-space kernel mips: with SPECAA_KERNEL_ANISOTROPIC
+//                                   RGBA = (xx, yy, xy, g) of Sigma and its rough share g
+//                                   (R16G16B16A16_SFLOAT), the bake's default; without it R = t (isotropic
+//                                   mean, R16_SFLOAT; `specbake texture --isotropic-kernel`).
+//                                   The single lobe takes K = 2 Sigma sqrt(g) (specaa_baked_kernel_matrix);
+//   SPECAA_KERNEL_COVARIANCE        K = 2 Sigma whatever g (the covariance-matched lobe of earlier releases).
+//   SPECAA_KERNEL_GATE              a baked kernel K whose largest eigenvalue is below this times the
+//                                   material's a is faded out, K saturate(lambda_max(K) / (gate a))^2
+//                                   (specaa_baked_kernel_matrix); default 0.5, 0 keeps every kernel whole.
+//   SPECAA_KERNEL_TWO_LOBES         specaa_default_D splits the Sigma kernel's texel into its flat share
+//                                   (the material's lobe) and its rough share g (all of Sigma): opt-in.
+//   SPECAA_LEAN_TEXTURE0 name       LEAN moments, projected space (SPEC Sec. 3), in two textures:
+//   SPECAA_LEAN_TEXTURE1 name         TEXTURE0 RGBA = (m.x, m.y, M.xx, M.yy), TEXTURE1 R = M.xy
+//                                     (at least 16-bit float, trilinear filtering).
+//   Every baked file has 1, 2 or 4 channels in the same order in KTX2, DDS, EXR and PNG
+//   (docs/texture-bake.md#output-layouts); bind them with linear mip filtering (LINEAR_MIPMAP_LINEAR):
+//   loaders such as three.js KTX2Loader default to nearest.
+//   SPECAA_NORMAL_TWO_CHANNEL       the baked mean normal (`*_normal`) read by specaa_sample_mean_normal
+//                                   has two channels (BC5 of `--block bc`, ASTC of `--block astc`: x, y as
+//                                   (n + 1) / 2); z is rebuilt as sqrt(max(0, 1 - x^2 - y^2)). Without it:
+//                                   RGBA8, (n + 1) / 2.
+//   SPECAA_SAMPLER name             HLSL only: the SamplerState used with the textures above.
+//   SPECAA_USE_CURVATURE            per-pixel kernel from _SPECAA_CURVATURE (SPEC Sec. 4) and the
+//                                   position derivatives instead of normal derivatives.
+//   SPECAA_NO_PIXEL_KERNEL          baked data only (no per-pixel kernel).
+//   Diagnostics (to attribute an error to one part of the default; not for shipping):
+//   SPECAA_NO_BAKED_KERNEL          the baked kernel/LEAN spread is taken as zero (the per-pixel kernel only).
+//   SPECAA_DEFAULT_D_WEIGHT w       specaa_default_D with this blend weight everywhere (0: the convolved
+//                                   NDF, 1: GGX(A)).
+//   SPECAA_KERNEL_LOD_BIAS b        the Sigma kernel texel sampled with this LOD bias (the mip the
+//                                   hardware picks against a finer or coarser footprint).
+//   SPECAA_GATE_PIXEL_KERNEL        the per-pixel kernel faded out like the baked one (SPECAA_KERNEL_GATE).
+//   SPECAA_KERNEL_AREA_LOD          the Sigma kernel texel sampled at the mip of the footprint's area, not of
+//                                   its major axis (the hardware's isotropic choice).
+//   SPECAA_BLEND_FROM_BAKED_SPREAD  opt-in: specaa_default_D's blend weight from the baked spread alone,
+//                                   not from all of K = A - a I (the per-pixel kernel included).
+// Textures are sampled with implicit derivatives, so the hardware selects the mip: the baked mips are
+// the footprint filter of the normal map, the per-pixel kernel adds the geometric curvature.
+//
+// Domain: unit vectors, a in [0, 1], finite derivatives. Outside it, the derivative-based methods and the
+// default entry points follow the edge policy of the bake's filter core (bake/methods.h): a is clamped to
+// [0, 1] and a NaN a counts as 1 (fully rough); a non-finite input of a kernel (the vector whose quad
+// derivatives are taken or those derivatives, the curvature, the tangent frame, a baked texel) gives a
+// zero kernel; a kernel that overflows is infinitely wide: the clamped methods and the per-pixel kernels
+// of the default add kappa, the others give the fully rough matrix I. Their results are always finite.
+// The filters from given derivatives, the reductions and the NDFs take inputs inside the domain.
+// ===================================================================================================
+
+#ifndef SPECAA_SIGMA2
+#define SPECAA_SIGMA2 0.15915494309189535
+#endif
+#ifndef SPECAA_KAPPA
+#define SPECAA_KAPPA 0.18
+#endif
+#ifndef SPECAA_GGX_SPREAD
+#define SPECAA_GGX_SPREAD 8.0
+#endif
+#ifndef SPECAA_KERNEL_GATE
+#define SPECAA_KERNEL_GATE 0.5
+#endif
+#ifndef SPECAA_ROUGHNESS_CHANNEL
+#define SPECAA_ROUGHNESS_CHANNEL g
+#endif
+#define SPECAA_PI 3.14159265358979
+
+// Kernel traces above this are treated as this: the filtered roughness is then 1 within float precision,
+// and the closed forms below stay finite.
+#define SPECAA_MAX_KERNEL 1.0e8
+
+// ---------------------------------------------------------------------------------------------------
+// Edge policy (header comment). Finiteness is read from the bits: GLSL does not require NaN support,
+// and a compiler may fold isnan() or x != x away; an exponent of all ones cannot be.
+// ---------------------------------------------------------------------------------------------------
+
+// Largest magnitude of the components as bits: at least SPECAA_NOT_FINITE exactly when one is +-inf or
+// NaN. Vector bit operations and maxima keep the tests cheap (no short-circuit branches).
+#define SPECAA_NOT_FINITE 0x7f800000u
+uint specaa_magnitude_bits(float x) { return SPECAA_AS_UINT(x) & 0x7fffffffu; }
+SPECAA_UINT3 specaa_magnitude_bits3(SPECAA_FLOAT3 v) { return SPECAA_AS_UINT(v) & 0x7fffffffu; }
+uint specaa_max_component(SPECAA_UINT3 m) { return max(max(m.x, m.y), m.z); }
+bool specaa_is_finite(float x) { return specaa_magnitude_bits(x) < SPECAA_NOT_FINITE; }
+bool specaa_is_finite3(SPECAA_FLOAT3 v) { return specaa_max_component(specaa_magnitude_bits3(v)) < SPECAA_NOT_FINITE; }
+
+// Squared roughness clamped to [0, 1]; NaN counts as fully rough.
+float specaa_sanitize_alpha2(float a) { return SPECAA_SELECT(specaa_magnitude_bits(a) > SPECAA_NOT_FINITE, 1.0, clamp(a, 0.0, 1.0)); }
+SPECAA_FLOAT2 specaa_sanitize_alpha2_2(SPECAA_FLOAT2 a) {
+    return SPECAA_FLOAT2(specaa_sanitize_alpha2(a.x), specaa_sanitize_alpha2(a.y));
+}
+
+// A derivative-based kernel clamped to kappa; an unbounded one (+inf, or NaN from inf - inf or 0 * inf)
+// is clamped to kappa too (TK21 Eq. 10: the clamp bounds the kernel whatever the derivatives).
+float specaa_clamp_kernel(float kernel) { return SPECAA_SELECT(specaa_is_finite(kernel), min(kernel, SPECAA_KAPPA), SPECAA_KAPPA); }
+
+// The vector v and its quad derivatives dx, dy are finite.
+bool specaa_usable(SPECAA_FLOAT3 v, SPECAA_FLOAT3 dx, SPECAA_FLOAT3 dy) {
+    SPECAA_UINT3 m = max(specaa_magnitude_bits3(v), max(specaa_magnitude_bits3(dx), specaa_magnitude_bits3(dy)));
+    return specaa_max_component(m) < SPECAA_NOT_FINITE;
+}
+
+// The policy around a filtered matrix r of squared roughness a: diag(a) without usable inputs (zero
+// kernel), the fully rough I when the kernel overflowed.
+SPECAA_FLOAT3 specaa_guard_matrix(bool usable, SPECAA_FLOAT2 a, SPECAA_FLOAT3 r) {
+    SPECAA_FLOAT3 filtered = SPECAA_SELECT3(specaa_is_finite3(r), r, SPECAA_FLOAT3(1.0, 1.0, 0.0));
+    return SPECAA_SELECT3(usable, filtered, SPECAA_FLOAT3(a, 0.0));
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Symmetric 2x2 matrices stored as float3(xx, yy, xy).
+// ---------------------------------------------------------------------------------------------------
+
+// Determinant xx yy - xy^2.
+float specaa_sym_det(SPECAA_FLOAT3 m) { return m.x * m.y - m.z * m.z; }
+
+// Largest eigenvalue of a symmetric 2x2 matrix (closed form of the 2x2 characteristic polynomial).
+float specaa_sym_max_eigenvalue(SPECAA_FLOAT3 m) {
+    float halfDiff = 0.5 * (m.x - m.y);
+    return 0.5 * (m.x + m.y) + sqrt(halfDiff * halfDiff + m.z * m.z);
+}
+
+// A positive semi-definite matrix with each eigenvalue clamped to [0, cap] (eigenvectors kept): TK21
+// Sec. 4's clamp of the non-axis-aligned kernel ("clamp the eigenvalues of Sigma"), the matrix analogue of
+// Listing 3's per-axis min. m = l2 I + (l1 - l2) P1 with the projector P1 = (m - l2 I) / (l1 - l2), so the
+// result is c2 I + (c1 - c2) P1, c_i = clamp(l_i, 0, cap); both above the cap: cap I. For a huge, nearly
+// rank-one m the rounded l2 can come out negative (cancellation in halfTrace - radius); the clamp to 0
+// keeps the result positive semi-definite and at most cap.
+SPECAA_FLOAT3 specaa_sym_clamp_eigenvalues(SPECAA_FLOAT3 m, float cap) {
+    float halfTrace = 0.5 * (m.x + m.y);
+    float halfDiff = 0.5 * (m.x - m.y);
+    float radius = sqrt(halfDiff * halfDiff + m.z * m.z);
+    float l2 = halfTrace - radius;
+    float c1 = clamp(halfTrace + radius, 0.0, cap), c2 = clamp(l2, 0.0, cap);
+    float f = radius > 0.0 ? (c1 - c2) / (2.0 * radius) : 0.0;
+    return SPECAA_FLOAT3(c2 + f * (m.x - l2), c2 + f * (m.y - l2), f * m.z);
+}
+
+// Nearest positive semi-definite matrix: negative eigenvalues set to 0 (Frobenius projection). Used on
+// covariances formed as a difference of moments, Sigma = M - m m^T (SPEC Sec. 3), which rounding can
+// push slightly indefinite. Uses the spectral projector (Sigma - lmin I) / (lmax - lmin).
+SPECAA_FLOAT3 specaa_sym_clamp_psd(SPECAA_FLOAT3 m) {
+    float halfTrace = 0.5 * (m.x + m.y);
+    float halfDiff = 0.5 * (m.x - m.y);
+    float radius = sqrt(halfDiff * halfDiff + m.z * m.z);
+    float lmax = halfTrace + radius;
+    float lmin = halfTrace - radius;
+    if (lmin >= 0.0) return m;
+    if (lmax <= 0.0) return SPECAA_FLOAT3(0.0, 0.0, 0.0);
+    return (lmax / (2.0 * radius)) * SPECAA_FLOAT3(m.x - lmin, m.y - lmin, m.z);
+}
+
+// Kernel matrix K = 2 Sigma = 2 sigma^2 [du; dv]^T [du; dv] from the screen-space derivatives of a 2D
+// quantity along x (du) and y (dv), TK21 Eq. (3) (K16: C = U U^T with the roughness factor 2).
+SPECAA_FLOAT3 specaa_kernel_matrix(SPECAA_FLOAT2 du, SPECAA_FLOAT2 dv) {
+    return (2.0 * SPECAA_SIGMA2) * SPECAA_FLOAT3(du.x * du.x + dv.x * dv.x,
+                                                 du.y * du.y + dv.y * dv.y,
+                                                 du.x * du.y + dv.x * dv.y);
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Half-vector projections (TK21 Sec. 3-4.1, T19 Listing 1).
+// ---------------------------------------------------------------------------------------------------
+
+// Slope-space half vector -h.xy / |h.z| (K16 "parallel plane", TK21 Listings 2-3 with the division).
+// Not finite at h.z = 0: the slope-space methods break down at grazing half vectors (TK21 Sec. 3).
+SPECAA_FLOAT2 specaa_slope_half_vector(SPECAA_FLOAT3 h) { return h.xy / -abs(h.z); }
+
+// Orthographically projected half vector (h.x, h.y), TK21 Sec. 4.1: derivatives shrink by det J = h_z.
+SPECAA_FLOAT2 specaa_projected_half_vector(SPECAA_FLOAT3 h) { return h.xy; }
+
+// ---------------------------------------------------------------------------------------------------
+// Filters from given derivatives (du, dv = value at the right/upper neighbour minus the fragment's).
+// alpha2 = (alpha_x^2, alpha_y^2) of the material.
+// ---------------------------------------------------------------------------------------------------
+
+// Non-axis-aligned filtering diag(alpha2) + K, no clamp. With slope-space derivatives this is K16's
+// R' = R + 2C (TK21 Eq. 2); with projected derivatives the practical approximation TK21 Eq. (9), Listing 2.
+SPECAA_FLOAT3 specaa_filter_non_axis_aligned(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT2 du, SPECAA_FLOAT2 dv) {
+    return SPECAA_FLOAT3(alpha2.x, alpha2.y, 0.0) + specaa_kernel_matrix(du, dv);
+}
+
+// Axis-aligned filtering over the bounding rectangle |du| + |dv| of the footprint with the kappa clamp,
+// TK21 Listing 3 (K16 "More Temporal Stability"): saturate(alpha2 + min(2 sigma^2 bounds^2, kappa)).
+SPECAA_FLOAT2 specaa_filter_axis_aligned(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT2 du, SPECAA_FLOAT2 dv) {
+    SPECAA_FLOAT2 bounds = abs(du) + abs(dv);
+    SPECAA_FLOAT2 kernel = (2.0 * SPECAA_SIGMA2) * (bounds * bounds);
+    return SPECAA_SATURATE(alpha2 + SPECAA_FLOAT2(specaa_clamp_kernel(kernel.x), specaa_clamp_kernel(kernel.y)));
+}
+
+// Full projected-space filtering of an axis-aligned material, TK21 Eq. (4)-(8):
+// A_bar = ((B + K)^-1 + I)^-1 with B = diag(a / (1 - a)), B_bar = B + K. Written as
+// A_bar = (B_bar + det(B_bar) I) / (1 + tr(B_bar) + det(B_bar)) (the App. D form) and multiplied by
+// c = (1 - a_x)(1 - a_y), so a = 1 (B infinite) and a = 0 with K = 0 (singular) stay exact (A_bar = 1
+// resp. 0). c det(B_bar) = a_x a_y + c B_xx K_yy + c B_yy K_xx + c det(K) is a sum of non-negative terms,
+// so det(B_bar) >= det(B) (the clamp of Listing 1) holds by construction. detK = det(K) >= 0, K PSD.
+SPECAA_FLOAT3 specaa_filter_projected_matrix_det(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT3 K, float detK) {
+    // Half the trace first: a finite K whose trace overflows still scales down to the cap (then A_bar ~ I)
+    // instead of to 0; an infinite K gives NaN here, which the callers' edge policy turns into I.
+    float halfTraceK = 0.5 * K.x + 0.5 * K.y;
+    float traceK = K.x + K.y;
+    if (halfTraceK > 0.5 * SPECAA_MAX_KERNEL) {
+        float scale = (0.5 * SPECAA_MAX_KERNEL) / halfTraceK;
+        K *= scale;
+        detK *= scale * scale;
+        traceK = SPECAA_MAX_KERNEL;
+    }
+    float ax = SPECAA_SATURATE(alpha2.x);
+    float ay = SPECAA_SATURATE(alpha2.y);
+    float c = (1.0 - ax) * (1.0 - ay);
+    float bx = ax * (1.0 - ay);                                   // c B_xx
+    float by = ay * (1.0 - ax);                                   // c B_yy
+    float cDet = ax * ay + bx * K.y + by * K.x + c * max(detK, 0.0);  // c det(B_bar)
+    float denominator = c + bx + by + c * traceK + cDet;         // c (1 + tr(B_bar) + det(B_bar)) > 0
+    return SPECAA_FLOAT3(bx + c * K.x + cDet, by + c * K.y + cDet, c * K.z) / denominator;
+}
+
+// Full projected-space filtering by a kernel matrix K (PSD), e.g. baked Sigma plus a curvature kernel.
+SPECAA_FLOAT3 specaa_filter_projected_matrix(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT3 K) {
+    return specaa_filter_projected_matrix_det(alpha2, K, specaa_sym_det(K));
+}
+
+// Full projected-space filtering from projected half-vector derivatives, TK21 Listing 1. det(K) comes
+// from Cauchy-Binet, (2 sigma^2)^2 (du x dv)^2, exact where K_xx K_yy - K_xy^2 would cancel (a footprint
+// stretched along one direction, e.g. at grazing angles).
+SPECAA_FLOAT3 specaa_filter_projected(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT2 du, SPECAA_FLOAT2 dv) {
+    float cross2 = (2.0 * SPECAA_SIGMA2) * (du.x * dv.y - du.y * dv.x);
+    return specaa_filter_projected_matrix_det(alpha2, specaa_kernel_matrix(du, dv), cross2 * cross2);
+}
+
+// Isotropic kernels from world-space normal derivatives dnU, dnV (TK21 Sec. 5; Eq. 12: their lengths
+// equal the projected derivatives of the pairwise averaged normal). Sigma = sigma^2 Gram(dnU, dnV).
+// Max: 2 lambda_max(Sigma), TK21 Eq. (10) (tightest conservative isotropic kernel).
+float specaa_iso_kernel_max(SPECAA_FLOAT3 dnU, SPECAA_FLOAT3 dnV) {
+    SPECAA_FLOAT3 gram = SPECAA_FLOAT3(dot(dnU, dnU), dot(dnV, dnV), dot(dnU, dnV));
+    return 2.0 * SPECAA_SIGMA2 * specaa_sym_max_eigenvalue(gram);
+}
+
+// Sum: 2 tr(Sigma) = 2 sigma^2 (|dnU|^2 + |dnV|^2), TK21 Eq. (13), Listing 5 (conservative).
+float specaa_iso_kernel_sum(SPECAA_FLOAT3 dnU, SPECAA_FLOAT3 dnV) {
+    return 2.0 * SPECAA_SIGMA2 * (dot(dnU, dnU) + dot(dnV, dnV));
+}
+
+// Mean: tr(Sigma) = sigma^2 (|dnU|^2 + |dnV|^2), TK21 Eq. (14) (less conservative, lowest error there).
+float specaa_iso_kernel_mean(SPECAA_FLOAT3 dnU, SPECAA_FLOAT3 dnV) {
+    return SPECAA_SIGMA2 * (dot(dnU, dnU) + dot(dnV, dnV));
+}
+
+// Clamped isotropic filtering, TK21 Eq. (10)/(13)/(14) as in Listing 5: saturate(a + min(t, kappa)).
+float specaa_filter_isotropic(float alpha2, float kernel) {
+    return SPECAA_SATURATE(alpha2 + specaa_clamp_kernel(kernel));
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Derivative-based methods: the filters above with derivatives from the 2x2 pixel quad (ddx/ddy).
+// hTS: unit tangent-space half vector; normal: unit world-space shading normal.
+// ---------------------------------------------------------------------------------------------------
+
+// "slope": K16 slope-space non-axis-aligned filtering, R' = R + 2C (TK21 Eq. 2).
+SPECAA_FLOAT3 specaa_slope(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT3 hTS) {
+    SPECAA_FLOAT2 a = specaa_sanitize_alpha2_2(alpha2);
+    SPECAA_FLOAT2 hs = specaa_slope_half_vector(hTS);
+    return specaa_guard_matrix(specaa_usable(hTS, SPECAA_DDX(hTS), SPECAA_DDY(hTS)), a, specaa_filter_non_axis_aligned(a, SPECAA_DDX(hs), SPECAA_DDY(hs)));
+}
+
+// "slope-aa": K16 axis-aligned rectangle in slope space with the kappa clamp (Listing 3 with division).
+SPECAA_FLOAT2 specaa_slope_aa(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT3 hTS) {
+    SPECAA_FLOAT2 a = specaa_sanitize_alpha2_2(alpha2);
+    SPECAA_FLOAT2 hs = specaa_slope_half_vector(hTS);
+    SPECAA_FLOAT2 r = specaa_filter_axis_aligned(a, SPECAA_DDX(hs), SPECAA_DDY(hs));
+    return SPECAA_SELECT2(specaa_usable(hTS, SPECAA_DDX(hTS), SPECAA_DDY(hTS)), r, a);
+}
+
+// "projected-approx": TK21 Listing 2, Eq. (9), non-axis-aligned, projected derivatives, no clamp.
+SPECAA_FLOAT3 specaa_projected_approx(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT3 hTS) {
+    SPECAA_FLOAT2 a = specaa_sanitize_alpha2_2(alpha2);
+    SPECAA_FLOAT2 hp = specaa_projected_half_vector(hTS);
+    return specaa_guard_matrix(specaa_usable(hTS, SPECAA_DDX(hTS), SPECAA_DDY(hTS)), a, specaa_filter_non_axis_aligned(a, SPECAA_DDX(hp), SPECAA_DDY(hp)));
+}
+
+// "projected-aa": TK21 Listing 3, axis-aligned, projected derivatives, kappa clamp.
+SPECAA_FLOAT2 specaa_projected_aa(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT3 hTS) {
+    SPECAA_FLOAT2 a = specaa_sanitize_alpha2_2(alpha2);
+    SPECAA_FLOAT2 hp = specaa_projected_half_vector(hTS);
+    SPECAA_FLOAT2 r = specaa_filter_axis_aligned(a, SPECAA_DDX(hp), SPECAA_DDY(hp));
+    return SPECAA_SELECT2(specaa_usable(hTS, SPECAA_DDX(hTS), SPECAA_DDY(hTS)), r, a);
+}
+
+// "projected": TK21 Listing 1, full projected-space filtering (Eq. 4-8).
+SPECAA_FLOAT3 specaa_projected(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT3 hTS) {
+    SPECAA_FLOAT2 a = specaa_sanitize_alpha2_2(alpha2);
+    SPECAA_FLOAT2 hp = specaa_projected_half_vector(hTS);
+    return specaa_guard_matrix(specaa_usable(hTS, SPECAA_DDX(hTS), SPECAA_DDY(hTS)), a, specaa_filter_projected(a, SPECAA_DDX(hp), SPECAA_DDY(hp)));
+}
+
+// "iso-max": TK21 Eq. (10) from normal derivatives; returns the filtered a.
+float specaa_iso_max(float alpha2, SPECAA_FLOAT3 normal) {
+    float a = specaa_sanitize_alpha2(alpha2);
+    SPECAA_FLOAT3 dnU = SPECAA_DDX(normal);
+    SPECAA_FLOAT3 dnV = SPECAA_DDY(normal);
+    return SPECAA_SELECT(specaa_usable(normal, dnU, dnV), specaa_filter_isotropic(a, specaa_iso_kernel_max(dnU, dnV)), a);
+}
+
+// "iso-sum": TK21 Eq. (13), Listing 5 (T19 Listing 2); returns the filtered a.
+float specaa_iso_sum(float alpha2, SPECAA_FLOAT3 normal) {
+    float a = specaa_sanitize_alpha2(alpha2);
+    SPECAA_FLOAT3 dnU = SPECAA_DDX(normal);
+    SPECAA_FLOAT3 dnV = SPECAA_DDY(normal);
+    return SPECAA_SELECT(specaa_usable(normal, dnU, dnV), specaa_filter_isotropic(a, specaa_iso_kernel_sum(dnU, dnV)), a);
+}
+
+// "iso-mean": TK21 Eq. (14); returns the filtered a.
+float specaa_iso_mean(float alpha2, SPECAA_FLOAT3 normal) {
+    float a = specaa_sanitize_alpha2(alpha2);
+    SPECAA_FLOAT3 dnU = SPECAA_DDX(normal);
+    SPECAA_FLOAT3 dnV = SPECAA_DDY(normal);
+    return SPECAA_SELECT(specaa_usable(normal, dnU, dnV), specaa_filter_isotropic(a, specaa_iso_kernel_mean(dnU, dnV)), a);
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Isotropic projected-space filtering and kernel reductions (SPEC Sec. 3, the texture bake's formulas).
+// ---------------------------------------------------------------------------------------------------
+
+// Full projected-space filtering of a scalar a by an isotropic kernel t, TK21 Eq. (4)-(7) in closed form:
+// a' = (a + t (1 - a)) / (1 + t (1 - a)). t = 0 leaves a unchanged; a = 1 stays 1.
+float specaa_filter_projected_isotropic(float alpha2, float kernel) {
+    float k = min(kernel, SPECAA_MAX_KERNEL) * (1.0 - alpha2);
+    return (alpha2 + k) / (1.0 + k);
+}
+
+// Approximate filtering a' = min(1, a + t), TK21 Eq. (9) (the bake's --filter approx).
+float specaa_filter_approx_isotropic(float alpha2, float kernel) { return min(1.0, alpha2 + kernel); }
+
+// Reductions of a covariance Sigma to an isotropic kernel t (SPEC Sec. 3): mean tr(Sigma) (Eq. 14
+// analogue), sum 2 tr(Sigma) (Eq. 13), max 2 lambda_max(Sigma) (Eq. 10).
+float specaa_reduce_mean(SPECAA_FLOAT3 sigma) { return sigma.x + sigma.y; }
+float specaa_reduce_sum(SPECAA_FLOAT3 sigma) { return 2.0 * (sigma.x + sigma.y); }
+float specaa_reduce_max(SPECAA_FLOAT3 sigma) { return 2.0 * specaa_sym_max_eigenvalue(sigma); }
+
+// ---------------------------------------------------------------------------------------------------
+// Baked textures (SPEC Sec. 3), sampled at the hardware-selected mip.
+// ---------------------------------------------------------------------------------------------------
+
+// a = r^4 from perceptual roughness r (SPEC Sec. 2), and back.
+float specaa_alpha2_from_roughness(float r) { float alpha = r * r; return alpha * alpha; }
+float specaa_roughness_from_alpha2(float alpha2) { return sqrt(sqrt(max(alpha2, 0.0))); }
+
+// Baked filtered roughness mips: returns a of channel SPECAA_ROUGHNESS_CHANNEL (perceptual r).
+float specaa_sample_roughness(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
+    return specaa_alpha2_from_roughness(SPECAA_SAMPLE(tex, smp, uv).SPECAA_ROUGHNESS_CHANNEL);
+}
+
+// Baked isotropic kernel mips: t in channel R.
+// A non-finite texel gives a zero kernel (edge policy).
+float specaa_sample_kernel(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
+    float t = SPECAA_SAMPLE(tex, smp, uv).r;
+    return SPECAA_SELECT(specaa_is_finite(t), max(t, 0.0), 0.0);
+}
+
+// Baked anisotropic kernel mips: Sigma = (xx, yy, xy) in RGB (A: the rough share below); clamped to PSD
+// after filtering.
+SPECAA_FLOAT3 specaa_sample_kernel_covariance(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
+    SPECAA_FLOAT3 sigma = specaa_sym_clamp_psd(SPECAA_SAMPLE(tex, smp, uv).rgb);
+    return SPECAA_SELECT3(specaa_is_finite3(sigma), sigma, SPECAA_FLOAT3(0.0, 0.0, 0.0));
+}
+
+// Rough share g of a baked Sigma kernel texel (alpha channel): the part of its normals steeper than slope
+// 0.02, which holds all of Sigma (specaa_default_D). Non-finite or absent (1) gives the single lobe.
+float specaa_rough_share(float g) { return SPECAA_SELECT(specaa_is_finite(g), SPECAA_SATURATE(g), 1.0); }
+float specaa_sample_kernel_rough_share(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
+    return specaa_rough_share(SPECAA_SAMPLE(tex, smp, uv).a);
+}
+
+// Both from one fetch: (Sigma.xx, Sigma.yy, Sigma.xy, g), Sigma clamped to PSD (zero if not finite).
+SPECAA_FLOAT4 specaa_sample_kernel_texel(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
+#if defined(SPECAA_KERNEL_LOD_BIAS)
+    SPECAA_FLOAT4 t = SPECAA_SAMPLE_BIAS(tex, smp, uv, SPECAA_KERNEL_LOD_BIAS);
+#elif defined(SPECAA_KERNEL_AREA_LOD)
+    // The derivatives scaled by sqrt(area) / major axis: the isotropic LOD of the result is the footprint's
+    // area, not its major axis.
+    SPECAA_FLOAT2 gx = SPECAA_DDX(uv), gy = SPECAA_DDY(uv);
+    float major2 = max(dot(gx, gx), dot(gy, gy));
+    float scale = sqrt(abs(gx.x * gy.y - gx.y * gy.x) / max(major2, 1.0e-30));
+    SPECAA_FLOAT4 t = SPECAA_SAMPLE_GRAD(tex, smp, uv, gx * scale, gy * scale);
+#else
+    SPECAA_FLOAT4 t = SPECAA_SAMPLE(tex, smp, uv);
+#endif
+    SPECAA_FLOAT3 sigma = specaa_sym_clamp_psd(t.rgb);
+    return SPECAA_FLOAT4(SPECAA_SELECT3(specaa_is_finite3(sigma), sigma, SPECAA_FLOAT3(0.0, 0.0, 0.0)),
+                         specaa_rough_share(t.a));
+}
+
+// Covariance from LEAN moments, Sigma = M - m m^T clamped to PSD (SPEC Sec. 3; C21 Eq. 16).
+// lean0 = (m.x, m.y, M.xx, M.yy), lean1 = M.xy. Moments filter linearly, so any mip/trilinear mix of
+// them still yields the covariance of the normals in the filtered footprint. Non-finite moments give 0.
+SPECAA_FLOAT3 specaa_lean_covariance(SPECAA_FLOAT4 lean0, float lean1) {
+    SPECAA_FLOAT3 sigma = specaa_sym_clamp_psd(SPECAA_FLOAT3(lean0.z - lean0.x * lean0.x,
+                                                             lean0.w - lean0.y * lean0.y,
+                                                             lean1 - lean0.x * lean0.y));
+    return SPECAA_SELECT3(specaa_is_finite3(sigma), sigma, SPECAA_FLOAT3(0.0, 0.0, 0.0));
+}
+
+// Baked mean normal (`*_normal`, docs/texture-bake.md#output-layouts), tangent space, unit length. Two-channel texels
+// (BC5 under `--block bc`, ASTC's (x, y, 0, 1) under `--block astc`) hold x, y as (n + 1) / 2: z = sqrt(max(0, 1 - x^2 - y^2)) (the mean normal lies in
+// the upper hemisphere), renormalised where filtering or quantisation put (x, y) outside the unit disc.
+// RGB texels hold (n + 1) / 2, renormalised after filtering; a zero vector gives (0, 0, 1).
+SPECAA_FLOAT3 specaa_decode_normal_xy(SPECAA_FLOAT2 texel) {
+    SPECAA_FLOAT2 xy = texel * 2.0 - 1.0;
+    SPECAA_FLOAT3 n = SPECAA_FLOAT3(xy, sqrt(max(0.0, 1.0 - dot(xy, xy))));
+    return n / sqrt(dot(n, n));  // |n| >= 1 (z = 1 at xy = 0): no division by zero
+}
+SPECAA_FLOAT3 specaa_decode_normal_rgb(SPECAA_FLOAT3 texel) {
+    SPECAA_FLOAT3 n = texel * 2.0 - 1.0;
+    float l2 = dot(n, n);
+    return SPECAA_SELECT3(l2 > 0.0, n / sqrt(max(l2, 1.0e-30)), SPECAA_FLOAT3(0.0, 0.0, 1.0));
+}
+// The baked mean normal at uv: two channels with SPECAA_NORMAL_TWO_CHANNEL (BC5, ASTC), else RGB(A).
+SPECAA_FLOAT3 specaa_sample_mean_normal(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
+#if defined(SPECAA_NORMAL_TWO_CHANNEL)
+    return specaa_decode_normal_xy(SPECAA_SAMPLE(tex, smp, uv).rg);
+#else
+    return specaa_decode_normal_rgb(SPECAA_SAMPLE(tex, smp, uv).rgb);
+#endif
+}
+
+// LEAN lookup from the two moment textures (layout in the header comment).
+SPECAA_FLOAT3 specaa_sample_lean(SPECAA_TEXTURE_PARAMS(tex0, smp0), SPECAA_TEXTURE_PARAMS(tex1, smp1),
+                                 SPECAA_FLOAT2 uv) {
+    return specaa_lean_covariance(SPECAA_SAMPLE(tex0, smp0, uv), SPECAA_SAMPLE(tex1, smp1, uv).r);
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Curvature-based kernel from the _SPECAA_CURVATURE attribute (SPEC Sec. 4) and the pixel footprint.
+// ---------------------------------------------------------------------------------------------------
+
+// Shape operator S = k1 d d^T + k2 d' d'^T (d' = d rotated by 90 degrees) in the tangent frame from
+// curvature = (k1, k2, d.x, d.y). The normal moves by dp = -S dx for a tangent step dx (first order), so
+// S maps the footprint to projected-normal derivatives. A zero d (umbilic) uses k1 on both axes.
+SPECAA_FLOAT3 specaa_shape_operator(SPECAA_FLOAT4 curvature) {
+    float len = length(curvature.zw);
+    if (len < 1.0e-6) return SPECAA_FLOAT3(curvature.x, curvature.x, 0.0);
+    SPECAA_FLOAT2 d = curvature.zw / len;
+    float k1 = curvature.x;
+    float k2 = curvature.y;
+    return SPECAA_FLOAT3(k1 * d.x * d.x + k2 * d.y * d.y,
+                         k1 * d.y * d.y + k2 * d.x * d.x,
+                         (k1 - k2) * d.x * d.y);
+}
+
+// Pixel footprint in the tangent plane: the position derivatives along screen x and y expressed in the
+// (T, B) frame, returned as (u.x, u.y, v.x, v.y). Units of the positions (object space for the curvature).
+SPECAA_FLOAT4 specaa_footprint_tangent(SPECAA_FLOAT3 dPdx, SPECAA_FLOAT3 dPdy, SPECAA_FLOAT3 tangent,
+                                       SPECAA_FLOAT3 bitangent) {
+    SPECAA_FLOAT3 t = normalize(tangent);
+    SPECAA_FLOAT3 b = normalize(bitangent);
+    return SPECAA_FLOAT4(dot(dPdx, t), dot(dPdx, b), dot(dPdy, t), dot(dPdy, b));
+}
+
+// Pixel footprint from the quad derivatives of the interpolated position (same space as T, B).
+SPECAA_FLOAT4 specaa_footprint(SPECAA_FLOAT3 position, SPECAA_FLOAT3 tangent, SPECAA_FLOAT3 bitangent) {
+    return specaa_footprint_tangent(SPECAA_DDX(position), SPECAA_DDY(position), tangent, bitangent);
+}
+
+// Width of one pixel on a plane facing the camera at view depth z (perspective, vertical field of view
+// with tan(fovY/2), viewport height in pixels): 2 z tan(fovY/2) / height. Grazing elongation is ignored.
+float specaa_pixel_footprint_from_depth(float viewDepth, float tanHalfFovY, float viewportHeight) {
+    return 2.0 * viewDepth * tanHalfFovY / viewportHeight;
+}
+
+// Curvature kernel matrix K = 2 sigma^2 (S u u^T S + S v v^T S), TK21 Eq. (3) with the projected-normal
+// derivatives S u, S v of the curved shading-normal field (K16 "virtual quadric") instead of quad
+// differences. footprint = (u.x, u.y, v.x, v.y) from specaa_footprint*.
+SPECAA_FLOAT3 specaa_curvature_kernel(SPECAA_FLOAT4 curvature, SPECAA_FLOAT4 footprint) {
+    SPECAA_FLOAT3 S = specaa_shape_operator(curvature);
+    SPECAA_FLOAT2 du = SPECAA_FLOAT2(S.x * footprint.x + S.z * footprint.y, S.z * footprint.x + S.y * footprint.y);
+    SPECAA_FLOAT2 dv = SPECAA_FLOAT2(S.x * footprint.z + S.z * footprint.w, S.z * footprint.z + S.y * footprint.w);
+    return specaa_kernel_matrix(du, dv);
+}
+
+// Isotropic curvature kernel for a square footprint of width w: mean reduction tr(Sigma) =
+// sigma^2 w^2 (k1^2 + k2^2) (TK21 Eq. 14 with |dn| = |k| w per principal direction).
+float specaa_curvature_kernel_isotropic(SPECAA_FLOAT4 curvature, float footprintWidth) {
+    return SPECAA_SIGMA2 * footprintWidth * footprintWidth * (curvature.x * curvature.x + curvature.y * curvature.y);
+}
+
+// ---------------------------------------------------------------------------------------------------
+// GGX and Beckmann with a roughness matrix A (TK21 Sec. 2.1, App. A).
+// ---------------------------------------------------------------------------------------------------
+
+// Clamped determinant max(det(A), tau) of TK21 App. A.4 (tau = alpha_x^2 alpha_y^2 of the unfiltered
+// material), floored at 1e-30 so a mirror (A = 0, tau = 0) stays finite instead of a Dirac delta.
+float specaa_clamped_det(SPECAA_FLOAT3 A, float tau) { return max(max(specaa_sym_det(A), tau), 1.0e-30); }
+
+// [h.x, h.y] A^-1 [h.x, h.y]^T with A^-1 = adj(A) / detClamped (TK21 App. A.4).
+float specaa_inverse_quadratic_form(SPECAA_FLOAT3 A, SPECAA_FLOAT2 v, float detClamped) {
+    return (v.x * v.x * A.y - 2.0 * v.x * v.y * A.z + v.y * v.y * A.x) / detClamped;
+}
+
+// GGX NDF, TK21 Eq. (1) with the determinant clamp of App. A.4. 0 for h.z <= 0.
+float specaa_ggx_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float tau) {
+    if (h.z <= 0.0) return 0.0;
+    float detClamped = specaa_clamped_det(A, tau);
+    float q = specaa_inverse_quadratic_form(A, h.xy, detClamped) + h.z * h.z;
+    return 1.0 / (SPECAA_PI * sqrt(detClamped) * q * q);
+}
+
+// Beckmann NDF with a roughness matrix, TK21 Sec. 2.1, same clamp. 0 for h.z <= 0.
+float specaa_beckmann_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float tau) {
+    if (h.z <= 0.0) return 0.0;
+    float detClamped = specaa_clamped_det(A, tau);
+    float z2 = h.z * h.z;
+    return exp(-specaa_inverse_quadratic_form(A, h.xy, detClamped) / z2) /
+           (SPECAA_PI * sqrt(detClamped) * z2 * z2);
+}
+
+// NDF of a filtered lobe with the tails of the unfiltered material (TK21 Sec. 7). Widening GGX to
+// A = a I + K also raises its tails: along the direction u of h.xy GGX(A) falls as
+// 1 / (pi sqrt(det A) (u^T A^-1 u)^2 theta^4), while the footprint's true NDF (GGX(a) spread by the
+// footprint's normal distribution) keeps the tails of GGX(a), ~ a / (pi theta^4). Along the widened axis
+// of an anisotropic A (a grazing footprint) the excess is (K/a)^(3/2), not K/a. The mixture
+// rho GGX(A) + (1 - rho) Beckmann(A) with rho = a sqrt(det A) (u^T A^-1 u)^2 (clamped to [0, 1]) keeps the
+// width of the filtered lobe, has exactly the unfiltered tail in every direction and integrates to one
+// like both parts (along each ray of slopes their difference integrates to zero); with K = 0 it is
+// GGX(a). `alpha2` is the unfiltered a of the material.
+float specaa_filtered_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
+    float tau = alpha2 * alpha2;
+    float detClamped = specaa_clamped_det(A, tau);
+    float r2 = dot(h.xy, h.xy);
+    float q = r2 > 0.0 ? specaa_inverse_quadratic_form(A, h.xy, detClamped) / r2 : 1.0 / sqrt(detClamped);
+    float rho = SPECAA_SATURATE(alpha2 * sqrt(detClamped) * q * q);
+    float ggx = specaa_ggx_D(h, A, tau);
+    return ggx + (1.0 - rho) * (specaa_beckmann_D(h, A, tau) - ggx);
+}
+
+// NDF of GGX(alpha2) seen through the pixel footprint: GGX(a) convolved with the footprint's distribution
+// of slopes, N(0, K / 2) with K = A - a I (TK21 Eq. 3: the kernel is twice the footprint's slope
+// covariance). GGX is a Gaussian scale mixture (a bivariate Student t with two degrees of freedom):
+// GGX(a) = int_0^inf e^-w Beckmann(a / w I) dw, so the convolution is, exactly,
+// int_0^inf e^-w Beckmann(a / w I + K) dw: a core as wide as the footprint and the unfiltered lobe's own
+// tails (from the small w), where GGX(A) widens both (its tails K / a too heavy) and specaa_filtered_D's
+// Beckmann part undershoots between them. Evaluated by the trapezoid rule in ln w, steps of at most 1.1,
+// from w_lo = 0.05 min(1, a / k_max) to 10 (e^-10 of the weight is left out; 12 to 32 nodes), and the
+// part below w_lo in closed form (a / w >= 20 k_max) with Beckmann(a / w I + K) to first order in K:
+// int_0^w_lo w e^(-w (1 + c)) (1 + q w^2 / a^2 - tr(K) w / (2 a)) dw / (pi a h_z^4), c = tan^2(theta_h) / a,
+// q = h.xy^T K h.xy / h_z^2 (in the tails most of the lobe lies there). That sum's own error (about 1% in
+// the tails, from the node at w_lo) exceeds what a footprint much smaller than the lobe changes there, so
+// for k_max < a the same nodes also sum the K = 0 integrand and the result is GGX(a) + (sum_K - sum_0):
+// exact as K -> 0, its error a fraction of the footprint's effect; from k_max = a / 10 to a it blends
+// (in log k_max) into the direct sum. Relative error against a dense quadrature under 0.1% for
+// K / a <= 0.1, 1.6% to K / a = 3, 4% beyond, out to tan^2 = 2 (tests/bake/test_ggx.cpp checks it
+// against a brute-force convolution to 4%, and the small-footprint effect to 10% of itself).
+// GGX(A) itself where k_max <= 1e-3 a (within 0.1%).
+// `alpha2` is the a the footprint spreads: the material's, or the baked roughness texture's.
+float specaa_convolved_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
+    if (h.z <= 0.0) return 0.0;
+    float a = max(alpha2, 1.0e-12);
+    // The added kernel, projected onto the PSD cone (an anisotropic material's A - a I can be indefinite).
+    SPECAA_FLOAT3 K = specaa_sym_clamp_psd(A - SPECAA_FLOAT3(a, a, 0.0));
+    float kmax = max(specaa_sym_max_eigenvalue(K), 0.0);
+    if (kmax <= 1.0e-3 * a) return specaa_ggx_D(h, A, a * a);  // no footprint to speak of
+    float wlo = 0.05 * min(1.0, a / kmax);
+    float slo = log(wlo);
+    float range = log(10.0) - slo;
+    int nodes = int(clamp(ceil(range / 1.1), 11.0, 31.0)) + 1;
+    float ds = range / float(nodes - 1);
+    float z2 = h.z * h.z;
+    float c = dot(h.xy, h.xy) / (z2 * a);
+    float unit = 1.0 / (SPECAA_PI * a * z2 * z2);
+    float sum = 0.0;
+    float sumUnfiltered = 0.0;
+    for (int j = 0; j < 32; ++j) {
+        if (j >= nodes) break;
+        float w = exp(slo + ds * float(j));
+        float v = a / w;
+        float weight = (j == 0 || j == nodes - 1) ? 0.5 : 1.0;
+        sum += weight * exp(-w) * w * specaa_beckmann_D(h, K + SPECAA_FLOAT3(v, v, 0.0), v * v);
+        sumUnfiltered += weight * exp(-w * (1.0 + c)) * w * w * unit;  // Beckmann(a / w I)
+    }
+    // Below w_lo, Beckmann(a / w I + K) to first order in K, integrated in closed form (series where the
+    // closed forms cancel in float): I1 + q I3 / a^2 - tr(K) I2 / (2 a), In = int_0^w_lo w^n e^(-w (1 + c)) dw.
+    float c1 = 1.0 + c;
+    float x = c1 * wlo;
+    float e = exp(-x);
+    float below = x > 1.0e-2 ? (1.0 - e * (1.0 + x)) / (c1 * c1) : wlo * wlo * (0.5 - x / 3.0);
+    float p2 = 1.0 + x + 0.5 * x * x;
+    float wlo3 = wlo * wlo * wlo;
+    float i2 = x < 0.5 ? wlo3 * (1.0 / 3.0 - x / 4.0 + x * x / 10.0 - x * x * x / 36.0) : 2.0 * (1.0 - e * p2) / (c1 * c1 * c1);
+    float i3 = x < 0.5 ? wlo3 * wlo * (0.25 - x / 5.0 + x * x / 12.0 - x * x * x / 42.0)
+                       : 6.0 * (1.0 - e * (p2 + x * x * x / 6.0)) / (c1 * c1 * c1 * c1);
+    float q = (h.x * h.x * K.x + 2.0 * h.x * h.y * K.z + h.y * h.y * K.y) / z2;
+    float firstOrder = q / (a * a) * i3 - 0.5 * (K.x + K.y) / a * i2;
+    float direct = sum * ds + (below + firstOrder) * unit;
+    float difference = max(0.0, specaa_ggx_D(h, SPECAA_FLOAT3(a, a, 0.0), a * a) + (sum - sumUnfiltered) * ds + firstOrder * unit);
+    float blend = SPECAA_SATURATE(log2(10.0 * kmax / a) * 0.30103);
+    return difference + blend * (direct - difference);
+}
+
+// GGX Smith Lambda, TK21 App. A.3: -1/2 + sqrt(s + o.z^2) / (2 |o.z|), s = [o.x, o.y] A [o.x, o.y]^T,
+// evaluated as s / (2 |o.z| (sqrt(s + o.z^2) + |o.z|)) (same value, no cancellation for smooth A).
+// +inf at o.z = 0 with s > 0.
+float specaa_ggx_lambda(SPECAA_FLOAT3 o, SPECAA_FLOAT3 A) {
+    float s = o.x * o.x * A.x + 2.0 * o.x * o.y * A.z + o.y * o.y * A.y;
+    float z = abs(o.z);
+    return s / (2.0 * z * (sqrt(s + z * z) + z));
+}
+
+// Height-correlated G2 = chi+(i.h) chi+(o.h) / (1 + Lambda(i) + Lambda(o)), TK21 App. A.1, evaluated as
+// 2 |i.z| |o.z| / (|o.z| sqrt(q_i) + |i.z| sqrt(q_o)) (same expression times 2 |i.z| |o.z|), which is
+// finite at grazing i or o (G2 -> 0). In [0, 1].
+float specaa_ggx_G2(SPECAA_FLOAT3 i, SPECAA_FLOAT3 o, SPECAA_FLOAT3 h, SPECAA_FLOAT3 A) {
+    if (dot(i, h) <= 0.0 || dot(o, h) <= 0.0) return 0.0;
+    float qi = i.x * i.x * A.x + 2.0 * i.x * i.y * A.z + i.y * i.y * A.y + i.z * i.z;
+    float qo = o.x * o.x * A.x + 2.0 * o.x * o.y * A.z + o.y * o.y * A.y + o.z * o.z;
+    float denominator = abs(o.z) * sqrt(qi) + abs(i.z) * sqrt(qo);
+    return denominator > 0.0 ? 2.0 * abs(i.z) * abs(o.z) / denominator : 0.0;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Default entry point: filtered roughness from whatever baked data is bound plus a per-pixel kernel.
+// The default rule is the matrix form, specaa_filtered_alpha2_matrix (an anisotropic per-pixel kernel
+// in the tangent frame), with specaa_default_D (GGX convolved with the footprint where no normal-map data
+// is baked) and specaa_ggx_G2: of the combinations `specbake bench` scores it has the lowest linear and
+// tone-mapped error and flicker (docs/accuracy.md#the-rule). specaa_filtered_alpha2 /
+// specaa_filtered_roughness are its isotropic form, a drop-in for BRDFs that take one roughness.
+// ---------------------------------------------------------------------------------------------------
+
+// Per-fragment inputs. Fill every field the configuration uses (see the header comment).
+struct SpecaaSurface {
+    float roughness;             // perceptual roughness r of the material (unused with a roughness texture)
+    SPECAA_FLOAT2 uv;            // texture coordinates of the baked textures
+    SPECAA_FLOAT3 normal;        // unit interpolated vertex normal (before normal mapping), any space
+    SPECAA_FLOAT3 position;      // position in the space of tangent/bitangent (SPECAA_USE_CURVATURE)
+    SPECAA_FLOAT3 tangent;       // T = TANGENT.xyz (matrix form, SPECAA_USE_CURVATURE)
+    SPECAA_FLOAT3 bitangent;     // B = cross(N, T) * TANGENT.w
+    SPECAA_FLOAT4 curvature;     // _SPECAA_CURVATURE (k1, k2, d.x, d.y) (SPECAA_USE_CURVATURE)
+};
+
+#if defined(SPECAA_ROUGHNESS_TEXTURE) && (defined(SPECAA_KERNEL_TEXTURE) || defined(SPECAA_LEAN_TEXTURE0))
+#error "specaa: the baked roughness already contains the kernel; bind either the roughness or the kernel/LEAN textures"
+#endif
+
+// Squared roughness a of the material: the baked filtered roughness texture if bound, else r^4.
+// Clamped to [0, 1], NaN as 1 (edge policy).
+float specaa_base_alpha2(SpecaaSurface s) {
+#if defined(SPECAA_ROUGHNESS_TEXTURE)
+    return specaa_sanitize_alpha2(specaa_sample_roughness(SPECAA_TEXTURE_ARGS(SPECAA_ROUGHNESS_TEXTURE, SPECAA_SAMPLER), s.uv));
+#else
+    return specaa_sanitize_alpha2(specaa_alpha2_from_roughness(s.roughness));
+#endif
+}
+
+// The normal map's spread at this fragment's mip as a kernel matrix, before the gate below (0 without
+// kernel/LEAN data); an isotropic kernel texture gives K = t I.
+SPECAA_FLOAT3 specaa_baked_spread_matrix(SpecaaSurface s) {
+#if defined(SPECAA_NO_BAKED_KERNEL)
+    return SPECAA_FLOAT3(0.0, 0.0, 0.0);
+#elif defined(SPECAA_LEAN_TEXTURE0)
+    return 2.0 * specaa_sample_lean(SPECAA_TEXTURE_ARGS(SPECAA_LEAN_TEXTURE0, SPECAA_SAMPLER),
+                                    SPECAA_TEXTURE_ARGS(SPECAA_LEAN_TEXTURE1, SPECAA_SAMPLER), s.uv);
+#elif defined(SPECAA_KERNEL_TEXTURE) && defined(SPECAA_KERNEL_ANISOTROPIC)
+    // The single lobe of a texel with rough share g: K = 2 Sigma sqrt(g), not 2 Sigma. A texel of a flat
+    // field with a few steep grooves or seams (g small) is a spike at the flat normal plus a wide rough
+    // part; the Gaussian of its covariance spreads the spike's highlight over the grooves' slopes, while
+    // the Gaussian closest to the mixture in L2 (the radiance error over half vectors) is far narrower
+    // (K / (2 Sigma) = 0.11-0.24 at g = 0.1-0.5 for a rough part 10x the material's lobe). The covariance
+    // is what keeps the rough part's sparkle down where it is lit; sqrt(g) sits between the two ends
+    // (g^0 and g^1). g = 1 (every texel steep, or bakes before the rough share) is the covariance itself.
+    // The measurements (g^0, g^0.25, g^0.5, g^0.75, g^1): docs/accuracy.md#the-single-lobe-of-a-mixed-texel.
+    SPECAA_FLOAT4 k = specaa_sample_kernel_texel(SPECAA_TEXTURE_ARGS(SPECAA_KERNEL_TEXTURE, SPECAA_SAMPLER), s.uv);
+#if defined(SPECAA_KERNEL_COVARIANCE)
+    return 2.0 * k.xyz;
+#else
+    return (2.0 * sqrt(k.w)) * k.xyz;
+#endif
+#elif defined(SPECAA_KERNEL_TEXTURE)
+    float t = specaa_sample_kernel(SPECAA_TEXTURE_ARGS(SPECAA_KERNEL_TEXTURE, SPECAA_SAMPLER), s.uv);
+    return SPECAA_FLOAT3(t, t, 0.0);
+#else
+    return SPECAA_FLOAT3(0.0, 0.0, 0.0);
+#endif
+}
+
+// Baked kernel matrix of the default: the spread above, faded out where it is much narrower than the
+// material's lobe, K f^2 with f = saturate(lambda_max(K) / (SPECAA_KERNEL_GATE a)) (NaN passes through
+// for the guards downstream). A spread far below a changes D by a small fraction, and on a smooth bump
+// map under a rough material (the normal-mapped sphere at alpha 0.2-0.5) that change raised the flicker
+// above no filtering's (alpha 0.2: 1.0025x tone-mapped, 0.3: 1.017x, 0.5: 1.012x); no filtering's flicker
+// there is the engine's trilinear sampling of the mean normal, which no widening of the lobe removes.
+// Kernels of half of a or more pass whole. docs/accuracy.md#the-gate has the forms measured (gates 0.25, 0.5
+// and 1, linear and squared fade). The opt-in two lobes gate their rough lobe's kernel the same way.
+SPECAA_FLOAT3 specaa_gate_baked_kernel(SPECAA_FLOAT3 K, float a) {
+    float f = SPECAA_SATURATE(specaa_sym_max_eigenvalue(K) / max(SPECAA_KERNEL_GATE * a, 1.0e-30));
+    return K * SPECAA_SELECT(f == f, f * f, 1.0);
+}
+SPECAA_FLOAT3 specaa_baked_kernel_matrix(SpecaaSurface s) {
+    return specaa_gate_baked_kernel(specaa_baked_spread_matrix(s), specaa_base_alpha2(s));
+}
+
+// Footprint of the pixel in the (T, B) frame (specaa_footprint) and whether it and the curvature are
+// usable (finite inputs and derivatives; edge policy).
+bool specaa_curvature_footprint(SpecaaSurface s, out SPECAA_FLOAT4 footprint) {
+    SPECAA_FLOAT3 dPdx = SPECAA_DDX(s.position);
+    SPECAA_FLOAT3 dPdy = SPECAA_DDY(s.position);
+    footprint = specaa_footprint_tangent(dPdx, dPdy, s.tangent, s.bitangent);
+    SPECAA_UINT3 m = max(max(specaa_magnitude_bits3(s.position), specaa_magnitude_bits3(dPdx)),
+                         max(specaa_magnitude_bits3(dPdy), specaa_magnitude_bits3(footprint.xyw)));
+    SPECAA_UINT4 c = max(SPECAA_AS_UINT(s.curvature), SPECAA_UINT4(0u, 0u, 0u, SPECAA_AS_UINT(footprint.z))) & 0x7fffffffu;
+    return max(specaa_max_component(m), max(max(c.x, c.y), max(c.z, c.w))) < SPECAA_NOT_FINITE;
+}
+
+// Per-pixel kernel matrix of the curved geometry in the (T, B) frame: from _SPECAA_CURVATURE and the
+// position footprint, or from the quad derivatives of the vertex normal projected onto T and B
+// (TK21 Sec. 5.1). Each eigenvalue clamped to at most kappa, the eigenvectors kept (TK21 Sec. 4: "clamp the
+// eigenvalues of Sigma"; scaling the whole matrix by kappa / lambda_max instead would also shrink the minor
+// axis, and an elongated footprint's peak would come out too bright: ClearCoatTest far,
+// docs/accuracy.md#the-per-pixel-kernels-clamp); an overflowing kernel is kappa I, unusable inputs give 0
+// (edge policy).
+SPECAA_FLOAT3 specaa_pixel_kernel_matrix(SpecaaSurface s) {
+#if defined(SPECAA_NO_PIXEL_KERNEL)
+    return SPECAA_FLOAT3(0.0, 0.0, 0.0);
+#else
+#if defined(SPECAA_USE_CURVATURE)
+    SPECAA_FLOAT4 footprint;
+    bool usable = specaa_curvature_footprint(s, footprint);
+    SPECAA_FLOAT3 K = specaa_curvature_kernel(s.curvature, footprint);
+#else
+    SPECAA_FLOAT3 dnU = SPECAA_DDX(s.normal);
+    SPECAA_FLOAT3 dnV = SPECAA_DDY(s.normal);
+    SPECAA_FLOAT3 t = normalize(s.tangent);
+    SPECAA_FLOAT3 b = normalize(s.bitangent);
+    SPECAA_UINT3 m = max(max(specaa_magnitude_bits3(s.normal), specaa_magnitude_bits3(dnU)),
+                         max(specaa_magnitude_bits3(dnV), max(specaa_magnitude_bits3(t), specaa_magnitude_bits3(b))));
+    bool usable = specaa_max_component(m) < SPECAA_NOT_FINITE;
+    SPECAA_FLOAT3 K = specaa_kernel_matrix(SPECAA_FLOAT2(dot(dnU, t), dot(dnU, b)), SPECAA_FLOAT2(dot(dnV, t), dot(dnV, b)));
+#endif
+    float lmax = specaa_sym_max_eigenvalue(K);
+    SPECAA_FLOAT3 clamped = SPECAA_SELECT3(lmax > SPECAA_KAPPA, specaa_sym_clamp_eigenvalues(K, SPECAA_KAPPA), K);
+    bool bounded = max(specaa_magnitude_bits(lmax), specaa_max_component(specaa_magnitude_bits3(clamped))) < SPECAA_NOT_FINITE;
+    return SPECAA_SELECT3(usable, SPECAA_SELECT3(bounded, clamped, SPECAA_FLOAT3(SPECAA_KAPPA, SPECAA_KAPPA, 0.0)),
+                          SPECAA_FLOAT3(0.0, 0.0, 0.0));
+#endif
+}
+
+// Per-pixel isotropic kernel t (mean reduction, TK21 Eq. 14), clamped to kappa. Tangent-free on the
+// derivative path (world-space normal derivatives). Edge policy as for the matrix.
+float specaa_pixel_kernel(SpecaaSurface s) {
+#if defined(SPECAA_NO_PIXEL_KERNEL)
+    return 0.0;
+#elif defined(SPECAA_USE_CURVATURE)
+    SPECAA_FLOAT4 footprint;
+    bool usable = specaa_curvature_footprint(s, footprint);
+    SPECAA_FLOAT3 K = specaa_curvature_kernel(s.curvature, footprint);
+    return SPECAA_SELECT(usable, specaa_clamp_kernel(0.5 * (K.x + K.y)), 0.0);
+#else
+    SPECAA_FLOAT3 dnU = SPECAA_DDX(s.normal);
+    SPECAA_FLOAT3 dnV = SPECAA_DDY(s.normal);
+    bool usable = specaa_max_component(max(specaa_magnitude_bits3(s.normal),
+                                           max(specaa_magnitude_bits3(dnU), specaa_magnitude_bits3(dnV)))) < SPECAA_NOT_FINITE;
+    return SPECAA_SELECT(usable, specaa_clamp_kernel(specaa_iso_kernel_mean(dnU, dnV)), 0.0);
+#endif
+}
+
+// Filtered squared roughness a (isotropic form of the default). The baked and per-pixel kernels are variances of
+// independent footprints, so they add in projected space (TK21 Eq. 6) before mapping back (Eq. 7).
+float specaa_filtered_alpha2(SpecaaSurface s) {
+    SPECAA_FLOAT3 baked = specaa_baked_kernel_matrix(s);
+    float a = specaa_filter_projected_isotropic(specaa_base_alpha2(s), 0.5 * (baked.x + baked.y) + specaa_pixel_kernel(s));
+    return SPECAA_SELECT(specaa_is_finite(a), a, 1.0);
+}
+
+// Filtered perceptual roughness r = a^(1/4): drop-in for the material's roughness.
+float specaa_filtered_roughness(SpecaaSurface s) { return specaa_roughness_from_alpha2(specaa_filtered_alpha2(s)); }
+
+// Isotropic a widened by the kernel matrix K in projected space (TK21 Eq. 6-7), non-finite results as I.
+SPECAA_FLOAT3 specaa_widened_matrix(float a, SPECAA_FLOAT3 K) {
+    return specaa_guard_matrix(true, SPECAA_FLOAT2(a, a), specaa_filter_projected_matrix(SPECAA_FLOAT2(a, a), K));
+}
+
+// The default: filtered roughness matrix A_bar in the (T, B) frame, for specaa_default_D / specaa_ggx_G2 (or
+// specaa_ggx_D with tau = a^2 of the unfiltered material). Same composition as specaa_filtered_alpha2, with the per-pixel
+// kernel kept anisotropic.
+SPECAA_FLOAT3 specaa_filtered_alpha2_matrix(SpecaaSurface s) {
+#if defined(SPECAA_GATE_PIXEL_KERNEL)
+    float a = specaa_base_alpha2(s);
+    return specaa_widened_matrix(a, specaa_baked_kernel_matrix(s) + specaa_gate_baked_kernel(specaa_pixel_kernel_matrix(s), a));
+#else
+    return specaa_widened_matrix(specaa_base_alpha2(s), specaa_baked_kernel_matrix(s) + specaa_pixel_kernel_matrix(s));
+#endif
+}
+
+// Level of detail the hardware samples a texture at uv (negative under magnification).
+float specaa_texture_lod(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) { return SPECAA_QUERY_LOD(tex, smp, uv); }
+
+// The default NDF for the default matrix A = specaa_filtered_alpha2_matrix(s): GGX(A) + (1 - w)
+// (specaa_convolved_D - GGX(A)), GGX of the material convolved with the footprint's spread K = A - a I
+// where that spread is Gaussian, GGX(A) where it is not.
+// - No baked normal-map data (w = 0): the spread is the image of the pixel filter under the surface's
+//   curvature, a Gaussian, and the convolution is exact.
+// - Baked kernel or LEAN texture (the material's own a; K holds the texel's spread and the pixel kernel
+//   of the vertex normal's curvature):
+//   w = saturate(LOD) saturate(SPECAA_GGX_SPREAD k_max). Under magnification (LOD <= 0) the footprint lies
+//   inside one texel and the interpolated normals vary smoothly: the convolution. Minified, a small spread
+//   of small slopes is still close to Gaussian (slope and projected variance within 10% up to
+//   k_max ~ 0.05), but a broad one covers much of the hemisphere (a normal map's domes and bevels hold
+//   every slope up to the horizon), where a Gaussian in slope space has too little weight far from the
+//   mean and GGX(A) (TK21's projected-space widening; A = I is the uniform hemisphere) follows closer:
+//   GGX(A) from k_max = 1 / SPECAA_GGX_SPREAD = 0.125 (slope standard deviation 0.25) on. The measurements
+//   (SPECAA_GGX_SPREAD 4, 8, 16 and the LOD factor): docs/accuracy.md#normal-mapped-materials-the-blend.
+// - Baked Sigma kernel with SPECAA_KERNEL_TWO_LOBES (opt-in): two lobes with the texel's mean and
+//   covariance. The texel's flat share 1 - g (normals within slope 0.02 of the surface's, alpha channel)
+//   keeps the material's own lobe convolved with the pixel kernel only; its rough share g holds all of
+//   Sigma, as the lobe above with K = 2 Sigma / g (gated like every baked kernel) + pixel kernel. One
+//   Gaussian of the whole texel spreads a flat field's highlight over the slopes of the few scratches or
+//   seams in it; the two lobes keep it (docs/accuracy.md#two-lobes-per-texel: they win on the stress scenes' scratches
+//   and tiles, but over the bench's normal-mapped scenes they have more error than the default's single
+//   lobe, K = 2 Sigma sqrt(g), at 1.7x its cost, so they are not the default). g = 1 (earlier bakes
+//   wrote A = 1) is the single lobe.
+// - Baked roughness texture (a already holds the texel's spread, K only the pixel's): w = saturate(LOD),
+//   the convolution under magnification, GGX(A) from the texture's mip 1 on.
+// NaN inputs give GGX(A).
+float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, SpecaaSurface s) {
+    float a = specaa_base_alpha2(s);
+    float share = 1.0;   // rough share g of the texel (two lobes where g < 1)
+    float flatD = 0.0;   // the flat share's lobe
+#if defined(SPECAA_ROUGHNESS_TEXTURE)
+    float w = SPECAA_SATURATE(specaa_texture_lod(SPECAA_TEXTURE_ARGS(SPECAA_ROUGHNESS_TEXTURE, SPECAA_SAMPLER), s.uv));
+#elif defined(SPECAA_KERNEL_TEXTURE) || defined(SPECAA_LEAN_TEXTURE0)
+#if defined(SPECAA_KERNEL_TEXTURE)
+    float lod = specaa_texture_lod(SPECAA_TEXTURE_ARGS(SPECAA_KERNEL_TEXTURE, SPECAA_SAMPLER), s.uv);
+#else
+    float lod = specaa_texture_lod(SPECAA_TEXTURE_ARGS(SPECAA_LEAN_TEXTURE0, SPECAA_SAMPLER), s.uv);
+#endif
+#if defined(SPECAA_KERNEL_TEXTURE) && defined(SPECAA_KERNEL_ANISOTROPIC) && defined(SPECAA_KERNEL_TWO_LOBES)
+    // Sampled and differentiated in uniform control flow; only the convolution is skipped for g = 1.
+    SPECAA_FLOAT4 k = specaa_sample_kernel_texel(SPECAA_TEXTURE_ARGS(SPECAA_KERNEL_TEXTURE, SPECAA_SAMPLER), s.uv);
+    share = k.w;
+    SPECAA_FLOAT3 pixel = specaa_pixel_kernel_matrix(s);
+    SPECAA_FLOAT3 flatA = specaa_widened_matrix(a, pixel);
+    SPECAA_FLOAT3 roughK = specaa_gate_baked_kernel((2.0 / max(share, 1.0e-3)) * k.xyz, a);
+    SPECAA_FLOAT3 roughA = specaa_widened_matrix(a, roughK + pixel);
+    if (share < 1.0) {
+        flatD = specaa_convolved_D(h, flatA, a);
+        A = roughA;
+    }
+#endif
+    // The blend weight is judged on all of K = A - a I, the per-pixel kernel included. Opt-in
+    // SPECAA_BLEND_FROM_BAKED_SPREAD judges it on the baked spread alone: the pixel kernel is the image of
+    // the Gaussian pixel filter under the surface's curvature (TK21 Eq. 3), for which the convolution is
+    // exact, and a large one (rims, strongly curved small parts: up to kappa) otherwise switches the pixel
+    // to GGX(A), whose tails put a flickering halo around highlights and along rims on models outside the
+    // bench's corpus; but where the clamped pixel kernel hides geometry a pixel wide (domes of mesh), GGX(A)
+    // is what fits, and the bench's NormalTangentTest far fails without it (docs/accuracy.md#do-no-harm-in-the-field).
+    SPECAA_FLOAT3 spread = A - SPECAA_FLOAT3(a, a, 0.0);
+#if defined(SPECAA_BLEND_FROM_BAKED_SPREAD) && defined(SPECAA_KERNEL_TEXTURE) && defined(SPECAA_KERNEL_ANISOTROPIC) && defined(SPECAA_KERNEL_TWO_LOBES)
+    spread = roughK;
+#elif defined(SPECAA_BLEND_FROM_BAKED_SPREAD)
+    spread = specaa_baked_kernel_matrix(s);
+#endif
+    float w = SPECAA_SATURATE(lod) * SPECAA_SATURATE(SPECAA_GGX_SPREAD * specaa_sym_max_eigenvalue(spread));
+#else
+    float w = 0.0;
+#endif
+    w = SPECAA_SELECT(w == w, w, 1.0);
+#if defined(SPECAA_DEFAULT_D_WEIGHT)
+    w = SPECAA_DEFAULT_D_WEIGHT;
+#endif
+    float ggx = specaa_ggx_D(h, A, a * a);
+    float roughD = ggx;
+    if (w < 1.0) roughD = ggx + (1.0 - w) * (specaa_convolved_D(h, A, a) - ggx);
+    return share * roughD + (1.0 - share) * flatD;
+}
+// ===================================================================================================
+// Glints: geometric glint anti-aliasing, C21 (Chermain et al. 2021) on the procedural glint BRDF of
+// C20, with the dictionary that `specbake glints` bakes (glint_dictionary.ktx2, see its manifest).
+//
+// The patch slope distribution (C21 Eq. 3) sums, over the cells of a virtual UV pyramid under the pixel
+// footprint, per-cell SDFs P22_M(m) = P_x(x_o) P_y(y_o) / det M (Eq. 4-6), where m_o = M^-1 m, M is the
+// slope-correlated transform of Eq. 18 times a random rotation per cell, and P_x, P_y are two marginals
+// of the dictionary picked per cell. GGAA (Eq. 15, 19, 21) filters each marginal with textureGrad using
+// the pixel derivatives of the projected half vector mapped into dictionary space.
+//
+// Configuration (define before including; they must match the dictionary's manifest):
+//   SPECAA_GLINT_LEVELS     distribution levels L, default 16
+//   SPECAA_GLINT_COUNT      marginals N, default 192 (4 per RGBA texel)
+//   SPECAA_GLINT_SIGMA_O    sigma_o = alpha_dict / sqrt 2, default 0.5 / sqrt 2
+//   SPECAA_GLINT_MAX_CELLS  cells visited per level and pixel, default 64 (the weights are renormalised)
+//   SPECAA_GLINT_GGX        converge to GGX (the include's specaa_ggx_D with A = 2 Sigma) instead of
+//                           Beckmann: each cell's transform is divided by sqrt(E), E ~ Exp(1) per cell
+//                           (clamped at 1/64), as GGX slopes are the scale mixture N(0, Sigma / E)
+// The dictionary is a 2D array texture (RGBA16F), sampled with linear filtering, linear mip filtering,
+// clamp-to-edge (or mirrored) addressing in u, no anisotropic filtering.
+//
+// Derivatives: the glint functions take no derivatives themselves. Call specaa_glint_derivatives() on
+// the UV and, per light, on the projected half vector h.xy in uniform control flow (before any
+// branch on the light or the material) and pass the results in: derivatives inside non-uniform control
+// flow are undefined in GLSL and HLSL.
+//
+// Slope covariance: (sigma_x, sigma_y, rho) from a slope covariance Sigma, e.g. slope-space LEAN
+// moments Sigma = M - m m^T, whose second moments already hold the material roughness alpha^2 / 2
+// (Olano & Baker 2010; C21 Eq. 16), or Sigma = A / 2 of a roughness matrix A.
+// ===================================================================================================
+
+#ifndef SPECAA_GLINT_LEVELS
+#define SPECAA_GLINT_LEVELS 16
+#endif
+#ifndef SPECAA_GLINT_COUNT
+#define SPECAA_GLINT_COUNT 192
+#endif
+#ifndef SPECAA_GLINT_SIGMA_O
+#define SPECAA_GLINT_SIGMA_O 0.35355339059327373
+#endif
+#ifndef SPECAA_GLINT_MAX_CELLS
+#define SPECAA_GLINT_MAX_CELLS 64
+#endif
+
+// Per-material glint parameters (the SPECBAKE_glints material extension).
+struct SpecaaGlintParams {
+    float logDensity;            // ln(microfacets per unit area of the scaled UV), e.g. 15
+    float relativeArea;          // fraction of cells that carry microfacets, in [0, 1]
+    float densityRandomization;  // std of the per-cell distribution-level jitter (C20: 2)
+    float maxAnisotropy;         // footprint eccentricity clamp (C21: 4)
+    float kernelScale;           // GGAA kernel scale s_K (C21: 0.5); 0 reads mip 0: C20 without GGAA
+};
+
+SpecaaGlintParams specaa_glint_default_params() {
+    SpecaaGlintParams g;
+    g.logDensity = 15.0;
+    g.relativeArea = 1.0;
+    g.densityRandomization = 2.0;
+    g.maxAnisotropy = 4.0;
+    g.kernelScale = 0.5;
+    return g;
+}
+
+// (ddx(v), ddy(v)) of a 2D quantity. Call in uniform control flow (see above).
+SPECAA_FLOAT4 specaa_glint_derivatives(SPECAA_FLOAT2 v) { return SPECAA_FLOAT4(SPECAA_DDX(v), SPECAA_DDY(v)); }
+
+// pcg3d (Jarzynski & Olano 2020, "Hash Functions for GPU Rendering"): three 32-bit draws per key with no
+// lattice repeat, unlike C20's seed s + 1549 t (cells (s, t) and (s + 1549, t - 1) are then equal).
+SPECAA_UINT3 specaa_glint_pcg3d(SPECAA_UINT3 v) {
+    v = v * 1664525u + SPECAA_UINT3(1013904223u, 1013904223u, 1013904223u);
+    v.x += v.y * v.z;
+    v.y += v.z * v.x;
+    v.z += v.x * v.y;
+    v = v ^ (v >> 16u);
+    v.x += v.y * v.z;
+    v.y += v.z * v.x;
+    v.z += v.x * v.y;
+    return v;
+}
+
+// Uniform in [0, 1) from the top 24 bits (exact in float).
+float specaa_glint_unit(uint x) { return float(x >> 8u) * (1.0 / 16777216.0); }
+
+// (sigma_x, sigma_y, rho) of a slope covariance (xx, yy, xy), clamped as C21's shader does:
+// sigma in [0.01, 1], rho in [-0.99, 0.99].
+SPECAA_FLOAT3 specaa_glint_sigma_rho(SPECAA_FLOAT3 sigma) {
+    float sx = clamp(sqrt(max(sigma.x, 0.0)), 0.01, 1.0);
+    float sy = clamp(sqrt(max(sigma.y, 0.0)), 0.01, 1.0);
+    return SPECAA_FLOAT3(sx, sy, clamp(sigma.z / (sx * sy), -0.99, 0.99));
+}
+
+// M^-1 of C21 Eq. 18, M = (1 / sigma_o) [[sx sqrt(1 - rho^2), rho sx], [0, sy]], as (m00, m01, m10, m11):
+// M^-1 = sigma_o [[1 / (sx sqrt(1 - rho^2)), -rho / (sy sqrt(1 - rho^2))], [0, 1 / sy]].
+SPECAA_FLOAT4 specaa_glint_inverse_transform(SPECAA_FLOAT3 sxsyrho) {
+    float c = sqrt(1.0 - sxsyrho.z * sxsyrho.z);
+    return SPECAA_GLINT_SIGMA_O * SPECAA_FLOAT4(1.0 / (sxsyrho.x * c), -sxsyrho.z / (sxsyrho.y * c), 0.0, 1.0 / sxsyrho.y);
+}
+
+// GGX slope distribution with A = 2 Sigma: 1 / (pi sqrt(det A) (1 + m^T A^-1 m)^2) (SPECAA_GLINT_GGX).
+float specaa_glint_ggx_P22(SPECAA_FLOAT2 m, SPECAA_FLOAT3 sxsyrho) {
+    float c2 = 1.0 - sxsyrho.z * sxsyrho.z;
+    float x = m.x / sxsyrho.x, y = m.y / sxsyrho.y;
+    float t = 1.0 + 0.5 * (x * x - 2.0 * sxsyrho.z * x * y + y * y) / c2;
+    return 1.0 / (2.0 * SPECAA_PI * sxsyrho.x * sxsyrho.y * sqrt(c2) * t * t);
+}
+
+// Correlated Beckmann slope distribution N(0, Sigma) at slope m, Sigma from (sx, sy, rho): the limit of
+// the glint SDF at high density and the coarse-level fallback (C21 Sec. 3).
+float specaa_glint_beckmann_P22(SPECAA_FLOAT2 m, SPECAA_FLOAT3 sxsyrho) {
+    float c2 = 1.0 - sxsyrho.z * sxsyrho.z;
+    float x = m.x / sxsyrho.x, y = m.y / sxsyrho.y;
+    float q = (x * x - 2.0 * sxsyrho.z * x * y + y * y) / c2;
+    return exp(-0.5 * q) / (2.0 * SPECAA_PI * sxsyrho.x * sxsyrho.y * sqrt(c2));
+}
+
+// One marginal of the dictionary: marginal i at distribution level k, read at dictionary-space slope x
+// with the dictionary-space kernel derivatives gx, gy (Eq. 19).
+float specaa_glint_marginal(SPECAA_TEXTURE_ARRAY_PARAMS(dict, smp), int k, int i, float x, float gx, float gy) {
+    float u = abs(x) * (0.25 / SPECAA_GLINT_SIGMA_O);
+    float layer = float(k * (SPECAA_GLINT_COUNT / 4) + i / 4);
+    SPECAA_FLOAT4 texel = SPECAA_SAMPLE_ARRAY_GRAD(dict, smp, SPECAA_FLOAT3(u, 0.5, layer), SPECAA_FLOAT2(gx, 0.0),
+                                                   SPECAA_FLOAT2(gy, 0.0));
+    int c = i - 4 * (i / 4);
+    return c == 0 ? texel.x : c == 1 ? texel.y : c == 2 ? texel.z : texel.w;
+}
+
+// SDF of cell (s, t) of spatial level `level` (C20 Alg. 3 with C21 Eq. 15 and 18). hs: half-vector
+// slope; dh: (ddx, ddy) of the projected half vector (Eq. 21); minv: Eq. 18 inverse; beckmann: the
+// analytic SDF at hs, returned by cells whose jittered level reaches L.
+float specaa_glint_cell(SPECAA_TEXTURE_ARRAY_PARAMS(dict, smp), int s, int t, int level, float levelDist,
+                        SPECAA_FLOAT2 hs, SPECAA_FLOAT4 dh, SPECAA_FLOAT4 minv, float beckmann, SpecaaGlintParams g) {
+    // Coherent index (C20 Eq. 8): a cell shares its draws with its first descendant at every finer level.
+    SPECAA_UINT3 r1 = specaa_glint_pcg3d(SPECAA_UINT3(uint(s) << uint(level), uint(t) << uint(level), 0x2545F491u));
+    SPECAA_UINT3 r2 = specaa_glint_pcg3d(r1 ^ SPECAA_UINT3(0x9E3779B9u, 0x85EBCA6Bu, 0xC2B2AE35u));
+    if (specaa_glint_unit(r1.x) >= g.relativeArea) return 0.0;
+    // Density randomisation: the distribution level jittered by a normal of std zeta (Box-Muller).
+    float n = sqrt(-2.0 * log(1.0 - specaa_glint_unit(r1.y))) * cos(2.0 * SPECAA_PI * specaa_glint_unit(r1.z));
+    int k = int(clamp(floor(levelDist + g.densityRandomization * n + 0.5), 0.0, float(SPECAA_GLINT_LEVELS)));
+    if (k >= SPECAA_GLINT_LEVELS) return beckmann;
+#if defined(SPECAA_GLINT_GGX)
+    SPECAA_UINT3 r3 = specaa_glint_pcg3d(r2 ^ SPECAA_UINT3(0x27D4EB2Fu, 0x165667B1u, 0xD3A2646Cu));
+    float e = max(-log(1.0 - specaa_glint_unit(r3.x)), 1.0 / 64.0);
+#else
+    float e = 1.0;
+#endif
+    float theta = 2.0 * SPECAA_PI * specaa_glint_unit(r2.x);
+    float ct = sqrt(e) * cos(theta), st = sqrt(e) * sin(theta);
+    // sqrt(E) R(-theta) M^-1 (Eq. 5); a rotation keeps det M^-1, the GGX scale multiplies it by E.
+    SPECAA_FLOAT4 m = SPECAA_FLOAT4(ct * minv.x + st * minv.z, ct * minv.y + st * minv.w,
+                                    -st * minv.x + ct * minv.z, -st * minv.y + ct * minv.w);
+    SPECAA_FLOAT2 ho = SPECAA_FLOAT2(m.x * hs.x + m.y * hs.y, m.z * hs.x + m.w * hs.y);
+    if (abs(ho.x) > 4.0 * SPECAA_GLINT_SIGMA_O || abs(ho.y) > 4.0 * SPECAA_GLINT_SIGMA_O) return 0.0;
+    int i = min(int(specaa_glint_unit(r2.y) * float(SPECAA_GLINT_COUNT)), SPECAA_GLINT_COUNT - 1);
+    int j = min(int(specaa_glint_unit(r2.z) * float(SPECAA_GLINT_COUNT)), SPECAA_GLINT_COUNT - 1);
+    // Kernel derivatives in texture space: s_K M^-1_cell dh / (4 sigma_o) (Eq. 19, 21).
+    float scale = g.kernelScale * 0.25 / SPECAA_GLINT_SIGMA_O;
+    SPECAA_FLOAT2 gx = scale * SPECAA_FLOAT2(m.x * dh.x + m.y * dh.y, m.z * dh.x + m.w * dh.y);
+    SPECAA_FLOAT2 gy = scale * SPECAA_FLOAT2(m.x * dh.z + m.y * dh.w, m.z * dh.z + m.w * dh.w);
+    float px = specaa_glint_marginal(SPECAA_TEXTURE_ARRAY_ARGS(dict, smp), k, i, ho.x, gx.x, gy.x);
+    float py = specaa_glint_marginal(SPECAA_TEXTURE_ARRAY_ARGS(dict, smp), k, j, ho.y, gx.y, gy.y);
+    return px * py * (minv.x * minv.w - minv.y * minv.z) * e;
+}
+
+// Footprint of the pixel in scaled UV (C21 step 5, pbrt-v3 MIPMap::Lookup): the two axes with the minor
+// one stretched to major / maxAnisotropy, and the continuous spatial level whose cell size is the minor
+// axis. Returns (major.xy, minor.xy) in `axes` and the level, clamped to [0, L - 1].
+float specaa_glint_footprint(SPECAA_FLOAT4 duv, float maxAnisotropy, out SPECAA_FLOAT4 axes) {
+    float lx = length(duv.xy), ly = length(duv.zw);
+    SPECAA_FLOAT2 major = lx >= ly ? duv.xy : duv.zw;
+    SPECAA_FLOAT2 minor = lx >= ly ? duv.zw : duv.xy;
+    float majorLength = max(lx, ly), minorLength = min(lx, ly);
+    float floorLength = majorLength / maxAnisotropy;
+    if (minorLength < floorLength) {
+        // A zero minor axis takes the direction perpendicular to the major one.
+        SPECAA_FLOAT2 direction = minorLength > 0.0 ? minor / minorLength : SPECAA_FLOAT2(-major.y, major.x) / majorLength;
+        minor = direction * floorLength;
+        minorLength = floorLength;
+    }
+    axes = SPECAA_FLOAT4(major, minor);
+    return clamp(float(SPECAA_GLINT_LEVELS - 1) + log2(max(minorLength, 1.0e-30)), 0.0, float(SPECAA_GLINT_LEVELS - 1));
+}
+
+// Mean SDF of the cells of one spatial level under the footprint, Gaussian-weighted over the EWA
+// ellipse (C20 Alg. 2): W = exp(-2 r^2) - exp(-2) inside r < 1, the ellipse at least one cell wide.
+float specaa_glint_level(SPECAA_TEXTURE_ARRAY_PARAMS(dict, smp), SPECAA_FLOAT2 uv, SPECAA_FLOAT4 axes, int level,
+                         SPECAA_FLOAT2 hs, SPECAA_FLOAT4 dh, SPECAA_FLOAT4 minv, float beckmann, SpecaaGlintParams g) {
+    // Distribution level: log4 of the expected microfacets per cell, 4^(level - (L - 1)) e^logDensity.
+    float levelDist = float(level - (SPECAA_GLINT_LEVELS - 1)) + g.logDensity * 0.72134752044448170;  // 1 / (2 ln 2)
+    // Every cell would draw the analytic level (C21 step 6).
+    if (g.relativeArea > 0.99 && floor(levelDist + 0.5) >= float(SPECAA_GLINT_LEVELS)) return beckmann;
+    float scale = exp2(float(SPECAA_GLINT_LEVELS - 1 - level));
+    SPECAA_FLOAT2 p = uv * scale - SPECAA_FLOAT2(0.5, 0.5);
+    SPECAA_FLOAT2 d0 = axes.xy * scale, d1 = axes.zw * scale;
+    float A = d0.y * d0.y + d1.y * d1.y + 1.0;
+    float B = -2.0 * (d0.x * d0.y + d1.x * d1.y);
+    float C = d0.x * d0.x + d1.x * d1.x + 1.0;
+    float F = A * C - 0.25 * B * B;
+    A /= F;
+    B /= F;
+    C /= F;
+    float det = 4.0 * A * C - B * B;
+    float halfU = 2.0 * sqrt(det * C) / det, halfV = 2.0 * sqrt(A * det) / det;
+    int s0 = int(ceil(p.x - halfU)), s1 = int(floor(p.x + halfU));
+    int t0 = int(ceil(p.y - halfV)), t1 = int(floor(p.y + halfV));
+    float sum = 0.0, weights = 0.0;
+    int visited = 0;
+    for (int t = t0; t <= t1 && visited < SPECAA_GLINT_MAX_CELLS; ++t) {
+        for (int s = s0; s <= s1 && visited < SPECAA_GLINT_MAX_CELLS; ++s) {
+            ++visited;
+            float ds = float(s) - p.x, dt = float(t) - p.y;
+            float r2 = A * ds * ds + B * ds * dt + C * dt * dt;
+            if (r2 < 1.0) {
+                float w = exp(-2.0 * r2) - 0.1353352832366127;  // exp(-2)
+                sum += w * specaa_glint_cell(SPECAA_TEXTURE_ARRAY_ARGS(dict, smp), s, t, level, levelDist, hs, dh, minv,
+                                             beckmann, g);
+                weights += w;
+            }
+        }
+    }
+    return weights > 1.0e-6 ? sum / weights : 0.0;
+}
+
+// Patch SDF P22 of the pixel (C21 Eq. 3): the two spatial levels around the footprint's level, blended
+// linearly. uv: scaled texture coordinates; duv: specaa_glint_derivatives(uv); hs: half-vector slope
+// (-h.x / h.z, -h.y / h.z); dh: specaa_glint_derivatives(h.xy); sxsyrho: specaa_glint_sigma_rho.
+float specaa_glint_P22(SPECAA_TEXTURE_ARRAY_PARAMS(dict, smp), SPECAA_FLOAT2 uv, SPECAA_FLOAT4 duv, SPECAA_FLOAT2 hs,
+                       SPECAA_FLOAT4 dh, SPECAA_FLOAT3 sxsyrho, SpecaaGlintParams g) {
+    SPECAA_FLOAT4 axes;
+    float l = specaa_glint_footprint(duv, g.maxAnisotropy, axes);
+    int il = int(floor(l));
+    float w = l - float(il);
+    SPECAA_FLOAT4 minv = specaa_glint_inverse_transform(sxsyrho);
+#if defined(SPECAA_GLINT_GGX)
+    float beckmann = specaa_glint_ggx_P22(hs, sxsyrho);  // the analytic fallback of the target
+#else
+    float beckmann = specaa_glint_beckmann_P22(hs, sxsyrho);
+#endif
+    float p = (1.0 - w) * specaa_glint_level(SPECAA_TEXTURE_ARRAY_ARGS(dict, smp), uv, axes, il, hs, dh, minv, beckmann, g);
+    if (w > 0.0)
+        p += w * specaa_glint_level(SPECAA_TEXTURE_ARRAY_ARGS(dict, smp), uv, axes, il + 1, hs, dh, minv, beckmann, g);
+    return p;
+}
+
+// Glint NDF D = P22 / h.z^4 (C21 Eq. 2) at the unit tangent-space half vector h; 0 for h.z <= 0.
+float specaa_glint_D(SPECAA_TEXTURE_ARRAY_PARAMS(dict, smp), SPECAA_FLOAT2 uv, SPECAA_FLOAT4 duv, SPECAA_FLOAT3 h,
+                     SPECAA_FLOAT4 dh, SPECAA_FLOAT3 sxsyrho, SpecaaGlintParams g) {
+    if (h.z <= 0.0) return 0.0;
+    SPECAA_FLOAT2 hs = -h.xy / h.z;
+    float z2 = h.z * h.z;
+    return specaa_glint_P22(SPECAA_TEXTURE_ARRAY_ARGS(dict, smp), uv, duv, hs, dh, sxsyrho, g) / (z2 * z2);
+}
+
+// V-cavity masking-shadowing of C20/C21: min(1, 2 h.z o.z / o.h) min(1, 2 h.z i.z / i.h); 0 when a
+// direction is below the surface or on the back of h.
+float specaa_glint_vcavity_G2(SPECAA_FLOAT3 i, SPECAA_FLOAT3 o, SPECAA_FLOAT3 h) {
+    float ih = dot(i, h), oh = dot(o, h);
+    if (i.z <= 0.0 || o.z <= 0.0 || ih <= 0.0 || oh <= 0.0) return 0.0;
+    return min(1.0, 2.0 * h.z * o.z / oh) * min(1.0, 2.0 * h.z * i.z / ih);
+}
+
+// Glint specular term times cos(i): D G2 / (4 o.z) with F = 1 (multiply by the Fresnel term), C21 Eq. 1.
+float specaa_glint_specular(SPECAA_TEXTURE_ARRAY_PARAMS(dict, smp), SPECAA_FLOAT2 uv, SPECAA_FLOAT4 duv,
+                            SPECAA_FLOAT3 i, SPECAA_FLOAT3 o, SPECAA_FLOAT4 dh, SPECAA_FLOAT3 sxsyrho,
+                            SpecaaGlintParams g) {
+    SPECAA_FLOAT3 h = normalize(i + o);
+    float G = specaa_glint_vcavity_G2(i, o, h);
+    if (G <= 0.0) return 0.0;
+    return specaa_glint_D(SPECAA_TEXTURE_ARRAY_ARGS(dict, smp), uv, duv, h, dh, sxsyrho, g) * G / (4.0 * o.z);
+}
+
+#endif  // SPECAA_INCLUDED
