@@ -1,5 +1,7 @@
 #include "verify/candidates.h"
 
+#include "verify/engine_peers.h"
+
 #include <algorithm>
 
 namespace specbake::verify {
@@ -66,6 +68,21 @@ void add_derivative_and_peer_candidates(std::vector<SimCandidate>& c) {
                   "        A = vec3(f, f, 0.0);",
                   "exact", ""},
                  "", ""});
+    // Engines' run-time filters (bake/peers.h, verify/engine_peers.h), each on the normal it uses: the
+    // shading normal n (Godot, Babylon.js) or the interpolated vertex normal nGeo (Unity HDRP, three.js).
+    const auto engine = [&](const char* name, const char* source, const char* call) {
+        c.push_back({name, "peer", source,
+                     {kEnginePeersGlsl, std::string("float f = ") + call + "; A = vec3(f, f, 0.0);", "exact", ""},
+                     "", ""});
+    };
+    engine("godot", "Godot 4 roughness limiter (amount 0.25, limit 0.18; on r^2, shading normal)",
+           "peer_godot_alpha2(sqrt(alpha), dFdx(n), dFdy(n))");
+    engine("unity-hdrp", "Unity HDRP geometric specular AA (screen-space variance 0.1, threshold 0.2)",
+           "peer_unity_alpha2(a, dFdx(nGeo), dFdy(nGeo))");
+    engine("threejs", "three.js geometryRoughness (added to r, floor 0.0525)",
+           "peer_threejs_alpha2(sqrt(alpha), dFdx(nGeo), dFdy(nGeo))");
+    engine("babylon", "Babylon.js SPECULARAA, analytic lights (r = max(r, slope^(2/3)); shading normal)",
+           "peer_babylon_alpha2(sqrt(alpha), dFdx(n), dFdy(n))");
 }
 
 // The rules that read baked data: curvature, and where the scene is normal-mapped the roughness mips.
