@@ -3,6 +3,7 @@
 #include "verify/engine_peers.h"
 
 #include <algorithm>
+#include <tuple>
 
 namespace specbake::verify {
 namespace {
@@ -96,6 +97,15 @@ void add_baked_candidates(std::vector<SimCandidate>& c, bool normal_mapped) {
                      {std::string(kBakedRoughnessDefines) + "#define SPECAA_NO_PIXEL_KERNEL\n", kIsotropicDefault,
                       "exact", "mean-projected"},
                      "mean-projected", ""});
+        // Engines' offline roughness mips (bake/peer_roughness_bake.h), shaded as the engine does: the baked
+        // roughness alone.
+        for (const auto& [name, source, bake] :
+             {std::tuple{"filament-prefilter", "Filament roughness-prefilter (vMF, r' = sqrt(r^2 + 2 / kappa))", "peer-filament"},
+              std::tuple{"godot-importer", "Godot 4 importer roughness mips (r' = sqrt(r^2 + min(0.75 / kappa, 0.16)))", "peer-godot"}})
+            c.push_back({name, "peer", source,
+                         {std::string(kBakedRoughnessDefines) + "#define SPECAA_NO_PIXEL_KERNEL\n", kIsotropicDefault,
+                          "exact", bake},
+                         bake, ""});
     }
 }
 
@@ -269,7 +279,10 @@ std::vector<SimTextureBake> texture_bakes_for(const std::vector<SimCandidate>& c
         // The glint materials' LEAN (pipeline/glint_bake.h): slope space, the base roughness folded in.
         if (k == "slope-lean") s.lean_space = LeanSpace::Slope;
         s.anisotropic = !k.ends_with("isotropic-kernel");
-        bakes.push_back({k, s});
+        std::optional<PeerRoughnessBake> peer;
+        if (k == "peer-filament") peer = PeerRoughnessBake::Filament;
+        if (k == "peer-godot") peer = PeerRoughnessBake::Godot;
+        bakes.push_back({k, s, peer});
     }
     return bakes;
 }
