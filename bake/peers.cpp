@@ -1,4 +1,4 @@
-// Peer methods: VAREF variance-based roughness and the K16 GGX rectangle integral.
+// Peer methods: VAREF variance-based roughness, the K16 GGX rectangle integral and engines' run-time filters.
 #include "bake/peers.h"
 
 #include <algorithm>
@@ -62,12 +62,44 @@ Vec2<T> k16_ggx_rect_footprint(const Vec2<T>& dhpp_dx, const Vec2<T>& dhpp_dy, c
             std::min(std::max(fy, std::min(alpha.y, T(0.1))), footprint_max)};
 }
 
+template <class T>
+T godot_limiter_alpha2(T r, const Vec3<T>& dn_dx, const Vec3<T>& dn_dy, T amount, T limit) {
+    const T variance = amount * (dot(dn_dx, dn_dx) + dot(dn_dy, dn_dy));
+    const T r2 = std::min(T(1), r * r + std::min(T(2) * variance, limit));
+    return r2 * r2;
+}
+
+template <class T>
+T unity_geometric_aa_alpha2(T a, const Vec3<T>& dn_dx, const Vec3<T>& dn_dy, T variance, T threshold) {
+    const T v = variance * (dot(dn_dx, dn_dx) + dot(dn_dy, dn_dy));
+    return std::clamp(a + std::min(T(2) * v, threshold * threshold), T(0), T(1));
+}
+
+template <class T>
+T threejs_geometry_roughness_alpha2(T r, const Vec3<T>& dn_dx, const Vec3<T>& dn_dy) {
+    const T g = std::max({std::abs(dn_dx.x), std::abs(dn_dy.x), std::abs(dn_dx.y), std::abs(dn_dy.y),
+                          std::abs(dn_dx.z), std::abs(dn_dy.z)});
+    const T rf = std::min(std::max(r, T(0.0525)) + g, T(1));
+    return rf * rf * rf * rf;
+}
+
+template <class T>
+T babylon_specular_aa_alpha2(T r, const Vec3<T>& dn_dx, const Vec3<T>& dn_dy) {
+    const T slope2 = std::max(dot(dn_dx, dn_dx), dot(dn_dy, dn_dy));
+    const T rf = std::max(r, std::pow(std::clamp(slope2, T(0), T(1)), T(0.333)));
+    return rf * rf * rf * rf;
+}
+
 #define SPECBAKE_INSTANTIATE(T)                                                                      \
     template T varef_screen_space_variance<T>(const Vec3<T>&, const Vec3<T>&);                      \
     template T varef_curvature_variance<T>(T, T);                                                   \
     template T varef_filter_alpha<T>(T, T);                                                         \
     template T k16_ggx_rect_ndf<T>(const Vec2<T>&, const Vec3<T>&, const Vec2<T>&, const Vec2<T>&); \
-    template Vec2<T> k16_ggx_rect_footprint<T>(const Vec2<T>&, const Vec2<T>&, const Vec2<T>&, T);
+    template Vec2<T> k16_ggx_rect_footprint<T>(const Vec2<T>&, const Vec2<T>&, const Vec2<T>&, T);    \
+    template T godot_limiter_alpha2<T>(T, const Vec3<T>&, const Vec3<T>&, T, T);                   \
+    template T unity_geometric_aa_alpha2<T>(T, const Vec3<T>&, const Vec3<T>&, T, T);              \
+    template T threejs_geometry_roughness_alpha2<T>(T, const Vec3<T>&, const Vec3<T>&);            \
+    template T babylon_specular_aa_alpha2<T>(T, const Vec3<T>&, const Vec3<T>&);
 SPECBAKE_INSTANTIATE(float)
 SPECBAKE_INSTANTIATE(double)
 #undef SPECBAKE_INSTANTIATE

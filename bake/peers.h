@@ -1,5 +1,7 @@
-// Peer methods kept for comparison: the VAREF variance-based roughness (screen-space and curvature modes)
-// and K16's GGX rectangle integral (box-filtered GGX NDF over an axis-aligned slope-space rectangle).
+// Peer methods kept for comparison: the VAREF variance-based roughness (screen-space and curvature modes),
+// K16's GGX rectangle integral (box-filtered GGX NDF over an axis-aligned slope-space rectangle), and the
+// run-time specular anti-aliasing that engines ship (Godot 4, Unity HDRP, three.js, Babylon.js), written
+// from their published formulas (docs/accuracy.md#engine-peers says where each is from).
 #pragma once
 
 #include "core/vec.h"
@@ -37,5 +39,31 @@ T k16_ggx_rect_ndf(const Vec2<T>& hpp, const Vec3<T>& h, const Vec2<T>& alpha, c
 template <class T>
 Vec2<T> k16_ggx_rect_footprint(const Vec2<T>& dhpp_dx, const Vec2<T>& dhpp_dy, const Vec2<T>& alpha,
                                T footprint_max);
+
+// Run-time filters of engines, from the screen-space derivatives of a normal (each engine's choice of
+// normal: the shading normal for Godot and Babylon.js, the interpolated vertex normal for Unity HDRP and
+// three.js). Each returns the squared GGX roughness a = alpha^2 it shades with, for a material of
+// perceptual roughness r (alpha = r^2).
+//
+// Godot 4 roughness limiter (TK19 with its defaults amount 0.25, limit 0.18), applied to r^2:
+// r'^2 = min(1, r^2 + min(2 amount (|dn/dx|^2 + |dn/dy|^2), limit)).
+template <class T>
+T godot_limiter_alpha2(T r, const Vec3<T>& dn_dx, const Vec3<T>& dn_dy, T amount = T(0.25), T limit = T(0.18));
+
+// Unity HDRP geometric specular AA (defaults: screen-space variance 0.1, threshold 0.2):
+// a' = saturate(a + min(2 variance (|dn/dx|^2 + |dn/dy|^2), threshold^2)).
+template <class T>
+T unity_geometric_aa_alpha2(T a, const Vec3<T>& dn_dx, const Vec3<T>& dn_dy, T variance = T(0.1),
+                            T threshold = T(0.2));
+
+// three.js MeshStandardMaterial: r' = min(max(r, 0.0525) + g, 1) with g the largest component of
+// max(|dn/dx|, |dn/dy|) (its `geometryRoughness`).
+template <class T>
+T threejs_geometry_roughness_alpha2(T r, const Vec3<T>& dn_dx, const Vec3<T>& dn_dy);
+
+// Babylon.js SPECULARAA for analytic lights: r' = max(r, saturate(s)^0.333) with
+// s = max(|dn/dx|^2, |dn/dy|^2).
+template <class T>
+T babylon_specular_aa_alpha2(T r, const Vec3<T>& dn_dx, const Vec3<T>& dn_dy);
 
 }  // namespace specbake

@@ -77,6 +77,7 @@ int run_bench_command(const BenchCommandOptions& given) {
         }
     }
     v.keep_images = !o.output.empty();
+    v.pixel_maps = v.keep_images;  // the strips' harm cell
     options.scenes = o.scenes;
     options.no_builtin = o.no_builtin;
     // A missing or unreadable scene file fails before the long run starts (exit 1, as for every command).

@@ -11,6 +11,7 @@
 #include "core/text_format.h"
 #include "io/files/file_read.h"
 
+#include <cctype>
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -33,13 +34,14 @@ struct VerifyCommandOptions {
     SimCommandOptions sim;
     std::string strip;
     std::string harm_map;
+    std::string images;
     float distance = 1.0f;
 };
 
 int run_verify_command(const VerifyCommandOptions& o) {
     VerifyOptions options;
     if (!apply_sim_command_options(o.sim, options)) return kExitUsage;
-    options.pixel_maps = !o.harm_map.empty();
+    options.pixel_maps = !o.harm_map.empty() || !o.strip.empty();
     // Frames done / total on a terminal; the stage lines as plain lines otherwise.
     ProgressDisplay display(size_t(options.frames), progress_mode(run_settings()), "frames",
                             ProgressDisplay::Lines::activity);
@@ -103,13 +105,21 @@ int run_verify_command(const VerifyCommandOptions& o) {
     if (!o.strip.empty()) {
         // One strip per ground truth: the GGX candidates', and the glint candidates' (NAME-glints.png when
         // the scene has both).
-        std::vector<StripTile> tiles, glint_tiles;
-        for (const CandidateReport& c : report->candidates)
-            (c.family == "glint" ? glint_tiles : tiles).push_back({c.name, &c.image});
+        const std::vector<StripTile> tiles = strip_tiles(report->candidates, false);
+        const std::vector<StripTile> glint_tiles = strip_tiles(report->candidates, true);
+        const CandidateReport* none = nullptr;
+        const CandidateReport* fallback = nullptr;
+        for (const CandidateReport& c : report->candidates) {
+            if (c.name == "none") none = &c;
+            if (c.name == "default") fallback = &c;
+        }
+        StripHarm harm;
+        if (none && fallback)
+            harm = {"default - none", &fallback->pixel_temporal_error, &none->pixel_temporal_error};
         std::filesystem::path glint_strip = o.strip;
         if (!tiles.empty()) {
             glint_strip.replace_filename(glint_strip.stem().string() + "-glints" + glint_strip.extension().string());
-            if (auto written = write_strip_png(make_strip(report->ground_truth, tiles), o.strip); !written) {
+            if (auto written = write_strip_png(make_strip(report->ground_truth, tiles, &harm), o.strip); !written) {
                 print_error(written.error().message);
                 return kExitFailed;
             }
@@ -118,6 +128,23 @@ int run_verify_command(const VerifyCommandOptions& o) {
             if (auto written = write_strip_png(make_strip(report->glint_ground_truth, glint_tiles), glint_strip); !written) {
                 print_error(written.error().message);
                 return kExitFailed;
+            }
+        }
+    }
+    if (!o.images.empty()) {
+        // One picture per candidate: the ground truth beside it, its error below.
+        for (const bool glint : {false, true}) {
+            const SimImage& gt = glint ? report->glint_ground_truth : report->ground_truth;
+            if (gt.empty()) continue;
+            for (const StripTile& tile : strip_tiles(report->candidates, glint, 0, true)) {
+                std::string name = tile.label;
+                for (char& ch : name)
+                    if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '-' && ch != '_' && ch != '.') ch = '_';
+                const std::filesystem::path path = std::filesystem::path(o.images) / (name + ".png");
+                if (auto written = write_strip_png(make_strip(gt, {tile}), path); !written) {
+                    print_error(written.error().message);
+                    return kExitFailed;
+                }
             }
         }
     }
@@ -172,13 +199,21 @@ void add_verify_command(CLI::App& app, std::function<int()>& run) {
                     "Camera distance as a factor of the scene's own (bench: near 0.55, mid 1, far 3)")
         ->capture_default_str()
         ->check(CLI::Range(0.05f, 100.0f));
-    sub->add_option("--strip", o->strip, "Also write the image strip (frame 0) to this PNG file");
+    sub->add_option("--strip", o->strip,
+                    "Also write the strip to this PNG file: a labelled grid (frame 0, cropped to the object) of the "
+                    "ground truth, no filtering, the default and its variants, and the three best other candidates, "
+                    "each over its error map and captioned with its ratios to no filtering, plus where the "
+                    "default's temporal error exceeds no filtering's");
+    sub->add_option("--images", o->images,
+                    "Also write one PNG per candidate into this folder (NAME.png: the ground truth, the candidate and "
+                    "its error map)");
     sub->add_option("--harm-map", o->harm_map,
                     "Also write the harm map to this PNG file: per pixel, where each candidate's tone-mapped flicker "
                     "and temporal error exceed no filtering's (red) or fall below it (blue), and print where the "
                     "excess lies");
     sub->footer("Examples:\n"
                 "  specbake verify scene.glb --strip scene.png\n"
+                "  specbake verify scene.glb --strip scene.png --images scene-candidates/\n"
                 "  specbake verify --builtin torus --alpha 0.01 --strip torus.png\n"
                 "  specbake verify --builtin cylinder --alpha 0.01 --spp 1024 --frames 16 --size 256x256\n"
                 "  specbake verify --builtin bumpy-sphere --only baked-texture,default\n"

@@ -1,6 +1,9 @@
 #include "verify/candidates.h"
 
+#include "verify/engine_peers.h"
+
 #include <algorithm>
+#include <tuple>
 
 namespace specbake::verify {
 namespace {
@@ -66,6 +69,21 @@ void add_derivative_and_peer_candidates(std::vector<SimCandidate>& c) {
                   "        A = vec3(f, f, 0.0);",
                   "exact", ""},
                  "", ""});
+    // Engines' run-time filters (bake/peers.h, verify/engine_peers.h), each on the normal it uses: the
+    // shading normal n (Godot, Babylon.js) or the interpolated vertex normal nGeo (Unity HDRP, three.js).
+    const auto engine = [&](const char* name, const char* source, const char* call) {
+        c.push_back({name, "peer", source,
+                     {kEnginePeersGlsl, std::string("float f = ") + call + "; A = vec3(f, f, 0.0);", "exact", ""},
+                     "", ""});
+    };
+    engine("godot", "Godot 4 roughness limiter (amount 0.25, limit 0.18; on r^2, shading normal)",
+           "peer_godot_alpha2(sqrt(alpha), dFdx(n), dFdy(n))");
+    engine("unity-hdrp", "Unity HDRP geometric specular AA (screen-space variance 0.1, threshold 0.2)",
+           "peer_unity_alpha2(a, dFdx(nGeo), dFdy(nGeo))");
+    engine("threejs", "three.js geometryRoughness (added to r, floor 0.0525)",
+           "peer_threejs_alpha2(sqrt(alpha), dFdx(nGeo), dFdy(nGeo))");
+    engine("babylon", "Babylon.js SPECULARAA, analytic lights (r = max(r, slope^(2/3)); shading normal)",
+           "peer_babylon_alpha2(sqrt(alpha), dFdx(n), dFdy(n))");
 }
 
 // The rules that read baked data: curvature, and where the scene is normal-mapped the roughness mips.
@@ -79,6 +97,15 @@ void add_baked_candidates(std::vector<SimCandidate>& c, bool normal_mapped) {
                      {std::string(kBakedRoughnessDefines) + "#define SPECAA_NO_PIXEL_KERNEL\n", kIsotropicDefault,
                       "exact", "mean-projected"},
                      "mean-projected", ""});
+        // Engines' offline roughness mips (bake/peer_roughness_bake.h), shaded as the engine does: the baked
+        // roughness alone.
+        for (const auto& [name, source, bake] :
+             {std::tuple{"filament-prefilter", "Filament roughness-prefilter (vMF, r' = sqrt(r^2 + 2 / kappa))", "peer-filament"},
+              std::tuple{"godot-importer", "Godot 4 importer roughness mips (r' = sqrt(r^2 + min(0.75 / kappa, 0.16)))", "peer-godot"}})
+            c.push_back({name, "peer", source,
+                         {std::string(kBakedRoughnessDefines) + "#define SPECAA_NO_PIXEL_KERNEL\n", kIsotropicDefault,
+                          "exact", bake},
+                         bake, ""});
     }
 }
 
@@ -252,7 +279,10 @@ std::vector<SimTextureBake> texture_bakes_for(const std::vector<SimCandidate>& c
         // The glint materials' LEAN (pipeline/glint_bake.h): slope space, the base roughness folded in.
         if (k == "slope-lean") s.lean_space = LeanSpace::Slope;
         s.anisotropic = !k.ends_with("isotropic-kernel");
-        bakes.push_back({k, s});
+        std::optional<PeerRoughnessBake> peer;
+        if (k == "peer-filament") peer = PeerRoughnessBake::Filament;
+        if (k == "peer-godot") peer = PeerRoughnessBake::Godot;
+        bakes.push_back({k, s, peer});
     }
     return bakes;
 }

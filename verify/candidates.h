@@ -4,6 +4,7 @@
 // GLSL body on top of shaders/specaa.glsl plus the baked data it samples.
 #pragma once
 
+#include "bake/peer_roughness_bake.h"
 #include "bake/texture_bake.h"
 #include "verify/renderer.h"
 #include "verify/scene.h"
@@ -17,8 +18,9 @@ namespace specbake::verify {
 
 // A texture bake a candidate depends on (run once per normal map, timed as the candidate's bake cost).
 struct SimTextureBake {
-    std::string key;  // "mean-projected", "mean-approx", "sum-projected", "max-projected"
+    std::string key;  // "mean-projected", "mean-approx", "sum-projected", "max-projected", "peer-filament", ...
     TextureBakeSettings settings;
+    std::optional<PeerRoughnessBake> peer;  // an engine's offline roughness bake instead of specbake's
 };
 
 // A curvature estimate a candidate depends on ("exact" is the analytic curvature: no bake).

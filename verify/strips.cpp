@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <random>
 
 namespace specbake::verify {
@@ -88,35 +89,139 @@ void heat(float v, float* rgb) {
 
 }  // namespace
 
-Image make_strip(const SimImage& gt, const std::vector<StripTile>& candidates) {
-    // Every image pixel drawn as a zoom x zoom block: at least 2x, and about 256 pixels high for small
-    // renders, so single-pixel highlights and their errors stay visible.
-    const int zoom = std::clamp(256 / std::max(gt.height, 1), 2, 8);
-    const int w = gt.width * zoom, h = gt.height * zoom, gap = 4;
-    const int columns = 1 + int(candidates.size());
-    const int tile_w = w + gap, tile_h = h + kLabelHeight;
-    Image strip(columns * tile_w, 2 * tile_h, 3);
+namespace {
+
+// The pixels the ground truth covers, with 4 pixels of margin (the whole image when it covers none): at
+// the far distance a model is a few dozen pixels of the render.
+struct Crop {
+    int x0 = 0, y0 = 0, w = 0, h = 0;
+};
+Crop object_crop(const SimImage& gt) {
+    int x_lo = gt.width, x_hi = -1, y_lo = gt.height, y_hi = -1;
+    for (int y = 0; y < gt.height; ++y)
+        for (int x = 0; x < gt.width; ++x)
+            if (gt.texel(x, y)[1] > 0.0f) x_lo = std::min(x_lo, x), x_hi = std::max(x_hi, x), y_lo = std::min(y_lo, y), y_hi = std::max(y_hi, y);
+    if (x_hi < 0) x_lo = 0, x_hi = gt.width - 1, y_lo = 0, y_hi = gt.height - 1;
+    x_lo = std::max(0, x_lo - 4), y_lo = std::max(0, y_lo - 4);
+    x_hi = std::min(gt.width - 1, x_hi + 4), y_hi = std::min(gt.height - 1, y_hi + 4);
+    return {x_lo, y_lo, x_hi - x_lo + 1, y_hi - y_lo + 1};
+}
+
+std::string ratio_caption(const SimMetrics& m, const SimMetrics& none) {
+    const auto r = [](double c, double b) {
+        if (!(b > 0)) return std::string("-");
+        char text[32];
+        std::snprintf(text, sizeof text, "%.2fx", c / b);
+        return std::string(text);
+    };
+    return "rmse " + r(m.rmse, none.rmse) + " flicker " + r(m.flicker, none.flicker) + " t-err " +
+           r(m.temporal_error, none.temporal_error);
+}
+
+}  // namespace
+
+std::vector<StripTile> strip_tiles(const std::vector<CandidateReport>& candidates, bool glint, int best, bool all) {
+    std::vector<StripTile> tiles;
+    const auto in_family = [glint](const CandidateReport& c) {
+        return !c.image.empty() && (c.family == "glint") == glint;
+    };
+    const CandidateReport* none = nullptr;
+    for (const CandidateReport& c : candidates)
+        if (in_family(c) && c.name == (glint ? "glint-c20" : "none")) none = &c;
+    const auto tile = [none](const CandidateReport& c) {
+        return StripTile{c.name, &c.image, none && &c != none ? ratio_caption(c.metrics, none->metrics) : ""};
+    };
+    if (glint || all) {
+        for (const CandidateReport& c : candidates)
+            if (in_family(c)) tiles.push_back(tile(c));
+        return tiles;
+    }
+    std::vector<const CandidateReport*> others;
+    if (none) tiles.push_back(tile(*none));
+    for (const CandidateReport& c : candidates) {
+        if (!in_family(c) || &c == none) continue;
+        if (c.name == "default" || c.name.rfind("default:", 0) == 0) tiles.push_back(tile(c));
+        else if (c.family != "limit" && c.name != "limit" && c.name != "floor") others.push_back(&c);
+    }
+    // Rank sum over RMSE and tone-mapped flicker; ties keep the report's order.
+    std::vector<double> score(others.size(), 0.0);
+    for (const auto key : {&SimMetrics::rmse, &SimMetrics::flicker}) {
+        std::vector<size_t> order(others.size());
+        for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+        std::stable_sort(order.begin(), order.end(),
+                         [&](size_t a, size_t b) { return others[a]->metrics.*key < others[b]->metrics.*key; });
+        for (size_t r = 0; r < order.size(); ++r) score[order[r]] += double(r);
+    }
+    std::vector<size_t> order(others.size());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return score[a] < score[b]; });
+    for (size_t i = 0; i < order.size() && int(i) < best; ++i) tiles.push_back(tile(*others[order[i]]));
+    return tiles;
+}
+
+Image make_strip(const SimImage& gt, const std::vector<StripTile>& candidates, const StripHarm* harm) {
+    const Crop crop = object_crop(gt);
+    // Every image pixel drawn as a zoom x zoom block, the crop about 320 pixels across, so single-pixel
+    // highlights and their errors stay visible and labels of 40 characters fit.
+    const int zoom = std::clamp(320 / std::max(crop.w, crop.h), 1, 12);
+    const int w = crop.w * zoom, h = crop.h * zoom, gap = 6;
+    const bool with_harm = harm && harm->candidate && harm->baseline && !harm->candidate->empty() &&
+                           harm->candidate->size() == gt.texel_count() && harm->baseline->size() == gt.texel_count();
+    const int cells = 1 + int(candidates.size()) + (with_harm ? 1 : 0);
+    const int columns = std::min(cells, 4), rows = (cells + columns - 1) / columns;
+    const int cell_w = std::max(w, 40 * 4 * kScale) + gap, cell_h = kLabelHeight + 2 * h + gap + gap;
+    Image strip(columns * cell_w, rows * cell_h, 3);
     const float p99 = covered_p99(gt);
     const auto tone = [p99](float x) { return (x / p99) / (1.0f + x / p99); };
-    const auto put_image = [&](const SimImage& im, int column) {
+    const auto sample = [&](const SimImage& im, int x, int y) { return im.texel(crop.x0 + x / zoom, crop.y0 + y / zoom)[0]; };
+    const auto origin = [&](int cell) { return std::pair<int, int>((cell % columns) * cell_w, (cell / columns) * cell_h); };
+    const auto label = [&](int cell, const std::string& name, const std::string& caption) {
+        const auto [x0, y0] = origin(cell);
+        const size_t width = size_t(std::max(1, (cell_w - gap) / (4 * kScale)));
+        draw_text(strip, x0 + 2, y0 + 3, wrap_label(name, width).first);
+        draw_text(strip, x0 + 2, y0 + 3 + kLineHeight, caption.substr(0, width));
+    };
+    const auto put_image = [&](const SimImage& im, int cell) {
+        const auto [x0, y0] = origin(cell);
         for (int y = 0; y < h; ++y)
             for (int x = 0; x < w; ++x)
-                std::fill_n(strip.texel(column * tile_w + x, kLabelHeight + y), 3, srgb(tone(im.texel(x / zoom, y / zoom)[0])));
+                std::fill_n(strip.texel(x0 + x, y0 + kLabelHeight + y), 3, srgb(tone(sample(im, x, y))));
     };
     put_image(gt, 0);
-    draw_text(strip, 2, 3, "ground truth");
-    draw_text(strip, 2, tile_h + 3, "error x4");
+    label(0, "ground truth", "error x4 below; ratios to none");
     for (size_t c = 0; c < candidates.size(); ++c) {
-        const int column = int(c) + 1;
-        put_image(*candidates[c].image, column);
-        const auto [first, second] = wrap_label(candidates[c].label, size_t(std::max(1, w / (4 * kScale))));
-        draw_text(strip, column * tile_w + 2, 3, first);
-        draw_text(strip, column * tile_w + 2, 3 + kLineHeight, second);
+        const int cell = int(c) + 1;
+        put_image(*candidates[c].image, cell);
+        label(cell, candidates[c].label, candidates[c].caption);
+        const auto [x0, y0] = origin(cell);
         for (int y = 0; y < h; ++y)
             for (int x = 0; x < w; ++x) {
-                const float err = std::abs(tone(candidates[c].image->texel(x / zoom, y / zoom)[0]) -
-                                           tone(gt.texel(x / zoom, y / zoom)[0]));
-                heat(4.0f * err, strip.texel(column * tile_w + x, tile_h + kLabelHeight + y));
+                const float err = std::abs(tone(sample(*candidates[c].image, x, y)) - tone(sample(gt, x, y)));
+                heat(4.0f * err, strip.texel(x0 + x, y0 + kLabelHeight + h + gap + y));
+            }
+    }
+    if (with_harm) {
+        // The harm map's temporal-error tile over a dim copy of the ground truth.
+        const int cell = cells - 1;
+        const auto [x0, y0] = origin(cell);
+        label(cell, harm->label + " t-err tm", "red: more than it, blue: less");
+        double sum = 0;
+        long long n = 0;
+        for (float v : *harm->baseline)
+            if (std::isfinite(v)) sum += v, ++n;
+        const double scale = 2.0 * std::max(n > 0 ? sum / double(n) : 0.0, 1e-9);
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                const int px = crop.x0 + x / zoom, py = crop.y0 + y / zoom;
+                const size_t i = size_t(py) * size_t(gt.width) + size_t(px);
+                float* o = strip.texel(x0 + x, y0 + kLabelHeight + y);
+                const float cv = (*harm->candidate)[i], bv = (*harm->baseline)[i];
+                if (!std::isfinite(cv) || !std::isfinite(bv)) continue;
+                const float g = 0.3f * srgb(tone(gt.texel(px, py)[0]));
+                const float d = float((double(cv) - double(bv)) / scale);
+                o[0] = std::clamp(g + std::max(d, 0.0f) * (1.0f - g), 0.0f, 1.0f);
+                o[1] = g;
+                o[2] = std::clamp(g + std::max(-d, 0.0f) * (1.0f - g), 0.0f, 1.0f);
             }
     }
     return strip;
@@ -159,16 +264,9 @@ double finite_mean(const std::vector<float>& v) {
 
 Image make_harm_map(const SimImage& gt, const HarmTile& baseline, const std::vector<HarmTile>& candidates,
                     std::vector<HarmReport>* summaries) {
-    // Cropped to the object (the pixels the ground truth covers, 4 pixels of margin), magnified to about
-    // 384 pixels: at the far distance a model is a few dozen pixels wide.
-    int x_lo = gt.width, x_hi = -1, y_lo = gt.height, y_hi = -1;
-    for (int y = 0; y < gt.height; ++y)
-        for (int x = 0; x < gt.width; ++x)
-            if (gt.texel(x, y)[1] > 0.0f) x_lo = std::min(x_lo, x), x_hi = std::max(x_hi, x), y_lo = std::min(y_lo, y), y_hi = std::max(y_hi, y);
-    if (x_hi < 0) x_lo = 0, x_hi = gt.width - 1, y_lo = 0, y_hi = gt.height - 1;
-    x_lo = std::max(0, x_lo - 4), y_lo = std::max(0, y_lo - 4);
-    x_hi = std::min(gt.width - 1, x_hi + 4), y_hi = std::min(gt.height - 1, y_hi + 4);
-    const int crop_w = x_hi - x_lo + 1, crop_h = y_hi - y_lo + 1;
+    // Cropped to the object (object_crop), magnified to about 384 pixels.
+    const Crop crop = object_crop(gt);
+    const int x_lo = crop.x0, y_lo = crop.y0, crop_w = crop.w, crop_h = crop.h;
     const int zoom = std::clamp(384 / std::max(crop_w, crop_h), 1, 12);
     const int w = crop_w * zoom, h = crop_h * zoom, gap = 4;
     const int tile_w = std::max(w, 64 * 4 * kScale) + gap, tile_h = h + kLabelHeight;  // room for 64 characters

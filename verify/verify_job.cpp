@@ -155,6 +155,15 @@ Result<std::map<std::string, double>> run_bakes(const SimScene& scene, const std
             const SimTextureSet& t = sets[set];
             const Image* roughness_map = t.roughness_map >= 0 ? &scene.roughness_maps[size_t(t.roughness_map)] : nullptr;
             const auto start = std::chrono::steady_clock::now();
+            if (bake.peer) {
+                auto chain = bake_peer_roughness(scene.normal_maps[size_t(t.normal_map)], roughness_map, t.roughness, *bake.peer);
+                total += ms_since(start);
+                if (!chain) return make_error(scene.name + ": texture bake failed: " + chain.error().message);
+                SimBakedTextures textures;
+                textures.roughness = std::move(*chain);
+                renderer.set_baked(bake.key, int(set), textures);
+                continue;
+            }
             auto baked = bake_texture(scene.normal_maps[size_t(t.normal_map)], roughness_map, 0, t.roughness, bake.settings);
             total += ms_since(start);
             if (!baked) return make_error(scene.name + ": texture bake failed: " + baked.error().message);

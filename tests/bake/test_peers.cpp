@@ -73,5 +73,41 @@ TEST(K16Rect, FootprintClamps) {
     EXPECT_EQ(big.y, 1.0);
 }
 
+// Engines' run-time filters against values worked by hand from their formulas (bake/peers.h).
+TEST(EnginePeers, GodotLimiterAddsToRSquaredAndClampsAtTheLimit) {
+    const Vec3<double> dx{0.1, 0, 0}, dy{0, 0.2, 0};
+    // variance 0.25 (0.01 + 0.04) = 0.0125; r'^2 = 0.09 + 0.025 = 0.115; a = 0.115^2.
+    EXPECT_NEAR(godot_limiter_alpha2(0.3, dx, dy), 0.115 * 0.115, 1e-15);
+    // 2 variance = 0.5 is limited to 0.18: r'^2 = 0.27.
+    EXPECT_NEAR(godot_limiter_alpha2(0.3, Vec3<double>{1, 0, 0}, Vec3<double>{0, 0, 0}), 0.27 * 0.27, 1e-15);
+    EXPECT_EQ(godot_limiter_alpha2(0.95, Vec3<double>{1, 0, 0}, Vec3<double>{0, 0, 0}), 1.0);
+    EXPECT_NEAR(godot_limiter_alpha2(0.3, Vec3<double>{}, Vec3<double>{}), 0.0081, 1e-15);
+}
+
+TEST(EnginePeers, UnityGeometricAaAddsToASquaredWithTheThresholdSquared) {
+    const Vec3<double> dx{0.1, 0, 0}, dy{0, 0.2, 0};
+    // variance 0.1 x 0.05 = 0.005: a + 0.01.
+    EXPECT_NEAR(unity_geometric_aa_alpha2(0.01, dx, dy), 0.02, 1e-15);
+    // 2 variance = 0.2 is limited to 0.2^2 = 0.04.
+    EXPECT_NEAR(unity_geometric_aa_alpha2(0.01, Vec3<double>{1, 0, 0}, Vec3<double>{0, 0, 0}), 0.05, 1e-15);
+    EXPECT_EQ(unity_geometric_aa_alpha2(0.99, Vec3<double>{1, 0, 0}, Vec3<double>{0, 0, 0}), 1.0);
+}
+
+TEST(EnginePeers, ThreeJsAddsTheLargestDerivativeComponentToR) {
+    // max(|dx|, |dy|) = (0.1, 0.25, 0.05): 0.25 added to r = 0.3.
+    EXPECT_NEAR(threejs_geometry_roughness_alpha2(0.3, Vec3<double>{0.1, -0.25, 0}, Vec3<double>{0, 0.2, 0.05}),
+                0.55 * 0.55 * 0.55 * 0.55, 1e-15);
+    EXPECT_NEAR(threejs_geometry_roughness_alpha2(0.01, Vec3<double>{}, Vec3<double>{}), 7.5969140625e-06, 1e-18);
+    EXPECT_EQ(threejs_geometry_roughness_alpha2(0.9, Vec3<double>{0.25, 0, 0}, Vec3<double>{}), 1.0);
+}
+
+TEST(EnginePeers, BabylonRaisesRToTheSlopesCubeRoot) {
+    // max(|dx|^2, |dy|^2) = 0.04; 0.04^0.333 = 0.34238 > 0.3 (worked in double: a = 0.0137386452129849).
+    EXPECT_NEAR(babylon_specular_aa_alpha2(0.3, Vec3<double>{0.1, 0, 0}, Vec3<double>{0, 0.2, 0}), 0.013738645212984884,
+                1e-15);
+    EXPECT_NEAR(babylon_specular_aa_alpha2(0.5, Vec3<double>{0.1, 0, 0}, Vec3<double>{0, 0.2, 0}), 0.0625, 1e-15);
+    EXPECT_EQ(babylon_specular_aa_alpha2(0.3, Vec3<double>{2, 0, 0}, Vec3<double>{}), 1.0);
+}
+
 }  // namespace
 }  // namespace specbake

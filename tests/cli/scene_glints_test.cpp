@@ -122,11 +122,6 @@ TEST(SceneGlints, RebakeReusesTheCommittedDictionary) {
     fs::remove_all(dir);
 }
 
-bool gl_disabled() {
-    const char* v = std::getenv("SPECBAKE_NO_GL");
-    return v && std::string(v) == "1";
-}
-
 // The same glTF that plans and bakes above also verifies: its normal-mapped glint material gets every
 // glint candidate, LEAN rows included, next to the specular AA rows.
 TEST(SceneGlints, ExtensionAsksVerifyFollows) {

@@ -135,4 +135,10 @@ inline void write_test_model(const fs::path& path, bool sphere, double radius, d
         path, {.sphere = sphere, .size = radius, .rings = rings, .segments = segments, .roughness = roughness});
 }
 
+// SPECBAKE_NO_GL=1 turns the tests that render (verify, bench) into skips.
+inline bool gl_disabled() {
+    const char* v = std::getenv("SPECBAKE_NO_GL");
+    return v && std::string(v) == "1";
+}
+
 }  // namespace scene_test
