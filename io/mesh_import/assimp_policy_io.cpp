@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <cstring>
 #include <optional>
+#include <string>
+#include <unordered_map>
 
 namespace specbake::io {
 namespace fs = std::filesystem;
@@ -48,9 +50,17 @@ private:
 
     // Assimp names a referenced file by joining the asset's folder with the reference as written (an OBJ's
     // "mtllib ../x.mtl" arrives as "FOLDER/../x.mtl"), or by the reference alone; either way the name is
-    // taken relative to the asset's folder and resolved once.
+    // taken relative to the asset's folder and resolved once. Each name's answer is kept for the import:
+    // Assimp's FileSystemFilter asks Exists and Open for a dozen names derived from every reference, the
+    // same ones again for a reference repeated in the file.
     std::optional<fs::path> resolve(const char* file) const {
         if (!file || !*file) return std::nullopt;
+        const auto [known, added] = resolved_.try_emplace(file);
+        if (added) known->second = resolve_once(file);
+        return known->second;
+    }
+
+    std::optional<fs::path> resolve_once(const char* file) const {
         const fs::path full = absolute_normal(file);
         if (full == asset_) return fs::path(file);
         fs::path rel = full.lexically_relative(folder_);
@@ -63,6 +73,7 @@ private:
         return std::nullopt;
     }
 
+    mutable std::unordered_map<std::string, std::optional<fs::path>> resolved_;
     fs::path asset_, folder_, given_folder_;
     const InputPolicy& policy_;
     AssimpReads& reads_;
