@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 #include <unordered_map>
+#include <utility>
 
 namespace specbake::io {
 namespace fs = std::filesystem;
@@ -18,9 +19,9 @@ namespace {
 
 class PolicyIOSystem final : public Assimp::DefaultIOSystem {
 public:
-    PolicyIOSystem(const fs::path& asset, const InputPolicy& policy, AssimpReads& reads)
+    PolicyIOSystem(const fs::path& asset, const InputPolicy& policy, AssimpReads& reads, AssimpOpenCheck check)
         : asset_(absolute_normal(asset)), folder_(asset_.parent_path()), given_folder_(asset.parent_path()),
-          policy_(policy), reads_(reads) {}
+          policy_(policy), reads_(reads), check_(std::move(check)) {}
 
     bool Exists(const char* file) const override {
         const std::optional<fs::path> path = resolve(file);
@@ -34,14 +35,28 @@ public:
         if (!path) return nullptr;
         // A FIFO or device would block the importer (or never end): only regular files are opened.
         if (!check_regular_input(*path)) return nullptr;
+        const bool asset = absolute_normal(*path) == asset_;
+        if (check_) {
+            if (auto ok = check_(*path, asset); !ok) {
+                if (reads_.refused.empty())
+                    reads_.refused = asset ? ok.error().message : "referenced file '" + shown(*path) + "' refused: " +
+                                                                     ok.error().message;
+                return nullptr;
+            }
+        }
         Assimp::IOStream* stream = DefaultIOSystem::Open(path->c_str(), mode);
-        if (stream && absolute_normal(*path) != asset_ &&
-            std::find(reads_.files.begin(), reads_.files.end(), *path) == reads_.files.end())
+        if (stream && !asset && std::find(reads_.files.begin(), reads_.files.end(), *path) == reads_.files.end())
             reads_.files.push_back(*path);
         return stream;
     }
 
 private:
+    // A referenced file as named in a refusal: relative to the asset's folder.
+    std::string shown(const fs::path& p) const {
+        const fs::path rel = p.lexically_relative(given_folder_);
+        return (rel.empty() ? p : rel).generic_string();
+    }
+
     static fs::path absolute_normal(const fs::path& p) {
         std::error_code ec;
         const fs::path a = fs::absolute(p, ec);
@@ -77,12 +92,14 @@ private:
     fs::path asset_, folder_, given_folder_;
     const InputPolicy& policy_;
     AssimpReads& reads_;
+    AssimpOpenCheck check_;
 };
 
 }  // namespace
 
-Assimp::IOSystem* new_policy_io_system(const fs::path& asset, const InputPolicy& policy, AssimpReads& reads) {
-    return new PolicyIOSystem(asset, policy, reads);
+Assimp::IOSystem* new_policy_io_system(const fs::path& asset, const InputPolicy& policy, AssimpReads& reads,
+                                       AssimpOpenCheck check) {
+    return new PolicyIOSystem(asset, policy, reads, std::move(check));
 }
 
 }  // namespace specbake::io

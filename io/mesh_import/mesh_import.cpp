@@ -72,6 +72,96 @@ Result<void> check_ply_header(const std::string& path, const io::InputLimits& li
     return {};
 }
 
+// Where a line ends for Assimp's OBJ and MTL readers (its IsLineEnd).
+bool is_line_end(char c) { return c == '\n' || c == '\r' || c == '\0' || c == '\f'; }
+
+// Checks of an OBJ file before Assimp 5.2's OBJ reader parses it, on its lines as that reader forms them
+// (a '\\' before a line end joins the next line). Refused:
+// - a line that fills the reader's line buffer of min(file size, 16 MiB) bytes: the reader ends a line with
+//   '\n' but no NUL and reads a face's indices with atoi (strtol), so such a line (a file that is one face
+//   line) is read past the buffer's end as far as AddressSanitizer's string checks go. One line cannot hold
+//   a mesh (vertices and faces both).
+// - an mtllib naming the file itself (by its last path component, as Assimp's FileSystemFilter also finds
+//   it), or any mtllib in a file whose name ends in "mtl" (the reader's fallback library name): the file
+//   would be read as its own material library, which check_mtl_starts_with_newmtl cannot be asked about
+//   (the asset is opened more than once before the reader parses it).
+Result<void> check_obj_file(const std::filesystem::path& file) {
+    std::error_code ec;
+    const uint64_t size = std::filesystem::file_size(file, ec);
+    if (ec) return {};
+    const uint64_t buffer = std::min<uint64_t>(size, uint64_t(1) << 24);
+    const std::string self = file.filename().string();
+    const bool fallback_is_self = self.size() >= 3 && self.compare(self.size() - 3, 3, "mtl") == 0;
+    std::ifstream in(file, std::ios::binary);
+    std::string line;  // the current logical line, kept up to 4 KiB (enough for an mtllib name)
+    uint64_t run = 0, longest = 0;
+    bool joining = false;  // after '\\' + line end: skipping to the next '\n'
+    auto statement_names_self = [&]() {
+        const size_t first = line.find_first_not_of(" \t");
+        if (first == std::string::npos || line.compare(first, 6, "mtllib") != 0) return false;
+        if (line.size() > first + 6 && line[first + 6] != ' ' && line[first + 6] != '\t') return false;
+        if (fallback_is_self) return true;
+        const size_t begin = line.find_first_not_of(" \t", first + 6);
+        const size_t last = line.find_last_not_of(" \t");
+        if (begin == std::string::npos) return false;
+        const std::string name = line.substr(begin, last + 1 - begin);
+        const size_t slash = name.find_last_of("/\\");
+        return (slash == std::string::npos ? name : name.substr(slash + 1)) == self;
+    };
+    char prev = 0;
+    for (char block[65536]; in.read(block, sizeof block), in.gcount() > 0;) {
+        for (std::streamsize i = 0; i < in.gcount(); ++i) {
+            const char c = block[i];
+            if (joining) {
+                joining = c != '\n';
+            } else if (prev == '\\' && is_line_end(c)) {
+                joining = c != '\n';
+                line.pop_back();
+                run -= 1;
+            } else if (is_line_end(c)) {
+                if (statement_names_self())
+                    return make_error("the OBJ names itself (or its fallback material library) in mtllib");
+                line.clear();
+                run = 0;
+                prev = c;
+                continue;
+            } else {
+                if (line.size() < 4096) line += c;
+                longest = std::max(longest, ++run);
+            }
+            prev = c;
+        }
+    }
+    if (statement_names_self()) return make_error("the OBJ names itself (or its fallback material library) in mtllib");
+    if (buffer > 0 && longest + 1 >= buffer)
+        return make_error("an OBJ line of " + std::to_string(longest) +
+                          " bytes fills the whole file (or 16 MiB); a mesh needs vertex and face lines");
+    return {};
+}
+
+// Assimp 5.2's MTL reader writes each statement into its current material, which is null until the first
+// newmtl: a statement before it (Kd, Ns, map_Kd, ...) crashes the process (a write through a null
+// pointer). A material library is read only when every line before its first newmtl is blank or a comment.
+Result<void> check_mtl_starts_with_newmtl(const std::filesystem::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    std::string line;
+    size_t number = 1;  // lines counted by '\n'
+    char c = 0;
+    for (bool more = true; more;) {
+        while ((more = bool(in.get(c))) && !is_line_end(c)) line += c;
+        const size_t first = line.find_first_not_of(" \t");
+        if (first != std::string::npos && line[first] != '#') {
+            if (first == 0 && line.compare(0, 6, "newmtl") == 0 &&
+                (line.size() == 6 || line[6] == ' ' || line[6] == '\t'))
+                return {};
+            return make_error("line " + std::to_string(number) + " sets a material property before the first newmtl");
+        }
+        line.clear();
+        if (c == '\n') ++number;
+    }
+    return {};
+}
+
 ImportedMaterial read_material(const aiMaterial& m) {
     ImportedMaterial out;
     aiString name;
@@ -301,7 +391,15 @@ Result<ImportedScene> import_mesh(const std::string& path, const MeshImportOptio
     Assimp::Importer importer;
     // Every file Assimp opens (the asset, an OBJ's .mtl, a glTF's buffers) passes the path policy.
     io::AssimpReads reads;
-    importer.SetIOHandler(io::new_policy_io_system(path, policy, reads));
+    // The OBJ reader's own checks (check_obj_file, check_mtl_starts_with_newmtl) apply whenever Assimp runs
+    // it, whether chosen by the extension or by the content: every file it opens besides the asset is a
+    // material library. Assimp names the reader it runs in the property "importerIndex".
+    const size_t obj_reader = importer.GetImporterIndex("obj");
+    auto obj_checks = [&importer, obj_reader](const std::filesystem::path& file, bool asset) -> Result<void> {
+        if (obj_reader == size_t(-1) || importer.GetPropertyInteger("importerIndex", -1) != int(obj_reader)) return {};
+        return asset ? check_obj_file(file) : check_mtl_starts_with_newmtl(file);
+    };
+    importer.SetIOHandler(io::new_policy_io_system(path, policy, reads, obj_checks));
     importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
     unsigned flags = aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_ValidateDataStructure;
     const bool join = options.join == VertexJoin::Always || (options.join == VertexJoin::Auto && !is_gltf(path));
