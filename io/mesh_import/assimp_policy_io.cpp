@@ -17,6 +17,28 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// A stream of the asset: counts the asset's open streams, so that an opening of the asset while one is
+// open is known as a second reading (Assimp's OBJ reader keeps the OBJ open while it reads the material
+// libraries it names, and the OBJ can be one of them). Assimp deletes streams with or without Close.
+class CountedStream final : public Assimp::IOStream {
+public:
+    CountedStream(Assimp::IOStream* stream, int& open) : stream_(stream), open_(open) { ++open_; }
+    ~CountedStream() override {
+        --open_;
+        delete stream_;
+    }
+    size_t Read(void* buffer, size_t size, size_t count) override { return stream_->Read(buffer, size, count); }
+    size_t Write(const void* buffer, size_t size, size_t count) override { return stream_->Write(buffer, size, count); }
+    aiReturn Seek(size_t offset, aiOrigin origin) override { return stream_->Seek(offset, origin); }
+    size_t Tell() const override { return stream_->Tell(); }
+    size_t FileSize() const override { return stream_->FileSize(); }
+    void Flush() override { stream_->Flush(); }
+
+private:
+    Assimp::IOStream* stream_;
+    int& open_;
+};
+
 class PolicyIOSystem final : public Assimp::DefaultIOSystem {
 public:
     PolicyIOSystem(const fs::path& asset, const InputPolicy& policy, AssimpReads& reads, AssimpOpenCheck check)
@@ -35,7 +57,8 @@ public:
         if (!path) return nullptr;
         // A FIFO or device would block the importer (or never end): only regular files are opened.
         if (!check_regular_input(*path)) return nullptr;
-        const bool asset = absolute_normal(*path) == asset_;
+        const bool is_asset_file = absolute_normal(*path) == asset_;
+        const bool asset = is_asset_file && asset_streams_open_ == 0;  // else the asset read again, as a reference
         if (check_) {
             if (auto ok = check_(*path, asset); !ok) {
                 if (reads_.refused.empty())
@@ -45,8 +68,9 @@ public:
             }
         }
         Assimp::IOStream* stream = DefaultIOSystem::Open(path->c_str(), mode);
-        if (stream && !asset && std::find(reads_.files.begin(), reads_.files.end(), *path) == reads_.files.end())
+        if (stream && !is_asset_file && std::find(reads_.files.begin(), reads_.files.end(), *path) == reads_.files.end())
             reads_.files.push_back(*path);
+        if (stream && is_asset_file) return new CountedStream(stream, asset_streams_open_);
         return stream;
     }
 
@@ -93,6 +117,7 @@ private:
     const InputPolicy& policy_;
     AssimpReads& reads_;
     AssimpOpenCheck check_;
+    int asset_streams_open_ = 0;
 };
 
 }  // namespace

@@ -22,8 +22,9 @@ struct AssimpReads {
     std::string refused;  // "referenced file 'REF' refused: WHY", the first refusal; empty when none
 };
 
-// Called before a file is opened for reading (`asset`: the file being imported, else a file it references);
-// an error refuses the file like the path policy does.
+// Called before a file is opened for reading (`asset`: the file being imported, opened while no stream of
+// it is open; else a file it references, which may be the asset itself opened again while it is being
+// read); an error refuses the file like the path policy does.
 using AssimpOpenCheck = std::function<Result<void>(const std::filesystem::path& file, bool asset)>;
 
 // A new IOSystem for Assimp::Importer::SetIOHandler (the importer owns and deletes it). Reads only: a name

@@ -75,64 +75,23 @@ Result<void> check_ply_header(const std::string& path, const io::InputLimits& li
 // Where a line ends for Assimp's OBJ and MTL readers (its IsLineEnd).
 bool is_line_end(char c) { return c == '\n' || c == '\r' || c == '\0' || c == '\f'; }
 
-// Checks of an OBJ file before Assimp 5.2's OBJ reader parses it, on its lines as that reader forms them
-// (a '\\' before a line end joins the next line). Refused:
-// - a line that fills the reader's line buffer of min(file size, 16 MiB) bytes: the reader ends a line with
-//   '\n' but no NUL and reads a face's indices with atoi (strtol), so such a line (a file that is one face
-//   line) is read past the buffer's end as far as AddressSanitizer's string checks go. One line cannot hold
-//   a mesh (vertices and faces both).
-// - an mtllib naming the file itself (by its last path component, as Assimp's FileSystemFilter also finds
-//   it), or any mtllib in a file whose name ends in "mtl" (the reader's fallback library name): the file
-//   would be read as its own material library, which check_mtl_starts_with_newmtl cannot be asked about
-//   (the asset is opened more than once before the reader parses it).
+// Assimp 5.2's OBJ reader copies each line into a buffer of min(file size, 16 MiB) bytes, ends it with
+// '\n' but no NUL, and reads a face's indices with atoi (strtol) from that buffer: a line that fills the
+// buffer (a file that is one face line) is read past the buffer's end as far as AddressSanitizer's string
+// checks go. One line cannot hold a mesh (vertices and faces both): such a file is refused.
 Result<void> check_obj_file(const std::filesystem::path& file) {
     std::error_code ec;
     const uint64_t size = std::filesystem::file_size(file, ec);
     if (ec) return {};
     const uint64_t buffer = std::min<uint64_t>(size, uint64_t(1) << 24);
-    const std::string self = file.filename().string();
-    const bool fallback_is_self = self.size() >= 3 && self.compare(self.size() - 3, 3, "mtl") == 0;
     std::ifstream in(file, std::ios::binary);
-    std::string line;  // the current logical line, kept up to 4 KiB (enough for an mtllib name)
     uint64_t run = 0, longest = 0;
-    bool joining = false;  // after '\\' + line end: skipping to the next '\n'
-    auto statement_names_self = [&]() {
-        const size_t first = line.find_first_not_of(" \t");
-        if (first == std::string::npos || line.compare(first, 6, "mtllib") != 0) return false;
-        if (line.size() > first + 6 && line[first + 6] != ' ' && line[first + 6] != '\t') return false;
-        if (fallback_is_self) return true;
-        const size_t begin = line.find_first_not_of(" \t", first + 6);
-        const size_t last = line.find_last_not_of(" \t");
-        if (begin == std::string::npos) return false;
-        const std::string name = line.substr(begin, last + 1 - begin);
-        const size_t slash = name.find_last_of("/\\");
-        return (slash == std::string::npos ? name : name.substr(slash + 1)) == self;
-    };
-    char prev = 0;
     for (char block[65536]; in.read(block, sizeof block), in.gcount() > 0;) {
         for (std::streamsize i = 0; i < in.gcount(); ++i) {
-            const char c = block[i];
-            if (joining) {
-                joining = c != '\n';
-            } else if (prev == '\\' && is_line_end(c)) {
-                joining = c != '\n';
-                line.pop_back();
-                run -= 1;
-            } else if (is_line_end(c)) {
-                if (statement_names_self())
-                    return make_error("the OBJ names itself (or its fallback material library) in mtllib");
-                line.clear();
-                run = 0;
-                prev = c;
-                continue;
-            } else {
-                if (line.size() < 4096) line += c;
-                longest = std::max(longest, ++run);
-            }
-            prev = c;
+            run = is_line_end(block[i]) ? 0 : run + 1;
+            longest = std::max(longest, run);
         }
     }
-    if (statement_names_self()) return make_error("the OBJ names itself (or its fallback material library) in mtllib");
     if (buffer > 0 && longest + 1 >= buffer)
         return make_error("an OBJ line of " + std::to_string(longest) +
                           " bytes fills the whole file (or 16 MiB); a mesh needs vertex and face lines");
@@ -392,8 +351,9 @@ Result<ImportedScene> import_mesh(const std::string& path, const MeshImportOptio
     // Every file Assimp opens (the asset, an OBJ's .mtl, a glTF's buffers) passes the path policy.
     io::AssimpReads reads;
     // The OBJ reader's own checks (check_obj_file, check_mtl_starts_with_newmtl) apply whenever Assimp runs
-    // it, whether chosen by the extension or by the content: every file it opens besides the asset is a
-    // material library. Assimp names the reader it runs in the property "importerIndex".
+    // it, whether chosen by the extension or by the content: every file it opens besides the asset, and the
+    // asset opened again while it reads it (an mtllib naming the OBJ, or Assimp's guesses from the name
+    // landing on it), is a material library. Assimp names the reader it runs in the property "importerIndex".
     const size_t obj_reader = importer.GetImporterIndex("obj");
     auto obj_checks = [&importer, obj_reader](const std::filesystem::path& file, bool asset) -> Result<void> {
         if (obj_reader == size_t(-1) || importer.GetPropertyInteger("importerIndex", -1) != int(obj_reader)) return {};
