@@ -95,6 +95,22 @@ Result<void> check_obj_file(const std::filesystem::path& file) {
     if (buffer > 0 && longest + 1 >= buffer)
         return make_error("an OBJ line of " + std::to_string(longest) +
                           " bytes fills the whole file (or 16 MiB); a mesh needs vertex and face lines");
+    // Assimp 5.2's file-name cleanup (FileSystemFilter) treats "://" in a name as a URL scheme and erases a
+    // negative-length range before it when separators precede it (AddressSanitizer: negative-size-param in
+    // std::string::erase). A material library is a file beside the OBJ, never a URL: such an mtllib is refused.
+    in.clear();
+    in.seekg(0);
+    std::string line;
+    size_t number = 1;
+    char c = 0;
+    for (bool more = true; more;) {
+        while ((more = bool(in.get(c))) && !is_line_end(c)) line += c;
+        const size_t first = line.find_first_not_of(" \t");
+        if (first != std::string::npos && line.compare(first, 6, "mtllib") == 0 && line.find("://", first) != std::string::npos)
+            return make_error("line " + std::to_string(number) + ": mtllib names a URL ('://'); a material library is a file");
+        line.clear();
+        if (c == '\n') ++number;
+    }
     return {};
 }
 

@@ -286,5 +286,21 @@ TEST(MeshImport, ObjFileOfOneLineIsRefused) {
     fs::remove(path);
 }
 
+// An mtllib naming a URL ("://") is refused before Assimp's file-name cleanup sees it (it erased a negative
+// length on such names); an ordinary mtllib beside it still imports.
+TEST(MeshImport, ObjMaterialLibraryNamedAsAUrlIsRefused) {
+    const fs::path dir = fs::temp_directory_path() / ("specbake_import_url_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const std::string mesh = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    std::ofstream(dir / "url.obj", std::ios::binary) << "mtllib no//////://////x.mtl\n" << mesh;
+    Result<ImportedScene> bad = import_mesh((dir / "url.obj").string());
+    ASSERT_FALSE(bad.ok());
+    EXPECT_NE(bad.error().message.find("url.obj: line 1: mtllib names a URL"), std::string::npos) << bad.error().message;
+    std::ofstream(dir / "m.mtl", std::ios::binary) << "newmtl a\nKd 1 1 1\n";
+    std::ofstream(dir / "file.obj", std::ios::binary) << "mtllib m.mtl\n" << mesh;
+    EXPECT_TRUE(import_mesh((dir / "file.obj").string()).ok());
+    fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace specbake
