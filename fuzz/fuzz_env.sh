@@ -30,7 +30,7 @@ fuzz_ci_runs() {
     gltf) echo 8000 ;;
     image) echo 3000 ;;
     container) echo 200000 ;;
-    mesh) echo 200 ;;
+    mesh) echo 4000 ;;
     config) echo 15000 ;;
     filter) echo 400000 ;;
   esac

@@ -72,6 +72,71 @@ Result<void> check_ply_header(const std::string& path, const io::InputLimits& li
     return {};
 }
 
+// Where a line ends for Assimp's OBJ and MTL readers (its IsLineEnd).
+bool is_line_end(char c) { return c == '\n' || c == '\r' || c == '\0' || c == '\f'; }
+
+// Assimp 5.2's OBJ reader copies each line into a buffer of min(file size, 16 MiB) bytes, ends it with
+// '\n' but no NUL, and reads a face's indices with atoi (strtol) from that buffer: a line that fills the
+// buffer (a file that is one face line) is read past the buffer's end as far as AddressSanitizer's string
+// checks go. One line cannot hold a mesh (vertices and faces both): such a file is refused.
+Result<void> check_obj_file(const std::filesystem::path& file) {
+    std::error_code ec;
+    const uint64_t size = std::filesystem::file_size(file, ec);
+    if (ec) return {};
+    const uint64_t buffer = std::min<uint64_t>(size, uint64_t(1) << 24);
+    std::ifstream in(file, std::ios::binary);
+    uint64_t run = 0, longest = 0;
+    for (char block[65536]; in.read(block, sizeof block), in.gcount() > 0;) {
+        for (std::streamsize i = 0; i < in.gcount(); ++i) {
+            run = is_line_end(block[i]) ? 0 : run + 1;
+            longest = std::max(longest, run);
+        }
+    }
+    if (buffer > 0 && longest + 1 >= buffer)
+        return make_error("an OBJ line of " + std::to_string(longest) +
+                          " bytes fills the whole file (or 16 MiB); a mesh needs vertex and face lines");
+    // Assimp 5.2's file-name cleanup (FileSystemFilter) treats "://" in a name as a URL scheme and erases a
+    // negative-length range before it when separators precede it (AddressSanitizer: negative-size-param in
+    // std::string::erase). A material library is a file beside the OBJ, never a URL: such an mtllib is refused.
+    in.clear();
+    in.seekg(0);
+    std::string line;
+    size_t number = 1;
+    char c = 0;
+    for (bool more = true; more;) {
+        while ((more = bool(in.get(c))) && !is_line_end(c)) line += c;
+        const size_t first = line.find_first_not_of(" \t");
+        if (first != std::string::npos && line.compare(first, 6, "mtllib") == 0 && line.find("://", first) != std::string::npos)
+            return make_error("line " + std::to_string(number) + ": mtllib names a URL ('://'); a material library is a file");
+        line.clear();
+        if (c == '\n') ++number;
+    }
+    return {};
+}
+
+// Assimp 5.2's MTL reader writes each statement into its current material, which is null until the first
+// newmtl: a statement before it (Kd, Ns, map_Kd, ...) crashes the process (a write through a null
+// pointer). A material library is read only when every line before its first newmtl is blank or a comment.
+Result<void> check_mtl_starts_with_newmtl(const std::filesystem::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    std::string line;
+    size_t number = 1;  // lines counted by '\n'
+    char c = 0;
+    for (bool more = true; more;) {
+        while ((more = bool(in.get(c))) && !is_line_end(c)) line += c;
+        const size_t first = line.find_first_not_of(" \t");
+        if (first != std::string::npos && line[first] != '#') {
+            if (first == 0 && line.compare(0, 6, "newmtl") == 0 &&
+                (line.size() == 6 || line[6] == ' ' || line[6] == '\t'))
+                return {};
+            return make_error("line " + std::to_string(number) + " sets a material property before the first newmtl");
+        }
+        line.clear();
+        if (c == '\n') ++number;
+    }
+    return {};
+}
+
 ImportedMaterial read_material(const aiMaterial& m) {
     ImportedMaterial out;
     aiString name;
@@ -301,7 +366,16 @@ Result<ImportedScene> import_mesh(const std::string& path, const MeshImportOptio
     Assimp::Importer importer;
     // Every file Assimp opens (the asset, an OBJ's .mtl, a glTF's buffers) passes the path policy.
     io::AssimpReads reads;
-    importer.SetIOHandler(io::new_policy_io_system(path, policy, reads));
+    // The OBJ reader's own checks (check_obj_file, check_mtl_starts_with_newmtl) apply whenever Assimp runs
+    // it, whether chosen by the extension or by the content: every file it opens besides the asset, and the
+    // asset opened again while it reads it (an mtllib naming the OBJ, or Assimp's guesses from the name
+    // landing on it), is a material library. Assimp names the reader it runs in the property "importerIndex".
+    const size_t obj_reader = importer.GetImporterIndex("obj");
+    auto obj_checks = [&importer, obj_reader](const std::filesystem::path& file, bool asset) -> Result<void> {
+        if (obj_reader == size_t(-1) || importer.GetPropertyInteger("importerIndex", -1) != int(obj_reader)) return {};
+        return asset ? check_obj_file(file) : check_mtl_starts_with_newmtl(file);
+    };
+    importer.SetIOHandler(io::new_policy_io_system(path, policy, reads, obj_checks));
     importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
     unsigned flags = aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_ValidateDataStructure;
     const bool join = options.join == VertexJoin::Always || (options.join == VertexJoin::Auto && !is_gltf(path));

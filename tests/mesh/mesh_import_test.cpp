@@ -5,6 +5,7 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -217,6 +218,88 @@ TEST(MeshImport, PlyWithoutEndHeaderLineIsRefused) {
         ASSERT_TRUE(good.ok()) << good.error().message;
         EXPECT_EQ(good->meshes.at(0).triangle_count(), 1u);
     }
+}
+
+// Found by fuzz/fuzz_mesh.cpp (fuzz/regressions/mesh/obj-mtllib-*): Assimp 5.2's MTL reader writes a
+// statement before the first newmtl through a null material, and the process dies (SEGV). import_mesh
+// refuses such a material library, named by the OBJ, by its extension or its content, or the OBJ itself.
+// On the old code this test crashes.
+TEST(MeshImport, MaterialLibraryWithAStatementBeforeNewmtlIsRefused) {
+    const fs::path dir = fs::temp_directory_path() / ("specbake_import_mtl_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const std::string triangle = "usemtl m\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    std::ofstream(dir / "early.mtl", std::ios::binary) << "# exported\n\nKd 1 0 0\nnewmtl m\nNs 30\n";
+    std::ofstream(dir / "good.mtl", std::ios::binary) << "# exported\n  \t\n\r\nnewmtl m\nNs 30\n";
+    for (const std::string name : {"early.obj", "early.unknownext"}) {
+        std::ofstream(dir / name, std::ios::binary) << "mtllib early.mtl\n" << triangle;
+        Result<ImportedScene> bad = import_mesh((dir / name).string());
+        ASSERT_FALSE(bad.ok()) << name;
+        EXPECT_NE(bad.error().message.find(name + ": referenced file 'early.mtl' refused: line 3 sets a material "
+                                                  "property before the first newmtl"),
+                  std::string::npos)
+            << bad.error().message;
+    }
+    // An OBJ that names itself as its material library (directly, as the fallback library name of a file
+    // named *.mtl, or through the names Assimp's FileSystemFilter derives from a missing one: it tries
+    // FOLDER/ + as many characters after each '/' as the last part has, plus one) is read as one while it
+    // is being read.
+    for (const auto& [name, text] :
+         {std::pair<std::string, std::string>{"self.obj", "mtllib self.obj\n"},
+          {"self.mtl", "mtllib missing.mtl\n"},
+          {"mangled.obj", "mtllib mangled.objABCDE/1234567890\nmap_Kd x.png\n"}}) {
+        std::ofstream(dir / name, std::ios::binary) << text << triangle;
+        Result<ImportedScene> self = import_mesh((dir / name).string());
+        ASSERT_FALSE(self.ok()) << text;
+        EXPECT_NE(self.error().message.find(name + ": referenced file '" + name +
+                                            "' refused: line 1 sets a material property before the first newmtl"),
+                  std::string::npos)
+            << self.error().message;
+    }
+    // Blank and comment lines before newmtl are fine, whatever the extension of the OBJ.
+    for (const std::string name : {"good.obj", "good.unknownext"}) {
+        std::ofstream(dir / name, std::ios::binary) << "mtllib good.mtl\n" << triangle;
+        Result<ImportedScene> good = import_mesh((dir / name).string());
+        ASSERT_TRUE(good.ok()) << good.error().message;
+        EXPECT_EQ(good->meshes.at(0).triangle_count(), 1u);
+        const int material = good->meshes[0].material;
+        ASSERT_GE(material, 0) << name;
+        EXPECT_EQ(good->materials.at(size_t(material)).name, "m") << name;
+        EXPECT_FLOAT_EQ(good->materials[size_t(material)].roughness_factor, float(std::pow(2.0 / 32.0, 0.25)))
+            << name;  // Ns 30, read from good.mtl
+    }
+    fs::remove_all(dir);
+}
+
+// Found by fuzz/fuzz_mesh.cpp (fuzz/regressions/mesh/obj-one-line-face-strtol-*): Assimp 5.2's OBJ reader
+// reads the indices of a line that fills its line buffer with atoi past the buffer's end (no NUL after
+// it), which the sanitizers' string checks report. One line cannot hold a mesh: such a file is refused.
+TEST(MeshImport, ObjFileOfOneLineIsRefused) {
+    const fs::path path = fs::temp_directory_path() / ("specbake_import_one_line_" + std::to_string(::getpid()) + ".obj");
+    for (const std::string text : {"f 1 2 3\n", "l 1 2", "p 1\n"}) {
+        std::ofstream(path, std::ios::binary) << text;
+        Result<ImportedScene> bad = import_mesh(path.string());
+        ASSERT_FALSE(bad.ok()) << text;
+        EXPECT_NE(bad.error().message.find(path.filename().string() + ": an OBJ line of "), std::string::npos)
+            << bad.error().message;
+        EXPECT_NE(bad.error().message.find("fills the whole file"), std::string::npos) << bad.error().message;
+    }
+    fs::remove(path);
+}
+
+// An mtllib naming a URL ("://") is refused before Assimp's file-name cleanup sees it (it erased a negative
+// length on such names); an ordinary mtllib beside it still imports.
+TEST(MeshImport, ObjMaterialLibraryNamedAsAUrlIsRefused) {
+    const fs::path dir = fs::temp_directory_path() / ("specbake_import_url_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const std::string mesh = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    std::ofstream(dir / "url.obj", std::ios::binary) << "mtllib no//////://////x.mtl\n" << mesh;
+    Result<ImportedScene> bad = import_mesh((dir / "url.obj").string());
+    ASSERT_FALSE(bad.ok());
+    EXPECT_NE(bad.error().message.find("url.obj: line 1: mtllib names a URL"), std::string::npos) << bad.error().message;
+    std::ofstream(dir / "m.mtl", std::ios::binary) << "newmtl a\nKd 1 1 1\n";
+    std::ofstream(dir / "file.obj", std::ios::binary) << "mtllib m.mtl\n" << mesh;
+    EXPECT_TRUE(import_mesh((dir / "file.obj").string()).ok());
+    fs::remove_all(dir);
 }
 
 }  // namespace
