@@ -66,8 +66,8 @@ struct MeshImportOptions {
 // header's counts before Assimp parses, the others right after import). Files Assimp 5.2's OBJ reader
 // cannot read safely are refused before it parses them: a material library with a statement before its
 // first newmtl, an OBJ naming itself as its material library, an OBJ of one line, an mtllib naming a URL
-// ("://"). The default material
-// Assimp appends (for glTF always) is removed: primitives without a material in the file get -1.
+// ("://"). The default material Assimp appends (for glTF always) is removed: primitives without a
+// material in the file get -1.
 Result<ImportedScene> import_mesh(const std::string& path, const MeshImportOptions& options = {},
                                   const io::InputPolicy& policy = {});
 
