@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace specbake {
@@ -31,6 +33,12 @@ SummedArea summed_area(int w, int h, int channels, F value) {
             }
         }
     return s;
+}
+
+// The texels [first, last) of a map `full` texels wide under texel `i` of a level `n` texels wide (at least one).
+std::pair<int, int> under(int i, int n, int full) {
+    const int first = int(int64_t(i) * full / n);
+    return {first, std::max(first + 1, int(int64_t(i + 1) * full / n))};
 }
 
 }  // namespace
@@ -77,14 +85,13 @@ Result<MipChain> bake_peer_roughness(const Image& normal, const Image* roughness
                 double r = roughness_value;
                 if (roughness) {
                     // The roughness map's own texels under the same uv rectangle (at least one).
-                    const int rw = roughness->width, rh = roughness->height;
-                    const int x0 = int(int64_t(x) * rw / w), x1 = std::max(x0 + 1, int(int64_t(x + 1) * rw / w));
-                    const int y0 = int(int64_t(y) * rh / h), y1 = std::max(y0 + 1, int(int64_t(y + 1) * rh / h));
+                    const auto [x0, x1] = under(x, w, roughness->width);
+                    const auto [y0, y1] = under(y, h, roughness->height);
                     r = rough.box(x0, y0, x1, y1, 0) / double((x1 - x0) * (y1 - y0));
                 }
                 if (k > 0) {
-                    const int x0 = int(int64_t(x) * W / w), x1 = std::max(x0 + 1, int(int64_t(x + 1) * W / w));
-                    const int y0 = int(int64_t(y) * H / h), y1 = std::max(y0 + 1, int(int64_t(y + 1) * H / h));
+                    const auto [x0, x1] = under(x, w, W);
+                    const auto [y0, y1] = under(y, h, H);
                     const double count = double((x1 - x0) * (y1 - y0));
                     double m[3];
                     for (int c = 0; c < 3; ++c) m[c] = normals.box(x0, y0, x1, y1, c) / count;

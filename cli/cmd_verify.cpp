@@ -107,15 +107,7 @@ int run_verify_command(const VerifyCommandOptions& o) {
         // the scene has both).
         const std::vector<StripTile> tiles = strip_tiles(report->candidates, false);
         const std::vector<StripTile> glint_tiles = strip_tiles(report->candidates, true);
-        const CandidateReport* none = nullptr;
-        const CandidateReport* fallback = nullptr;
-        for (const CandidateReport& c : report->candidates) {
-            if (c.name == "none") none = &c;
-            if (c.name == "default") fallback = &c;
-        }
-        StripHarm harm;
-        if (none && fallback)
-            harm = {"default - none", &fallback->pixel_temporal_error, &none->pixel_temporal_error};
+        const StripHarm harm = default_strip_harm(report->candidates);
         std::filesystem::path glint_strip = o.strip;
         if (!tiles.empty()) {
             glint_strip.replace_filename(glint_strip.stem().string() + "-glints" + glint_strip.extension().string());

@@ -420,15 +420,7 @@ Result<void> write_bench_outputs(const BenchReport& r, const std::filesystem::pa
         for (const bool glint : {false, true}) {
             const SimImage& gt = glint ? s.glint_ground_truth : s.ground_truth;
             if (gt.empty()) continue;
-            const CandidateReport* none = nullptr;
-            const CandidateReport* fallback = nullptr;
-            for (const CandidateReport& c : s.candidates) {
-                if (c.name == "none") none = &c;
-                if (c.name == "default") fallback = &c;
-            }
-            StripHarm harm;
-            if (!glint && none && fallback)
-                harm = {"default - none", &fallback->pixel_temporal_error, &none->pixel_temporal_error};
+            const StripHarm harm = glint ? StripHarm{} : default_strip_harm(s.candidates);
             const auto path = dir / "strips" / (stem + (glint ? "-glints.png" : ".png"));
             if (auto w = write_strip_png(make_strip(gt, strip_tiles(s.candidates, glint), &harm), path); !w) return w;
         }

@@ -87,6 +87,28 @@ void heat(float v, float* rgb) {
     rgb[2] = std::clamp(v - 2.0f, 0.0f, 1.0f);
 }
 
+double finite_mean(const std::vector<float>& v) {
+    double sum = 0;
+    long long n = 0;
+    for (float x : v)
+        if (std::isfinite(x)) sum += x, ++n;
+    return n > 0 ? sum / double(n) : 0.0;
+}
+
+// A harm-map pixel: the candidate's per-pixel measure `c` minus the baseline's `b`, divided by `scale`,
+// over `dim` (a dim copy of the ground truth's display value): red where larger, blue where smaller. Pixels
+// either does not score stay black.
+void harm_pixel(float c, float b, double scale, float dim, float* rgb) {
+    if (!std::isfinite(c) || !std::isfinite(b)) {
+        std::fill_n(rgb, 3, 0.0f);
+        return;
+    }
+    const float d = float((double(c) - double(b)) / scale);
+    rgb[0] = std::clamp(dim + std::max(d, 0.0f) * (1.0f - dim), 0.0f, 1.0f);
+    rgb[1] = dim;
+    rgb[2] = std::clamp(dim + std::max(-d, 0.0f) * (1.0f - dim), 0.0f, 1.0f);
+}
+
 }  // namespace
 
 namespace {
@@ -159,6 +181,17 @@ std::vector<StripTile> strip_tiles(const std::vector<CandidateReport>& candidate
     return tiles;
 }
 
+StripHarm default_strip_harm(const std::vector<CandidateReport>& candidates) {
+    const CandidateReport* none = nullptr;
+    const CandidateReport* fallback = nullptr;
+    for (const CandidateReport& c : candidates) {
+        if (c.name == "none") none = &c;
+        if (c.name == "default") fallback = &c;
+    }
+    if (!none || !fallback) return {};
+    return {"default - none", &fallback->pixel_temporal_error, &none->pixel_temporal_error};
+}
+
 Image make_strip(const SimImage& gt, const std::vector<StripTile>& candidates, const StripHarm* harm) {
     const Crop crop = object_crop(gt);
     // Every image pixel drawn as a zoom x zoom block, the crop about 320 pixels across, so single-pixel
@@ -205,23 +238,13 @@ Image make_strip(const SimImage& gt, const std::vector<StripTile>& candidates, c
         const int cell = cells - 1;
         const auto [x0, y0] = origin(cell);
         label(cell, harm->label + " t-err tm", "red: more than it, blue: less");
-        double sum = 0;
-        long long n = 0;
-        for (float v : *harm->baseline)
-            if (std::isfinite(v)) sum += v, ++n;
-        const double scale = 2.0 * std::max(n > 0 ? sum / double(n) : 0.0, 1e-9);
+        const double scale = 2.0 * std::max(finite_mean(*harm->baseline), 1e-9);
         for (int y = 0; y < h; ++y)
             for (int x = 0; x < w; ++x) {
                 const int px = crop.x0 + x / zoom, py = crop.y0 + y / zoom;
                 const size_t i = size_t(py) * size_t(gt.width) + size_t(px);
-                float* o = strip.texel(x0 + x, y0 + kLabelHeight + y);
-                const float cv = (*harm->candidate)[i], bv = (*harm->baseline)[i];
-                if (!std::isfinite(cv) || !std::isfinite(bv)) continue;
-                const float g = 0.3f * srgb(tone(gt.texel(px, py)[0]));
-                const float d = float((double(cv) - double(bv)) / scale);
-                o[0] = std::clamp(g + std::max(d, 0.0f) * (1.0f - g), 0.0f, 1.0f);
-                o[1] = g;
-                o[2] = std::clamp(g + std::max(-d, 0.0f) * (1.0f - g), 0.0f, 1.0f);
+                harm_pixel((*harm->candidate)[i], (*harm->baseline)[i], scale, 0.3f * srgb(tone(gt.texel(px, py)[0])),
+                           strip.texel(x0 + x, y0 + kLabelHeight + y));
             }
     }
     return strip;
@@ -250,14 +273,6 @@ HarmSummary harm_summary(const std::vector<float>& c, const std::vector<float>& 
         h.edge_excess /= base;
     }
     return h;
-}
-
-double finite_mean(const std::vector<float>& v) {
-    double sum = 0;
-    long long n = 0;
-    for (float x : v)
-        if (std::isfinite(x)) sum += x, ++n;
-    return n > 0 ? sum / double(n) : 0.0;
 }
 
 }  // namespace
@@ -307,17 +322,8 @@ Image make_harm_map(const SimImage& gt, const HarmTile& baseline, const std::vec
                 for (int x = 0; x < w; ++x) {
                     const int px = x_lo + x / zoom, py = y_lo + y / zoom;
                     const size_t i = size_t(py) * gt.width + size_t(px);
-                    float* o = map.texel(x0 + x, row + kLabelHeight + y);
-                    const float cv = (*mine[m])[i], bv = (*base[m])[i];
-                    if (!std::isfinite(cv) || !std::isfinite(bv)) {
-                        std::fill_n(o, 3, 0.0f);
-                        continue;
-                    }
-                    const float g = 0.3f * srgb(tone(gt.texel(px, py)[0]));
-                    const float d = float((double(cv) - double(bv)) / scale[m]);
-                    o[0] = std::clamp(g + std::max(d, 0.0f) * (1.0f - g), 0.0f, 1.0f);
-                    o[1] = g;
-                    o[2] = std::clamp(g + std::max(-d, 0.0f) * (1.0f - g), 0.0f, 1.0f);
+                    harm_pixel((*mine[m])[i], (*base[m])[i], scale[m], 0.3f * srgb(tone(gt.texel(px, py)[0])),
+                               map.texel(x0 + x, row + kLabelHeight + y));
                 }
         }
         if (summaries)

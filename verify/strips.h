@@ -37,6 +37,10 @@ struct StripHarm {
 std::vector<StripTile> strip_tiles(const std::vector<CandidateReport>& candidates, bool glint, int best = 3,
                                    bool all = false);
 
+// The default's harm against no filtering from a scene's candidates (empty when either is missing or kept
+// no per-pixel maps: VerifyOptions::pixel_maps).
+StripHarm default_strip_harm(const std::vector<CandidateReport>& candidates);
+
 // The strip as an RGB image in [0, 1] (sRGB-encoded for display): a grid of at most four columns, the
 // ground truth first, each tile cropped to the object (4 pixels of margin) and magnified to about 320
 // pixels, its label and caption above it and its error map below; with `harm`, a last cell with the
