@@ -770,7 +770,7 @@ SPECAA_FLOAT3 specaa_pixel_kernel_matrix(SpecaaSurface s) {
 #if defined(SPECAA_NO_PIXEL_KERNEL)
     return SPECAA_FLOAT3(0.0, 0.0, 0.0);
 #else
-#if defined(SPECAA_USE_CURVATURE)
+#if defined(SPECAA_USE_CURVATURE) && !defined(SPECAA_PIXEL_KERNEL_MIN)
     SPECAA_FLOAT4 footprint;
     bool usable = specaa_curvature_footprint(s, footprint);
     SPECAA_FLOAT3 K = specaa_curvature_kernel(s.curvature, footprint);
@@ -783,6 +783,13 @@ SPECAA_FLOAT3 specaa_pixel_kernel_matrix(SpecaaSurface s) {
                          max(specaa_magnitude_bits3(dnV), max(specaa_magnitude_bits3(t), specaa_magnitude_bits3(b))));
     bool usable = specaa_max_component(m) < SPECAA_NOT_FINITE;
     SPECAA_FLOAT3 K = specaa_kernel_matrix(SPECAA_FLOAT2(dot(dnU, t), dot(dnU, b)), SPECAA_FLOAT2(dot(dnV, t), dot(dnV, b)));
+#if defined(SPECAA_USE_CURVATURE) && defined(SPECAA_PIXEL_KERNEL_MIN)
+    // Diagnostic: the smaller (by trace) of the quad-derivative kernel and the vertex-curvature kernel.
+    SPECAA_FLOAT4 footprint;
+    bool usableCurvature = specaa_curvature_footprint(s, footprint);
+    SPECAA_FLOAT3 Kc = specaa_curvature_kernel(s.curvature, footprint);
+    K = SPECAA_SELECT3(usableCurvature && Kc.x + Kc.y < K.x + K.y, Kc, K);
+#endif
 #endif
     float lmax = specaa_sym_max_eigenvalue(K);
     SPECAA_FLOAT3 clamped = SPECAA_SELECT3(lmax > SPECAA_KAPPA, specaa_sym_clamp_eigenvalues(K, SPECAA_KAPPA), K);
