@@ -925,7 +925,17 @@ float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, SpecaaSurface s) {
 #elif defined(SPECAA_BLEND_FROM_BAKED_SPREAD)
     spread = specaa_baked_kernel_matrix(s);
 #endif
+#if defined(SPECAA_BLEND_FROM_MINOR_AXIS)
+    // Diagnostic: the baked spread's major axis and the rest's minor one (a spread along one direction, a
+    // rim's arc of normals, keeps the convolution; one in every direction, geometry within the footprint,
+    // takes GGX(A)).
+    SPECAA_FLOAT3 bakedSpread = specaa_baked_kernel_matrix(s);
+    SPECAA_FLOAT3 rest = spread - bakedSpread;
+    float restMinor = 0.5 * (rest.x + rest.y) - sqrt(0.25 * (rest.x - rest.y) * (rest.x - rest.y) + rest.z * rest.z);
+    float w = SPECAA_SATURATE(lod) * SPECAA_SATURATE(SPECAA_GGX_SPREAD * max(specaa_sym_max_eigenvalue(bakedSpread), restMinor));
+#else
     float w = SPECAA_SATURATE(lod) * SPECAA_SATURATE(SPECAA_GGX_SPREAD * specaa_sym_max_eigenvalue(spread));
+#endif
 #else
     float w = 0.0;
 #endif
