@@ -1,6 +1,7 @@
 // The page browser_check.mjs opens for WGSL jobs: for each entry of /job.json ({id, code, entryPoint?,
-// inputs?, outputCount?}) it creates the shader module with WebGPU (Chromium's Tint, then Dawn on
-// SwiftShader), reads getCompilationInfo, and with an entryPoint creates the compute pipeline; with inputs
+// render?: {vertex, fragment}, inputs?, outputCount?}) it creates the shader module with WebGPU (Chromium's
+// Tint, then Dawn on SwiftShader), reads getCompilationInfo, and with an entryPoint creates the compute
+// pipeline (with render, a render pipeline of those two entry points, one rgba8unorm target); with inputs
 // (floats) it binds them as a read-only storage buffer at @group(0) @binding(0), an output buffer of
 // outputCount floats at @binding(1), dispatches ceil(outputCount / 4 / 64) workgroups of 64 and reads the
 // outputs back (non-finite values as the strings "inf", "-inf", "nan": JSON has no such numbers).
@@ -23,6 +24,18 @@ async function check(device, entry) {
     if (entry.entryPoint) {
         try {
             pipeline = await device.createComputePipelineAsync({ layout: 'auto', compute: { module, entryPoint: entry.entryPoint } });
+            result.pipeline = true;
+        } catch (e) {
+            result.pipelineError = String(e?.message ?? e);
+        }
+    }
+    if (entry.render) {
+        try {
+            await device.createRenderPipelineAsync({
+                layout: 'auto',
+                vertex: { module, entryPoint: entry.render.vertex },
+                fragment: { module, entryPoint: entry.render.fragment, targets: [{ format: 'rgba8unorm' }] },
+            });
             result.pipeline = true;
         } catch (e) {
             result.pipelineError = String(e?.message ?? e);
