@@ -73,8 +73,9 @@ void add_shader_command(CLI::App& app, std::function<int()>& run) {
         "    WebGL 2: no #include there, so concatenate '#version 300 es', your #defines and highp sampler\n"
         "    uniforms, the include's text, then your shader (docs/shader-include.md#webgl-2-and-opengl-es).\n"
         "  specbake shader --lang wgsl -o assets/shaders/specaa.wgsl\n"
-        "    WebGPU: one configuration (no baked texture; constants as consts at the top), to prepend to a\n"
-        "    WGSL module or give to three.js TSL's code()/wgslFn (docs/shader-include.md#webgpu-wgsl).");
+        "    WebGPU: the default entry points without baked data and, suffixed _kernel, with the baked Sigma\n"
+        "    kernel; to prepend to a WGSL module or give to three.js TSL's wgsl()/wgslFn\n"
+        "    (docs/shader-include.md#webgpu-wgsl).");
     sub->callback([&run, opts] { run = [opts] { return run_shader(*opts); }; });
 }
 

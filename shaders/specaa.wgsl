@@ -2,16 +2,15 @@
 // Bevy). Generated from shaders/src/ by shaders/generate.cmake (the shared body through shaders/to_wgsl.py);
 // edit the sources there, not this file.
 //
-// WGSL has no preprocessor, so this is the body in one configuration: the default entry points with no
-// baked texture (specaa_filtered_alpha2_matrix, specaa_default_D, specaa_ggx_G2, specaa_filtered_alpha2,
-// specaa_filtered_roughness: the material's roughness widened by the per-pixel kernel of the vertex
-// normal's quad derivatives), and every function they and the baked-texture helpers are made of
-// (specaa_sample_kernel_texel, specaa_gate_baked_kernel, specaa_widened_matrix, ...), from which a shader
-// with a baked kernel composes the default (docs/shader-include.md#webgpu-wgsl). The "define before
-// including" options of the header comment below are the GLSL/HLSL includes'; here the four tunable values
-// are the consts that follow (edit them in place), and textures are function parameters
-// (texture_2d<f32>, sampler). Functions using derivatives (dpdx/dpdy) or textureSample run in fragment
-// shaders, in uniform control flow; the others run in any stage.
+// WGSL has no preprocessor, so this is the body in two configurations (docs/shader-include.md#webgpu-wgsl):
+// - no baked texture: specaa_filtered_alpha2_matrix, specaa_default_D, specaa_ggx_G2, specaa_filtered_alpha2,
+//   specaa_filtered_roughness (the material's roughness widened by the per-pixel kernel of the vertex
+//   normal's quad derivatives), and every function of the body with textures as parameters;
+// - the bake's default Sigma kernel texture: the same entry points with the suffix _kernel and the texture
+//   and its sampler as their last parameters (at the end of the file).
+// The "define before including" options of the header comment below are the GLSL/HLSL includes'; here the
+// four tunable values are the consts that follow (edit them in place). Functions using derivatives
+// (dpdx/dpdy) or textureSample run in fragment shaders, in uniform control flow; the others in any stage.
 const SPECAA_SIGMA2: f32 = 0.15915494309189535;  // pixel-filter variance in pixels^2, 1/(2 pi) (TK21 App. B)
 const SPECAA_KAPPA: f32 = 0.18;                  // clamp of derivative-based kernels (TK21 Eq. 10, K16)
 const SPECAA_GGX_SPREAD: f32 = 8.0;              // specaa_default_D with baked data: GGX(A) above k_max = 1/8
@@ -701,6 +700,74 @@ fn specaa_default_D(h: vec3<f32>, filteredA: vec3<f32>, s: SpecaaSurface) -> f32
     let share: f32 = 1.0; // rough share g of the texel (two lobes where g < 1)
     let flatD: f32 = 0.0; // the flat share's lobe
     var w: f32 = 0.0;
+    w = select(1.0, w, w == w);
+    let ggx: f32 = specaa_ggx_D(h, A, a * a);
+    var roughD: f32 = ggx;
+    if (w < 1.0) { roughD = ggx + (1.0 - w) * (specaa_convolved_D(h, A, a) - ggx); }
+    return share * roughD + (1.0 - share) * flatD;
+}
+
+// ===================================================================================================
+// The default entry points with the bake's default output, the Sigma kernel texture (`*_kernel`:
+// RGBA = Sigma xx, yy, xy and its rough share g, R16G16B16A16_SFLOAT, bound with linear mip filtering):
+// the body again with SPECAA_KERNEL_TEXTURE and SPECAA_KERNEL_ANISOTROPIC (shaders/to_wgsl.py), each
+// function that differs from the one above, or calls one that does, named with the suffix _kernel and
+// taking the texture and its sampler as its last parameters:
+//   specaa_filtered_alpha2_matrix_kernel(s, kernelTexture, kernelSampler)
+//   specaa_default_D_kernel(h, A, s, kernelTexture, kernelSampler)  (with specaa_ggx_G2 as above)
+//   specaa_filtered_roughness_kernel / specaa_filtered_alpha2_kernel(s, kernelTexture, kernelSampler)
+// ===================================================================================================
+
+// specaa_baked_spread_matrix with the baked texture.
+fn specaa_baked_spread_matrix_kernel(s: SpecaaSurface, kernelTexture: texture_2d<f32>, kernelSampler: sampler) -> vec3<f32> {
+    // The single lobe of a texel with rough share g: K = 2 Sigma sqrt(g), not 2 Sigma. A texel of a flat
+    // field with a few steep grooves or seams (g small) is a spike at the flat normal plus a wide rough
+    // part; the Gaussian of its covariance spreads the spike's highlight over the grooves' slopes, while
+    // the Gaussian closest to the mixture in L2 (the radiance error over half vectors) is far narrower
+    // (K / (2 Sigma) = 0.11-0.24 at g = 0.1-0.5 for a rough part 10x the material's lobe). The covariance
+    // is what keeps the rough part's sparkle down where it is lit; sqrt(g) sits between the two ends
+    // (g^0 and g^1). g = 1 (every texel steep, or bakes before the rough share) is the covariance itself.
+    // The measurements (g^0, g^0.25, g^0.5, g^0.75, g^1): docs/accuracy.md#the-single-lobe-of-a-mixed-texel.
+    let k: vec4<f32> = specaa_sample_kernel_texel(kernelTexture, kernelSampler, s.uv);
+    return (2.0 * sqrt(k.w)) * k.xyz;
+}
+
+// specaa_baked_kernel_matrix with the baked texture.
+fn specaa_baked_kernel_matrix_kernel(s: SpecaaSurface, kernelTexture: texture_2d<f32>, kernelSampler: sampler) -> vec3<f32> {
+    return specaa_gate_baked_kernel(specaa_baked_spread_matrix_kernel(s, kernelTexture, kernelSampler), specaa_base_alpha2(s));
+}
+
+// specaa_filtered_alpha2 with the baked texture.
+fn specaa_filtered_alpha2_kernel(s: SpecaaSurface, kernelTexture: texture_2d<f32>, kernelSampler: sampler) -> f32 {
+    let baked: vec3<f32> = specaa_baked_kernel_matrix_kernel(s, kernelTexture, kernelSampler);
+    let a: f32 = specaa_filter_projected_isotropic(specaa_base_alpha2(s), 0.5 * (baked.x + baked.y) + specaa_pixel_kernel(s));
+    return select(1.0, a, specaa_is_finite(a));
+}
+
+// specaa_filtered_roughness with the baked texture.
+fn specaa_filtered_roughness_kernel(s: SpecaaSurface, kernelTexture: texture_2d<f32>, kernelSampler: sampler) -> f32 { return specaa_roughness_from_alpha2(specaa_filtered_alpha2_kernel(s, kernelTexture, kernelSampler)); }
+
+// specaa_filtered_alpha2_matrix with the baked texture.
+fn specaa_filtered_alpha2_matrix_kernel(s: SpecaaSurface, kernelTexture: texture_2d<f32>, kernelSampler: sampler) -> vec3<f32> {
+    return specaa_widened_matrix(specaa_base_alpha2(s), specaa_baked_kernel_matrix_kernel(s, kernelTexture, kernelSampler) + specaa_pixel_kernel_matrix(s));
+}
+
+// specaa_default_D with the baked texture.
+fn specaa_default_D_kernel(h: vec3<f32>, filteredA: vec3<f32>, s: SpecaaSurface, kernelTexture: texture_2d<f32>, kernelSampler: sampler) -> f32 {
+    let A: vec3<f32> = filteredA;
+    let a: f32 = specaa_base_alpha2(s);
+    let share: f32 = 1.0; // rough share g of the texel (two lobes where g < 1)
+    let flatD: f32 = 0.0; // the flat share's lobe
+    let lod: f32 = specaa_texture_lod(kernelTexture, kernelSampler, s.uv);
+    // The blend weight is judged on all of K = A - a I, the per-pixel kernel included. Opt-in
+    // SPECAA_BLEND_FROM_BAKED_SPREAD judges it on the baked spread alone: the pixel kernel is the image of
+    // the Gaussian pixel filter under the surface's curvature (TK21 Eq. 3), for which the convolution is
+    // exact, and a large one (rims, strongly curved small parts: up to kappa) otherwise switches the pixel
+    // to GGX(A), whose tails put a flickering halo around highlights and along rims on models outside the
+    // bench's corpus; but where the clamped pixel kernel hides geometry a pixel wide (domes of mesh), GGX(A)
+    // is what fits, and the bench's NormalTangentTest far fails without it (docs/accuracy.md#do-no-harm-in-the-field).
+    let spread: vec3<f32> = A - vec3<f32>(a, a, 0.0);
+    var w: f32 = saturate(lod) * saturate(SPECAA_GGX_SPREAD * specaa_sym_max_eigenvalue(spread));
     w = select(1.0, w, w == w);
     let ggx: f32 = specaa_ggx_D(h, A, a * a);
     var roughD: f32 = ggx;

@@ -19,7 +19,13 @@ C-like declarations around WGSL expressions, which this script rewrites statemen
 Anything else (a ternary inside a larger expression, an assignment to a parameter, an unknown top-level
 construct) stops with an error naming the line: the body must stay in the subset this translates.
 
-Usage: to_wgsl.py [-D NAME[=VALUE]]... [--macros MACROS_FILE] FILE...
+A second configuration can follow in the same module (WGSL has no overloads): the body translated again
+with more defines, each function that differs from the first translation (or calls one that does) renamed
+with a suffix, and the names the configuration binds (a texture, its sampler) made trailing parameters of
+every function that uses them or calls one that does (--variant-*, --texture-parameter).
+
+Usage: to_wgsl.py [-D NAME[=VALUE]]... [--macros MACROS_FILE] [--variant-suffix S --variant-define NAME[=VALUE]...
+         --texture-parameter NAME=TYPE... --variant-header COMMENT_FILE] FILE...
   The files are concatenated (the macro file without its // comment lines), then translated; WGSL on stdout.
 """
 import re
@@ -471,6 +477,108 @@ class Translator:
         return ''.join(out)
 
 
+# ----- a second configuration in the same module ----------------------------------------------------
+
+def top_level_items(text):
+    """Splits translated WGSL into (name, kind, tokens) items; comments and blank lines before an item
+    belong to it (kind None for trailing text)."""
+    toks = tokenize(text)
+    items, start, i = [], 0, 0
+    while i < len(toks):
+        t = toks[i]
+        if not t.code:
+            i += 1
+            continue
+        if t.text in ('fn', 'struct'):
+            name = toks[next_code(toks, i + 1)].text
+            brace = i
+            while toks[brace].text != '{':
+                brace += 1
+            end = matching(toks, brace, '{', '}')
+        else:  # const, ...: up to its ;
+            name = toks[next_code(toks, i + 1)].text
+            end = i
+            while toks[end].text != ';':
+                end += 1
+        items.append((name, t.text, toks[start:end + 1]))
+        start = i = end + 1
+    items.append((None, None, toks[start:]))
+    return items
+
+
+def calls(toks, names):
+    """Indices of the '(' of calls to `names` in toks."""
+    out = []
+    code = [j for j, t in enumerate(toks) if t.code]
+    previous = {j: toks[code[n - 1]].text if n else '' for n, j in enumerate(code)}
+    for j, t in enumerate(toks):
+        if t.kind == 'ident' and t.text in names and t.code and previous[j] not in ('.', 'fn'):
+            k = next_code(toks, j + 1)
+            if k < len(toks) and toks[k].text == '(':
+                out.append(k)
+    return out
+
+
+def add_texture_parameters(items, params):
+    """Functions using the free names of `params` ([(name, type)]), and the functions calling them, take
+    them as trailing parameters; their calls pass them on."""
+    names = {n for n, _ in params}
+    needs = {name for name, kind, toks in items
+             if kind == 'fn' and any(t.kind == 'ident' and t.text in names for t in toks)}
+    changed = True
+    while changed:
+        changed = False
+        for name, kind, toks in items:
+            if kind == 'fn' and name not in needs and calls(toks, needs):
+                needs.add(name)
+                changed = True
+    declared = ', '.join(f'{n}: {ty}' for n, ty in params)
+    passed = ', '.join(n for n, _ in params)
+    result = []
+    for name, kind, toks in items:
+        toks = list(toks)
+        for k in reversed(calls(toks, needs)):
+            close = matching(toks, k, '(', ')')
+            empty = next_code(toks, k + 1) == close
+            toks.insert(close, Tok('expr', passed if empty else ', ' + passed, toks[k].line))
+        if kind == 'fn' and name in needs:
+            k = next_code(toks, [j for j, t in enumerate(toks) if t.text == name][0] + 1)
+            close = matching(toks, k, '(', ')')
+            empty = next_code(toks, k + 1) == close
+            toks.insert(close, Tok('expr', declared if empty else ', ' + declared, toks[k].line))
+        result.append((name, kind, toks))
+    return result
+
+
+def variant_functions(base_text, variant_text, params, suffix, header):
+    """The functions of `variant_text` (the body in another configuration) that differ from those of
+    `base_text`, or call one that does, renamed with `suffix` and with the texture parameters added; one
+    comment line each instead of the repeated documentation."""
+    base = {name: text_of([t for t in toks if t.code]) for name, kind, toks in top_level_items(base_text) if name}
+    items = add_texture_parameters(top_level_items(variant_text), params)
+    code = {name: text_of([t for t in toks if t.code]) for name, kind, toks in items if name}
+    differ = {name for name, kind, toks in items if kind == 'fn' and base.get(name) != code[name]}
+    changed = True
+    while changed:
+        changed = False
+        for name, kind, toks in items:
+            if kind == 'fn' and name not in differ and calls(toks, differ):
+                differ.add(name)
+                changed = True
+    out = [header]
+    for name, kind, toks in items:
+        if name not in differ:
+            continue
+        body = [t for t in toks]
+        first = next_code(body, 0)
+        body = body[first:]
+        renamed = ''.join(t.text + suffix if (t.kind == 'ident' and t.text in differ and
+                                              (j == 0 or body[j - 1].text != '.')) else t.text
+                          for j, t in enumerate(body))
+        out.append(f'\n// {name} with the baked texture.\n{renamed}\n')
+    return ''.join(out)
+
+
 def preprocess(sources, defines):
     args = ['cpp', '-P', '-C', '-undef', '-nostdinc', '-std=c99']
     for d in defines:
@@ -496,6 +604,7 @@ def translate(sources, defines=()):
 
 def main(argv):
     defines, files = [], []
+    variant = {'suffix': None, 'defines': [], 'params': [], 'header': ''}
     it = iter(argv)
     for a in it:
         if a == '-D':
@@ -504,10 +613,20 @@ def main(argv):
             defines.append(a[2:])
         elif a == '--macros':
             files.append((next(it), True))
+        elif a == '--variant-suffix':
+            variant['suffix'] = next(it)
+        elif a == '--variant-define':
+            variant['defines'].append(next(it))
+        elif a == '--texture-parameter':
+            name, _, ty = next(it).partition('=')
+            variant['params'].append((name, ty))
+        elif a == '--variant-header':
+            with open(next(it), encoding='utf-8') as fh:
+                variant['header'] = fh.read()
         else:
             files.append((a, False))
     if not files:
-        sys.stderr.write('\n'.join(__doc__.strip().splitlines()[-2:]) + '\n')
+        sys.stderr.write('\n'.join(__doc__.strip().splitlines()[-3:]) + '\n')
         return 2
     sources = []
     for f, macros_only in files:
@@ -517,7 +636,11 @@ def main(argv):
             text = ''.join(line for line in text.splitlines(True) if not line.lstrip().startswith('//'))
         sources.append(text)
     try:
-        sys.stdout.write(translate(sources, defines))
+        text = translate(sources, defines)
+        if variant['suffix']:
+            text += variant_functions(text, translate(sources, defines + variant['defines']), variant['params'],
+                                      variant['suffix'], '\n' + variant['header'])
+        sys.stdout.write(text)
     except TranslateError as e:
         sys.stderr.write(f'to_wgsl.py: {e}\n')
         return 1

@@ -10,7 +10,11 @@
 //   tests/gl/shaders/grid_eval.inc translated by the same shaders/to_wgsl.py, and checked against the same
 //   C++ references with the same tolerances as the GLSL on OpenGL; plus the default's derivative-free
 //   entry points (specaa_widened_matrix, specaa_default_D without baked data) against the bake's matrix
-//   filter and convolved NDF.
+//   filter and convolved NDF;
+// - the default with the baked Sigma kernel (the _kernel functions) drawn in a fragment shader over a
+//   1 x 1 kernel texture (constant normal: no per-pixel kernel), at a footprint under one texel (the
+//   convolved NDF) and of four texels (LOD 2: the blend toward GGX(A)), against the same core: the texel's
+//   single lobe K = 2 Sigma sqrt(g), the gate, the matrix filter, and the blend of GGX(A) and the convolution.
 // Skips when node or Chromium is missing (as the consumer tests do).
 #include "gl/grid_cases.h"
 
@@ -20,6 +24,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <random>
@@ -141,8 +146,8 @@ std::string messages(const nlohmann::json& r) {
     return s + r.value("pipelineError", "") + r.value("validationError", "");
 }
 
-// A fragment stage calling the default entry points (in uniform control flow unless `guard` puts them in a
-// branch on a varying), including the composition of a baked Sigma kernel the docs show.
+// A fragment stage calling the default entry points, without and with the baked Sigma kernel (in uniform
+// control flow unless `guard` puts one in a branch on a varying).
 std::string render_module(const std::string& include, bool guard) {
     std::string fs = R"(
 struct VsOut {
@@ -172,11 +177,10 @@ struct VsOut {
     fs += R"(
     let A = specaa_filtered_alpha2_matrix(s);
     let d = specaa_default_D(h, A, s) * specaa_ggx_G2(h, h, h, A);
-    let k = specaa_sample_kernel_texel(kernelTexture, kernelSampler, v.uv);
-    let a = specaa_base_alpha2(s);
-    let baked = specaa_widened_matrix(a, specaa_gate_baked_kernel((2.0 * sqrt(k.w)) * k.xyz, a) + specaa_pixel_kernel_matrix(s));
-    let lod = specaa_texture_lod(kernelTexture, kernelSampler, v.uv);
-    return vec4<f32>(d, r, baked.x + lod, specaa_filtered_alpha2(s));
+    let baked = specaa_filtered_alpha2_matrix_kernel(s, kernelTexture, kernelSampler);
+    let bakedD = specaa_default_D_kernel(h, baked, s, kernelTexture, kernelSampler) * specaa_ggx_G2(h, h, h, baked);
+    let bakedR = specaa_filtered_roughness_kernel(s, kernelTexture, kernelSampler);
+    return vec4<f32>(d + bakedD, r + bakedR, specaa_filtered_alpha2(s), specaa_filtered_alpha2_kernel(s, kernelTexture, kernelSampler));
 }
 )";
     return include + fs;
@@ -307,6 +311,84 @@ TEST(ShaderWgsl, GridMatchesCppCoreInWebGpuComputeShader) {
     }
     EXPECT_GT(evaluated, 4000u);
     std::printf("%zu cases compared on WebGPU (%s)\n", evaluated, result.value("adapter", "").c_str());
+}
+
+// The fragment shader of the baked-kernel check: pixel (x, y) of a 16 x 16 target has roughness
+// r = 0.05 + 0.9 (y + 0.5) / 16 and h = normalize(0.06 (x mod 8), 0.03, 1); uv spans 0.01 texel per pixel
+// left of x = 8 and 4 texels right of it (the texture is 1 x 1: LOD -6.6 and 2).
+const char* kKernelDraw = R"(
+@group(0) @binding(0) var kernelTexture: texture_2d<f32>;
+@group(0) @binding(1) var kernelSampler: sampler;
+@vertex fn vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    return vec4<f32>(f32(i & 1u) * 4.0 - 1.0, f32(i >> 1u) * 4.0 - 1.0, 0.0, 1.0);
+}
+@fragment fn fs(@builtin(position) p: vec4<f32>) -> @location(0) vec4<f32> {
+    var s: SpecaaSurface;
+    s.roughness = 0.05 + 0.9 * p.y / 16.0;
+    s.uv = p.xy * select(0.01, 4.0, p.x > 8.0);
+    s.normal = vec3<f32>(0.0, 0.0, 1.0);
+    s.tangent = vec3<f32>(1.0, 0.0, 0.0);
+    s.bitangent = vec3<f32>(0.0, 1.0, 0.0);
+    let h = normalize(vec3<f32>(0.06 * f32(u32(p.x) % 8u), 0.03, 1.0));
+    let A = specaa_filtered_alpha2_matrix_kernel(s, kernelTexture, kernelSampler);
+    return vec4<f32>(A, specaa_default_D_kernel(h, A, s, kernelTexture, kernelSampler));
+}
+)";
+
+TEST(ShaderWgsl, DefaultWithBakedKernelMatchesCppCoreInAFragmentShader) {
+    const std::string include = wgsl_include();
+    ASSERT_FALSE(include.empty()) << "specbake shader --lang wgsl wrote nothing";
+    const int size = 16;
+    const int texel[4] = {40, 20, 10, 128};  // Sigma (xx, yy, xy) and g, as RGBA8 k / 255
+    nlohmann::json job = {{"modules", nlohmann::json::array()}};
+    job["modules"].push_back({{"id", "kernel"}, {"code", include + kKernelDraw},
+                              {"draw", {{"size", size}, {"texel", {texel[0], texel[1], texel[2], texel[3]}}}}});
+    nlohmann::json result;
+    std::string skip;
+    if (!run_webgpu(job, result, skip)) {
+        if (!skip.empty()) GTEST_SKIP() << skip;
+        return;
+    }
+    const auto& r = result["results"][0];
+    ASSERT_EQ(r.value("errors", -1), 0) << messages(r);
+    ASSERT_FALSE(r.contains("drawError")) << r.value("drawError", "");
+    const auto& px = r["pixels"];
+    ASSERT_EQ(px.size(), size_t(4 * size * size));
+    const double sxx = texel[0] / 255.0, syy = texel[1] / 255.0, sxy = texel[2] / 255.0, g = texel[3] / 255.0;
+    int blended = 0;
+    double worst_a = 0, worst_d = 0;
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+            const double rough = double(0.05f + 0.9f * (float(y) + 0.5f) / 16.0f), a = std::pow(rough, 4.0);
+            // K = 2 Sigma sqrt(g), gated: K f^2, f = saturate(lambda_max(K) / (0.5 a)).
+            Sym2<double> K{2.0 * std::sqrt(g) * sxx, 2.0 * std::sqrt(g) * sxy, 2.0 * std::sqrt(g) * syy};
+            const double lmax = 0.5 * (K.xx + K.yy) + std::hypot(0.5 * (K.xx - K.yy), K.xy);
+            const double f = std::min(1.0, lmax / (0.5 * a));
+            K = (f * f) * K;
+            const Sym2<double> A = projected_to_slope_roughness(slope_to_projected_roughness(diag(a, a)) + K);
+            const size_t i = 4 * size_t(y * size + x);
+            const double scale = A.xx + A.yy;
+            const double ea = std::max({std::abs(decode(px[i]) - A.xx) / A.xx, std::abs(decode(px[i + 1]) - A.yy) / A.yy,
+                                        std::abs(decode(px[i + 2]) - A.xy) / scale});
+            worst_a = std::max(worst_a, ea);
+            EXPECT_LE(ea, kRelTol) << "A at pixel (" << x << ", " << y << "): gpu (" << decode(px[i]) << ", "
+                                   << decode(px[i + 1]) << ", " << decode(px[i + 2]) << "), reference (" << A.xx << ", "
+                                   << A.yy << ", " << A.xy << ")";
+            // D: the blend weight w = saturate(LOD) saturate(8 lambda_max(A - a I)), LOD 2 right of x = 8.
+            const Vec3<double> h = normalize(Vec3<double>{0.06 * (x % 8), 0.03, 1.0});
+            const Sym2<double> spread{A.xx - a, A.xy, A.yy - a};
+            const double spread_max = 0.5 * (spread.xx + spread.yy) + std::hypot(0.5 * (spread.xx - spread.yy), spread.xy);
+            const double w = x >= 8 ? std::clamp(8.0 * spread_max, 0.0, 1.0) : 0.0;
+            blended += w > 0.0 && w < 1.0;
+            const double ggx = ggx_ndf(h, A, a * a), d = ggx + (1.0 - w) * (convolved_ndf(h, A, a) - ggx);
+            const double cond = std::max(1.0, A.xx * A.yy / std::max(det(A), a * a));
+            worst_d = std::max(worst_d, std::abs(decode(px[i + 3]) - d) / (cond * d));
+            EXPECT_LE(std::abs(decode(px[i + 3]) - d), 1e-3 * cond * d + kAbsTol)
+                << "D at pixel (" << x << ", " << y << "), w " << w << ": gpu " << decode(px[i + 3]) << ", reference " << d;
+        }
+    EXPECT_GT(blended, 8) << "too few pixels between the convolution and GGX(A)";
+    std::printf("baked kernel: %d pixels, worst relative error A %.2e, D %.2e (%d blended)\n", size * size, worst_a,
+                worst_d, blended);
 }
 
 }  // namespace
