@@ -5,11 +5,13 @@
 //   D = specaa_default_D(h, A, surface of roughness r), rendered into a size x size float target.
 // - "sphere": a MeshStandardNodeMaterial sphere whose roughnessNode is specaa_filtered_roughness of the
 //   vertex normal (the per-pixel kernel from its quad derivatives), lit by a directional light; then the
-//   same roughness written as the fragment output and read back (float target).
+//   same roughness written as the fragment output and read back (float target); then
+//   specaa_filtered_roughness_kernel with a one-texel kernel texture (job.texel, RGBA8) passed from TSL's
+//   texture() and sampler() nodes, read back the same way.
 // Posts the backend ("WebGPU" or the WebGL 2 fallback), every console error and uncaptured WebGPU error,
 // and the read-backs.
 import * as THREE from 'three/webgpu';
-import { float, normalViewGeometry, uv, vec4, wgsl, wgslFn } from 'three/tsl';
+import { float, normalViewGeometry, sampler, texture, uv, vec4, wgsl, wgslFn } from 'three/tsl';
 import specaaSource from '/web/three/specaa.wgsl.js';
 
 const post = (path, body) => fetch(path, { method: 'POST', body });
@@ -38,6 +40,16 @@ fn specbakeRoughness(roughness: f32, normal: vec3<f32>) -> f32 {
     s.roughness = roughness;
     s.normal = normal;
     return specaa_filtered_roughness(s);
+}`, [specaa]);
+
+const kernelRoughnessFn = wgslFn(`
+fn specbakeKernelRoughness(roughness: f32, normal: vec3<f32>, coord: vec2<f32>, kernelTexture: texture_2d<f32>,
+                           kernelSampler: sampler) -> f32 {
+    var s: SpecaaSurface;
+    s.roughness = roughness;
+    s.normal = normal;
+    s.uv = coord;
+    return specaa_filtered_roughness_kernel(s, kernelTexture, kernelSampler);
 }`, [specaa]);
 
 async function readFloats(renderer, scene, camera, size) {
@@ -81,6 +93,18 @@ async function main() {
     probe.fragmentNode = vec4(roughnessFn({ roughness: float(job.roughness), normal: normalViewGeometry }), 0, 0, 1);
     mesh.material = probe;
     const roughness = await readFloats(renderer, sphere, camera, size);
-    await post('/result', JSON.stringify({ backend, userAgent: navigator.userAgent, errors, grid, shaded, roughness }));
+    // The same with a baked kernel texture: one texel (RGBA8), trilinear.
+    const kernelMap = new THREE.DataTexture(new Uint8Array(job.texel), 1, 1);
+    kernelMap.magFilter = THREE.LinearFilter;
+    kernelMap.minFilter = THREE.LinearMipmapLinearFilter;
+    kernelMap.needsUpdate = true;
+    const kernelProbe = new THREE.MeshBasicNodeMaterial();
+    const kernelNode = texture(kernelMap);
+    kernelProbe.fragmentNode = vec4(kernelRoughnessFn({ roughness: float(job.roughness), normal: normalViewGeometry,
+        coord: uv(), kernelTexture: kernelNode, kernelSampler: sampler(kernelNode) }), 0, 0, 1);
+    mesh.material = kernelProbe;
+    const kernelRoughness = await readFloats(renderer, sphere, camera, size);
+    await post('/result', JSON.stringify({ backend, userAgent: navigator.userAgent, errors, grid, shaded, roughness,
+        kernelRoughness }));
 }
 main().catch((e) => post('/result', JSON.stringify({ fatal: String(e?.stack ?? e), errors })));

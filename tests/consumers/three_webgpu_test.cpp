@@ -9,7 +9,9 @@
 //   draws lit pixels, and that roughness read back matches the closed form of the per-pixel kernel on an
 //   orthographic sphere, t = sigma^2 (|dn/dx|^2 + |dn/dy|^2), |dn/dx|^2 = (p / R)^2 (1 + x^2 / z^2) for pixel
 //   width p (TK21 Eq. 14, clamped to kappa), within 3% of r on the pixels whose 2x2 quad lies inside
-//   0.8 R (the quad's finite differences of a 64 x 32 tessellation against the smooth sphere).
+//   0.8 R (the quad's finite differences of a 64 x 32 tessellation against the smooth sphere); with a
+//   one-texel kernel texture passed from TSL's texture()/sampler() nodes, specaa_filtered_roughness_kernel
+//   matches the same closed form plus the texel's gated kernel, within the same 3%.
 #include "consumer_harness.h"
 
 #include "bake/constants.h"
@@ -27,8 +29,10 @@ TEST_F(ThreeWebGpu, WgslIncludeInWgslFnMatchesTheCoreAndShadesASphere) {
     if (auto why = missing_node_packages({"three"}); !why.empty()) GTEST_SKIP() << why;
     const int size = 32;
     const double roughness = 0.2, radius = 0.9;
+    const int texel[4] = {40, 20, 10, 128};  // the baked kernel: Sigma (xx, yy, xy) and g as RGBA8 k / 255
     const nlohmann::json job = {{"page", "browser_three_webgpu.html"}, {"webgpu", true}, {"size", size},
-                                {"roughness", roughness}, {"radius", radius}};
+                                {"roughness", roughness}, {"radius", radius},
+                                {"texel", {texel[0], texel[1], texel[2], texel[3]}}};
     nlohmann::json result;
     if (!run_browser(job, root_, &result)) return;
     std::printf("three.js backend: %s\n", result.value("backend", "").c_str());
@@ -60,11 +64,21 @@ TEST_F(ThreeWebGpu, WgslIncludeInWgslFnMatchesTheCoreAndShadesASphere) {
     // The sphere: lit pixels, and the filtered roughness against the closed form.
     const auto& shaded = result["shaded"];
     const auto& rough = result["roughness"];
+    const auto& kernel_rough = result["kernelRoughness"];
     ASSERT_EQ(shaded.size(), size_t(4 * size * size));
     ASSERT_EQ(rough.size(), size_t(4 * size * size));
+    ASSERT_EQ(kernel_rough.size(), size_t(4 * size * size));
     const double p = 2.0 / size, a = std::pow(roughness, 4.0);
+    // The texel's isotropic kernel: half the trace of K = 2 Sigma sqrt(g), gated by
+    // f = saturate(lambda_max(K) / (0.5 a)) (f = 1 here: the kernel is far wider than a).
+    const double root_g = std::sqrt(texel[3] / 255.0);
+    const double kxx = 2.0 * root_g * texel[0] / 255.0, kyy = 2.0 * root_g * texel[1] / 255.0,
+                 kxy = 2.0 * root_g * texel[2] / 255.0;
+    const double kmax = 0.5 * (kxx + kyy) + std::hypot(0.5 * (kxx - kyy), kxy);
+    const double gate = std::min(1.0, kmax / (0.5 * a));
+    const double baked_t = 0.5 * (kxx + kyy) * gate * gate;
     int lit = 0, compared = 0;
-    double worst = 0;
+    double worst = 0, worst_kernel = 0;
     for (int row = 0; row < size; ++row)
         for (int col = 0; col < size; ++col) {
             const int i = row * size + col;
@@ -84,10 +98,17 @@ TEST_F(ThreeWebGpu, WgslIncludeInWgslFnMatchesTheCoreAndShadesASphere) {
             worst = std::max(worst, std::abs(gpu - filtered) / filtered);
             EXPECT_LE(std::abs(gpu - filtered), 0.03 * filtered) << "pixel (" << col << ", " << row << ")";
             EXPECT_GE(gpu, roughness * (1.0 - 1e-5)) << "pixel (" << col << ", " << row << ")";
+            const double tk = t + baked_t;
+            const double with_kernel = std::pow((a + tk * (1.0 - a)) / (1.0 + tk * (1.0 - a)), 0.25);
+            const double gpu_kernel = kernel_rough[4 * i].get<double>();
+            worst_kernel = std::max(worst_kernel, std::abs(gpu_kernel - with_kernel) / with_kernel);
+            EXPECT_LE(std::abs(gpu_kernel - with_kernel), 0.03 * with_kernel)
+                << "with the kernel texture, pixel (" << col << ", " << row << ")";
             ++compared;
         }
-    std::printf("sphere: %d lit pixels; filtered roughness at %d inner pixels within %.2f%% of the closed form\n", lit,
-                compared, 100.0 * worst);
+    std::printf("sphere: %d lit pixels; filtered roughness at %d inner pixels within %.2f%% of the closed form, "
+                "with the kernel texture within %.2f%%\n",
+                lit, compared, 100.0 * worst, 100.0 * worst_kernel);
     EXPECT_GT(lit, size * size / 4);
     EXPECT_GT(compared, 100);
 }
