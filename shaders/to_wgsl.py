@@ -6,7 +6,8 @@ WGSL macro set (shaders/src/macros_wgsl.inc) and the configuration's defines, wh
 #if and expands SPECAA_FLOAT3 to vec3<f32>, SPECAA_DDX to dpdx, ...; comments are kept. What is left is
 C-like declarations around WGSL expressions, which this script rewrites statement by statement:
 
-  float f(float3 a, out float4 b) {  ->  fn f(a: vec3<f32>, b: ptr<function, vec4<f32>>) -> f32 {
+  float f(SPECAA_FLOAT3 a, out SPECAA_FLOAT4 b) {
+                                     ->  fn f(a: vec3<f32>, b: ptr<function, vec4<f32>>) -> f32 {
   float x = e1, y = e2;              ->  let x: f32 = e1; var y: f32 = e2;  (var where assigned later)
   return c ? a : b;                  ->  return select(b, a, c);  (only a whole initializer, return value
                                          or right-hand side; select evaluates both sides)
@@ -239,7 +240,6 @@ class Translator:
                 if t.text in ('++', '--') and j + 1 < len(code) and code[j + 1].kind == 'ident':
                     names.add(code[j + 1].text)
             if t.kind == 'ident' and t.text in self.out_params and j + 1 < len(code) and code[j + 1].text == '(':
-                end = j + 1
                 depth = 0
                 args, cur = [], []
                 for m in range(j + 1, len(code)):
@@ -441,7 +441,7 @@ class Translator:
                 derefs.add(pname)
                 outs.append(n)
                 ty = f'ptr<function, {ty}>'
-            params.append(text_of(lead).replace('\n', '\n') + f'{pname}: {ty}')
+            params.append(text_of(lead) + f'{pname}: {ty}')
         if outs:
             self.out_params[name] = set(outs)
         open_ = next_code(toks, close + 1)
@@ -467,10 +467,6 @@ class Translator:
             elif t.text == 'struct':
                 i, s = self.struct(toks, i)
                 out.append(s)
-            elif t.text in ('const', 'fn', 'alias', 'override', 'var', 'diagnostic', 'enable', 'requires'):
-                end = self.statement_end(toks, i) if t.text != 'fn' else matching(toks, next_code(toks, matching(toks, next_code(toks, i + 2), '(', ')') + 1), '{', '}')
-                out.append(text_of(toks[i:end + 1]))  # already WGSL
-                i = end + 1
             else:
                 i, f = self.function(toks, i)
                 out.append(f)
