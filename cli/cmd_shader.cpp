@@ -1,5 +1,6 @@
-// specbake shader: writes the runtime shader include (GLSL, GLSL ES or HLSL) that is embedded in the
-// executable, byte for byte identical to shaders/specaa.glsl, specaa_es.glsl and specaa.hlsl of the source tree.
+// specbake shader: writes the runtime shader include (GLSL, GLSL ES, HLSL or WGSL) that is embedded in the
+// executable, byte for byte identical to shaders/specaa.glsl, specaa_es.glsl, specaa.hlsl and specaa.wgsl of the
+// source tree.
 #include "cli/command.h"
 
 #include "io/files/atomic_write.h"
@@ -18,6 +19,8 @@ extern const unsigned char kSpecaaGlslEs[];
 extern const std::size_t kSpecaaGlslEsSize;
 extern const unsigned char kSpecaaHlsl[];
 extern const std::size_t kSpecaaHlslSize;
+extern const unsigned char kSpecaaWgsl[];
+extern const std::size_t kSpecaaWgslSize;
 
 namespace {
 
@@ -32,6 +35,7 @@ int run_shader(const ShaderOptions& opts) {
     };
     const std::string text = opts.lang == "glsl"      ? embedded(kSpecaaGlsl, kSpecaaGlslSize)
                              : opts.lang == "glsl-es" ? embedded(kSpecaaGlslEs, kSpecaaGlslEsSize)
+                             : opts.lang == "wgsl"    ? embedded(kSpecaaWgsl, kSpecaaWgslSize)
                                                       : embedded(kSpecaaHlsl, kSpecaaHlslSize);
     if (opts.output.empty()) {
         if (std::fwrite(text.data(), 1, text.size(), stdout) != text.size() || std::fflush(stdout) != 0) {
@@ -51,13 +55,14 @@ int run_shader(const ShaderOptions& opts) {
 
 void add_shader_command(CLI::App& app, std::function<int()>& run) {
     auto* sub = app.add_subcommand(
-        "shader", "Write the runtime shader include (GLSL, GLSL ES or HLSL) for specular anti-aliasing in an engine.");
+        "shader",
+        "Write the runtime shader include (GLSL, GLSL ES, HLSL or WGSL) for specular anti-aliasing in an engine.");
     auto opts = std::make_shared<ShaderOptions>();
     sub->add_option("--lang", opts->lang,
                     "Shading language of the include: glsl (GLSL 3.30+), glsl-es (GLSL ES 3.00+: WebGL 2, "
-                    "OpenGL ES 3), hlsl (Shader Model 5+)")
+                    "OpenGL ES 3), hlsl (Shader Model 5+), wgsl (WebGPU: three.js WebGPURenderer, Bevy)")
         ->required()
-        ->check(CLI::IsMember({"glsl", "glsl-es", "hlsl"}));
+        ->check(CLI::IsMember({"glsl", "glsl-es", "hlsl", "wgsl"}));
     sub->add_option("-o,--output", opts->output,
                     "Write to FILE (atomically: a temporary file renamed into place) instead of standard output");
     sub->footer(
@@ -66,7 +71,11 @@ void add_shader_command(CLI::App& app, std::function<int()>& run) {
         "  specbake shader --lang hlsl > specaa.hlsl\n"
         "  specbake shader --lang glsl-es -o web/specaa_es.glsl\n"
         "    WebGL 2: no #include there, so concatenate '#version 300 es', your #defines and highp sampler\n"
-        "    uniforms, the include's text, then your shader (docs/shader-include.md#webgl-2-and-opengl-es).");
+        "    uniforms, the include's text, then your shader (docs/shader-include.md#webgl-2-and-opengl-es).\n"
+        "  specbake shader --lang wgsl -o assets/shaders/specaa.wgsl\n"
+        "    WebGPU: the default entry points without baked data and, suffixed _kernel, with the baked Sigma\n"
+        "    kernel; to prepend to a WGSL module or give to three.js TSL's wgsl()/wgslFn\n"
+        "    (docs/shader-include.md#webgpu-wgsl).");
     sub->callback([&run, opts] { run = [opts] { return run_shader(*opts); }; });
 }
 

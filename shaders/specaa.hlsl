@@ -14,6 +14,8 @@
 #define SPECAA_DDX(x) ddx(x)
 // The bits of a float as uint (the edge policy tests finiteness on them).
 #define SPECAA_AS_UINT(x) asuint(x)
+#define SPECAA_AS_UINT3(x) asuint(x)
+#define SPECAA_AS_UINT4(x) asuint(x)
 #define SPECAA_DDY(x) ddy(x)
 // Selection c ? a : b (HLSL's ?: evaluates both sides and selects).
 #define SPECAA_SELECT(c, a, b) ((c) ? (a) : (b))
@@ -130,7 +132,10 @@
 // NaN. Vector bit operations and maxima keep the tests cheap (no short-circuit branches).
 #define SPECAA_NOT_FINITE 0x7f800000u
 uint specaa_magnitude_bits(float x) { return SPECAA_AS_UINT(x) & 0x7fffffffu; }
-SPECAA_UINT3 specaa_magnitude_bits3(SPECAA_FLOAT3 v) { return SPECAA_AS_UINT(v) & 0x7fffffffu; }
+// (The mask as a vector: WGSL does not apply a scalar to every component of a vector operand.)
+SPECAA_UINT3 specaa_magnitude_bits3(SPECAA_FLOAT3 v) {
+    return SPECAA_AS_UINT3(v) & SPECAA_UINT3(0x7fffffffu, 0x7fffffffu, 0x7fffffffu);
+}
 uint specaa_max_component(SPECAA_UINT3 m) { return max(max(m.x, m.y), m.z); }
 bool specaa_is_finite(float x) { return specaa_magnitude_bits(x) < SPECAA_NOT_FINITE; }
 bool specaa_is_finite3(SPECAA_FLOAT3 v) { return specaa_max_component(specaa_magnitude_bits3(v)) < SPECAA_NOT_FINITE; }
@@ -245,9 +250,11 @@ SPECAA_FLOAT2 specaa_filter_axis_aligned(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT2 du,
 // c = (1 - a_x)(1 - a_y), so a = 1 (B infinite) and a = 0 with K = 0 (singular) stay exact (A_bar = 1
 // resp. 0). c det(B_bar) = a_x a_y + c B_xx K_yy + c B_yy K_xx + c det(K) is a sum of non-negative terms,
 // so det(B_bar) >= det(B) (the clamp of Listing 1) holds by construction. detK = det(K) >= 0, K PSD.
-SPECAA_FLOAT3 specaa_filter_projected_matrix_det(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT3 K, float detK) {
+SPECAA_FLOAT3 specaa_filter_projected_matrix_det(SPECAA_FLOAT2 alpha2, SPECAA_FLOAT3 kernel, float kernelDet) {
     // Half the trace first: a finite K whose trace overflows still scales down to the cap (then A_bar ~ I)
     // instead of to 0; an infinite K gives NaN here, which the callers' edge policy turns into I.
+    SPECAA_FLOAT3 K = kernel;
+    float detK = kernelDet;
     float halfTraceK = 0.5 * K.x + 0.5 * K.y;
     float traceK = K.x + K.y;
     if (halfTraceK > 0.5 * SPECAA_MAX_KERNEL) {
@@ -755,7 +762,8 @@ bool specaa_curvature_footprint(SpecaaSurface s, out SPECAA_FLOAT4 footprint) {
     footprint = specaa_footprint_tangent(dPdx, dPdy, s.tangent, s.bitangent);
     SPECAA_UINT3 m = max(max(specaa_magnitude_bits3(s.position), specaa_magnitude_bits3(dPdx)),
                          max(specaa_magnitude_bits3(dPdy), specaa_magnitude_bits3(footprint.xyw)));
-    SPECAA_UINT4 c = max(SPECAA_AS_UINT(s.curvature), SPECAA_UINT4(0u, 0u, 0u, SPECAA_AS_UINT(footprint.z))) & 0x7fffffffu;
+    SPECAA_UINT4 c = max(SPECAA_AS_UINT4(s.curvature), SPECAA_UINT4(0u, 0u, 0u, SPECAA_AS_UINT(footprint.z))) &
+                     SPECAA_UINT4(0x7fffffffu, 0x7fffffffu, 0x7fffffffu, 0x7fffffffu);
     return max(specaa_max_component(m), max(max(c.x, c.y), max(c.z, c.w))) < SPECAA_NOT_FINITE;
 }
 
@@ -876,7 +884,8 @@ float specaa_texture_lod(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) { re
 // - Baked roughness texture (a already holds the texel's spread, K only the pixel's): w = saturate(LOD),
 //   the convolution under magnification, GGX(A) from the texture's mip 1 on.
 // NaN inputs give GGX(A).
-float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, SpecaaSurface s) {
+float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 filteredA, SpecaaSurface s) {
+    SPECAA_FLOAT3 A = filteredA;
     float a = specaa_base_alpha2(s);
     float share = 1.0;   // rough share g of the texel (two lobes where g < 1)
     float flatD = 0.0;   // the flat share's lobe

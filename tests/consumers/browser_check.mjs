@@ -17,7 +17,8 @@ if (!jobPath || !dataDir || !resultPath) {
 }
 const timeoutMs = 1000 * Number(timeoutArg || 150);
 const here = dirname(fileURLToPath(import.meta.url));
-const page = JSON.parse(readFileSync(jobPath, 'utf8')).page ?? 'browser_page.html';
+const job = JSON.parse(readFileSync(jobPath, 'utf8'));
+const page = job.page ?? 'browser_page.html';
 if (!/^[\w-]+\.html$/.test(page)) {
     process.stderr.write(`JOB.json names a page that is not an .html file of ${here}: ${page}\n`);
     process.exit(1);
@@ -98,7 +99,10 @@ server.listen(0, '127.0.0.1', () => {
     const args = ['--headless=new', '--no-sandbox', `--user-data-dir=${profile}`, '--use-angle=swiftshader',
         '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist', '--no-first-run', '--no-default-browser-check',
         '--disable-extensions', '--disable-background-networking', '--disable-component-update', '--disable-sync',
-        '--mute-audio', '--window-size=256,256', `http://127.0.0.1:${port}/${page}`];
+        '--mute-audio', '--window-size=256,256'];
+    // WebGPU jobs (browser_wgsl.html): Chromium's WebGPU (Dawn) on its SwiftShader Vulkan adapter.
+    if (job.webgpu) args.push('--enable-unsafe-webgpu', '--use-webgpu-adapter=swiftshader', '--enable-features=Vulkan');
+    args.push(`http://127.0.0.1:${port}/${page}`);
     browser = spawn(chromium, args, { stdio: ['ignore', 'ignore', 'pipe'] });
     let stderr = '';
     browser.stderr.on('data', (d) => { stderr = (stderr + d).slice(-4000); });

@@ -1,6 +1,5 @@
-// specbake shader: the embedded include is byte-identical to shaders/specaa.glsl, specaa_es.glsl and
-// specaa.hlsl, on stdout and
-// with -o (atomic); bad arguments give one error line and a non-zero exit without touching files.
+// specbake shader: the embedded include is byte-identical to shaders/specaa.glsl, specaa_es.glsl,
+// specaa.hlsl and specaa.wgsl, on stdout and with -o (atomic); bad arguments give one error line and a non-zero exit without touching files.
 #include "gl/gl_harness.h"
 
 #include <gtest/gtest.h>
@@ -19,7 +18,7 @@ std::string read_all(const std::filesystem::path& path) {
 
 TEST(ShaderCli, WritesTheIncludesByteForByte) {
     TempDir dir;
-    for (const std::string lang : {"glsl", "glsl-es", "hlsl"}) {
+    for (const std::string lang : {"glsl", "glsl-es", "hlsl", "wgsl"}) {
         const std::string expected = read_source_file(lang == "glsl-es" ? "shaders/specaa_es.glsl" : "shaders/specaa." + lang);
         ASSERT_FALSE(expected.empty());
         const auto file = dir.path() / ("specaa." + lang);
@@ -32,7 +31,7 @@ TEST(ShaderCli, WritesTheIncludesByteForByte) {
         EXPECT_EQ(read_all(piped), expected) << lang;
     }
     // Only the requested files exist: no temporary file left behind.
-    EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), std::filesystem::directory_iterator()), 6);
+    EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), std::filesystem::directory_iterator()), 8);
 }
 
 TEST(ShaderCli, ReplacesAnExistingFileCompletely) {

@@ -1,0 +1,776 @@
+// specaa.wgsl: specbake runtime include for specular anti-aliasing (WGSL: WebGPU, three.js WebGPURenderer,
+// Bevy). Generated from shaders/src/ by shaders/generate.cmake (the shared body through shaders/to_wgsl.py);
+// edit the sources there, not this file.
+//
+// WGSL has no preprocessor, so this is the body in two configurations (docs/shader-include.md#webgpu-wgsl):
+// - no baked texture: specaa_filtered_alpha2_matrix, specaa_default_D, specaa_ggx_G2, specaa_filtered_alpha2,
+//   specaa_filtered_roughness (the material's roughness widened by the per-pixel kernel of the vertex
+//   normal's quad derivatives), and every function of the body with textures as parameters;
+// - the bake's default Sigma kernel texture: the same entry points with the suffix _kernel and the texture
+//   and its sampler as their last parameters (at the end of the file).
+// The "define before including" options of the header comment below are the GLSL/HLSL includes'; here the
+// four tunable values are the consts that follow (edit them in place). Functions using derivatives
+// (dpdx/dpdy) or textureSample run in fragment shaders, in uniform control flow; the others in any stage.
+const SPECAA_SIGMA2: f32 = 0.15915494309189535;  // pixel-filter variance in pixels^2, 1/(2 pi) (TK21 App. B)
+const SPECAA_KAPPA: f32 = 0.18;                  // clamp of derivative-based kernels (TK21 Eq. 10, K16)
+const SPECAA_GGX_SPREAD: f32 = 8.0;              // specaa_default_D with baked data: GGX(A) above k_max = 1/8
+const SPECAA_KERNEL_GATE: f32 = 0.5;             // fade of baked kernels narrower than this times a
+
+// Level of detail of a texture of level-0 size `size` at uv: the isotropic LOD of the GL spec (Sec. 8.14),
+// log2 of the footprint's major axis in texels (WGSL has no LOD query; specaa_texture_lod).
+fn specaa_lod_from_derivatives(size: vec2<f32>, uv: vec2<f32>) -> f32 {
+    let dx = dpdx(uv) * size;
+    let dy = dpdy(uv) * size;
+    return 0.5 * log2(max(dot(dx, dx), dot(dy, dy)));
+}
+// ===================================================================================================
+// specbake runtime include: specular anti-aliasing by NDF filtering (SPEC Sec. 5).
+//
+// Conventions (SPEC Sec. 2). Perceptual roughness r (glTF), alpha = r^2, squared roughness a = alpha^2.
+// A roughness matrix is a symmetric 2x2 matrix [[xx, xy], [xy, yy]] in the tangent frame, stored as
+// float3(xx, yy, xy), in squared-roughness units (A = diag(alpha_x^2, alpha_y^2) when axis-aligned;
+// A = 2 x slope covariance, TK21 Sec. 2.1). A "kernel matrix" K = 2 Sigma is what filtering adds to a
+// roughness matrix (TK21 Eq. 3 and 6); an isotropic kernel t is what it adds to a scalar a (TK21 Eq. 10,
+// 13, 14; SPEC Sec. 3: t = tr(Sigma) for the mean reduction). Tangent-space vectors: z along the normal.
+//
+// Configuration (define before including):
+//   SPECAA_SIGMA2   pixel-filter variance in pixels^2, default 1/(2 pi) (TK21 App. B).
+//   SPECAA_KAPPA    clamp of derivative-based kernels, default 0.18 (TK21 Eq. 10, K16).
+//   SPECAA_GGX_SPREAD  specaa_default_D with a kernel or LEAN texture: GGX(A) where the minified
+//                   footprint's spread k_max exceeds 1 / this, default 8.
+//   Baked data for the default entry point (at most one of the roughness texture and kernel/LEAN):
+//   SPECAA_ROUGHNESS_TEXTURE name   baked filtered roughness mips (perceptual r), channel
+//                                   SPECAA_ROUGHNESS_CHANNEL (default g: the RGBA ORM layout, A = 1;
+//                                   define it as r for the one-channel R8/R16 file).
+//   SPECAA_KERNEL_TEXTURE name      baked projected-space kernel mips: with SPECAA_KERNEL_ANISOTROPIC
+//                                   RGBA = (xx, yy, xy, g) of Sigma and its rough share g
+//                                   (R16G16B16A16_SFLOAT), the bake's default; without it R = t (isotropic
+//                                   mean, R16_SFLOAT; `specbake texture --isotropic-kernel`).
+//                                   The single lobe takes K = 2 Sigma sqrt(g) (specaa_baked_kernel_matrix);
+//   SPECAA_KERNEL_COVARIANCE        K = 2 Sigma whatever g (the covariance-matched lobe of earlier releases).
+//   SPECAA_KERNEL_GATE              a baked kernel K whose largest eigenvalue is below this times the
+//                                   material's a is faded out, K saturate(lambda_max(K) / (gate a))^2
+//                                   (specaa_baked_kernel_matrix); default 0.5, 0 keeps every kernel whole.
+//   SPECAA_KERNEL_TWO_LOBES         specaa_default_D splits the Sigma kernel's texel into its flat share
+//                                   (the material's lobe) and its rough share g (all of Sigma): opt-in.
+//   SPECAA_LEAN_TEXTURE0 name       LEAN moments, projected space (SPEC Sec. 3), in two textures:
+//   SPECAA_LEAN_TEXTURE1 name         TEXTURE0 RGBA = (m.x, m.y, M.xx, M.yy), TEXTURE1 R = M.xy
+//                                     (at least 16-bit float, trilinear filtering).
+//   Every baked file has 1, 2 or 4 channels in the same order in KTX2, DDS, EXR and PNG
+//   (docs/texture-bake.md#output-layouts); bind them with linear mip filtering (LINEAR_MIPMAP_LINEAR):
+//   loaders such as three.js KTX2Loader default to nearest.
+//   SPECAA_NORMAL_TWO_CHANNEL       the baked mean normal (`*_normal`) read by specaa_sample_mean_normal
+//                                   has two channels (BC5 of `--block bc`, ASTC of `--block astc`: x, y as
+//                                   (n + 1) / 2); z is rebuilt as sqrt(max(0, 1 - x^2 - y^2)). Without it:
+//                                   RGBA8, (n + 1) / 2.
+//   SPECAA_SAMPLER name             HLSL only: the SamplerState used with the textures above.
+//   SPECAA_USE_CURVATURE            per-pixel kernel from _SPECAA_CURVATURE (SPEC Sec. 4) and the
+//                                   position derivatives instead of normal derivatives.
+//   SPECAA_NO_PIXEL_KERNEL          baked data only (no per-pixel kernel).
+//   Diagnostics (to attribute an error to one part of the default; not for shipping):
+//   SPECAA_NO_BAKED_KERNEL          the baked kernel/LEAN spread is taken as zero (the per-pixel kernel only).
+//   SPECAA_DEFAULT_D_WEIGHT w       specaa_default_D with this blend weight everywhere (0: the convolved
+//                                   NDF, 1: GGX(A)).
+//   SPECAA_KERNEL_LOD_BIAS b        the Sigma kernel texel sampled with this LOD bias (the mip the
+//                                   hardware picks against a finer or coarser footprint).
+//   SPECAA_GATE_PIXEL_KERNEL        the per-pixel kernel faded out like the baked one (SPECAA_KERNEL_GATE).
+//   SPECAA_KERNEL_AREA_LOD          the Sigma kernel texel sampled at the mip of the footprint's area, not of
+//                                   its major axis (the hardware's isotropic choice).
+//   SPECAA_BLEND_FROM_BAKED_SPREAD  opt-in: specaa_default_D's blend weight from the baked spread alone,
+//                                   not from all of K = A - a I (the per-pixel kernel included).
+// Textures are sampled with implicit derivatives, so the hardware selects the mip: the baked mips are
+// the footprint filter of the normal map, the per-pixel kernel adds the geometric curvature.
+//
+// Domain: unit vectors, a in [0, 1], finite derivatives. Outside it, the derivative-based methods and the
+// default entry points follow the edge policy of the bake's filter core (bake/methods.h): a is clamped to
+// [0, 1] and a NaN a counts as 1 (fully rough); a non-finite input of a kernel (the vector whose quad
+// derivatives are taken or those derivatives, the curvature, the tangent frame, a baked texel) gives a
+// zero kernel; a kernel that overflows is infinitely wide: the clamped methods and the per-pixel kernels
+// of the default add kappa, the others give the fully rough matrix I. Their results are always finite.
+// The filters from given derivatives, the reductions and the NDFs take inputs inside the domain.
+// ===================================================================================================
+// Kernel traces above this are treated as this: the filtered roughness is then 1 within float precision,
+// and the closed forms below stay finite.
+// ---------------------------------------------------------------------------------------------------
+// Edge policy (header comment). Finiteness is read from the bits: GLSL does not require NaN support,
+// and a compiler may fold isnan() or x != x away; an exponent of all ones cannot be.
+// ---------------------------------------------------------------------------------------------------
+// Largest magnitude of the components as bits: at least SPECAA_NOT_FINITE exactly when one is +-inf or
+// NaN. Vector bit operations and maxima keep the tests cheap (no short-circuit branches).
+fn specaa_magnitude_bits(x: f32) -> u32 { return bitcast<u32>(x) & 0x7fffffffu; }
+// (The mask as a vector: WGSL does not apply a scalar to every component of a vector operand.)
+fn specaa_magnitude_bits3(v: vec3<f32>) -> vec3<u32> {
+    return bitcast<vec3<u32>>(v) & vec3<u32>(0x7fffffffu, 0x7fffffffu, 0x7fffffffu);
+}
+fn specaa_max_component(m: vec3<u32>) -> u32 { return max(max(m.x, m.y), m.z); }
+fn specaa_is_finite(x: f32) -> bool { return specaa_magnitude_bits(x) < 0x7f800000u; }
+fn specaa_is_finite3(v: vec3<f32>) -> bool { return specaa_max_component(specaa_magnitude_bits3(v)) < 0x7f800000u; }
+// Squared roughness clamped to [0, 1]; NaN counts as fully rough.
+fn specaa_sanitize_alpha2(a: f32) -> f32 { return select(clamp(a, 0.0, 1.0), 1.0, specaa_magnitude_bits(a) > 0x7f800000u); }
+fn specaa_sanitize_alpha2_2(a: vec2<f32>) -> vec2<f32> {
+    return vec2<f32>(specaa_sanitize_alpha2(a.x), specaa_sanitize_alpha2(a.y));
+}
+// A derivative-based kernel clamped to kappa; an unbounded one (+inf, or NaN from inf - inf or 0 * inf)
+// is clamped to kappa too (TK21 Eq. 10: the clamp bounds the kernel whatever the derivatives).
+fn specaa_clamp_kernel(kernel: f32) -> f32 { return select(SPECAA_KAPPA, min(kernel, SPECAA_KAPPA), specaa_is_finite(kernel)); }
+// The vector v and its quad derivatives dx, dy are finite.
+fn specaa_usable(v: vec3<f32>, dx: vec3<f32>, dy: vec3<f32>) -> bool {
+    let m: vec3<u32> = max(specaa_magnitude_bits3(v), max(specaa_magnitude_bits3(dx), specaa_magnitude_bits3(dy)));
+    return specaa_max_component(m) < 0x7f800000u;
+}
+// The policy around a filtered matrix r of squared roughness a: diag(a) without usable inputs (zero
+// kernel), the fully rough I when the kernel overflowed.
+fn specaa_guard_matrix(usable: bool, a: vec2<f32>, r: vec3<f32>) -> vec3<f32> {
+    let filtered: vec3<f32> = select(vec3<f32>(1.0, 1.0, 0.0), r, specaa_is_finite3(r));
+    return select(vec3<f32>(a, 0.0), filtered, usable);
+}
+// ---------------------------------------------------------------------------------------------------
+// Symmetric 2x2 matrices stored as float3(xx, yy, xy).
+// ---------------------------------------------------------------------------------------------------
+// Determinant xx yy - xy^2.
+fn specaa_sym_det(m: vec3<f32>) -> f32 { return m.x * m.y - m.z * m.z; }
+// Largest eigenvalue of a symmetric 2x2 matrix (closed form of the 2x2 characteristic polynomial).
+fn specaa_sym_max_eigenvalue(m: vec3<f32>) -> f32 {
+    let halfDiff: f32 = 0.5 * (m.x - m.y);
+    return 0.5 * (m.x + m.y) + sqrt(halfDiff * halfDiff + m.z * m.z);
+}
+// A positive semi-definite matrix with each eigenvalue clamped to [0, cap] (eigenvectors kept): TK21
+// Sec. 4's clamp of the non-axis-aligned kernel ("clamp the eigenvalues of Sigma"), the matrix analogue of
+// Listing 3's per-axis min. m = l2 I + (l1 - l2) P1 with the projector P1 = (m - l2 I) / (l1 - l2), so the
+// result is c2 I + (c1 - c2) P1, c_i = clamp(l_i, 0, cap); both above the cap: cap I. For a huge, nearly
+// rank-one m the rounded l2 can come out negative (cancellation in halfTrace - radius); the clamp to 0
+// keeps the result positive semi-definite and at most cap.
+fn specaa_sym_clamp_eigenvalues(m: vec3<f32>, cap: f32) -> vec3<f32> {
+    let halfTrace: f32 = 0.5 * (m.x + m.y);
+    let halfDiff: f32 = 0.5 * (m.x - m.y);
+    let radius: f32 = sqrt(halfDiff * halfDiff + m.z * m.z);
+    let l2: f32 = halfTrace - radius;
+    let c1: f32 = clamp(halfTrace + radius, 0.0, cap);
+    let c2: f32 = clamp(l2, 0.0, cap);
+    let f: f32 = select(0.0, (c1 - c2) / (2.0 * radius), radius > 0.0);
+    return vec3<f32>(c2 + f * (m.x - l2), c2 + f * (m.y - l2), f * m.z);
+}
+// Nearest positive semi-definite matrix: negative eigenvalues set to 0 (Frobenius projection). Used on
+// covariances formed as a difference of moments, Sigma = M - m m^T (SPEC Sec. 3), which rounding can
+// push slightly indefinite. Uses the spectral projector (Sigma - lmin I) / (lmax - lmin).
+fn specaa_sym_clamp_psd(m: vec3<f32>) -> vec3<f32> {
+    let halfTrace: f32 = 0.5 * (m.x + m.y);
+    let halfDiff: f32 = 0.5 * (m.x - m.y);
+    let radius: f32 = sqrt(halfDiff * halfDiff + m.z * m.z);
+    let lmax: f32 = halfTrace + radius;
+    let lmin: f32 = halfTrace - radius;
+    if (lmin >= 0.0) { return m; }
+    if (lmax <= 0.0) { return vec3<f32>(0.0, 0.0, 0.0); }
+    return (lmax / (2.0 * radius)) * vec3<f32>(m.x - lmin, m.y - lmin, m.z);
+}
+// Kernel matrix K = 2 Sigma = 2 sigma^2 [du; dv]^T [du; dv] from the screen-space derivatives of a 2D
+// quantity along x (du) and y (dv), TK21 Eq. (3) (K16: C = U U^T with the roughness factor 2).
+fn specaa_kernel_matrix(du: vec2<f32>, dv: vec2<f32>) -> vec3<f32> {
+    return (2.0 * SPECAA_SIGMA2) * vec3<f32>(du.x * du.x + dv.x * dv.x,
+                                                 du.y * du.y + dv.y * dv.y,
+                                                 du.x * du.y + dv.x * dv.y);
+}
+// ---------------------------------------------------------------------------------------------------
+// Half-vector projections (TK21 Sec. 3-4.1, T19 Listing 1).
+// ---------------------------------------------------------------------------------------------------
+// Slope-space half vector -h.xy / |h.z| (K16 "parallel plane", TK21 Listings 2-3 with the division).
+// Not finite at h.z = 0: the slope-space methods break down at grazing half vectors (TK21 Sec. 3).
+fn specaa_slope_half_vector(h: vec3<f32>) -> vec2<f32> { return h.xy / -abs(h.z); }
+// Orthographically projected half vector (h.x, h.y), TK21 Sec. 4.1: derivatives shrink by det J = h_z.
+fn specaa_projected_half_vector(h: vec3<f32>) -> vec2<f32> { return h.xy; }
+// ---------------------------------------------------------------------------------------------------
+// Filters from given derivatives (du, dv = value at the right/upper neighbour minus the fragment's).
+// alpha2 = (alpha_x^2, alpha_y^2) of the material.
+// ---------------------------------------------------------------------------------------------------
+// Non-axis-aligned filtering diag(alpha2) + K, no clamp. With slope-space derivatives this is K16's
+// R' = R + 2C (TK21 Eq. 2); with projected derivatives the practical approximation TK21 Eq. (9), Listing 2.
+fn specaa_filter_non_axis_aligned(alpha2: vec2<f32>, du: vec2<f32>, dv: vec2<f32>) -> vec3<f32> {
+    return vec3<f32>(alpha2.x, alpha2.y, 0.0) + specaa_kernel_matrix(du, dv);
+}
+// Axis-aligned filtering over the bounding rectangle |du| + |dv| of the footprint with the kappa clamp,
+// TK21 Listing 3 (K16 "More Temporal Stability"): saturate(alpha2 + min(2 sigma^2 bounds^2, kappa)).
+fn specaa_filter_axis_aligned(alpha2: vec2<f32>, du: vec2<f32>, dv: vec2<f32>) -> vec2<f32> {
+    let bounds: vec2<f32> = abs(du) + abs(dv);
+    let kernel: vec2<f32> = (2.0 * SPECAA_SIGMA2) * (bounds * bounds);
+    return saturate(alpha2 + vec2<f32>(specaa_clamp_kernel(kernel.x), specaa_clamp_kernel(kernel.y)));
+}
+// Full projected-space filtering of an axis-aligned material, TK21 Eq. (4)-(8):
+// A_bar = ((B + K)^-1 + I)^-1 with B = diag(a / (1 - a)), B_bar = B + K. Written as
+// A_bar = (B_bar + det(B_bar) I) / (1 + tr(B_bar) + det(B_bar)) (the App. D form) and multiplied by
+// c = (1 - a_x)(1 - a_y), so a = 1 (B infinite) and a = 0 with K = 0 (singular) stay exact (A_bar = 1
+// resp. 0). c det(B_bar) = a_x a_y + c B_xx K_yy + c B_yy K_xx + c det(K) is a sum of non-negative terms,
+// so det(B_bar) >= det(B) (the clamp of Listing 1) holds by construction. detK = det(K) >= 0, K PSD.
+fn specaa_filter_projected_matrix_det(alpha2: vec2<f32>, kernel: vec3<f32>, kernelDet: f32) -> vec3<f32> {
+    // Half the trace first: a finite K whose trace overflows still scales down to the cap (then A_bar ~ I)
+    // instead of to 0; an infinite K gives NaN here, which the callers' edge policy turns into I.
+    var K: vec3<f32> = kernel;
+    var detK: f32 = kernelDet;
+    let halfTraceK: f32 = 0.5 * K.x + 0.5 * K.y;
+    var traceK: f32 = K.x + K.y;
+    if (halfTraceK > 0.5 * 1.0e8) {
+        let scale: f32 = (0.5 * 1.0e8) / halfTraceK;
+        K *= scale;
+        detK *= scale * scale;
+        traceK = 1.0e8;
+    }
+    let ax: f32 = saturate(alpha2.x);
+    let ay: f32 = saturate(alpha2.y);
+    let c: f32 = (1.0 - ax) * (1.0 - ay);
+    let bx: f32 = ax * (1.0 - ay); // c B_xx
+    let by: f32 = ay * (1.0 - ax); // c B_yy
+    let cDet: f32 = ax * ay + bx * K.y + by * K.x + c * max(detK, 0.0); // c det(B_bar)
+    let denominator: f32 = c + bx + by + c * traceK + cDet; // c (1 + tr(B_bar) + det(B_bar)) > 0
+    return vec3<f32>(bx + c * K.x + cDet, by + c * K.y + cDet, c * K.z) / denominator;
+}
+// Full projected-space filtering by a kernel matrix K (PSD), e.g. baked Sigma plus a curvature kernel.
+fn specaa_filter_projected_matrix(alpha2: vec2<f32>, K: vec3<f32>) -> vec3<f32> {
+    return specaa_filter_projected_matrix_det(alpha2, K, specaa_sym_det(K));
+}
+// Full projected-space filtering from projected half-vector derivatives, TK21 Listing 1. det(K) comes
+// from Cauchy-Binet, (2 sigma^2)^2 (du x dv)^2, exact where K_xx K_yy - K_xy^2 would cancel (a footprint
+// stretched along one direction, e.g. at grazing angles).
+fn specaa_filter_projected(alpha2: vec2<f32>, du: vec2<f32>, dv: vec2<f32>) -> vec3<f32> {
+    let cross2: f32 = (2.0 * SPECAA_SIGMA2) * (du.x * dv.y - du.y * dv.x);
+    return specaa_filter_projected_matrix_det(alpha2, specaa_kernel_matrix(du, dv), cross2 * cross2);
+}
+// Isotropic kernels from world-space normal derivatives dnU, dnV (TK21 Sec. 5; Eq. 12: their lengths
+// equal the projected derivatives of the pairwise averaged normal). Sigma = sigma^2 Gram(dnU, dnV).
+// Max: 2 lambda_max(Sigma), TK21 Eq. (10) (tightest conservative isotropic kernel).
+fn specaa_iso_kernel_max(dnU: vec3<f32>, dnV: vec3<f32>) -> f32 {
+    let gram: vec3<f32> = vec3<f32>(dot(dnU, dnU), dot(dnV, dnV), dot(dnU, dnV));
+    return 2.0 * SPECAA_SIGMA2 * specaa_sym_max_eigenvalue(gram);
+}
+// Sum: 2 tr(Sigma) = 2 sigma^2 (|dnU|^2 + |dnV|^2), TK21 Eq. (13), Listing 5 (conservative).
+fn specaa_iso_kernel_sum(dnU: vec3<f32>, dnV: vec3<f32>) -> f32 {
+    return 2.0 * SPECAA_SIGMA2 * (dot(dnU, dnU) + dot(dnV, dnV));
+}
+// Mean: tr(Sigma) = sigma^2 (|dnU|^2 + |dnV|^2), TK21 Eq. (14) (less conservative, lowest error there).
+fn specaa_iso_kernel_mean(dnU: vec3<f32>, dnV: vec3<f32>) -> f32 {
+    return SPECAA_SIGMA2 * (dot(dnU, dnU) + dot(dnV, dnV));
+}
+// Clamped isotropic filtering, TK21 Eq. (10)/(13)/(14) as in Listing 5: saturate(a + min(t, kappa)).
+fn specaa_filter_isotropic(alpha2: f32, kernel: f32) -> f32 {
+    return saturate(alpha2 + specaa_clamp_kernel(kernel));
+}
+// ---------------------------------------------------------------------------------------------------
+// Derivative-based methods: the filters above with derivatives from the 2x2 pixel quad (ddx/ddy).
+// hTS: unit tangent-space half vector; normal: unit world-space shading normal.
+// ---------------------------------------------------------------------------------------------------
+// "slope": K16 slope-space non-axis-aligned filtering, R' = R + 2C (TK21 Eq. 2).
+fn specaa_slope(alpha2: vec2<f32>, hTS: vec3<f32>) -> vec3<f32> {
+    let a: vec2<f32> = specaa_sanitize_alpha2_2(alpha2);
+    let hs: vec2<f32> = specaa_slope_half_vector(hTS);
+    return specaa_guard_matrix(specaa_usable(hTS, dpdx(hTS), dpdy(hTS)), a, specaa_filter_non_axis_aligned(a, dpdx(hs), dpdy(hs)));
+}
+// "slope-aa": K16 axis-aligned rectangle in slope space with the kappa clamp (Listing 3 with division).
+fn specaa_slope_aa(alpha2: vec2<f32>, hTS: vec3<f32>) -> vec2<f32> {
+    let a: vec2<f32> = specaa_sanitize_alpha2_2(alpha2);
+    let hs: vec2<f32> = specaa_slope_half_vector(hTS);
+    let r: vec2<f32> = specaa_filter_axis_aligned(a, dpdx(hs), dpdy(hs));
+    return select(a, r, specaa_usable(hTS, dpdx(hTS), dpdy(hTS)));
+}
+// "projected-approx": TK21 Listing 2, Eq. (9), non-axis-aligned, projected derivatives, no clamp.
+fn specaa_projected_approx(alpha2: vec2<f32>, hTS: vec3<f32>) -> vec3<f32> {
+    let a: vec2<f32> = specaa_sanitize_alpha2_2(alpha2);
+    let hp: vec2<f32> = specaa_projected_half_vector(hTS);
+    return specaa_guard_matrix(specaa_usable(hTS, dpdx(hTS), dpdy(hTS)), a, specaa_filter_non_axis_aligned(a, dpdx(hp), dpdy(hp)));
+}
+// "projected-aa": TK21 Listing 3, axis-aligned, projected derivatives, kappa clamp.
+fn specaa_projected_aa(alpha2: vec2<f32>, hTS: vec3<f32>) -> vec2<f32> {
+    let a: vec2<f32> = specaa_sanitize_alpha2_2(alpha2);
+    let hp: vec2<f32> = specaa_projected_half_vector(hTS);
+    let r: vec2<f32> = specaa_filter_axis_aligned(a, dpdx(hp), dpdy(hp));
+    return select(a, r, specaa_usable(hTS, dpdx(hTS), dpdy(hTS)));
+}
+// "projected": TK21 Listing 1, full projected-space filtering (Eq. 4-8).
+fn specaa_projected(alpha2: vec2<f32>, hTS: vec3<f32>) -> vec3<f32> {
+    let a: vec2<f32> = specaa_sanitize_alpha2_2(alpha2);
+    let hp: vec2<f32> = specaa_projected_half_vector(hTS);
+    return specaa_guard_matrix(specaa_usable(hTS, dpdx(hTS), dpdy(hTS)), a, specaa_filter_projected(a, dpdx(hp), dpdy(hp)));
+}
+// "iso-max": TK21 Eq. (10) from normal derivatives; returns the filtered a.
+fn specaa_iso_max(alpha2: f32, normal: vec3<f32>) -> f32 {
+    let a: f32 = specaa_sanitize_alpha2(alpha2);
+    let dnU: vec3<f32> = dpdx(normal);
+    let dnV: vec3<f32> = dpdy(normal);
+    return select(a, specaa_filter_isotropic(a, specaa_iso_kernel_max(dnU, dnV)), specaa_usable(normal, dnU, dnV));
+}
+// "iso-sum": TK21 Eq. (13), Listing 5 (T19 Listing 2); returns the filtered a.
+fn specaa_iso_sum(alpha2: f32, normal: vec3<f32>) -> f32 {
+    let a: f32 = specaa_sanitize_alpha2(alpha2);
+    let dnU: vec3<f32> = dpdx(normal);
+    let dnV: vec3<f32> = dpdy(normal);
+    return select(a, specaa_filter_isotropic(a, specaa_iso_kernel_sum(dnU, dnV)), specaa_usable(normal, dnU, dnV));
+}
+// "iso-mean": TK21 Eq. (14); returns the filtered a.
+fn specaa_iso_mean(alpha2: f32, normal: vec3<f32>) -> f32 {
+    let a: f32 = specaa_sanitize_alpha2(alpha2);
+    let dnU: vec3<f32> = dpdx(normal);
+    let dnV: vec3<f32> = dpdy(normal);
+    return select(a, specaa_filter_isotropic(a, specaa_iso_kernel_mean(dnU, dnV)), specaa_usable(normal, dnU, dnV));
+}
+// ---------------------------------------------------------------------------------------------------
+// Isotropic projected-space filtering and kernel reductions (SPEC Sec. 3, the texture bake's formulas).
+// ---------------------------------------------------------------------------------------------------
+// Full projected-space filtering of a scalar a by an isotropic kernel t, TK21 Eq. (4)-(7) in closed form:
+// a' = (a + t (1 - a)) / (1 + t (1 - a)). t = 0 leaves a unchanged; a = 1 stays 1.
+fn specaa_filter_projected_isotropic(alpha2: f32, kernel: f32) -> f32 {
+    let k: f32 = min(kernel, 1.0e8) * (1.0 - alpha2);
+    return (alpha2 + k) / (1.0 + k);
+}
+// Approximate filtering a' = min(1, a + t), TK21 Eq. (9) (the bake's --filter approx).
+fn specaa_filter_approx_isotropic(alpha2: f32, kernel: f32) -> f32 { return min(1.0, alpha2 + kernel); }
+// Reductions of a covariance Sigma to an isotropic kernel t (SPEC Sec. 3): mean tr(Sigma) (Eq. 14
+// analogue), sum 2 tr(Sigma) (Eq. 13), max 2 lambda_max(Sigma) (Eq. 10).
+fn specaa_reduce_mean(sigma: vec3<f32>) -> f32 { return sigma.x + sigma.y; }
+fn specaa_reduce_sum(sigma: vec3<f32>) -> f32 { return 2.0 * (sigma.x + sigma.y); }
+fn specaa_reduce_max(sigma: vec3<f32>) -> f32 { return 2.0 * specaa_sym_max_eigenvalue(sigma); }
+// ---------------------------------------------------------------------------------------------------
+// Baked textures (SPEC Sec. 3), sampled at the hardware-selected mip.
+// ---------------------------------------------------------------------------------------------------
+// a = r^4 from perceptual roughness r (SPEC Sec. 2), and back.
+fn specaa_alpha2_from_roughness(r: f32) -> f32 { let alpha: f32 = r * r; return alpha * alpha; }
+fn specaa_roughness_from_alpha2(alpha2: f32) -> f32 { return sqrt(sqrt(max(alpha2, 0.0))); }
+// Baked filtered roughness mips: returns a of channel SPECAA_ROUGHNESS_CHANNEL (perceptual r).
+fn specaa_sample_roughness(tex: texture_2d<f32>, smp: sampler, uv: vec2<f32>) -> f32 {
+    return specaa_alpha2_from_roughness(textureSample(tex, smp, uv).g);
+}
+// Baked isotropic kernel mips: t in channel R.
+// A non-finite texel gives a zero kernel (edge policy).
+fn specaa_sample_kernel(tex: texture_2d<f32>, smp: sampler, uv: vec2<f32>) -> f32 {
+    let t: f32 = textureSample(tex, smp, uv).r;
+    return select(0.0, max(t, 0.0), specaa_is_finite(t));
+}
+// Baked anisotropic kernel mips: Sigma = (xx, yy, xy) in RGB (A: the rough share below); clamped to PSD
+// after filtering.
+fn specaa_sample_kernel_covariance(tex: texture_2d<f32>, smp: sampler, uv: vec2<f32>) -> vec3<f32> {
+    let sigma: vec3<f32> = specaa_sym_clamp_psd(textureSample(tex, smp, uv).rgb);
+    return select(vec3<f32>(0.0, 0.0, 0.0), sigma, specaa_is_finite3(sigma));
+}
+// Rough share g of a baked Sigma kernel texel (alpha channel): the part of its normals steeper than slope
+// 0.02, which holds all of Sigma (specaa_default_D). Non-finite or absent (1) gives the single lobe.
+fn specaa_rough_share(g: f32) -> f32 { return select(1.0, saturate(g), specaa_is_finite(g)); }
+fn specaa_sample_kernel_rough_share(tex: texture_2d<f32>, smp: sampler, uv: vec2<f32>) -> f32 {
+    return specaa_rough_share(textureSample(tex, smp, uv).a);
+}
+// Both from one fetch: (Sigma.xx, Sigma.yy, Sigma.xy, g), Sigma clamped to PSD (zero if not finite).
+fn specaa_sample_kernel_texel(tex: texture_2d<f32>, smp: sampler, uv: vec2<f32>) -> vec4<f32> {
+    let t: vec4<f32> = textureSample(tex, smp, uv);
+    let sigma: vec3<f32> = specaa_sym_clamp_psd(t.rgb);
+    return vec4<f32>(select(vec3<f32>(0.0, 0.0, 0.0), sigma, specaa_is_finite3(sigma)),
+                         specaa_rough_share(t.a));
+}
+// Covariance from LEAN moments, Sigma = M - m m^T clamped to PSD (SPEC Sec. 3; C21 Eq. 16).
+// lean0 = (m.x, m.y, M.xx, M.yy), lean1 = M.xy. Moments filter linearly, so any mip/trilinear mix of
+// them still yields the covariance of the normals in the filtered footprint. Non-finite moments give 0.
+fn specaa_lean_covariance(lean0: vec4<f32>, lean1: f32) -> vec3<f32> {
+    let sigma: vec3<f32> = specaa_sym_clamp_psd(vec3<f32>(lean0.z - lean0.x * lean0.x,
+                                                             lean0.w - lean0.y * lean0.y,
+                                                             lean1 - lean0.x * lean0.y));
+    return select(vec3<f32>(0.0, 0.0, 0.0), sigma, specaa_is_finite3(sigma));
+}
+// Baked mean normal (`*_normal`, docs/texture-bake.md#output-layouts), tangent space, unit length. Two-channel texels
+// (BC5 under `--block bc`, ASTC's (x, y, 0, 1) under `--block astc`) hold x, y as (n + 1) / 2: z = sqrt(max(0, 1 - x^2 - y^2)) (the mean normal lies in
+// the upper hemisphere), renormalised where filtering or quantisation put (x, y) outside the unit disc.
+// RGB texels hold (n + 1) / 2, renormalised after filtering; a zero vector gives (0, 0, 1).
+fn specaa_decode_normal_xy(texel: vec2<f32>) -> vec3<f32> {
+    let xy: vec2<f32> = texel * 2.0 - 1.0;
+    let n: vec3<f32> = vec3<f32>(xy, sqrt(max(0.0, 1.0 - dot(xy, xy))));
+    return n / sqrt(dot(n, n)); // |n| >= 1 (z = 1 at xy = 0): no division by zero
+}
+fn specaa_decode_normal_rgb(texel: vec3<f32>) -> vec3<f32> {
+    let n: vec3<f32> = texel * 2.0 - 1.0;
+    let l2: f32 = dot(n, n);
+    return select(vec3<f32>(0.0, 0.0, 1.0), n / sqrt(max(l2, 1.0e-30)), l2 > 0.0);
+}
+// The baked mean normal at uv: two channels with SPECAA_NORMAL_TWO_CHANNEL (BC5, ASTC), else RGB(A).
+fn specaa_sample_mean_normal(tex: texture_2d<f32>, smp: sampler, uv: vec2<f32>) -> vec3<f32> {
+    return specaa_decode_normal_rgb(textureSample(tex, smp, uv).rgb);
+}
+// LEAN lookup from the two moment textures (layout in the header comment).
+fn specaa_sample_lean(tex0: texture_2d<f32>, smp0: sampler, tex1: texture_2d<f32>, smp1: sampler,
+                                 uv: vec2<f32>) -> vec3<f32> {
+    return specaa_lean_covariance(textureSample(tex0, smp0, uv), textureSample(tex1, smp1, uv).r);
+}
+// ---------------------------------------------------------------------------------------------------
+// Curvature-based kernel from the _SPECAA_CURVATURE attribute (SPEC Sec. 4) and the pixel footprint.
+// ---------------------------------------------------------------------------------------------------
+// Shape operator S = k1 d d^T + k2 d' d'^T (d' = d rotated by 90 degrees) in the tangent frame from
+// curvature = (k1, k2, d.x, d.y). The normal moves by dp = -S dx for a tangent step dx (first order), so
+// S maps the footprint to projected-normal derivatives. A zero d (umbilic) uses k1 on both axes.
+fn specaa_shape_operator(curvature: vec4<f32>) -> vec3<f32> {
+    let len: f32 = length(curvature.zw);
+    if (len < 1.0e-6) { return vec3<f32>(curvature.x, curvature.x, 0.0); }
+    let d: vec2<f32> = curvature.zw / len;
+    let k1: f32 = curvature.x;
+    let k2: f32 = curvature.y;
+    return vec3<f32>(k1 * d.x * d.x + k2 * d.y * d.y,
+                         k1 * d.y * d.y + k2 * d.x * d.x,
+                         (k1 - k2) * d.x * d.y);
+}
+// Pixel footprint in the tangent plane: the position derivatives along screen x and y expressed in the
+// (T, B) frame, returned as (u.x, u.y, v.x, v.y). Units of the positions (object space for the curvature).
+fn specaa_footprint_tangent(dPdx: vec3<f32>, dPdy: vec3<f32>, tangent: vec3<f32>,
+                                       bitangent: vec3<f32>) -> vec4<f32> {
+    let t: vec3<f32> = normalize(tangent);
+    let b: vec3<f32> = normalize(bitangent);
+    return vec4<f32>(dot(dPdx, t), dot(dPdx, b), dot(dPdy, t), dot(dPdy, b));
+}
+// Pixel footprint from the quad derivatives of the interpolated position (same space as T, B).
+fn specaa_footprint(position: vec3<f32>, tangent: vec3<f32>, bitangent: vec3<f32>) -> vec4<f32> {
+    return specaa_footprint_tangent(dpdx(position), dpdy(position), tangent, bitangent);
+}
+// Width of one pixel on a plane facing the camera at view depth z (perspective, vertical field of view
+// with tan(fovY/2), viewport height in pixels): 2 z tan(fovY/2) / height. Grazing elongation is ignored.
+fn specaa_pixel_footprint_from_depth(viewDepth: f32, tanHalfFovY: f32, viewportHeight: f32) -> f32 {
+    return 2.0 * viewDepth * tanHalfFovY / viewportHeight;
+}
+// Curvature kernel matrix K = 2 sigma^2 (S u u^T S + S v v^T S), TK21 Eq. (3) with the projected-normal
+// derivatives S u, S v of the curved shading-normal field (K16 "virtual quadric") instead of quad
+// differences. footprint = (u.x, u.y, v.x, v.y) from specaa_footprint*.
+fn specaa_curvature_kernel(curvature: vec4<f32>, footprint: vec4<f32>) -> vec3<f32> {
+    let S: vec3<f32> = specaa_shape_operator(curvature);
+    let du: vec2<f32> = vec2<f32>(S.x * footprint.x + S.z * footprint.y, S.z * footprint.x + S.y * footprint.y);
+    let dv: vec2<f32> = vec2<f32>(S.x * footprint.z + S.z * footprint.w, S.z * footprint.z + S.y * footprint.w);
+    return specaa_kernel_matrix(du, dv);
+}
+// Isotropic curvature kernel for a square footprint of width w: mean reduction tr(Sigma) =
+// sigma^2 w^2 (k1^2 + k2^2) (TK21 Eq. 14 with |dn| = |k| w per principal direction).
+fn specaa_curvature_kernel_isotropic(curvature: vec4<f32>, footprintWidth: f32) -> f32 {
+    return SPECAA_SIGMA2 * footprintWidth * footprintWidth * (curvature.x * curvature.x + curvature.y * curvature.y);
+}
+// ---------------------------------------------------------------------------------------------------
+// GGX and Beckmann with a roughness matrix A (TK21 Sec. 2.1, App. A).
+// ---------------------------------------------------------------------------------------------------
+// Clamped determinant max(det(A), tau) of TK21 App. A.4 (tau = alpha_x^2 alpha_y^2 of the unfiltered
+// material), floored at 1e-30 so a mirror (A = 0, tau = 0) stays finite instead of a Dirac delta.
+fn specaa_clamped_det(A: vec3<f32>, tau: f32) -> f32 { return max(max(specaa_sym_det(A), tau), 1.0e-30); }
+// [h.x, h.y] A^-1 [h.x, h.y]^T with A^-1 = adj(A) / detClamped (TK21 App. A.4).
+fn specaa_inverse_quadratic_form(A: vec3<f32>, v: vec2<f32>, detClamped: f32) -> f32 {
+    return (v.x * v.x * A.y - 2.0 * v.x * v.y * A.z + v.y * v.y * A.x) / detClamped;
+}
+// GGX NDF, TK21 Eq. (1) with the determinant clamp of App. A.4. 0 for h.z <= 0.
+fn specaa_ggx_D(h: vec3<f32>, A: vec3<f32>, tau: f32) -> f32 {
+    if (h.z <= 0.0) { return 0.0; }
+    let detClamped: f32 = specaa_clamped_det(A, tau);
+    let q: f32 = specaa_inverse_quadratic_form(A, h.xy, detClamped) + h.z * h.z;
+    return 1.0 / (3.14159265358979 * sqrt(detClamped) * q * q);
+}
+// Beckmann NDF with a roughness matrix, TK21 Sec. 2.1, same clamp. 0 for h.z <= 0.
+fn specaa_beckmann_D(h: vec3<f32>, A: vec3<f32>, tau: f32) -> f32 {
+    if (h.z <= 0.0) { return 0.0; }
+    let detClamped: f32 = specaa_clamped_det(A, tau);
+    let z2: f32 = h.z * h.z;
+    return exp(-specaa_inverse_quadratic_form(A, h.xy, detClamped) / z2) /
+           (3.14159265358979 * sqrt(detClamped) * z2 * z2);
+}
+// NDF of a filtered lobe with the tails of the unfiltered material (TK21 Sec. 7). Widening GGX to
+// A = a I + K also raises its tails: along the direction u of h.xy GGX(A) falls as
+// 1 / (pi sqrt(det A) (u^T A^-1 u)^2 theta^4), while the footprint's true NDF (GGX(a) spread by the
+// footprint's normal distribution) keeps the tails of GGX(a), ~ a / (pi theta^4). Along the widened axis
+// of an anisotropic A (a grazing footprint) the excess is (K/a)^(3/2), not K/a. The mixture
+// rho GGX(A) + (1 - rho) Beckmann(A) with rho = a sqrt(det A) (u^T A^-1 u)^2 (clamped to [0, 1]) keeps the
+// width of the filtered lobe, has exactly the unfiltered tail in every direction and integrates to one
+// like both parts (along each ray of slopes their difference integrates to zero); with K = 0 it is
+// GGX(a). `alpha2` is the unfiltered a of the material.
+fn specaa_filtered_D(h: vec3<f32>, A: vec3<f32>, alpha2: f32) -> f32 {
+    let tau: f32 = alpha2 * alpha2;
+    let detClamped: f32 = specaa_clamped_det(A, tau);
+    let r2: f32 = dot(h.xy, h.xy);
+    let q: f32 = select(1.0 / sqrt(detClamped), specaa_inverse_quadratic_form(A, h.xy, detClamped) / r2, r2 > 0.0);
+    let rho: f32 = saturate(alpha2 * sqrt(detClamped) * q * q);
+    let ggx: f32 = specaa_ggx_D(h, A, tau);
+    return ggx + (1.0 - rho) * (specaa_beckmann_D(h, A, tau) - ggx);
+}
+// NDF of GGX(alpha2) seen through the pixel footprint: GGX(a) convolved with the footprint's distribution
+// of slopes, N(0, K / 2) with K = A - a I (TK21 Eq. 3: the kernel is twice the footprint's slope
+// covariance). GGX is a Gaussian scale mixture (a bivariate Student t with two degrees of freedom):
+// GGX(a) = int_0^inf e^-w Beckmann(a / w I) dw, so the convolution is, exactly,
+// int_0^inf e^-w Beckmann(a / w I + K) dw: a core as wide as the footprint and the unfiltered lobe's own
+// tails (from the small w), where GGX(A) widens both (its tails K / a too heavy) and specaa_filtered_D's
+// Beckmann part undershoots between them. Evaluated by the trapezoid rule in ln w, steps of at most 1.1,
+// from w_lo = 0.05 min(1, a / k_max) to 10 (e^-10 of the weight is left out; 12 to 32 nodes), and the
+// part below w_lo in closed form (a / w >= 20 k_max) with Beckmann(a / w I + K) to first order in K:
+// int_0^w_lo w e^(-w (1 + c)) (1 + q w^2 / a^2 - tr(K) w / (2 a)) dw / (pi a h_z^4), c = tan^2(theta_h) / a,
+// q = h.xy^T K h.xy / h_z^2 (in the tails most of the lobe lies there). That sum's own error (about 1% in
+// the tails, from the node at w_lo) exceeds what a footprint much smaller than the lobe changes there, so
+// for k_max < a the same nodes also sum the K = 0 integrand and the result is GGX(a) + (sum_K - sum_0):
+// exact as K -> 0, its error a fraction of the footprint's effect; from k_max = a / 10 to a it blends
+// (in log k_max) into the direct sum. Relative error against a dense quadrature under 0.1% for
+// K / a <= 0.1, 1.6% to K / a = 3, 4% beyond, out to tan^2 = 2 (tests/bake/test_ggx.cpp checks it
+// against a brute-force convolution to 4%, and the small-footprint effect to 10% of itself).
+// GGX(A) itself where k_max <= 1e-3 a (within 0.1%).
+// `alpha2` is the a the footprint spreads: the material's, or the baked roughness texture's.
+fn specaa_convolved_D(h: vec3<f32>, A: vec3<f32>, alpha2: f32) -> f32 {
+    if (h.z <= 0.0) { return 0.0; }
+    let a: f32 = max(alpha2, 1.0e-12);
+    // The added kernel, projected onto the PSD cone (an anisotropic material's A - a I can be indefinite).
+    let K: vec3<f32> = specaa_sym_clamp_psd(A - vec3<f32>(a, a, 0.0));
+    let kmax: f32 = max(specaa_sym_max_eigenvalue(K), 0.0);
+    if (kmax <= 1.0e-3 * a) { return specaa_ggx_D(h, A, a * a); } // no footprint to speak of
+    let wlo: f32 = 0.05 * min(1.0, a / kmax);
+    let slo: f32 = log(wlo);
+    let range: f32 = log(10.0) - slo;
+    let nodes: i32 = i32(clamp(ceil(range / 1.1), 11.0, 31.0)) + 1;
+    let ds: f32 = range / f32(nodes - 1);
+    let z2: f32 = h.z * h.z;
+    let c: f32 = dot(h.xy, h.xy) / (z2 * a);
+    let unit: f32 = 1.0 / (3.14159265358979 * a * z2 * z2);
+    var sum: f32 = 0.0;
+    var sumUnfiltered: f32 = 0.0;
+    for (var j: i32 = 0; j < 32; j++) {
+        if (j >= nodes) { break; }
+        let w: f32 = exp(slo + ds * f32(j));
+        let v: f32 = a / w;
+        let weight: f32 = select(1.0, 0.5, (j == 0 || j == nodes - 1));
+        sum += weight * exp(-w) * w * specaa_beckmann_D(h, K + vec3<f32>(v, v, 0.0), v * v);
+        sumUnfiltered += weight * exp(-w * (1.0 + c)) * w * w * unit; // Beckmann(a / w I)
+    }
+    // Below w_lo, Beckmann(a / w I + K) to first order in K, integrated in closed form (series where the
+    // closed forms cancel in float): I1 + q I3 / a^2 - tr(K) I2 / (2 a), In = int_0^w_lo w^n e^(-w (1 + c)) dw.
+    let c1: f32 = 1.0 + c;
+    let x: f32 = c1 * wlo;
+    let e: f32 = exp(-x);
+    let below: f32 = select(wlo * wlo * (0.5 - x / 3.0), (1.0 - e * (1.0 + x)) / (c1 * c1), x > 1.0e-2);
+    let p2: f32 = 1.0 + x + 0.5 * x * x;
+    let wlo3: f32 = wlo * wlo * wlo;
+    let i2: f32 = select(2.0 * (1.0 - e * p2) / (c1 * c1 * c1), wlo3 * (1.0 / 3.0 - x / 4.0 + x * x / 10.0 - x * x * x / 36.0), x < 0.5);
+    let i3: f32 = select(6.0 * (1.0 - e * (p2 + x * x * x / 6.0)) / (c1 * c1 * c1 * c1), wlo3 * wlo * (0.25 - x / 5.0 + x * x / 12.0 - x * x * x / 42.0), x < 0.5);
+    let q: f32 = (h.x * h.x * K.x + 2.0 * h.x * h.y * K.z + h.y * h.y * K.y) / z2;
+    let firstOrder: f32 = q / (a * a) * i3 - 0.5 * (K.x + K.y) / a * i2;
+    let direct: f32 = sum * ds + (below + firstOrder) * unit;
+    let difference: f32 = max(0.0, specaa_ggx_D(h, vec3<f32>(a, a, 0.0), a * a) + (sum - sumUnfiltered) * ds + firstOrder * unit);
+    let blend: f32 = saturate(log2(10.0 * kmax / a) * 0.30103);
+    return difference + blend * (direct - difference);
+}
+// GGX Smith Lambda, TK21 App. A.3: -1/2 + sqrt(s + o.z^2) / (2 |o.z|), s = [o.x, o.y] A [o.x, o.y]^T,
+// evaluated as s / (2 |o.z| (sqrt(s + o.z^2) + |o.z|)) (same value, no cancellation for smooth A).
+// +inf at o.z = 0 with s > 0.
+fn specaa_ggx_lambda(o: vec3<f32>, A: vec3<f32>) -> f32 {
+    let s: f32 = o.x * o.x * A.x + 2.0 * o.x * o.y * A.z + o.y * o.y * A.y;
+    let z: f32 = abs(o.z);
+    return s / (2.0 * z * (sqrt(s + z * z) + z));
+}
+// Height-correlated G2 = chi+(i.h) chi+(o.h) / (1 + Lambda(i) + Lambda(o)), TK21 App. A.1, evaluated as
+// 2 |i.z| |o.z| / (|o.z| sqrt(q_i) + |i.z| sqrt(q_o)) (same expression times 2 |i.z| |o.z|), which is
+// finite at grazing i or o (G2 -> 0). In [0, 1].
+fn specaa_ggx_G2(i: vec3<f32>, o: vec3<f32>, h: vec3<f32>, A: vec3<f32>) -> f32 {
+    if (dot(i, h) <= 0.0 || dot(o, h) <= 0.0) { return 0.0; }
+    let qi: f32 = i.x * i.x * A.x + 2.0 * i.x * i.y * A.z + i.y * i.y * A.y + i.z * i.z;
+    let qo: f32 = o.x * o.x * A.x + 2.0 * o.x * o.y * A.z + o.y * o.y * A.y + o.z * o.z;
+    let denominator: f32 = abs(o.z) * sqrt(qi) + abs(i.z) * sqrt(qo);
+    return select(0.0, 2.0 * abs(i.z) * abs(o.z) / denominator, denominator > 0.0);
+}
+// ---------------------------------------------------------------------------------------------------
+// Default entry point: filtered roughness from whatever baked data is bound plus a per-pixel kernel.
+// The default rule is the matrix form, specaa_filtered_alpha2_matrix (an anisotropic per-pixel kernel
+// in the tangent frame), with specaa_default_D (GGX convolved with the footprint where no normal-map data
+// is baked) and specaa_ggx_G2: of the combinations `specbake bench` scores it has the lowest linear and
+// tone-mapped error and flicker (docs/accuracy.md#the-rule). specaa_filtered_alpha2 /
+// specaa_filtered_roughness are its isotropic form, a drop-in for BRDFs that take one roughness.
+// ---------------------------------------------------------------------------------------------------
+// Per-fragment inputs. Fill every field the configuration uses (see the header comment).
+struct SpecaaSurface {
+    roughness: f32, // perceptual roughness r of the material (unused with a roughness texture)
+    uv: vec2<f32>, // texture coordinates of the baked textures
+    normal: vec3<f32>, // unit interpolated vertex normal (before normal mapping), any space
+    position: vec3<f32>, // position in the space of tangent/bitangent (SPECAA_USE_CURVATURE)
+    tangent: vec3<f32>, // T = TANGENT.xyz (matrix form, SPECAA_USE_CURVATURE)
+    bitangent: vec3<f32>, // B = cross(N, T) * TANGENT.w
+    curvature: vec4<f32>, // _SPECAA_CURVATURE (k1, k2, d.x, d.y) (SPECAA_USE_CURVATURE)
+}
+// Squared roughness a of the material: the baked filtered roughness texture if bound, else r^4.
+// Clamped to [0, 1], NaN as 1 (edge policy).
+fn specaa_base_alpha2(s: SpecaaSurface) -> f32 {
+    return specaa_sanitize_alpha2(specaa_alpha2_from_roughness(s.roughness));
+}
+// The normal map's spread at this fragment's mip as a kernel matrix, before the gate below (0 without
+// kernel/LEAN data); an isotropic kernel texture gives K = t I.
+fn specaa_baked_spread_matrix(s: SpecaaSurface) -> vec3<f32> {
+    return vec3<f32>(0.0, 0.0, 0.0);
+}
+// Baked kernel matrix of the default: the spread above, faded out where it is much narrower than the
+// material's lobe, K f^2 with f = saturate(lambda_max(K) / (SPECAA_KERNEL_GATE a)) (NaN passes through
+// for the guards downstream). A spread far below a changes D by a small fraction, and on a smooth bump
+// map under a rough material (the normal-mapped sphere at alpha 0.2-0.5) that change raised the flicker
+// above no filtering's (alpha 0.2: 1.0025x tone-mapped, 0.3: 1.017x, 0.5: 1.012x); no filtering's flicker
+// there is the engine's trilinear sampling of the mean normal, which no widening of the lobe removes.
+// Kernels of half of a or more pass whole. docs/accuracy.md#the-gate has the forms measured (gates 0.25, 0.5
+// and 1, linear and squared fade). The opt-in two lobes gate their rough lobe's kernel the same way.
+fn specaa_gate_baked_kernel(K: vec3<f32>, a: f32) -> vec3<f32> {
+    let f: f32 = saturate(specaa_sym_max_eigenvalue(K) / max(SPECAA_KERNEL_GATE * a, 1.0e-30));
+    return K * select(1.0, f * f, f == f);
+}
+fn specaa_baked_kernel_matrix(s: SpecaaSurface) -> vec3<f32> {
+    return specaa_gate_baked_kernel(specaa_baked_spread_matrix(s), specaa_base_alpha2(s));
+}
+// Footprint of the pixel in the (T, B) frame (specaa_footprint) and whether it and the curvature are
+// usable (finite inputs and derivatives; edge policy).
+fn specaa_curvature_footprint(s: SpecaaSurface, footprint: ptr<function, vec4<f32>>) -> bool {
+    let dPdx: vec3<f32> = dpdx(s.position);
+    let dPdy: vec3<f32> = dpdy(s.position);
+    (*footprint) = specaa_footprint_tangent(dPdx, dPdy, s.tangent, s.bitangent);
+    let m: vec3<u32> = max(max(specaa_magnitude_bits3(s.position), specaa_magnitude_bits3(dPdx)),
+                         max(specaa_magnitude_bits3(dPdy), specaa_magnitude_bits3((*footprint).xyw)));
+    let c: vec4<u32> = max(bitcast<vec4<u32>>(s.curvature), vec4<u32>(0u, 0u, 0u, bitcast<u32>((*footprint).z))) &
+                     vec4<u32>(0x7fffffffu, 0x7fffffffu, 0x7fffffffu, 0x7fffffffu);
+    return max(specaa_max_component(m), max(max(c.x, c.y), max(c.z, c.w))) < 0x7f800000u;
+}
+// Per-pixel kernel matrix of the curved geometry in the (T, B) frame: from _SPECAA_CURVATURE and the
+// position footprint, or from the quad derivatives of the vertex normal projected onto T and B
+// (TK21 Sec. 5.1). Each eigenvalue clamped to at most kappa, the eigenvectors kept (TK21 Sec. 4: "clamp the
+// eigenvalues of Sigma"; scaling the whole matrix by kappa / lambda_max instead would also shrink the minor
+// axis, and an elongated footprint's peak would come out too bright: ClearCoatTest far,
+// docs/accuracy.md#the-per-pixel-kernels-clamp); an overflowing kernel is kappa I, unusable inputs give 0
+// (edge policy).
+fn specaa_pixel_kernel_matrix(s: SpecaaSurface) -> vec3<f32> {
+    let dnU: vec3<f32> = dpdx(s.normal);
+    let dnV: vec3<f32> = dpdy(s.normal);
+    let t: vec3<f32> = normalize(s.tangent);
+    let b: vec3<f32> = normalize(s.bitangent);
+    let m: vec3<u32> = max(max(specaa_magnitude_bits3(s.normal), specaa_magnitude_bits3(dnU)),
+                         max(specaa_magnitude_bits3(dnV), max(specaa_magnitude_bits3(t), specaa_magnitude_bits3(b))));
+    let usable: bool = specaa_max_component(m) < 0x7f800000u;
+    let K: vec3<f32> = specaa_kernel_matrix(vec2<f32>(dot(dnU, t), dot(dnU, b)), vec2<f32>(dot(dnV, t), dot(dnV, b)));
+    let lmax: f32 = specaa_sym_max_eigenvalue(K);
+    let clamped: vec3<f32> = select(K, specaa_sym_clamp_eigenvalues(K, SPECAA_KAPPA), lmax > SPECAA_KAPPA);
+    let bounded: bool = max(specaa_magnitude_bits(lmax), specaa_max_component(specaa_magnitude_bits3(clamped))) < 0x7f800000u;
+    return select(vec3<f32>(0.0, 0.0, 0.0), select(vec3<f32>(SPECAA_KAPPA, SPECAA_KAPPA, 0.0), clamped, bounded), usable);
+}
+// Per-pixel isotropic kernel t (mean reduction, TK21 Eq. 14), clamped to kappa. Tangent-free on the
+// derivative path (world-space normal derivatives). Edge policy as for the matrix.
+fn specaa_pixel_kernel(s: SpecaaSurface) -> f32 {
+    let dnU: vec3<f32> = dpdx(s.normal);
+    let dnV: vec3<f32> = dpdy(s.normal);
+    let usable: bool = specaa_max_component(max(specaa_magnitude_bits3(s.normal),
+                                           max(specaa_magnitude_bits3(dnU), specaa_magnitude_bits3(dnV)))) < 0x7f800000u;
+    return select(0.0, specaa_clamp_kernel(specaa_iso_kernel_mean(dnU, dnV)), usable);
+}
+// Filtered squared roughness a (isotropic form of the default). The baked and per-pixel kernels are variances of
+// independent footprints, so they add in projected space (TK21 Eq. 6) before mapping back (Eq. 7).
+fn specaa_filtered_alpha2(s: SpecaaSurface) -> f32 {
+    let baked: vec3<f32> = specaa_baked_kernel_matrix(s);
+    let a: f32 = specaa_filter_projected_isotropic(specaa_base_alpha2(s), 0.5 * (baked.x + baked.y) + specaa_pixel_kernel(s));
+    return select(1.0, a, specaa_is_finite(a));
+}
+// Filtered perceptual roughness r = a^(1/4): drop-in for the material's roughness.
+fn specaa_filtered_roughness(s: SpecaaSurface) -> f32 { return specaa_roughness_from_alpha2(specaa_filtered_alpha2(s)); }
+// Isotropic a widened by the kernel matrix K in projected space (TK21 Eq. 6-7), non-finite results as I.
+fn specaa_widened_matrix(a: f32, K: vec3<f32>) -> vec3<f32> {
+    return specaa_guard_matrix(true, vec2<f32>(a, a), specaa_filter_projected_matrix(vec2<f32>(a, a), K));
+}
+// The default: filtered roughness matrix A_bar in the (T, B) frame, for specaa_default_D / specaa_ggx_G2 (or
+// specaa_ggx_D with tau = a^2 of the unfiltered material). Same composition as specaa_filtered_alpha2, with the per-pixel
+// kernel kept anisotropic.
+fn specaa_filtered_alpha2_matrix(s: SpecaaSurface) -> vec3<f32> {
+    return specaa_widened_matrix(specaa_base_alpha2(s), specaa_baked_kernel_matrix(s) + specaa_pixel_kernel_matrix(s));
+}
+// Level of detail the hardware samples a texture at uv (negative under magnification).
+fn specaa_texture_lod(tex: texture_2d<f32>, smp: sampler, uv: vec2<f32>) -> f32 { return specaa_lod_from_derivatives(vec2<f32>(textureDimensions(tex, 0)), uv); }
+// The default NDF for the default matrix A = specaa_filtered_alpha2_matrix(s): GGX(A) + (1 - w)
+// (specaa_convolved_D - GGX(A)), GGX of the material convolved with the footprint's spread K = A - a I
+// where that spread is Gaussian, GGX(A) where it is not.
+// - No baked normal-map data (w = 0): the spread is the image of the pixel filter under the surface's
+//   curvature, a Gaussian, and the convolution is exact.
+// - Baked kernel or LEAN texture (the material's own a; K holds the texel's spread and the pixel kernel
+//   of the vertex normal's curvature):
+//   w = saturate(LOD) saturate(SPECAA_GGX_SPREAD k_max). Under magnification (LOD <= 0) the footprint lies
+//   inside one texel and the interpolated normals vary smoothly: the convolution. Minified, a small spread
+//   of small slopes is still close to Gaussian (slope and projected variance within 10% up to
+//   k_max ~ 0.05), but a broad one covers much of the hemisphere (a normal map's domes and bevels hold
+//   every slope up to the horizon), where a Gaussian in slope space has too little weight far from the
+//   mean and GGX(A) (TK21's projected-space widening; A = I is the uniform hemisphere) follows closer:
+//   GGX(A) from k_max = 1 / SPECAA_GGX_SPREAD = 0.125 (slope standard deviation 0.25) on. The measurements
+//   (SPECAA_GGX_SPREAD 4, 8, 16 and the LOD factor): docs/accuracy.md#normal-mapped-materials-the-blend.
+// - Baked Sigma kernel with SPECAA_KERNEL_TWO_LOBES (opt-in): two lobes with the texel's mean and
+//   covariance. The texel's flat share 1 - g (normals within slope 0.02 of the surface's, alpha channel)
+//   keeps the material's own lobe convolved with the pixel kernel only; its rough share g holds all of
+//   Sigma, as the lobe above with K = 2 Sigma / g (gated like every baked kernel) + pixel kernel. One
+//   Gaussian of the whole texel spreads a flat field's highlight over the slopes of the few scratches or
+//   seams in it; the two lobes keep it (docs/accuracy.md#two-lobes-per-texel: they win on the stress scenes' scratches
+//   and tiles, but over the bench's normal-mapped scenes they have more error than the default's single
+//   lobe, K = 2 Sigma sqrt(g), at 1.7x its cost, so they are not the default). g = 1 (earlier bakes
+//   wrote A = 1) is the single lobe.
+// - Baked roughness texture (a already holds the texel's spread, K only the pixel's): w = saturate(LOD),
+//   the convolution under magnification, GGX(A) from the texture's mip 1 on.
+// NaN inputs give GGX(A).
+fn specaa_default_D(h: vec3<f32>, filteredA: vec3<f32>, s: SpecaaSurface) -> f32 {
+    let A: vec3<f32> = filteredA;
+    let a: f32 = specaa_base_alpha2(s);
+    let share: f32 = 1.0; // rough share g of the texel (two lobes where g < 1)
+    let flatD: f32 = 0.0; // the flat share's lobe
+    var w: f32 = 0.0;
+    w = select(1.0, w, w == w);
+    let ggx: f32 = specaa_ggx_D(h, A, a * a);
+    var roughD: f32 = ggx;
+    if (w < 1.0) { roughD = ggx + (1.0 - w) * (specaa_convolved_D(h, A, a) - ggx); }
+    return share * roughD + (1.0 - share) * flatD;
+}
+
+// ===================================================================================================
+// The default entry points with the bake's default output, the Sigma kernel texture (`*_kernel`:
+// RGBA = Sigma xx, yy, xy and its rough share g, R16G16B16A16_SFLOAT, bound with linear mip filtering):
+// the body again with SPECAA_KERNEL_TEXTURE and SPECAA_KERNEL_ANISOTROPIC (shaders/to_wgsl.py), each
+// function that differs from the one above, or calls one that does, named with the suffix _kernel and
+// taking the texture and its sampler as its last parameters:
+//   specaa_filtered_alpha2_matrix_kernel(s, kernelTexture, kernelSampler)
+//   specaa_default_D_kernel(h, A, s, kernelTexture, kernelSampler)  (with specaa_ggx_G2 as above)
+//   specaa_filtered_roughness_kernel / specaa_filtered_alpha2_kernel(s, kernelTexture, kernelSampler)
+// ===================================================================================================
+
+// specaa_baked_spread_matrix with the baked texture.
+fn specaa_baked_spread_matrix_kernel(s: SpecaaSurface, kernelTexture: texture_2d<f32>, kernelSampler: sampler) -> vec3<f32> {
+    // The single lobe of a texel with rough share g: K = 2 Sigma sqrt(g), not 2 Sigma. A texel of a flat
+    // field with a few steep grooves or seams (g small) is a spike at the flat normal plus a wide rough
+    // part; the Gaussian of its covariance spreads the spike's highlight over the grooves' slopes, while
+    // the Gaussian closest to the mixture in L2 (the radiance error over half vectors) is far narrower
+    // (K / (2 Sigma) = 0.11-0.24 at g = 0.1-0.5 for a rough part 10x the material's lobe). The covariance
+    // is what keeps the rough part's sparkle down where it is lit; sqrt(g) sits between the two ends
+    // (g^0 and g^1). g = 1 (every texel steep, or bakes before the rough share) is the covariance itself.
+    // The measurements (g^0, g^0.25, g^0.5, g^0.75, g^1): docs/accuracy.md#the-single-lobe-of-a-mixed-texel.
+    let k: vec4<f32> = specaa_sample_kernel_texel(kernelTexture, kernelSampler, s.uv);
+    return (2.0 * sqrt(k.w)) * k.xyz;
+}
+
+// specaa_baked_kernel_matrix with the baked texture.
+fn specaa_baked_kernel_matrix_kernel(s: SpecaaSurface, kernelTexture: texture_2d<f32>, kernelSampler: sampler) -> vec3<f32> {
+    return specaa_gate_baked_kernel(specaa_baked_spread_matrix_kernel(s, kernelTexture, kernelSampler), specaa_base_alpha2(s));
+}
+
+// specaa_filtered_alpha2 with the baked texture.
+fn specaa_filtered_alpha2_kernel(s: SpecaaSurface, kernelTexture: texture_2d<f32>, kernelSampler: sampler) -> f32 {
+    let baked: vec3<f32> = specaa_baked_kernel_matrix_kernel(s, kernelTexture, kernelSampler);
+    let a: f32 = specaa_filter_projected_isotropic(specaa_base_alpha2(s), 0.5 * (baked.x + baked.y) + specaa_pixel_kernel(s));
+    return select(1.0, a, specaa_is_finite(a));
+}
+
+// specaa_filtered_roughness with the baked texture.
+fn specaa_filtered_roughness_kernel(s: SpecaaSurface, kernelTexture: texture_2d<f32>, kernelSampler: sampler) -> f32 { return specaa_roughness_from_alpha2(specaa_filtered_alpha2_kernel(s, kernelTexture, kernelSampler)); }
+
+// specaa_filtered_alpha2_matrix with the baked texture.
+fn specaa_filtered_alpha2_matrix_kernel(s: SpecaaSurface, kernelTexture: texture_2d<f32>, kernelSampler: sampler) -> vec3<f32> {
+    return specaa_widened_matrix(specaa_base_alpha2(s), specaa_baked_kernel_matrix_kernel(s, kernelTexture, kernelSampler) + specaa_pixel_kernel_matrix(s));
+}
+
+// specaa_default_D with the baked texture.
+fn specaa_default_D_kernel(h: vec3<f32>, filteredA: vec3<f32>, s: SpecaaSurface, kernelTexture: texture_2d<f32>, kernelSampler: sampler) -> f32 {
+    let A: vec3<f32> = filteredA;
+    let a: f32 = specaa_base_alpha2(s);
+    let share: f32 = 1.0; // rough share g of the texel (two lobes where g < 1)
+    let flatD: f32 = 0.0; // the flat share's lobe
+    let lod: f32 = specaa_texture_lod(kernelTexture, kernelSampler, s.uv);
+    // The blend weight is judged on all of K = A - a I, the per-pixel kernel included. Opt-in
+    // SPECAA_BLEND_FROM_BAKED_SPREAD judges it on the baked spread alone: the pixel kernel is the image of
+    // the Gaussian pixel filter under the surface's curvature (TK21 Eq. 3), for which the convolution is
+    // exact, and a large one (rims, strongly curved small parts: up to kappa) otherwise switches the pixel
+    // to GGX(A), whose tails put a flickering halo around highlights and along rims on models outside the
+    // bench's corpus; but where the clamped pixel kernel hides geometry a pixel wide (domes of mesh), GGX(A)
+    // is what fits, and the bench's NormalTangentTest far fails without it (docs/accuracy.md#do-no-harm-in-the-field).
+    let spread: vec3<f32> = A - vec3<f32>(a, a, 0.0);
+    var w: f32 = saturate(lod) * saturate(SPECAA_GGX_SPREAD * specaa_sym_max_eigenvalue(spread));
+    w = select(1.0, w, w == w);
+    let ggx: f32 = specaa_ggx_D(h, A, a * a);
+    var roughD: f32 = ggx;
+    if (w < 1.0) { roughD = ggx + (1.0 - w) * (specaa_convolved_D(h, A, a) - ggx); }
+    return share * roughD + (1.0 - share) * flatD;
+}
