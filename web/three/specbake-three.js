@@ -120,7 +120,9 @@ vec3 specbake_BRDF_GGX( const in vec3 lightDir, const in vec3 viewDir, const in 
 
 const BASE_REPLACEMENT = `
 #ifdef SPECBAKE_SPECULAR_AA
-specbakeSurface.roughness = roughnessFactor;
+// three.js's own minimum for punctual lights (BRDF_GGX), the simulator's too: a mirror under a point light
+// has no finite highlight.
+specbakeSurface.roughness = max( roughnessFactor, 0.045 );
 specbakeSurface.uv = SPECBAKE_BASE_UV;
 specbakeSurface.normal = nonPerturbedNormal;
 specbakeSurface.position = vec3( 0.0 );
