@@ -9,8 +9,7 @@
 // Tolerance (measured, web/three/README.md#checked-against-the-simulator): over the pixels both cover, the
 // median per-pixel relative difference at most 1%, the summed radiance within 10%, and the patched image
 // closer to the simulator (relative L1) than three.js's own; coverage may differ on at most 1% of the pixels
-// (measured: 0, 2 and 77 of 16,384; the 77 of NormalTangentMirrorTest are not explained yet). DamagedHelmet
-// does not meet the radiance tolerance (reported below, not asserted; web/three/README.md says by how much).
+// (measured: 0, 2 and 77 of 16,384; the 77 of NormalTangentMirrorTest are not explained yet).
 #include "consumer_harness.h"
 
 #include <cstring>
@@ -79,8 +78,6 @@ class ThreeSimulatorMatch : public ConsumerTest {};
 TEST_F(ThreeSimulatorMatch, PatchedFrameMatchesTheSimulatorsDefault) {
     if (const std::string why = missing_node_packages({"three"}); !why.empty()) GTEST_SKIP() << why;
     const fs::path assets = fs::path(SPECBAKE_ASSETS_DIR) / "gltf";
-    // Not asserted: the known mismatch (see the file comment).
-    const std::set<std::string> known_mismatch = {"DamagedHelmet"};
     std::vector<std::string> models;
     for (const char* m : {"DamagedHelmet", "NormalTangentTest", "NormalTangentMirrorTest"}) {
         if (fs::exists(assets / m / (std::string(m) + ".gltf"))) models.push_back(m);
@@ -118,11 +115,6 @@ TEST_F(ThreeSimulatorMatch, PatchedFrameMatchesTheSimulatorsDefault) {
         // The camera and the geometry: the same pixels covered.
         EXPECT_LE(double(on.coverage_mismatch), 0.01 * double(sim.radiance.size())) << id;
         EXPECT_GT(on.pixels, 1000u) << id << ": the model is not in the frame";
-        if (known_mismatch.count(id)) {
-            std::printf("%-24s KNOWN MISMATCH, not asserted: median rel %.4f (tolerance 0.01), sum ratio %.4f "
-                        "(tolerance 0.9-1.1)\n", id.c_str(), on.median_relative, on.sum_ratio);
-            continue;
-        }
         EXPECT_LE(on.median_relative, 0.01) << id;
         EXPECT_NEAR(on.sum_ratio, 1.0, 0.1) << id;
         EXPECT_LT(on.relative_l1, off.relative_l1) << id << ": the patch does not bring three.js closer to the simulator";

@@ -246,6 +246,17 @@ export class SpecbakeSpecularAAPlugin {
         return { ...binding, texture: await this._loadChain(binding.output) };
     }
 
+    // The chains repeat or clamp as the normal map whose UV space they were baked in (glTF's default sampler
+    // repeats; KTX2Loader's textures clamp): UVs outside [0, 1] read the texels the normal map reads.
+    static _wrapLike(texture, normalMap) {
+        if (!texture || !normalMap) return;
+        if (texture.wrapS !== normalMap.wrapS || texture.wrapT !== normalMap.wrapT) {
+            texture.wrapS = normalMap.wrapS;
+            texture.wrapT = normalMap.wrapT;
+            texture.needsUpdate = true;
+        }
+    }
+
     async afterRoot(result) {
         const json = this.parser.json;
         const materials = new Set();
@@ -297,6 +308,8 @@ export class SpecbakeSpecularAAPlugin {
                 : { kind: 'none' };
         const coat = material.isMeshPhysicalMaterial && material.clearcoat > 0
             ? await this._layerState(coatLayer, !!material.clearcoatNormalMap, `${name} (clear coat)`) : null;
+        SpecbakeSpecularAAPlugin._wrapLike(base.texture, material.normalMap);
+        SpecbakeSpecularAAPlugin._wrapLike(coat?.texture, material.clearcoatNormalMap);
         patchMaterial(material, {
             enabled: this.enabledByDefault,
             base: { kind: base.kind, anisotropic: base.anisotropic, channel: base.channel },

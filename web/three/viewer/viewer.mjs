@@ -8,9 +8,11 @@
 // Frame time: each half is drawn and then waited for (a one-pixel readPixels forces the GPU to finish), and
 // the wall time between is that half's; the labels show the median over the last 60 frames.
 //
-// Query: ?scene=PATH picks a scene of /viewer.json; ?report=N renders N frames, then posts /report: per
+// Query: ?scene=PATH picks a scene of /viewer.json, ?distance=D sets the distance slider, ?orbit=0 starts
+// paused; ?report=N renders N frames, then posts /report: per
 // half the median frame time and the mean colour and lit-pixel fraction read back from the canvas, the
-// plugin's report, three.js's revision and console errors (`specbake view --report FILE` writes it).
+// plugin's report, three.js's revision and console errors (`specbake view --report FILE` writes it); with
+// &png also the canvas with the labels drawn on it.
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { KTX2Loader } from 'three/addons/loaders/KTX2Loader.js';
@@ -161,6 +163,27 @@ function halfStatistics() {
     });
 }
 
+// The canvas with the halves' labels and the split line drawn over it, as the page shows them.
+function screenshot() {
+    const shot = document.createElement('canvas');
+    shot.width = gl.drawingBufferWidth;
+    shot.height = gl.drawingBufferHeight;
+    const g = shot.getContext('2d');
+    g.drawImage(canvas, 0, 0);
+    const scale = shot.width / canvas.clientWidth;
+    g.fillStyle = '#e8e8e8';
+    g.fillRect(Math.floor(shot.width / 2) - scale, 0, 2 * scale, shot.height);
+    g.font = `${13 * scale}px sans-serif`;
+    for (const [i, id] of [[0, 'left'], [1, 'right']]) {
+        const text = $(id).textContent, x = (i * shot.width) / 2 + 8 * scale, y = 8 * scale;
+        g.fillStyle = 'rgba(0, 0, 0, 0.55)';
+        g.fillRect(x, y, g.measureText(text).width + 16 * scale, 26 * scale);
+        g.fillStyle = '#e8e8e8';
+        g.fillText(text, x + 8 * scale, y + 18 * scale);
+    }
+    return shot.toDataURL('image/png');
+}
+
 function report() {
     const stats = halfStatistics();
     const body = {
@@ -170,7 +193,7 @@ function report() {
         labels: [$('left').textContent, $('right').textContent],
         status: $('status').textContent,
         plugin: plugins[1].report, pluginOff: plugins[0].report,
-        png: query.has('png') ? canvas.toDataURL('image/png') : undefined,
+        png: query.has('png') ? screenshot() : undefined,
         errors,
     };
     fetch('/report', { method: 'POST', body: JSON.stringify(body) });
@@ -184,6 +207,8 @@ try {
     current = query.get('scene') ?? info.scenes[0];
     if (!info.scenes.includes(current)) throw new Error(`?scene=${current}: not one of ${info.scenes.join(', ')}`);
     select.value = current;
+    if (query.has('distance')) $('distance').value = query.get('distance');
+    if (query.get('orbit') === '0') $('orbit').checked = false;
     select.onchange = () => { location.search = `?scene=${encodeURIComponent(select.value)}`; };
     $('distance').oninput = () => placeCamera(camera.position.clone().sub(controls.target).normalize());
     window.addEventListener('keydown', (e) => {
