@@ -41,7 +41,7 @@ constexpr Command kCommands[] = {
     {"bake", &add_bake_command},       {"texture", &add_texture_command}, {"mesh", &add_mesh_command},
     {"plan", &add_plan_command},       {"glints", &add_glints_command},   {"inspect", &add_inspect_command},
     {"shader", &add_shader_command},   {"verify", &add_verify_command},   {"bench", &add_bench_command},
-    {"filter", &add_filter_command},
+    {"filter", &add_filter_command},   {"view", &add_view_command},
 };
 
 // Reads --config files (TOML or JSON) into the parser's items. Top-level keys go to the command being

@@ -11,7 +11,12 @@
 #include "core/text_format.h"
 #include "io/files/file_read.h"
 
+#include "io/files/atomic_write.h"
+
+#include <nlohmann/json.hpp>
+
 #include <cctype>
+#include <cstring>
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -35,8 +40,60 @@ struct VerifyCommandOptions {
     std::string strip;
     std::string harm_map;
     std::string images;
+    std::string frame_data;
     float distance = 1.0f;
 };
+
+// `image` (channel 0 radiance, 1 coverage; row 0 the top) as a Portable Float Map: "PF", RGB = radiance,
+// coverage, 0, little-endian, rows bottom to top.
+Result<void> write_pfm(const SimImage& image, const std::filesystem::path& path) {
+    std::string bytes = "PF\n" + std::to_string(image.width) + " " + std::to_string(image.height) + "\n-1.0\n";
+    const size_t header = bytes.size();
+    bytes.resize(header + size_t(image.width) * size_t(image.height) * 12);
+    char* out = bytes.data() + header;
+    for (int y = image.height - 1; y >= 0; --y)
+        for (int x = 0; x < image.width; ++x) {
+            const float* p = &image.pixels[(size_t(y) * size_t(image.width) + size_t(x)) * size_t(image.channels)];
+            const float rgb[3] = {p[0], image.channels > 1 ? p[1] : 1.0f, 0.0f};
+            std::memcpy(out, rgb, 12);
+            out += 12;
+        }
+    return io::write_file_atomic(path, bytes);
+}
+
+// --frame-data DIR: frame 0 of the ground truth and of every candidate as DIR/NAME.pfm, and DIR/frame.json
+// with the camera, lights and size they were rendered with, so another renderer can draw the same frame.
+Result<void> write_frame_data(const SimScene& scene, const SceneReport& report, const std::filesystem::path& dir) {
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec) return make_error(dir.string() + ": cannot create the folder: " + ec.message());
+    const SimCamera cam = camera_at_frame(scene, 0, report.height);
+    nlohmann::json j = {{"scene", report.scene}, {"width", report.width}, {"height", report.height},
+                        {"camera", {{"position", cam.position}, {"target", cam.target}, {"up", cam.up},
+                                    {"fovYDegrees", cam.fov_y_degrees}}},
+                        {"lights", nlohmann::json::array()}, {"images", nlohmann::json::object()},
+                        {"radiance", "specular only: sum over lights of D G2 / (4 n.v) E, F = 1; E the irradiance on a surface facing the light"}};
+    for (size_t i = 0; i < std::min(scene.lights.size(), kMaxSimLights); ++i) {
+        const SimLight& l = scene.lights[i];
+        j["lights"].push_back({{"type", l.type == SimLight::Type::Directional ? "directional"
+                                        : l.type == SimLight::Type::Point     ? "point" : "spot"},
+                               {"direction", l.direction}, {"position", l.position}, {"radiance", l.radiance},
+                               {"range", l.range}, {"innerCone", l.inner_cone}, {"outerCone", l.outer_cone}});
+    }
+    const auto write = [&](const std::string& name, const SimImage& image) -> Result<void> {
+        if (image.empty()) return {};
+        j["images"][name] = name + ".pfm";
+        return write_pfm(image, dir / (name + ".pfm"));
+    };
+    if (auto w = write("ground-truth", report.ground_truth); !w) return w;
+    for (const CandidateReport& c : report.candidates) {
+        std::string name = c.name;
+        for (char& ch : name)
+            if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '-' && ch != '_' && ch != '.') ch = '_';
+        if (auto w = write(name, c.image); !w) return w;
+    }
+    return io::write_file_atomic(dir / "frame.json", j.dump(1));
+}
 
 int run_verify_command(const VerifyCommandOptions& o) {
     VerifyOptions options;
@@ -140,6 +197,12 @@ int run_verify_command(const VerifyCommandOptions& o) {
             }
         }
     }
+    if (!o.frame_data.empty()) {
+        if (auto written = write_frame_data(*scene, *report, o.frame_data); !written) {
+            print_error(written.error().message);
+            return kExitFailed;
+        }
+    }
     if (!o.harm_map.empty()) {
         const CandidateReport* none = nullptr;
         std::vector<HarmTile> tiles;
@@ -199,6 +262,10 @@ void add_verify_command(CLI::App& app, std::function<int()>& run) {
     sub->add_option("--images", o->images,
                     "Also write one PNG per candidate into this folder (NAME.png: the ground truth, the candidate and "
                     "its error map)");
+    sub->add_option("--frame-data", o->frame_data,
+                    "Also write frame 0 of the ground truth and of every candidate as float images into this folder "
+                    "(NAME.pfm: radiance, coverage) with frame.json, the camera, lights and size they were rendered "
+                    "with: the same frame drawn elsewhere (e.g. three.js) can be compared with them");
     sub->add_option("--harm-map", o->harm_map,
                     "Also write the harm map to this PNG file: per pixel, where each candidate's tone-mapped flicker "
                     "and temporal error exceed no filtering's (red) or fall below it (blue), and print where the "
@@ -211,6 +278,7 @@ void add_verify_command(CLI::App& app, std::function<int()>& run) {
                 "  specbake verify --builtin bumpy-sphere --only baked-texture,default\n"
                 "  specbake verify --builtin glitter-plane --alpha 0.1 --size 64x64 --spp 1024 --frames 4\n"
                 "  specbake verify scene.gltf --distance 3 --only default,default-two-lobes --define SPECAA_KAPPA=1.0\n"
+                "  specbake verify scene.gltf --only default --frames 1 --repeats 0 --frame-data frame/\n"
                 "  specbake verify glittery.gltf   (materials with \"SPECBAKE_glints\" also get the glint candidates)");
     sub->callback([&run, o] { run = [o] { return run_verify_command(*o); }; });
 }

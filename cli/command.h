@@ -39,6 +39,7 @@ void add_shader_command(CLI::App& app, std::function<int()>& run);
 void add_verify_command(CLI::App& app, std::function<int()>& run);
 void add_bench_command(CLI::App& app, std::function<int()>& run);
 void add_filter_command(CLI::App& app, std::function<int()>& run);
+void add_view_command(CLI::App& app, std::function<int()>& run);
 
 // Prints "specbake: error: <message>" on stderr.
 void print_error(const std::string& message);

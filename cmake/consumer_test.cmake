@@ -14,6 +14,21 @@ function(run)
 endfunction()
 
 run(${CMAKE_COMMAND} --install "${BUILD_DIR}" --prefix "${prefix}")
+
+# `specbake view` serves the installed plugin and viewer, and the three.js files installed beside them when
+# the source tree had the pinned copy (tests/consumers/node_modules).
+set(web_files share/specbake/web/three/specbake-three.js share/specbake/web/three/specaa_es.glsl.js
+              share/specbake/web/three/viewer/index.html share/specbake/web/three/viewer/viewer.mjs)
+if(EXISTS "${SOURCE_DIR}/tests/consumers/node_modules/three/build/three.module.js")
+  list(APPEND web_files share/specbake/web/vendor/three/LICENSE share/specbake/web/vendor/three/build/three.module.js
+                        share/specbake/web/vendor/three/examples/jsm/loaders/GLTFLoader.js
+                        share/specbake/web/vendor/three/examples/jsm/libs/basis/basis_transcoder.wasm)
+endif()
+foreach(f ${web_files})
+  if(NOT EXISTS "${prefix}/${f}")
+    message(FATAL_ERROR "not installed: ${f}")
+  endif()
+endforeach()
 run(${CMAKE_COMMAND} -S "${SOURCE_DIR}/tests/consumer" -B "${build}" -G "${GENERATOR}"
     -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_BUILD_TYPE=Release)
 run(${CMAKE_COMMAND} --build "${build}")

@@ -472,6 +472,7 @@ TEST(FarmExitCodes, AMissingInputIsOneAndABadOptionTwoForEveryCommand) {
         {"inspect", "--check", (dir / "missing.png").string()},
         {"verify", missing},
         {"bench", "--no-builtin", "--no-corpus", missing},
+        {"view", missing, "--port", "0"},
     };
     for (const auto& args : missing_runs) {
         SCOPED_TRACE(args[0] + " " + args[1]);
@@ -480,7 +481,7 @@ TEST(FarmExitCodes, AMissingInputIsOneAndABadOptionTwoForEveryCommand) {
         EXPECT_NE(line_naming(r.err, {"error", "missing.", "no such file"}), "") << r.err;
     }
     for (const char* command :
-         {"bake", "mesh", "plan", "texture", "inspect", "shader", "filter", "glints", "verify", "bench"}) {
+         {"bake", "mesh", "plan", "texture", "inspect", "shader", "filter", "glints", "verify", "bench", "view"}) {
         SCOPED_TRACE(command);
         const RunResult r = run_bounded({command, "--no-such-option"}, dir);
         EXPECT_EQ(r.exit_code, 2) << r.err;

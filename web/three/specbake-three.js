@@ -120,7 +120,9 @@ vec3 specbake_BRDF_GGX( const in vec3 lightDir, const in vec3 viewDir, const in 
 
 const BASE_REPLACEMENT = `
 #ifdef SPECBAKE_SPECULAR_AA
-specbakeSurface.roughness = roughnessFactor;
+// three.js's own minimum for punctual lights (BRDF_GGX), the simulator's too: a mirror under a point light
+// has no finite highlight.
+specbakeSurface.roughness = max( roughnessFactor, 0.045 );
 specbakeSurface.uv = SPECBAKE_BASE_UV;
 specbakeSurface.normal = nonPerturbedNormal;
 specbakeSurface.position = vec3( 0.0 );
@@ -244,6 +246,17 @@ export class SpecbakeSpecularAAPlugin {
         return { ...binding, texture: await this._loadChain(binding.output) };
     }
 
+    // The chains repeat or clamp as the normal map whose UV space they were baked in (glTF's default sampler
+    // repeats; KTX2Loader's textures clamp): UVs outside [0, 1] read the texels the normal map reads.
+    static _wrapLike(texture, normalMap) {
+        if (!texture || !normalMap) return;
+        if (texture.wrapS !== normalMap.wrapS || texture.wrapT !== normalMap.wrapT) {
+            texture.wrapS = normalMap.wrapS;
+            texture.wrapT = normalMap.wrapT;
+            texture.needsUpdate = true;
+        }
+    }
+
     async afterRoot(result) {
         const json = this.parser.json;
         const materials = new Set();
@@ -295,6 +308,8 @@ export class SpecbakeSpecularAAPlugin {
                 : { kind: 'none' };
         const coat = material.isMeshPhysicalMaterial && material.clearcoat > 0
             ? await this._layerState(coatLayer, !!material.clearcoatNormalMap, `${name} (clear coat)`) : null;
+        SpecbakeSpecularAAPlugin._wrapLike(base.texture, material.normalMap);
+        SpecbakeSpecularAAPlugin._wrapLike(coat?.texture, material.clearcoatNormalMap);
         patchMaterial(material, {
             enabled: this.enabledByDefault,
             base: { kind: base.kind, anisotropic: base.anisotropic, channel: base.channel },
