@@ -167,6 +167,21 @@ T closed_form_tail(T r2, T z2, T a, T k) {
                        : (T(0.5) - L / T(3) + L * L / T(8)) * a / (pi * k * k * z2 * z2);
 }
 
+// GGX(a) convolved with a small footprint to second order in K: for the isotropic slope density
+// f(q) = 1 / (pi a (1 + q / a)^2), f + f' tr(K) / 2 + f'' m^T K m at the slope m, written as
+// a / (pi s2^2) (1 - tr(K) h_z^2 / s2 + 6 h.xy^T K h.xy h_z^2 / s2^2), s2 = a h_z^2 + |h.xy|^2.
+template <class T>
+T small_footprint_ndf(T r2, T z2, T a, T trK, T hKh) {
+    const T s2 = a * z2 + r2;
+    return a / (std::numbers::pi_v<T> * s2 * s2) * (T(1) - trK * z2 / s2 + T(6) * hKh * z2 / (s2 * s2));
+}
+
+// Share of the fitted nodes: 0 below k = 0.03 a (the expansion alone), 1 above 0.1 a, log-linear between.
+template <class T>
+T closed_form_share(T b) {
+    return std::clamp((std::log10(b) - std::log10(T(0.03))) / (std::log10(T(0.1)) - std::log10(T(0.03))), T(0), T(1));
+}
+
 // Beckmann(K + v I) (TK21 Sec. 2.1), 0 where its exponential underflows (h_z -> 0).
 template <class T>
 T beckmann_node(const Vec3<T>& h, const Sym2<T>& K, T v) {
@@ -202,7 +217,14 @@ T convolved_ndf_closed_form(const Vec3<T>& h, const Sym2<T>& A, T alpha2) {
     const T k = std::max(T(0.5) * (K.xx + K.yy), T(1e-6) * a);
     const ClosedFormNodes<T> n = closed_form_nodes(k / a, a);
     const T nodes = n.w1 * beckmann_node(h, K, n.v1) + n.w2 * beckmann_node(h, K, n.v2);
-    return std::max(T(0), closed_form_tail(h.x * h.x + h.y * h.y, h.z * h.z, a, k) + nodes);
+    const T r2 = h.x * h.x + h.y * h.y, z2 = h.z * h.z;
+    const T fitted = closed_form_tail(r2, z2, a, k) + nodes;
+    // Below k = 0.1 a the fit's error would exceed the change the footprint makes: the second-order
+    // expansion there (alone below 0.03 a).
+    const T hKh = h.x * h.x * K.xx + T(2) * h.x * h.y * K.xy + h.y * h.y * K.yy;
+    const T small = small_footprint_ndf(r2, z2, a, K.xx + K.yy, hKh);
+    const T share = closed_form_share(k / a);  // written out: the expansion is huge and wrong at large k
+    return std::max(T(0), share * fitted + (T(1) - share) * small);
 }
 
 template <class T>
@@ -218,7 +240,10 @@ T convolved_ndf_isotropic(const Vec3<T>& h, T alpha2, T kernel) {
         const T g = std::exp(-r2 / (z2 * v));
         if (g > T(0)) nodes += w * g / (unit * v);
     }
-    return std::max(T(0), closed_form_tail(r2, z2, a, k) + nodes);
+    const T fitted = closed_form_tail(r2, z2, a, k) + nodes;
+    const T small = small_footprint_ndf(r2, z2, a, T(2) * k, k * r2);
+    const T share = closed_form_share(k / a);  // written out: the expansion is huge and wrong at large k
+    return std::max(T(0), share * fitted + (T(1) - share) * small);
 }
 
 template <class T>

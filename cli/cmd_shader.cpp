@@ -66,7 +66,15 @@ void add_shader_command(CLI::App& app, std::function<int()>& run) {
         "  specbake shader --lang hlsl > specaa.hlsl\n"
         "  specbake shader --lang glsl-es -o web/specaa_es.glsl\n"
         "    WebGL 2: no #include there, so concatenate '#version 300 es', your #defines and highp sampler\n"
-        "    uniforms, the include's text, then your shader (docs/shader-include.md#webgl-2-and-opengl-es).");
+        "    uniforms, the include's text, then your shader (docs/shader-include.md#webgl-2-and-opengl-es).\n"
+        "\n"
+        "Cost tier: #define SPECAA_QUALITY before the include to pick what the default entry points\n"
+        "(specaa_filtered_alpha2_matrix, specaa_default_D) cost per light:\n"
+        "  SPECAA_QUALITY_FAST (0)       isotropic filtered roughness and GGX: the cheapest, a roughness drop-in\n"
+        "  SPECAA_QUALITY_BALANCED (1)   isotropic filtered roughness and the footprint's convolved NDF in closed\n"
+        "                                form (no loop)\n"
+        "  SPECAA_QUALITY_REFERENCE (2)  the default: the anisotropic matrix form and the convolution by quadrature\n"
+        "  SPIR-V instructions and accuracy per tier: docs/shader-include.md#quality-tiers.");
     sub->callback([&run, opts] { run = [opts] { return run_shader(*opts); }; });
 }
 

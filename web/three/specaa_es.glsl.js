@@ -118,6 +118,9 @@ float specaa_lod_from_derivatives(vec2 size, vec2 uv) {
 //   SPECAA_GATE_PIXEL_KERNEL        the per-pixel kernel faded out like the baked one (SPECAA_KERNEL_GATE).
 //   SPECAA_KERNEL_AREA_LOD          the Sigma kernel texel sampled at the mip of the footprint's area, not of
 //                                   its major axis (the hardware's isotropic choice).
+//   SPECAA_CLOSED_FORM_D            the reference tier's convolution in closed form
+//                                   (specaa_convolved_D_closed_form on its anisotropic matrix): the closed
+//                                   form's share of the balanced tier's error, apart from its isotropic A.
 //   SPECAA_BLEND_FROM_BAKED_SPREAD  opt-in: specaa_default_D's blend weight from the baked spread alone,
 //                                   not from all of K = A - a I (the per-pixel kernel included).
 // Textures are sampled with implicit derivatives, so the hardware selects the mip: the baked mips are
@@ -703,9 +706,11 @@ float specaa_convolved_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
 // [1e-3, 1e4]; b is clamped to that range). Largest relative error of D against the convolution: 9.5% for
 // an isotropic K (the fit; 8.7% against a brute-force convolution in tests/bake/test_ggx.cpp), up to 70%
 // for a strongly anisotropic one (k_max / k_min = 40), whose slopes between its two widths fall as a power
-// the isotropic truncated mixture does not have; the integral over the hemisphere is one. The small change
-// of a footprint much narrower than the lobe is not resolved (errors of a few % of D at k = a / 10, where
-// the quadrature gets the change itself to 10%). C++ twin: bake/ggx.cpp convolved_ndf_closed_form.
+// the isotropic truncated mixture does not have; the integral over the hemisphere is one. Below k = 0.1 a
+// the fit's error would exceed the change the footprint makes (a smooth sphere's highlight would flicker
+// more than unfiltered, docs/accuracy.md#the-convolutions-accuracy), so there it blends (log-linearly from
+// k = 0.1 a) into the convolution's second-order expansion, alone below k = 0.03 a, exact as K -> 0
+// (specaa_small_footprint_D). C++ twin: bake/ggx.cpp convolved_ndf_closed_form.
 
 // (w1, w2, e^-p1, e^-p2) of the closed form's two nodes at b = k / a.
 SPECAA_FLOAT4 specaa_closed_form_nodes(float b) {
@@ -727,6 +732,19 @@ float specaa_closed_form_tail(float r2, float z2, float a, float k) {
                     : (0.5 - L / 3.0 + L * L / 8.0) * a / (SPECAA_PI * k * k * z2 * z2);
 }
 
+// GGX(a) convolved with a small footprint, to second order in K (the convolution's Taylor expansion, written
+// for the isotropic slope density f(q) = 1 / (pi a (1 + q / a)^2): f + f' tr(K) / 2 + f'' m^T K m):
+// a / (pi s2^2) (1 - tr(K) h_z^2 / s2 + 6 h.xy^T K h.xy h_z^2 / s2^2), s2 = a h_z^2 + |h.xy|^2 (finite as
+// h_z -> 0). Exact as K -> 0, within 0.6% of D at k = 0.03 a; trK = tr(K), hKh = h.xy^T K h.xy.
+float specaa_small_footprint_D(float r2, float z2, float a, float trK, float hKh) {
+    float s2 = a * z2 + r2;
+    return a / (SPECAA_PI * s2 * s2) * (1.0 - trK * z2 / s2 + 6.0 * hKh * z2 / (s2 * s2));
+}
+
+// Share of the fitted nodes in the closed form: 0 (the second-order expansion) below k = 0.03 a, where
+// the fit's error would exceed the change the footprint makes, 1 above k = 0.1 a, log-linear between.
+float specaa_closed_form_share(float b) { return SPECAA_SATURATE((log2(b) * 0.30102999566 + 1.5228787) * 1.9124059); }
+
 // Beckmann(K + v I) (TK21 Sec. 2.1), 0 where its exponential underflows (h_z -> 0).
 float specaa_beckmann_node(SPECAA_FLOAT3 h, SPECAA_FLOAT3 K, float v) {
     SPECAA_FLOAT3 B = K + SPECAA_FLOAT3(v, v, 0.0);
@@ -746,7 +764,13 @@ float specaa_convolved_D_closed_form(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alp
     float k = max(0.5 * (K.x + K.y), 1.0e-6 * a);
     SPECAA_FLOAT4 n = specaa_closed_form_nodes(k / a);
     float nodes = n.x * specaa_beckmann_node(h, K, a * n.z) + n.y * specaa_beckmann_node(h, K, a * n.w);
-    return max(0.0, specaa_closed_form_tail(dot(h.xy, h.xy), h.z * h.z, a, k) + nodes);
+    float r2 = dot(h.xy, h.xy);
+    float z2 = h.z * h.z;
+    float fitted = specaa_closed_form_tail(r2, z2, a, k) + nodes;
+    float hKh = h.x * h.x * K.x + 2.0 * h.x * h.y * K.z + h.y * h.y * K.y;
+    float small = specaa_small_footprint_D(r2, z2, a, K.x + K.y, hKh);
+    float share = specaa_closed_form_share(k / a);  // written out: the expansion is huge and wrong at large k
+    return max(0.0, share * fitted + (1.0 - share) * small);
 }
 
 // The closed form for an isotropic footprint K = k I (the balanced tier's, whose A is isotropic): no matrix
@@ -762,7 +786,10 @@ float specaa_convolved_D_isotropic(SPECAA_FLOAT3 h, float alpha2, float k) {
     SPECAA_FLOAT2 g = exp(-r2 / (z2 * v));
     float unit = SPECAA_PI * z2 * z2;
     float nodes = (g.x > 0.0 ? n.x * g.x / (unit * v.x) : 0.0) + (g.y > 0.0 ? n.y * g.y / (unit * v.y) : 0.0);
-    return max(0.0, specaa_closed_form_tail(r2, z2, a, k) + nodes);
+    float fitted = specaa_closed_form_tail(r2, z2, a, k) + nodes;
+    float small = specaa_small_footprint_D(r2, z2, a, 2.0 * k, k * r2);
+    float share = specaa_closed_form_share(k / a);  // written out: the expansion is huge and wrong at large k
+    return max(0.0, share * fitted + (1.0 - share) * small);
 }
 
 // GGX Smith Lambda, TK21 App. A.3: -1/2 + sqrt(s + o.z^2) / (2 |o.z|), s = [o.x, o.y] A [o.x, o.y]^T,
@@ -968,7 +995,9 @@ float specaa_texture_lod(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) { re
 // GGX(alpha2) convolved with the footprint K = A - a I of the tier (SPECAA_QUALITY): the quadrature
 // (reference) or its closed form for an isotropic K (balanced).
 float specaa_footprint_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
-#if SPECAA_QUALITY == SPECAA_QUALITY_REFERENCE
+#if SPECAA_QUALITY == SPECAA_QUALITY_REFERENCE && defined(SPECAA_CLOSED_FORM_D)
+    return specaa_convolved_D_closed_form(h, A, alpha2);
+#elif SPECAA_QUALITY == SPECAA_QUALITY_REFERENCE
     return specaa_convolved_D(h, A, alpha2);
 #else
     // The tier's A is isotropic (specaa_filtered_alpha2_matrix); the opt-in two lobes' flat share is not, and
@@ -1007,8 +1036,11 @@ float specaa_footprint_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
 // SPECAA_QUALITY fast: GGX(A) (A isotropic; no texture LOD query, no convolution).
 float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, SpecaaSurface s) {
 #if SPECAA_QUALITY == SPECAA_QUALITY_FAST
-    // A floor of 1e-12 keeps a mirror (A = 0) finite off its peak, like the other tiers.
-    return specaa_ggx_D(h, A + SPECAA_FLOAT3(1.0e-12, 1.0e-12, 0.0), 0.0);
+    // GGX of the isotropic A = f I, f / (pi (f h_z^2 + |h.xy|^2)^2) (TK21 Eq. 1 for a unit h; finite as h_z -> 0),
+    // f floored at 1e-12 so that a mirror stays finite, like the other tiers.
+    float f = max(A.x, 1.0e-12);
+    float s2 = f * h.z * h.z + dot(h.xy, h.xy);
+    return h.z > 0.0 ? f / (SPECAA_PI * s2 * s2) : 0.0;
 #else
     float a = specaa_base_alpha2(s);
     float share = 1.0;   // rough share g of the texel (two lobes where g < 1)
