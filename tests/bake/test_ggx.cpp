@@ -197,7 +197,8 @@ void expect_small_footprint_change(const std::function<double(const Vec3<double>
 }
 
 TEST(ConvolvedNdf, GetsTheChangeOfASmallFootprintRight) {
-    expect_small_footprint_change([](const Vec3<double>& h, const Sym2<double>& A, double a) { return convolved_ndf(h, A, a); });
+    expect_small_footprint_change(
+        [](const Vec3<double>& h, const Sym2<double>& A, double a) { return convolved_ndf(h, A, a); });
 }
 
 // The closed form takes the second-order expansion there (its fit alone is off by more than the change).
@@ -205,7 +206,8 @@ TEST(ConvolvedNdfClosedForm, GetsTheChangeOfASmallFootprintRight) {
     expect_small_footprint_change(
         [](const Vec3<double>& h, const Sym2<double>& A, double a) { return convolved_ndf_closed_form(h, A, a); });
     expect_small_footprint_change([](const Vec3<double>& h, const Sym2<double>& A, double a) {
-        return A.xy == 0.0 && A.xx == A.yy ? convolved_ndf_isotropic(h, a, A.xx - a) : convolved_ndf_closed_form(h, A, a);
+        return A.xy == 0.0 && A.xx == A.yy ? convolved_ndf_isotropic(h, a, A.xx - a)
+                                           : convolved_ndf_closed_form(h, A, a);
     });
 }
 
@@ -294,7 +296,8 @@ TEST(ConvolvedNdfClosedForm, EdgesAreFiniteAndReduceToGgxWithoutAKernel) {
     EXPECT_NEAR(convolved_ndf_closed_form(h, Sym2<double>{alpha2, 0.0, alpha2}, alpha2), ggx_axis_aligned(h, 0.1, 0.1),
                 1e-9 * ggx_axis_aligned(h, 0.1, 0.1));
     // The isotropic entry without a kernel: GGX(a) (its nodes weigh 1e-6 of the lobe there).
-    EXPECT_NEAR(convolved_ndf_isotropic(h, alpha2, 0.0), ggx_axis_aligned(h, 0.1, 0.1), 1e-4 * ggx_axis_aligned(h, 0.1, 0.1));
+    const double ggx = ggx_axis_aligned(h, 0.1, 0.1);
+    EXPECT_NEAR(convolved_ndf_isotropic(h, alpha2, 0.0), ggx, 1e-4 * ggx);
     // Below the horizon: 0.
     EXPECT_EQ(convolved_ndf_closed_form(Vec3<double>{0.0, 0.6, -0.8}, Sym2<double>{0.05, 0.0, 0.05}, alpha2), 0.0);
     // Indefinite A - a I (an anisotropic material): the kernel is clamped, the result finite and positive.
