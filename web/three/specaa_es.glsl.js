@@ -141,6 +141,7 @@ float specaa_lod_from_derivatives(vec2 size, vec2 uv) {
 #ifndef SPECAA_QUALITY
 #define SPECAA_QUALITY SPECAA_QUALITY_REFERENCE
 #endif
+// (One line: GLSL before 4.20 has no line continuation.)
 #if SPECAA_QUALITY != SPECAA_QUALITY_FAST && SPECAA_QUALITY != SPECAA_QUALITY_BALANCED && SPECAA_QUALITY != SPECAA_QUALITY_REFERENCE
 #error "specaa: SPECAA_QUALITY is SPECAA_QUALITY_FAST (0), SPECAA_QUALITY_BALANCED (1) or SPECAA_QUALITY_REFERENCE (2)"
 #endif
@@ -716,8 +717,15 @@ float specaa_convolved_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
 SPECAA_FLOAT4 specaa_closed_form_nodes(float b) {
     float z = clamp(log2(b) * 0.30102999566, -3.0, 4.0);
     // (p1, q, p2) by Horner's rule, one coefficient vector per power of z.
-    SPECAA_FLOAT3 p = z < -0.25 ? SPECAA_FLOAT3(13.4053507, 0.175485909, -0.78612125) + z * (SPECAA_FLOAT3(18.6896586, 0.837682955, 0.779175295) + z * (SPECAA_FLOAT3(8.00904241, -0.121406802, 1.05666563) + z * SPECAA_FLOAT3(0.357309142, -0.297962248, -0.559140109)))
-                                : SPECAA_FLOAT3(-0.589765801, 2.49577999, -2.55947913) + z * (SPECAA_FLOAT3(1.15587235, 0.554438611, -0.177032328) + z * (SPECAA_FLOAT3(-1.77857435, 0.921497471, -1.03833038) + z * SPECAA_FLOAT3(0.425394192, -0.115584935, 0.133253855)));
+    SPECAA_FLOAT3 c0 = z < -0.25 ? SPECAA_FLOAT3(13.4053507, 0.175485909, -0.78612125)
+                                 : SPECAA_FLOAT3(-0.589765801, 2.49577999, -2.55947913);
+    SPECAA_FLOAT3 c1 = z < -0.25 ? SPECAA_FLOAT3(18.6896586, 0.837682955, 0.779175295)
+                                 : SPECAA_FLOAT3(1.15587235, 0.554438611, -0.177032328);
+    SPECAA_FLOAT3 c2 = z < -0.25 ? SPECAA_FLOAT3(8.00904241, -0.121406802, 1.05666563)
+                                 : SPECAA_FLOAT3(-1.77857435, 0.921497471, -1.03833038);
+    SPECAA_FLOAT3 c3 = z < -0.25 ? SPECAA_FLOAT3(0.357309142, -0.297962248, -0.559140109)
+                                 : SPECAA_FLOAT3(0.425394192, -0.115584935, 0.133253855);
+    SPECAA_FLOAT3 p = c0 + z * (c1 + z * (c2 + z * c3));
     float rest = exp(-1.0 / b);
     float w1 = z < -0.25 ? p.y * b / (1.0 + b) : rest / (1.0 + exp(-p.y));
     return SPECAA_FLOAT4(w1, rest - w1, exp(-p.x), exp(-p.z));
@@ -760,7 +768,8 @@ float specaa_convolved_D_closed_form(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alp
     if (h.z <= 0.0) return 0.0;
     float a = max(alpha2, 1.0e-12);
     SPECAA_FLOAT3 K = specaa_sym_clamp_psd(A - SPECAA_FLOAT3(a, a, 0.0));
-    if (max(specaa_sym_max_eigenvalue(K), 0.0) <= 1.0e-3 * a) return specaa_ggx_D(h, A + SPECAA_FLOAT3(1.0e-12, 1.0e-12, 0.0), a * a);
+    if (max(specaa_sym_max_eigenvalue(K), 0.0) <= 1.0e-3 * a)
+        return specaa_ggx_D(h, A + SPECAA_FLOAT3(1.0e-12, 1.0e-12, 0.0), a * a);
     float k = max(0.5 * (K.x + K.y), 1.0e-6 * a);
     SPECAA_FLOAT4 n = specaa_closed_form_nodes(k / a);
     float nodes = n.x * specaa_beckmann_node(h, K, a * n.z) + n.y * specaa_beckmann_node(h, K, a * n.w);
