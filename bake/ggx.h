@@ -40,6 +40,20 @@ T filtered_ndf(const Vec3<T>& h, const Sym2<T>& A, T alpha2);
 template <class T>
 T convolved_ndf(const Vec3<T>& h, const Sym2<T>& A, T alpha2);
 
+// convolved_ndf without the quadrature (the include's specaa_convolved_D_closed_form, its C++ twin): the
+// lobes of GGX(a)'s scale mixture wider than the footprint's mean kernel k = tr(K) / 2 in closed form (they
+// carry GGX(a)'s tails), the rest as two Beckmann lobes of a e^-p_i I + K whose widths p_i and weights are
+// fitted functions of k / a; integrates to one; GGX(A) below k_max = 1e-3 a, as convolved_ndf. Largest
+// relative error of D against the convolution: 9.5% for an isotropic K (the fit), up to 70% for a strongly
+// anisotropic one (k_max / k_min = 40; tests/bake/test_ggx.cpp, docs/accuracy.md).
+template <class T>
+T convolved_ndf_closed_form(const Vec3<T>& h, const Sym2<T>& A, T alpha2);
+
+// The same closed form for an isotropic footprint K = kernel I (the include's specaa_convolved_D_isotropic,
+// the balanced tier's NDF); kernel = 0 is GGX(alpha2).
+template <class T>
+T convolved_ndf_isotropic(const Vec3<T>& h, T alpha2, T kernel);
+
 // GGX Smith Lambda for a non-axis-aligned roughness matrix, TK21 App. A.3:
 // Lambda(o) = -1/2 + sqrt(o_xy^T A o_xy + o_z^2) / (2 |o_z|). Returns +inf for o_z = 0.
 template <class T>

@@ -75,7 +75,15 @@ void add_shader_command(CLI::App& app, std::function<int()>& run) {
         "  specbake shader --lang wgsl -o assets/shaders/specaa.wgsl\n"
         "    WebGPU: the default entry points without baked data and, suffixed _kernel, with the baked Sigma\n"
         "    kernel; to prepend to a WGSL module or give to three.js TSL's wgsl()/wgslFn\n"
-        "    (docs/shader-include.md#webgpu-wgsl).");
+        "    (docs/shader-include.md#webgpu-wgsl).\n"
+        "\n"
+        "Cost tier: #define SPECAA_QUALITY before the include to pick what the default entry points\n"
+        "(specaa_filtered_alpha2_matrix, specaa_default_D) cost per light:\n"
+        "  SPECAA_QUALITY_FAST (0)       isotropic filtered roughness and GGX: the cheapest, a roughness drop-in\n"
+        "  SPECAA_QUALITY_BALANCED (1)   isotropic filtered roughness and the footprint's convolved NDF in closed\n"
+        "                                form (no loop)\n"
+        "  SPECAA_QUALITY_REFERENCE (2)  the default: the anisotropic matrix form and the convolution by quadrature\n"
+        "  SPIR-V instructions and accuracy per tier: docs/shader-include.md#quality-tiers.");
     sub->callback([&run, opts] { run = [opts] { return run_shader(*opts); }; });
 }
 

@@ -34,6 +34,18 @@ fn specaa_lod_from_derivatives(size: vec2<f32>, uv: vec2<f32>) -> f32 {
 // 13, 14; SPEC Sec. 3: t = tr(Sigma) for the mean reduction). Tangent-space vectors: z along the normal.
 //
 // Configuration (define before including):
+//   SPECAA_QUALITY  the cost tier of the default entry points (specaa_filtered_alpha2_matrix,
+//                   specaa_default_D); pick by the run-time cost you accept per light:
+//                   SPECAA_QUALITY_FAST (0)      the isotropic filtered roughness (baked data + per-pixel
+//                                                kernel, specaa_filtered_alpha2) as A = a' I and GGX(A):
+//                                                the cheapest, a drop-in for a BRDF's roughness.
+//                   SPECAA_QUALITY_BALANCED (1)  the same isotropic A with GGX of the material convolved
+//                                                with the footprint in closed form
+//                                                (specaa_convolved_D_closed_form, no loop).
+//                   SPECAA_QUALITY_REFERENCE (2) the default (the anisotropic matrix form and the convolution
+//                                                by quadrature, specaa_convolved_D: a loop of 12-32 lobes).
+//                   Default SPECAA_QUALITY_REFERENCE. Costs and accuracy per tier:
+//                   docs/shader-include.md#quality-tiers.
 //   SPECAA_SIGMA2   pixel-filter variance in pixels^2, default 1/(2 pi) (TK21 App. B).
 //   SPECAA_KAPPA    clamp of derivative-based kernels, default 0.18 (TK21 Eq. 10, K16).
 //   SPECAA_GGX_SPREAD  specaa_default_D with a kernel or LEAN texture: GGX(A) where the minified
@@ -76,6 +88,9 @@ fn specaa_lod_from_derivatives(size: vec2<f32>, uv: vec2<f32>) -> f32 {
 //   SPECAA_GATE_PIXEL_KERNEL        the per-pixel kernel faded out like the baked one (SPECAA_KERNEL_GATE).
 //   SPECAA_KERNEL_AREA_LOD          the Sigma kernel texel sampled at the mip of the footprint's area, not of
 //                                   its major axis (the hardware's isotropic choice).
+//   SPECAA_CLOSED_FORM_D            the reference tier's convolution in closed form
+//                                   (specaa_convolved_D_closed_form on its anisotropic matrix): the closed
+//                                   form's share of the balanced tier's error, apart from its isotropic A.
 //   SPECAA_BLEND_FROM_BAKED_SPREAD  opt-in: specaa_default_D's blend weight from the baked spread alone,
 //                                   not from all of K = A - a I (the per-pixel kernel included).
 // Textures are sampled with implicit derivatives, so the hardware selects the mip: the baked mips are
@@ -89,6 +104,7 @@ fn specaa_lod_from_derivatives(size: vec2<f32>, uv: vec2<f32>) -> f32 {
 // of the default add kappa, the others give the fully rough matrix I. Their results are always finite.
 // The filters from given derivatives, the reductions and the NDFs take inputs inside the domain.
 // ===================================================================================================
+// (One line: GLSL before 4.20 has no line continuation.)
 // Kernel traces above this are treated as this: the filtered roughness is then 1 within float precision,
 // and the closed forms below stay finite.
 // ---------------------------------------------------------------------------------------------------
@@ -507,7 +523,8 @@ fn specaa_convolved_D(h: vec3<f32>, A: vec3<f32>, alpha2: f32) -> f32 {
     // The added kernel, projected onto the PSD cone (an anisotropic material's A - a I can be indefinite).
     let K: vec3<f32> = specaa_sym_clamp_psd(A - vec3<f32>(a, a, 0.0));
     let kmax: f32 = max(specaa_sym_max_eigenvalue(K), 0.0);
-    if (kmax <= 1.0e-3 * a) { return specaa_ggx_D(h, A, a * a); } // no footprint to speak of
+    // No footprint to speak of: GGX(A), floored at 1e-12 I so that a mirror (A = 0) stays finite off its peak.
+    if (kmax <= 1.0e-3 * a) { return specaa_ggx_D(h, A + vec3<f32>(1.0e-12, 1.0e-12, 0.0), a * a); }
     let wlo: f32 = 0.05 * min(1.0, a / kmax);
     let slo: f32 = log(wlo);
     let range: f32 = log(10.0) - slo;
@@ -541,7 +558,104 @@ fn specaa_convolved_D(h: vec3<f32>, A: vec3<f32>, alpha2: f32) -> f32 {
     let direct: f32 = sum * ds + (below + firstOrder) * unit;
     let difference: f32 = max(0.0, specaa_ggx_D(h, vec3<f32>(a, a, 0.0), a * a) + (sum - sumUnfiltered) * ds + firstOrder * unit);
     let blend: f32 = saturate(log2(10.0 * kmax / a) * 0.30103);
-    return difference + blend * (direct - difference);
+    let D: f32 = difference + blend * (direct - difference);
+    // Grazing half vectors (h_z^4 below float's range) overflow the sums; the convolution is GGX(a)'s tail
+    // there, a / (pi (|h.xy|^2 + a h_z^2)^2).
+    let s2: f32 = dot(h.xy, h.xy) + a * z2;
+    return select(a / (3.14159265358979 * s2 * s2), D, specaa_is_finite(D));
+}
+// specaa_convolved_D without the loop (SPECAA_QUALITY balanced): the same convolution of GGX(a) with the
+// footprint, int_0^inf e^-w Beckmann(a / w I + K) dw, with k = tr(K) / 2 (the mean reduction) and b = k / a.
+// Its lobes wider than k (w < 1 / b) are taken without K: GGX(a)'s scale mixture truncated there, in closed
+// form, a (1 - e^-L (1 + L)) / (pi (|h.xy|^2 + a h_z^2)^2) with L = (tan^2(theta_h) + a) / k, which carries
+// GGX(a)'s tails and the mass 1 - e^(-1/b). The rest, mass e^(-1/b), is two Beckmann lobes
+// Beckmann(a e^(-p_i) I + K) with weights w1 (q b / (1 + b) for b < 10^-0.25, e^(-1/b) / (1 + e^-q) above)
+// and w2 = e^(-1/b) - w1, so D integrates to one whatever the fit. (p1, q, p2) are cubics in log10(b) fitted
+// to the isotropic convolution (minimax relative error over tan^2(theta_h) / a in [0, 1e7] and b in
+// [1e-3, 1e4]; b is clamped to that range). Largest relative error of D against the convolution: 9.5% for
+// an isotropic K (the fit; 8.7% against a brute-force convolution in tests/bake/test_ggx.cpp), up to 70%
+// for a strongly anisotropic one (k_max / k_min = 40), whose slopes between its two widths fall as a power
+// the isotropic truncated mixture does not have; the integral over the hemisphere is one. Below k = 0.1 a
+// the fit's error would exceed the change the footprint makes (a smooth sphere's highlight would flicker
+// more than unfiltered, docs/accuracy.md#the-convolutions-accuracy), so there it blends (log-linearly from
+// k = 0.1 a) into the convolution's second-order expansion, alone below k = 0.03 a, exact as K -> 0
+// (specaa_small_footprint_D). C++ twin: bake/ggx.cpp convolved_ndf_closed_form.
+// (w1, w2, e^-p1, e^-p2) of the closed form's two nodes at b = k / a.
+fn specaa_closed_form_nodes(b: f32) -> vec4<f32> {
+    let z: f32 = clamp(log2(b) * 0.30102999566, -3.0, 4.0);
+    // (p1, q, p2) by Horner's rule, one coefficient vector per power of z.
+    let c0: vec3<f32> = select(vec3<f32>(-0.589765801, 2.49577999, -2.55947913), vec3<f32>(13.4053507, 0.175485909, -0.78612125), z < -0.25);
+    let c1: vec3<f32> = select(vec3<f32>(1.15587235, 0.554438611, -0.177032328), vec3<f32>(18.6896586, 0.837682955, 0.779175295), z < -0.25);
+    let c2: vec3<f32> = select(vec3<f32>(-1.77857435, 0.921497471, -1.03833038), vec3<f32>(8.00904241, -0.121406802, 1.05666563), z < -0.25);
+    let c3: vec3<f32> = select(vec3<f32>(0.425394192, -0.115584935, 0.133253855), vec3<f32>(0.357309142, -0.297962248, -0.559140109), z < -0.25);
+    let p: vec3<f32> = c0 + z * (c1 + z * (c2 + z * c3));
+    let rest: f32 = exp(-1.0 / b);
+    let w1: f32 = select(rest / (1.0 + exp(-p.y)), p.y * b / (1.0 + b), z < -0.25);
+    return vec4<f32>(w1, rest - w1, exp(-p.x), exp(-p.z));
+}
+// The truncated mixture of the closed form (GGX(a)'s lobes wider than k), r2 = |h.xy|^2, z2 = h_z^2 > 0.
+fn specaa_closed_form_tail(r2: f32, z2: f32, a: f32, k: f32) -> f32 {
+    let L: f32 = (r2 / z2 + a) / k;
+    let Lc: f32 = min(L, 80.0); // e^-L (1 + L) below float's range beyond (and no inf * 0 at h_z = 0)
+    let s2: f32 = r2 + a * z2;
+    return select((0.5 - L / 3.0 + L * L / 8.0) * a / (3.14159265358979 * k * k * z2 * z2), a * (1.0 - exp(-Lc) * (1.0 + Lc)) / (3.14159265358979 * s2 * s2), L > 0.05);
+}
+// GGX(a) convolved with a small footprint, to second order in K (the convolution's Taylor expansion, written
+// for the isotropic slope density f(q) = 1 / (pi a (1 + q / a)^2): f + f' tr(K) / 2 + f'' m^T K m):
+// a / (pi s2^2) (1 - tr(K) h_z^2 / s2 + 6 h.xy^T K h.xy h_z^2 / s2^2), s2 = a h_z^2 + |h.xy|^2 (finite as
+// h_z -> 0). Exact as K -> 0, within 0.6% of D at k = 0.03 a; trK = tr(K), hKh = h.xy^T K h.xy.
+fn specaa_small_footprint_D(r2: f32, z2: f32, a: f32, trK: f32, hKh: f32) -> f32 {
+    let s2: f32 = a * z2 + r2;
+    return a / (3.14159265358979 * s2 * s2) * (1.0 - trK * z2 / s2 + 6.0 * hKh * z2 / (s2 * s2));
+}
+// Share of the fitted nodes in the closed form: 0 (the second-order expansion) below k = 0.03 a, where
+// the fit's error would exceed the change the footprint makes, 1 above k = 0.1 a, log-linear between.
+fn specaa_closed_form_share(b: f32) -> f32 { return saturate((log2(b) * 0.30102999566 + 1.5228787) * 1.9124059); }
+// Beckmann(K + v I) (TK21 Sec. 2.1), 0 where its exponential underflows (h_z -> 0).
+fn specaa_beckmann_node(h: vec3<f32>, K: vec3<f32>, v: f32) -> f32 {
+    let B: vec3<f32> = K + vec3<f32>(v, v, 0.0);
+    let detB: f32 = max(specaa_sym_det(B), 1.0e-30);
+    let z2: f32 = h.z * h.z;
+    let g: f32 = exp(-specaa_inverse_quadratic_form(B, h.xy, detB) / z2);
+    return select(0.0, g / (3.14159265358979 * sqrt(detB) * z2 * z2), g > 0.0);
+}
+// The closed form for a roughness matrix A (K = A - a I projected onto the PSD cone, as specaa_convolved_D);
+// GGX(A) itself where k_max <= 1e-3 a. `alpha2` is the a the footprint spreads.
+fn specaa_convolved_D_closed_form(h: vec3<f32>, A: vec3<f32>, alpha2: f32) -> f32 {
+    if (h.z <= 0.0) { return 0.0; }
+    let a: f32 = max(alpha2, 1.0e-12);
+    let K: vec3<f32> = specaa_sym_clamp_psd(A - vec3<f32>(a, a, 0.0));
+    if (max(specaa_sym_max_eigenvalue(K), 0.0) <= 1.0e-3 * a) { return specaa_ggx_D(h, A + vec3<f32>(1.0e-12, 1.0e-12, 0.0), a * a); }
+    let k: f32 = max(0.5 * (K.x + K.y), 1.0e-6 * a);
+    let n: vec4<f32> = specaa_closed_form_nodes(k / a);
+    let nodes: f32 = n.x * specaa_beckmann_node(h, K, a * n.z) + n.y * specaa_beckmann_node(h, K, a * n.w);
+    let r2: f32 = dot(h.xy, h.xy);
+    let z2: f32 = h.z * h.z;
+    let fitted: f32 = specaa_closed_form_tail(r2, z2, a, k) + nodes;
+    let hKh: f32 = h.x * h.x * K.x + 2.0 * h.x * h.y * K.z + h.y * h.y * K.y;
+    let small: f32 = specaa_small_footprint_D(r2, z2, a, K.x + K.y, hKh);
+    let share: f32 = specaa_closed_form_share(k / a); // written out: the expansion is huge and wrong at large k
+    return max(0.0, share * fitted + (1.0 - share) * small);
+}
+// The closed form for an isotropic footprint K = k I (the balanced tier's, whose A is isotropic): no matrix
+// algebra; k = 0 is GGX(a).
+fn specaa_convolved_D_isotropic(h: vec3<f32>, alpha2: f32, kernel: f32) -> f32 {
+    if (h.z <= 0.0) { return 0.0; }
+    let a: f32 = max(alpha2, 1.0e-12);
+    let k: f32 = max(kernel, 1.0e-6 * a);
+    let n: vec4<f32> = specaa_closed_form_nodes(k / a);
+    let z2: f32 = h.z * h.z;
+    let r2: f32 = dot(h.xy, h.xy);
+    let v: vec2<f32> = k + a * n.zw; // the nodes' widths
+    let g: vec2<f32> = exp(-r2 / (z2 * v));
+    let unit: f32 = 3.14159265358979 * z2 * z2;
+    let nodeX: f32 = select(0.0, n.x * g.x / (unit * v.x), g.x > 0.0);
+    let nodeY: f32 = select(0.0, n.y * g.y / (unit * v.y), g.y > 0.0);
+    let nodes: f32 = nodeX + nodeY;
+    let fitted: f32 = specaa_closed_form_tail(r2, z2, a, k) + nodes;
+    let small: f32 = specaa_small_footprint_D(r2, z2, a, 2.0 * k, k * r2);
+    let share: f32 = specaa_closed_form_share(k / a); // written out: the expansion is huge and wrong at large k
+    return max(0.0, share * fitted + (1.0 - share) * small);
 }
 // GGX Smith Lambda, TK21 App. A.3: -1/2 + sqrt(s + o.z^2) / (2 |o.z|), s = [o.x, o.y] A [o.x, o.y]^T,
 // evaluated as s / (2 |o.z| (sqrt(s + o.z^2) + |o.z|)) (same value, no cancellation for smooth A).
@@ -667,6 +781,11 @@ fn specaa_filtered_alpha2_matrix(s: SpecaaSurface) -> vec3<f32> {
 }
 // Level of detail the hardware samples a texture at uv (negative under magnification).
 fn specaa_texture_lod(tex: texture_2d<f32>, smp: sampler, uv: vec2<f32>) -> f32 { return specaa_lod_from_derivatives(vec2<f32>(textureDimensions(tex, 0)), uv); }
+// GGX(alpha2) convolved with the footprint K = A - a I of the tier (SPECAA_QUALITY): the quadrature
+// (reference) or its closed form for an isotropic K (balanced).
+fn specaa_footprint_D(h: vec3<f32>, A: vec3<f32>, alpha2: f32) -> f32 {
+    return specaa_convolved_D(h, A, alpha2);
+}
 // The default NDF for the default matrix A = specaa_filtered_alpha2_matrix(s): GGX(A) + (1 - w)
 // (specaa_convolved_D - GGX(A)), GGX of the material convolved with the footprint's spread K = A - a I
 // where that spread is Gaussian, GGX(A) where it is not.
@@ -694,6 +813,7 @@ fn specaa_texture_lod(tex: texture_2d<f32>, smp: sampler, uv: vec2<f32>) -> f32 
 // - Baked roughness texture (a already holds the texel's spread, K only the pixel's): w = saturate(LOD),
 //   the convolution under magnification, GGX(A) from the texture's mip 1 on.
 // NaN inputs give GGX(A).
+// SPECAA_QUALITY fast: GGX(A) (A isotropic; no texture LOD query, no convolution).
 fn specaa_default_D(h: vec3<f32>, filteredA: vec3<f32>, s: SpecaaSurface) -> f32 {
     let A: vec3<f32> = filteredA;
     let a: f32 = specaa_base_alpha2(s);
@@ -701,9 +821,9 @@ fn specaa_default_D(h: vec3<f32>, filteredA: vec3<f32>, s: SpecaaSurface) -> f32
     let flatD: f32 = 0.0; // the flat share's lobe
     var w: f32 = 0.0;
     w = select(1.0, w, w == w);
-    let ggx: f32 = specaa_ggx_D(h, A, a * a);
+    let ggx: f32 = specaa_ggx_D(h, A + vec3<f32>(1.0e-12, 1.0e-12, 0.0), a * a); // floored: a mirror stays finite
     var roughD: f32 = ggx;
-    if (w < 1.0) { roughD = ggx + (1.0 - w) * (specaa_convolved_D(h, A, a) - ggx); }
+    if (w < 1.0) { roughD = ggx + (1.0 - w) * (specaa_footprint_D(h, A, a) - ggx); }
     return share * roughD + (1.0 - share) * flatD;
 }
 
@@ -769,8 +889,8 @@ fn specaa_default_D_kernel(h: vec3<f32>, filteredA: vec3<f32>, s: SpecaaSurface,
     let spread: vec3<f32> = A - vec3<f32>(a, a, 0.0);
     var w: f32 = saturate(lod) * saturate(SPECAA_GGX_SPREAD * specaa_sym_max_eigenvalue(spread));
     w = select(1.0, w, w == w);
-    let ggx: f32 = specaa_ggx_D(h, A, a * a);
+    let ggx: f32 = specaa_ggx_D(h, A + vec3<f32>(1.0e-12, 1.0e-12, 0.0), a * a); // floored: a mirror stays finite
     var roughD: f32 = ggx;
-    if (w < 1.0) { roughD = ggx + (1.0 - w) * (specaa_convolved_D(h, A, a) - ggx); }
+    if (w < 1.0) { roughD = ggx + (1.0 - w) * (specaa_footprint_D(h, A, a) - ggx); }
     return share * roughD + (1.0 - share) * flatD;
 }

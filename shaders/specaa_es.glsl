@@ -65,6 +65,18 @@ float specaa_lod_from_derivatives(vec2 size, vec2 uv) {
 // 13, 14; SPEC Sec. 3: t = tr(Sigma) for the mean reduction). Tangent-space vectors: z along the normal.
 //
 // Configuration (define before including):
+//   SPECAA_QUALITY  the cost tier of the default entry points (specaa_filtered_alpha2_matrix,
+//                   specaa_default_D); pick by the run-time cost you accept per light:
+//                   SPECAA_QUALITY_FAST (0)      the isotropic filtered roughness (baked data + per-pixel
+//                                                kernel, specaa_filtered_alpha2) as A = a' I and GGX(A):
+//                                                the cheapest, a drop-in for a BRDF's roughness.
+//                   SPECAA_QUALITY_BALANCED (1)  the same isotropic A with GGX of the material convolved
+//                                                with the footprint in closed form
+//                                                (specaa_convolved_D_closed_form, no loop).
+//                   SPECAA_QUALITY_REFERENCE (2) the default (the anisotropic matrix form and the convolution
+//                                                by quadrature, specaa_convolved_D: a loop of 12-32 lobes).
+//                   Default SPECAA_QUALITY_REFERENCE. Costs and accuracy per tier:
+//                   docs/shader-include.md#quality-tiers.
 //   SPECAA_SIGMA2   pixel-filter variance in pixels^2, default 1/(2 pi) (TK21 App. B).
 //   SPECAA_KAPPA    clamp of derivative-based kernels, default 0.18 (TK21 Eq. 10, K16).
 //   SPECAA_GGX_SPREAD  specaa_default_D with a kernel or LEAN texture: GGX(A) where the minified
@@ -107,6 +119,9 @@ float specaa_lod_from_derivatives(vec2 size, vec2 uv) {
 //   SPECAA_GATE_PIXEL_KERNEL        the per-pixel kernel faded out like the baked one (SPECAA_KERNEL_GATE).
 //   SPECAA_KERNEL_AREA_LOD          the Sigma kernel texel sampled at the mip of the footprint's area, not of
 //                                   its major axis (the hardware's isotropic choice).
+//   SPECAA_CLOSED_FORM_D            the reference tier's convolution in closed form
+//                                   (specaa_convolved_D_closed_form on its anisotropic matrix): the closed
+//                                   form's share of the balanced tier's error, apart from its isotropic A.
 //   SPECAA_BLEND_FROM_BAKED_SPREAD  opt-in: specaa_default_D's blend weight from the baked spread alone,
 //                                   not from all of K = A - a I (the per-pixel kernel included).
 // Textures are sampled with implicit derivatives, so the hardware selects the mip: the baked mips are
@@ -121,6 +136,16 @@ float specaa_lod_from_derivatives(vec2 size, vec2 uv) {
 // The filters from given derivatives, the reductions and the NDFs take inputs inside the domain.
 // ===================================================================================================
 
+#define SPECAA_QUALITY_FAST 0
+#define SPECAA_QUALITY_BALANCED 1
+#define SPECAA_QUALITY_REFERENCE 2
+#ifndef SPECAA_QUALITY
+#define SPECAA_QUALITY SPECAA_QUALITY_REFERENCE
+#endif
+// (One line: GLSL before 4.20 has no line continuation.)
+#if SPECAA_QUALITY != SPECAA_QUALITY_FAST && SPECAA_QUALITY != SPECAA_QUALITY_BALANCED && SPECAA_QUALITY != SPECAA_QUALITY_REFERENCE
+#error "specaa: SPECAA_QUALITY is SPECAA_QUALITY_FAST (0), SPECAA_QUALITY_BALANCED (1) or SPECAA_QUALITY_REFERENCE (2)"
+#endif
 #ifndef SPECAA_SIGMA2
 #define SPECAA_SIGMA2 0.15915494309189535
 #endif
@@ -634,7 +659,8 @@ float specaa_convolved_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
     // The added kernel, projected onto the PSD cone (an anisotropic material's A - a I can be indefinite).
     SPECAA_FLOAT3 K = specaa_sym_clamp_psd(A - SPECAA_FLOAT3(a, a, 0.0));
     float kmax = max(specaa_sym_max_eigenvalue(K), 0.0);
-    if (kmax <= 1.0e-3 * a) return specaa_ggx_D(h, A, a * a);  // no footprint to speak of
+    // No footprint to speak of: GGX(A), floored at 1e-12 I so that a mirror (A = 0) stays finite off its peak.
+    if (kmax <= 1.0e-3 * a) return specaa_ggx_D(h, A + SPECAA_FLOAT3(1.0e-12, 1.0e-12, 0.0), a * a);
     float wlo = 0.05 * min(1.0, a / kmax);
     float slo = log(wlo);
     float range = log(10.0) - slo;
@@ -669,7 +695,118 @@ float specaa_convolved_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
     float direct = sum * ds + (below + firstOrder) * unit;
     float difference = max(0.0, specaa_ggx_D(h, SPECAA_FLOAT3(a, a, 0.0), a * a) + (sum - sumUnfiltered) * ds + firstOrder * unit);
     float blend = SPECAA_SATURATE(log2(10.0 * kmax / a) * 0.30103);
-    return difference + blend * (direct - difference);
+    float D = difference + blend * (direct - difference);
+    // Grazing half vectors (h_z^4 below float's range) overflow the sums; the convolution is GGX(a)'s tail
+    // there, a / (pi (|h.xy|^2 + a h_z^2)^2).
+    float s2 = dot(h.xy, h.xy) + a * z2;
+    return SPECAA_SELECT(specaa_is_finite(D), D, a / (SPECAA_PI * s2 * s2));
+}
+
+// specaa_convolved_D without the loop (SPECAA_QUALITY balanced): the same convolution of GGX(a) with the
+// footprint, int_0^inf e^-w Beckmann(a / w I + K) dw, with k = tr(K) / 2 (the mean reduction) and b = k / a.
+// Its lobes wider than k (w < 1 / b) are taken without K: GGX(a)'s scale mixture truncated there, in closed
+// form, a (1 - e^-L (1 + L)) / (pi (|h.xy|^2 + a h_z^2)^2) with L = (tan^2(theta_h) + a) / k, which carries
+// GGX(a)'s tails and the mass 1 - e^(-1/b). The rest, mass e^(-1/b), is two Beckmann lobes
+// Beckmann(a e^(-p_i) I + K) with weights w1 (q b / (1 + b) for b < 10^-0.25, e^(-1/b) / (1 + e^-q) above)
+// and w2 = e^(-1/b) - w1, so D integrates to one whatever the fit. (p1, q, p2) are cubics in log10(b) fitted
+// to the isotropic convolution (minimax relative error over tan^2(theta_h) / a in [0, 1e7] and b in
+// [1e-3, 1e4]; b is clamped to that range). Largest relative error of D against the convolution: 9.5% for
+// an isotropic K (the fit; 8.7% against a brute-force convolution in tests/bake/test_ggx.cpp), up to 70%
+// for a strongly anisotropic one (k_max / k_min = 40), whose slopes between its two widths fall as a power
+// the isotropic truncated mixture does not have; the integral over the hemisphere is one. Below k = 0.1 a
+// the fit's error would exceed the change the footprint makes (a smooth sphere's highlight would flicker
+// more than unfiltered, docs/accuracy.md#the-convolutions-accuracy), so there it blends (log-linearly from
+// k = 0.1 a) into the convolution's second-order expansion, alone below k = 0.03 a, exact as K -> 0
+// (specaa_small_footprint_D). C++ twin: bake/ggx.cpp convolved_ndf_closed_form.
+
+// (w1, w2, e^-p1, e^-p2) of the closed form's two nodes at b = k / a.
+SPECAA_FLOAT4 specaa_closed_form_nodes(float b) {
+    float z = clamp(log2(b) * 0.30102999566, -3.0, 4.0);
+    // (p1, q, p2) by Horner's rule, one coefficient vector per power of z.
+    SPECAA_FLOAT3 c0 = z < -0.25 ? SPECAA_FLOAT3(13.4053507, 0.175485909, -0.78612125)
+                                 : SPECAA_FLOAT3(-0.589765801, 2.49577999, -2.55947913);
+    SPECAA_FLOAT3 c1 = z < -0.25 ? SPECAA_FLOAT3(18.6896586, 0.837682955, 0.779175295)
+                                 : SPECAA_FLOAT3(1.15587235, 0.554438611, -0.177032328);
+    SPECAA_FLOAT3 c2 = z < -0.25 ? SPECAA_FLOAT3(8.00904241, -0.121406802, 1.05666563)
+                                 : SPECAA_FLOAT3(-1.77857435, 0.921497471, -1.03833038);
+    SPECAA_FLOAT3 c3 = z < -0.25 ? SPECAA_FLOAT3(0.357309142, -0.297962248, -0.559140109)
+                                 : SPECAA_FLOAT3(0.425394192, -0.115584935, 0.133253855);
+    SPECAA_FLOAT3 p = c0 + z * (c1 + z * (c2 + z * c3));
+    float rest = exp(-1.0 / b);
+    float w1 = z < -0.25 ? p.y * b / (1.0 + b) : rest / (1.0 + exp(-p.y));
+    return SPECAA_FLOAT4(w1, rest - w1, exp(-p.x), exp(-p.z));
+}
+
+// The truncated mixture of the closed form (GGX(a)'s lobes wider than k), r2 = |h.xy|^2, z2 = h_z^2 > 0.
+float specaa_closed_form_tail(float r2, float z2, float a, float k) {
+    float L = (r2 / z2 + a) / k;
+    float Lc = min(L, 80.0);  // e^-L (1 + L) below float's range beyond (and no inf * 0 at h_z = 0)
+    float s2 = r2 + a * z2;
+    return L > 0.05 ? a * (1.0 - exp(-Lc) * (1.0 + Lc)) / (SPECAA_PI * s2 * s2)
+                    : (0.5 - L / 3.0 + L * L / 8.0) * a / (SPECAA_PI * k * k * z2 * z2);
+}
+
+// GGX(a) convolved with a small footprint, to second order in K (the convolution's Taylor expansion, written
+// for the isotropic slope density f(q) = 1 / (pi a (1 + q / a)^2): f + f' tr(K) / 2 + f'' m^T K m):
+// a / (pi s2^2) (1 - tr(K) h_z^2 / s2 + 6 h.xy^T K h.xy h_z^2 / s2^2), s2 = a h_z^2 + |h.xy|^2 (finite as
+// h_z -> 0). Exact as K -> 0, within 0.6% of D at k = 0.03 a; trK = tr(K), hKh = h.xy^T K h.xy.
+float specaa_small_footprint_D(float r2, float z2, float a, float trK, float hKh) {
+    float s2 = a * z2 + r2;
+    return a / (SPECAA_PI * s2 * s2) * (1.0 - trK * z2 / s2 + 6.0 * hKh * z2 / (s2 * s2));
+}
+
+// Share of the fitted nodes in the closed form: 0 (the second-order expansion) below k = 0.03 a, where
+// the fit's error would exceed the change the footprint makes, 1 above k = 0.1 a, log-linear between.
+float specaa_closed_form_share(float b) { return SPECAA_SATURATE((log2(b) * 0.30102999566 + 1.5228787) * 1.9124059); }
+
+// Beckmann(K + v I) (TK21 Sec. 2.1), 0 where its exponential underflows (h_z -> 0).
+float specaa_beckmann_node(SPECAA_FLOAT3 h, SPECAA_FLOAT3 K, float v) {
+    SPECAA_FLOAT3 B = K + SPECAA_FLOAT3(v, v, 0.0);
+    float detB = max(specaa_sym_det(B), 1.0e-30);
+    float z2 = h.z * h.z;
+    float g = exp(-specaa_inverse_quadratic_form(B, h.xy, detB) / z2);
+    return g > 0.0 ? g / (SPECAA_PI * sqrt(detB) * z2 * z2) : 0.0;
+}
+
+// The closed form for a roughness matrix A (K = A - a I projected onto the PSD cone, as specaa_convolved_D);
+// GGX(A) itself where k_max <= 1e-3 a. `alpha2` is the a the footprint spreads.
+float specaa_convolved_D_closed_form(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
+    if (h.z <= 0.0) return 0.0;
+    float a = max(alpha2, 1.0e-12);
+    SPECAA_FLOAT3 K = specaa_sym_clamp_psd(A - SPECAA_FLOAT3(a, a, 0.0));
+    if (max(specaa_sym_max_eigenvalue(K), 0.0) <= 1.0e-3 * a)
+        return specaa_ggx_D(h, A + SPECAA_FLOAT3(1.0e-12, 1.0e-12, 0.0), a * a);
+    float k = max(0.5 * (K.x + K.y), 1.0e-6 * a);
+    SPECAA_FLOAT4 n = specaa_closed_form_nodes(k / a);
+    float nodes = n.x * specaa_beckmann_node(h, K, a * n.z) + n.y * specaa_beckmann_node(h, K, a * n.w);
+    float r2 = dot(h.xy, h.xy);
+    float z2 = h.z * h.z;
+    float fitted = specaa_closed_form_tail(r2, z2, a, k) + nodes;
+    float hKh = h.x * h.x * K.x + 2.0 * h.x * h.y * K.z + h.y * h.y * K.y;
+    float small = specaa_small_footprint_D(r2, z2, a, K.x + K.y, hKh);
+    float share = specaa_closed_form_share(k / a);  // written out: the expansion is huge and wrong at large k
+    return max(0.0, share * fitted + (1.0 - share) * small);
+}
+
+// The closed form for an isotropic footprint K = k I (the balanced tier's, whose A is isotropic): no matrix
+// algebra; k = 0 is GGX(a).
+float specaa_convolved_D_isotropic(SPECAA_FLOAT3 h, float alpha2, float kernel) {
+    if (h.z <= 0.0) return 0.0;
+    float a = max(alpha2, 1.0e-12);
+    float k = max(kernel, 1.0e-6 * a);
+    SPECAA_FLOAT4 n = specaa_closed_form_nodes(k / a);
+    float z2 = h.z * h.z;
+    float r2 = dot(h.xy, h.xy);
+    SPECAA_FLOAT2 v = k + a * n.zw;  // the nodes' widths
+    SPECAA_FLOAT2 g = exp(-r2 / (z2 * v));
+    float unit = SPECAA_PI * z2 * z2;
+    float nodeX = g.x > 0.0 ? n.x * g.x / (unit * v.x) : 0.0;
+    float nodeY = g.y > 0.0 ? n.y * g.y / (unit * v.y) : 0.0;
+    float nodes = nodeX + nodeY;
+    float fitted = specaa_closed_form_tail(r2, z2, a, k) + nodes;
+    float small = specaa_small_footprint_D(r2, z2, a, 2.0 * k, k * r2);
+    float share = specaa_closed_form_share(k / a);  // written out: the expansion is huge and wrong at large k
+    return max(0.0, share * fitted + (1.0 - share) * small);
 }
 
 // GGX Smith Lambda, TK21 App. A.3: -1/2 + sqrt(s + o.z^2) / (2 |o.z|), s = [o.x, o.y] A [o.x, o.y]^T,
@@ -865,7 +1002,11 @@ SPECAA_FLOAT3 specaa_widened_matrix(float a, SPECAA_FLOAT3 K) {
 // specaa_ggx_D with tau = a^2 of the unfiltered material). Same composition as specaa_filtered_alpha2, with the per-pixel
 // kernel kept anisotropic.
 SPECAA_FLOAT3 specaa_filtered_alpha2_matrix(SpecaaSurface s) {
-#if defined(SPECAA_GATE_PIXEL_KERNEL)
+#if SPECAA_QUALITY != SPECAA_QUALITY_REFERENCE
+    // The fast and balanced tiers: the isotropic form (SPECAA_QUALITY).
+    float f = specaa_filtered_alpha2(s);
+    return SPECAA_FLOAT3(f, f, 0.0);
+#elif defined(SPECAA_GATE_PIXEL_KERNEL)
     float a = specaa_base_alpha2(s);
     return specaa_widened_matrix(a, specaa_baked_kernel_matrix(s) + specaa_gate_baked_kernel(specaa_pixel_kernel_matrix(s), a));
 #else
@@ -875,6 +1016,20 @@ SPECAA_FLOAT3 specaa_filtered_alpha2_matrix(SpecaaSurface s) {
 
 // Level of detail the hardware samples a texture at uv (negative under magnification).
 float specaa_texture_lod(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) { return SPECAA_QUERY_LOD(tex, smp, uv); }
+
+// GGX(alpha2) convolved with the footprint K = A - a I of the tier (SPECAA_QUALITY): the quadrature
+// (reference) or its closed form for an isotropic K (balanced).
+float specaa_footprint_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
+#if SPECAA_QUALITY == SPECAA_QUALITY_REFERENCE && defined(SPECAA_CLOSED_FORM_D)
+    return specaa_convolved_D_closed_form(h, A, alpha2);
+#elif SPECAA_QUALITY == SPECAA_QUALITY_REFERENCE
+    return specaa_convolved_D(h, A, alpha2);
+#else
+    // The tier's A is isotropic (specaa_filtered_alpha2_matrix); the opt-in two lobes' flat share is not, and
+    // takes the mean of its kernel.
+    return specaa_convolved_D_isotropic(h, alpha2, max(0.5 * (A.x + A.y) - alpha2, 0.0));
+#endif
+}
 
 // The default NDF for the default matrix A = specaa_filtered_alpha2_matrix(s): GGX(A) + (1 - w)
 // (specaa_convolved_D - GGX(A)), GGX of the material convolved with the footprint's spread K = A - a I
@@ -903,7 +1058,15 @@ float specaa_texture_lod(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) { re
 // - Baked roughness texture (a already holds the texel's spread, K only the pixel's): w = saturate(LOD),
 //   the convolution under magnification, GGX(A) from the texture's mip 1 on.
 // NaN inputs give GGX(A).
+// SPECAA_QUALITY fast: GGX(A) (A isotropic; no texture LOD query, no convolution).
 float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 filteredA, SpecaaSurface s) {
+#if SPECAA_QUALITY == SPECAA_QUALITY_FAST
+    // GGX of the isotropic A = f I, f / (pi (f h_z^2 + |h.xy|^2)^2) (TK21 Eq. 1 for a unit h; finite as h_z -> 0),
+    // f floored at 1e-12 so that a mirror stays finite, like the other tiers.
+    float f = max(filteredA.x, 1.0e-12);
+    float s2 = f * h.z * h.z + dot(h.xy, h.xy);
+    return SPECAA_SELECT(h.z > 0.0, f / (SPECAA_PI * s2 * s2), 0.0);
+#else
     SPECAA_FLOAT3 A = filteredA;
     float a = specaa_base_alpha2(s);
     float share = 1.0;   // rough share g of the texel (two lobes where g < 1)
@@ -925,7 +1088,7 @@ float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 filteredA, SpecaaSurface s
     SPECAA_FLOAT3 roughK = specaa_gate_baked_kernel((2.0 / max(share, 1.0e-3)) * k.xyz, a);
     SPECAA_FLOAT3 roughA = specaa_widened_matrix(a, roughK + pixel);
     if (share < 1.0) {
-        flatD = specaa_convolved_D(h, flatA, a);
+        flatD = specaa_footprint_D(h, flatA, a);
         A = roughA;
     }
 #endif
@@ -960,10 +1123,11 @@ float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 filteredA, SpecaaSurface s
 #if defined(SPECAA_DEFAULT_D_WEIGHT)
     w = SPECAA_DEFAULT_D_WEIGHT;
 #endif
-    float ggx = specaa_ggx_D(h, A, a * a);
+    float ggx = specaa_ggx_D(h, A + SPECAA_FLOAT3(1.0e-12, 1.0e-12, 0.0), a * a);  // floored: a mirror stays finite
     float roughD = ggx;
-    if (w < 1.0) roughD = ggx + (1.0 - w) * (specaa_convolved_D(h, A, a) - ggx);
+    if (w < 1.0) roughD = ggx + (1.0 - w) * (specaa_footprint_D(h, A, a) - ggx);
     return share * roughD + (1.0 - share) * flatD;
+#endif
 }
 // ===================================================================================================
 // Glints: geometric glint anti-aliasing, C21 (Chermain et al. 2021) on the procedural glint BRDF of

@@ -204,6 +204,16 @@ GridGroup ggx_group() {
         const double convolved = convolved_ndf(h, A, std::sqrt(tau));
         if (!(std::abs(r.out[1][1] - convolved) <= 1e-3 * cond * convolved + kAbsTol))
             return describe("convolved D (GGX through the footprint)", c, {r.out[1][1]}, {convolved});
+        // Its closed form (the balanced tier's NDF) against its C++ twin: three exponentials and two Beckmann
+        // lobes in float, 1e-3 relative like the quadrature.
+        const double closed_form = convolved_ndf_closed_form(h, A, std::sqrt(tau));
+        if (!(std::abs(r.out[1][2] - closed_form) <= 1e-3 * cond * (1.0 + exponent) * closed_form + kAbsTol))
+            return describe("convolved D in closed form", c, {r.out[1][2]}, {closed_form});
+        // The isotropic closed form (the balanced tier's NDF) on the mean of the kernel.
+        const double a = std::sqrt(tau);
+        const double isotropic = convolved_ndf_isotropic(h, a, std::max(0.5 * (A.xx + A.yy) - a, 0.0));
+        if (!(std::abs(r.out[1][3] - isotropic) <= 1e-3 * (1.0 + exponent) * isotropic + kAbsTol))
+            return describe("convolved D in closed form, isotropic (balanced tier)", c, {r.out[1][3]}, {isotropic});
         return {};
     };
     return g;

@@ -1,5 +1,6 @@
 // specbake shader: the embedded include is byte-identical to shaders/specaa.glsl, specaa_es.glsl,
-// specaa.hlsl and specaa.wgsl, on stdout and with -o (atomic); bad arguments give one error line and a non-zero exit without touching files.
+// specaa.hlsl and specaa.wgsl, on stdout and with -o (atomic); bad arguments give one error line and a
+// non-zero exit without touching files; the help names the cost tiers (SPECAA_QUALITY).
 #include "gl/gl_harness.h"
 
 #include <gtest/gtest.h>
@@ -41,6 +42,17 @@ TEST(ShaderCli, ReplacesAnExistingFileCompletely) {
     std::string out;
     ASSERT_EQ(run_command(std::string("'") + SPECBAKE_EXE + "' shader --lang glsl -o '" + file.string() + "'", out), 0) << out;
     EXPECT_EQ(read_all(file), read_source_file("shaders/specaa.glsl"));
+}
+
+// The help says how to pick a cost tier, with the macro names the include defines.
+TEST(ShaderCli, HelpNamesTheQualityTiers) {
+    std::string out;
+    ASSERT_EQ(run_command(std::string("'") + SPECBAKE_EXE + "' shader --help", out), 0) << out;
+    const std::string include = read_source_file("shaders/specaa.glsl");
+    for (const char* tier : {"SPECAA_QUALITY_FAST (0)", "SPECAA_QUALITY_BALANCED (1)", "SPECAA_QUALITY_REFERENCE (2)"}) {
+        EXPECT_NE(out.find(tier), std::string::npos) << tier << "\n" << out;
+        EXPECT_NE(include.find(tier), std::string::npos) << tier;
+    }
 }
 
 TEST(ShaderCli, BadArgumentsFailWithOneLine) {

@@ -2,7 +2,8 @@
 // alpha 0 ... 1 per axis, h_z from 1 to exactly 0, zero, tiny, huge and mixed derivatives) plus NaN and
 // infinities in every input, through every derivative-based method and the default entry points of the
 // include, in GLSL and in HLSL (glslangValidator -D -> SPIR-V -> GL_ARB_gl_spirv) on the GL
-// implementation (llvmpipe in CI), float32. One draw per program: each case is one 2x2 quad of a large
+// implementation (llvmpipe in CI), float32, the default entry points once per SPECAA_QUALITY tier (with the
+// tier's default NDF at h). One draw per program: each case is one 2x2 quad of a large
 // float framebuffer (tests/gl/shaders/stability_eval.inc). Every output must be finite, a symmetric
 // PSD matrix that never reduces the input roughness, and follow the edge policy of the C++ core
 // (bake/methods.h), which the core itself is evaluated on for the same float inputs.
@@ -101,10 +102,13 @@ std::vector<Case> make_cases() {
 
 std::string vertex_shader() { return pass_through_vertex_shader(7, 2); }
 
+// Groups: METHODS, or DEFAULT / CURVATURE with the tier's SPECAA_QUALITY after a slash (e.g. "DEFAULT/1").
 std::string defines(const std::string& group) {
-    return group == "METHODS" ? "#define SPECAA_TEST_METHODS\n"
-           : group == "DEFAULT" ? "#define SPECAA_TEST_DEFAULT\n"
-                                : "#define SPECAA_TEST_DEFAULT\n#define SPECAA_USE_CURVATURE\n";
+    if (group == "METHODS") return "#define SPECAA_TEST_METHODS\n";
+    const size_t slash = group.find('/');
+    const std::string tier = "#define SPECAA_QUALITY " + group.substr(slash + 1) + "\n";
+    return group.substr(0, slash) == "DEFAULT" ? tier + "#define SPECAA_TEST_DEFAULT\n"
+                                               : tier + "#define SPECAA_TEST_DEFAULT\n#define SPECAA_USE_CURVATURE\n";
 }
 
 std::string fragment_glsl(const std::string& group) {
@@ -244,6 +248,7 @@ void check_default(const std::vector<Case>& cases, const std::vector<std::array<
         const float r4 = (c.r * c.r) * (c.r * c.r);
         const float a = std::isnan(r4) ? 1.0f : std::min(std::max(r4, 0.0f), 1.0f);
         const double alpha2 = out[i][0], rough = out[i][1], xx = out[i][2], yy = out[i][3], xy = out[i][4];
+        const double D = out[i][5];
         std::string e;
         if (!std::isfinite(alpha2) || alpha2 < a * (1 - kTol) || alpha2 > 1 + kTol)
             e = "filtered a not finite, below the input or above 1";
@@ -263,11 +268,14 @@ void check_default(const std::vector<Case>& cases, const std::vector<std::array<
         if (e.empty() && !usable &&
             (std::abs(alpha2 - a) > 1e-6 || std::abs(xx - a) > 1e-6 || std::abs(yy - a) > 1e-6 || xy != 0))
             e = "non-finite input: not the unfiltered a";
+        // The NDF takes a unit half vector (its domain): finite and non-negative there, 0 below the horizon.
+        if (e.empty() && finite3(c.h) && (!std::isfinite(D) || D < 0 || (c.h.z <= 0 && D != 0)))
+            e = "default NDF not finite, negative, or not 0 below the horizon";
         if (!e.empty()) {
             std::ostringstream s;
             s.precision(9);
             s << (curvature ? "default+curvature" : "default") << ": " << e << ": a " << alpha2 << " r " << rough
-              << " matrix [" << xx << " " << xy << " " << yy << "] for " << describe(c);
+              << " matrix [" << xx << " " << xy << " " << yy << "] D " << D << " for " << describe(c);
             f.add(s.str());
         }
     }
@@ -278,7 +286,9 @@ void run_grid(const std::string& language, const std::function<GLuint(const std:
     const std::vector<Case> cases = make_cases();
     ASSERT_GE(cases.size(), 100000u);
     const int height = point_grid_height(kGrid, cases.size());
-    for (const std::string group : {"METHODS", "DEFAULT", "CURVATURE"}) {
+    // The default entry points once per SPECAA_QUALITY tier (fast 0, balanced 1, reference 2).
+    for (const std::string group : {"METHODS", "DEFAULT/0", "DEFAULT/1", "DEFAULT/2", "CURVATURE/0", "CURVATURE/1",
+                                    "CURVATURE/2"}) {
         std::string log;
         const GLuint program = build(group, height, log);
         ASSERT_NE(program, 0u) << group << ": " << log;
@@ -289,7 +299,7 @@ void run_grid(const std::string& language, const std::function<GLuint(const std:
         if (group == "METHODS")
             check_methods(cases, out, f);
         else
-            check_default(cases, out, group == "CURVATURE", f);
+            check_default(cases, out, group.rfind("CURVATURE", 0) == 0, f);
         for (const auto& s : f.shown) ADD_FAILURE() << language << " " << s;
         EXPECT_EQ(f.count, 0u) << language << " " << group << ": " << f.count << " failures";
         std::printf("%s %s: %zu cases checked\n", language.c_str(), group.c_str(), cases.size());
@@ -312,7 +322,9 @@ TEST(ShaderStability, HlslGridThroughGlSpirvFiniteSymmetricPsdAndPolicy) {
     const auto vertex = compile_vertex_spirv(vertex_shader(), dir.path() / "stability.vert", out);
     ASSERT_FALSE(vertex.empty()) << out;
     run_grid("HLSL", [&](const std::string& group, int height, std::string& log) -> GLuint {
-        return build_program_hlsl_spirv(vertex, fragment_hlsl(group, height), dir.path() / group, log);
+        std::string file = group;
+        std::replace(file.begin(), file.end(), '/', '_');
+        return build_program_hlsl_spirv(vertex, fragment_hlsl(group, height), dir.path() / file, log);
     });
 }
 
