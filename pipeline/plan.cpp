@@ -6,6 +6,8 @@
 #include "mesh/curvature_summary.h"
 #include "mesh/prepare_mesh.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -69,17 +71,40 @@ public:
         if (image < 0) return nullptr;
         if (auto it = maps_.find(image); it != maps_.end()) return &it->second;
         if (errors_.count(image)) return nullptr;
-        Result<io::DecodedImage> decoded = make_error(scene_.image_label(image) + ": not read");
-        if (const std::filesystem::path file = scene_.image_file(image); !file.empty()) {
-            decoded = io::decode_image(file, limits_, true);
-        } else {
-            auto bytes = scene_.image_bytes(image);
-            if (!bytes) {
-                errors_[image] = bytes.error().message;
-                return nullptr;
-            }
-            decoded = io::decode_image_memory(*bytes, scene_.image_label(image), limits_, true);
-        }
+        return keep(image, read(image));
+    }
+    // Decodes the `images` not decoded yet side by side, one task each, as decode() would one by one: a
+    // scene's normal and roughness maps are read at once, as `specbake texture` reads its two maps.
+    void prefetch(std::vector<int> images) {
+        std::sort(images.begin(), images.end());
+        images.erase(std::unique(images.begin(), images.end()), images.end());
+        std::erase_if(images, [&](int i) { return i < 0 || maps_.count(i) || errors_.count(i); });
+        std::vector<Result<io::DecodedImage>> decoded(images.size(), make_error(""));
+        tbb::parallel_for(size_t(0), images.size(), [&](size_t i) { decoded[i] = read(images[i]); });
+        for (size_t i = 0; i < images.size(); ++i) keep(images[i], std::move(decoded[i]));
+    }
+    // The first image of the scene stored in the same file as `image` (`image` itself when none is, or when
+    // it is embedded): several image entries naming one file are decoded and baked once.
+    int first_of_file(int image) {
+        const std::filesystem::path file = image >= 0 ? scene_.image_file(image) : std::filesystem::path();
+        if (file.empty()) return image;
+        std::error_code ec;
+        const std::filesystem::path canonical = std::filesystem::weakly_canonical(file, ec);
+        return first_by_file_.emplace(ec ? file.lexically_normal() : canonical, image).first->second;
+    }
+    // Why `image` could not be decoded ("" when it was).
+    const std::string& error(int image) { return errors_[image]; }
+    bool is_float(int image) { return is_float_[image]; }
+
+private:
+    Result<io::DecodedImage> read(int image) const {
+        if (const std::filesystem::path file = scene_.image_file(image); !file.empty())
+            return io::decode_image(file, limits_, true);
+        auto bytes = scene_.image_bytes(image);
+        if (!bytes) return bytes.error();
+        return io::decode_image_memory(*bytes, scene_.image_label(image), limits_, true);
+    }
+    const TextureMap* keep(int image, Result<io::DecodedImage> decoded) {
         if (!decoded) {
             errors_[image] = decoded.error().message;
             return nullptr;
@@ -98,20 +123,7 @@ public:
         const Image& kept = plan_.decoded_images.emplace(image, std::move(decoded->image)).first->second;
         return &(maps_[image] = TextureMap::of(kept));
     }
-    // The first image of the scene stored in the same file as `image` (`image` itself when none is, or when
-    // it is embedded): several image entries naming one file are decoded and baked once.
-    int first_of_file(int image) {
-        const std::filesystem::path file = image >= 0 ? scene_.image_file(image) : std::filesystem::path();
-        if (file.empty()) return image;
-        std::error_code ec;
-        const std::filesystem::path canonical = std::filesystem::weakly_canonical(file, ec);
-        return first_by_file_.emplace(ec ? file.lexically_normal() : canonical, image).first->second;
-    }
-    // Why `image` could not be decoded ("" when it was).
-    const std::string& error(int image) { return errors_[image]; }
-    bool is_float(int image) { return is_float_[image]; }
 
-private:
     const io::GltfScene& scene_;
     const io::InputLimits& limits_;
     ScenePlan& plan_;
@@ -541,6 +553,21 @@ Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& optio
     const std::vector<io::PrimitiveInfo> infos = scene.primitives();
     const std::vector<io::MaterialInfo> materials = scene.materials();
     ImageDecoder images(scene, options.input_policy.limits, plan);
+    if (options.textures) {
+        // The maps the texture decisions read, decoded side by side before the decisions read them one by one.
+        std::vector<int> wanted;
+        for (size_t m = 0; m < materials.size(); ++m) {
+            const std::vector<Layer> layers = layers_of(materials[m]);
+            for (size_t l = 0; l < layers.size(); ++l) {
+                const Layer& layer = layers[l];
+                wanted.push_back(layer.roughness->image);
+                if (layer.roughness->image >= 0) wanted.push_back(images.first_of_file(layer.roughness->image));
+                if (layer.normal->image >= 0 && texture_skip_reason(materials[m], int(m), layer, l > 0, infos).empty())
+                    wanted.push_back(images.first_of_file(layer.normal->image));
+            }
+        }
+        images.prefetch(std::move(wanted));
+    }
     const MaterialRoughness roughness = lowest_material_roughness(scene, materials, images, plan);
     // Curvature regardless of the material (`specbake mesh`) needs no roughness texture.
     if (!options.textures && !options.check_material) plan.input_errors.clear();
