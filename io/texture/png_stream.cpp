@@ -35,9 +35,10 @@ void put_text(std::vector<uint8_t>& out, const std::string& key, const std::stri
     put_chunk(out, "tEXt", reinterpret_cast<const uint8_t*>(text.data()), text.size());
 }
 
-// PNG filter type 2, Up (PNG 1.2 Sec. 6.3): each byte less the byte above (zero above the first row). On the
-// baked levels it compresses as well as libpng's per-row choice among all five filters (within 2% on the
-// 4096^2 roughness and mean-normal levels of docs/texture-bake.md#speed-and-memory) at a tenth of its cost.
+// PNG filter type 2, Up (PNG 1.2 Sec. 6.3): each byte less the byte above (zero above the first row). On
+// 4096^2 ORM roughness and mean-normal levels it compressed as well as libpng's per-row choice among all
+// five filters (0.079 and 0.025 of the filtered bytes at zlib level 2 either way; no filter: 0.079 and
+// 0.043) in a seventh of the filtering time.
 void filter_up(const uint8_t* row, const uint8_t* prev, size_t n, uint8_t* out) {
     out[0] = 2;
     if (!prev) {
