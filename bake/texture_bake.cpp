@@ -94,11 +94,15 @@ Result<TextureBakeResult> bake_texture_rows(const Image& normal, const Image* ro
 Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughness, int roughness_channel,
                                        float roughness_value, const TextureBakeSettings& settings) {
     if (auto ok = validate_buffers(normal, roughness); !ok) return ok.error();
-    const TextureMap normal_map = TextureMap::of(normal);
     const TextureMap roughness_map = roughness ? TextureMap::of(*roughness) : TextureMap{};
-    const TextureMap* rough = roughness ? &roughness_map : nullptr;
+    return bake_texture(TextureMap::of(normal), roughness ? &roughness_map : nullptr, roughness_channel,
+                        roughness_value, settings);
+}
+
+Result<TextureBakeResult> bake_texture(const TextureMap& normal_map, const TextureMap* rough, int roughness_channel,
+                                       float roughness_value, const TextureBakeSettings& settings) {
     if (auto ok = validate(normal_map, rough, roughness_channel, roughness_value); !ok) return ok.error();
-    const TextureBakeShape shape = texture_bake_shape(normal, roughness, roughness_channel, settings);
+    const TextureBakeShape shape = texture_bake_shape(normal_map, rough, roughness_channel, settings);
     MipChain rough_chain, kern, lean, nrm;
     // The chains are allocated (and zero-filled) on two threads: LEAN, the widest, against the other three.
     run_with_threads(settings.threads, [&] {

@@ -140,6 +140,10 @@ struct TextureBakeResult {
 Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughness, int roughness_channel,
                                        float roughness_value, const TextureBakeSettings& settings);
 
+// The same on maps in any TextureMap storage (8-bit inputs held as they were decoded).
+Result<TextureBakeResult> bake_texture(const TextureMap& normal, const TextureMap* roughness, int roughness_channel,
+                                       float roughness_value, const TextureBakeSettings& settings);
+
 // The block of texels [x0, x0 + width) x [y0, y0 + rows) of mip level `level`: `rows` rows of `width`
 // texels, interleaved with the channels of the matching TextureBakeResult chain; null for an output that
 // was not requested. Valid during the call only. Large levels arrive in column blocks that fit the cache.

@@ -13,16 +13,25 @@
 //      the same two PNGs (oiiotool's own defaults: PNG output at zlib level 6), one after the other as
 //      two commands, and both at once (the job decodes its two inputs side by side) (goal: <= 1.0x, issue 16);
 //  (c) peak resident memory of that child (getrusage) over the decoded inputs (8-bit) plus the outputs
-//      written (goal: <= 1.5x, issue 16), and of one oiiotool run for comparison.
+//      written (goal: <= 1.5x, issue 16), and of one oiiotool run for comparison;
+//  (d) the floor of each output container, in the same run: the texture job (a child, as in (b)) writing the
+//      roughness and mean-normal outputs as KTX2 (zstd level 3) and as per-mip PNG (filter Up, zlib level 2),
+//      against (1) decoding its two inputs with the fastest decoder here (io/image/png_decode: zlib inflate,
+//      no float conversion) and (2) that plus compressing the same raw output levels with the same codec and
+//      level, in this process, one thread; CPU seconds, and peak RSS against decoded inputs + written files.
 //
-// Run: build/bench/bench_texture [--size N] [--compute-only] [google-benchmark flags]
-// (--compute-only skips (b) and (c), which take about 15 s at 4096^2.)
+// Run: build/bench/bench_texture [--size N] [--compute-only] [--floor-only] [google-benchmark flags]
+// (--compute-only skips (b), (c) and (d), which take about 15 s at 4096^2; --floor-only runs (d) alone;
+// `--floor-only --size 1024` is the quick form.)
 #include "pipeline/texture_job.h"
 #include "io/image/image_io.h"
+#include "io/texture/png_stream.h"
 
 #include <benchmark/benchmark.h>
+#include <zstd.h>
 
 #include <sys/resource.h>
+#include <tbb/task_arena.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -90,12 +99,18 @@ double process_cpu_seconds() {
 
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-// Child mode: run the texture job once, print "<wall seconds> <peak RSS KiB> <CPU seconds>".
-int end_to_end_child(const char* normal, const char* orm, const char* out) {
+// The outputs of (d): the two integer outputs, which both KTX2 and per-mip PNG hold.
+TextureOutputs floor_outputs() { return TextureOutputs{true, false, false, true}; }
+
+// Child mode: run the texture job once, print "<wall seconds> <peak RSS KiB> <CPU seconds>". `container`
+// "ktx2-all": all default outputs as KTX2; "ktx2", "png": the outputs of (d).
+int end_to_end_child(const char* normal, const char* orm, const char* out, const std::string& container) {
     TextureJob job;
     job.normal = normal;
     job.roughness = fs::path(orm);
     job.output_dir = out;
+    if (container != "ktx2-all") job.settings.outputs = floor_outputs();
+    if (container == "png") job.texture_format = io::TextureFileFormat(io::TextureContainer::PngPerMip);
     const auto t0 = Clock::now();
     auto r = run_texture_job(job);
     const double wall = seconds_since(t0);
@@ -138,17 +153,120 @@ Timed time_command(const std::string& cmd) {
     return {seconds_since(t0), children_cpu_seconds() - c0};
 }
 
+// One job run in a child process: wall and CPU from outside, peak RSS from inside, bytes written.
+struct ChildRun {
+    Timed time;
+    long rss_kib = 0;
+    uintmax_t output_bytes = 0;
+};
+ChildRun run_child(const std::string& self, const fs::path& normal, const fs::path& orm, const fs::path& out,
+                   const std::string& container) {
+    ChildRun run;
+    fs::remove_all(out);
+    const fs::path report = out.string() + ".txt";
+    const Timed t = time_command("'" + self + "' --end-to-end-child '" + normal.string() + "' '" + orm.string() + "' '" +
+                                 out.string() + "' " + container + " > '" + report.string() + "'");
+    double wall_inside = 0, cpu_inside = 0;
+    FILE* f = t.wall >= 0 ? std::fopen(report.string().c_str(), "r") : nullptr;
+    if (f && std::fscanf(f, "%lf %ld %lf", &wall_inside, &run.rss_kib, &cpu_inside) == 3) run.time = t;
+    if (f) std::fclose(f);
+    std::error_code none;
+    for (const auto& e : fs::directory_iterator(out, none))
+        if (e.path().filename() != "manifest.json") run.output_bytes += e.file_size();
+    return run;
+}
+
+// (d): the job against its floor for KTX2 and per-mip PNG, the median of `repeats` runs of each.
+void print_floor(const std::string& self, const fs::path& dir, const fs::path& normal_png, const fs::path& orm_png,
+                 int size, int repeats) {
+    // (1) Decoding the inputs as the job does (8-bit PNGs kept as bytes), one after the other.
+    std::vector<double> decode_cpu;
+    size_t decoded_bytes = 0;
+    for (int r = 0; r < repeats; ++r) {
+        const double c0 = process_cpu_seconds();
+        auto n = io::decode_image(normal_png, {}, true);
+        auto m = io::decode_image(orm_png, {}, true);
+        decode_cpu.push_back(process_cpu_seconds() - c0);
+        if (!n || !m) {
+            std::fprintf(stderr, "floor: cannot decode the inputs\n");
+            return;
+        }
+        decoded_bytes = n->bytes8.data.size() + m->bytes8.data.size();
+    }
+    // The raw output levels (uncompressed KTX2 files, untimed): what both containers compress.
+    const Image normal = make_normal(size), orm = make_orm(size);
+    TextureInputs inputs;
+    inputs.normal = &normal;
+    inputs.roughness = &orm;
+    TextureBakeSettings settings;
+    settings.outputs = floor_outputs();
+    io::Supercompression none;
+    none.zstd = false;
+    auto raw = bake_texture_encoded(inputs, settings, io::TextureFileFormat(io::TextureContainer::Ktx2, none), "t");
+    if (!raw) {
+        std::fprintf(stderr, "floor: %s\n", raw.error().message.c_str());
+        return;
+    }
+    // (2) Compressing every level with the job's codec and level, one level after another, one thread.
+    auto compress_cpu = [&](bool png) {
+        const double c0 = process_cpu_seconds();
+        for (const auto& t : raw->textures) {
+            const io::ContainerLayout& layout = t->layout();
+            for (size_t L = 0; L < layout.level_offset.size(); ++L) {
+                const int w = std::max(1, t->width() >> L), h = std::max(1, t->height() >> L);
+                const uint8_t* level = t->bytes().data() + layout.level_offset[L];
+                const size_t bytes = size_t(w) * size_t(h) * size_t(layout.stored_channels);
+                if (png) {
+                    io::PngLevelStream stream(w, h, layout.stored_channels, 8, 2);
+                    if (!stream.add_rows(level, h)) return -1.0;
+                    benchmark::DoNotOptimize(stream.bytes());
+                } else {
+                    std::vector<uint8_t> out(ZSTD_compressBound(bytes));
+                    benchmark::DoNotOptimize(ZSTD_compress(out.data(), out.size(), level, bytes, 3));
+                }
+            }
+        }
+        return process_cpu_seconds() - c0;
+    };
+    const double mib = 1024.0 * 1024.0;
+    std::printf("(d) floor, %dx%d, roughness + mean normal, CPU s (user + sys), median of %d\n", size, size, repeats);
+    std::printf("  container  job CPU   decode   (ratio)   decode + compress   (ratio)   job peak MiB   decoded + files MiB   (ratio)\n");
+    const double decode = median(decode_cpu);
+    for (const bool png : {false, true}) {
+        std::vector<double> job_cpu, compress, rss;
+        uintmax_t files = 0;
+        tbb::task_arena one_thread(1);
+        for (int r = 0; r < repeats; ++r) {
+            const ChildRun run = run_child(self, normal_png, orm_png, dir / "floor_out", png ? "png" : "ktx2");
+            if (run.time.cpu < 0) {
+                std::fprintf(stderr, "floor: the %s job failed\n", png ? "png" : "ktx2");
+                return;
+            }
+            job_cpu.push_back(run.time.cpu);
+            rss.push_back(double(run.rss_kib) / 1024.0);
+            files = run.output_bytes;
+            one_thread.execute([&] { compress.push_back(compress_cpu(png)); });
+        }
+        const double job = median(job_cpu), floor = decode + median(compress);
+        const double held = (double(decoded_bytes) + double(files)) / mib;
+        std::printf("  %-9s %8.2f %8.2f %8.2fx %13.2f %13.2fx %14.1f %21.1f %8.2fx\n", png ? "png" : "ktx2", job, decode,
+                    job / decode, floor, job / floor, median(rss), held, median(rss) / held);
+    }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-    if (argc == 5 && std::strcmp(argv[1], "--end-to-end-child") == 0) return end_to_end_child(argv[2], argv[3], argv[4]);
+    if (argc == 6 && std::strcmp(argv[1], "--end-to-end-child") == 0)
+        return end_to_end_child(argv[2], argv[3], argv[4], argv[5]);
     int size = 4096;
-    bool compute_only = false, end_to_end_only = false;
+    bool compute_only = false, end_to_end_only = false, floor_only = false;
     fs::path keep;  // --keep DIR: inputs and outputs go to DIR and stay there
     for (int i = 1; i < argc; ++i) {
         if (i + 1 < argc && std::strcmp(argv[i], "--size") == 0) size = std::atoi(argv[i + 1]);
         if (std::strcmp(argv[i], "--compute-only") == 0) compute_only = true;
         if (std::strcmp(argv[i], "--end-to-end-only") == 0) end_to_end_only = true;
+        if (std::strcmp(argv[i], "--floor-only") == 0) floor_only = true;
         if (i + 1 < argc && std::strcmp(argv[i], "--keep") == 0) keep = argv[i + 1];
     }
 
@@ -165,9 +283,14 @@ int main(int argc, char** argv) {
         }
     }
     const std::string self = fs::read_symlink("/proc/self/exe").string();
+    if (floor_only) {
+        print_floor(self, dir, normal_png, orm_png, size, 3);
+        if (keep.empty()) fs::remove_all(dir);
+        return 0;
+    }
     const fs::path out = dir / "out";
     const std::string child = "'" + self + "' --end-to-end-child '" + normal_png.string() + "' '" + orm_png.string() +
-                              "' '" + out.string() + "' > '" + (dir / "child.txt").string() + "'";
+                              "' '" + out.string() + "' ktx2-all > '" + (dir / "child.txt").string() + "'";
     // Wall and CPU time of the job are taken from outside its process, as for oiiotool below (process start
     // and exit included, CPU of the waited-for child); its peak RSS is its own ru_maxrss, the counter GNU
     // time's %M reports for oiiotool.
@@ -299,6 +422,7 @@ int main(int argc, char** argv) {
     std::printf("  ratio to (decoded 8-bit inputs + outputs): %.2fx; goal <= 1.5x (issue 16 item 7): %s\n", memory_ratio,
                 memory_ratio <= 1.5 ? "met" : "NOT met");
     std::printf("  oiiotool PNG->PNG of the normal map alone: %.1f MiB\n", oiio_rss_kib / 1024.0);
+    print_floor(self, dir, normal_png, orm_png, size, 3);
     if (keep.empty()) fs::remove_all(dir);
     return 0;
 }

@@ -6,6 +6,8 @@
 #include "mesh/curvature_summary.h"
 #include "mesh/prepare_mesh.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -56,41 +58,30 @@ double roughness_gain(double r, double kappa) {
 
 namespace {
 
-// The scene's images, decoded on first use into plan.decoded_images (kept for the bake) with their bit
-// depth in plan.image_bits; an image that cannot be read is decoded once and its error kept.
+// The scene's images, decoded on first use into plan.decoded_images or, plain 8-bit PNGs as their bytes (a
+// quarter of the floats' memory, what `specbake texture` holds), plan.decoded_bytes8 (kept for the bake),
+// with their bit depth in plan.image_bits; an image that cannot be read is decoded once and its error kept.
 class ImageDecoder {
 public:
     ImageDecoder(const io::GltfScene& scene, const io::InputLimits& limits, ScenePlan& plan)
         : scene_(scene), limits_(limits), plan_(plan) {}
 
-    // The decoded image, or null (negative index, or not readable: see error()).
-    const Image* decode(int image) {
+    // The decoded image as the bake reads it, or null (negative index, or not readable: see error()).
+    const TextureMap* decode(int image) {
         if (image < 0) return nullptr;
-        if (auto it = plan_.decoded_images.find(image); it != plan_.decoded_images.end()) return &it->second;
+        if (auto it = maps_.find(image); it != maps_.end()) return &it->second;
         if (errors_.count(image)) return nullptr;
-        Result<io::DecodedImage> decoded = make_error(scene_.image_label(image) + ": not read");
-        if (const std::filesystem::path file = scene_.image_file(image); !file.empty()) {
-            decoded = io::decode_image(file, limits_);
-        } else {
-            auto bytes = scene_.image_bytes(image);
-            if (!bytes) {
-                errors_[image] = bytes.error().message;
-                return nullptr;
-            }
-            decoded = io::decode_image_memory(*bytes, scene_.image_label(image), limits_);
-        }
-        if (!decoded) {
-            errors_[image] = decoded.error().message;
-            return nullptr;
-        }
-        if (auto bad = find_non_finite(decoded->image)) {
-            errors_[image] = scene_.image_label(image) + ": non-finite value at texel (" +
-                             std::to_string(bad->first) + ", " + std::to_string(bad->second) + ")";
-            return nullptr;
-        }
-        plan_.image_bits[image] = decoded->info.bits_per_channel;
-        is_float_[image] = decoded->info.is_float;
-        return &plan_.decoded_images.emplace(image, std::move(decoded->image)).first->second;
+        return keep(image, read(image));
+    }
+    // Decodes the `images` not decoded yet side by side, one task each, as decode() would one by one: a
+    // scene's normal and roughness maps are read at once, as `specbake texture` reads its two maps.
+    void prefetch(std::vector<int> images) {
+        std::sort(images.begin(), images.end());
+        images.erase(std::unique(images.begin(), images.end()), images.end());
+        std::erase_if(images, [&](int i) { return i < 0 || maps_.count(i) || errors_.count(i); });
+        std::vector<Result<io::DecodedImage>> decoded(images.size(), make_error(""));
+        tbb::parallel_for(size_t(0), images.size(), [&](size_t i) { decoded[i] = read(images[i]); });
+        for (size_t i = 0; i < images.size(); ++i) keep(images[i], std::move(decoded[i]));
     }
     // The first image of the scene stored in the same file as `image` (`image` itself when none is, or when
     // it is embedded): several image entries naming one file are decoded and baked once.
@@ -106,9 +97,37 @@ public:
     bool is_float(int image) { return is_float_[image]; }
 
 private:
+    Result<io::DecodedImage> read(int image) const {
+        if (const std::filesystem::path file = scene_.image_file(image); !file.empty())
+            return io::decode_image(file, limits_, true);
+        auto bytes = scene_.image_bytes(image);
+        if (!bytes) return bytes.error();
+        return io::decode_image_memory(*bytes, scene_.image_label(image), limits_, true);
+    }
+    const TextureMap* keep(int image, Result<io::DecodedImage> decoded) {
+        if (!decoded) {
+            errors_[image] = decoded.error().message;
+            return nullptr;
+        }
+        plan_.image_bits[image] = decoded->info.bits_per_channel;
+        is_float_[image] = decoded->info.is_float;
+        if (!decoded->bytes8.empty()) {  // integers: nothing non-finite
+            const io::Bytes8& b = plan_.decoded_bytes8.emplace(image, std::move(decoded->bytes8)).first->second;
+            return &(maps_[image] = TextureMap{b.width, b.height, b.channels, b.row_bytes, nullptr, b.data.data() + b.offset});
+        }
+        if (auto bad = find_non_finite(decoded->image)) {
+            errors_[image] = scene_.image_label(image) + ": non-finite value at texel (" +
+                             std::to_string(bad->first) + ", " + std::to_string(bad->second) + ")";
+            return nullptr;
+        }
+        const Image& kept = plan_.decoded_images.emplace(image, std::move(decoded->image)).first->second;
+        return &(maps_[image] = TextureMap::of(kept));
+    }
+
     const io::GltfScene& scene_;
     const io::InputLimits& limits_;
     ScenePlan& plan_;
+    std::map<int, TextureMap> maps_;
     std::map<int, bool> is_float_;
     std::map<int, std::string> errors_;
     std::map<std::filesystem::path, int> first_by_file_;
@@ -147,11 +166,11 @@ double lowest_roughness(const io::GltfScene& scene, size_t material, const io::M
                         ImageDecoder& images, ScenePlan& plan) {
     double r = layer.roughness_factor;
     if (layer.roughness->image >= 0) {
-        if (const Image* img = images.decode(layer.roughness->image)) {
+        if (const TextureMap* img = images.decode(layer.roughness->image)) {
             const int ch = img->channels >= 2 ? 1 : 0;
             float lo = 1.0f;
-            for (size_t i = 0; i < img->texel_count(); ++i)
-                lo = std::min(lo, img->pixels[i * size_t(img->channels) + size_t(ch)]);
+            for (int y = 0; y < img->height; ++y)
+                for (int x = 0; x < img->width; ++x) lo = std::min(lo, img->value(x, y, ch));
             r *= std::clamp(double(lo), 0.0, 1.0);
         } else if (std::string(layer.name) == "base" || mat.clearcoat.active()) {
             // A coat with clearcoatFactor 0 does not count, so its texture is not needed.
@@ -205,29 +224,38 @@ std::string texture_skip_reason(const io::MaterialInfo& mat, int material, const
 // The bake's inputs as the glTF material defines them: the normal map with normalTexture.scale applied
 // (n = normalize((2c - 1) * (scale, scale, 1))) and the roughness map times the roughness factor, copies
 // only where they differ from the decoded images.
-void set_texture_inputs(TextureWork& w, const TextureDecision& d, const Layer& layer, const Image* normal,
-                        const Image* rough, const ScenePlan& plan) {
+// `map` as floats (the values TextureMap::value reads).
+Image float_copy(const TextureMap& map) {
+    Image image(map.width, map.height, map.channels);
+    for (int y = 0; y < map.height; ++y)
+        for (int x = 0; x < map.width; ++x)
+            for (int c = 0; c < map.channels; ++c) image.texel(x, y)[c] = map.value(x, y, c);
+    return image;
+}
+
+void set_texture_inputs(TextureWork& w, const TextureDecision& d, const Layer& layer, const TextureMap& normal,
+                        const TextureMap* rough, const ScenePlan& plan) {
     w.normal = normal;
-    w.roughness = rough;
+    w.roughness = rough ? *rough : TextureMap{};
     w.normal_bits = plan.image_bits.at(d.normal_image);
     w.roughness_bits = rough ? plan.image_bits.at(d.roughness_image) : w.normal_bits;
     if (layer.normal_scale != 1.0) {
-        w.normal_storage = *normal;
+        w.normal_storage = float_copy(normal);
         Image& n = w.normal_storage;
         for (size_t t = 0; t < n.texel_count(); ++t)
             for (int c = 0; c < std::min(2, n.channels); ++c) {
                 float& v = n.pixels[t * size_t(n.channels) + size_t(c)];
                 v = float(((2.0 * v - 1.0) * layer.normal_scale + 1.0) * 0.5);
             }
-        w.normal = &w.normal_storage;
+        w.normal = TextureMap::of(w.normal_storage);
     }
     w.roughness_channel = rough && rough->channels >= 2 ? 1 : 0;
     if (rough && d.roughness_factor != 1.0f) {  // glTF: r = roughness factor * G
-        w.roughness_storage = *rough;
+        w.roughness_storage = float_copy(*rough);
         Image& r = w.roughness_storage;
         for (size_t t = 0; t < r.texel_count(); ++t)
             r.pixels[t * size_t(r.channels) + size_t(w.roughness_channel)] *= d.roughness_factor;
-        w.roughness = &w.roughness_storage;
+        w.roughness = TextureMap::of(w.roughness_storage);
     }
 }
 
@@ -259,7 +287,8 @@ Result<void> bake_and_decide_texture(TextureDecision& d, int index, const std::s
             baked = encoded.error();
         }
     } else {
-        baked = bake_texture(*w.normal, w.roughness, w.roughness_channel, d.roughness_value, s);
+        baked = bake_texture(w.normal, w.roughness.empty() ? nullptr : &w.roughness, w.roughness_channel,
+                             d.roughness_value, s);
     }
     if (!baked) {
         d.reason = scene.image_label(d.normal_image) + ": " + baked.error().message;
@@ -318,13 +347,13 @@ Result<void> decide_textures(const io::GltfScene& scene, const PlanOptions& opti
             const std::string normal_name = coat ? "clearcoat normal texture" : "normal texture";
             if (std::string skip = texture_skip_reason(mat, int(m), layer, coat, infos); !skip.empty()) {
                 d.reason = std::move(skip);
-            } else if (const Image* normal = images.decode(images.first_of_file(layer.normal->image)); !normal) {
+            } else if (const TextureMap* normal = images.decode(images.first_of_file(layer.normal->image)); !normal) {
                 const std::string error = images.error(images.first_of_file(layer.normal->image));
                 d.reason = normal_name + " cannot be decoded: " + error;
                 plan.input_errors.push_back(input_error(scene, m, mat, layer, normal_name, error));
             } else {
                 d.normal_image = images.first_of_file(layer.normal->image);
-                const Image* rough = nullptr;
+                const TextureMap* rough = nullptr;
                 std::string mapping_note;
                 if (layer.roughness->image >= 0) {
                     if (!io::same_uv_mapping(*layer.roughness, *layer.normal)) {
@@ -371,7 +400,7 @@ Result<void> decide_textures(const io::GltfScene& scene, const PlanOptions& opti
                     const int index = int(plan.textures.size());
                     if (auto n = normal_bakes.find(normal_key); n != normal_bakes.end() && !d.roughness_mapped_apart)
                         d.normal_outputs_stem = plan.textures[size_t(n->second)].stem;
-                    set_texture_inputs(plan.texture_work[index], d, layer, normal, rough, plan);
+                    set_texture_inputs(plan.texture_work[index], d, layer, *normal, rough, plan);
                     if (auto ok = bake_and_decide_texture(d, index, mat.name, mapping_note, scene, options, plan); !ok)
                         return ok;
                     bakes_by_inputs[key] = index;
@@ -524,6 +553,21 @@ Result<ScenePlan> make_plan(const io::GltfScene& scene, const PlanOptions& optio
     const std::vector<io::PrimitiveInfo> infos = scene.primitives();
     const std::vector<io::MaterialInfo> materials = scene.materials();
     ImageDecoder images(scene, options.input_policy.limits, plan);
+    if (options.textures) {
+        // The maps the texture decisions read, decoded side by side before the decisions read them one by one.
+        std::vector<int> wanted;
+        for (size_t m = 0; m < materials.size(); ++m) {
+            const std::vector<Layer> layers = layers_of(materials[m]);
+            for (size_t l = 0; l < layers.size(); ++l) {
+                const Layer& layer = layers[l];
+                wanted.push_back(layer.roughness->image);
+                if (layer.roughness->image >= 0) wanted.push_back(images.first_of_file(layer.roughness->image));
+                if (layer.normal->image >= 0 && texture_skip_reason(materials[m], int(m), layer, l > 0, infos).empty())
+                    wanted.push_back(images.first_of_file(layer.normal->image));
+            }
+        }
+        images.prefetch(std::move(wanted));
+    }
     const MaterialRoughness roughness = lowest_material_roughness(scene, materials, images, plan);
     // Curvature regardless of the material (`specbake mesh`) needs no roughness texture.
     if (!options.textures && !options.check_material) plan.input_errors.clear();

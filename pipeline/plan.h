@@ -33,6 +33,7 @@
 #include "bake/texture_bake.h"
 #include "io/files/input_policy.h"
 #include "io/gltf/gltf_scene.h"
+#include "io/image/image_io.h"
 #include "mesh/curvature.h"
 #include "core/trimesh.h"
 #include "mesh/validate_mesh.h"
@@ -101,7 +102,7 @@ struct PlanOptions {
     // only one material's chains are held at a time. Empty (`specbake plan`): roughness only, nothing kept.
     // An error from it ends the plan.
     TextureBakeSink texture_sink;
-    // In place of texture_sink when set (`specbake bake` without --gltf-mode replace, KTX2 and DDS): each
+    // In place of texture_sink when set (`specbake bake` without --gltf-mode replace): each
     // texture is baked straight into its files' bytes, a fraction of the float chains' memory.
     TextureBakeEncoder texture_encoder;
 
@@ -165,11 +166,11 @@ struct PrimitiveWork {
     VertexCurvature curvature;
 };
 
-// The inputs of one texture bake: the decoded maps, or adjusted copies when the material scales them
-// (normalTexture.scale, roughnessFactor).
+// The inputs of one texture bake: the decoded maps (8-bit PNGs as their bytes, others as floats), or
+// adjusted float copies when the material scales them (normalTexture.scale, roughnessFactor).
 struct TextureWork {
-    const Image* normal = nullptr;
-    const Image* roughness = nullptr;  // null: constant TextureDecision::roughness_value
+    TextureMap normal;
+    TextureMap roughness;              // empty (no channels): constant TextureDecision::roughness_value
     int roughness_channel = 0;
     int normal_bits = 8, roughness_bits = 8;
     Image normal_storage, roughness_storage;
@@ -187,7 +188,8 @@ struct ScenePlan {
     std::map<size_t, PrimitiveWork> work;         // by index into `primitives`, for the ones to bake
     std::vector<GlintDecision> glints;            // only the materials that ask for glints
     std::map<int, TextureWork> texture_work;      // by index in `textures`, for the texture bakes to run
-    std::map<int, Image> decoded_images;          // image index -> decoded image
+    std::map<int, Image> decoded_images;          // image index -> decoded image (as floats)
+    std::map<int, io::Bytes8> decoded_bytes8;     // image index -> decoded plain 8-bit PNG, as its bytes
     std::map<int, int> image_bits;                // image index -> bits per channel of the file
 };
 

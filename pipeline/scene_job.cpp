@@ -109,11 +109,11 @@ TextureBakeSink texture_sink(SceneBake& bake, const io::GltfScene& scene, const 
         bake.say("writing " + (d.layer == "base" ? std::string() : d.layer + " ") + "textures of material " +
                  std::to_string(d.material) + " of " + bake.input.string());
         TextureInputs in;
-        in.normal = w.normal;
+        in.normal_map = w.normal;
         in.normal_name = scene.image_label(d.normal_image);
-        in.roughness = w.roughness;
-        in.roughness_name = w.roughness ? scene.image_label(d.roughness_image) : std::string();
-        in.roughness_channel = w.roughness ? w.roughness_channel : -1;
+        in.roughness_map = w.roughness;
+        in.roughness_name = w.roughness.empty() ? std::string() : scene.image_label(d.roughness_image);
+        in.roughness_channel = w.roughness.empty() ? -1 : w.roughness_channel;
         in.roughness_value = d.roughness_value;
         in.normal_bits = w.normal_bits;
         in.roughness_bits = w.roughness_bits;
@@ -141,18 +141,18 @@ TextureBakeSink texture_sink(SceneBake& bake, const io::GltfScene& scene, const 
     };
 }
 
-// Without replacement the files are all the bake needs: KTX2 and DDS are baked row by row straight into
-// their bytes (zstd streamed per level), as `specbake texture` does, so no float chain is held. The
-// replacement encodes the float roughness and normal chains, and other containers write from them.
+// Without replacement the files are all the bake needs: they are baked row by row straight into their
+// bytes (KTX2 zstd and per-mip PNG streamed per level), as `specbake texture` does, so no float chain is
+// held. The replacement encodes the float roughness and normal chains.
 TextureBakeEncoder texture_encoder(SceneBake& bake) {
     return [&bake](const TextureDecision& d, const TextureWork& w,
                    const TextureBakeSettings& settings) -> Result<EncodedTextureBake> {
         const SceneJob& job = bake.job;
         TextureInputs in;
-        in.normal = w.normal;
+        in.normal_map = w.normal;
         // The plan names the image in its note; these keep the bake's own prefixes (name_error).
         in.normal_name = "normal map";
-        in.roughness = w.roughness;
+        in.roughness_map = w.roughness;
         in.roughness_name = "roughness map";
         in.roughness_channel = w.roughness_channel;
         in.roughness_value = d.roughness_value;
@@ -406,7 +406,7 @@ Result<SceneResult> bake_one_scene(const SceneJob& job, const fs::path& input, c
 
     PlanOptions options = job.plan;
     options.texture_sink = texture_sink(bake, scene, options);
-    if (job.gltf_mode != GltfMode::Replace && io::EncodedTexture::supports(job.texture_format.container))
+    if (job.gltf_mode != GltfMode::Replace)
         options.texture_encoder = texture_encoder(bake);
     // Materials that ask for glints get slope-space LEAN moments of their normal map (C21 Eq. 16).
     if (auto r = add_glint_lean_settings(scene, options); !r) return r.error();
@@ -593,6 +593,7 @@ Result<SceneJobOutcome> run_scene_job(const SceneJob& job) {
             b.result->plan.work.clear();
             b.result->plan.texture_work.clear();
             b.result->plan.decoded_images.clear();
+            b.result->plan.decoded_bytes8.clear();
         } else {
             remove_files(written);
         }

@@ -315,11 +315,6 @@ Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& in, cons
                                                    const io::TextureFileFormat& format, const fs::path& dir,
                                                    const std::string& stem, const ProgressFn& progress,
                                                    const FractionFn& fraction) {
-    if (!io::EncodedTexture::supports(format.container)) {
-        auto baked = bake_texture_inputs(in, settings, progress);
-        if (!baked) return baked.error();
-        return write_texture_outputs(std::move(*baked), in, settings, format, dir, stem, progress);
-    }
     auto encoded = bake_texture_encoded(in, settings, format, stem, progress, fraction);
     if (!encoded) return encoded.error();
     TextureOutputsWritten result;
@@ -340,15 +335,14 @@ Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, cons
     const io::Supercompression& supercompression = format.supercompression;
     const InputMaps maps = maps_of(in);
     if (maps.normal.channels == 0) return make_error(in.normal_name + ": no normal map given");
-    if (!io::EncodedTexture::supports(container))
-        return make_error(std::string("cannot encode ") + io::container_name(container) + " in memory");
     const int channel = roughness_channel_of(in);
     const TextureBakeShape shape = texture_bake_shape(maps.normal, maps.roughness, channel, settings);
     const std::vector<OutputFile> files = output_files(shape, in, settings, stem, format);
     EncodedTextureOutputs out;
     for (const OutputFile& f : files) {
         out.textures.push_back(std::make_unique<io::EncodedTexture>(container, f.encoding, shape.width, shape.height,
-                                                                    shape.levels, f.channels, supercompression));
+                                                                    shape.levels, f.channels, supercompression,
+                                                                    format.wrap));
         out.files.push_back({out.textures.back().get(), f.stem, f.kind, f.names, block_format_of(f, supercompression)});
     }
     if (progress)
@@ -359,11 +353,12 @@ Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, cons
     for (int L = 0; L < shape.levels; ++L)
         total_texels += double(std::max(1, shape.width >> L)) * double(std::max(1, shape.height >> L));
     std::atomic<size_t> texels_done{0};
-    // zstd-supercompressed KTX2 files compress their levels' rows as the bake finishes them, top down, so
-    // neither a whole level's raw bytes nor the raw file are held (io::EncodedTexture::compress_rows).
+    // zstd-supercompressed KTX2 files and per-mip PNGs compress their levels' rows as the bake finishes
+    // them, top down, so neither a whole level's raw bytes nor the raw file are held
+    // (io::EncodedTexture::compress_rows).
     std::vector<size_t> streamed;
     for (size_t i = 0; i < files.size(); ++i)
-        if (out.textures[i]->supercompressed() && out.files[i].block == io::BlockFormat::None) streamed.push_back(i);
+        if (out.textures[i]->streams() && out.files[i].block == io::BlockFormat::None) streamed.push_back(i);
     std::optional<Error> stream_error;
     std::mutex stream_error_lock;
     const TextureBakeRowsDone rows_done = [&](int level, int rows) {
@@ -479,21 +474,20 @@ Result<void> make_demo_maps(const io::BakeOutput& out, JobMaps& maps) {
 }
 
 // The job's map files, decoded and hashed side by side, each file by one task. The row-streaming bake
-// (KTX2, DDS) reads 8-bit maps as bytes, a quarter of the float images' memory.
+// reads 8-bit maps as bytes, a quarter of the float images' memory.
 Result<void> read_job_maps(const TextureJob& job, JobMaps& maps) {
     if (job.progress) job.progress("reading " + job.normal.string());
     if (job.roughness && job.progress) job.progress("reading " + job.roughness->string());
-    const bool keep_8bit = io::EncodedTexture::supports(job.texture_format.container);
     Result<io::DecodedImage> n = make_error(""), r = make_error("");
     Result<std::string> n_hash = make_error(""), r_hash = make_error("");
     tbb::parallel_invoke(
         [&] {
-            n = io::decode_image(job.normal, job.limits, keep_8bit);
+            n = io::decode_image(job.normal, job.limits, true);
             if (n) n_hash = io::sha256_file(job.normal);
         },
         [&] {
             if (!job.roughness) return;
-            r = io::decode_image(*job.roughness, job.limits, keep_8bit);
+            r = io::decode_image(*job.roughness, job.limits, true);
             if (r) r_hash = io::sha256_file(*job.roughness);
         });
     if (!n) return n.error();
@@ -535,17 +529,11 @@ TextureInputs texture_inputs_of(const JobMaps& maps, const TextureJob& job) {
     return in;
 }
 
-// Bakes `in` and writes the outputs into `out`'s staging folder. KTX2 and DDS: the decoded maps are
+// Bakes `in` and writes the outputs into `out`'s staging folder. The decoded maps are
 // released once baked, before the files are packed and written, so the inputs, the encoded files and the
 // packed files are never all held at once. Errors name the final files.
 Result<TextureOutputsWritten> bake_job_outputs(const TextureJob& job, const TextureInputs& in, JobMaps& maps,
                                                const io::BakeOutput& out) {
-    if (!io::EncodedTexture::supports(job.texture_format.container)) {
-        auto written = bake_texture_outputs(in, job.settings, job.texture_format, out.stage(), "texture", job.progress,
-                                            job.fraction);
-        if (!written) return out.final_names(written.error());
-        return written;
-    }
     auto encoded = bake_texture_encoded(in, job.settings, job.texture_format, "texture", job.progress, job.fraction);
     if (!encoded) return out.final_names(encoded.error());
     maps.normal.image = Image{}, maps.normal.bytes8 = io::Bytes8{};

@@ -41,7 +41,7 @@ struct TextureJob {
     const io::OutputLock* lock = nullptr;
     // Replace a bake of another normal map that output_dir holds (refused otherwise).
     bool replace = false;
-    FractionFn fraction;                           // KTX2 and DDS bakes, which run row by row
+    FractionFn fraction;                           // the bake runs row by row, every container
 };
 
 // The manifest's "supercompression" setting: {"scheme": "zstd", "zstd_level": N} or {"scheme": "none"}.
@@ -101,7 +101,7 @@ Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& inputs, 
                                                    const std::filesystem::path& dir, const std::string& stem,
                                                    const ProgressFn& progress = {}, const FractionFn& fraction = {});
 
-// bake_texture_outputs() for KTX2 and DDS up to the write: the bake encodes every finished row straight
+// bake_texture_outputs() up to the write: the bake encodes every finished row straight
 // into the files' bytes (no float chain of the whole map is held). files[i] refers to textures[i].
 struct EncodedTextureOutputs {
     std::vector<std::unique_ptr<io::EncodedTexture>> textures;

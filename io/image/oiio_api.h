@@ -28,7 +28,13 @@ enum class PixelType { Uint8, Uint16, Half, Float };
 struct LevelsRequest {
     std::string temp_path;  // where the bytes go (the caller's AtomicOutput temporary)
     std::string name;       // the final path, named in errors
-    std::vector<const Image*> levels;
+    // Each level's texels, already stored as `type`: width x height texels of `channels` values, tightly
+    // packed, in the machine's byte order.
+    struct StoredLevel {
+        int width = 0, height = 0, channels = 0;
+        const void* texels = nullptr;
+    };
+    std::vector<StoredLevel> levels;
     PixelType type = PixelType::Float;
     bool mipmapped = false;
     std::vector<std::string> channel_names;

@@ -235,8 +235,7 @@ Result<void> write_levels(const LevelsRequest& r) {
     const OIIO::TypeDesc type = type_of(r.type);
     target.attach(*out, r.temp_path);
     errno = 0;
-    for (size_t i = 0; i < r.levels.size(); ++i) {
-        const Image& level = *r.levels[i];
+    for (const LevelsRequest::StoredLevel& level : r.levels) {
         OIIO::ImageSpec spec(level.width, level.height, level.channels, type);
         spec.channelnames = r.channel_names;
         spec.attribute("oiio:UnassociatedAlpha", 1);  // data, not premultiplied colour: store as given
@@ -253,8 +252,8 @@ Result<void> write_levels(const LevelsRequest& r) {
             spec.attribute("DateTime", r.date_time);
             if (!r.channel_meaning.empty()) spec.attribute("specbake:channels", r.channel_meaning);
         }
-        const auto mode = i == 0 ? OIIO::ImageOutput::Create : OIIO::ImageOutput::AppendMIPLevel;
-        if (!out->open(r.temp_path, spec, mode) || !out->write_image(OIIO::TypeDesc::FLOAT, level.pixels.data())) {
+        const auto mode = &level == &r.levels.front() ? OIIO::ImageOutput::Create : OIIO::ImageOutput::AppendMIPLevel;
+        if (!out->open(r.temp_path, spec, mode) || !out->write_image(type, level.texels)) {
             const int err = target.error_number() ? target.error_number() : errno;
             return make_error(r.name + ": cannot write: " + write_failure(out->geterror(), err));
         }

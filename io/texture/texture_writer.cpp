@@ -5,6 +5,7 @@
 #include "io/texture/block_compress.h"
 #include "io/texture/dds.h"
 #include "io/texture/ktx2.h"
+#include "io/texture/png_stream.h"
 #include "io/image/oiio_api.h"
 #include "io/files/sha256.h"
 #include "io/texture/texel_encoding.h"
@@ -73,6 +74,11 @@ std::string block_container_problem(TextureContainer container, BlockFamily fami
 
 namespace {
 
+// The zlib level of per-mip PNGs: on 4096^2 ORM roughness and mean-normal levels (filter Up, one thread),
+// level 2 deflated at 118 / 182 MB/s to 0.079 / 0.025 of the filtered bytes, level 1 at 116 / 204 MB/s to
+// 0.091 / 0.026, level 3 up to 20% slower, level 6 (OpenImageIO's) 4x slower on the roughness for 1.5x smaller.
+constexpr int kPngZlibLevel = 2;
+
 const char* wrap_name(WrapMode w) {
     switch (w) {
         case WrapMode::Repeat: return "periodic";
@@ -116,21 +122,6 @@ std::string joined(const std::vector<std::string>& names) {
     return s;
 }
 
-// `chain` with 3 channels widened to RGBA, A = 1 (other counts are returned as they are).
-const MipChain& gpu_chain(const MipChain& chain, MipChain& storage) {
-    if (chain.channels() != 3) return chain;
-    for (const Image& level : chain.levels) {
-        Image wide(level.width, level.height, 4);
-        const size_t n = level.texel_count();
-        for (size_t i = 0; i < n; ++i) {
-            for (int c = 0; c < 3; ++c) wide.pixels[i * 4 + size_t(c)] = level.pixels[i * 3 + size_t(c)];
-            wide.pixels[i * 4 + 3] = 1.0f;
-        }
-        storage.levels.push_back(std::move(wide));
-    }
-    return storage;
-}
-
 // The DateTime written into EXR headers: SOURCE_DATE_EPOCH (the reproducible-builds convention) when it is
 // set, else the epoch. OpenImageIO's EXR writer stamps the current time otherwise (its PNG writer adds none), so the same bake would give files (and
 // manifest hashes) that differ from run to run and defeat build caches.
@@ -148,10 +139,10 @@ std::string reproducible_date_time() {
     return text;
 }
 
-// One OpenImageIO file: all levels as a tiled MIP-mapped EXR, or a single level (PNG / EXR).
-Result<void> write_oiio(const fs::path& temp, const fs::path& final_path, const std::vector<const Image*>& levels,
-                        oiio::PixelType type, bool mipmapped, const std::vector<std::string>& meaning,
-                        WrapMode wrap) {
+// One OpenImageIO file: all levels as a tiled MIP-mapped EXR, or a single level.
+Result<void> write_oiio(const fs::path& temp, const fs::path& final_path,
+                        const std::vector<oiio::LevelsRequest::StoredLevel>& levels, oiio::PixelType type,
+                        bool mipmapped, const std::vector<std::string>& meaning, WrapMode wrap) {
     auto api = oiio::api();
     if (!api) return make_error(final_path.string() + ": " + api.error().message);
     oiio::LevelsRequest request;
@@ -160,11 +151,38 @@ Result<void> write_oiio(const fs::path& temp, const fs::path& final_path, const 
     request.levels = levels;
     request.type = type;
     request.mipmapped = mipmapped;
-    request.channel_names = exr_names(levels.front()->channels);
+    request.channel_names = exr_names(levels.front().channels);
     request.channel_meaning = joined(meaning);
     request.wrap = wrap_name(wrap);
     request.date_time = reproducible_date_time();
     return (*api)->write_levels(request);
+}
+
+// The levels of `t` (EXR or per-mip) as OpenImageIO takes them: their stored bytes.
+std::vector<oiio::LevelsRequest::StoredLevel> stored_levels(const EncodedTexture& t) {
+    std::vector<oiio::LevelsRequest::StoredLevel> levels;
+    const ContainerLayout& layout = t.layout();
+    for (size_t L = 0; L < layout.level_offset.size(); ++L)
+        levels.push_back({std::max(1, t.width() >> L), std::max(1, t.height() >> L), layout.stored_channels,
+                          t.bytes().data() + layout.level_offset[L]});
+    return levels;
+}
+
+// EXR and per-mip files: levels tightly packed from offset 0, level 0 first, no header.
+ContainerLayout plain_layout(int width, int height, int levels, TexelEncoding encoding, int data_channels) {
+    ContainerLayout layout;
+    layout.stored_channels = gpu_channels(data_channels);
+    const size_t texel_bytes = size_t(layout.stored_channels) * size_t(encoding_bytes(encoding));
+    for (int L = 0; L < levels; ++L) {
+        layout.level_offset.push_back(layout.total);
+        layout.total += size_t(std::max(1, width >> L)) * size_t(std::max(1, height >> L)) * texel_bytes;
+    }
+    return layout;
+}
+
+// What an EXR stores of `encoding`: float32 as float32, everything else as half.
+TexelEncoding exr_encoding(TexelEncoding encoding) {
+    return encoding == TexelEncoding::Float32 ? encoding : TexelEncoding::Float16;
 }
 
 }  // namespace
@@ -181,105 +199,32 @@ Result<std::vector<ManifestOutput>> write_texture(const MipChain& data, TexelEnc
     fs::create_directories(dir, ec);
     if (ec) return make_error(dir.string() + ": cannot create folder: " + ec.message());
 
-    struct Pending {
-        std::unique_ptr<AtomicOutput> file;
-        ManifestOutput entry;
-    };
     const int mips = int(data.levels.size());
     const std::vector<std::string> names = meaning_for(data.channels(), gpu_channels(data.channels()), channel_names);
-
-    if (EncodedTexture::supports(format.container)) {
-        EncodedTexture t(format.container, encoding, data.width(), data.height(), mips, data.channels(),
-                         format.supercompression);
-        for (int L = 0; L < mips; ++L) {
-            const Image& level = data.levels[size_t(L)];
-            t.put_block(L, 0, 0, level.width, level.height, level.pixels.data(), level.channels, 0);
-        }
-        const EncodedFile file{&t, stem, kind, names, block};
-        return write_encoded_textures({&file, 1}, dir);
+    EncodedTexture t(format.container, encoding, data.width(), data.height(), mips, data.channels(),
+                     format.supercompression, format.wrap);
+    for (int L = 0; L < mips; ++L) {
+        const Image& level = data.levels[size_t(L)];
+        t.put_block(L, 0, 0, level.width, level.height, level.pixels.data(), level.channels, 0);
     }
-    MipChain widened;
-    const MipChain& chain = gpu_chain(data, widened);
-    std::vector<Pending> pending;
-    auto add = [&](const std::string& filename, int width, int height, int mips) -> Pending& {
-        Pending p;
-        p.file = std::make_unique<AtomicOutput>(dir / filename);
-        p.entry.kind = kind;
-        p.entry.path = filename;
-        p.entry.format = container_name(format.container);
-        p.entry.width = width;
-        p.entry.height = height;
-        p.entry.mips = mips;
-        p.entry.channels = chain.channels();
-        p.entry.extra["encoding"] = encoding_name(encoding);
-        p.entry.extra["gpu_format"] = gpu_format_name(encoding, chain.channels());
-        p.entry.extra["channel_meaning"] = names;
-        p.entry.extra["channel_names"] = exr_names(chain.channels());
-        pending.push_back(std::move(p));
-        return pending.back();
-    };
-    switch (format.container) {
-        case TextureContainer::Ktx2:
-        case TextureContainer::Dds: break;  // written above
-        case TextureContainer::Exr: {
-            Pending& p = add(stem + ".exr", chain.width(), chain.height(), mips);
-            const TexelEncoding stored = encoding == TexelEncoding::Float32 ? encoding : TexelEncoding::Float16;
-            p.entry.extra["encoding"] = encoding_name(stored);
-            p.entry.extra["gpu_format"] = gpu_format_name(stored, chain.channels());
-            std::vector<const Image*> levels;
-            for (const Image& l : chain.levels) levels.push_back(&l);
-            if (auto ok = write_oiio(p.file->temp_path(), p.file->final_path(), levels, oiio_type(stored), true,
-                                     names, format.wrap);
-                !ok)
-                return ok.error();
-            break;
-        }
-        case TextureContainer::PngPerMip: {
-            const bool integer = encoding == TexelEncoding::Unorm8 || encoding == TexelEncoding::Unorm16;
-            for (int L = 0; L < mips; ++L) {
-                const Image& level = chain.levels[size_t(L)];
-                const std::string filename = stem + "_mip" + std::to_string(L) + (integer ? ".png" : ".exr");
-                Pending& p = add(filename, level.width, level.height, 1);
-                p.entry.format = integer ? "png" : "exr";
-                p.entry.extra["mip_level"] = L;
-                if (auto ok = write_oiio(p.file->temp_path(), p.file->final_path(), {&level}, oiio_type(encoding),
-                                         false, names, format.wrap);
-                    !ok)
-                    return ok.error();
-            }
-            break;
-        }
-    }
-
-    std::vector<ManifestOutput> entries;
-    for (Pending& p : pending) {
-        auto hash = sha256_file(p.file->temp_path());
-        if (!hash) return hash.error();
-        p.entry.sha256 = *hash;
-    }
-    for (Pending& p : pending) {
-        if (auto ok = p.file->commit(); !ok) return ok.error();
-        entries.push_back(p.entry);
-    }
-    return entries;
-}
-
-bool EncodedTexture::supports(TextureContainer container) {
-    return container == TextureContainer::Ktx2 || container == TextureContainer::Dds;
+    const EncodedFile file{&t, stem, kind, names, block};
+    return write_encoded_textures({&file, 1}, dir);
 }
 
 EncodedTexture::EncodedTexture(TextureContainer container, TexelEncoding encoding, int width, int height, int levels,
-                               int channels, const Supercompression& supercompression)
-    : container_(container), encoding_(encoding), width_(width), height_(height), channels_(channels),
-      supercompression_(supercompression) {
-    layout_ = container == TextureContainer::Ktx2 ? ktx2_layout(width, height, levels, encoding, channels)
-                                                  : dds_layout(width, height, levels, encoding, channels);
+                               int channels, const Supercompression& supercompression, WrapMode wrap)
+    : container_(container), encoding_(container == TextureContainer::Exr ? exr_encoding(encoding) : encoding),
+      width_(width), height_(height), channels_(channels), supercompression_(supercompression), wrap_(wrap) {
+    if (container == TextureContainer::Ktx2) layout_ = ktx2_layout(width, height, levels, encoding_, channels);
+    else if (container == TextureContainer::Dds) layout_ = dds_layout(width, height, levels, encoding_, channels);
+    else layout_ = plain_layout(width, height, levels, encoding_, channels);
     data_.reset(new uint8_t[layout_.total]);
+    if (png()) png_.resize(layout_.level_offset.size());  // one stream a level, each made by its level's feeder
     // Faulted in on transparent huge pages as the rows arrive: a 4096^2 bake writes about 400 MiB of fresh
     // container bytes.
     detail::hint_huge_pages(data_.get(), layout_.total);
     if (container == TextureContainer::Ktx2) ktx2_write_header(data_.get(), layout_, width, height, encoding, channels);
-    else dds_write_header(data_.get(), layout_, width, height, encoding, channels);
+    if (container == TextureContainer::Dds) dds_write_header(data_.get(), layout_, width, height, encoding, channels);
     if (container == TextureContainer::Dds)
         if (const auto legacy = dds_legacy_pixel_format(encoding, channels); legacy && legacy->bgra) bgra_ = true;
 }
@@ -316,6 +261,23 @@ struct EncodedTexture::LevelStream {
 EncodedTexture::~EncodedTexture() = default;
 
 Result<void> EncodedTexture::compress_rows(int level, int rows) {
+    if (png()) {
+        auto& stream = png_[size_t(level)];
+        const int w = std::max(1, width_ >> level), h = std::max(1, height_ >> level);
+        if (!stream) stream = std::make_unique<PngLevelStream>(w, h, layout_.stored_channels,
+                                                               8 * encoding_bytes(encoding_), kPngZlibLevel);
+        const uint8_t* start = data_.get() + layout_.level_offset[size_t(level)];
+        if (auto ok = stream->add_rows(start, rows); !ok) return ok;
+        // Whole 2 MiB pages (the huge pages the buffer was hinted for) of rows no strip reads again.
+        if (stream->done()) {
+            const size_t level_bytes = size_t(h) * stream->row_bytes();
+            detail::advise_whole_pages(start, level_bytes, uintptr_t(2) << 20, MADV_DONTNEED);
+        } else {
+            detail::advise_whole_pages(start, size_t(stream->rows_read()) * stream->row_bytes(), uintptr_t(2) << 20,
+                                       MADV_DONTNEED);
+        }
+        return {};
+    }
     if (!supercompressed()) return make_error("zstd streams are for zstd-supercompressed KTX2 files");
     if (streams_.empty()) streams_.resize(layout_.level_offset.size());
     auto& slot = streams_[size_t(level)];
@@ -361,6 +323,13 @@ Result<void> EncodedTexture::compress_rows(int level, int rows) {
         if (to) z.released = size_t(static_cast<const uint8_t*>(to) - start);
     }
     return {};
+}
+
+Result<std::vector<std::span<const uint8_t>>> EncodedTexture::png_level(int level) {
+    if (!png()) return make_error("per-mip PNG levels are for integer data in the png container");
+    if (!png_[size_t(level)] || !png_[size_t(level)]->done())
+        if (auto ok = compress_rows(level, std::max(1, height_ >> level)); !ok) return ok.error();
+    return png_[size_t(level)]->pieces();
 }
 
 std::vector<std::span<const uint8_t>> EncodedTexture::streamed_levels() const {
@@ -478,68 +447,143 @@ void describe_blocks(ManifestOutput& e, const EncodedTexture& t, const EncodedFi
 
 }  // namespace
 
+namespace {
+
+// One file of write_encoded_textures: a whole texture (KTX2, DDS, EXR), or level `level` of a per-mip one.
+struct TargetFile {
+    size_t file = 0;
+    int level = -1;
+    std::unique_ptr<AtomicOutput> out;
+    ManifestOutput entry;
+};
+
+// The manifest entry of an EXR or per-mip file of `t`: the stored format and what each channel means.
+ManifestOutput level_file_entry(const EncodedTexture& t, const EncodedFile& f, const std::string& filename,
+                                int level) {
+    const int channels = t.layout().stored_channels;
+    ManifestOutput e;
+    e.kind = f.kind;
+    e.path = filename;
+    e.format = t.png() ? "png" : "exr";
+    e.width = level < 0 ? t.width() : std::max(1, t.width() >> level);
+    e.height = level < 0 ? t.height() : std::max(1, t.height() >> level);
+    e.mips = level < 0 ? int(t.layout().level_offset.size()) : 1;
+    e.channels = channels;
+    e.extra["encoding"] = encoding_name(t.encoding());
+    e.extra["gpu_format"] = gpu_format_name(t.encoding(), channels);
+    e.extra["channel_meaning"] = meaning_for(t.channels(), channels, f.channel_meaning);
+    e.extra["channel_names"] = exr_names(channels);
+    if (level >= 0) e.extra["mip_level"] = level;
+    return e;
+}
+
+// Writes a KTX2 or DDS file: supercompressed (its levels in parallel) or block-compressed where asked,
+// hashed from memory.
+Result<void> write_container(const EncodedFile& f, TargetFile& target) {
+    const EncodedTexture& t = *f.texture;
+    ManifestOutput& entry = target.entry;
+    Ktx2Pieces packed;
+    BlockFile blocks;
+    std::vector<std::span<const uint8_t>> pieces{t.bytes()};
+    if (f.block != BlockFormat::None) {
+        auto b = block_compressed(t, f.block);
+        if (!b) return make_error(target.out->final_path().string() + ": " + b.error().message);
+        blocks = std::move(*b);
+        pieces = blocks.pieces();
+        describe_blocks(entry, t, f);
+    } else if (const auto streamed = t.streamed_levels(); t.supercompressed() && !streamed.empty()) {
+        // Compressed while the bake ran (compress_rows): the header, then the levels smallest first.
+        std::vector<size_t> sizes;
+        for (std::span<const uint8_t> l : streamed) sizes.push_back(l.size());
+        packed.header = ktx2_zstd_header(t.bytes(), sizes);
+        pieces = {std::span<const uint8_t>(packed.header)};
+        for (size_t L = streamed.size(); L-- > 0;) pieces.push_back(streamed[L]);
+    } else if (t.supercompressed()) {
+        auto z = ktx2_zstd_pieces(t.bytes(), t.layout(), t.supercompression().zstd_level);
+        if (!z) return make_error(target.out->final_path().string() + ": " + z.error().message);
+        packed = std::move(*z);
+        pieces = packed.pieces();
+    }
+    Sha256 hash;
+    size_t size = 0;
+    for (std::span<const uint8_t> p : pieces) hash.update(p), size += p.size();
+    entry.sha256 = hash.hex();
+    entry.extra["bytes"] = size;
+    entry.extra["uncompressed_bytes"] = t.bytes().size();
+    entry.extra["block_compression"] = block_format_name(f.block);
+    entry.extra["supercompression"] = t.supercompressed() ? "zstd" : "none";
+    if (t.supercompressed()) entry.extra["zstd_level"] = t.supercompression().zstd_level;
+    return write_pieces_to(target.out->temp_path(), target.out->final_path(), pieces);
+}
+
+// Writes an EXR file (every level, tiled) or one level of a per-mip output (PNG, or EXR for float data).
+Result<void> write_level_file(const EncodedFile& f, TargetFile& target) {
+    EncodedTexture& t = *f.texture;
+    ManifestOutput& entry = target.entry;
+    if (t.png()) {
+        auto pieces = t.png_level(target.level);
+        if (!pieces) return make_error(target.out->final_path().string() + ": " + pieces.error().message);
+        Sha256 hash;
+        for (std::span<const uint8_t> p : *pieces) hash.update(p);
+        entry.sha256 = hash.hex();
+        return write_pieces_to(target.out->temp_path(), target.out->final_path(), *pieces);
+    }
+    std::vector<oiio::LevelsRequest::StoredLevel> levels = stored_levels(t);
+    if (target.level >= 0) levels = {levels[size_t(target.level)]};
+    const std::vector<std::string> meaning = entry.extra["channel_meaning"];
+    if (auto ok = write_oiio(target.out->temp_path(), target.out->final_path(), levels, oiio_type(t.encoding()),
+                             target.level < 0, meaning, t.wrap());
+        !ok)
+        return ok;
+    auto hash = sha256_file(target.out->temp_path());
+    if (!hash) return hash.error();
+    entry.sha256 = *hash;
+    return {};
+}
+
+}  // namespace
+
 Result<std::vector<ManifestOutput>> write_encoded_textures(std::span<const EncodedFile> files, const fs::path& dir) {
     std::error_code ec;
     fs::create_directories(dir, ec);
     if (ec) return make_error(dir.string() + ": cannot create folder: " + ec.message());
-    std::vector<std::unique_ptr<AtomicOutput>> outputs;
-    std::vector<ManifestOutput> entries;
-    for (const EncodedFile& f : files) {
-        const std::string filename = f.stem + '.' + container_name(f.texture->container());
-        outputs.push_back(std::make_unique<AtomicOutput>(dir / filename));
-        entries.push_back(f.texture->entry(filename, f.kind));
-        entries.back().extra["channel_meaning"] =
-            meaning_for(f.texture->channels(), gpu_channels(f.texture->channels()), f.channel_meaning);
-    }
-    // Each file is supercompressed (its levels in parallel), hashed from memory and written by one task;
-    // the first error in file order is reported.
-    std::vector<std::optional<Error>> errors(files.size());
-    tbb::parallel_for(size_t(0), files.size(), [&](size_t i) {
-        const EncodedTexture& t = *files[i].texture;
-        Ktx2Pieces packed;
-        BlockFile blocks;
-        std::vector<std::span<const uint8_t>> pieces{t.bytes()};
-        if (files[i].block != BlockFormat::None) {
-            auto b = block_compressed(t, files[i].block);
-            if (!b) {
-                errors[i] = make_error(outputs[i]->final_path().string() + ": " + b.error().message);
-                return;
+    std::vector<TargetFile> targets;
+    for (size_t i = 0; i < files.size(); ++i) {
+        const EncodedFile& f = files[i];
+        const EncodedTexture& t = *f.texture;
+        auto add = [&](const std::string& filename, int level) {
+            TargetFile target{i, level, std::make_unique<AtomicOutput>(dir / filename), {}};
+            if (EncodedTexture::is_container_file(t.container())) {
+                target.entry = t.entry(filename, f.kind);
+                target.entry.extra["channel_meaning"] = meaning_for(t.channels(), gpu_channels(t.channels()), f.channel_meaning);
+            } else {
+                target.entry = level_file_entry(t, f, filename, level);
             }
-            blocks = std::move(*b);
-            pieces = blocks.pieces();
-            describe_blocks(entries[i], t, files[i]);
-        } else if (const auto streamed = t.streamed_levels(); t.supercompressed() && !streamed.empty()) {
-            // Compressed while the bake ran (compress_rows): the header, then the levels smallest first.
-            std::vector<size_t> sizes;
-            for (std::span<const uint8_t> l : streamed) sizes.push_back(l.size());
-            packed.header = ktx2_zstd_header(t.bytes(), sizes);
-            pieces = {std::span<const uint8_t>(packed.header)};
-            for (size_t L = streamed.size(); L-- > 0;) pieces.push_back(streamed[L]);
-        } else if (t.supercompressed()) {
-            auto z = ktx2_zstd_pieces(t.bytes(), t.layout(), t.supercompression().zstd_level);
-            if (!z) {
-                errors[i] = make_error(outputs[i]->final_path().string() + ": " + z.error().message);
-                return;
-            }
-            packed = std::move(*z);
-            pieces = packed.pieces();
+            targets.push_back(std::move(target));
+        };
+        if (t.container() != TextureContainer::PngPerMip) {
+            add(f.stem + '.' + container_name(t.container()), -1);
+            continue;
         }
-        Sha256 hash;
-        size_t size = 0;
-        for (std::span<const uint8_t> p : pieces) hash.update(p), size += p.size();
-        entries[i].sha256 = hash.hex();
-        entries[i].extra["bytes"] = size;
-        entries[i].extra["uncompressed_bytes"] = t.bytes().size();
-        entries[i].extra["block_compression"] = block_format_name(files[i].block);
-        entries[i].extra["supercompression"] = t.supercompressed() ? "zstd" : "none";
-        if (t.supercompressed()) entries[i].extra["zstd_level"] = t.supercompression().zstd_level;
-        if (auto ok = write_pieces_to(outputs[i]->temp_path(), outputs[i]->final_path(), pieces); !ok)
-            errors[i] = ok.error();
+        for (int L = 0; L < int(t.layout().level_offset.size()); ++L)
+            add(f.stem + "_mip" + std::to_string(L) + (t.png() ? ".png" : ".exr"), L);
+    }
+    // Each file is encoded, hashed and written by one task; the first error in file order is reported.
+    std::vector<std::optional<Error>> errors(targets.size());
+    tbb::parallel_for(size_t(0), targets.size(), [&](size_t k) {
+        TargetFile& target = targets[k];
+        const EncodedFile& f = files[target.file];
+        auto ok = EncodedTexture::is_container_file(f.texture->container()) ? write_container(f, target)
+                                                                            : write_level_file(f, target);
+        if (!ok) errors[k] = ok.error();
     });
     for (const std::optional<Error>& e : errors)
         if (e) return *e;
-    for (const auto& out : outputs)
-        if (auto ok = out->commit(); !ok) return ok.error();
+    std::vector<ManifestOutput> entries;
+    for (TargetFile& target : targets) {
+        if (auto ok = target.out->commit(); !ok) return ok.error();
+        entries.push_back(std::move(target.entry));
+    }
     return entries;
 }
 

@@ -23,6 +23,8 @@
 
 namespace specbake::io {
 
+class PngLevelStream;
+
 enum class TextureContainer { Ktx2, Dds, Exr, PngPerMip };
 
 // How texel values are stored. Unorm: round(clamp(v, 0, 1) * (2^bits - 1)); Float16: IEEE half.
@@ -102,15 +104,22 @@ Result<std::vector<ManifestOutput>> write_texture(const MipChain& chain, TexelEn
                                                   const std::vector<std::string>& channel_names = {},
                                                   BlockFormat block = {});
 
-// A KTX2 or DDS file assembled in memory, level by level and row by row, so a producer can encode rows
-// as it finishes them instead of holding float chains. put_block() may run on several threads at once
-// for disjoint blocks; the file is complete once every texel of every level was put. bytes() is the file
-// without supercompression; write_encoded_textures applies `supercompression` to KTX2 files as it writes.
+// A texture file (KTX2, DDS, mipmapped EXR) or the files of a per-mip output (one PNG or EXR a level)
+// assembled in memory, level by level and row by row, so a producer can encode rows as it finishes them
+// instead of holding float chains. put_block() may run on several threads at once for disjoint blocks; the
+// file is complete once every texel of every level was put. bytes() is the KTX2/DDS file without
+// supercompression (for EXR and per-mip files: the stored levels, tightly packed, no header);
+// write_encoded_textures applies `supercompression` to KTX2 files and encodes PNG and EXR as it writes.
+// EXR stores half floats (float32 data as float32), as does a per-mip level of float data.
 class EncodedTexture {
 public:
-    static bool supports(TextureContainer container);  // KTX2 and DDS
+    // KTX2 and DDS: one file whose bytes() are the file's (before supercompression or block compression).
+    static bool is_container_file(TextureContainer container) {
+        return container == TextureContainer::Ktx2 || container == TextureContainer::Dds;
+    }
+    // `wrap` is recorded in EXR files ("wrapmodes").
     EncodedTexture(TextureContainer container, TexelEncoding encoding, int width, int height, int levels,
-                   int channels, const Supercompression& supercompression = {});
+                   int channels, const Supercompression& supercompression = {}, WrapMode wrap = WrapMode::Repeat);
 
     // Encodes the texels [x0, x0 + width) x [y0, y0 + rows) of `level` from `rows` rows of `width`
     // interleaved floats with `src_channels` per texel, taking channels [first, first + channels()).
@@ -125,12 +134,22 @@ public:
     const ContainerLayout& layout() const { return layout_; }
     // True when the written file is supercompressed (KTX2 with zstd on).
     bool supercompressed() const { return container_ == TextureContainer::Ktx2 && supercompression_.zstd; }
+    // True when compress_rows() encodes the rows as they arrive: zstd-supercompressed KTX2, per-mip PNG.
+    bool streams() const { return supercompressed() || png(); }
+    // True for per-mip PNG files (integer data in the PngPerMip container).
+    bool png() const {
+        return container_ == TextureContainer::PngPerMip &&
+               (encoding_ == TexelEncoding::Unorm8 || encoding_ == TexelEncoding::Unorm16);
+    }
     const Supercompression& supercompression() const { return supercompression_; }
+    WrapMode wrap() const { return wrap_; }
     // True when the level bytes hold RGBA8 texels in B, G, R, A order (DDS A8R8G8B8, io/texture/dds.h).
     bool bgra() const { return bgra_; }
     // The manifest entry of this file as `filename` (sha256 left empty; the writer fills it).
     ManifestOutput entry(const std::string& filename, const std::string& kind) const;
 
+    // Per-mip PNG: filters and deflates the strips that rows [0, rows) of `level` complete
+    // (io/texture/png_stream.h) and returns the raw pages no strip reads again to the system.
     // KTX2 with zstd: zstd-compresses rows [0, rows) of `level`, put before the call, as a stream of the
     // level (whole zstd blocks; the rest once rows is the level's height), and returns the raw pages zstd
     // no longer reads (older than its window) to the system, so a level's raw bytes are never all held.
@@ -141,15 +160,20 @@ public:
     Result<void> compress_rows(int level, int rows);
     // The compressed bytes of every level when all were fed to their end by compress_rows, else empty.
     std::vector<std::span<const uint8_t>> streamed_levels() const;
+
+    // Per-mip PNG: the file of `level`, every level fed to its end first (by compress_rows, or here).
+    Result<std::vector<std::span<const uint8_t>>> png_level(int level);
     ~EncodedTexture();
 
 private:
     struct LevelStream;
     std::vector<std::unique_ptr<LevelStream>> streams_;
+    std::vector<std::unique_ptr<PngLevelStream>> png_;
     TextureContainer container_;
     TexelEncoding encoding_;
     int width_, height_, channels_;
     Supercompression supercompression_;
+    WrapMode wrap_;
     ContainerLayout layout_;
     bool bgra_ = false;
     std::unique_ptr<uint8_t[]> data_;  // not zero-filled: every byte is written by the header or a row
@@ -159,7 +183,7 @@ private:
 // asked, hashed and written to temporary names in parallel, and renamed only when every one succeeded.
 // Returns their manifest entries, with "bytes" (file size), "uncompressed_bytes" and "supercompression".
 struct EncodedFile {
-    const EncodedTexture* texture = nullptr;
+    EncodedTexture* texture = nullptr;  // non-const: per-mip PNG levels not yet fed are encoded by the write
     std::string stem;
     std::string kind;
     std::vector<std::string> channel_meaning;  // what each stored channel holds (manifest), may be empty

@@ -3,6 +3,7 @@
 #include "io/image/image_io.h"
 #include "io/texture/dds.h"
 #include "io/texture/ktx2.h"
+#include "io/texture/png_stream.h"
 #include "io/texture/texel_encoding.h"
 #include "io/texture/texture_writer.h"
 
@@ -584,6 +585,55 @@ TEST(PngPerMip, OneFilePerLevel) {
     ASSERT_TRUE(floats.ok());
     EXPECT_EQ((*floats)[0].path, "k_mip0.exr");
     fs::remove_all(dir);
+}
+
+// A per-mip PNG deflated strip by strip as its rows arrive: the same bytes however the rows arrive, and
+// OpenImageIO (libpng) reads back exactly the texels given, for every channel count and depth, sizes of
+// one strip and of several, the last one short.
+TEST(PngLevelStream, StreamedInBandsReadsBackExactlyThroughOpenImageIO) {
+    struct Case { int width, height, channels, bits; };
+    std::mt19937 rng(5);
+    for (const Case c : {Case{1, 1, 1, 8}, Case{7, 3, 4, 16}, Case{300, 1000, 2, 8}, Case{2100, 70, 4, 8},
+                         Case{513, 400, 1, 16}}) {
+        SCOPED_TRACE(std::to_string(c.width) + "x" + std::to_string(c.height) + " " + std::to_string(c.channels) +
+                     " channels, " + std::to_string(c.bits) + " bits");
+        const size_t row_bytes = size_t(c.width) * size_t(c.channels) * size_t(c.bits / 8);
+        std::vector<uint8_t> texels(row_bytes * size_t(c.height));
+        // Smooth ramps with noise: compressible, but not trivially.
+        for (size_t i = 0; i < texels.size(); ++i) texels[i] = uint8_t(i / 7 + rng() % 5);
+        PngLevelStream whole(c.width, c.height, c.channels, c.bits, 2);
+        ASSERT_TRUE(whole.add_rows(texels.data(), c.height).ok());
+        ASSERT_TRUE(whole.done());
+        PngLevelStream banded(c.width, c.height, c.channels, c.bits, 2);
+        for (int rows = 0; rows < c.height;) {
+            rows = std::min(c.height, rows + 1 + int(rng() % 97));
+            ASSERT_TRUE(banded.add_rows(texels.data(), rows).ok());
+            EXPECT_LT(banded.rows_read(), std::max(1, rows));
+        }
+        ASSERT_TRUE(banded.done());
+        std::vector<uint8_t> a, b;
+        for (std::span<const uint8_t> p : whole.pieces()) a.insert(a.end(), p.begin(), p.end());
+        for (std::span<const uint8_t> p : banded.pieces()) b.insert(b.end(), p.begin(), p.end());
+        EXPECT_TRUE(a == b) << "the file depends on how its rows arrived";
+        EXPECT_EQ(a.size(), whole.bytes());
+        const fs::path dir = fresh_dir("png_stream");
+        const fs::path file = dir / "level.png";
+        std::ofstream(file, std::ios::binary).write(reinterpret_cast<const char*>(a.data()), std::streamsize(a.size()));
+        OIIO::ImageSpec config;
+        config.attribute("oiio:UnassociatedAlpha", 1);  // alpha as stored (data), not premultiplied
+        auto in = OIIO::ImageInput::open(file.string(), &config);
+        ASSERT_TRUE(in) << OIIO::geterror();
+        const OIIO::ImageSpec& spec = in->spec();
+        EXPECT_EQ(spec.width, c.width);
+        EXPECT_EQ(spec.height, c.height);
+        EXPECT_EQ(spec.nchannels, c.channels);
+        const OIIO::TypeDesc type = c.bits == 8 ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::UINT16;
+        std::vector<uint8_t> back(texels.size());
+        ASSERT_TRUE(in->read_image(0, 0, 0, c.channels, type, back.data())) << in->geterror();
+        EXPECT_TRUE(back == texels) << "OpenImageIO decodes other texels than were written";
+        in->close();
+        fs::remove_all(dir);
+    }
 }
 
 TEST(ImageIo, DecodesEveryInputFormatWithoutConversion) {
