@@ -52,22 +52,24 @@ T filtered_ndf(const Vec3<T>& h, const Sym2<T>& A, T alpha2) {
     return ggx + (T(1) - rho) * (beckmann_ndf(h, A, tau) - ggx);
 }
 
+// The kernel A - a I added to the material's a, projected onto the PSD cone (an anisotropic material's
+// A - a I can be indefinite), by the include's formula (specaa_sym_clamp_psd).
+template <class T>
+Sym2<T> added_kernel(const Sym2<T>& A, T a) {
+    const Sym2<T> K{A.xx - a, A.xy, A.yy - a};
+    const T half_trace = T(0.5) * (K.xx + K.yy), radius = std::hypot(T(0.5) * (K.xx - K.yy), K.xy);
+    const T lmax = half_trace + radius, lmin = half_trace - radius;
+    if (lmax <= T(0)) return Sym2<T>{};
+    if (!(lmin < T(0))) return K;
+    const T f = lmax / (T(2) * radius);
+    return Sym2<T>{f * (K.xx - lmin), f * K.xy, f * (K.yy - lmin)};
+}
+
 template <class T>
 T convolved_ndf(const Vec3<T>& h, const Sym2<T>& A, T alpha2) {
     if (!(h.z > T(0))) return T(0);
     const T a = std::max(alpha2, T(1e-12));
-    // The added kernel, projected onto the PSD cone (an anisotropic material's A - a I can be indefinite),
-    // by the include's formula (specaa_sym_clamp_psd).
-    Sym2<T> K{A.xx - a, A.xy, A.yy - a};
-    {
-        const T half_trace = T(0.5) * (K.xx + K.yy), radius = std::hypot(T(0.5) * (K.xx - K.yy), K.xy);
-        const T lmax = half_trace + radius, lmin = half_trace - radius;
-        if (lmax <= T(0)) K = Sym2<T>{};
-        else if (lmin < T(0)) {
-            const T f = lmax / (T(2) * radius);
-            K = Sym2<T>{f * (K.xx - lmin), f * K.xy, f * (K.yy - lmin)};
-        }
-    }
+    const Sym2<T> K = added_kernel(A, a);
     const T kmax = std::max(max_eigenvalue_sym2(K.xx, K.yy, K.xy), T(0));
     // No footprint to speak of: GGX(A) itself (within 0.1% of the convolution).
     if (kmax <= T(1e-3) * a) return ggx_ndf(h, Sym2<T>{A.xx + T(1e-12), A.xy, A.yy + T(1e-12)}, a * a);
@@ -204,16 +206,7 @@ T convolved_ndf_closed_form(const Vec3<T>& h, const Sym2<T>& A, T alpha2) {
     if (!(h.z > T(0))) return T(0);
     const T a = std::max(alpha2, T(1e-12));
     // The added kernel projected onto the PSD cone, as in convolved_ndf.
-    Sym2<T> K{A.xx - a, A.xy, A.yy - a};
-    {
-        const T half_trace = T(0.5) * (K.xx + K.yy), radius = std::hypot(T(0.5) * (K.xx - K.yy), K.xy);
-        const T lmax = half_trace + radius, lmin = half_trace - radius;
-        if (lmax <= T(0)) K = Sym2<T>{};
-        else if (lmin < T(0)) {
-            const T f = lmax / (T(2) * radius);
-            K = Sym2<T>{f * (K.xx - lmin), f * K.xy, f * (K.yy - lmin)};
-        }
-    }
+    const Sym2<T> K = added_kernel(A, a);
     if (std::max(max_eigenvalue_sym2(K.xx, K.yy, K.xy), T(0)) <= T(1e-3) * a)
         return ggx_ndf(h, Sym2<T>{A.xx + T(1e-12), A.xy, A.yy + T(1e-12)}, a * a);
     // GGX(a) = int_0^inf e^-w Beckmann(a / w I) dw, so the convolution is int_0^inf e^-w Beckmann(a / w I + K) dw

@@ -123,35 +123,33 @@ struct ConvolutionCase {
     double a, kx, ky, phi;
 };
 
-// convolved_ndf within `tolerance` (relative) of the brute-force convolution at every half vector of the
-// grid (theta in degrees, azimuths in radians).
-void expect_matches_brute_force(std::initializer_list<ConvolutionCase> cases, std::initializer_list<double> thetas_deg,
-                                std::initializer_list<double> azimuths, double tolerance) {
+// `ndf` within `tolerance` (relative) of the brute-force convolution at every half vector of the grid
+// (theta in degrees, azimuths in radians).
+using ConvolvedNdf = double (*)(const Vec3<double>&, const Sym2<double>&, double);
+void expect_within_brute_force(ConvolvedNdf ndf, const char* name, std::initializer_list<ConvolutionCase> cases,
+                               std::initializer_list<double> thetas_deg, std::initializer_list<double> azimuths,
+                               double tolerance) {
     for (const ConvolutionCase& k : cases) {
         const Sym2<double> A = sym(test::rotated_diag(k.a + k.kx, k.a + k.ky, k.phi));
         for (double theta_deg : thetas_deg)
             for (double phi : azimuths) {
                 const Vec3<double> h = test::spherical(theta_deg * kPi / 180.0, phi);
                 const double expected = brute_force_convolved(h, k.a, k.kx, k.ky, k.phi);
-                EXPECT_NEAR(convolved_ndf(h, A, k.a), expected, tolerance * expected)
-                    << "a " << k.a << " K (" << k.kx << ", " << k.ky << ") theta " << theta_deg << " phi " << phi;
+                EXPECT_NEAR(ndf(h, A, k.a), expected, tolerance * expected)
+                    << name << ": a " << k.a << " K (" << k.kx << ", " << k.ky << ") theta " << theta_deg << " phi " << phi;
             }
     }
 }
 
-// convolved_ndf_closed_form within `tolerance` (relative) of the brute-force convolution, as above.
+// convolved_ndf (the quadrature) and convolved_ndf_closed_form against the brute-force convolution.
+void expect_matches_brute_force(std::initializer_list<ConvolutionCase> cases, std::initializer_list<double> thetas_deg,
+                                std::initializer_list<double> azimuths, double tolerance) {
+    expect_within_brute_force(&convolved_ndf<double>, "convolved_ndf", cases, thetas_deg, azimuths, tolerance);
+}
 void expect_closed_form_within(std::initializer_list<ConvolutionCase> cases, std::initializer_list<double> thetas_deg,
                                std::initializer_list<double> azimuths, double tolerance) {
-    for (const ConvolutionCase& k : cases) {
-        const Sym2<double> A = sym(test::rotated_diag(k.a + k.kx, k.a + k.ky, k.phi));
-        for (double theta_deg : thetas_deg)
-            for (double phi : azimuths) {
-                const Vec3<double> h = test::spherical(theta_deg * kPi / 180.0, phi);
-                const double expected = brute_force_convolved(h, k.a, k.kx, k.ky, k.phi);
-                EXPECT_NEAR(convolved_ndf_closed_form(h, A, k.a), expected, tolerance * expected)
-                    << "a " << k.a << " K (" << k.kx << ", " << k.ky << ") theta " << theta_deg << " phi " << phi;
-            }
-    }
+    expect_within_brute_force(&convolved_ndf_closed_form<double>, "convolved_ndf_closed_form", cases, thetas_deg,
+                              azimuths, tolerance);
 }
 
 TEST(ConvolvedNdf, MatchesABruteForceConvolutionOfGgxWithTheFootprint) {
