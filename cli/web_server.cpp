@@ -1,5 +1,7 @@
 #include "cli/web_server.h"
 
+#include "io/files/file_read.h"
+
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
@@ -9,7 +11,6 @@
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
 #include <sstream>
 
 namespace specbake::cli {
@@ -113,10 +114,11 @@ bool handle(int fd, const WebServerOptions& options) {
     }
     const fs::path file = file_for(options, path);
     if (file.empty()) return respond(fd, 404, "Not Found", "text/plain", "not found: " + path + "\n"), false;
-    std::ifstream in(file, std::ios::binary);
-    std::ostringstream bytes;
-    bytes << in.rdbuf();
-    respond(fd, 200, "OK", content_type(file.string()), method == "HEAD" ? "" : bytes.str());
+    // Read as every input is: a regular file only, without blocking on a FIFO put there since the check.
+    const auto bytes = io::read_file(file);
+    if (!bytes) return respond(fd, 404, "Not Found", "text/plain", bytes.error().message + "\n"), false;
+    respond(fd, 200, "OK", content_type(file.string()),
+            method == "HEAD" ? "" : std::string(bytes->begin(), bytes->end()));
     return false;
 }
 

@@ -515,19 +515,25 @@ def calls(toks, names):
     return out
 
 
-def add_texture_parameters(items, params):
-    """Functions using the free names of `params` ([(name, type)]), and the functions calling them, take
-    them as trailing parameters; their calls pass them on."""
-    names = {n for n, _ in params}
-    needs = {name for name, kind, toks in items
-             if kind == 'fn' and any(t.kind == 'ident' and t.text in names for t in toks)}
+def with_callers(items, names):
+    """`names` and every function that calls one of them, directly or through others."""
+    names = set(names)
     changed = True
     while changed:
         changed = False
         for name, kind, toks in items:
-            if kind == 'fn' and name not in needs and calls(toks, needs):
-                needs.add(name)
+            if kind == 'fn' and name not in names and calls(toks, names):
+                names.add(name)
                 changed = True
+    return names
+
+
+def add_texture_parameters(items, params):
+    """Functions using the free names of `params` ([(name, type)]), and the functions calling them, take
+    them as trailing parameters; their calls pass them on."""
+    names = {n for n, _ in params}
+    needs = with_callers(items, {name for name, kind, toks in items
+                                 if kind == 'fn' and any(t.kind == 'ident' and t.text in names for t in toks)})
     declared = ', '.join(f'{n}: {ty}' for n, ty in params)
     passed = ', '.join(n for n, _ in params)
     result = []
@@ -553,14 +559,7 @@ def variant_functions(base_text, variant_text, params, suffix, header):
     base = {name: text_of([t for t in toks if t.code]) for name, kind, toks in top_level_items(base_text) if name}
     items = add_texture_parameters(top_level_items(variant_text), params)
     code = {name: text_of([t for t in toks if t.code]) for name, kind, toks in items if name}
-    differ = {name for name, kind, toks in items if kind == 'fn' and base.get(name) != code[name]}
-    changed = True
-    while changed:
-        changed = False
-        for name, kind, toks in items:
-            if kind == 'fn' and name not in differ and calls(toks, differ):
-                differ.add(name)
-                changed = True
+    differ = with_callers(items, {name for name, kind, toks in items if kind == 'fn' and base.get(name) != code[name]})
     out = [header]
     for name, kind, toks in items:
         if name not in differ:

@@ -41,13 +41,17 @@ double modelp(double x, double b, double p0, double p1, double p2) {
     double w1 = LARGE ? std::exp(-1 / b) / (1 + std::exp(-p1)) : b / (1 + b) * p1, w2 = std::exp(-1 / b) - w1;
     return (T + w1 * t1 * std::exp(-y * t1) + w2 * t2 * std::exp(-y * t2)) / b;
 }
-P nm(std::function<double(const P&)> f, P p, int iters, double step) {
-    constexpr int N = NP;
-    std::array<P, N + 1> s;
+// Nelder-Mead from p, the simplex's other points p + step along each axis (relative: step times
+// max(0.05, |p_i|)); the best point after `iters` iterations.
+template <int N>
+std::array<double, N> nm(std::function<double(const std::array<double, N>&)> f, std::array<double, N> p, int iters,
+                         double step, bool relative = true) {
+    using Point = std::array<double, N>;
+    std::array<Point, N + 1> s;
     std::array<double, N + 1> v;
     for (int i = 0; i <= N; ++i) {
         s[i] = p;
-        if (i) s[i][i - 1] += step * std::max(0.05, std::abs(p[i - 1]));
+        if (i) s[i][i - 1] += relative ? step * std::max(0.05, std::abs(p[i - 1])) : step;
         v[i] = f(s[i]);
     }
     for (int it = 0; it < iters; ++it) {
@@ -60,11 +64,11 @@ P nm(std::function<double(const P&)> f, P p, int iters, double step) {
             s[i] = S[o[i]];
             v[i] = V[o[i]];
         }
-        P c{};
+        Point c{};
         for (int i = 0; i < N; ++i)
             for (int j = 0; j < N; ++j) c[j] += s[i][j] / N;
         auto pt = [&](double t) {
-            P r;
+            Point r;
             for (int j = 0; j < N; ++j) r[j] = c[j] + t * (s[N][j] - c[j]);
             return r;
         };
@@ -130,63 +134,7 @@ int main(int argc, char** argv) {
             }
             return m;
         };
-        // small NM in 3D
-        std::array<std::array<double, 3>, 4> s;
-        std::array<double, 4> v;
-        for (int rep = 0; rep < 3; ++rep) {
-            for (int i = 0; i < 4; ++i) {
-                s[i] = p;
-                if (i) s[i][i - 1] += 0.2;
-                v[i] = f(s[i]);
-            }
-            for (int it = 0; it < 400; ++it) {
-                std::array<int, 4> o{0, 1, 2, 3};
-                std::sort(o.begin(), o.end(), [&](int a, int b) { return v[a] < v[b]; });
-                auto S = s;
-                auto V = v;
-                for (int i = 0; i < 4; ++i) {
-                    s[i] = S[o[i]];
-                    v[i] = V[o[i]];
-                }
-                std::array<double, 3> c{};
-                for (int i = 0; i < 3; ++i)
-                    for (int k = 0; k < 3; ++k) c[k] += s[i][k] / 3;
-                auto pt = [&](double t) {
-                    std::array<double, 3> r;
-                    for (int k = 0; k < 3; ++k) r[k] = c[k] + t * (s[3][k] - c[k]);
-                    return r;
-                };
-                auto r = pt(-1);
-                double fr = f(r);
-                if (fr < v[0]) {
-                    auto e = pt(-2);
-                    double fe = f(e);
-                    if (fe < fr) {
-                        s[3] = e;
-                        v[3] = fe;
-                    } else {
-                        s[3] = r;
-                        v[3] = fr;
-                    }
-                } else if (fr < v[2]) {
-                    s[3] = r;
-                    v[3] = fr;
-                } else {
-                    auto k = pt(0.5);
-                    double fk = f(k);
-                    if (fk < v[3]) {
-                        s[3] = k;
-                        v[3] = fk;
-                    } else {
-                        for (int i = 1; i < 4; ++i) {
-                            for (int k2 = 0; k2 < 3; ++k2) s[i][k2] = 0.5 * (s[i][k2] + s[0][k2]);
-                            v[i] = f(s[i]);
-                        }
-                    }
-                }
-            }
-            p = s[std::min_element(v.begin(), v.end()) - v.begin()];
-        }
+        for (int rep = 0; rep < 3; ++rep) p = nm<3>(f, p, 400, 0.2, false);
         p[0] = std::min(p[0], 8.0);
         p[1] = std::clamp(p[1], -12.0, 12.0);
         per[j] = p;
@@ -242,7 +190,7 @@ int main(int argc, char** argv) {
     fprintf(stderr, "lsq max %.4f\n", gerr(coef));
     for (int r = 0; r < 8; ++r) {
         PW = r < 3 ? 16 : 1000;
-        coef = nm(gerr, coef, 2500, 0.05);
+        coef = nm<NP>(gerr, coef, 2500, 0.05);
         double sv = PW;
         PW = 1000;
         fprintf(stderr, "refine %d %.4f\n", r, gerr(coef));
