@@ -63,8 +63,9 @@ inline void add_curvature_options(CLI::App* sub, SceneCliOptions& o) {
     sub->add_option("--estimator", o.estimator,
                     "Curvature estimator: shape-operator (SPEC Sec. 4 per-face fit), second-order (per-vertex fit "
                     "with the curvature derivative, more accurate on irregular meshes), jet-fitting (geometric, "
-                    "CGAL), normal-cone (cheap bound)")
-        ->check(CLI::IsMember({"shape-operator", "second-order", "jet-fitting", "normal-cone"}))
+                    "CGAL), normal-cone (cheap bound), patch (the per-face fit averaged over each vertex's smooth patch: "
+                    "faces much steeper than most of the one-ring count little)")
+        ->check(CLI::IsMember({"shape-operator", "second-order", "jet-fitting", "normal-cone", "patch"}))
         ->capture_default_str();
     sub->add_option("--min-curvature", o.min_relative_curvature,
                     "Bake curvature only where p95(|k1|) x bounding-box diagonal reaches this (radians of normal turn)")

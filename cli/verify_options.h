@@ -28,6 +28,7 @@ struct SimCommandOptions {
     std::vector<std::string> defines;  // NAME or NAME=VALUE
     std::vector<std::string> variants;  // LABEL:NAME[=VALUE][+NAME[=VALUE]...]
     std::vector<std::string> only;      // candidate names to keep besides the baselines; empty: all
+    std::string curvature_estimator = "shape-operator";
 };
 
 inline void add_sim_command_options(CLI::App* sub, SimCommandOptions& o) {
@@ -61,6 +62,12 @@ inline void add_sim_command_options(CLI::App* sub, SimCommandOptions& o) {
                     "Also score a copy of the default named default:LABEL compiled with these defines (repeatable; "
                     "'+' separates defines), e.g. --variant nopix:SPECAA_NO_PIXEL_KERNEL --variant g1:SPECAA_KERNEL_GATE=1")
         ->type_name("LABEL:NAME[=VALUE][+NAME[=VALUE]]");
+    sub->add_option("--curvature-estimator", o.curvature_estimator,
+                    "On scene files, the per-vertex curvature that --define and --variant candidates with "
+                    "SPECAA_USE_CURVATURE read: shape-operator (what bake writes by default), patch, "
+                    "second-order, jet-fitting or normal-cone (analytic scenes use their exact curvature)")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"shape-operator", "patch", "second-order", "jet-fitting", "normal-cone"}));
 }
 
 // "NAME" or "NAME=VALUE" as the line "#define NAME VALUE"; an error message for anything else (NAME a C
@@ -101,6 +108,7 @@ inline bool apply_sim_command_options(const SimCommandOptions& o, verify::Verify
     v.floor = !o.no_floor;
     v.limit = !o.no_limit;
     v.only = o.only;
+    v.curvature_estimator = o.curvature_estimator;
     v.defines.clear();
     for (const std::string& d : o.defines) {
         std::string line, error;

@@ -78,6 +78,7 @@ Result<VertexCurvature> estimate(const TriMesh& mesh, const WeldedTopology* shar
                 break;
             case CurvatureEstimator::NormalCone: out = curvature_normal_cone(mesh, topology); break;
             case CurvatureEstimator::SecondOrder: out = curvature_second_order(mesh, topology); break;
+            case CurvatureEstimator::Patch: out = curvature_patch(mesh, topology); break;
         }
         bad_vertex = first_bad(4 * n, [&](size_t k) { return !std::isfinite(out.values[k]); }) / 4;
     });
@@ -95,13 +96,15 @@ std::string_view to_string(CurvatureEstimator estimator) {
         case CurvatureEstimator::JetFitting: return "jet-fitting";
         case CurvatureEstimator::NormalCone: return "normal-cone";
         case CurvatureEstimator::SecondOrder: return "second-order";
+        case CurvatureEstimator::Patch: return "patch";
     }
     return "unknown";
 }
 
 std::optional<CurvatureEstimator> parse_curvature_estimator(std::string_view name) {
     for (CurvatureEstimator e : {CurvatureEstimator::ShapeOperator, CurvatureEstimator::JetFitting,
-                                 CurvatureEstimator::NormalCone, CurvatureEstimator::SecondOrder}) {
+                                 CurvatureEstimator::NormalCone, CurvatureEstimator::SecondOrder,
+                                 CurvatureEstimator::Patch}) {
         if (name == to_string(e)) return e;
     }
     return std::nullopt;

@@ -20,6 +20,8 @@ enum class CurvatureEstimator {
     NormalCone,     // one-ring bound: largest normal turn per edge length, cheapest
     SecondOrder,    // one least-squares fit per vertex over its one-ring with Rusinkiewicz 2004's
                     // curvature-derivative term: second order on irregular meshes
+    Patch,          // the per-face operators of ShapeOperator, averaged at a vertex over its smooth patch:
+                    // faces steeper than the one-ring's area-weighted median weigh by (median / |S_f|)^2
 };
 
 struct CurvatureOptions {
@@ -41,7 +43,7 @@ Result<VertexCurvature> estimate_curvature(const TriMesh& mesh, CurvatureEstimat
 Result<VertexCurvature> estimate_curvature(const TriMesh& mesh, const WeldedTopology& topology,
                                            CurvatureEstimator estimator, const CurvatureOptions& options = {});
 
-// "shape-operator", "jet-fitting", "normal-cone", "second-order" (the CLI spellings).
+// "shape-operator", "jet-fitting", "normal-cone", "second-order", "patch" (the CLI spellings).
 std::string_view to_string(CurvatureEstimator estimator);
 std::optional<CurvatureEstimator> parse_curvature_estimator(std::string_view name);
 
@@ -51,5 +53,6 @@ VertexCurvature curvature_jet_fitting(const TriMesh& mesh, const WeldedTopology&
                                       int min_points);
 VertexCurvature curvature_normal_cone(const TriMesh& mesh, const WeldedTopology& topology);
 VertexCurvature curvature_second_order(const TriMesh& mesh, const WeldedTopology& topology);
+VertexCurvature curvature_patch(const TriMesh& mesh, const WeldedTopology& topology);
 
 }  // namespace specbake

@@ -95,7 +95,7 @@ std::vector<SimCandidate> select_candidates(const SimScene& scene, const VerifyO
         return lines.find("#define SPECAA_USE_CURVATURE\n") != std::string::npos ||
                lines.find("#define SPECAA_USE_CURVATURE ") != std::string::npos;
     };
-    const std::string estimator = has_exact_curvature(scene) ? "exact" : "shape-operator";
+    const std::string estimator = has_exact_curvature(scene) ? "exact" : options.curvature_estimator;
     if (!options.defines.empty()) {
         const bool curvature = uses_curvature(options.defines);
         for (SimCandidate& c : candidates) {

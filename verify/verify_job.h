@@ -45,6 +45,10 @@ struct VerifyOptions {
     // "#define" lines (after `defines`): several variants of the rule scored against one ground truth
     // (`verify --variant`), for attributing an error to one part of the rule.
     std::vector<std::pair<std::string, std::string>> default_variants;
+    // The curvature estimator (mesh/curvature.h spelling) whose per-vertex estimate the candidates made
+    // with `defines` or `default_variants` read when those include SPECAA_USE_CURVATURE, on scenes without
+    // exact curvature.
+    std::string curvature_estimator = "shape-operator";
     // Ground-truth samples integrate the highlight over their stratum (false: point samples).
     bool footprint_ground_truth = true;
     // Receives one line per finished stage (bakes, each ground-truth frame, timing); may be empty.

@@ -2,6 +2,7 @@
 // several tessellations and scales, seams, hard edges, sign, direction, degenerate triangles, determinism.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -28,9 +29,11 @@ VertexCurvature estimate(const TriMesh& m, CurvatureEstimator e = CurvatureEstim
 
 // The shape-operator fits: the default (per face, SPEC Sec. 4) and the second-order fit per vertex. Both must
 // meet the closed-form bounds below.
-constexpr CurvatureEstimator kFits[] = {CurvatureEstimator::ShapeOperator, CurvatureEstimator::SecondOrder};
+constexpr CurvatureEstimator kFits[] = {CurvatureEstimator::ShapeOperator, CurvatureEstimator::SecondOrder,
+                                        CurvatureEstimator::Patch};
 constexpr CurvatureEstimator kAll[] = {CurvatureEstimator::ShapeOperator, CurvatureEstimator::SecondOrder,
-                                       CurvatureEstimator::JetFitting, CurvatureEstimator::NormalCone};
+                                       CurvatureEstimator::JetFitting, CurvatureEstimator::NormalCone,
+                                       CurvatureEstimator::Patch};
 
 TEST(Curvature, SphereIsOneOverRadius) {
     for (CurvatureEstimator f : kFits) {
@@ -388,6 +391,54 @@ TEST(Curvature, UnusableVertexFramesKeepTheOutputDefined) {
             EXPECT_NEAR(x[1], 1.0 / R, 1e-3) << v;
         }
     }
+}
+
+// A gently curved patch (shading normals n = normalize(c x, c y, 1) on a flat grid: curvature c in every
+// direction, the closed form) crossed by a lip one narrow column wide where n.x climbs by s per unit length
+// (s = 60 c), as a rim or a bevel beside a dome. The vertices on the lip's two sides touch three gentle
+// faces of width 1 and three steep faces of width 0.1: their gentle faces interpolate the vertex values, so
+// the value must be the gentle patch's c. The one-ring average (shape-operator) carries the lip into them;
+// patch must not.
+TEST(Curvature, PatchKeepsASteepLipOutOfTheGentleVertices) {
+    const double c = 0.05, s = 60.0 * c, lip_width = 0.1;
+    const int n = 12, lip = 6;  // grid columns 0..n, the lip between columns lip and lip + 1
+    std::vector<double> xs;
+    for (int i = 0; i <= n; ++i) xs.push_back(i <= lip ? i : lip + lip_width + (i - lip - 1));
+    TriMesh m;
+    m.name = "lip";
+    for (int j = 0; j <= n; ++j) {
+        for (int i = 0; i <= n; ++i) {
+            const double x = xs[size_t(i)] - 6.0, y = j - 6.0;
+            const double climb = s * std::clamp(xs[size_t(i)] - lip, 0.0, lip_width);
+            const double nx = c * x + climb, ny = c * y, len = std::sqrt(nx * nx + ny * ny + 1.0);
+            m.positions.insert(m.positions.end(), {float(x), float(y), 0.0f});
+            m.normals.insert(m.normals.end(), {float(nx / len), float(ny / len), float(1.0 / len)});
+            m.tangents.insert(m.tangents.end(), {1.0f, 0.0f, 0.0f, 1.0f});
+        }
+    }
+    for (int j = 0; j < n; ++j) {
+        for (int i = 0; i < n; ++i) {
+            const uint32_t a = uint32_t(j * (n + 1) + i), b = a + 1, d = a + uint32_t(n + 1), e = d + 1;
+            m.indices.insert(m.indices.end(), {a, b, e, a, e, d});
+        }
+    }
+    const VertexCurvature so = estimate(m, CurvatureEstimator::ShapeOperator);
+    const VertexCurvature patch = estimate(m, CurvatureEstimator::Patch);
+    int checked = 0;
+    for (int j = 2; j <= n - 2; ++j) {
+        for (int i : {lip, lip + 1}) {
+            const size_t v = size_t(j * (n + 1) + i);
+            // The gentle patch's |k1| at this vertex: the field's curvature there, c up to the tilt of n.
+            EXPECT_NEAR(std::abs(patch.values[4 * v]), c, 0.15 * c) << "vertex " << i << "," << j;
+            EXPECT_GT(std::abs(so.values[4 * v]), 3.0 * c) << "vertex " << i << "," << j;
+            ++checked;
+        }
+    }
+    EXPECT_EQ(checked, 18);
+    // Away from the lip both are the gentle patch's curvature.
+    const size_t far = size_t(6 * (n + 1) + 2);
+    EXPECT_NEAR(std::abs(patch.values[4 * far]), c, 0.15 * c);
+    EXPECT_NEAR(std::abs(so.values[4 * far]), c, 0.15 * c);
 }
 
 TEST(Curvature, SameOutputForAnyThreadCount) {
