@@ -51,7 +51,7 @@ Outcome run(const fs::path& file) {
         out.reports.push_back(*report);
         for (CurvatureEstimator e :
              {CurvatureEstimator::ShapeOperator, CurvatureEstimator::SecondOrder, CurvatureEstimator::JetFitting,
-              CurvatureEstimator::NormalCone}) {
+              CurvatureEstimator::NormalCone, CurvatureEstimator::Patch}) {
             Result<VertexCurvature> c = estimate_curvature(mesh, e);
             EXPECT_TRUE(c.ok()) << file << ": " << (c.ok() ? "" : c.error().message);
             if (!c) continue;
