@@ -43,6 +43,10 @@ struct LevelsRequest {
     std::string date_time;  // DateTime written into EXR headers (reproducible outputs)
 };
 
+// A file of a LevelsRequest written into memory band by band as its rows are finished (so no level need
+// be held whole), opened by Api::open_bands. Its bytes are those write_levels writes for the same texels.
+struct BandWriter;
+
 // The module's entry points. Every error names the file.
 struct Api {
     uint32_t size;    // sizeof(Api) of the build the module belongs to
@@ -64,6 +68,16 @@ struct Api {
                                const uint8_t* rgb);
     // Format, size, levels and channels from the headers of every MIP level, no pixels (`inspect --check`).
     Result<TextureShape> (*read_shape)(const std::string& name);
+    // Opens `request` (its levels' texels unused; temp_path unused) for write_band. The writer is freed by
+    // free_bands, after close_bands or on an error.
+    Result<BandWriter*> (*open_bands)(const LevelsRequest& request);
+    // Writes rows [y0, y1) of `level` (`texels`: row y0, tightly packed, stored as the request's type).
+    // Levels come in order, level 0 first, each level's rows top down without gaps; a tiled (mipmapped)
+    // file takes bands of whole 64-row tile rows, the last band of a level ending at its height.
+    Result<void> (*write_band)(BandWriter* writer, int level, int y0, int y1, const void* texels);
+    // Ends the file once every row of every level was written; returns its bytes.
+    Result<std::vector<uint8_t>> (*close_bands)(BandWriter* writer);
+    void (*free_bands)(BandWriter* writer);
 };
 
 // The module's entry points, loaded once (thread-safe); the error says which files were tried and why
