@@ -251,7 +251,7 @@ void print_floor(const std::string& self, const fs::path& dir, const FloorInputs
                 request.name = "floor.exr";
                 for (size_t L = 0; L < layout.level_offset.size(); ++L)
                     request.levels.push_back({std::max(1, t.width() >> L), std::max(1, t.height() >> L),
-                                              layout.stored_channels, nullptr});
+                                              layout.stored_channels});
                 request.type = io::oiio::PixelType::Half;
                 request.mipmapped = true;
                 request.channel_names = layout.stored_channels == 1 ? std::vector<std::string>{"Y"}

@@ -251,30 +251,6 @@ OIIO::ImageSpec level_spec(const LevelsRequest& r, const LevelsRequest::StoredLe
     return spec;
 }
 
-Result<void> write_levels(const LevelsRequest& r) {
-    CheckedTarget target;
-    auto out = OIIO::ImageOutput::create(r.temp_path);
-    if (!out) return make_error(r.name + ": no writer: " + one_line(OIIO::geterror(), "unknown format"));
-    if (r.mipmapped && !out->supports("mipmap")) return make_error(r.name + ": the format cannot hold MIP levels");
-    const OIIO::TypeDesc type = type_of(r.type);
-    target.attach(*out, r.temp_path);
-    errno = 0;
-    for (const LevelsRequest::StoredLevel& level : r.levels) {
-        const OIIO::ImageSpec spec = level_spec(r, level, out->format_name());
-        const auto mode = &level == &r.levels.front() ? OIIO::ImageOutput::Create : OIIO::ImageOutput::AppendMIPLevel;
-        if (!out->open(r.temp_path, spec, mode) || !out->write_image(type, level.texels)) {
-            const int err = target.error_number() ? target.error_number() : errno;
-            return make_error(r.name + ": cannot write: " + write_failure(out->geterror(), err));
-        }
-    }
-    if (!out->close()) {
-        const int err = target.error_number() ? target.error_number() : errno;
-        return make_error(r.name + ": cannot write: " + write_failure(out->geterror(), err));
-    }
-    out.reset();
-    return target.finish(r.name);
-}
-
 }  // namespace
 
 // Declared in this order so that the writer (whose destructor may still write) goes before the proxy, and
@@ -408,8 +384,8 @@ Result<TextureShape> read_shape(const std::string& name) {
 }
 
 const Api kApi{sizeof(Api), SPECBAKE_OIIO_API_TAG, decode_file, decode_memory, write_image,
-               write_levels, read_levels, write_rgb8, read_shape, open_bands, write_band,
-               close_bands, free_bands};
+               read_levels, write_rgb8, read_shape, open_bands, write_band, close_bands,
+               free_bands};
 
 }  // namespace
 }  // namespace specbake::io::oiio

@@ -286,7 +286,7 @@ Result<void> EncodedTexture::feed_exr(int level, int rows, const std::vector<std
         oiio::LevelsRequest request;
         request.name = mipmapped ? "mipmapped.exr" : "mip" + std::to_string(level) + ".exr";
         for (size_t L = mipmapped ? 0 : size_t(level); L < (mipmapped ? layout_.level_offset.size() : size_t(level) + 1); ++L)
-            request.levels.push_back({std::max(1, width_ >> L), std::max(1, height_ >> L), stored, nullptr});
+            request.levels.push_back({std::max(1, width_ >> L), std::max(1, height_ >> L), stored});
         request.type = oiio_type(encoding_);
         request.mipmapped = mipmapped;
         request.channel_names = exr_names(stored);
