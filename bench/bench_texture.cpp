@@ -14,18 +14,23 @@
 //      two commands, and both at once (the job decodes its two inputs side by side) (goal: <= 1.0x, issue 16);
 //  (c) peak resident memory of that child (getrusage) over the decoded inputs (8-bit) plus the outputs
 //      written (goal: <= 1.5x, issue 16), and of one oiiotool run for comparison;
-//  (d) the floor of each output container, in the same run: the texture job (a child, as in (b)) writing the
-//      roughness and mean-normal outputs as KTX2 (zstd level 3) and as per-mip PNG (filter Up, zlib level 2),
-//      against (1) decoding its two inputs with the fastest decoder here (io/image/png_decode: zlib inflate,
-//      no float conversion) and (2) that plus compressing the same raw output levels with the same codec and
-//      level, in this process, one thread; CPU seconds, and peak RSS against decoded inputs + written files.
+//  (d) the floor of each output container, in the same run, from 8-bit and from 16-bit PNG inputs: the
+//      texture job (a child, as in (b)) writing the roughness and mean-normal outputs as KTX2 (zstd level 3),
+//      DDS (uncompressed), EXR (tiled mipmapped half, zip) and per-mip PNG (filter Up, zlib level 2),
+//      against (1) decoding its two inputs with the fastest decoder here (io/image/png_decode: libdeflate
+//      inflate; 8-bit kept as bytes, 16-bit converted to float as the job does) and (2) that plus compressing
+//      the same raw output levels with the same codec and level, in this process (KTX2, PNG: one thread;
+//      EXR: OpenImageIO/OpenEXR writing into memory, its own threads; EXR levels are the unorm levels as
+//      half, untimed conversion); CPU seconds, and peak RSS against decoded inputs + written files.
 //
 // Run: build/bench/bench_texture [--size N] [--compute-only] [--floor-only] [google-benchmark flags]
 // (--compute-only skips (b), (c) and (d), which take about 15 s at 4096^2; --floor-only runs (d) alone;
 // `--floor-only --size 1024` is the quick form.)
 #include "pipeline/texture_job.h"
 #include "io/image/image_io.h"
+#include "io/image/oiio_api.h"
 #include "io/texture/png_stream.h"
+#include "io/texture/texel_encoding.h"
 
 #include <benchmark/benchmark.h>
 #include <zstd.h>
@@ -52,6 +57,7 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 float q8(double v) { return float(std::lround(std::clamp(v, 0.0, 1.0) * 255.0)) / 255.0f; }
+float q16(double v) { return float(std::lround(std::clamp(v, 0.0, 1.0) * 65535.0)) / 65535.0f; }
 
 uint32_t hash(uint32_t x, uint32_t y) {
     uint32_t h = x * 0x8da6b343u ^ y * 0xd8163841u;
@@ -61,8 +67,9 @@ uint32_t hash(uint32_t x, uint32_t y) {
     return h;
 }
 
-// Bumps at three scales plus per-texel noise, quantised to 8 bits.
-Image make_normal(int size) {
+// Bumps at three scales plus per-texel noise, quantised to `bits` (8 or 16).
+Image make_normal(int size, int bits = 8) {
+    const auto q = bits == 16 ? q16 : q8;
     Image n(size, size, 3);
     for (int y = 0; y < size; ++y)
         for (int x = 0; x < size; ++x) {
@@ -75,17 +82,18 @@ Image make_normal(int size) {
             gx += 0.2 * (double(hash(uint32_t(x), uint32_t(y)) & 1023) / 1023.0 - 0.5);
             const double len = std::sqrt(gx * gx + gy * gy + 1);
             float* t = n.texel(x, y);
-            t[0] = q8(0.5 - 0.5 * gx / len), t[1] = q8(0.5 - 0.5 * gy / len), t[2] = q8(0.5 + 0.5 / len);
+            t[0] = q(0.5 - 0.5 * gx / len), t[1] = q(0.5 - 0.5 * gy / len), t[2] = q(0.5 + 0.5 / len);
         }
     return n;
 }
 
-Image make_orm(int size) {
+Image make_orm(int size, int bits = 8) {
+    const auto q = bits == 16 ? q16 : q8;
     Image m(size, size, 3);
     for (int y = 0; y < size; ++y)
         for (int x = 0; x < size; ++x) {
             float* t = m.texel(x, y);
-            t[0] = q8(1.0 - 0.25 * y / size), t[1] = q8(0.1 + 0.6 * x / size), t[2] = ((x / 64 + y / 64) % 2) ? 1.0f : 0.0f;
+            t[0] = q(1.0 - 0.25 * y / size), t[1] = q(0.1 + 0.6 * x / size), t[2] = ((x / 64 + y / 64) % 2) ? 1.0f : 0.0f;
         }
     return m;
 }
@@ -103,14 +111,14 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 TextureOutputs floor_outputs() { return TextureOutputs{true, false, false, true}; }
 
 // Child mode: run the texture job once, print "<wall seconds> <peak RSS KiB> <CPU seconds>". `container`
-// "ktx2-all": all default outputs as KTX2; "ktx2", "png": the outputs of (d).
+// "ktx2-all": all default outputs as KTX2; "ktx2", "dds", "exr", "png": the outputs of (d).
 int end_to_end_child(const char* normal, const char* orm, const char* out, const std::string& container) {
     TextureJob job;
     job.normal = normal;
     job.roughness = fs::path(orm);
     job.output_dir = out;
     if (container != "ktx2-all") job.settings.outputs = floor_outputs();
-    if (container == "png") job.texture_format = io::TextureFileFormat(io::TextureContainer::PngPerMip);
+    if (container != "ktx2-all") job.texture_format = io::TextureFileFormat(*io::parse_container(container));
     const auto t0 = Clock::now();
     auto r = run_texture_job(job);
     const double wall = seconds_since(t0);
@@ -176,28 +184,35 @@ ChildRun run_child(const std::string& self, const fs::path& normal, const fs::pa
     return run;
 }
 
-// (d): the job against its floor for KTX2 and per-mip PNG, the median of `repeats` runs of each.
-void print_floor(const std::string& self, const fs::path& dir, const fs::path& normal_png, const fs::path& orm_png,
-                 int size, int repeats) {
+// The two inputs of (d) at `bits` (8 or 16) as PNGs in `dir`, and the images they hold.
+struct FloorInputs {
+    fs::path normal_png, orm_png;
+    Image normal, orm;
+};
+
+// (d): the job against its floor for every container, from `bits`-bit inputs, the median of `repeats` runs.
+void print_floor(const std::string& self, const fs::path& dir, const FloorInputs& in, int bits, int size,
+                 int repeats) {
     // (1) Decoding the inputs as the job does (8-bit PNGs kept as bytes), one after the other.
     std::vector<double> decode_cpu;
     size_t decoded_bytes = 0;
     for (int r = 0; r < repeats; ++r) {
         const double c0 = process_cpu_seconds();
-        auto n = io::decode_image(normal_png, {}, true);
-        auto m = io::decode_image(orm_png, {}, true);
+        auto n = io::decode_image(in.normal_png, {}, true);
+        auto m = io::decode_image(in.orm_png, {}, true);
         decode_cpu.push_back(process_cpu_seconds() - c0);
         if (!n || !m) {
             std::fprintf(stderr, "floor: cannot decode the inputs\n");
             return;
         }
-        decoded_bytes = n->bytes8.data.size() + m->bytes8.data.size();
+        decoded_bytes = n->bytes8.data.size() + m->bytes8.data.size() +
+                        (n->image.pixels.size() + m->image.pixels.size()) * sizeof(float);
     }
-    // The raw output levels (uncompressed KTX2 files, untimed): what both containers compress.
-    const Image normal = make_normal(size), orm = make_orm(size);
+    // The raw output levels (uncompressed KTX2 files, untimed): what every container compresses.
     TextureInputs inputs;
-    inputs.normal = &normal;
-    inputs.roughness = &orm;
+    inputs.normal = &in.normal;
+    inputs.roughness = &in.orm;
+    inputs.normal_bits = inputs.roughness_bits = bits;
     TextureBakeSettings settings;
     settings.outputs = floor_outputs();
     io::Supercompression none;
@@ -207,50 +222,114 @@ void print_floor(const std::string& self, const fs::path& dir, const fs::path& n
         std::fprintf(stderr, "floor: %s\n", raw.error().message.c_str());
         return;
     }
-    // (2) Compressing every level with the job's codec and level, one level after another, one thread.
-    auto compress_cpu = [&](bool png) {
+    auto oiio = io::oiio::api();
+    if (!oiio) {
+        std::fprintf(stderr, "floor: %s\n", oiio.error().message.c_str());
+        return;
+    }
+    // The same levels as EXR stores them (half), untimed.
+    std::vector<std::vector<std::vector<uint8_t>>> halves;
+    for (const auto& t : raw->textures) {
+        const io::ContainerLayout& layout = t->layout();
+        halves.emplace_back();
+        for (size_t L = 0; L < layout.level_offset.size(); ++L) {
+            const int w = std::max(1, t->width() >> L), h = std::max(1, t->height() >> L);
+            const size_t bytes = size_t(w) * size_t(h) * size_t(layout.stored_channels) * size_t(io::encoding_bytes(t->encoding()));
+            const Image level = io::decode_texels(t->bytes().subspan(layout.level_offset[L], bytes), t->encoding(), w, h,
+                                                  layout.stored_channels);
+            halves.back().push_back(io::encode_texels(level, io::TexelEncoding::Float16, layout.stored_channels));
+        }
+    }
+    // (2) Compressing every level with the job's codec and level, one level after another.
+    auto compress_cpu = [&](io::TextureContainer container) {
         const double c0 = process_cpu_seconds();
-        for (const auto& t : raw->textures) {
-            const io::ContainerLayout& layout = t->layout();
+        for (size_t k = 0; k < raw->textures.size(); ++k) {
+            const io::EncodedTexture& t = *raw->textures[k];
+            const io::ContainerLayout& layout = t.layout();
+            if (container == io::TextureContainer::Exr) {
+                io::oiio::LevelsRequest request;
+                request.name = "floor.exr";
+                for (size_t L = 0; L < layout.level_offset.size(); ++L)
+                    request.levels.push_back({std::max(1, t.width() >> L), std::max(1, t.height() >> L),
+                                              layout.stored_channels});
+                request.type = io::oiio::PixelType::Half;
+                request.mipmapped = true;
+                request.channel_names = layout.stored_channels == 1 ? std::vector<std::string>{"Y"}
+                                                                    : std::vector<std::string>{"R", "G", "B", "A"};
+                request.wrap = "periodic";
+                auto writer = (*oiio)->open_bands(request);
+                if (!writer) return -1.0;
+                for (size_t L = 0; L < request.levels.size(); ++L)
+                    if (!(*oiio)->write_band(*writer, int(L), 0, request.levels[L].height, halves[k][L].data())) return -1.0;
+                auto file = (*oiio)->close_bands(*writer);
+                (*oiio)->free_bands(*writer);
+                if (!file) return -1.0;
+                benchmark::DoNotOptimize(file->size());
+                continue;
+            }
             for (size_t L = 0; L < layout.level_offset.size(); ++L) {
-                const int w = std::max(1, t->width() >> L), h = std::max(1, t->height() >> L);
-                const uint8_t* level = t->bytes().data() + layout.level_offset[L];
-                const size_t bytes = size_t(w) * size_t(h) * size_t(layout.stored_channels);
-                if (png) {
-                    io::PngLevelStream stream(w, h, layout.stored_channels, 8, 2);
+                const int w = std::max(1, t.width() >> L), h = std::max(1, t.height() >> L);
+                const uint8_t* level = t.bytes().data() + layout.level_offset[L];
+                const int channel_bytes = io::encoding_bytes(t.encoding());
+                const size_t bytes = size_t(w) * size_t(h) * size_t(layout.stored_channels) * size_t(channel_bytes);
+                if (container == io::TextureContainer::PngPerMip) {
+                    io::PngLevelStream stream(w, h, layout.stored_channels, 8 * channel_bytes, 2);
                     if (!stream.add_rows(level, h)) return -1.0;
                     benchmark::DoNotOptimize(stream.bytes());
-                } else {
+                } else if (container == io::TextureContainer::Ktx2) {
                     std::vector<uint8_t> out(ZSTD_compressBound(bytes));
                     benchmark::DoNotOptimize(ZSTD_compress(out.data(), out.size(), level, bytes, 3));
-                }
+                }  // DDS stores its levels as they are
             }
         }
         return process_cpu_seconds() - c0;
     };
     const double mib = 1024.0 * 1024.0;
-    std::printf("(d) floor, %dx%d, roughness + mean normal, CPU s (user + sys), median of %d\n", size, size, repeats);
+    std::printf("(d) floor, %dx%d %d-bit inputs, roughness + mean normal, CPU s (user + sys), median of %d\n", size, size,
+                bits, repeats);
     std::printf("  container  job CPU   decode   (ratio)   decode + compress   (ratio)   job peak MiB   decoded + files MiB   (ratio)\n");
     const double decode = median(decode_cpu);
-    for (const bool png : {false, true}) {
+    for (const io::TextureContainer container : {io::TextureContainer::Ktx2, io::TextureContainer::Dds,
+                                                 io::TextureContainer::Exr, io::TextureContainer::PngPerMip}) {
+        const std::string name = io::container_name(container);
         std::vector<double> job_cpu, compress, rss;
         uintmax_t files = 0;
         tbb::task_arena one_thread(1);
         for (int r = 0; r < repeats; ++r) {
-            const ChildRun run = run_child(self, normal_png, orm_png, dir / "floor_out", png ? "png" : "ktx2");
+            const ChildRun run = run_child(self, in.normal_png, in.orm_png, dir / "floor_out", name);
             if (run.time.cpu < 0) {
-                std::fprintf(stderr, "floor: the %s job failed\n", png ? "png" : "ktx2");
+                std::fprintf(stderr, "floor: the %s job failed\n", name.c_str());
                 return;
             }
             job_cpu.push_back(run.time.cpu);
             rss.push_back(double(run.rss_kib) / 1024.0);
             files = run.output_bytes;
-            one_thread.execute([&] { compress.push_back(compress_cpu(png)); });
+            one_thread.execute([&] { compress.push_back(compress_cpu(container)); });
         }
         const double job = median(job_cpu), floor = decode + median(compress);
         const double held = (double(decoded_bytes) + double(files)) / mib;
-        std::printf("  %-9s %8.2f %8.2f %8.2fx %13.2f %13.2fx %14.1f %21.1f %8.2fx\n", png ? "png" : "ktx2", job, decode,
+        std::printf("  %-9s %8.2f %8.2f %8.2fx %13.2f %13.2fx %14.1f %21.1f %8.2fx\n", name.c_str(), job, decode,
                     job / decode, floor, job / floor, median(rss), held, median(rss) / held);
+    }
+}
+
+// Writes the inputs of (d) at `bits` to `dir`; empty paths on failure.
+FloorInputs floor_inputs(const fs::path& dir, int size, int bits) {
+    FloorInputs in{dir / ("normal" + std::to_string(bits) + ".png"), dir / ("orm" + std::to_string(bits) + ".png"),
+                   make_normal(size, bits), make_orm(size, bits)};
+    if (!io::write_image(in.normal_png, in.normal, bits) || !io::write_image(in.orm_png, in.orm, bits)) return {};
+    return in;
+}
+
+// (d) for 8- and 16-bit inputs.
+void print_floors(const std::string& self, const fs::path& dir, int size, int repeats) {
+    for (const int bits : {8, 16}) {
+        const FloorInputs in = floor_inputs(dir, size, bits);
+        if (in.normal_png.empty()) {
+            std::fprintf(stderr, "floor: cannot write the %d-bit inputs to %s\n", bits, dir.string().c_str());
+            return;
+        }
+        print_floor(self, dir, in, bits, size, repeats);
     }
 }
 
@@ -275,7 +354,7 @@ int main(int argc, char** argv) {
         keep.empty() ? fs::temp_directory_path() / ("specbake_bench_texture_" + std::to_string(::getpid())) : keep;
     fs::create_directories(dir);
     const fs::path normal_png = dir / "normal.png", orm_png = dir / "orm.png";
-    if (!compute_only) {
+    if (!compute_only && !floor_only) {
         const Image n = make_normal(size), m = make_orm(size);
         if (!io::write_image(normal_png, n, 8) || !io::write_image(orm_png, m, 8)) {
             std::fprintf(stderr, "cannot write the benchmark inputs to %s\n", dir.string().c_str());
@@ -284,7 +363,7 @@ int main(int argc, char** argv) {
     }
     const std::string self = fs::read_symlink("/proc/self/exe").string();
     if (floor_only) {
-        print_floor(self, dir, normal_png, orm_png, size, 3);
+        print_floors(self, dir, size, 3);
         if (keep.empty()) fs::remove_all(dir);
         return 0;
     }
@@ -422,7 +501,7 @@ int main(int argc, char** argv) {
     std::printf("  ratio to (decoded 8-bit inputs + outputs): %.2fx; goal <= 1.5x (issue 16 item 7): %s\n", memory_ratio,
                 memory_ratio <= 1.5 ? "met" : "NOT met");
     std::printf("  oiiotool PNG->PNG of the normal map alone: %.1f MiB\n", oiio_rss_kib / 1024.0);
-    print_floor(self, dir, normal_png, orm_png, size, 3);
+    print_floors(self, dir, size, 3);
     if (keep.empty()) fs::remove_all(dir);
     return 0;
 }

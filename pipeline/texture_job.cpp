@@ -343,6 +343,7 @@ Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, cons
         out.textures.push_back(std::make_unique<io::EncodedTexture>(container, f.encoding, shape.width, shape.height,
                                                                     shape.levels, f.channels, supercompression,
                                                                     format.wrap));
+        out.textures.back()->set_channel_meaning(f.names);
         out.files.push_back({out.textures.back().get(), f.stem, f.kind, f.names, block_format_of(f, supercompression)});
     }
     if (progress)
@@ -353,9 +354,9 @@ Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, cons
     for (int L = 0; L < shape.levels; ++L)
         total_texels += double(std::max(1, shape.width >> L)) * double(std::max(1, shape.height >> L));
     std::atomic<size_t> texels_done{0};
-    // zstd-supercompressed KTX2 files and per-mip PNGs compress their levels' rows as the bake finishes
-    // them, top down, so neither a whole level's raw bytes nor the raw file are held
-    // (io::EncodedTexture::compress_rows).
+    // zstd-supercompressed KTX2 files, per-mip PNGs and EXRs compress their levels' rows as the bake
+    // finishes them, top down, so neither a whole level's raw bytes nor the raw file are held (a mipmapped
+    // EXR holds its levels >= 1 until level 0 is written; io::EncodedTexture::compress_rows).
     std::vector<size_t> streamed;
     for (size_t i = 0; i < files.size(); ++i)
         if (out.textures[i]->streams() && out.files[i].block == io::BlockFormat::None) streamed.push_back(i);

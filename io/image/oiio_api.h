@@ -26,13 +26,11 @@ enum class PixelType { Uint8, Uint16, Half, Float };
 // One file written through OpenImageIO: every level as a tiled MIP-mapped texture ("Plain Texture",
 // 64x64 tiles), or a single level. Values are stored as given (linear, unassociated alpha).
 struct LevelsRequest {
-    std::string temp_path;  // where the bytes go (the caller's AtomicOutput temporary)
-    std::string name;       // the final path, named in errors
-    // Each level's texels, already stored as `type`: width x height texels of `channels` values, tightly
-    // packed, in the machine's byte order.
+    std::string name;       // the file's name, named in errors; its extension selects the format
+    // Each level's shape; its texels (given to write_band) are stored as `type`, `channels` values a
+    // texel, rows tightly packed, in the machine's byte order.
     struct StoredLevel {
         int width = 0, height = 0, channels = 0;
-        const void* texels = nullptr;
     };
     std::vector<StoredLevel> levels;
     PixelType type = PixelType::Float;
@@ -42,6 +40,11 @@ struct LevelsRequest {
     std::string wrap;       // OpenImageIO wrap mode name, for mipmapped files
     std::string date_time;  // DateTime written into EXR headers (reproducible outputs)
 };
+
+// A file of a LevelsRequest written into memory band by band as its rows are finished (so no level need
+// be held whole), opened by Api::open_bands. Its bytes are those OpenImageIO's write_image writes from
+// each whole level with the same header.
+struct BandWriter;
 
 // The module's entry points. Every error names the file.
 struct Api {
@@ -56,7 +59,6 @@ struct Api {
     // An 8- or 16-bit integer file, the format from name's extension, values clamped to [0, 1].
     Result<void> (*write_image)(const std::string& temp_path, const std::string& name, const Image& image,
                                 PixelType type);
-    Result<void> (*write_levels)(const LevelsRequest& request);
     // Every MIP level of an EXR, PNG or other file OpenImageIO reads, for `inspect`; channel_names from
     // the "specbake:channels" attribute where the file has it.
     Result<InspectedTexture> (*read_levels)(const std::string& name, uint64_t max_texels);
@@ -64,6 +66,16 @@ struct Api {
                                const uint8_t* rgb);
     // Format, size, levels and channels from the headers of every MIP level, no pixels (`inspect --check`).
     Result<TextureShape> (*read_shape)(const std::string& name);
+    // Opens `request` for write_band; the caller frees the writer with free_bands (after close_bands, or
+    // after an error).
+    Result<BandWriter*> (*open_bands)(const LevelsRequest& request);
+    // Writes rows [y0, y1) of `level` (`texels`: row y0, tightly packed, stored as the request's type).
+    // Levels come in order, level 0 first, each level's rows top down without gaps; a tiled (mipmapped)
+    // file takes bands of whole 64-row tile rows, the last band of a level ending at its height.
+    Result<void> (*write_band)(BandWriter* writer, int level, int y0, int y1, const void* texels);
+    // Ends the file once every row of every level was written; returns its bytes.
+    Result<std::vector<uint8_t>> (*close_bands)(BandWriter* writer);
+    void (*free_bands)(BandWriter* writer);
 };
 
 // The module's entry points, loaded once (thread-safe); the error says which files were tried and why

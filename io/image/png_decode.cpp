@@ -1,7 +1,8 @@
-// decode_plain_png(): chunk walk with CRC checks, zlib inflate, the five PNG row filters (PNG spec
+// decode_plain_png(): chunk walk with CRC checks, inflate (libdeflate), the five PNG row filters (PNG spec
 // Sec. 9), and OpenImageIO's integer-to-float conversion.
 #include "io/image/png_decode.h"
 
+#include <libdeflate.h>
 #include <zlib.h>
 
 #include <cstdlib>
@@ -67,10 +68,15 @@ std::optional<DecodedImage> decode_plain_png(std::span<const uint8_t> b, bool ke
     const size_t bytes_per_pixel = size_t(channels) * size_t(depth / 8);
     const size_t stride = size_t(width) * bytes_per_pixel;
     std::vector<uint8_t> raw(size_t(height) * (stride + 1));
-    uLongf raw_size = uLongf(raw.size());
-    if (uncompress(raw.data(), &raw_size, compressed.data(), uLong(compressed.size())) != Z_OK ||
-        raw_size != raw.size())
-        return std::nullopt;
+    // libdeflate inflates the whole stream at once (its size is known), 1.6-8x faster than zlib's inflate on
+    // 4096^2 maps (docs/texture-bake.md). Like zlib's uncompress(), bytes after the stream's end are ignored.
+    libdeflate_decompressor* inflater = libdeflate_alloc_decompressor();
+    if (!inflater) return std::nullopt;
+    size_t used = 0, raw_size = 0;
+    const libdeflate_result inflated = libdeflate_zlib_decompress_ex(inflater, compressed.data(), compressed.size(),
+                                                                     raw.data(), raw.size(), &used, &raw_size);
+    libdeflate_free_decompressor(inflater);
+    if (inflated != LIBDEFLATE_SUCCESS || raw_size != raw.size()) return std::nullopt;
 
     // Unfilter in place: row y's bytes follow its filter byte; the previous row is already decoded.
     for (size_t y = 0; y < height; ++y) {

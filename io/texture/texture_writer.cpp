@@ -79,6 +79,9 @@ namespace {
 // 0.091 / 0.026, level 3 up to 20% slower, level 6 (OpenImageIO's) 4x slower on the roughness for 1.5x smaller.
 constexpr int kPngZlibLevel = 2;
 
+// The tile side of mipmapped EXRs (io/image/oiio_api.h).
+constexpr int kExrTileSide = 64;
+
 const char* wrap_name(WrapMode w) {
     switch (w) {
         case WrapMode::Repeat: return "periodic";
@@ -139,35 +142,6 @@ std::string reproducible_date_time() {
     return text;
 }
 
-// One OpenImageIO file: all levels as a tiled MIP-mapped EXR, or a single level.
-Result<void> write_oiio(const fs::path& temp, const fs::path& final_path,
-                        const std::vector<oiio::LevelsRequest::StoredLevel>& levels, oiio::PixelType type,
-                        bool mipmapped, const std::vector<std::string>& meaning, WrapMode wrap) {
-    auto api = oiio::api();
-    if (!api) return make_error(final_path.string() + ": " + api.error().message);
-    oiio::LevelsRequest request;
-    request.temp_path = temp.string();
-    request.name = final_path.string();
-    request.levels = levels;
-    request.type = type;
-    request.mipmapped = mipmapped;
-    request.channel_names = exr_names(levels.front().channels);
-    request.channel_meaning = joined(meaning);
-    request.wrap = wrap_name(wrap);
-    request.date_time = reproducible_date_time();
-    return (*api)->write_levels(request);
-}
-
-// The levels of `t` (EXR or per-mip) as OpenImageIO takes them: their stored bytes.
-std::vector<oiio::LevelsRequest::StoredLevel> stored_levels(const EncodedTexture& t) {
-    std::vector<oiio::LevelsRequest::StoredLevel> levels;
-    const ContainerLayout& layout = t.layout();
-    for (size_t L = 0; L < layout.level_offset.size(); ++L)
-        levels.push_back({std::max(1, t.width() >> L), std::max(1, t.height() >> L), layout.stored_channels,
-                          t.bytes().data() + layout.level_offset[L]});
-    return levels;
-}
-
 // EXR and per-mip files: levels tightly packed from offset 0, level 0 first, no header.
 ContainerLayout plain_layout(int width, int height, int levels, TexelEncoding encoding, int data_channels) {
     ContainerLayout layout;
@@ -220,6 +194,8 @@ EncodedTexture::EncodedTexture(TextureContainer container, TexelEncoding encodin
     else layout_ = plain_layout(width, height, levels, encoding_, channels);
     data_.reset(new uint8_t[layout_.total]);
     if (png()) png_.resize(layout_.level_offset.size());  // one stream a level, each made by its level's feeder
+    if (exr()) exr_.resize(container == TextureContainer::Exr ? 1 : layout_.level_offset.size());
+    if (container == TextureContainer::Exr) held_.resize(layout_.level_offset.size());
     // Faulted in on transparent huge pages as the rows arrive: a 4096^2 bake writes about 400 MiB of fresh
     // container bytes.
     detail::hint_huge_pages(data_.get(), layout_.total);
@@ -258,9 +234,126 @@ struct EncodedTexture::LevelStream {
     ~LevelStream() { ZSTD_freeCCtx(cctx); }
 };
 
+// The EXR writer of one file (compress_rows, exr_file).
+struct EncodedTexture::ExrStream {
+    const oiio::Api* api = nullptr;
+    oiio::BandWriter* writer = nullptr;
+    std::vector<std::string> meaning;  // what the file's "specbake:channels" says
+    int level = 0;                     // the level of the texture being written, and its rows written
+    int rows = 0;
+    std::vector<uint8_t> file;         // once done
+    bool done = false;
+    ~ExrStream() {
+        if (writer) api->free_bands(writer);
+    }
+};
+
 EncodedTexture::~EncodedTexture() = default;
 
+// Writes rows up to `rows` of `level` into its EXR file, opened on first use: whole 64-row tile rows of
+// level 0 of a mipmapped file (its levels >= 1 go in once level 0 is complete, from exr_file), any rows of a
+// per-mip level, whose file is ended with its last row. The raw pages written are returned to the system.
+// A file opened here says `meaning_given` in its "specbake:channels".
+Result<void> EncodedTexture::feed_exr(int level, int rows, const std::vector<std::string>& meaning_given) {
+    const bool mipmapped = container_ == TextureContainer::Exr;
+    const int h = std::max(1, height_ >> level);
+    const size_t row_bytes =
+        size_t(std::max(1, width_ >> level)) * size_t(layout_.stored_channels) * size_t(encoding_bytes(encoding_));
+    const int end = mipmapped && rows < h ? rows / kExrTileSide * kExrTileSide : std::min(rows, h);
+    const uint8_t* start = data_.get() + layout_.level_offset[size_t(level)];
+    if (mipmapped && level > 0) {
+        // Held until level 0 is written: whole tile rows compressed as they arrive (a 4096^2 bake's levels
+        // >= 1 are a third of its level 0 in each file).
+        std::vector<HeldBand>& bands = held_[size_t(level)];
+        const int from = bands.empty() ? 0 : bands.back().rows_end;
+        if (end <= from) return {};
+        const size_t length = size_t(end - from) * row_bytes;
+        HeldBand band{end, std::vector<uint8_t>(ZSTD_compressBound(length))};
+        const size_t size = ZSTD_compress(band.zstd.data(), band.zstd.size(), start + size_t(from) * row_bytes,
+                                          length, 1);
+        if (ZSTD_isError(size)) return make_error(std::string("zstd: ") + ZSTD_getErrorName(size));
+        band.zstd.resize(size);
+        band.zstd.shrink_to_fit();
+        bands.push_back(std::move(band));
+        detail::advise_whole_pages(start, size_t(end) * row_bytes, uintptr_t(2) << 20, MADV_DONTNEED);
+        return {};
+    }
+    auto& slot = exr_[mipmapped ? 0 : size_t(level)];
+    if (!slot) {
+        auto api = oiio::api();
+        if (!api) return api.error();
+        const int stored = layout_.stored_channels;
+        oiio::LevelsRequest request;
+        request.name = mipmapped ? "mipmapped.exr" : "mip" + std::to_string(level) + ".exr";
+        for (size_t L = mipmapped ? 0 : size_t(level); L < (mipmapped ? layout_.level_offset.size() : size_t(level) + 1); ++L)
+            request.levels.push_back({std::max(1, width_ >> L), std::max(1, height_ >> L), stored});
+        request.type = oiio_type(encoding_);
+        request.mipmapped = mipmapped;
+        request.channel_names = exr_names(stored);
+        const std::vector<std::string> meaning = meaning_for(channels_, stored, meaning_given);
+        request.channel_meaning = joined(meaning);
+        request.wrap = wrap_name(wrap_);
+        request.date_time = reproducible_date_time();
+        auto writer = (*api)->open_bands(request);
+        if (!writer) return writer.error();
+        slot = std::make_unique<ExrStream>();
+        slot->api = *api;
+        slot->writer = *writer;
+        slot->meaning = meaning;
+        slot->level = level;
+    }
+    ExrStream& x = *slot;
+    if (x.done || end <= x.rows) return {};
+    if (auto ok = x.api->write_band(x.writer, 0, x.rows, end, start + size_t(x.rows) * row_bytes); !ok) return ok;
+    x.rows = end;
+    // Whole 2 MiB pages (the huge pages the buffer was hinted for) of the rows written.
+    detail::advise_whole_pages(start, size_t(end) * row_bytes, uintptr_t(2) << 20, MADV_DONTNEED);
+    if (!mipmapped && end == h) {
+        auto file = x.api->close_bands(x.writer);
+        if (!file) return file.error();
+        x.file = std::move(*file);
+        x.done = true;
+    }
+    return {};
+}
+
+Result<std::span<const uint8_t>> EncodedTexture::exr_file(int level, const std::vector<std::string>& meaning) {
+    if (!exr()) return make_error("EXR files are for the exr container and per-mip float data");
+    const bool mipmapped = container_ == TextureContainer::Exr;
+    if (mipmapped != (level < 0)) return make_error("a mipmapped EXR is one file; per-mip EXRs are one a level");
+    const int first = std::max(level, 0);
+    if (auto ok = feed_exr(first, std::max(1, height_ >> first), meaning); !ok) return ok.error();
+    ExrStream& x = *exr_[size_t(first)];
+    if (x.meaning != meaning_for(channels_, layout_.stored_channels, meaning))
+        return make_error("the channel meaning differs from the one the EXR file was opened with");
+    if (!x.done) {  // the mipmapped file: levels >= 1, held, after level 0
+        std::vector<uint8_t> rows;
+        for (size_t L = 1; L < layout_.level_offset.size(); ++L) {
+            const int h = std::max(1, height_ >> L);
+            if (auto ok = feed_exr(int(L), h, meaning); !ok) return ok.error();
+            const size_t row_bytes = size_t(std::max(1, width_ >> L)) * size_t(layout_.stored_channels) *
+                                     size_t(encoding_bytes(encoding_));
+            int from = 0;
+            for (const HeldBand& band : held_[L]) {
+                rows.resize(size_t(band.rows_end - from) * row_bytes);
+                const size_t size = ZSTD_decompress(rows.data(), rows.size(), band.zstd.data(), band.zstd.size());
+                if (size != rows.size()) return make_error("zstd: a held EXR band does not inflate to its rows");
+                if (auto ok = x.api->write_band(x.writer, int(L), from, band.rows_end, rows.data()); !ok)
+                    return ok.error();
+                from = band.rows_end;
+            }
+            held_[L] = {};
+        }
+        auto file = x.api->close_bands(x.writer);
+        if (!file) return file.error();
+        x.file = std::move(*file);
+        x.done = true;
+    }
+    return std::span<const uint8_t>(x.file);
+}
+
 Result<void> EncodedTexture::compress_rows(int level, int rows) {
+    if (exr()) return feed_exr(level, rows, meaning_);
     if (png()) {
         auto& stream = png_[size_t(level)];
         const int w = std::max(1, width_ >> level), h = std::max(1, height_ >> level);
@@ -528,17 +621,12 @@ Result<void> write_level_file(const EncodedFile& f, TargetFile& target) {
         entry.sha256 = hash.hex();
         return write_pieces_to(target.out->temp_path(), target.out->final_path(), *pieces);
     }
-    std::vector<oiio::LevelsRequest::StoredLevel> levels = stored_levels(t);
-    if (target.level >= 0) levels = {levels[size_t(target.level)]};
-    const std::vector<std::string> meaning = entry.extra["channel_meaning"];
-    if (auto ok = write_oiio(target.out->temp_path(), target.out->final_path(), levels, oiio_type(t.encoding()),
-                             target.level < 0, meaning, t.wrap());
-        !ok)
-        return ok;
-    auto hash = sha256_file(target.out->temp_path());
-    if (!hash) return hash.error();
-    entry.sha256 = *hash;
-    return {};
+    auto file = t.exr_file(target.level, f.channel_meaning);
+    if (!file) return make_error(target.out->final_path().string() + ": " + file.error().message);
+    Sha256 hash;
+    hash.update(*file);
+    entry.sha256 = hash.hex();
+    return write_pieces_to(target.out->temp_path(), target.out->final_path(), {&*file, 1});
 }
 
 }  // namespace

@@ -134,13 +134,19 @@ public:
     const ContainerLayout& layout() const { return layout_; }
     // True when the written file is supercompressed (KTX2 with zstd on).
     bool supercompressed() const { return container_ == TextureContainer::Ktx2 && supercompression_.zstd; }
-    // True when compress_rows() encodes the rows as they arrive: zstd-supercompressed KTX2, per-mip PNG.
-    bool streams() const { return supercompressed() || png(); }
+    // True when compress_rows() encodes the rows as they arrive: zstd-supercompressed KTX2, per-mip PNG
+    // and EXR files.
+    bool streams() const { return supercompressed() || png() || exr(); }
     // True for per-mip PNG files (integer data in the PngPerMip container).
     bool png() const {
         return container_ == TextureContainer::PngPerMip &&
                (encoding_ == TexelEncoding::Unorm8 || encoding_ == TexelEncoding::Unorm16);
     }
+    // True for EXR files: the mipmapped EXR container, or per-mip files of float data.
+    bool exr() const { return container_ == TextureContainer::Exr || (container_ == TextureContainer::PngPerMip && !png()); }
+    // What each stored channel of an EXR means (its "specbake:channels" attribute), given before the first
+    // compress_rows() call opens the file; write_encoded_textures checks it against the EncodedFile's.
+    void set_channel_meaning(const std::vector<std::string>& meaning) { meaning_ = meaning; }
     const Supercompression& supercompression() const { return supercompression_; }
     WrapMode wrap() const { return wrap_; }
     // True when the level bytes hold RGBA8 texels in B, G, R, A order (DDS A8R8G8B8, io/texture/dds.h).
@@ -150,6 +156,9 @@ public:
 
     // Per-mip PNG: filters and deflates the strips that rows [0, rows) of `level` complete
     // (io/texture/png_stream.h) and returns the raw pages no strip reads again to the system.
+    // EXR: writes rows [0, rows) of `level` into the file in memory (OpenImageIO, zip compression; a
+    // mipmapped file takes whole 64-row tile rows of level 0 and holds levels >= 1, which OpenImageIO
+    // writes after level 0, as zstd level 1 bands) and returns the raw pages written or held to the system.
     // KTX2 with zstd: zstd-compresses rows [0, rows) of `level`, put before the call, as a stream of the
     // level (whole zstd blocks; the rest once rows is the level's height), and returns the raw pages zstd
     // no longer reads (older than its window) to the system, so a level's raw bytes are never all held.
@@ -163,11 +172,24 @@ public:
 
     // Per-mip PNG: the file of `level`, every level fed to its end first (by compress_rows, or here).
     Result<std::vector<std::span<const uint8_t>>> png_level(int level);
+    // EXR: the file (`level` -1: the mipmapped file; else that level of a per-mip output), every row fed
+    // first (by compress_rows, or here). `meaning` must be the one the file was opened with, if it was.
+    Result<std::span<const uint8_t>> exr_file(int level, const std::vector<std::string>& meaning);
     ~EncodedTexture();
 
 private:
     struct LevelStream;
+    struct ExrStream;
+    Result<void> feed_exr(int level, int rows, const std::vector<std::string>& meaning_given);
     std::vector<std::unique_ptr<LevelStream>> streams_;
+    std::vector<std::unique_ptr<ExrStream>> exr_;  // one a level (per-mip) or one (mipmapped)
+    // A mipmapped EXR's levels >= 1 until level 0 is written: zstd-compressed bands of whole tile rows.
+    struct HeldBand {
+        int rows_end = 0;
+        std::vector<uint8_t> zstd;
+    };
+    std::vector<std::vector<HeldBand>> held_;
+    std::vector<std::string> meaning_;
     std::vector<std::unique_ptr<PngLevelStream>> png_;
     TextureContainer container_;
     TexelEncoding encoding_;

@@ -34,14 +34,17 @@ int paeth(int a, int b, int c) {
 }
 
 // A PNG of random samples; row y uses filter y % 5 (the encoder side of PNG spec Sec. 9).
+// `level`, `strategy`: zlib's (stored, fixed or dynamic Huffman blocks, RLE); `noise` bits of noise on a
+// ramp (8: random bytes); `trailing` bytes after the zlib stream.
 std::vector<uint8_t> make_png(int w, int h, int colour, int depth, uint32_t seed, const char* extra_chunk = nullptr,
-                              int interlace = 0) {
+                              int interlace = 0, int level = Z_DEFAULT_COMPRESSION, int strategy = Z_DEFAULT_STRATEGY,
+                              int noise = 8, size_t trailing = 0) {
     const int channels = colour == 0 ? 1 : colour == 4 ? 2 : colour == 2 ? 3 : colour == 6 ? 4 : 1;
     const size_t bpp = size_t(channels * depth / 8), stride = size_t(w) * bpp;
     std::mt19937 rng(seed);
     std::vector<std::vector<uint8_t>> rows(size_t(h), std::vector<uint8_t>(stride, 0));
     for (auto& r : rows)
-        for (auto& v : r) v = uint8_t(rng() >> 24);
+        for (size_t i = 0; i < r.size(); ++i) r[i] = uint8_t((noise >= 8 ? 0 : i / 5) + (rng() >> (32 - noise)));
     std::vector<uint8_t> raw;
     for (size_t y = 0; y < size_t(h); ++y) {
         const int filter = int(y % 5);
@@ -54,10 +57,15 @@ std::vector<uint8_t> make_png(int w, int h, int colour, int depth, uint32_t seed
             raw.push_back(uint8_t(x - pred));
         }
     }
-    std::vector<uint8_t> z(compressBound(uLong(raw.size())));
-    uLongf zn = uLongf(z.size());
-    EXPECT_EQ(compress(z.data(), &zn, raw.data(), uLong(raw.size())), Z_OK);
-    z.resize(zn);
+    std::vector<uint8_t> z(compressBound(uLong(raw.size())) + trailing);
+    z_stream zs{};
+    EXPECT_EQ(deflateInit2(&zs, level, Z_DEFLATED, 15, 8, strategy), Z_OK);
+    zs.next_in = raw.data(), zs.avail_in = uInt(raw.size());
+    zs.next_out = z.data(), zs.avail_out = uInt(z.size());
+    EXPECT_EQ(deflate(&zs, Z_FINISH), Z_STREAM_END);
+    z.resize(zs.total_out);
+    deflateEnd(&zs);
+    for (size_t k = 0; k < trailing; ++k) z.push_back(uint8_t(k * 37));
     std::vector<uint8_t> png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
     std::vector<uint8_t> ihdr;
     put32(ihdr, uint32_t(w));
@@ -118,6 +126,45 @@ TEST(PlainPng, SameValuesAndFactsAsOpenImageIO) {
             EXPECT_EQ(mine->info.format, "png");
         }
     }
+}
+
+// The inflate takes every kind of deflate block zlib writes (stored, fixed and dynamic Huffman, RLE matches)
+// on larger, compressible rows, and ignores bytes after the stream's end as zlib's uncompress() did: the
+// texels are OpenImageIO's (libpng's inflate), bit for bit. A stream cut short is refused.
+TEST(PlainPng, EveryDeflateBlockKindInflatesAsOpenImageIOReadsIt) {
+    struct Case { int level, strategy, noise; size_t trailing; };
+    for (const Case c : {Case{0, Z_DEFAULT_STRATEGY, 8, 0}, Case{1, Z_DEFAULT_STRATEGY, 2, 0}, Case{9, Z_FIXED, 3, 0},
+                         Case{6, Z_RLE, 1, 0}, Case{6, Z_HUFFMAN_ONLY, 4, 0}, Case{9, Z_DEFAULT_STRATEGY, 0, 0},
+                         Case{6, Z_DEFAULT_STRATEGY, 3, 5}}) {
+        for (int depth : {8, 16}) {
+            SCOPED_TRACE("zlib level " + std::to_string(c.level) + ", strategy " + std::to_string(c.strategy) +
+                         ", noise bits " + std::to_string(c.noise) + ", " + std::to_string(depth) + " bits");
+            std::vector<uint8_t> png = make_png(301, 170, 6, depth, uint32_t(c.level * 10 + depth), nullptr, 0, c.level,
+                                                c.strategy, c.noise, c.trailing);
+            auto mine = decode_plain_png(png);
+            ASSERT_TRUE(mine.has_value());
+            int channels = 0;
+            std::string colour_space;
+            const std::vector<float> ref = oiio_decode(png, channels, colour_space);
+            ASSERT_EQ(mine->image.pixels.size(), ref.size());
+            EXPECT_EQ(std::memcmp(mine->image.pixels.data(), ref.data(), ref.size() * sizeof(float)), 0)
+                << "the float bits differ from OpenImageIO's";
+        }
+    }
+    // The stream without its last 9 bytes (adler32 and the end of the data), its IDAT's CRC made right.
+    std::vector<uint8_t> png = make_png(64, 64, 2, 8, 5, nullptr, 0, 6, Z_DEFAULT_STRATEGY, 3);
+    const size_t iend = png.size() - 12, crc_at = iend - 4;
+    size_t idat = 8;  // the last IDAT chunk's start
+    for (size_t at = 8; at < iend;) {
+        const uint32_t length = uint32_t(png[at]) << 24 | uint32_t(png[at + 1]) << 16 | uint32_t(png[at + 2]) << 8 | png[at + 3];
+        idat = at;
+        at += length + 12;
+    }
+    std::vector<uint8_t> body(png.begin() + long(idat) + 4, png.begin() + long(crc_at) - 9);
+    std::vector<uint8_t> cut(png.begin(), png.begin() + long(idat));
+    chunk(cut, "IDAT", std::vector<uint8_t>(body.begin() + 4, body.end()));
+    cut.insert(cut.end(), png.begin() + long(iend), png.end());
+    EXPECT_FALSE(decode_plain_png(cut).has_value()) << "a stream cut short";
 }
 
 TEST(PlainPng, EightBitTexelsKeptAsBytesStandForOpenImageIOsFloats) {

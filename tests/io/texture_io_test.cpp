@@ -562,6 +562,107 @@ TEST(Exr, MipmappedTiledPlainTextureThroughOpenImageIO) {
     fs::remove_all(dir);
 }
 
+// EXR files (the mipmapped container, and per-mip files of float data) written band by band as their rows
+// arrive, in scrambled band sizes and sizes that do not tile, are byte for byte the files OpenImageIO
+// writes from each whole level (write_image, the same header), and read back as the texels given.
+TEST(Exr, StreamedInBandsEqualsWrittenWhole) {
+    struct Case { TextureContainer container; TexelEncoding encoding; int width, height, channels; };
+    std::mt19937 rng(8);
+    for (const Case c : {Case{TextureContainer::Exr, TexelEncoding::Float16, 300, 200, 4},
+                         Case{TextureContainer::Exr, TexelEncoding::Float32, 130, 64, 1},
+                         Case{TextureContainer::Exr, TexelEncoding::Float16, 64, 257, 3},
+                         Case{TextureContainer::PngPerMip, TexelEncoding::Float16, 301, 77, 4},
+                         Case{TextureContainer::PngPerMip, TexelEncoding::Float32, 40, 130, 1}}) {
+        SCOPED_TRACE(std::string(container_name(c.container)) + " " + encoding_name(c.encoding) + " " +
+                     std::to_string(c.width) + "x" + std::to_string(c.height) + "x" + std::to_string(c.channels));
+        const MipChain chain = random_chain(c.width, c.height, c.channels, unsigned(c.width), -2.0f, 2.0f);
+        const int levels = int(chain.levels.size());
+        const std::vector<std::string> meaning{"a", "b", "c", "d"};
+        const std::vector<std::string> given(meaning.begin(), meaning.begin() + std::min(c.channels, 4));
+        EncodedTexture whole(c.container, c.encoding, c.width, c.height, levels, c.channels, {}, WrapMode::Mirror);
+        EncodedTexture banded(c.container, c.encoding, c.width, c.height, levels, c.channels, {}, WrapMode::Mirror);
+        banded.set_channel_meaning(given);
+        ASSERT_TRUE(banded.exr() && banded.streams());
+        for (int L = 0; L < levels; ++L) {
+            const Image& level = chain.levels[size_t(L)];
+            whole.put_block(L, 0, 0, level.width, level.height, level.pixels.data(), c.channels, 0);
+            for (int y = 0; y < level.height;) {
+                const int rows = std::min(level.height - y, 1 + int(rng() % 40));
+                banded.put_block(L, 0, y, level.width, rows,
+                                 level.pixels.data() + size_t(y) * size_t(level.width) * size_t(c.channels), c.channels, 0);
+                y += rows;
+                ASSERT_TRUE(banded.compress_rows(L, y).ok());
+            }
+        }
+        const fs::path dir = fresh_dir("exr_bands");
+        const EncodedFile file{&banded, "t", "kernel", given};
+        auto written = write_encoded_textures({&file, 1}, dir);
+        ASSERT_TRUE(written.ok()) << written.error().message;
+        // The reference: each file written whole by OpenImageIO from the stored levels, as before streaming.
+        const bool mipmapped = c.container == TextureContainer::Exr;
+        const int stored = whole.layout().stored_channels;
+        const OIIO::TypeDesc type = whole.encoding() == TexelEncoding::Float32 ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::HALF;
+        std::vector<std::string> names = stored == 1 ? std::vector<std::string>{"Y"}
+                                                     : std::vector<std::string>{"R", "G", "B", "A"};
+        names.resize(size_t(stored));
+        std::string stored_meaning;
+        for (int k = 0; k < stored; ++k) stored_meaning += (k ? "," : "") + (k < c.channels ? meaning[size_t(k)] : std::string("1"));
+        const char* epoch = std::getenv("SOURCE_DATE_EPOCH");
+        auto reference = [&](const fs::path& path, int first, int count) {
+            auto out = OIIO::ImageOutput::create(path.string());
+            ASSERT_TRUE(out);
+            for (int L = first; L < first + count; ++L) {
+                OIIO::ImageSpec spec(std::max(1, c.width >> L), std::max(1, c.height >> L), stored, type);
+                spec.channelnames = names;
+                spec.attribute("oiio:UnassociatedAlpha", 1);
+                if (mipmapped) {
+                    spec.tile_width = spec.tile_height = 64;
+                    spec.attribute("textureformat", "Plain Texture");
+                    spec.attribute("wrapmodes", "mirror,mirror");
+                }
+                spec.attribute("compression", "zip");
+                spec.attribute("oiio:ColorSpace", "Linear");
+                spec.attribute("Software", "specbake");
+                spec.attribute("DateTime", "1970:01:01 00:00:00");
+                spec.attribute("specbake:channels", stored_meaning);
+                ASSERT_TRUE(out->open(path.string(), spec, L == first ? OIIO::ImageOutput::Create
+                                                                      : OIIO::ImageOutput::AppendMIPLevel));
+                ASSERT_TRUE(out->write_image(type, whole.bytes().data() + whole.layout().level_offset[size_t(L)]));
+            }
+            ASSERT_TRUE(out->close());
+        };
+        const int files = mipmapped ? 1 : levels;
+        ASSERT_EQ(written->size(), size_t(files));
+        for (int k = 0; k < files; ++k) {
+            const std::string name = mipmapped ? "t.exr" : "t_mip" + std::to_string(k) + ".exr";
+            EXPECT_EQ((*written)[size_t(k)].path, name);
+            reference(dir / ("ref_" + name), mipmapped ? 0 : k, mipmapped ? levels : 1);
+            if (!epoch) EXPECT_TRUE(slurp(dir / name) == slurp(dir / ("ref_" + name))) << name << ": other bytes";
+            auto in = OIIO::ImageInput::open((dir / name).string());
+            ASSERT_TRUE(in);
+            int read = 0;
+            for (int L = 0; in->seek_subimage(0, L); ++L, ++read) {
+                const OIIO::ImageSpec& spec = in->spec();
+                Image level(spec.width, spec.height, stored), got(spec.width, spec.height, c.channels);
+                ASSERT_TRUE(in->read_image(0, L, 0, stored, OIIO::TypeDesc::FLOAT, level.pixels.data()));
+                for (int ch = 0; ch < c.channels; ++ch) {  // OpenEXR stores channels sorted by name
+                    const long column = std::find(spec.channelnames.begin(), spec.channelnames.end(),
+                                                  names[size_t(ch)]) - spec.channelnames.begin();
+                    ASSERT_LT(column, stored);
+                    for (size_t i = 0; i < level.texel_count(); ++i)
+                        got.pixels[i * size_t(c.channels) + size_t(ch)] = level.pixels[i * size_t(stored) + size_t(column)];
+                }
+                MipChain one, want;
+                one.levels.push_back(got);
+                want.levels.push_back(chain.levels[size_t(L + (mipmapped ? 0 : k))]);
+                expect_chain_near(one, want, c.channels, tolerance(c.encoding));
+            }
+            EXPECT_EQ(read, mipmapped ? levels : 1);
+        }
+        fs::remove_all(dir);
+    }
+}
+
 TEST(PngPerMip, OneFilePerLevel) {
     const fs::path dir = fresh_dir("png");
     const MipChain chain = random_chain(9, 5, 3, 11);
