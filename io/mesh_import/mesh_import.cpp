@@ -105,10 +105,11 @@ Result<void> check_ply_header(const std::string& path, const io::InputLimits& li
         size_t stop = begin;
         while (stop < end && !is_line_end(head[stop])) ++stop;
         const std::optional<PlyElementLine> element = parse_ply_element_line(std::string_view(head).substr(begin, stop - begin));
+        const size_t line_number = number;
         if (head[stop] == '\n') ++number;
         begin = stop + 1;
         if (!element || element->semantic == "TextureFile") continue;
-        const std::string where = path + ": PLY element '" + element->name + "' (line " + std::to_string(number) + ")";
+        const std::string where = path + ": PLY element '" + element->name + "' (line " + std::to_string(line_number) + ")";
         uint64_t count = 0;
         const std::string& text = element->count_text;
         const auto [ptr, err] = std::from_chars(text.data(), text.data() + text.size(), count);

@@ -232,20 +232,20 @@ TEST(MeshImport, PlyWithASecondVertexOrFaceElementIsRefused) {
     const std::string faces = "element face 1\nproperty list uchar int vertex_indices\n";
     const std::string body = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
     struct Case {
-        std::string header, body, second;
+        std::string header, body, second;  // second: "NAME' (line N)", the second element
     };
     for (const Case& c : {
-             Case{vertices + faces + faces, body + "3 0 1 2\n", "face"},
+             Case{vertices + faces + faces, body + "3 0 1 2\n", "face' (line 9)"},
              Case{vertices + faces + "element face 2\nproperty list uchar int vertex_indices\n",
-                  body + "3 0 1 2\n3 0 1 2\n", "face"},
+                  body + "3 0 1 2\n3 0 1 2\n", "face' (line 9)"},
              Case{vertices + faces + "element tristrips 1\nproperty list int int vertex_indices\n",
-                  body + "3 0 1 2\n", "tristrips"},
-             Case{vertices + vertices + faces, "0 0 0\n1 0 0\n0 1 0\n" + body, "vertex"},
+                  body + "3 0 1 2\n", "tristrips' (line 9)"},
+             Case{vertices + vertices + faces, "0 0 0\n1 0 0\n0 1 0\n" + body, "vertex' (line 7)"},
          }) {
         std::ofstream(path, std::ios::binary) << "ply\nformat ascii 1.0\n" << c.header << "end_header\n" << c.body;
         Result<ImportedScene> bad = import_mesh(path.string());
         ASSERT_FALSE(bad.ok()) << c.header;
-        EXPECT_NE(bad.error().message.find(path.filename().string() + ": PLY element '" + c.second + "' (line "),
+        EXPECT_NE(bad.error().message.find(path.filename().string() + ": PLY element '" + c.second),
                   std::string::npos)
             << bad.error().message;
         EXPECT_NE(bad.error().message.find("is a second element of"), std::string::npos) << bad.error().message;
