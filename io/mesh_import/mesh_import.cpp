@@ -16,7 +16,8 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
+#include <optional>
+#include <string_view>
 
 namespace specbake {
 using io::over_limit;
@@ -27,11 +28,58 @@ bool is_gltf(const std::string& path) {
     return ext == ".gltf" || ext == ".glb";
 }
 
+// Where a line ends for Assimp's OBJ, MTL and PLY readers (its IsLineEnd).
+bool is_line_end(char c) { return c == '\n' || c == '\r' || c == '\0' || c == '\f'; }
+
+// How Assimp 5.2's PLY header parser (PlyParser.cpp, Element::ParseElement) reads an element line, so that
+// the counts bounded below are the ones it allocates by. Words are separated by spaces and tabs; a keyword
+// matches when a space or a line end follows it. The element's semantic is one of Assimp's names (vertex,
+// face, tristrips, edge, material, TextureFile); for any other name Assimp does not step past the name, and
+// reads the count from the name itself: "element 4444444444/245" is an element of 4444444444 mod 2^32
+// instances. Counts are read as Assimp's strtoul10 does: the leading digits, modulo 2^32.
+struct PlyElementLine {
+    std::string name, semantic;  // semantic: empty when Assimp does not know the name
+    uint32_t assimp_count = 0;
+    std::string count_text;      // the word after the name, as the PLY format has it
+};
+
+std::optional<PlyElementLine> parse_ply_element_line(std::string_view line) {
+    auto skip_spaces = [&line](size_t i) {
+        while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
+        return i;
+    };
+    auto word_end = [&line](size_t i) {
+        while (i < line.size() && line[i] != ' ' && line[i] != '\t' && !is_line_end(line[i])) ++i;
+        return i;
+    };
+    auto strtoul10 = [&line](size_t i) {
+        uint32_t value = 0;
+        for (; i < line.size() && line[i] >= '0' && line[i] <= '9'; ++i) value = value * 10u + uint32_t(line[i] - '0');
+        return value;
+    };
+    size_t i = skip_spaces(0);
+    if (line.substr(i, word_end(i) - i) != "element") return std::nullopt;
+    PlyElementLine out;
+    const size_t name_begin = skip_spaces(word_end(i));
+    const size_t name_end = word_end(name_begin);
+    out.name = std::string(line.substr(name_begin, name_end - name_begin));
+    for (const char* known : {"vertex", "face", "tristrips", "edge", "material", "TextureFile"})
+        if (out.name == known) out.semantic = known;
+    const size_t count_begin = skip_spaces(name_end);
+    out.count_text = std::string(line.substr(count_begin, word_end(count_begin) - count_begin));
+    out.assimp_count = strtoul10(out.semantic.empty() ? name_begin : count_begin);
+    return out;
+}
+
 // Assimp 5.2's PLY reader never returns on a file whose header lacks its end_header line (it keeps
 // seeking and re-reading the file), so a PLY file (by its "ply" magic, which is what Assimp goes by) is
 // refused here unless an end_header line closes its header within the first MiB. Its element counts are
-// checked here too, before Assimp sizes its instance lists by them: against the vertex and face limits,
-// and against the bytes after the header (every instance takes at least one byte).
+// checked here too, before Assimp sizes its instance lists by them (the counts it reads, see
+// parse_ply_element_line): against the vertex and face limits, and against the bytes after the header
+// (every instance takes at least one byte). And one element of vertices and one of faces at most: Assimp
+// sizes the mesh's vertex and face arrays by the first such element with instances and writes the
+// instances of every later one into them (past their end when a later one has more: a heap overflow
+// inside the library, which the sanitizers do not see).
 Result<void> check_ply_header(const std::string& path, const io::InputLimits& limits) {
     std::ifstream in(path, std::ios::binary);
     // Read in 4 KiB steps until the header's end is in (a header is a few hundred bytes; a whole MiB
@@ -50,30 +98,47 @@ Result<void> check_ply_header(const std::string& path, const io::InputLimits& li
         return make_error(path + ": PLY header has no end_header line (within its first MiB)");
     std::error_code ec;
     const uint64_t body = std::filesystem::file_size(path, ec) - (end + 12);
-    std::istringstream lines(head.substr(0, end));
     uint64_t instances = 0;
-    for (std::string line; std::getline(lines, line);) {
-        std::istringstream words(line);
-        std::string keyword, name, count_text;
-        if (!(words >> keyword >> name >> count_text) || keyword != "element") continue;
+    std::string vertex_element, face_element;  // the first of each with instances
+    size_t number = 1;                          // lines counted by '\n'
+    for (size_t begin = 0; begin < end;) {
+        size_t stop = begin;
+        while (stop < end && !is_line_end(head[stop])) ++stop;
+        const std::optional<PlyElementLine> element = parse_ply_element_line(std::string_view(head).substr(begin, stop - begin));
+        const size_t line_number = number;
+        if (head[stop] == '\n') ++number;
+        begin = stop + 1;
+        if (!element || element->semantic == "TextureFile") continue;
+        const std::string where = path + ": PLY element '" + element->name + "' (line " + std::to_string(line_number) + ")";
         uint64_t count = 0;
-        const auto [ptr, err] = std::from_chars(count_text.data(), count_text.data() + count_text.size(), count);
-        if (err != std::errc() || ptr != count_text.data() + count_text.size())
-            return make_error(path + ": PLY element '" + name + "' has no valid count ('" + count_text + "')");
-        if (name == "vertex" && count > limits.vertices)
-            return make_error(path + ": PLY vertex count " + over_limit("vertices", count, limits.vertices));
-        if (name == "face" && count > limits.faces)
-            return make_error(path + ": PLY face count " + over_limit("faces", count, limits.faces));
-        instances += std::min<uint64_t>(count, UINT64_MAX / 2);
+        const std::string& text = element->count_text;
+        const auto [ptr, err] = std::from_chars(text.data(), text.data() + text.size(), count);
+        if (text.empty() || err != std::errc() || ptr != text.data() + text.size())
+            return make_error(where + " has no valid count ('" + text + "')");
+        if (element->semantic.empty() && element->assimp_count != 0)
+            return make_error(where + " starts with digits, which Assimp reads as its count (" +
+                              std::to_string(element->assimp_count) + ")");
+        count = std::max<uint64_t>(count, element->assimp_count);
+        const bool vertices = element->semantic == "vertex";
+        const bool faces = element->semantic == "face" || element->semantic == "tristrips";
+        if (vertices && count > limits.vertices)
+            return make_error(where + ": vertex count " + over_limit("vertices", count, limits.vertices));
+        if (faces && count > limits.faces)
+            return make_error(where + ": face count " + over_limit("faces", count, limits.faces));
+        if ((vertices || faces) && element->assimp_count > 0) {
+            std::string& first = vertices ? vertex_element : face_element;
+            if (!first.empty())
+                return make_error(where + " is a second element of " + (vertices ? "vertices" : "faces") +
+                                  " (after '" + first + "'); a PLY mesh has one");
+            first = element->name;
+        }
+        instances += count;
         if (!ec && instances > body)
             return make_error(path + ": PLY header claims " + std::to_string(instances) +
                               " element instances but only " + std::to_string(body) + " bytes follow it");
     }
     return {};
 }
-
-// Where a line ends for Assimp's OBJ and MTL readers (its IsLineEnd).
-bool is_line_end(char c) { return c == '\n' || c == '\r' || c == '\0' || c == '\f'; }
 
 // Assimp 5.2's OBJ reader copies each line into a buffer of min(file size, 16 MiB) bytes, ends it with
 // '\n' but no NUL, and reads a face's indices with atoi (strtol) from that buffer: a line that fills the

@@ -63,11 +63,13 @@ struct MeshImportOptions {
 // range), so a glTF read with another library must still go through validate_mesh. Every file Assimp opens
 // and every texture reference is resolved by `policy` (io/files/input_policy.h) relative to the asset's
 // folder, and refused outside it; the limits on primitives, vertices, faces and nodes apply (a PLY
-// header's counts before Assimp parses, the others right after import). Files Assimp 5.2's OBJ reader
-// cannot read safely are refused before it parses them: a material library with a statement before its
-// first newmtl, an OBJ naming itself as its material library, an OBJ of one line, an mtllib naming a URL
-// ("://"). The default material Assimp appends (for glTF always) is removed: primitives without a
-// material in the file get -1.
+// header's counts before Assimp parses, the others right after import). Files Assimp 5.2's OBJ and PLY
+// readers cannot read safely are refused before they parse them: a material library with a statement
+// before its first newmtl, an OBJ naming itself as its material library, an OBJ of one line, an mtllib
+// naming a URL ("://"); a PLY header without end_header, with an element count Assimp would read
+// differently (from a name starting with digits) or beyond the bytes that follow, or with a second
+// non-empty element of vertices or of faces. The default material Assimp appends (for glTF always) is
+// removed: primitives without a material in the file get -1.
 Result<ImportedScene> import_mesh(const std::string& path, const MeshImportOptions& options = {},
                                   const io::InputPolicy& policy = {});
 
