@@ -102,23 +102,69 @@ std::string over_limit(const char* name, uint64_t value, uint64_t limit) {
            "raises it)";
 }
 
+namespace {
+
+// The length of the well-formed UTF-8 sequence starting at text[i] (RFC 3629: shortest forms only, no
+// surrogates, nothing above U+10FFFF), or 0 when the bytes there are not one.
+size_t utf8_sequence_length(const std::string& text, size_t i) {
+    const uint8_t c = uint8_t(text[i]);
+    const size_t n = c < 0x80 ? 0 : (c >> 5) == 0x6 ? 1 : (c >> 4) == 0xE ? 2 : (c >> 3) == 0x1E ? 3 : 4;
+    if (n == 4 || i + n >= text.size()) return 0;
+    uint32_t cp = n == 0 ? c : n == 1 ? c & 0x1F : n == 2 ? c & 0x0F : c & 0x07;
+    for (size_t k = 1; k <= n; ++k) {
+        const uint8_t cc = uint8_t(text[i + k]);
+        if ((cc >> 6) != 0x2) return 0;
+        cp = cp << 6 | (cc & 0x3F);
+    }
+    static constexpr uint32_t kMin[4] = {0, 0x80, 0x800, 0x10000};
+    if (cp < kMin[n] || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF)) return 0;
+    return n + 1;
+}
+
+}  // namespace
+
 bool is_valid_utf8(const std::string& text) {
-    // RFC 3629: shortest forms only, no surrogates, nothing above U+10FFFF.
     for (size_t i = 0; i < text.size();) {
-        const uint8_t c = uint8_t(text[i]);
-        size_t n = c < 0x80 ? 0 : (c >> 5) == 0x6 ? 1 : (c >> 4) == 0xE ? 2 : (c >> 3) == 0x1E ? 3 : 4;
-        if (n == 4 || i + n >= text.size()) return false;
-        uint32_t cp = n == 0 ? c : n == 1 ? c & 0x1F : n == 2 ? c & 0x0F : c & 0x07;
-        for (size_t k = 1; k <= n; ++k) {
-            const uint8_t cc = uint8_t(text[i + k]);
-            if ((cc >> 6) != 0x2) return false;
-            cp = cp << 6 | (cc & 0x3F);
-        }
-        static constexpr uint32_t kMin[4] = {0, 0x80, 0x800, 0x10000};
-        if (cp < kMin[n] || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF)) return false;
-        i += n + 1;
+        const size_t n = utf8_sequence_length(text, i);
+        if (n == 0) return false;
+        i += n;
     }
     return true;
+}
+
+std::string to_valid_utf8(const std::string& text) {
+    std::string out;
+    out.reserve(text.size());
+    for (size_t i = 0; i < text.size();) {
+        const size_t n = utf8_sequence_length(text, i);
+        if (n == 0) {
+            out += "\xEF\xBF\xBD";  // U+FFFD REPLACEMENT CHARACTER, one per byte that starts no sequence
+            ++i;
+        } else {
+            out.append(text, i, n);
+            i += n;
+        }
+    }
+    return out;
+}
+
+std::string escape_invalid_utf8(const std::string& text) {
+    std::string out;
+    for (size_t i = 0; i < text.size();) {
+        const size_t n = utf8_sequence_length(text, i);
+        if (n == 0) {
+            static constexpr char kHex[] = "0123456789ABCDEF";
+            const uint8_t c = uint8_t(text[i]);
+            out += "\\x";
+            out += kHex[c >> 4];
+            out += kHex[c & 0xF];
+            ++i;
+        } else {
+            out.append(text, i, n);
+            i += n;
+        }
+    }
+    return out;
 }
 
 Result<void> check_utf8_path(const fs::path& path) {

@@ -48,6 +48,11 @@ std::string over_limit(const char* name, uint64_t value, uint64_t limit);
 // must be valid UTF-8 (checked before any work, instead of failing when the manifest is written).
 Result<void> check_utf8_path(const std::filesystem::path& path);
 bool is_valid_utf8(const std::string& text);
+// The text with each byte that starts no well-formed UTF-8 sequence replaced by U+FFFD, for names a file
+// carries that are written again as JSON text (glTF names); valid text comes back unchanged.
+std::string to_valid_utf8(const std::string& text);
+// The text with each such byte written as \xHH, for messages that quote it.
+std::string escape_invalid_utf8(const std::string& text);
 
 // Resolves a decoded URI of a file in `folder` to the path that is read, hashed, copied and listed: the
 // folder joined with the decoded text, lexically normal. Refused (the reason, without the scene's name):

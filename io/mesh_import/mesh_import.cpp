@@ -390,6 +390,27 @@ Result<std::vector<int>> read_meshes(const aiScene& scene, const std::string& pa
     return mesh_slot;
 }
 
+// Names of materials, meshes and nodes as UTF-8 text. They are written again as glTF names, which JSON
+// requires to be UTF-8, and formats such as OBJ carry whatever bytes the exporter wrote (a Latin-1 'usemtl'
+// name). Each byte that starts no UTF-8 sequence becomes U+FFFD, with a note quoting the name as read; the
+// geometry and the bake do not depend on names, so the scene is still read rather than refused at the end.
+void names_as_utf8(ImportedScene& out) {
+    auto fix = [&out](std::string& name, const char* what, const std::string& shown) {
+        if (io::is_valid_utf8(name)) return;
+        out.notes.push_back(out.path + ": " + what + " name '" + io::escape_invalid_utf8(shown) +
+                            "' is not valid UTF-8; each invalid byte is written as U+FFFD (glTF names are UTF-8)");
+        name = io::to_valid_utf8(name);
+    };
+    for (ImportedMaterial& m : out.materials) fix(m.name, "material", m.name);
+    // A mesh's name is labelled with the file (read_mesh); the note quotes the file's part.
+    const std::string mesh_label = out.path + ": mesh '";
+    for (TriMesh& m : out.meshes) {
+        const bool labelled = m.name.starts_with(mesh_label) && m.name.ends_with("'");
+        fix(m.name, "mesh", labelled ? m.name.substr(mesh_label.size(), m.name.size() - mesh_label.size() - 1) : m.name);
+    }
+    for (ImportedNode& n : out.nodes) fix(n.name, "node", n.name);
+}
+
 // The node hierarchy into out.nodes, depth first in child order, without recursion (a deep hierarchy is a
 // file's choice, the stack's depth is not); its size is bounded by the node limit.
 Result<void> read_nodes(const aiScene& scene, const std::string& path, const std::vector<int>& mesh_slot,
@@ -470,6 +491,7 @@ Result<ImportedScene> import_mesh(const std::string& path, const MeshImportOptio
     if (!mesh_slot) return mesh_slot.error();
     if (out.meshes.empty()) return make_error(path + ": no triangles in the file");
     if (auto nodes = read_nodes(*scene, path, *mesh_slot, limits, out); !nodes) return nodes.error();
+    names_as_utf8(out);
     return out;
 }
 

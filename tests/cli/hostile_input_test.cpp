@@ -569,6 +569,28 @@ TEST(HostileInput, MeshFilesReadThroughAssimpFollowThePathPolicy) {
     fs::remove_all(dir);
 }
 
+// An OBJ exported with Latin-1 names (one of the mesh fuzz target's saved inputs had 0xFF in its usemtl
+// name): the glTF written names them as UTF-8 text (each invalid byte U+FFFD), where the JSON writer
+// failed at the very end before; what was changed is said, with the bytes as read.
+TEST(HostileInput, MeshNamesThatAreNotUtf8AreWrittenAsUtf8WithANote) {
+    const fs::path dir = temp_dir("latin1_names");
+    write_bytes(dir / "scene" / "latin1.mtl", "newmtl M\xE9tal\xFF\nNs 30\n");
+    write_bytes(dir / "scene" / "latin1.obj", "mtllib latin1.mtl\no Pi\xE8""ce\nusemtl M\xE9tal\xFF\n"
+                                              "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\n");
+    const RunResult r =
+        run_specbake({"mesh", (dir / "scene" / "latin1.obj").string(), "-o", (dir / "out").string()}, dir);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE((r.out + r.err).find("M\\xE9tal\\xFF"), std::string::npos) << r.out << r.err;
+    const fs::path written = dir / "out" / "latin1.gltf";
+    ASSERT_TRUE(fs::exists(written));
+    const json doc = json::parse(slurp(written));  // throws on invalid UTF-8
+    bool found = false;
+    for (const json& m : doc["materials"]) found = found || m.value("name", "") == "M\xEF\xBF\xBDtal\xEF\xBF\xBD";
+    EXPECT_TRUE(found) << doc["materials"].dump();
+    EXPECT_TRUE(fs::exists(dir / "scene" / "latin1.obj"));
+    fs::remove_all(dir);
+}
+
 TEST(HostileInput, MeshFilesReadThroughAssimpAreLimited) {
     const fs::path dir = temp_dir("assimp_limits");
     // Two triangles (4 vertices) as OBJ: the vertex, face and primitive limits apply after import.
