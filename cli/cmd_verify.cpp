@@ -42,6 +42,7 @@ struct VerifyCommandOptions {
     std::string images;
     std::string frame_data;
     float distance = 1.0f;
+    int lights = 0;  // 0: the scene's own
 };
 
 // `image` (channel 0 radiance, 1 coverage; row 0 the top) as a Portable Float Map: "PF", RGB = radiance,
@@ -123,6 +124,7 @@ int run_verify_command(const VerifyCommandOptions& o) {
         return o.builtin.empty() ? kExitFailed : kExitUsage;
     }
     if (o.distance != 1.0f) *scene = at_distance(*scene, format_double("x%g", double(o.distance)), o.distance);
+    if (o.lights > 0) *scene = with_cost_lights(*scene, o.lights);
     if (!o.scene_file.empty() && run_settings().verbosity != Verbosity::quiet)
         print_line(stderr, "specbake: " + o.scene_file + ": " + std::to_string(scene->objects.size()) + " objects, " +
                                std::to_string(scene->normal_maps.size()) + " normal maps, " +
@@ -254,6 +256,10 @@ void add_verify_command(CLI::App& app, std::function<int()>& run) {
                     "Camera distance as a factor of the scene's own (bench: near 0.55, mid 1, far 3)")
         ->capture_default_str()
         ->check(CLI::Range(0.05f, 100.0f));
+    sub->add_option("--lights", o->lights,
+                    "Shade under N directional lights instead of the scene's own (for run-time cost: 35 degrees off "
+                    "the view, spread about it, irradiance 1/N each; frame x then counts N lights per pixel)")
+        ->check(CLI::Range(1, int(kMaxSimLights)));
     sub->add_option("--strip", o->strip,
                     "Also write the strip to this PNG file: a labelled grid (frame 0, cropped to the object) of the "
                     "ground truth, no filtering, the default and its variants, and the three best other candidates, "
@@ -279,6 +285,8 @@ void add_verify_command(CLI::App& app, std::function<int()>& run) {
                 "  specbake verify --builtin glitter-plane --alpha 0.1 --size 64x64 --spp 1024 --frames 4\n"
                 "  specbake verify scene.gltf --distance 3 --only default,default-two-lobes --define SPECAA_KAPPA=1.0\n"
                 "  specbake verify scene.gltf --only default --frames 1 --repeats 0 --frame-data frame/\n"
+                "  specbake verify --builtin bumpy-sphere --size 1920x1080 --distance 0.4 --lights 4 --frames 1 --spp 1 "
+                "--no-floor --no-limit --repeats 5   (frame time of each candidate; bench/frame_cost.sh runs the tiers and peers)\n"
                 "  specbake verify glittery.gltf   (materials with \"SPECBAKE_glints\" also get the glint candidates)");
     sub->callback([&run, o] { run = [o] { return run_verify_command(*o); }; });
 }

@@ -1,5 +1,7 @@
 #include "verify/bench_job.h"
 
+#include "verify/float3_math_internal.h"
+
 #include "verify/scene_file.h"
 #include "verify/strips.h"
 #include "core/text_format.h"
@@ -10,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <numbers>
 #include <set>
 
 namespace specbake::verify {
@@ -178,6 +181,28 @@ SimScene at_distance(const SimScene& scene, const std::string& label, float fact
     out.name = scene.name + "@" + label;
     SimCamera& c = out.camera;
     for (int i = 0; i < 3; ++i) c.position[i] = c.target[i] + factor * (c.position[i] - c.target[i]);
+    return out;
+}
+
+SimScene with_cost_lights(const SimScene& scene, int count) {
+    SimScene out = scene;
+    out.name = scene.name + "+" + std::to_string(count) + "L";
+    const SimCamera& c = scene.camera;
+    const Float3 view = unit(sub(c.position, c.target));
+    const Float3 right = unit(cross3(c.up, view));
+    const Float3 up = cross3(view, right);
+    constexpr float kTilt = 35.0f * std::numbers::pi_v<float> / 180.0f;
+    out.lights.clear();
+    for (int k = 0; k < count; ++k) {
+        const float turn = 2.0f * std::numbers::pi_v<float> * float(k) / float(count);
+        const float su = std::sin(kTilt) * std::cos(turn), sr = std::sin(kTilt) * std::sin(turn);
+        SimLight light;
+        light.type = SimLight::Type::Directional;
+        for (int i = 0; i < 3; ++i) light.direction[i] = std::cos(kTilt) * view[i] + su * up[i] + sr * right[i];
+        light.direction = unit(light.direction);
+        light.radiance = 1.0f / float(count);
+        out.lights.push_back(light);
+    }
     return out;
 }
 

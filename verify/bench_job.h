@@ -54,6 +54,12 @@ Result<std::vector<std::filesystem::path>> corpus_files(const std::filesystem::p
 // `scene` seen from `factor` times its camera's distance to the target, named "<name>@<label>".
 SimScene at_distance(const SimScene& scene, const std::string& label, float factor);
 
+// `scene` under `count` (1 to kMaxSimLights) directional lights instead of its own, for run-time cost: each
+// 35 degrees off the direction from the target to the camera, spread evenly about it (the first towards the
+// camera's up), irradiance 1 / count each, so every light puts a highlight in view and the image keeps its
+// exposure. Named "<name>+<count>L".
+SimScene with_cost_lights(const SimScene& scene, int count);
+
 // Summary: per candidate the geometric means (over scenes) of its RMSE (linear and tone-mapped) and
 // flicker (linear and tone-mapped) relative to its family's baseline (baseline_of: no filtering, or for the glint
 // family glints without anti-aliasing), the mean energy and peak ratios, and its

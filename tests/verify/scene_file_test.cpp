@@ -4,6 +4,7 @@
 // a built-in-style scene, far point and spot lights against a directional light of equal irradiance,
 // texture values decoded and scaled by hand.
 #include "verify/verify_job.h"
+#include "verify/bench_job.h"
 #include "bake/texture_bake.h"
 #include "verify/renderer.h"
 #include "verify/scene.h"
@@ -15,6 +16,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -22,6 +24,7 @@
 #include <fstream>
 #include <numbers>
 #include <sstream>
+#include <vector>
 
 namespace specbake::verify {
 namespace {
@@ -537,6 +540,59 @@ TEST(VerifySceneFile, BadFilesGiveAnErrorNamingTheFile) {
     auto cyclic = load_sim_scene(path);
     ASSERT_FALSE(cyclic.ok());
     EXPECT_NE(cyclic.error().message.find("sphere.gltf"), std::string::npos);
+}
+
+// `verify --lights N` (bench/frame_cost.sh): N directional lights, each 35 degrees off the view direction,
+// their projections across the view spread evenly (360 / N degrees apart, the first along the camera's up),
+// irradiance summing to 1. Checked with the angles computed here in double precision.
+TEST(VerifyScene, CostLightsAreSpreadEvenlyAroundTheView) {
+    auto scene = make_builtin_scene("bumpy-sphere", 0.2f);
+    ASSERT_TRUE(scene.ok()) << scene.error().message;
+    for (int n : {1, 2, 3, 4, 8}) {
+        const SimScene lit = with_cost_lights(*scene, n);
+        ASSERT_EQ(lit.lights.size(), size_t(n));
+        EXPECT_EQ(lit.name, scene->name + "+" + std::to_string(n) + "L");
+        const SimCamera& c = lit.camera;
+        double view[3], up[3];
+        double len = 0.0;
+        for (int i = 0; i < 3; ++i) len += double(c.position[i] - c.target[i]) * double(c.position[i] - c.target[i]);
+        for (int i = 0; i < 3; ++i) view[i] = double(c.position[i] - c.target[i]) / std::sqrt(len);
+        // The camera's up made orthogonal to the view.
+        double d = 0.0;
+        for (int i = 0; i < 3; ++i) d += double(c.up[i]) * view[i];
+        double ul = 0.0;
+        for (int i = 0; i < 3; ++i) ul += (double(c.up[i]) - d * view[i]) * (double(c.up[i]) - d * view[i]);
+        for (int i = 0; i < 3; ++i) up[i] = (double(c.up[i]) - d * view[i]) / std::sqrt(ul);
+        double total = 0.0;
+        std::vector<double> azimuth;
+        for (const SimLight& l : lit.lights) {
+            EXPECT_EQ(l.type, SimLight::Type::Directional);
+            total += l.radiance;
+            double norm = 0.0, cos_view = 0.0, along_up = 0.0;
+            for (int i = 0; i < 3; ++i) {
+                norm += double(l.direction[i]) * double(l.direction[i]);
+                cos_view += double(l.direction[i]) * view[i];
+                along_up += double(l.direction[i]) * up[i];
+            }
+            EXPECT_NEAR(norm, 1.0, 1e-5);
+            EXPECT_NEAR(std::acos(std::clamp(cos_view, -1.0, 1.0)) * 180.0 / std::numbers::pi, 35.0, 1e-3);
+            // Angle of the projection across the view, measured from up.
+            const double across = std::sqrt(std::max(0.0, 1.0 - cos_view * cos_view));
+            azimuth.push_back(std::acos(std::clamp(along_up / across, -1.0, 1.0)));
+        }
+        EXPECT_NEAR(total, 1.0, 1e-5);
+        EXPECT_NEAR(azimuth[0], 0.0, 1e-3);  // the first towards the camera's up
+        // Pairwise: the light directions sit on a cone, so their spread is even when every pair's angle
+        // matches the cone's chord for its index difference.
+        for (int a = 0; a < n; ++a)
+            for (int b = a + 1; b < n; ++b) {
+                double dab = 0.0;
+                for (int i = 0; i < 3; ++i) dab += double(lit.lights[a].direction[i]) * double(lit.lights[b].direction[i]);
+                const double s = std::sin(35.0 * std::numbers::pi / 180.0), cv = std::cos(35.0 * std::numbers::pi / 180.0);
+                const double expected = cv * cv + s * s * std::cos(2.0 * std::numbers::pi * double(b - a) / double(n));
+                EXPECT_NEAR(dab, expected, 1e-5) << n << " lights, " << a << " and " << b;
+            }
+    }
 }
 
 }  // namespace
