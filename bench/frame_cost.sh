@@ -48,14 +48,11 @@ variants=(--variant balanced:SPECAA_QUALITY=1 --variant fast:SPECAA_QUALITY=0)
 
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-renderer=""
-for n in $lights; do
-    "$specbake" -q verify --builtin bumpy-sphere --alpha 0.05 --size "$size" --distance 0.4 --lights "$n" \
-        --frames 1 --spp 1 --no-floor --no-limit --repeats "$repeats" --only "$only" "${variants[@]}" \
-        > "$work/$n.md"
-    line=$(grep -m1 '^Scene ' "$work/$n.md" || true)
-    renderer=${line##*; }
-done
+# The renderer first, from a 16x16 frame: --gpu stops here when it is a CPU rasteriser.
+"$specbake" -q verify --builtin bumpy-sphere --size 16x16 --frames 1 --spp 1 --no-floor --no-limit --repeats 0 \
+    --only none > "$work/probe.md"
+line=$(grep -m1 '^Scene ' "$work/probe.md" || true)
+renderer=${line##*; }
 case "$renderer" in
     *llvmpipe*|*softpipe*|*SwiftShader*|"")
         if [ "$gpu" = 1 ]; then
@@ -63,6 +60,11 @@ case "$renderer" in
             exit 2
         fi ;;
 esac
+for n in $lights; do
+    "$specbake" -q verify --builtin bumpy-sphere --alpha 0.05 --size "$size" --distance 0.4 --lights "$n" \
+        --frames 1 --spp 1 --no-floor --no-limit --repeats "$repeats" --only "$only" "${variants[@]}" \
+        > "$work/$n.md"
+done
 
 # One row per candidate: SPIR-V instructions and frame time x no filtering per light count.
 table=$(python3 - "$work" "$lights" "$renderer" "$size" "$repeats" <<'PY'
