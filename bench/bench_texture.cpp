@@ -19,16 +19,16 @@
 //      DDS (uncompressed), EXR (tiled mipmapped half, zip) and per-mip PNG (filter Up, zlib level 2),
 //      against (1) decoding its two inputs with the fastest decoder here (io/image/png_decode: libdeflate
 //      inflate; 8-bit kept as bytes, 16-bit converted to float as the job does) and (2) that plus compressing
-//      the same raw output levels with the same codec and level, in this process (KTX2, PNG: one thread;
-//      EXR: OpenImageIO/OpenEXR writing into memory, its own threads; EXR levels are the unorm levels as
-//      half, untimed conversion); CPU seconds, and peak RSS against decoded inputs + written files.
+//      the same raw output levels with the same codec and level, in this process (one thread; EXR: the
+//      tree's encoder, io/image/exr_encode.h, on the unorm levels as half, untimed conversion); CPU seconds,
+//      and peak RSS against decoded inputs + written files.
 //
 // Run: build/bench/bench_texture [--size N] [--compute-only] [--floor-only] [google-benchmark flags]
 // (--compute-only skips (b), (c) and (d), which take about 15 s at 4096^2; --floor-only runs (d) alone;
 // `--floor-only --size 1024` is the quick form.)
 #include "pipeline/texture_job.h"
 #include "io/image/image_io.h"
-#include "io/image/oiio_api.h"
+#include "io/image/exr_encode.h"
 #include "io/texture/png_stream.h"
 #include "io/texture/texel_encoding.h"
 
@@ -222,11 +222,6 @@ void print_floor(const std::string& self, const fs::path& dir, const FloorInputs
         std::fprintf(stderr, "floor: %s\n", raw.error().message.c_str());
         return;
     }
-    auto oiio = io::oiio::api();
-    if (!oiio) {
-        std::fprintf(stderr, "floor: %s\n", oiio.error().message.c_str());
-        return;
-    }
     // The same levels as EXR stores them (half), untimed.
     std::vector<std::vector<std::vector<uint8_t>>> halves;
     for (const auto& t : raw->textures) {
@@ -247,22 +242,17 @@ void print_floor(const std::string& self, const fs::path& dir, const FloorInputs
             const io::EncodedTexture& t = *raw->textures[k];
             const io::ContainerLayout& layout = t.layout();
             if (container == io::TextureContainer::Exr) {
-                io::oiio::LevelsRequest request;
-                request.name = "floor.exr";
+                io::ExrImageDesc desc;
+                desc.width = t.width(), desc.height = t.height();
+                desc.levels = int(layout.level_offset.size());
+                desc.tile_side = 64;
+                desc.channel_names = layout.stored_channels == 1 ? std::vector<std::string>{"Y"}
+                                                                 : std::vector<std::string>{"R", "G", "B", "A"};
+                auto encoder = io::ExrEncoder::create(desc, io::kExrDeflateLevel);
+                if (!encoder) return -1.0;
                 for (size_t L = 0; L < layout.level_offset.size(); ++L)
-                    request.levels.push_back({std::max(1, t.width() >> L), std::max(1, t.height() >> L),
-                                              layout.stored_channels});
-                request.type = io::oiio::PixelType::Half;
-                request.mipmapped = true;
-                request.channel_names = layout.stored_channels == 1 ? std::vector<std::string>{"Y"}
-                                                                    : std::vector<std::string>{"R", "G", "B", "A"};
-                request.wrap = "periodic";
-                auto writer = (*oiio)->open_bands(request);
-                if (!writer) return -1.0;
-                for (size_t L = 0; L < request.levels.size(); ++L)
-                    if (!(*oiio)->write_band(*writer, int(L), 0, request.levels[L].height, halves[k][L].data())) return -1.0;
-                auto file = (*oiio)->close_bands(*writer);
-                (*oiio)->free_bands(*writer);
+                    if (!encoder->add_rows(int(L), halves[k][L].data(), std::max(1, t.height() >> L))) return -1.0;
+                auto file = encoder->file({});
                 if (!file) return -1.0;
                 benchmark::DoNotOptimize(file->size());
                 continue;

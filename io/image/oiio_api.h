@@ -1,4 +1,4 @@
-// The OpenImageIO half of io/: image decoding, the EXR and PNG writers and the EXR/PNG reader of
+// The OpenImageIO half of io/: image decoding, the integer image writers and the EXR/PNG reader of
 // `inspect`, built as a module of its own (libspecbake_oiio.so, source io/image/oiio_module.cpp) that is
 // loaded on first use. OpenImageIO pulls in some 250 shared libraries, and binding them costs about
 // 0.25 s at every process start; commands that never pass an image through it (scene bakes without
@@ -23,29 +23,6 @@ namespace specbake::io::oiio {
 
 enum class PixelType { Uint8, Uint16, Half, Float };
 
-// One file written through OpenImageIO: every level as a tiled MIP-mapped texture ("Plain Texture",
-// 64x64 tiles), or a single level. Values are stored as given (linear, unassociated alpha).
-struct LevelsRequest {
-    std::string name;       // the file's name, named in errors; its extension selects the format
-    // Each level's shape; its texels (given to write_band) are stored as `type`, `channels` values a
-    // texel, rows tightly packed, in the machine's byte order.
-    struct StoredLevel {
-        int width = 0, height = 0, channels = 0;
-    };
-    std::vector<StoredLevel> levels;
-    PixelType type = PixelType::Float;
-    bool mipmapped = false;
-    std::vector<std::string> channel_names;
-    std::string channel_meaning;  // comma-separated meaning of each channel: EXR attribute "specbake:channels"
-    std::string wrap;       // OpenImageIO wrap mode name, for mipmapped files
-    std::string date_time;  // DateTime written into EXR headers (reproducible outputs)
-};
-
-// A file of a LevelsRequest written into memory band by band as its rows are finished (so no level need
-// be held whole), opened by Api::open_bands. Its bytes are those OpenImageIO's write_image writes from
-// each whole level with the same header.
-struct BandWriter;
-
 // The module's entry points. Every error names the file.
 struct Api {
     uint32_t size;    // sizeof(Api) of the build the module belongs to
@@ -66,16 +43,6 @@ struct Api {
                                const uint8_t* rgb);
     // Format, size, levels and channels from the headers of every MIP level, no pixels (`inspect --check`).
     Result<TextureShape> (*read_shape)(const std::string& name);
-    // Opens `request` for write_band; the caller frees the writer with free_bands (after close_bands, or
-    // after an error).
-    Result<BandWriter*> (*open_bands)(const LevelsRequest& request);
-    // Writes rows [y0, y1) of `level` (`texels`: row y0, tightly packed, stored as the request's type).
-    // Levels come in order, level 0 first, each level's rows top down without gaps; a tiled (mipmapped)
-    // file takes bands of whole 64-row tile rows, the last band of a level ending at its height.
-    Result<void> (*write_band)(BandWriter* writer, int level, int y0, int y1, const void* texels);
-    // Ends the file once every row of every level was written; returns its bytes.
-    Result<std::vector<uint8_t>> (*close_bands)(BandWriter* writer);
-    void (*free_bands)(BandWriter* writer);
 };
 
 // The module's entry points, loaded once (thread-safe); the error says which files were tried and why

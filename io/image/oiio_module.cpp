@@ -21,9 +21,6 @@ namespace {
 // Largest side accepted: bigger files are almost certainly corrupt headers, and would not fit in memory.
 constexpr int kMaxSide = 1 << 15;
 
-// The tile side of mipmapped files.
-constexpr int kTileSide = 64;
-
 std::string one_line(std::string s, const char* if_empty) {
     std::replace(s.begin(), s.end(), '\n', ' ');
     while (!s.empty() && (s.back() == ' ' || s.back() == '\r')) s.pop_back();
@@ -230,97 +227,6 @@ Result<void> write_image(const std::string& temp_path, const std::string& name, 
     return target.finish(name);
 }
 
-// The spec of `level` of the file `r` describes, for an output of format `format` ("openexr", "png", ...).
-OIIO::ImageSpec level_spec(const LevelsRequest& r, const LevelsRequest::StoredLevel& level, const char* format) {
-    OIIO::ImageSpec spec(level.width, level.height, level.channels, type_of(r.type));
-    spec.channelnames = r.channel_names;
-    spec.attribute("oiio:UnassociatedAlpha", 1);  // data, not premultiplied colour: store as given
-    if (r.mipmapped) {
-        spec.tile_width = kTileSide;
-        spec.tile_height = kTileSide;
-        spec.attribute("textureformat", "Plain Texture");
-        spec.attribute("wrapmodes", r.wrap + "," + r.wrap);
-    }
-    if (r.type == PixelType::Half || r.type == PixelType::Float) spec.attribute("compression", "zip");
-    spec.attribute("oiio:ColorSpace", "Linear");
-    spec.attribute("Software", "specbake");
-    if (std::strcmp(format, "openexr") == 0) {
-        spec.attribute("DateTime", r.date_time);
-        if (!r.channel_meaning.empty()) spec.attribute("specbake:channels", r.channel_meaning);
-    }
-    return spec;
-}
-
-}  // namespace
-
-// Declared in this order so that the writer (whose destructor may still write) goes before the proxy, and
-// the proxy before the bytes it appends to.
-struct BandWriter {
-    LevelsRequest request;
-    std::vector<unsigned char> bytes;
-    OIIO::Filesystem::IOVecOutput proxy{bytes};
-    std::unique_ptr<OIIO::ImageOutput> out;
-    int level = -1;  // the level open in `out`
-    int next_row = 0;
-};
-
-namespace {
-
-Result<BandWriter*> open_bands(const LevelsRequest& r) {
-    if (r.levels.empty()) return make_error(r.name + ": no levels to write");
-    auto w = std::make_unique<BandWriter>();
-    w->request = r;
-    // The extension of the final name selects the format; the bytes go to memory.
-    w->out = OIIO::ImageOutput::create(r.name);
-    if (!w->out) return make_error(r.name + ": no writer: " + one_line(OIIO::geterror(), "unknown format"));
-    if (r.mipmapped && !w->out->supports("mipmap")) return make_error(r.name + ": the format cannot hold MIP levels");
-    if (!w->out->supports("ioproxy") || !w->out->set_ioproxy(&w->proxy))
-        return make_error(r.name + ": the " + w->out->format_name() + " writer cannot write to memory");
-    return w.release();
-}
-
-Result<void> write_band(BandWriter* w, int level, int y0, int y1, const void* texels) {
-    const LevelsRequest& r = w->request;
-    const auto fail = [&](const std::string& why) { return make_error(r.name + ": cannot write: " + why); };
-    if (level < 0 || size_t(level) >= r.levels.size()) return fail("no level " + std::to_string(level));
-    const LevelsRequest::StoredLevel& shape = r.levels[size_t(level)];
-    if (level != w->level) {  // the next level, once the open one is complete
-        if (level != w->level + 1 || (w->level >= 0 && w->next_row != r.levels[size_t(w->level)].height))
-            return fail("level " + std::to_string(level) + " before the levels above it were complete");
-        const auto mode = level == 0 ? OIIO::ImageOutput::Create : OIIO::ImageOutput::AppendMIPLevel;
-        if (!w->out->open(r.name, level_spec(r, shape, w->out->format_name()), mode))
-            return fail(one_line(w->out->geterror(), "unknown writer error"));
-        w->level = level, w->next_row = 0;
-    }
-    if (y0 != w->next_row || y1 <= y0 || y1 > shape.height)
-        return fail("rows " + std::to_string(y0) + ".." + std::to_string(y1) + " of level " + std::to_string(level) +
-                    " out of order");
-    const OIIO::TypeDesc type = type_of(r.type);
-    bool ok;
-    if (r.mipmapped) {
-        if (y0 % kTileSide != 0 || (y1 % kTileSide != 0 && y1 != shape.height))
-            return fail("rows " + std::to_string(y0) + ".." + std::to_string(y1) + " do not end on a tile row");
-        ok = w->out->write_tiles(0, shape.width, y0, y1, 0, 1, type, texels);
-    } else {
-        ok = w->out->write_scanlines(y0, y1, 0, type, texels);
-    }
-    if (!ok) return fail(one_line(w->out->geterror(), "unknown writer error"));
-    w->next_row = y1;
-    return {};
-}
-
-Result<std::vector<uint8_t>> close_bands(BandWriter* w) {
-    const LevelsRequest& r = w->request;
-    if (w->level != int(r.levels.size()) - 1 || w->next_row != r.levels.back().height)
-        return make_error(r.name + ": cannot write: closed before every row of every level was written");
-    if (!w->out->close())
-        return make_error(r.name + ": cannot write: " + one_line(w->out->geterror(), "unknown writer error"));
-    w->out.reset();
-    return std::move(w->bytes);
-}
-
-void free_bands(BandWriter* w) { delete w; }
-
 Result<InspectedTexture> read_levels(const std::string& name, uint64_t max_texels) {
     auto in = OIIO::ImageInput::open(name);
     if (!in) return make_error(name + ": cannot read image: " + one_line(OIIO::geterror(), "unknown format"));
@@ -384,8 +290,7 @@ Result<TextureShape> read_shape(const std::string& name) {
 }
 
 const Api kApi{sizeof(Api), SPECBAKE_OIIO_API_TAG, decode_file, decode_memory, write_image,
-               read_levels, write_rgb8, read_shape, open_bands, write_band, close_bands,
-               free_bands};
+               read_levels, write_rgb8, read_shape};
 
 }  // namespace
 }  // namespace specbake::io::oiio

@@ -6,7 +6,7 @@
 #include "io/texture/dds.h"
 #include "io/texture/ktx2.h"
 #include "io/texture/png_stream.h"
-#include "io/image/oiio_api.h"
+#include "io/image/exr_encode.h"
 #include "io/files/sha256.h"
 #include "io/texture/texel_encoding.h"
 
@@ -79,7 +79,7 @@ namespace {
 // 0.091 / 0.026, level 3 up to 20% slower, level 6 (OpenImageIO's) 4x slower on the roughness for 1.5x smaller.
 constexpr int kPngZlibLevel = 2;
 
-// The tile side of mipmapped EXRs (io/image/oiio_api.h).
+// The tile side of mipmapped EXRs, as OpenImageIO's texture writer (maketx) chooses.
 constexpr int kExrTileSide = 64;
 
 const char* wrap_name(WrapMode w) {
@@ -89,16 +89,6 @@ const char* wrap_name(WrapMode w) {
         case WrapMode::Mirror: return "mirror";
     }
     return "periodic";
-}
-
-oiio::PixelType oiio_type(TexelEncoding e) {
-    switch (e) {
-        case TexelEncoding::Unorm8: return oiio::PixelType::Uint8;
-        case TexelEncoding::Unorm16: return oiio::PixelType::Uint16;
-        case TexelEncoding::Float16: return oiio::PixelType::Half;
-        case TexelEncoding::Float32: return oiio::PixelType::Float;
-    }
-    return oiio::PixelType::Float;
 }
 
 // EXR channel names common readers load (three.js EXRLoader, OpenImageIO, Pillow-free tools): Y alone,
@@ -125,9 +115,9 @@ std::string joined(const std::vector<std::string>& names) {
     return s;
 }
 
-// The DateTime written into EXR headers: SOURCE_DATE_EPOCH (the reproducible-builds convention) when it is
-// set, else the epoch. OpenImageIO's EXR writer stamps the current time otherwise (its PNG writer adds none), so the same bake would give files (and
-// manifest hashes) that differ from run to run and defeat build caches.
+// The DateTime written into EXR headers (OpenEXR's "capDate" attribute): SOURCE_DATE_EPOCH (the
+// reproducible-builds convention) when it is set, else the epoch, never the current time, so the same bake
+// gives the same files (and manifest hashes) from run to run and build caches hold.
 std::string reproducible_date_time() {
     std::time_t t = 0;
     if (const char* epoch = std::getenv("SOURCE_DATE_EPOCH")) {
@@ -194,8 +184,21 @@ EncodedTexture::EncodedTexture(TextureContainer container, TexelEncoding encodin
     else layout_ = plain_layout(width, height, levels, encoding_, channels);
     data_.reset(new uint8_t[layout_.total]);
     if (png()) png_.resize(layout_.level_offset.size());  // one stream a level, each made by its level's feeder
-    if (exr()) exr_.resize(container == TextureContainer::Exr ? 1 : layout_.level_offset.size());
-    if (container == TextureContainer::Exr) held_.resize(layout_.level_offset.size());
+    if (exr()) {  // every file's encoder made here, so levels fed on several threads share no set-up
+        const bool mipmapped = container == TextureContainer::Exr;
+        for (size_t L = 0; L < (mipmapped ? 1 : layout_.level_offset.size()); ++L) {
+            ExrImageDesc desc;
+            desc.width = std::max(1, width >> L);
+            desc.height = std::max(1, height >> L);
+            desc.levels = mipmapped ? int(layout_.level_offset.size()) : 1;
+            desc.tile_side = mipmapped ? kExrTileSide : 0;
+            desc.sample = encoding_ == TexelEncoding::Float32 ? ExrSample::Float : ExrSample::Half;
+            desc.channel_names = exr_names(layout_.stored_channels);
+            auto encoder = ExrEncoder::create(desc, kExrDeflateLevel);
+            if (encoder) exr_.push_back(std::make_unique<ExrStream>(std::move(*encoder)));
+            else exr_problem_ = encoder.error().message, exr_.emplace_back();
+        }
+    }
     // Faulted in on transparent huge pages as the rows arrive: a 4096^2 bake writes about 400 MiB of fresh
     // container bytes.
     detail::hint_huge_pages(data_.get(), layout_.total);
@@ -234,126 +237,72 @@ struct EncodedTexture::LevelStream {
     ~LevelStream() { ZSTD_freeCCtx(cctx); }
 };
 
-// The EXR writer of one file (compress_rows, exr_file).
+// The EXR encoder of one file (compress_rows, exr_file).
 struct EncodedTexture::ExrStream {
-    const oiio::Api* api = nullptr;
-    oiio::BandWriter* writer = nullptr;
-    std::vector<std::string> meaning;  // what the file's "specbake:channels" says
-    int level = 0;                     // the level of the texture being written, and its rows written
-    int rows = 0;
-    std::vector<uint8_t> file;         // once done
+    explicit ExrStream(ExrEncoder encoder) : encoder(std::move(encoder)) {}
+    ExrEncoder encoder;
+    std::vector<std::string> meaning;              // what the file's "specbake:channels" says, once done
+    std::vector<std::span<const uint8_t>> file;    // once done: pieces of the encoder's bytes
     bool done = false;
-    ~ExrStream() {
-        if (writer) api->free_bands(writer);
-    }
 };
 
 EncodedTexture::~EncodedTexture() = default;
 
-// Writes rows up to `rows` of `level` into its EXR file, opened on first use: whole 64-row tile rows of
-// level 0 of a mipmapped file (its levels >= 1 go in once level 0 is complete, from exr_file), any rows of a
-// per-mip level, whose file is ended with its last row. The raw pages written are returned to the system.
-// A file opened here says `meaning_given` in its "specbake:channels".
-Result<void> EncodedTexture::feed_exr(int level, int rows, const std::vector<std::string>& meaning_given) {
+// Compresses the EXR chunks that rows up to `rows` of `level` complete (whole 64-row tile rows of a
+// mipmapped file's level, whole 16-row blocks of a per-mip file; the rest with the level's last row) and
+// returns the raw pages compressed to the system.
+Result<void> EncodedTexture::feed_exr(int level, int rows) {
     const bool mipmapped = container_ == TextureContainer::Exr;
-    const int h = std::max(1, height_ >> level);
+    const auto& slot = exr_[mipmapped ? 0 : size_t(level)];
+    if (!slot) return make_error(exr_problem_);
+    const int encoder_level = mipmapped ? level : 0;
     const size_t row_bytes =
         size_t(std::max(1, width_ >> level)) * size_t(layout_.stored_channels) * size_t(encoding_bytes(encoding_));
-    const int end = mipmapped && rows < h ? rows / kExrTileSide * kExrTileSide : std::min(rows, h);
     const uint8_t* start = data_.get() + layout_.level_offset[size_t(level)];
-    if (mipmapped && level > 0) {
-        // Held until level 0 is written: whole tile rows compressed as they arrive (a 4096^2 bake's levels
-        // >= 1 are a third of its level 0 in each file).
-        std::vector<HeldBand>& bands = held_[size_t(level)];
-        const int from = bands.empty() ? 0 : bands.back().rows_end;
-        if (end <= from) return {};
-        const size_t length = size_t(end - from) * row_bytes;
-        HeldBand band{end, std::vector<uint8_t>(ZSTD_compressBound(length))};
-        const size_t size = ZSTD_compress(band.zstd.data(), band.zstd.size(), start + size_t(from) * row_bytes,
-                                          length, 1);
-        if (ZSTD_isError(size)) return make_error(std::string("zstd: ") + ZSTD_getErrorName(size));
-        band.zstd.resize(size);
-        band.zstd.shrink_to_fit();
-        bands.push_back(std::move(band));
-        detail::advise_whole_pages(start, size_t(end) * row_bytes, uintptr_t(2) << 20, MADV_DONTNEED);
-        return {};
-    }
-    auto& slot = exr_[mipmapped ? 0 : size_t(level)];
-    if (!slot) {
-        auto api = oiio::api();
-        if (!api) return api.error();
-        const int stored = layout_.stored_channels;
-        oiio::LevelsRequest request;
-        request.name = mipmapped ? "mipmapped.exr" : "mip" + std::to_string(level) + ".exr";
-        for (size_t L = mipmapped ? 0 : size_t(level); L < (mipmapped ? layout_.level_offset.size() : size_t(level) + 1); ++L)
-            request.levels.push_back({std::max(1, width_ >> L), std::max(1, height_ >> L), stored});
-        request.type = oiio_type(encoding_);
-        request.mipmapped = mipmapped;
-        request.channel_names = exr_names(stored);
-        const std::vector<std::string> meaning = meaning_for(channels_, stored, meaning_given);
-        request.channel_meaning = joined(meaning);
-        request.wrap = wrap_name(wrap_);
-        request.date_time = reproducible_date_time();
-        auto writer = (*api)->open_bands(request);
-        if (!writer) return writer.error();
-        slot = std::make_unique<ExrStream>();
-        slot->api = *api;
-        slot->writer = *writer;
-        slot->meaning = meaning;
-        slot->level = level;
-    }
-    ExrStream& x = *slot;
-    if (x.done || end <= x.rows) return {};
-    if (auto ok = x.api->write_band(x.writer, 0, x.rows, end, start + size_t(x.rows) * row_bytes); !ok) return ok;
-    x.rows = end;
-    // Whole 2 MiB pages (the huge pages the buffer was hinted for) of the rows written.
-    detail::advise_whole_pages(start, size_t(end) * row_bytes, uintptr_t(2) << 20, MADV_DONTNEED);
-    if (!mipmapped && end == h) {
-        auto file = x.api->close_bands(x.writer);
-        if (!file) return file.error();
-        x.file = std::move(*file);
-        x.done = true;
-    }
+    const int before = slot->encoder.rows_done(encoder_level);
+    if (auto ok = slot->encoder.add_rows(encoder_level, start, rows); !ok) return ok;
+    const int done = slot->encoder.rows_done(encoder_level);
+    // Whole 2 MiB pages (the huge pages the buffer was hinted for) of the rows compressed.
+    if (done > before) detail::advise_whole_pages(start, size_t(done) * row_bytes, uintptr_t(2) << 20, MADV_DONTNEED);
     return {};
 }
 
-Result<std::span<const uint8_t>> EncodedTexture::exr_file(int level, const std::vector<std::string>& meaning) {
+Result<std::vector<std::span<const uint8_t>>> EncodedTexture::exr_file(int level, const std::vector<std::string>& meaning) {
     if (!exr()) return make_error("EXR files are for the exr container and per-mip float data");
     const bool mipmapped = container_ == TextureContainer::Exr;
     if (mipmapped != (level < 0)) return make_error("a mipmapped EXR is one file; per-mip EXRs are one a level");
     const int first = std::max(level, 0);
-    if (auto ok = feed_exr(first, std::max(1, height_ >> first), meaning); !ok) return ok.error();
+    if (!exr_[size_t(first)]) return make_error(exr_problem_);
     ExrStream& x = *exr_[size_t(first)];
-    if (x.meaning != meaning_for(channels_, layout_.stored_channels, meaning))
-        return make_error("the channel meaning differs from the one the EXR file was opened with");
-    if (!x.done) {  // the mipmapped file: levels >= 1, held, after level 0
-        std::vector<uint8_t> rows;
-        for (size_t L = 1; L < layout_.level_offset.size(); ++L) {
-            const int h = std::max(1, height_ >> L);
-            if (auto ok = feed_exr(int(L), h, meaning); !ok) return ok.error();
-            const size_t row_bytes = size_t(std::max(1, width_ >> L)) * size_t(layout_.stored_channels) *
-                                     size_t(encoding_bytes(encoding_));
-            int from = 0;
-            for (const HeldBand& band : held_[L]) {
-                rows.resize(size_t(band.rows_end - from) * row_bytes);
-                const size_t size = ZSTD_decompress(rows.data(), rows.size(), band.zstd.data(), band.zstd.size());
-                if (size != rows.size()) return make_error("zstd: a held EXR band does not inflate to its rows");
-                if (auto ok = x.api->write_band(x.writer, int(L), from, band.rows_end, rows.data()); !ok)
-                    return ok.error();
-                from = band.rows_end;
-            }
-            held_[L] = {};
+    const std::vector<std::string> stored_meaning = meaning_for(channels_, layout_.stored_channels, meaning);
+    if (!x.done) {
+        const int levels = mipmapped ? int(layout_.level_offset.size()) : 1;
+        bool streamed = false;
+        for (int L = 0; L < levels; ++L) streamed |= x.encoder.rows_done(L) > 0;
+        if (streamed && stored_meaning != meaning_for(channels_, layout_.stored_channels, meaning_))
+            return make_error("the channel meaning differs from the one the EXR file was streamed with");
+        for (int L = first; L < first + levels; ++L)
+            if (auto ok = feed_exr(L, std::max(1, height_ >> L)); !ok) return ok.error();
+        // The attributes OpenImageIO's EXR writer stored before (its DateTime is OpenEXR's capDate).
+        std::vector<std::pair<std::string, std::string>> strings{
+            {"Software", "specbake"}, {"capDate", reproducible_date_time()}, {"specbake:channels", joined(stored_meaning)}};
+        if (mipmapped) {
+            strings.emplace_back("textureformat", "Plain Texture");
+            strings.emplace_back("wrapmodes", std::string(wrap_name(wrap_)) + "," + wrap_name(wrap_));
         }
-        auto file = x.api->close_bands(x.writer);
+        auto file = x.encoder.file(strings);
         if (!file) return file.error();
         x.file = std::move(*file);
+        x.meaning = stored_meaning;
         x.done = true;
     }
-    return std::span<const uint8_t>(x.file);
+    if (x.meaning != stored_meaning)
+        return make_error("the channel meaning differs from the one the EXR file was written with");
+    return x.file;
 }
 
 Result<void> EncodedTexture::compress_rows(int level, int rows) {
-    if (exr()) return feed_exr(level, rows, meaning_);
+    if (exr()) return feed_exr(level, rows);
     if (png()) {
         auto& stream = png_[size_t(level)];
         const int w = std::max(1, width_ >> level), h = std::max(1, height_ >> level);
@@ -621,12 +570,12 @@ Result<void> write_level_file(const EncodedFile& f, TargetFile& target) {
         entry.sha256 = hash.hex();
         return write_pieces_to(target.out->temp_path(), target.out->final_path(), *pieces);
     }
-    auto file = t.exr_file(target.level, f.channel_meaning);
-    if (!file) return make_error(target.out->final_path().string() + ": " + file.error().message);
+    auto pieces = t.exr_file(target.level, f.channel_meaning);
+    if (!pieces) return make_error(target.out->final_path().string() + ": " + pieces.error().message);
     Sha256 hash;
-    hash.update(*file);
+    for (std::span<const uint8_t> p : *pieces) hash.update(p);
     entry.sha256 = hash.hex();
-    return write_pieces_to(target.out->temp_path(), target.out->final_path(), {&*file, 1});
+    return write_pieces_to(target.out->temp_path(), target.out->final_path(), *pieces);
 }
 
 }  // namespace

@@ -1,6 +1,6 @@
 // Writes a MipChain with its full mip chain to a texture container, atomically (temporary file + rename),
 // and describes what it wrote as manifest entries (SPEC Sec. 7). Containers: KTX2 (io/texture/ktx2.h), DDS
-// (io/texture/dds.h), tiled mipmapped OpenEXR (OpenImageIO, "Plain Texture"), or one PNG (integer encodings) / EXR
+// (io/texture/dds.h), tiled mipmapped OpenEXR (io/image/exr_encode.h, "Plain Texture"), or one PNG (integer encodings) / EXR
 // (float encodings) file per mip level. Every container stores 1, 2 or 4 channels (formats GPUs sample:
 // D3D has no 3-channel 8/16-bit formats and Vulkan makes them optional): 3-channel data gets A = 1.
 #pragma once
@@ -156,9 +156,9 @@ public:
 
     // Per-mip PNG: filters and deflates the strips that rows [0, rows) of `level` complete
     // (io/texture/png_stream.h) and returns the raw pages no strip reads again to the system.
-    // EXR: writes rows [0, rows) of `level` into the file in memory (OpenImageIO, zip compression; a
-    // mipmapped file takes whole 64-row tile rows of level 0 and holds levels >= 1, which OpenImageIO
-    // writes after level 0, as zstd level 1 bands) and returns the raw pages written or held to the system.
+    // EXR: ZIP-compresses the chunks rows [0, rows) of `level` complete (io/image/exr_encode.h: whole 64-row
+    // tile rows of a mipmapped file's level, whole 16-row blocks of a per-mip file) and returns the raw
+    // pages compressed to the system; only compressed chunks are held.
     // KTX2 with zstd: zstd-compresses rows [0, rows) of `level`, put before the call, as a stream of the
     // level (whole zstd blocks; the rest once rows is the level's height), and returns the raw pages zstd
     // no longer reads (older than its window) to the system, so a level's raw bytes are never all held.
@@ -173,22 +173,18 @@ public:
     // Per-mip PNG: the file of `level`, every level fed to its end first (by compress_rows, or here).
     Result<std::vector<std::span<const uint8_t>>> png_level(int level);
     // EXR: the file (`level` -1: the mipmapped file; else that level of a per-mip output), every row fed
-    // first (by compress_rows, or here). `meaning` must be the one the file was opened with, if it was.
-    Result<std::span<const uint8_t>> exr_file(int level, const std::vector<std::string>& meaning);
+    // first (by compress_rows, or here); its pieces live as long as the texture. `meaning` must be that of
+    // set_channel_meaning when rows were streamed, and the same at every call.
+    Result<std::vector<std::span<const uint8_t>>> exr_file(int level, const std::vector<std::string>& meaning);
     ~EncodedTexture();
 
 private:
     struct LevelStream;
     struct ExrStream;
-    Result<void> feed_exr(int level, int rows, const std::vector<std::string>& meaning_given);
+    Result<void> feed_exr(int level, int rows);
     std::vector<std::unique_ptr<LevelStream>> streams_;
     std::vector<std::unique_ptr<ExrStream>> exr_;  // one a level (per-mip) or one (mipmapped)
-    // A mipmapped EXR's levels >= 1 until level 0 is written: zstd-compressed bands of whole tile rows.
-    struct HeldBand {
-        int rows_end = 0;
-        std::vector<uint8_t> zstd;
-    };
-    std::vector<std::vector<HeldBand>> held_;
+    std::string exr_problem_;                      // why an EXR encoder could not be made
     std::vector<std::string> meaning_;
     std::vector<std::unique_ptr<PngLevelStream>> png_;
     TextureContainer container_;

@@ -123,6 +123,40 @@ TEST_F(TextureCli, DemoWritesContainersAndManifestDeterministically) {
     }
 }
 
+// EXR outputs (the mipmapped file, and the per-mip float files beside per-mip PNGs) are written by the tree's
+// own encoders: with the OpenImageIO module made unfindable, a bake of plain PNG inputs still writes them,
+// and OpenImageIO reads every level back.
+TEST_F(TextureCli, ExrAndPngOutputsNeedNoImageModule) {
+    const fs::path demo = root_ / "demo";
+    const RunResult d = run("texture --demo -q -o '" + demo.string() + "'", root_ / "scratch");
+    ASSERT_EQ(d.code, 0) << d.err;
+    const std::string inputs =
+        "--normal '" + (demo / "demo_normal.png").string() + "' --roughness '" + (demo / "demo_orm.png").string() + "'";
+    const std::string missing = "SPECBAKE_OIIO_MODULE='" + (root_ / "absent" / "libspecbake_oiio.so").string() + "' ";
+    for (const char* format : {"exr", "png"}) {
+        SCOPED_TRACE(format);
+        const fs::path out = root_ / format;
+        const std::string cmd = std::string("'") + SPECBAKE_EXE + "' texture -q " + inputs + " --format " + format +
+                                " -o '" + out.string() + "' 2>'" + (root_ / "scratch" / "err.txt").string() + "'";
+        ASSERT_EQ(std::system((missing + cmd).c_str()), 0) << read_text(root_ / "scratch" / "err.txt");
+        auto m = io::read_manifest(out / "manifest.json");
+        ASSERT_TRUE(m.ok());
+        int exr_files = 0;
+        for (const io::ManifestOutput& o : m->outputs) {
+            if (o.format != "exr") continue;
+            ++exr_files;
+            auto in = OIIO::ImageInput::open((out / o.path).string());
+            ASSERT_TRUE(in) << o.path << ": " << OIIO::geterror();
+            int levels = 0;
+            while (in->seek_subimage(0, levels)) ++levels;
+            EXPECT_EQ(levels, o.mips) << o.path;
+            std::vector<float> texels(size_t(o.width) * size_t(o.height) * size_t(o.channels));
+            EXPECT_TRUE(in->read_image(0, 0, 0, o.channels, OIIO::TypeDesc::FLOAT, texels.data())) << in->geterror();
+        }
+        EXPECT_GT(exr_files, 0);
+    }
+}
+
 TEST_F(TextureCli, EveryFormatFromTheCommandLine) {
     for (const char* format : {"dds", "exr", "png"}) {
         const fs::path out = root_ / format;
