@@ -2,6 +2,7 @@
 // (through OpenEXR) reads every level of scanline and tiled mipmapped files back bit for bit, and tinyexr
 // (its own ZIP decoder, Debian's libtinyexr1d, loaded when installed) reads level 0.
 #include "io/image/exr_encode.h"
+#include "tests/io/temp_folder.h"
 
 #include <Imath/half.h>
 #include <OpenImageIO/imageio.h>
@@ -22,10 +23,7 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path fresh_dir(const std::string& name) {
-    fs::path d = fs::temp_directory_path() / ("specbake_exr_encode_" + name + "_" + std::to_string(::getpid()));
-    fs::remove_all(d);
-    fs::create_directories(d);
-    return d;
+    return specbake::testing::fresh_test_folder("exr_encode", name);
 }
 
 void write_pieces(const fs::path& path, const std::vector<std::span<const uint8_t>>& pieces) {

@@ -3,6 +3,7 @@
 // to exactly the new bake by the next lock holder.
 #include "io/files/cleanup_registry.h"
 #include "io/output/output_folder.h"
+#include "tests/io/temp_folder.h"
 
 #include <gtest/gtest.h>
 
@@ -22,10 +23,7 @@ using namespace specbake::io;
 namespace {
 
 fs::path fresh_dir(const std::string& name) {
-    const fs::path d = fs::temp_directory_path() / ("specbake_outfolder_" + name + "_" + std::to_string(::getpid()));
-    fs::remove_all(d);
-    fs::create_directories(d);
-    return d;
+    return specbake::testing::fresh_test_folder("outfolder", name);
 }
 
 void put(const fs::path& p, const std::string& text) {

@@ -6,6 +6,7 @@
 #include "io/texture/png_stream.h"
 #include "io/texture/texel_encoding.h"
 #include "io/texture/texture_writer.h"
+#include "tests/io/temp_folder.h"
 
 #include <Imath/half.h>
 #include <OpenImageIO/imageio.h>
@@ -27,10 +28,7 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path fresh_dir(const std::string& name) {
-    fs::path d = fs::temp_directory_path() / ("specbake_texture_io_" + name + "_" + std::to_string(::getpid()));
-    fs::remove_all(d);
-    fs::create_directories(d);
-    return d;
+    return specbake::testing::fresh_test_folder("texture_io", name);
 }
 
 std::vector<uint8_t> slurp(const fs::path& p) {
