@@ -227,6 +227,22 @@ std::string aggregate_table(const BenchReport& r, Family family) {
 }
 
 
+// The do-no-harm measures of a candidate against no filtering (candidate / none): RMSE, linear and
+// tone-mapped flicker, linear and tone-mapped temporal error, and their goals.
+constexpr const char* kHarmNames[5] = {"RMSE", "flicker", "flicker (tm)", "t-err", "t-err (tm)"};
+constexpr double kHarmGoal[5] = {1.02, 1.0, 1.0, 1.0, 1.0};
+std::array<double, 5> harm_measures(const SimMetrics& m, const SimMetrics& none) {
+    const auto ratio = [](double a, double b) { return b > 0 ? a / b : (a > 0 ? INFINITY : 1.0); };
+    return {ratio(m.rmse, none.rmse), ratio(m.flicker_linear, none.flicker_linear), ratio(m.flicker, none.flicker),
+            ratio(m.temporal_error_linear, none.temporal_error_linear), ratio(m.temporal_error, none.temporal_error)};
+}
+bool does_no_harm(const SimMetrics& m, const SimMetrics& none) {
+    const std::array<double, 5> x = harm_measures(m, none);
+    for (int i = 0; i < 5; ++i)
+        if (!(x[i] <= kHarmGoal[i])) return false;
+    return true;
+}
+
 // The do-no-harm check of the default per scene: each measure as default / none, the measures that exceed
 // their goal (RMSE <= 1.02x, linear and tone-mapped flicker and temporal error <= 1.00x), the default's
 // energy, and the floor (ground truth at 1/4 of the samples against the full one, / none) of each measure:
@@ -240,25 +256,16 @@ std::string do_no_harm_table(const BenchReport& r) {
     out += "| scene | default RMSE x | flicker x | flicker (tm) x | t-err x | t-err (tm) x | energy | fails by "
            "| floor RMSE x | floor flicker x | floor flicker (tm) x | floor t-err x | floor t-err (tm) x |\n"
            "|---|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|\n";
-    const auto ratio = [](double a, double b) { return b > 0 ? a / b : (a > 0 ? INFINITY : 1.0); };
-    const auto measures = [&](const SimMetrics& m, const SimMetrics& none) {
-        return std::array<double, 5>{ratio(m.rmse, none.rmse), ratio(m.flicker_linear, none.flicker_linear),
-                                     ratio(m.flicker, none.flicker),
-                                     ratio(m.temporal_error_linear, none.temporal_error_linear),
-                                     ratio(m.temporal_error, none.temporal_error)};
-    };
-    static constexpr const char* kNames[5] = {"RMSE", "flicker", "flicker (tm)", "t-err", "t-err (tm)"};
-    static constexpr double kGoal[5] = {1.02, 1.0, 1.0, 1.0, 1.0};
     int pairs = 0, holding = 0;
     for (const SceneReport& s : r.scenes) {
         const CandidateReport* none = find_row(s, "none");
         const CandidateReport* def = find_row(s, "default");
         const CandidateReport* floor = find_row(s, "floor");
         if (!none || !def) continue;
-        const std::array<double, 5> x = measures(def->metrics, none->metrics);
+        const std::array<double, 5> x = harm_measures(def->metrics, none->metrics);
         std::string fails;
         for (int i = 0; i < 5; ++i)
-            if (!(x[i] <= kGoal[i])) fails += (fails.empty() ? "" : ", ") + std::string(kNames[i]);
+            if (!(x[i] <= kHarmGoal[i])) fails += (fails.empty() ? "" : ", ") + std::string(kHarmNames[i]);
         ++pairs;
         holding += fails.empty() ? 1 : 0;
         out += "| " + scene_label(s);
@@ -266,7 +273,7 @@ std::string do_no_harm_table(const BenchReport& r) {
         out += " | " + format_double("%.2f", def->metrics.energy_ratio) + " | " +
                (fails.empty() ? std::string("holds") : "**" + fails + "**");
         if (floor) {
-            for (double v : measures(floor->metrics, none->metrics)) out += " | " + format_double("%.3f", v);
+            for (double v : harm_measures(floor->metrics, none->metrics)) out += " | " + format_double("%.3f", v);
         } else {
             out += " | - | - | - | - | -";
         }
@@ -274,6 +281,91 @@ std::string do_no_harm_table(const BenchReport& r) {
     }
     out += "\nThe default holds on " + std::to_string(holding) + " of " + std::to_string(pairs) + " scenes.\n";
     return out;
+}
+
+// A candidate over a set of scenes: geometric means of its ratio to no filtering (RMSE, RMSE (tm), flicker,
+// flicker (tm), t-err, t-err (tm)) and the scenes where it does no harm.
+struct OverScenes {
+    std::array<double, 6> means{};
+    int holds = 0, n = 0;
+};
+OverScenes over_scenes(const BenchReport& r, const std::string& name, const std::vector<size_t>& scenes) {
+    double log_rmse = 0, log_rmse_tm = 0;
+    RatioMean flicker, flicker_tm, terr, terr_tm;
+    OverScenes o;
+    for (size_t i : scenes) {
+        const CandidateReport* none = find_row(r.scenes[i], "none");
+        const CandidateReport* c = find_row(r.scenes[i], name);
+        if (!none || !c) continue;
+        const SimMetrics &m = c->metrics, &b = none->metrics;
+        log_rmse += std::log(std::max(m.rmse, kFloor) / std::max(b.rmse, kFloor));
+        log_rmse_tm += std::log(std::max(m.rmse_tonemapped, kFloor) / std::max(b.rmse_tonemapped, kFloor));
+        flicker.add(m.flicker_linear, b.flicker_linear);
+        flicker_tm.add(m.flicker, b.flicker);
+        terr.add(m.temporal_error_linear, b.temporal_error_linear);
+        terr_tm.add(m.temporal_error, b.temporal_error);
+        o.holds += does_no_harm(m, b) ? 1 : 0;
+        ++o.n;
+    }
+    o.means = {o.n ? std::exp(log_rmse / o.n) : 1.0, o.n ? std::exp(log_rmse_tm / o.n) : 1.0, flicker.value(),
+               flicker_tm.value(), terr.value(), terr_tm.value()};
+    return o;
+}
+
+// Each engine's filter (the "peer" rows) against specbake's row of equal or lower cost, on the scenes both
+// ran on: the most expensive of the baked roughness alone and the three quality tiers whose SPIR-V count is
+// at most the engine's, or, where none is that cheap, the cheapest of them, with its extra cost.
+std::string engines_against_tiers(const BenchReport& r) {
+    static const char* const kOurs[] = {"baked-texture", "fast", "balanced", "default"};
+    std::vector<std::string> peers;
+    std::map<std::string, int> spirv;
+    for (const SceneReport& s : r.scenes)
+        for (const CandidateReport& c : s.candidates) {
+            if (c.spirv_instructions) spirv[c.name] = std::max(spirv[c.name], *c.spirv_instructions);
+            if (c.family == "peer" && std::find(peers.begin(), peers.end(), c.name) == peers.end())
+                peers.push_back(c.name);
+        }
+    std::string rows;
+    for (const std::string& peer : peers) {
+        std::vector<size_t> scenes;
+        for (size_t i = 0; i < r.scenes.size(); ++i)
+            if (find_row(r.scenes[i], peer) && find_row(r.scenes[i], "none")) scenes.push_back(i);
+        if (scenes.empty() || !spirv.count(peer)) continue;
+        std::string match;  // the most expensive row within the engine's cost, else the cheapest
+        std::string cheapest;
+        for (const char* ours : kOurs) {
+            const bool everywhere = std::all_of(scenes.begin(), scenes.end(),
+                                                [&](size_t i) { return find_row(r.scenes[i], ours) != nullptr; });
+            if (!everywhere || !spirv.count(ours)) continue;
+            if (spirv[ours] <= spirv[peer] && (match.empty() || spirv[ours] > spirv[match])) match = ours;
+            if (cheapest.empty() || spirv[ours] < spirv[cheapest]) cheapest = ours;
+        }
+        if (match.empty()) match = cheapest;
+        if (match.empty()) continue;
+        const OverScenes e = over_scenes(r, peer, scenes), o = over_scenes(r, match, scenes);
+        int lower = 0;
+        rows += "| " + peer + " | " + std::to_string(spirv[peer]) + " | " + (match == "default" ? "reference" : match) +
+                " | " + std::to_string(spirv[match]) +
+                (spirv[match] > spirv[peer] ? " (+" + std::to_string(spirv[match] - spirv[peer]) + ")" : "") + " | " +
+                std::to_string(e.n);
+        for (int k = 0; k < 6; ++k) {
+            rows += " | " + format_double("%.3f", e.means[k]) + " / " + format_double("%.3f", o.means[k]);
+            lower += o.means[k] < e.means[k] ? 1 : 0;
+        }
+        rows += " | " + std::to_string(e.holds) + " / " + std::to_string(o.holds) + " | " + std::to_string(lower) +
+                " of 6 |\n";
+    }
+    if (rows.empty()) return "";
+    return "\nThe peers' filters (engines' run-time filters and offline bakes, VAREF's) against specbake's row of "
+           "equal or lower cost (on the scenes both ran on): the "
+           "most expensive of baked-texture (the baked roughness alone) and the tiers fast, balanced and reference "
+           "(the default) whose SPIR-V count is at most the engine's, else the cheapest of them (its extra "
+           "instructions in brackets). Cells are peer / specbake, geometric means of the ratio to no "
+           "filtering; do no harm counts the scenes where every measure holds its goal:\n\n"
+           "| peer | SPIR-V | specbake | SPIR-V | scenes | RMSE | RMSE (tm) | flicker | flicker (tm) | t-err "
+           "| t-err (tm) | do no harm | specbake lower on |\n"
+           "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n" +
+           rows;
 }
 }  // namespace
 
@@ -289,6 +381,7 @@ std::string bench_summary_markdown(const BenchReport& r) {
     out += "\nBase: none (no filtering); for the glint family glint-c20 (glints without anti-aliasing, C20), on the "
            "glint ground truth.\n";
     out += do_no_harm_table(r);
+    out += engines_against_tiers(r);
     out += "\nBest per scene (lowest linear RMSE / lowest flicker among filtering candidates):\n\n";
     out += "| scene | base RMSE | best RMSE | base flicker | best flicker |\n|---|---:|---|---:|---|\n";
     for (const SceneReport& s : r.scenes) {
@@ -385,7 +478,7 @@ std::string bench_svg(const BenchReport& r) {
     const std::map<std::string, std::string> colours = {{"none", "#000000"},   {"derivative", "#1f77b4"},
                                                         {"peer", "#d62728"},   {"baked", "#2ca02c"},
                                                         {"default", "#9467bd"}, {"variant", "#8c564b"},
-                                                        {"glint", "#ff7f0e"}};
+                                                        {"glint", "#ff7f0e"},   {"tier", "#e377c2"}};
     std::string svg = "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + std::to_string(width) + "\" height=\"" +
                       std::to_string(height) + "\" font-family=\"sans-serif\" font-size=\"10\">\n";
     svg += "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
@@ -430,7 +523,7 @@ std::string bench_svg(const BenchReport& r) {
     svg += "<text x=\"" + std::to_string(margin) + "\" y=\"" + std::to_string(height - 12) +
            "\">Geometric mean over " + std::to_string(r.scenes.size()) +
            " scene/roughness pairs; below the dark line = better than no filtering. Colours: black none, blue "
-           "derivative, red peers, green baked, purple default, brown bake variants, orange glints (relative to glint-c20).</text>\n";
+           "derivative, red peers, green baked, purple default, pink tiers, brown bake variants, orange glints (relative to glint-c20).</text>\n";
     svg += "</svg>\n";
     return svg;
 }

@@ -31,7 +31,7 @@ struct SimCurvatureBake {
 
 struct SimCandidate {
     std::string name;    // table row, e.g. "projected-approx", "baked-texture", "default+curvature"
-    std::string family;  // "none", "derivative", "peer", "baked", "default", "variant"
+    std::string family;  // "none", "derivative", "peer", "baked", "default", "tier", "variant"
     std::string source;  // citation of the formula
     SimShaderSpec shader;
     std::string texture_bake;    // key of a SimTextureBake, empty when none
