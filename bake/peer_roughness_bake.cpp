@@ -52,6 +52,18 @@ double peer_widened_roughness(double r_bar, double r, PeerRoughnessBake peer) {
         case PeerRoughnessBake::Godot:
             widened = std::sqrt(r * r + std::min(3.0 * (r_bar < 1.0 ? 0.25 / kappa : 0.0), 0.4 * 0.4));
             break;
+        case PeerRoughnessBake::UnityHdrp: {
+            const double variance = r_bar < 1.0 ? std::min(1.0 / (4.0 * kappa), 0.03125) : 0.0;
+            widened = std::pow(r * r * r * r + std::min(2.0 * variance, 0.2 * 0.2), 0.25);
+            break;
+        }
+        case PeerRoughnessBake::Unreal: {
+            const double length = std::clamp(r_bar, 1.0e-6, 1.0);
+            const double variance = std::max(0.0, (1.0 - length) / length - 4.0e-5);
+            const double a = r * r * r * r, b = 2.0 * variance * (a - 1.0);
+            widened = std::pow(std::max(0.0, (b - a) / (b - 1.0)), 0.25);
+            break;
+        }
     }
     return std::clamp(widened, 0.0, 1.0);
 }
@@ -66,7 +78,7 @@ Result<MipChain> bake_peer_roughness(const Image& normal, const Image* roughness
         double n[3] = {2.0 * c[0] - 1.0, 2.0 * c[1] - 1.0, 2.0 * c[2] - 1.0};
         if (peer == PeerRoughnessBake::Godot) {
             n[2] = std::sqrt(std::max(0.0, 1.0 - (n[0] * n[0] + n[1] * n[1])));
-        } else {
+        } else if (peer != PeerRoughnessBake::Unreal) {
             const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
             for (double& v : n) v = len > 0 ? v / len : 0.0;
         }
@@ -89,7 +101,7 @@ Result<MipChain> bake_peer_roughness(const Image& normal, const Image* roughness
                     const auto [y0, y1] = under(y, h, roughness->height);
                     r = rough.box(x0, y0, x1, y1, 0) / double((x1 - x0) * (y1 - y0));
                 }
-                if (k > 0) {
+                if (k > 0 || peer == PeerRoughnessBake::Unreal) {
                     const auto [x0, x1] = under(x, w, W);
                     const auto [y0, y1] = under(y, h, H);
                     const double count = double((x1 - x0) * (y1 - y0));

@@ -10,8 +10,16 @@
 //   r' = sqrt(r^2 + 1 / (2 kappa)), four times less spread, measured against that binary in the tests.
 // - Godot 4 importer (core/io/image.cpp `generate_mipmap_roughness`): z rebuilt as
 //   sqrt(max(0, 1 - x^2 - y^2)) from x, y = 2c - 1; r' = sqrt(r^2 + min(3 (0.25 / kappa), 0.4^2)).
-// Level 0 is the roughness as authored in both. The result is clamped to [0, 1] (the engines store it in
-// unsigned normalised formats).
+// - Unity HDRP `NormalMapFilteringTexturePostprocessor` (files named `_NF`): normals decoded as
+//   normalize(2c - 1) with the stored blue channel; var = min(1 / (4 kappa), 0.03125) (0 where r_bar >= 1,
+//   the cap being what its 8-bit encoding holds), applied by its shader's NormalFiltering as
+//   a' = a + min(2 var, threshold^2) on a = r^4, threshold 0.2 (HDRP's default specular AA threshold).
+// - Unreal 5 composite texture (`ApplyCompositeTexture`, Toksvig, CompositePower 1): the mean of the decoded
+//   2c - 1 vectors, not normalised per texel (the normal map's own box-filtered mip), L = min(|mean|, 1),
+//   var = max(0, (1 - L) / L - 4e-5); with a = r^4, B = 2 var (a - 1), a' = (B - a) / (B - 1). It is applied
+//   to every level, level 0 included (a stored normal shorter than 1 widens there too).
+// Level 0 is the roughness as authored in the others. The result is clamped to [0, 1] (the engines store it
+// in unsigned normalised formats).
 #pragma once
 
 #include "core/image.h"
@@ -19,7 +27,7 @@
 
 namespace specbake {
 
-enum class PeerRoughnessBake { Filament, FilamentDebian, Godot };
+enum class PeerRoughnessBake { Filament, FilamentDebian, Godot, UnityHdrp, Unreal };
 
 // `normal`: 3+ channels encoded (n + 1) / 2, +Y green; `roughness`: 1+ channels (channel 0: perceptual
 // roughness r) of any size, or null for the constant `roughness_value`. Returns levels down to 1 x 1 of
@@ -27,7 +35,8 @@ enum class PeerRoughnessBake { Filament, FilamentDebian, Godot };
 Result<MipChain> bake_peer_roughness(const Image& normal, const Image* roughness, float roughness_value,
                                      PeerRoughnessBake peer);
 
-// The widened roughness of one texel from its mean normal length r_bar and box-filtered roughness r.
+// The widened roughness of one texel from its mean normal length r_bar (Unreal: L, the length of the mean
+// of the decoded vectors) and box-filtered roughness r.
 double peer_widened_roughness(double r_bar, double r, PeerRoughnessBake peer);
 
 }  // namespace specbake

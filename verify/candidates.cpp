@@ -101,7 +101,9 @@ void add_baked_candidates(std::vector<SimCandidate>& c, bool normal_mapped) {
         // roughness alone.
         for (const auto& [name, source, bake] :
              {std::tuple{"filament-prefilter", "Filament roughness-prefilter (vMF, r' = sqrt(r^2 + 2 / kappa))", "peer-filament"},
-              std::tuple{"godot-importer", "Godot 4 importer roughness mips (r' = sqrt(r^2 + min(0.75 / kappa, 0.16)))", "peer-godot"}})
+              std::tuple{"godot-importer", "Godot 4 importer roughness mips (r' = sqrt(r^2 + min(0.75 / kappa, 0.16)))", "peer-godot"},
+              std::tuple{"unity-hdrp-nf", "Unity HDRP NormalMapFilteringTexturePostprocessor (var = min(1 / (4 kappa), 0.03125), a' = a + min(2 var, 0.2^2))", "peer-unity"},
+              std::tuple{"unreal-toksvig", "Unreal 5 composite texture, Toksvig (var = (1 - |N|) / |N| - 4e-5, a' = (B - a) / (B - 1), B = 2 var (a - 1))", "peer-unreal"}})
             c.push_back({name, "peer", source,
                          {std::string(kBakedRoughnessDefines) + "#define SPECAA_NO_PIXEL_KERNEL\n", kIsotropicDefault,
                           "exact", bake},
@@ -291,6 +293,8 @@ std::vector<SimTextureBake> texture_bakes_for(const std::vector<SimCandidate>& c
         std::optional<PeerRoughnessBake> peer;
         if (k == "peer-filament") peer = PeerRoughnessBake::Filament;
         if (k == "peer-godot") peer = PeerRoughnessBake::Godot;
+        if (k == "peer-unity") peer = PeerRoughnessBake::UnityHdrp;
+        if (k == "peer-unreal") peer = PeerRoughnessBake::Unreal;
         bakes.push_back({k, s, peer});
     }
     return bakes;

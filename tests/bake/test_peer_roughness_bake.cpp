@@ -78,5 +78,44 @@ TEST(PeerRoughnessBake, FlatMapsKeepTheRoughnessMapsBoxAverage) {
     EXPECT_FALSE(bake_peer_roughness(Image(4, 4, 1), nullptr, 0.5f, PeerRoughnessBake::Godot));
 }
 
+TEST(PeerRoughnessBake, UnityHdrpAddsTwiceTheCappedVarianceToAlphaSquared) {
+    const double t = 0.4;
+    auto chain = bake_peer_roughness(checker(8, t), nullptr, 0.3f, PeerRoughnessBake::UnityHdrp);
+    ASSERT_TRUE(chain) << chain.error().message;
+    EXPECT_FLOAT_EQ(chain->levels[0].texel(2, 3)[0], 0.3f);  // level 0 as authored
+    // var = 1 / (4 kappa) = 0.01913, under the 0.03125 cap; 2 var = 0.0383, under threshold^2 = 0.04.
+    const double variance = 1.0 / (4.0 * kappa_of(std::cos(t)));
+    for (int k = 1; k < 4; ++k)
+        EXPECT_NEAR(chain->levels[size_t(k)].texel(0, 0)[0], std::pow(0.0081 + 2.0 * variance, 0.25), 2e-6) << k;
+    // Steep: var = 1 / (4 kappa(cos 1.2)) = 0.30 is capped at 0.03125, and 2 x 0.03125 at 0.2^2.
+    auto steep = bake_peer_roughness(checker(4, 1.2), nullptr, 0.3f, PeerRoughnessBake::UnityHdrp);
+    EXPECT_NEAR(steep->levels[1].texel(1, 0)[0], std::pow(0.0081 + 0.04, 0.25), 2e-6);
+}
+
+TEST(PeerRoughnessBake, UnrealTakesTheUnnormalisedMeanAndWidensEveryLevel) {
+    const double t = 0.4;
+    // Unit normals whose 2x2 boxes average to (0, 0, cos t): L = cos t from level 1 on.
+    auto chain = bake_peer_roughness(checker(8, t), nullptr, 0.3f, PeerRoughnessBake::Unreal);
+    ASSERT_TRUE(chain) << chain.error().message;
+    const auto toksvig = [](double length, double r) {
+        const double v = std::max(0.0, (1 - length) / length - 4e-5), a = r * r * r * r, b = 2 * v * (a - 1);
+        return std::pow((b - a) / (b - 1), 0.25);
+    };
+    EXPECT_NEAR(chain->levels[0].texel(1, 1)[0], 0.3, 2e-6);  // unit normals: variance 1e-7 - 4e-5 -> 0
+    // var = (1 - cos t) / cos t - 4e-5 = 0.08566: a' = (B - a) / (B - 1) = 0.1522 with a = 0.0081, r' = 0.6246.
+    EXPECT_NEAR(chain->levels[1].texel(0, 0)[0], toksvig(std::cos(t), 0.3), 2e-6);
+    EXPECT_NEAR(chain->levels[1].texel(0, 0)[0], 0.6246, 1e-4);
+    // A stored normal of length 0.8 (blue 0.9, not renormalised) widens level 0 as well: var = 0.25 - 4e-5.
+    Image short_normals(2, 2, 3);
+    for (size_t i = 0; i < short_normals.texel_count(); ++i)
+        short_normals.pixels[3 * i] = short_normals.pixels[3 * i + 1] = 0.5f, short_normals.pixels[3 * i + 2] = 0.9f;
+    auto shortened = bake_peer_roughness(short_normals, nullptr, 0.3f, PeerRoughnessBake::Unreal);
+    ASSERT_TRUE(shortened);
+    EXPECT_NEAR(shortened->levels[0].texel(0, 0)[0], toksvig(0.8, 0.3), 2e-6);
+    // Filament normalises the same texels: nothing to widen at level 1 but its 2e-4 floor.
+    auto filament = bake_peer_roughness(short_normals, nullptr, 0.3f, PeerRoughnessBake::Filament);
+    EXPECT_NEAR(filament->levels[1].texel(0, 0)[0], std::sqrt(0.09 + 2e-4), 2e-6);
+}
+
 }  // namespace
 }  // namespace specbake
