@@ -461,7 +461,7 @@ std::string bench_csv(const BenchReport& r) {
 
 std::string bench_svg(const BenchReport& r) {
     const std::vector<Aggregate> rows = aggregate(r);
-    const int panel_w = 460, panel_h = 360, margin = 60, width = 2 * panel_w + 40, height = panel_h + 90;
+    const int panel_w = 460, panel_h = 360, margin = 60, width = 2 * panel_w + 110, height = panel_h + 105;
     int x_min = 1 << 30, x_max = 0;
     for (const Aggregate& a : rows)
         if (a.spirv) {
@@ -520,10 +520,12 @@ std::string bench_svg(const BenchReport& r) {
                    "\" fill=\"" + colour + "\">" + a.name + "</text>\n";
         }
     }
-    svg += "<text x=\"" + std::to_string(margin) + "\" y=\"" + std::to_string(height - 12) +
+    svg += "<text x=\"" + std::to_string(margin) + "\" y=\"" + std::to_string(height - 26) +
            "\">Geometric mean over " + std::to_string(r.scenes.size()) +
-           " scene/roughness pairs; below the dark line = better than no filtering. Colours: black none, blue "
-           "derivative, red peers, green baked, purple default, pink tiers, brown bake variants, orange glints (relative to glint-c20).</text>\n";
+           " scene/roughness pairs; below the dark line = better than no filtering.</text>\n";
+    svg += "<text x=\"" + std::to_string(margin) + "\" y=\"" + std::to_string(height - 10) +
+           "\">Colours: black none, blue derivative, red peers (engines, VAREF), green baked, purple default, pink "
+           "tiers, brown bake variants, orange glints (relative to glint-c20).</text>\n";
     svg += "</svg>\n";
     return svg;
 }

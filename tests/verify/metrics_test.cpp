@@ -267,5 +267,27 @@ TEST(VerifyBenchSummary, EnginesAreHeldAgainstTheTierOfEqualOrLowerCost) {
         << md;
 }
 
+// The plot draws every aggregated row at its SPIR-V count, the tiers in their own colour beside the peers.
+TEST(VerifyBenchSummary, PlotDrawsTiersAndPeersInTheirColours) {
+    const auto row = [](const char* name, const char* family, int spirv, double rmse) {
+        CandidateReport c;
+        c.name = name;
+        c.family = family;
+        c.spirv_instructions = spirv;
+        c.metrics.rmse = c.metrics.rmse_tonemapped = rmse;
+        c.metrics.flicker_linear = c.metrics.flicker = 1.0;
+        return c;
+    };
+    SceneReport s;
+    s.scene = "sphere";
+    s.candidates = {row("none", "none", 254, 1.0), row("godot", "peer", 266, 0.8), row("fast", "tier", 363, 0.5)};
+    BenchReport report;
+    report.scenes = {s};
+    const std::string svg = bench_svg(report);
+    EXPECT_NE(svg.find("fill=\"#e377c2\">fast</text>"), std::string::npos) << svg;
+    EXPECT_NE(svg.find("fill=\"#d62728\">godot</text>"), std::string::npos) << svg;
+    EXPECT_NE(svg.find("pink tiers"), std::string::npos) << svg;
+}
+
 }  // namespace
 }  // namespace specbake::verify
