@@ -70,8 +70,8 @@ float specaa_lod_from_derivatives(vec2 size, vec2 uv) {
 //                   SPECAA_QUALITY_FAST (0)      the isotropic filtered roughness (baked data + per-pixel
 //                                                kernel, specaa_filtered_alpha2) as A = a' I, and GGX(A)
 //                                                with the material's tails (specaa_filtered_D_isotropic):
-//                                                the cheapest; bind the baked roughness (+28-44 SPIR-V
-//                                                instructions over GGX(a), the Sigma kernel costs +80).
+//                                                the cheapest; bind the baked roughness (+29-44 SPIR-V
+//                                                instructions over GGX(a); with the Sigma kernel +80-83).
 //                   SPECAA_QUALITY_BALANCED (1)  the same isotropic A with GGX of the material convolved
 //                                                with the footprint in closed form
 //                                                (specaa_convolved_D_closed_form, no loop).
@@ -1051,7 +1051,7 @@ SPECAA_FLOAT3 specaa_widened_matrix(float a, SPECAA_FLOAT3 K) {
 // kernel kept anisotropic.
 SPECAA_FLOAT3 specaa_filtered_alpha2_matrix(SpecaaSurface s) {
 #if SPECAA_QUALITY == SPECAA_QUALITY_FAST
-    // The fast tier: the isotropic form (specaa_filtered_alpha2, the same value) written for its bindings.
+    // The fast tier: the isotropic form (specaa_filtered_alpha2's value, to rounding) written for its bindings.
     float t = specaa_pixel_kernel(s);
 #if defined(SPECAA_KERNEL_TEXTURE) || defined(SPECAA_LEAN_TEXTURE0)
     float a = specaa_base_alpha2(s);
@@ -1121,7 +1121,7 @@ float specaa_footprint_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
 // SPECAA_QUALITY fast: specaa_filtered_D_isotropic on its isotropic A (no texture LOD query, no convolution):
 // GGX(A) alone makes the material's tails a' / a times too bright, a halo around every highlight whose
 // footprint spread is large against a (the analytic scenes at alpha 0.01: tone-mapped flicker 3.6x no
-// filtering's on the sphere, 9.9x on the cylinder; docs/accuracy.md#quality-tiers).
+// filtering's on the sphere, 9.9x on the cylinder; docs/accuracy.md#the-fast-tier).
 float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 filteredA, SpecaaSurface s) {
 #if SPECAA_QUALITY == SPECAA_QUALITY_FAST
     return specaa_filtered_D_isotropic(h, specaa_base_alpha2(s), filteredA.x);

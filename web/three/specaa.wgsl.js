@@ -40,8 +40,8 @@ fn specaa_lod_from_derivatives(size: vec2<f32>, uv: vec2<f32>) -> f32 {
 //                   SPECAA_QUALITY_FAST (0)      the isotropic filtered roughness (baked data + per-pixel
 //                                                kernel, specaa_filtered_alpha2) as A = a' I, and GGX(A)
 //                                                with the material's tails (specaa_filtered_D_isotropic):
-//                                                the cheapest; bind the baked roughness (+28-44 SPIR-V
-//                                                instructions over GGX(a), the Sigma kernel costs +80).
+//                                                the cheapest; bind the baked roughness (+29-44 SPIR-V
+//                                                instructions over GGX(a); with the Sigma kernel +80-83).
 //                   SPECAA_QUALITY_BALANCED (1)  the same isotropic A with GGX of the material convolved
 //                                                with the footprint in closed form
 //                                                (specaa_convolved_D_closed_form, no loop).
@@ -849,7 +849,7 @@ fn specaa_footprint_D(h: vec3<f32>, A: vec3<f32>, alpha2: f32) -> f32 {
 // SPECAA_QUALITY fast: specaa_filtered_D_isotropic on its isotropic A (no texture LOD query, no convolution):
 // GGX(A) alone makes the material's tails a' / a times too bright, a halo around every highlight whose
 // footprint spread is large against a (the analytic scenes at alpha 0.01: tone-mapped flicker 3.6x no
-// filtering's on the sphere, 9.9x on the cylinder; docs/accuracy.md#quality-tiers).
+// filtering's on the sphere, 9.9x on the cylinder; docs/accuracy.md#the-fast-tier).
 fn specaa_default_D(h: vec3<f32>, filteredA: vec3<f32>, s: SpecaaSurface) -> f32 {
     let A: vec3<f32> = filteredA;
     let a: f32 = specaa_base_alpha2(s);
