@@ -60,7 +60,10 @@ inline void add_sim_command_options(CLI::App* sub, SimCommandOptions& o) {
         ->delimiter(',');
     sub->add_option("--variant", o.variants,
                     "Also score a copy of the default named default:LABEL compiled with these defines (repeatable; "
-                    "'+' separates defines), e.g. --variant nopix:SPECAA_NO_PIXEL_KERNEL --variant g1:SPECAA_KERNEL_GATE=1")
+                    "'+' separates defines), e.g. --variant nopix:SPECAA_NO_PIXEL_KERNEL --variant g1:SPECAA_KERNEL_GATE=1; "
+                    "a variant that defines SPECAA_ROUGHNESS_TEXTURE=uBakedRoughness shades with the baked roughness in "
+                    "place of the kernel mips, e.g. --variant fast:SPECAA_QUALITY=0+SPECAA_ROUGHNESS_TEXTURE=uBakedRoughness"
+                    "+SPECAA_ROUGHNESS_CHANNEL=r")
         ->type_name("LABEL:NAME[=VALUE][+NAME[=VALUE]]");
     sub->add_option("--curvature-estimator", o.curvature_estimator,
                     "On scene files, the per-vertex curvature that --define and --variant candidates with "

@@ -12,6 +12,7 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <sstream>
 
 namespace specbake::verify {
 namespace {
@@ -71,6 +72,27 @@ SceneReport empty_report(const SimScene& scene, const VerifyOptions& options) {
     return report;
 }
 
+// A --variant that binds the baked roughness (SPECAA_ROUGHNESS_TEXTURE) shades with the roughness mips of the
+// default's bake in place of its kernel mips (the include takes one or the other); where the default binds
+// no baked data (no normal map) the material's roughness is the baked one and the binding is dropped.
+// Returns the variant's lines.
+std::string with_baked_roughness(const std::string& lines, SimCandidate& v) {
+    static const std::string kRoughness = "#define SPECAA_ROUGHNESS_TEXTURE ";
+    if (lines.find(kRoughness) == std::string::npos) return lines;
+    static const std::string kKernel = "#define SPECAA_KERNEL_TEXTURE uBakedKernel\n";
+    static const std::string kAnisotropic = "#define SPECAA_KERNEL_ANISOTROPIC\n";
+    if (!v.shader.baked_source.empty()) {
+        for (const std::string& line : {kKernel, kAnisotropic})
+            if (auto at = v.shader.defines.find(line); at != std::string::npos) v.shader.defines.erase(at, line.size());
+        return lines;
+    }
+    std::string kept, line;
+    std::istringstream in(lines);
+    while (std::getline(in, line))
+        if (!line.starts_with(kRoughness) && !line.starts_with("#define SPECAA_ROUGHNESS_CHANNEL ")) kept += line + "\n";
+    return kept;
+}
+
 // The candidates the scene gets: the simulator's (unless it simulates glints only) and the glint ones where
 // a material asks for them (SPEC Sec. 6), narrowed to --only (plus the baselines), with --define's lines
 // in front of every non-baseline shader. Notes the --only names that do not apply.
@@ -114,7 +136,7 @@ std::vector<SimCandidate> select_candidates(const SimScene& scene, const VerifyO
             for (const auto& [label, lines] : options.default_variants) {
                 SimCandidate v = copy;
                 v.name = "default:" + label;
-                v.shader.defines = lines + v.shader.defines;
+                v.shader.defines = with_baked_roughness(lines, v) + v.shader.defines;
                 if (uses_curvature(lines) && v.curvature_bake.empty()) v.curvature_bake = v.shader.curvature_source = estimator;
                 candidates.push_back(std::move(v));
             }

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <sstream>
 #include <string>
 
 namespace specbake::gltest {
@@ -119,6 +120,58 @@ TEST(ShaderCompile, EveryEntryPointCompilesToValidSpirvInBothLanguages) {
     EXPECT_EQ(status, 0) << out;
     std::printf("SPIR-V instructions per entry point after spirv-opt -O:\n%s", out.c_str());
     EXPECT_NE(out.find("projected"), std::string::npos) << out;
+}
+
+// Instructions inside the functions of the optimised SPIR-V of shaders/cost/entries.frag (GLSL) or
+// entries.hlsl (HLSL) compiled with `defines`, counted as shaders/count_instructions.sh counts them; -1 on
+// a tool error (the output in `log`).
+int cost_entry_instructions(bool hlsl, const std::string& defines, const TempDir& dir, std::string& log) {
+    const std::string in = (dir.path() / "in.spv").string(), opt = (dir.path() / "opt.spv").string();
+    const std::string compile =
+        hlsl ? "glslangValidator -V -D -e main -S frag -I'" + kShaders + "' " + defines + " '" + kShaders + "/cost/entries.hlsl'"
+             : "glslangValidator -G -S frag -I'" + kShaders + "' " + defines + " '" + kShaders + "/cost/entries.frag'";
+    if (run_command(compile + " -o '" + in + "' && spirv-opt -O '" + in + "' -o '" + opt + "'", log) != 0) return -1;
+    std::string text;
+    if (run_command("spirv-dis --no-header --raw-id '" + opt + "'", text) != 0) {
+        log = text;
+        return -1;
+    }
+    int count = 0;
+    bool inside = false;
+    std::istringstream lines(text);
+    std::string line;
+    while (std::getline(lines, line)) {
+        if (line.find("OpFunction ") != std::string::npos) inside = true;
+        if (inside && line.find("Op") != std::string::npos) ++count;
+        if (line.find("OpFunctionEnd") != std::string::npos) inside = false;
+    }
+    return count;
+}
+
+// The fast tier's budget (issue 35): its matrix and NDF (the edge policy included) cost at most 50 SPIR-V
+// instructions over an unfiltered shader's GGX(a), with derivatives only and with the baked roughness, in
+// both languages.
+TEST(ShaderCompile, FastTierCostsAtMost50InstructionsOverUnfilteredGgx) {
+    SPECBAKE_REQUIRE_TOOLS();
+    TempDir dir;
+    for (bool hlsl : {false, true}) {
+        const char* language = hlsl ? "HLSL" : "GLSL";
+        std::string log;
+        const int none = cost_entry_instructions(hlsl, "-DSPECAA_COST_NONE_NDF", dir, log);
+        ASSERT_GT(none, 0) << language << " unfiltered GGX D: " << log;
+        for (const char* binding : {"", "-DSPECAA_COST_TEXTURES -DSPECAA_ROUGHNESS_TEXTURE=uBaked0"}) {
+            const int fast = cost_entry_instructions(
+                hlsl, std::string("-DSPECAA_COST_DEFAULT_NDF -DSPECAA_QUALITY=0 ") + binding, dir, log);
+            ASSERT_GT(fast, 0) << language << " fast tier " << binding << ": " << log;
+            EXPECT_LE(fast - none, 50) << language << " fast tier " << binding << ": " << fast << " against " << none;
+            // The reference tier of the same entry costs far more: the count sees the filtering at all.
+            const int reference = cost_entry_instructions(
+                hlsl, std::string("-DSPECAA_COST_DEFAULT_NDF -DSPECAA_QUALITY=2 ") + binding, dir, log);
+            EXPECT_GT(reference - none, 200) << language << " reference tier " << binding << ": " << log;
+            std::printf("%s fast tier %s: %d instructions, +%d over GGX(a)\n", language,
+                        *binding ? "+ baked roughness" : "(derivatives only)", fast, fast - none);
+        }
+    }
 }
 
 TEST(ShaderCompile, RoughnessTextureWithKernelIsRejected) {

@@ -51,6 +51,7 @@ struct Config {
     double world_per_pixel = kWorldPerPixel;  // footprint of the curvature kernel
     bool two_lobes = false;                    // SPECAA_KERNEL_TWO_LOBES
     double roughness = kRoughness;             // material r (no roughness texture)
+    int quality = 2;                           // SPECAA_QUALITY
 };
 
 GLuint make_texture(int channels, const std::function<std::array<float, 4>(int)>& level_value) {
@@ -83,6 +84,7 @@ std::string fragment_source(const Config& c) {
     if (c.curvature) defines += "#define SPECAA_USE_CURVATURE\n";
     if (!c.pixel_kernel) defines += "#define SPECAA_NO_PIXEL_KERNEL\n";
     if (c.two_lobes) defines += "#define SPECAA_KERNEL_TWO_LOBES\n";
+    defines += "#define SPECAA_QUALITY " + std::to_string(c.quality) + "\n";
     return defines + read_source_file("shaders/specaa.glsl") + R"(
 uniform float uUvPerPixel;
 uniform float uNormalSlope;
@@ -221,6 +223,7 @@ void run_config(const Config& c) {
                 // Per-pixel kernel: normal differences across the quad (x&~1 -> x|1), or the curvature
                 // kernel of the footprint (w, 0), (0, w) in the (T, B) frame.
                 Sym2<double> k_px{};
+                double want_iso = 0.0;  // specaa_filtered_alpha2
                 if (c.pixel_kernel && c.curvature) {
                     const double cx = std::cos(dir), cy = std::sin(dir);
                     const Sym2<double> S{kK1 * cx * cx + kK2 * cy * cy, (kK1 - kK2) * cx * cy, kK1 * cy * cy + kK2 * cx * cx};
@@ -234,6 +237,7 @@ void run_config(const Config& c) {
                     const double t_iso = std::min(kSigma2 * dot(dn, dn), kKappa);
                     const double t = 0.5 * (k_tex.xx + k_tex.yy) + t_iso;
                     const double want = filter_projected_isotropic(a0, t);
+                    want_iso = want;
                     const size_t i = static_cast<size_t>(y * kView + x) * 4;
                     if (std::abs(out0[i] - want) > kTol * want && ++failures <= 5)
                         ADD_FAILURE() << c.name << " level " << L << " pixel " << x << "," << y << ": a " << out0[i] << " want " << want;
@@ -242,11 +246,25 @@ void run_config(const Config& c) {
                 if (!(c.pixel_kernel && !c.curvature)) {
                     const double t = 0.5 * (k_tex.xx + k_tex.yy) + std::min(0.5 * (k_px.xx + k_px.yy), kKappa);
                     const double want = filter_projected_isotropic(a0, t);
+                    want_iso = want;
                     if (std::abs(out0[i] - want) > kTol * want && ++failures <= 5)
                         ADD_FAILURE() << c.name << " level " << L << " pixel " << x << "," << y << ": a " << out0[i] << " want " << want;
                 }
                 if (std::abs(out0[i + 1] - std::pow(double(out0[i]), 0.25)) > kTol && ++failures <= 5)
                     ADD_FAILURE() << c.name << ": r != a^(1/4)";
+                if (c.quality == 0) {
+                    // The fast tier: the isotropic form as its matrix, and specaa_filtered_D on it, the material's
+                    // tails (filtered_ndf of a' I with the unfiltered a).
+                    if ((std::abs(out1[i] - want_iso) > kTol * want_iso || std::abs(out1[i + 1] - want_iso) > kTol * want_iso ||
+                         out1[i + 2] != 0.0f) && ++failures <= 5)
+                        ADD_FAILURE() << c.name << " level " << L << " pixel " << x << "," << y << ": fast matrix " << out1[i]
+                                      << " " << out1[i + 1] << " " << out1[i + 2] << " want " << want_iso;
+                    const double fast_d = filtered_ndf(h, Sym2<double>{want_iso, 0.0, want_iso}, a0);
+                    if (std::abs(out2[i] - fast_d) > 1e-4 * fast_d && ++failures <= 5)
+                        ADD_FAILURE() << c.name << " level " << L << " pixel " << x << "," << y << ": fast D " << out2[i]
+                                      << " want " << fast_d << " (GGX(a') " << ggx_ndf(h, diag(want_iso, want_iso), a0 * a0) << ")";
+                    continue;
+                }
                 const Sym2<double> A = projected_to_slope_roughness(slope_to_projected_roughness(diag(a0, a0)) + k_tex + clamp_kernel(k_px));
                 const double scale = A.xx + A.yy;
                 if ((std::abs(out1[i] - A.xx) > kTol * scale || std::abs(out1[i + 1] - A.yy) > kTol * scale ||
@@ -287,7 +305,8 @@ void run_config(const Config& c) {
     // The kernel cases reach the blend itself, not only its ends.
     // The rough material's cases are there for the gate (with the Sigma kernel at r = 0.6 no pixel is both
     // in the blend and 5% apart).
-    if ((c.baked == Baked::Kernel || c.baked == Baked::KernelAnisotropic || c.baked == Baked::Lean) && c.roughness == kRoughness)
+    if ((c.baked == Baked::Kernel || c.baked == Baked::KernelAnisotropic || c.baked == Baked::Lean) && c.roughness == kRoughness &&
+        c.quality == 2)
         EXPECT_GT(blends, 0) << c.name << ": no pixel between the convolution and GGX(A)";
     glDeleteTextures(3, targets);
     glDeleteTextures(1, &tex0);
@@ -295,6 +314,22 @@ void run_config(const Config& c) {
     glDeleteFramebuffers(1, &fbo);
     glDeleteVertexArrays(1, &vao);
     glDeleteProgram(program);
+}
+
+// The fast tier (SPECAA_QUALITY 0) with each binding: its Sigma kernel mean from the texel's eigenvalues
+// (specaa_baked_kernel_mean), gated, and its NDF against the C++ composition.
+TEST(ShaderEntry, FastTierDerivativesOnly) { run_config({"fast, derivatives", Baked::None, false, true, kWorldPerPixel, false, kRoughness, 0}); }
+TEST(ShaderEntry, FastTierRoughnessTexturePlusDerivatives) {
+    run_config({"fast, roughness+derivatives", Baked::Roughness, false, true, kWorldPerPixel, false, kRoughness, 0});
+}
+TEST(ShaderEntry, FastTierAnisotropicKernelPlusDerivatives) {
+    run_config({"fast, anisotropic kernel+derivatives", Baked::KernelAnisotropic, false, true, kWorldPerPixel, false, kRoughness, 0});
+}
+TEST(ShaderEntry, FastTierAnisotropicKernelGatedUnderARoughMaterial) {
+    run_config({"fast, anisotropic kernel, r 0.6", Baked::KernelAnisotropic, false, false, kWorldPerPixel, false, 0.6, 0});
+}
+TEST(ShaderEntry, FastTierLeanPlusCurvature) {
+    run_config({"fast, LEAN+curvature", Baked::Lean, true, true, kWorldPerPixel, false, kRoughness, 0});
 }
 
 TEST(ShaderEntry, DerivativesOnly) { run_config({"derivatives", Baked::None, false, true}); }

@@ -457,6 +457,35 @@ TEST(VerifySceneFile, VariantAskingForCurvatureReadsTheEstimatedCurvature) {
     EXPECT_LT(curv->rmse, 0.6 * none->rmse);
 }
 
+// A --variant that binds the baked roughness shades with the default's roughness mips in place of its kernel
+// mips (the include rejects both at once): on a normal-mapped scene it is the default-roughness row to the
+// last bit; where nothing is baked (no normal map) the binding is dropped and it is the default row.
+TEST(VerifySceneFile, VariantBindingTheBakedRoughnessReplacesTheKernelMips) {
+    SPECBAKE_REQUIRE_GL();
+    const std::string rough = "#define SPECAA_ROUGHNESS_TEXTURE uBakedRoughness\n#define SPECAA_ROUGHNESS_CHANNEL r\n";
+    for (const char* name : {"bumpy-sphere", "sphere"}) {
+        auto scene = make_builtin_scene(name, 0.3f, 0.5f);
+        ASSERT_TRUE(scene.ok()) << scene.error().message;
+        const bool normal_mapped = std::string(name) == "bumpy-sphere";
+        VerifyOptions options = test::small_verify(32, 32, 4, 1);
+        options.only = {"default", "default-roughness"};
+        options.default_variants = {{"rough", rough}};
+        auto report = run_verify(*scene, options);
+        ASSERT_TRUE(report.ok()) << name << ": " << report.error().message;
+        const SimMetrics *variant = nullptr, *twin = nullptr, *kernel = nullptr;
+        for (const CandidateReport& c : report->candidates) {
+            if (c.name == "default:rough") variant = &c.metrics;
+            if (c.name == (normal_mapped ? "default-roughness" : "default")) twin = &c.metrics;
+            if (c.name == "default") kernel = &c.metrics;
+        }
+        ASSERT_TRUE(variant && twin && kernel) << name;
+        EXPECT_EQ(variant->rmse, twin->rmse) << name;
+        EXPECT_EQ(variant->flicker_linear, twin->flicker_linear) << name;
+        // The kernel mips shade the normal-mapped sphere differently: the binding did change.
+        if (normal_mapped) EXPECT_NE(variant->rmse, kernel->rmse);
+    }
+}
+
 TEST(VerifySceneFile, MaterialsWithoutANormalMapKeepTheirRoughnessInBakedCandidates) {
     SPECBAKE_REQUIRE_GL();
     // Two spheres side by side, only the right one normal-mapped: nothing is baked for the left one, so the

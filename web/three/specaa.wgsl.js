@@ -38,8 +38,10 @@ fn specaa_lod_from_derivatives(size: vec2<f32>, uv: vec2<f32>) -> f32 {
 //   SPECAA_QUALITY  the cost tier of the default entry points (specaa_filtered_alpha2_matrix,
 //                   specaa_default_D); pick by the run-time cost you accept per light:
 //                   SPECAA_QUALITY_FAST (0)      the isotropic filtered roughness (baked data + per-pixel
-//                                                kernel, specaa_filtered_alpha2) as A = a' I and GGX(A):
-//                                                the cheapest, a drop-in for a BRDF's roughness.
+//                                                kernel, specaa_filtered_alpha2) as A = a' I, and GGX(A)
+//                                                with the material's tails (specaa_filtered_D_isotropic):
+//                                                the cheapest; bind the baked roughness (+29-44 SPIR-V
+//                                                instructions over GGX(a); with the Sigma kernel +80-83).
 //                   SPECAA_QUALITY_BALANCED (1)  the same isotropic A with GGX of the material convolved
 //                                                with the footprint in closed form
 //                                                (specaa_convolved_D_closed_form, no loop).
@@ -370,9 +372,14 @@ fn specaa_rough_share(g: f32) -> f32 { return select(1.0, saturate(g), specaa_is
 fn specaa_sample_kernel_rough_share(tex: texture_2d<f32>, smp: sampler, uv: vec2<f32>) -> f32 {
     return specaa_rough_share(textureSample(tex, smp, uv).a);
 }
+// The Sigma kernel texel as stored (Sigma.xx, Sigma.yy, Sigma.xy, g), with the diagnostics' mip choice.
+fn specaa_sample_kernel_raw(tex: texture_2d<f32>, smp: sampler, uv: vec2<f32>) -> vec4<f32> {
+    let t: vec4<f32> = textureSample(tex, smp, uv);
+    return t;
+}
 // Both from one fetch: (Sigma.xx, Sigma.yy, Sigma.xy, g), Sigma clamped to PSD (zero if not finite).
 fn specaa_sample_kernel_texel(tex: texture_2d<f32>, smp: sampler, uv: vec2<f32>) -> vec4<f32> {
-    let t: vec4<f32> = textureSample(tex, smp, uv);
+    let t: vec4<f32> = specaa_sample_kernel_raw(tex, smp, uv);
     let sigma: vec3<f32> = specaa_sym_clamp_psd(t.rgb);
     return vec4<f32>(select(vec3<f32>(0.0, 0.0, 0.0), sigma, specaa_is_finite3(sigma)),
                          specaa_rough_share(t.a));
@@ -498,6 +505,22 @@ fn specaa_filtered_D(h: vec3<f32>, A: vec3<f32>, alpha2: f32) -> f32 {
     let rho: f32 = saturate(alpha2 * sqrt(detClamped) * q * q);
     let ggx: f32 = specaa_ggx_D(h, A, tau);
     return ggx + (1.0 - rho) * (specaa_beckmann_D(h, A, tau) - ggx);
+}
+// specaa_filtered_D for an isotropic A = f I (the fast tier's NDF): rho GGX(f) + (1 - rho) Beckmann(f) with
+// rho = a / f, which keeps the unfiltered lobe's tails, a / (pi tan^4(theta_h)), where GGX(f) alone makes them
+// f / a times too bright (TK21 Sec. 7); integrates to one. Stable forms: GGX f / (pi (f h_z^2 + |h.xy|^2)^2)
+// (finite as h_z -> 0), Beckmann e^(-u / f) (1 + u)^2 / (pi f) with u = tan^2(theta_h), 0 where the
+// exponential underflows; 0 for h_z <= 0. f is floored at 1e-12 so that a mirror stays finite.
+fn specaa_filtered_D_isotropic(h: vec3<f32>, alpha2: f32, filteredAlpha2: f32) -> f32 {
+    let f: f32 = max(filteredAlpha2, 1.0e-12);
+    let r2: f32 = dot(h.xy, h.xy);
+    let z2: f32 = h.z * h.z;
+    let s2: f32 = f * z2 + r2;
+    let ggx: f32 = f / (3.14159265358979 * s2 * s2);
+    let u: f32 = r2 / z2;
+    let e: f32 = exp(-u / f);
+    let beckmann: f32 = select(0.0, e * (1.0 + u) * (1.0 + u) / (3.14159265358979 * f), e > 0.0);
+    return select(0.0, beckmann + saturate(alpha2 / f) * (ggx - beckmann), h.z > 0.0);
 }
 // NDF of GGX(alpha2) seen through the pixel footprint: GGX(a) convolved with the footprint's distribution
 // of slopes, N(0, K / 2) with K = A - a I (TK21 Eq. 3: the kernel is twice the footprint's slope
@@ -719,6 +742,14 @@ fn specaa_gate_baked_kernel(K: vec3<f32>, a: f32) -> vec3<f32> {
 fn specaa_baked_kernel_matrix(s: SpecaaSurface) -> vec3<f32> {
     return specaa_gate_baked_kernel(specaa_baked_spread_matrix(s), specaa_base_alpha2(s));
 }
+// The mean tr(K) / 2 of specaa_baked_kernel_matrix (the fast tier's baked kernel; a = specaa_base_alpha2),
+// without the matrix for the Sigma kernel: from the texel's eigenvalues l1 >= l2, tr(clamp_psd(Sigma)) =
+// max(l1, 0) + max(l2, 0) and lambda_max = max(l1, 0), so tr(K) / 2 = sqrt(g) tr f^2 with the gate's
+// f = saturate(2 sqrt(g) max(l1, 0) / (SPECAA_KERNEL_GATE a)). A non-finite texel (l1 or l2 not finite) gives 0.
+fn specaa_baked_kernel_mean(s: SpecaaSurface, a: f32) -> f32 {
+    let baked: vec3<f32> = specaa_baked_kernel_matrix(s);
+    return 0.5 * (baked.x + baked.y);
+}
 // Footprint of the pixel in the (T, B) frame (specaa_footprint) and whether it and the curvature are
 // usable (finite inputs and derivatives; edge policy).
 fn specaa_curvature_footprint(s: SpecaaSurface, footprint: ptr<function, vec4<f32>>) -> bool {
@@ -759,7 +790,8 @@ fn specaa_pixel_kernel(s: SpecaaSurface) -> f32 {
     let dnV: vec3<f32> = dpdy(s.normal);
     let usable: bool = specaa_max_component(max(specaa_magnitude_bits3(s.normal),
                                            max(specaa_magnitude_bits3(dnU), specaa_magnitude_bits3(dnV)))) < 0x7f800000u;
-    return select(0.0, specaa_clamp_kernel(specaa_iso_kernel_mean(dnU, dnV)), usable);
+    // Finite derivatives give a kernel in [0, +inf] (never NaN): min() is specaa_clamp_kernel there.
+    return select(0.0, min(specaa_iso_kernel_mean(dnU, dnV), SPECAA_KAPPA), usable);
 }
 // Filtered squared roughness a (isotropic form of the default). The baked and per-pixel kernels are variances of
 // independent footprints, so they add in projected space (TK21 Eq. 6) before mapping back (Eq. 7).
@@ -814,7 +846,10 @@ fn specaa_footprint_D(h: vec3<f32>, A: vec3<f32>, alpha2: f32) -> f32 {
 // - Baked roughness texture (a already holds the texel's spread, K only the pixel's): w = saturate(LOD),
 //   the convolution under magnification, GGX(A) from the texture's mip 1 on.
 // NaN inputs give GGX(A).
-// SPECAA_QUALITY fast: GGX(A) (A isotropic; no texture LOD query, no convolution).
+// SPECAA_QUALITY fast: specaa_filtered_D_isotropic on its isotropic A (no texture LOD query, no convolution):
+// GGX(A) alone makes the material's tails a' / a times too bright, a halo around every highlight whose
+// footprint spread is large against a (the analytic scenes at alpha 0.01: tone-mapped flicker 3.6x no
+// filtering's on the sphere, 9.9x on the cylinder; docs/accuracy.md#the-fast-tier).
 fn specaa_default_D(h: vec3<f32>, filteredA: vec3<f32>, s: SpecaaSurface) -> f32 {
     let A: vec3<f32> = filteredA;
     let a: f32 = specaa_base_alpha2(s);
@@ -856,6 +891,20 @@ fn specaa_baked_spread_matrix_kernel(s: SpecaaSurface, kernelTexture: texture_2d
 // specaa_baked_kernel_matrix with the baked texture.
 fn specaa_baked_kernel_matrix_kernel(s: SpecaaSurface, kernelTexture: texture_2d<f32>, kernelSampler: sampler) -> vec3<f32> {
     return specaa_gate_baked_kernel(specaa_baked_spread_matrix_kernel(s, kernelTexture, kernelSampler), specaa_base_alpha2(s));
+}
+
+// specaa_baked_kernel_mean with the baked texture.
+fn specaa_baked_kernel_mean_kernel(s: SpecaaSurface, a: f32, kernelTexture: texture_2d<f32>, kernelSampler: sampler) -> f32 {
+    let k: vec4<f32> = specaa_sample_kernel_raw(kernelTexture, kernelSampler, s.uv);
+    let halfTrace: f32 = 0.5 * (k.x + k.y);
+    let halfDiff: f32 = 0.5 * (k.x - k.y);
+    let radius: f32 = sqrt(halfDiff * halfDiff + k.z * k.z);
+    let l1: f32 = max(halfTrace + radius, 0.0);
+    let l2: f32 = halfTrace - radius;
+    let share: f32 = sqrt(specaa_rough_share(k.w));
+    let f: f32 = saturate(2.0 * share * l1 / max(SPECAA_KERNEL_GATE * a, 1.0e-30));
+    let t: f32 = share * (l1 + max(l2, 0.0)) * select(1.0, f * f, f == f);
+    return select(0.0, t, specaa_is_finite(l1) && specaa_is_finite(l2));
 }
 
 // specaa_filtered_alpha2 with the baked texture.

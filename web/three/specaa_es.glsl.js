@@ -69,8 +69,10 @@ float specaa_lod_from_derivatives(vec2 size, vec2 uv) {
 //   SPECAA_QUALITY  the cost tier of the default entry points (specaa_filtered_alpha2_matrix,
 //                   specaa_default_D); pick by the run-time cost you accept per light:
 //                   SPECAA_QUALITY_FAST (0)      the isotropic filtered roughness (baked data + per-pixel
-//                                                kernel, specaa_filtered_alpha2) as A = a' I and GGX(A):
-//                                                the cheapest, a drop-in for a BRDF's roughness.
+//                                                kernel, specaa_filtered_alpha2) as A = a' I, and GGX(A)
+//                                                with the material's tails (specaa_filtered_D_isotropic):
+//                                                the cheapest; bind the baked roughness (+29-44 SPIR-V
+//                                                instructions over GGX(a); with the Sigma kernel +80-83).
 //                   SPECAA_QUALITY_BALANCED (1)  the same isotropic A with GGX of the material convolved
 //                                                with the footprint in closed form
 //                                                (specaa_convolved_D_closed_form, no loop).
@@ -474,8 +476,8 @@ float specaa_sample_kernel_rough_share(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_F
     return specaa_rough_share(SPECAA_SAMPLE(tex, smp, uv).a);
 }
 
-// Both from one fetch: (Sigma.xx, Sigma.yy, Sigma.xy, g), Sigma clamped to PSD (zero if not finite).
-SPECAA_FLOAT4 specaa_sample_kernel_texel(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
+// The Sigma kernel texel as stored (Sigma.xx, Sigma.yy, Sigma.xy, g), with the diagnostics' mip choice.
+SPECAA_FLOAT4 specaa_sample_kernel_raw(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
 #if defined(SPECAA_KERNEL_LOD_BIAS)
     SPECAA_FLOAT4 t = SPECAA_SAMPLE_BIAS(tex, smp, uv, SPECAA_KERNEL_LOD_BIAS);
 #elif defined(SPECAA_KERNEL_AREA_LOD)
@@ -488,6 +490,12 @@ SPECAA_FLOAT4 specaa_sample_kernel_texel(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA
 #else
     SPECAA_FLOAT4 t = SPECAA_SAMPLE(tex, smp, uv);
 #endif
+    return t;
+}
+
+// Both from one fetch: (Sigma.xx, Sigma.yy, Sigma.xy, g), Sigma clamped to PSD (zero if not finite).
+SPECAA_FLOAT4 specaa_sample_kernel_texel(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) {
+    SPECAA_FLOAT4 t = specaa_sample_kernel_raw(SPECAA_TEXTURE_ARGS(tex, smp), uv);
     SPECAA_FLOAT3 sigma = specaa_sym_clamp_psd(t.rgb);
     return SPECAA_FLOAT4(SPECAA_SELECT3(specaa_is_finite3(sigma), sigma, SPECAA_FLOAT3(0.0, 0.0, 0.0)),
                          specaa_rough_share(t.a));
@@ -633,6 +641,23 @@ float specaa_filtered_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
     float rho = SPECAA_SATURATE(alpha2 * sqrt(detClamped) * q * q);
     float ggx = specaa_ggx_D(h, A, tau);
     return ggx + (1.0 - rho) * (specaa_beckmann_D(h, A, tau) - ggx);
+}
+
+// specaa_filtered_D for an isotropic A = f I (the fast tier's NDF): rho GGX(f) + (1 - rho) Beckmann(f) with
+// rho = a / f, which keeps the unfiltered lobe's tails, a / (pi tan^4(theta_h)), where GGX(f) alone makes them
+// f / a times too bright (TK21 Sec. 7); integrates to one. Stable forms: GGX f / (pi (f h_z^2 + |h.xy|^2)^2)
+// (finite as h_z -> 0), Beckmann e^(-u / f) (1 + u)^2 / (pi f) with u = tan^2(theta_h), 0 where the
+// exponential underflows; 0 for h_z <= 0. f is floored at 1e-12 so that a mirror stays finite.
+float specaa_filtered_D_isotropic(SPECAA_FLOAT3 h, float alpha2, float filteredAlpha2) {
+    float f = max(filteredAlpha2, 1.0e-12);
+    float r2 = dot(h.xy, h.xy);
+    float z2 = h.z * h.z;
+    float s2 = f * z2 + r2;
+    float ggx = f / (SPECAA_PI * s2 * s2);
+    float u = r2 / z2;
+    float e = exp(-u / f);
+    float beckmann = SPECAA_SELECT(e > 0.0, e * (1.0 + u) * (1.0 + u) / (SPECAA_PI * f), 0.0);
+    return SPECAA_SELECT(h.z > 0.0, beckmann + SPECAA_SATURATE(alpha2 / f) * (ggx - beckmann), 0.0);
 }
 
 // NDF of GGX(alpha2) seen through the pixel footprint: GGX(a) convolved with the footprint's distribution
@@ -911,6 +936,28 @@ SPECAA_FLOAT3 specaa_baked_kernel_matrix(SpecaaSurface s) {
     return specaa_gate_baked_kernel(specaa_baked_spread_matrix(s), specaa_base_alpha2(s));
 }
 
+// The mean tr(K) / 2 of specaa_baked_kernel_matrix (the fast tier's baked kernel; a = specaa_base_alpha2),
+// without the matrix for the Sigma kernel: from the texel's eigenvalues l1 >= l2, tr(clamp_psd(Sigma)) =
+// max(l1, 0) + max(l2, 0) and lambda_max = max(l1, 0), so tr(K) / 2 = sqrt(g) tr f^2 with the gate's
+// f = saturate(2 sqrt(g) max(l1, 0) / (SPECAA_KERNEL_GATE a)). A non-finite texel (l1 or l2 not finite) gives 0.
+float specaa_baked_kernel_mean(SpecaaSurface s, float a) {
+#if defined(SPECAA_KERNEL_TEXTURE) && defined(SPECAA_KERNEL_ANISOTROPIC) && !defined(SPECAA_KERNEL_COVARIANCE) && !defined(SPECAA_NO_BAKED_KERNEL)
+    SPECAA_FLOAT4 k = specaa_sample_kernel_raw(SPECAA_TEXTURE_ARGS(SPECAA_KERNEL_TEXTURE, SPECAA_SAMPLER), s.uv);
+    float halfTrace = 0.5 * (k.x + k.y);
+    float halfDiff = 0.5 * (k.x - k.y);
+    float radius = sqrt(halfDiff * halfDiff + k.z * k.z);
+    float l1 = max(halfTrace + radius, 0.0);
+    float l2 = halfTrace - radius;
+    float share = sqrt(specaa_rough_share(k.w));
+    float f = SPECAA_SATURATE(2.0 * share * l1 / max(SPECAA_KERNEL_GATE * a, 1.0e-30));
+    float t = share * (l1 + max(l2, 0.0)) * SPECAA_SELECT(f == f, f * f, 1.0);
+    return SPECAA_SELECT(specaa_is_finite(l1) && specaa_is_finite(l2), t, 0.0);
+#else
+    SPECAA_FLOAT3 baked = specaa_baked_kernel_matrix(s);
+    return 0.5 * (baked.x + baked.y);
+#endif
+}
+
 // Footprint of the pixel in the (T, B) frame (specaa_footprint) and whether it and the curvature are
 // usable (finite inputs and derivatives; edge policy).
 bool specaa_curvature_footprint(SpecaaSurface s, out SPECAA_FLOAT4 footprint) {
@@ -979,7 +1026,8 @@ float specaa_pixel_kernel(SpecaaSurface s) {
     SPECAA_FLOAT3 dnV = SPECAA_DDY(s.normal);
     bool usable = specaa_max_component(max(specaa_magnitude_bits3(s.normal),
                                            max(specaa_magnitude_bits3(dnU), specaa_magnitude_bits3(dnV)))) < SPECAA_NOT_FINITE;
-    return SPECAA_SELECT(usable, specaa_clamp_kernel(specaa_iso_kernel_mean(dnU, dnV)), 0.0);
+    // Finite derivatives give a kernel in [0, +inf] (never NaN): min() is specaa_clamp_kernel there.
+    return SPECAA_SELECT(usable, min(specaa_iso_kernel_mean(dnU, dnV), SPECAA_KAPPA), 0.0);
 #endif
 }
 
@@ -1003,8 +1051,20 @@ SPECAA_FLOAT3 specaa_widened_matrix(float a, SPECAA_FLOAT3 K) {
 // specaa_ggx_D with tau = a^2 of the unfiltered material). Same composition as specaa_filtered_alpha2, with the per-pixel
 // kernel kept anisotropic.
 SPECAA_FLOAT3 specaa_filtered_alpha2_matrix(SpecaaSurface s) {
-#if SPECAA_QUALITY != SPECAA_QUALITY_REFERENCE
-    // The fast and balanced tiers: the isotropic form (SPECAA_QUALITY).
+#if SPECAA_QUALITY == SPECAA_QUALITY_FAST
+    // The fast tier: the isotropic form (specaa_filtered_alpha2's value, to rounding) written for its bindings.
+    float t = specaa_pixel_kernel(s);
+#if defined(SPECAA_KERNEL_TEXTURE) || defined(SPECAA_LEAN_TEXTURE0)
+    float a = specaa_base_alpha2(s);
+    float f = specaa_filter_projected_isotropic(a, specaa_baked_kernel_mean(s, a) + t);
+    f = SPECAA_SELECT(specaa_is_finite(f), f, 1.0);
+#else
+    // a in [0, 1] and t in [0, kappa]: finite.
+    float f = specaa_filter_projected_isotropic(specaa_base_alpha2(s), t);
+#endif
+    return SPECAA_FLOAT3(f, f, 0.0);
+#elif SPECAA_QUALITY != SPECAA_QUALITY_REFERENCE
+    // The balanced tier: the isotropic form (SPECAA_QUALITY).
     float f = specaa_filtered_alpha2(s);
     return SPECAA_FLOAT3(f, f, 0.0);
 #elif defined(SPECAA_GATE_PIXEL_KERNEL)
@@ -1059,14 +1119,13 @@ float specaa_footprint_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
 // - Baked roughness texture (a already holds the texel's spread, K only the pixel's): w = saturate(LOD),
 //   the convolution under magnification, GGX(A) from the texture's mip 1 on.
 // NaN inputs give GGX(A).
-// SPECAA_QUALITY fast: GGX(A) (A isotropic; no texture LOD query, no convolution).
+// SPECAA_QUALITY fast: specaa_filtered_D_isotropic on its isotropic A (no texture LOD query, no convolution):
+// GGX(A) alone makes the material's tails a' / a times too bright, a halo around every highlight whose
+// footprint spread is large against a (the analytic scenes at alpha 0.01: tone-mapped flicker 3.6x no
+// filtering's on the sphere, 9.9x on the cylinder; docs/accuracy.md#the-fast-tier).
 float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 filteredA, SpecaaSurface s) {
 #if SPECAA_QUALITY == SPECAA_QUALITY_FAST
-    // GGX of the isotropic A = f I, f / (pi (f h_z^2 + |h.xy|^2)^2) (TK21 Eq. 1 for a unit h; finite as h_z -> 0),
-    // f floored at 1e-12 so that a mirror stays finite, like the other tiers.
-    float f = max(filteredA.x, 1.0e-12);
-    float s2 = f * h.z * h.z + dot(h.xy, h.xy);
-    return SPECAA_SELECT(h.z > 0.0, f / (SPECAA_PI * s2 * s2), 0.0);
+    return specaa_filtered_D_isotropic(h, specaa_base_alpha2(s), filteredA.x);
 #else
     SPECAA_FLOAT3 A = filteredA;
     float a = specaa_base_alpha2(s);
