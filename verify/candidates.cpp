@@ -129,15 +129,18 @@ void add_default_candidates(std::vector<SimCandidate>& c, bool normal_mapped) {
                    "specaa_filtered_alpha2_matrix with specaa_default_D (baked Sigma kernel mips + anisotropic "
                    "per-pixel kernel; GGX convolved with the footprint, GGX of the matrix as the spread grows)",
                    kDefaultNdf, Baked::Kernel);
-    // The include's cheaper quality tiers (SPECAA_QUALITY; the default above is the reference tier), on the
-    // same baked kernel mips: the rows an engine's own run-time filter is held against (bench summary).
-    const auto tier = [&](const char* name, const char* source, const char* quality) {
-        matrix_default(name, source, std::string("#define SPECAA_QUALITY ") + quality + "\n" + kDefaultNdf, Baked::Kernel);
+    // The include's cheaper quality tiers (SPECAA_QUALITY; the default above is the reference tier), each on
+    // the baked data it is meant for: the rows an engine's own filter is held against (bench summary).
+    const auto tier = [&](const char* name, const char* source, const char* quality, Baked baked) {
+        matrix_default(name, source, std::string("#define SPECAA_QUALITY ") + quality + "\n" + kDefaultNdf, baked);
         c.back().family = "tier";
     };
-    tier("fast", "SPECAA_QUALITY_FAST: the isotropic filtered roughness, GGX(A) (no LOD query, no convolution)", "0");
+    tier("fast",
+         "SPECAA_QUALITY_FAST on the baked roughness: the isotropic filtered roughness, the material's tails kept "
+         "(TK21 Sec. 7)",
+         "0", Baked::Roughness);
     tier("balanced", "SPECAA_QUALITY_BALANCED: the isotropic A with GGX convolved with the footprint in closed form",
-         "1");
+         "1", Baked::Kernel);
     if (normal_mapped)
         matrix_default("default-isotropic-kernel",
                        "specaa_filtered_alpha2_matrix with specaa_default_D on the isotropic kernel mips (t = tr Sigma; "
