@@ -5,6 +5,7 @@
 #include "io/image/image_io.h"
 #include "mesh/curvature_summary.h"
 #include "mesh/prepare_mesh.h"
+#include "pipeline/texture_job.h"
 
 #include <tbb/parallel_for.h>
 
@@ -58,9 +59,10 @@ double roughness_gain(double r, double kappa) {
 
 namespace {
 
-// The scene's images, decoded on first use into plan.decoded_images or, plain 8-bit PNGs as their bytes (a
-// quarter of the floats' memory, what `specbake texture` holds), plan.decoded_bytes8 (kept for the bake),
-// with their bit depth in plan.image_bits; an image that cannot be read is decoded once and its error kept.
+// The scene's images, decoded on first use into plan.decoded_images or, plain 8/16-bit PNGs as their integers
+// (a quarter or half of the floats' memory, what `specbake texture` holds), plan.decoded_integers (kept for
+// the bake), with their bit depth in plan.image_bits; an image that cannot be read is decoded once and its
+// error kept.
 class ImageDecoder {
 public:
     ImageDecoder(const io::GltfScene& scene, const io::InputLimits& limits, ScenePlan& plan)
@@ -111,9 +113,9 @@ private:
         }
         plan_.image_bits[image] = decoded->info.bits_per_channel;
         is_float_[image] = decoded->info.is_float;
-        if (!decoded->bytes8.empty()) {  // integers: nothing non-finite
-            const io::Bytes8& b = plan_.decoded_bytes8.emplace(image, std::move(decoded->bytes8)).first->second;
-            return &(maps_[image] = TextureMap{b.width, b.height, b.channels, b.row_bytes, nullptr, b.data.data() + b.offset});
+        if (!decoded->integers.empty()) {  // integers: nothing non-finite
+            const io::IntegerTexels& t = plan_.decoded_integers.emplace(image, std::move(decoded->integers)).first->second;
+            return &(maps_[image] = texture_map_of(t));
         }
         if (auto bad = find_non_finite(decoded->image)) {
             errors_[image] = scene_.image_label(image) + ": non-finite value at texel (" +

@@ -593,7 +593,7 @@ Result<SceneJobOutcome> run_scene_job(const SceneJob& job) {
             b.result->plan.work.clear();
             b.result->plan.texture_work.clear();
             b.result->plan.decoded_images.clear();
-            b.result->plan.decoded_bytes8.clear();
+            b.result->plan.decoded_integers.clear();
         } else {
             remove_files(written);
         }
