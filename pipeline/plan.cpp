@@ -332,6 +332,12 @@ Result<void> decide_textures(const io::GltfScene& scene, const PlanOptions& opti
     const std::string stem = scene.source().stem().string();
     std::map<TextureBakeKey, int> bakes_by_inputs;
     std::map<NormalBakeKey, int> normal_bakes;  // -> the bake that wrote those files
+    // Layers still to come that may read each decoded image (every layer naming it counts, a skipped one too).
+    std::map<int, int> readers_left;
+    for (const io::MaterialInfo& mat : materials)
+        for (const Layer& layer : layers_of(mat))
+            for (int image : {layer.normal->image, layer.roughness->image})
+                if (image >= 0) ++readers_left[images.first_of_file(image)];
     for (size_t m = 0; m < materials.size(); ++m) {
         const io::MaterialInfo& mat = materials[m];
         const std::vector<Layer> layers = layers_of(mat);
@@ -347,6 +353,8 @@ Result<void> decide_textures(const io::GltfScene& scene, const PlanOptions& opti
                      (coat ? "_clearcoat" : "");
             d.texcoord = layer.normal->texcoord;
             const std::string normal_name = coat ? "clearcoat normal texture" : "normal texture";
+            for (int image : {layer.normal->image, layer.roughness->image})
+                if (image >= 0) --readers_left[images.first_of_file(image)];
             if (std::string skip = texture_skip_reason(mat, int(m), layer, coat, infos); !skip.empty()) {
                 d.reason = std::move(skip);
             } else if (const TextureMap* normal = images.decode(images.first_of_file(layer.normal->image)); !normal) {
@@ -402,7 +410,9 @@ Result<void> decide_textures(const io::GltfScene& scene, const PlanOptions& opti
                     const int index = int(plan.textures.size());
                     if (auto n = normal_bakes.find(normal_key); n != normal_bakes.end() && !d.roughness_mapped_apart)
                         d.normal_outputs_stem = plan.textures[size_t(n->second)].stem;
-                    set_texture_inputs(plan.texture_work[index], d, layer, *normal, rough, plan);
+                    TextureWork& w = plan.texture_work[index];
+                    set_texture_inputs(w, d, layer, *normal, rough, plan);
+                    w.release_rows = readers_left[d.normal_image] == 0 && (!rough || readers_left[d.roughness_image] == 0);
                     if (auto ok = bake_and_decide_texture(d, index, mat.name, mapping_note, scene, options, plan); !ok)
                         return ok;
                     bakes_by_inputs[key] = index;

@@ -174,6 +174,9 @@ struct TextureWork {
     int roughness_channel = 0;
     int normal_bits = 8, roughness_bits = 8;
     Image normal_storage, roughness_storage;
+    // No later layer of the plan reads the decoded maps this bake reads: the bake may return their rows to
+    // the system as it passes them (TextureInputs::release_rows), as `specbake texture` does.
+    bool release_rows = false;
 };
 
 struct ScenePlan {

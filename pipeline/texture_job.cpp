@@ -486,7 +486,7 @@ Result<void> make_demo_maps(const io::BakeOutput& out, JobMaps& maps) {
 }
 
 // The job's map files, decoded and hashed side by side, each file by one task. The row-streaming bake
-// reads 8-bit maps as bytes, a quarter of the float images' memory.
+// reads plain PNG maps as their 8- or 16-bit integers, a quarter or half of the float images' memory.
 Result<void> read_job_maps(const TextureJob& job, JobMaps& maps) {
     if (job.progress) job.progress("reading " + job.normal.string());
     if (job.roughness && job.progress) job.progress("reading " + job.roughness->string());
