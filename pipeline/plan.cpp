@@ -280,6 +280,15 @@ Result<void> bake_and_decide_texture(TextureDecision& d, int index, const std::s
     Result<EncodedTextureBake> encoded = make_error("");
     if (options.texture_encoder) {
         encoded = options.texture_encoder(d, w, s);
+        if (w.release_rows) {
+            // No later layer reads these maps: they are not held while the files are written (as `specbake
+            // texture` drops its maps after the bake); the decoder's views of them are not used again.
+            for (int image : {d.normal_image, d.roughness_image}) {
+                plan.decoded_integers.erase(image);
+                plan.decoded_images.erase(image);
+            }
+            w.normal = w.roughness = TextureMap{};
+        }
         if (encoded) {
             TextureBakeResult measure;
             measure.max_roughness_change = encoded->max_roughness_change;
