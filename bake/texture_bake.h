@@ -100,14 +100,16 @@ struct TextureBakeNotes {
 };
 
 // An input map as the bake reads it: `channels` interleaved values per texel, row y starting `row_stride`
-// values after row y - 1. The values are floats, or 8-bit integers v standing for float(v) * (1.0f / 255.0f),
-// the value io/image/image_io.h decodes them to, so a bake of the integers equals the bake of the decoded floats
-// while holding a quarter of the memory. Exactly one of f32 and u8 is set. The memory is the caller's.
+// values after row y - 1. The values are floats, or 8- or 16-bit integers v standing for
+// float(v) * (1.0f / 255.0f) or float(v) * (1.0f / 65535.0f), the value io/image/image_io.h decodes them to,
+// so a bake of the integers equals the bake of the decoded floats while holding a quarter (8-bit) or half
+// (16-bit) of the memory. Exactly one of f32, u8 and u16 is set. The memory is the caller's.
 struct TextureMap {
     int width = 0, height = 0, channels = 0;
     size_t row_stride = 0;
     const float* f32 = nullptr;
     const uint8_t* u8 = nullptr;
+    const uint16_t* u16 = nullptr;
 
     static TextureMap of(const Image& image) {
         return {image.width, image.height, image.channels, size_t(image.width) * size_t(image.channels),
@@ -116,7 +118,7 @@ struct TextureMap {
     bool empty() const { return width <= 0 || height <= 0 || channels <= 0; }
     float value(int x, int y, int c) const {
         const size_t i = size_t(y) * row_stride + size_t(x) * size_t(channels) + size_t(c);
-        return f32 ? f32[i] : float(u8[i]) * (1.0f / 255.0f);
+        return f32 ? f32[i] : u8 ? float(u8[i]) * (1.0f / 255.0f) : float(u16[i]) * (1.0f / 65535.0f);
     }
 };
 
@@ -140,7 +142,7 @@ struct TextureBakeResult {
 Result<TextureBakeResult> bake_texture(const Image& normal, const Image* roughness, int roughness_channel,
                                        float roughness_value, const TextureBakeSettings& settings);
 
-// The same on maps in any TextureMap storage (8-bit inputs held as they were decoded).
+// The same on maps in any TextureMap storage (integer inputs held as they were decoded).
 Result<TextureBakeResult> bake_texture(const TextureMap& normal, const TextureMap* roughness, int roughness_channel,
                                        float roughness_value, const TextureBakeSettings& settings);
 
@@ -184,10 +186,10 @@ Result<TextureBakeResult> bake_texture_rows(const Image& normal, const Image* ro
 using TextureBakeRowsDone = std::function<void(int level, int rows)>;
 // Called there too once rows [0, rows) of the normal map, and of a roughness map of the same size, will not
 // be read again: a caller can release them (a roughness map of another size is read before the bands).
-// Only for 8-bit maps (float maps are read again to name a non-finite texel) baked with rows_done.
+// Only for integer maps (float maps are read again to name a non-finite texel) baked with rows_done.
 using TextureBakeInputsDone = std::function<void(int rows)>;
 
-// The same on maps in any TextureMap storage (8-bit inputs held as they were decoded). With `rows_done`,
+// The same on maps in any TextureMap storage (integer inputs held as they were decoded). With `rows_done`,
 // the largest levels are baked in bands of rows from the top down (each band on all threads), reported as
 // each band is done; the values are the same.
 Result<TextureBakeResult> bake_texture_rows(const TextureMap& normal, const TextureMap* roughness, int roughness_channel,

@@ -26,15 +26,13 @@ bool blue_is_constant_full_scale(const TextureMap& n) {
     const size_t ch = size_t(n.channels);
     for (int y = 0; y < n.height; ++y) {
         const size_t row = size_t(y) * n.row_stride + 2;
-        if (n.f32) {
+        // One integer code stands for one float value, so the codes of integer maps are compared.
+        auto same = [&](const auto* v) {
             for (size_t i = 0; i < size_t(n.width); ++i)
-                if (n.f32[row + i * ch] != first) return false;
-        } else {
-            // One integer code stands for one float value, so the codes are compared.
-            const uint8_t code = n.u8[2];
-            for (size_t i = 0; i < size_t(n.width); ++i)
-                if (n.u8[row + i * ch] != code) return false;
-        }
+                if (v[row + i * ch] != v[2]) return false;
+            return true;
+        };
+        if (!(n.f32 ? same(n.f32) : n.u8 ? same(n.u8) : same(n.u16))) return false;
     }
     return true;
 }

@@ -93,14 +93,20 @@ std::vector<Span1D> footprint_spans(int src, int n);
 inline double* plane(double* row, int c, int width) { return row + size_t(c) * size_t(width); }
 inline const double* plane(const double* row, int c, int width) { return row + size_t(c) * size_t(width); }
 
+// The values of `count` integers of a map: float(v) * scale, scale = 1 / (2^bits - 1) (TextureMap).
+template <class Integer>
+void integers_to_floats(const Integer* s, size_t count, float scale, float* out) {
+    for (size_t i = 0; i < count; ++i) out[i] = float(s[i]) * scale;
+}
+
 // Floats of texels [x0, x0 + n) of row y of `m`: the map's own memory for a float map, else `scratch`
 // (n * channels floats) filled with the integers' values (TextureMap).
 inline const float* row_floats(const TextureMap& m, int y, int x0, int n, float* scratch) {
     const size_t at = size_t(y) * m.row_stride + size_t(x0) * size_t(m.channels);
     if (m.f32) return m.f32 + at;
-    const uint8_t* s = m.u8 + at;
     const size_t count = size_t(n) * size_t(m.channels);
-    for (size_t i = 0; i < count; ++i) scratch[i] = float(s[i]) * (1.0f / 255.0f);
+    if (m.u8) integers_to_floats(m.u8 + at, count, 1.0f / 255.0f, scratch);
+    else integers_to_floats(m.u16 + at, count, 1.0f / 65535.0f, scratch);
     return scratch;
 }
 

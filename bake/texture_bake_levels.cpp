@@ -298,7 +298,7 @@ int LevelPass::run_fused() {
         // Base rows are read again after the pass only by a later level that does not tile the one before.
         // Float maps are read again to name a non-finite texel; integer maps hold none.
         const TextureMap* const roughness = dec.roughness;
-        bool base_read_later = !dec.normal.u8 || (roughness && !roughness->u8 && dec.resampled.empty());
+        bool base_read_later = dec.normal.f32 || (roughness && roughness->f32 && dec.resampled.empty());
         for (int L = F + 1; L < levels; ++L) base_read_later = base_read_later || !tiles_previous(L);
         const int step = std::max(1, kBandBaseRows / std::max(1, H / hF));
         for (int b0 = 0; b0 < hF; b0 += step) {

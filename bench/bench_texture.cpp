@@ -18,7 +18,7 @@
 //      texture job (a child, as in (b)) writing the roughness and mean-normal outputs as KTX2 (zstd level 3),
 //      DDS (uncompressed), EXR (tiled mipmapped half, zip) and per-mip PNG (filter Up, zlib level 2),
 //      against (1) decoding its two inputs with the fastest decoder here (io/image/png_decode: libdeflate
-//      inflate; 8-bit kept as bytes, 16-bit converted to float as the job does) and (2) that plus compressing
+//      inflate; 8-bit kept as bytes, 16-bit as uint16, as the job keeps them) and (2) that plus compressing
 //      the same raw output levels with the same codec and level, in this process (one thread; EXR: the
 //      tree's encoder, io/image/exr_encode.h, on the unorm levels as half, untimed conversion); CPU seconds,
 //      and peak RSS against decoded inputs + written files.
@@ -193,7 +193,7 @@ struct FloorInputs {
 // (d): the job against its floor for every container, from `bits`-bit inputs, the median of `repeats` runs.
 void print_floor(const std::string& self, const fs::path& dir, const FloorInputs& in, int bits, int size,
                  int repeats) {
-    // (1) Decoding the inputs as the job does (8-bit PNGs kept as bytes), one after the other.
+    // (1) Decoding the inputs as the job does (plain PNGs kept as 8- or 16-bit integers), one after the other.
     std::vector<double> decode_cpu;
     size_t decoded_bytes = 0;
     for (int r = 0; r < repeats; ++r) {
@@ -205,7 +205,8 @@ void print_floor(const std::string& self, const fs::path& dir, const FloorInputs
             std::fprintf(stderr, "floor: cannot decode the inputs\n");
             return;
         }
-        decoded_bytes = n->bytes8.data.size() + m->bytes8.data.size() +
+        auto integer_bytes = [](const io::IntegerTexels& t) { return t.bytes.size() + t.words.size() * sizeof(uint16_t); };
+        decoded_bytes = integer_bytes(n->integers) + integer_bytes(m->integers) +
                         (n->image.pixels.size() + m->image.pixels.size()) * sizeof(float);
     }
     // The raw output levels (uncompressed KTX2 files, untimed): what every container compresses.

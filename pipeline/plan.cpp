@@ -5,6 +5,7 @@
 #include "io/image/image_io.h"
 #include "mesh/curvature_summary.h"
 #include "mesh/prepare_mesh.h"
+#include "pipeline/texture_job.h"
 
 #include <tbb/parallel_for.h>
 
@@ -58,9 +59,10 @@ double roughness_gain(double r, double kappa) {
 
 namespace {
 
-// The scene's images, decoded on first use into plan.decoded_images or, plain 8-bit PNGs as their bytes (a
-// quarter of the floats' memory, what `specbake texture` holds), plan.decoded_bytes8 (kept for the bake),
-// with their bit depth in plan.image_bits; an image that cannot be read is decoded once and its error kept.
+// The scene's images, decoded on first use into plan.decoded_images or, plain 8/16-bit PNGs as their integers
+// (a quarter or half of the floats' memory, what `specbake texture` holds), plan.decoded_integers (kept for
+// the bake), with their bit depth in plan.image_bits; an image that cannot be read is decoded once and its
+// error kept.
 class ImageDecoder {
 public:
     ImageDecoder(const io::GltfScene& scene, const io::InputLimits& limits, ScenePlan& plan)
@@ -111,9 +113,9 @@ private:
         }
         plan_.image_bits[image] = decoded->info.bits_per_channel;
         is_float_[image] = decoded->info.is_float;
-        if (!decoded->bytes8.empty()) {  // integers: nothing non-finite
-            const io::Bytes8& b = plan_.decoded_bytes8.emplace(image, std::move(decoded->bytes8)).first->second;
-            return &(maps_[image] = TextureMap{b.width, b.height, b.channels, b.row_bytes, nullptr, b.data.data() + b.offset});
+        if (!decoded->integers.empty()) {  // integers: nothing non-finite
+            const io::IntegerTexels& t = plan_.decoded_integers.emplace(image, std::move(decoded->integers)).first->second;
+            return &(maps_[image] = texture_map_of(t));
         }
         if (auto bad = find_non_finite(decoded->image)) {
             errors_[image] = scene_.image_label(image) + ": non-finite value at texel (" +
@@ -278,6 +280,15 @@ Result<void> bake_and_decide_texture(TextureDecision& d, int index, const std::s
     Result<EncodedTextureBake> encoded = make_error("");
     if (options.texture_encoder) {
         encoded = options.texture_encoder(d, w, s);
+        if (w.release_rows) {
+            // No later layer reads these maps: they are not held while the files are written (as `specbake
+            // texture` drops its maps after the bake); the decoder's views of them are not used again.
+            for (int image : {d.normal_image, d.roughness_image}) {
+                plan.decoded_integers.erase(image);
+                plan.decoded_images.erase(image);
+            }
+            w.normal = w.roughness = TextureMap{};
+        }
         if (encoded) {
             TextureBakeResult measure;
             measure.max_roughness_change = encoded->max_roughness_change;
@@ -330,6 +341,12 @@ Result<void> decide_textures(const io::GltfScene& scene, const PlanOptions& opti
     const std::string stem = scene.source().stem().string();
     std::map<TextureBakeKey, int> bakes_by_inputs;
     std::map<NormalBakeKey, int> normal_bakes;  // -> the bake that wrote those files
+    // Layers still to come that may read each decoded image (every layer naming it counts, a skipped one too).
+    std::map<int, int> readers_left;
+    for (const io::MaterialInfo& mat : materials)
+        for (const Layer& layer : layers_of(mat))
+            for (int image : {layer.normal->image, layer.roughness->image})
+                if (image >= 0) ++readers_left[images.first_of_file(image)];
     for (size_t m = 0; m < materials.size(); ++m) {
         const io::MaterialInfo& mat = materials[m];
         const std::vector<Layer> layers = layers_of(mat);
@@ -345,6 +362,8 @@ Result<void> decide_textures(const io::GltfScene& scene, const PlanOptions& opti
                      (coat ? "_clearcoat" : "");
             d.texcoord = layer.normal->texcoord;
             const std::string normal_name = coat ? "clearcoat normal texture" : "normal texture";
+            for (int image : {layer.normal->image, layer.roughness->image})
+                if (image >= 0) --readers_left[images.first_of_file(image)];
             if (std::string skip = texture_skip_reason(mat, int(m), layer, coat, infos); !skip.empty()) {
                 d.reason = std::move(skip);
             } else if (const TextureMap* normal = images.decode(images.first_of_file(layer.normal->image)); !normal) {
@@ -400,7 +419,9 @@ Result<void> decide_textures(const io::GltfScene& scene, const PlanOptions& opti
                     const int index = int(plan.textures.size());
                     if (auto n = normal_bakes.find(normal_key); n != normal_bakes.end() && !d.roughness_mapped_apart)
                         d.normal_outputs_stem = plan.textures[size_t(n->second)].stem;
-                    set_texture_inputs(plan.texture_work[index], d, layer, *normal, rough, plan);
+                    TextureWork& w = plan.texture_work[index];
+                    set_texture_inputs(w, d, layer, *normal, rough, plan);
+                    w.release_rows = readers_left[d.normal_image] == 0 && (!rough || readers_left[d.roughness_image] == 0);
                     if (auto ok = bake_and_decide_texture(d, index, mat.name, mapping_note, scene, options, plan); !ok)
                         return ok;
                     bakes_by_inputs[key] = index;

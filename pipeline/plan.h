@@ -166,7 +166,7 @@ struct PrimitiveWork {
     VertexCurvature curvature;
 };
 
-// The inputs of one texture bake: the decoded maps (8-bit PNGs as their bytes, others as floats), or
+// The inputs of one texture bake: the decoded maps (plain PNGs as their integers, others as floats), or
 // adjusted float copies when the material scales them (normalTexture.scale, roughnessFactor).
 struct TextureWork {
     TextureMap normal;
@@ -174,6 +174,9 @@ struct TextureWork {
     int roughness_channel = 0;
     int normal_bits = 8, roughness_bits = 8;
     Image normal_storage, roughness_storage;
+    // No later layer of the plan reads the decoded maps this bake reads: the bake may return their rows to
+    // the system as it passes them (TextureInputs::release_rows), as `specbake texture` does.
+    bool release_rows = false;
 };
 
 struct ScenePlan {
@@ -189,7 +192,7 @@ struct ScenePlan {
     std::vector<GlintDecision> glints;            // only the materials that ask for glints
     std::map<int, TextureWork> texture_work;      // by index in `textures`, for the texture bakes to run
     std::map<int, Image> decoded_images;          // image index -> decoded image (as floats)
-    std::map<int, io::Bytes8> decoded_bytes8;     // image index -> decoded plain 8-bit PNG, as its bytes
+    std::map<int, io::IntegerTexels> decoded_integers;  // image index -> decoded plain 8/16-bit PNG, as integers
     std::map<int, int> image_bits;                // image index -> bits per channel of the file
 };
 

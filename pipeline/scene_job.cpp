@@ -158,6 +158,7 @@ TextureBakeEncoder texture_encoder(SceneBake& bake) {
         in.roughness_value = d.roughness_value;
         in.normal_bits = w.normal_bits;
         in.roughness_bits = w.roughness_bits;
+        in.release_rows = w.release_rows;
         auto encoded = std::make_shared<EncodedTextureOutputs>();
         auto baked = bake_texture_encoded(in, settings, job.texture_format, d.stem);
         if (!baked) return baked.error();
@@ -593,7 +594,7 @@ Result<SceneJobOutcome> run_scene_job(const SceneJob& job) {
             b.result->plan.work.clear();
             b.result->plan.texture_work.clear();
             b.result->plan.decoded_images.clear();
-            b.result->plan.decoded_bytes8.clear();
+            b.result->plan.decoded_integers.clear();
         } else {
             remove_files(written);
         }

@@ -370,11 +370,15 @@ Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, cons
             }
         });
     };
-    // The 8-bit maps' rows are returned to the system once the bake is past them (the job's own buffers).
+    // The integer maps' rows are returned to the system once the bake is past them (the job's own buffers).
     const TextureBakeInputsDone release_inputs = [&](int rows) {
         if (!in.release_rows) return;
-        for (const TextureMap* m : {&maps.normal, maps.roughness})
-            if (m && m->u8 && m->height == maps.normal.height) release_pages(m->u8, size_t(rows) * m->row_stride);
+        for (const TextureMap* m : {&maps.normal, maps.roughness}) {
+            if (!m || m->f32 || m->height != maps.normal.height) continue;
+            const size_t values = size_t(rows) * m->row_stride;
+            if (m->u8) release_pages(m->u8, values);
+            else release_pages(reinterpret_cast<const uint8_t*>(m->u16), values * sizeof(uint16_t));
+        }
     };
     auto baked = bake_texture_rows(maps.normal, maps.roughness, channel, in.roughness_value, settings,
                                    [&](const TextureBakeRows& r) {
@@ -423,6 +427,13 @@ Result<TextureOutputsWritten> write_texture_outputs(TextureBakeResult&& baked, c
         if (i + 1 == files.size() || files[i + 1].chain != f.chain) chain = MipChain{};
     }
     return result;
+}
+
+TextureMap texture_map_of(const io::IntegerTexels& t) {
+    TextureMap m{t.width, t.height, t.channels, t.row_stride};
+    if (t.bits == 8) m.u8 = t.bytes.data() + t.offset;
+    else m.u16 = t.words.data() + t.offset;
+    return m;
 }
 
 namespace {
@@ -475,7 +486,7 @@ Result<void> make_demo_maps(const io::BakeOutput& out, JobMaps& maps) {
 }
 
 // The job's map files, decoded and hashed side by side, each file by one task. The row-streaming bake
-// reads 8-bit maps as bytes, a quarter of the float images' memory.
+// reads plain PNG maps as their 8- or 16-bit integers, a quarter or half of the float images' memory.
 Result<void> read_job_maps(const TextureJob& job, JobMaps& maps) {
     if (job.progress) job.progress("reading " + job.normal.string());
     if (job.roughness && job.progress) job.progress("reading " + job.roughness->string());
@@ -507,22 +518,20 @@ Result<void> read_job_maps(const TextureJob& job, JobMaps& maps) {
     return {};
 }
 
-// The bake's view of `maps` (which must stay where they are while it is used): the 8-bit bytes where the
+// The bake's view of `maps` (which must stay where they are while it is used): the integer texels where the
 // decoder kept them, else the float images. Non-finite texels are reported by the bake's validation.
 TextureInputs texture_inputs_of(const JobMaps& maps, const TextureJob& job) {
-    auto bytes_map = [](const io::Bytes8& b) {
-        return TextureMap{b.width, b.height, b.channels, b.row_bytes, nullptr, b.data.data() + b.offset};
-    };
     TextureInputs in;
     in.normal_name = maps.normal_name;
     in.roughness_name = maps.roughness_name;
     in.normal = &maps.normal.image;
-    if (!maps.normal.bytes8.empty()) in.normal = nullptr, in.normal_map = bytes_map(maps.normal.bytes8);
+    if (!maps.normal.integers.empty()) in.normal = nullptr, in.normal_map = texture_map_of(maps.normal.integers);
     in.release_rows = true;  // the job's own buffers, dropped after the bake
     in.normal_bits = maps.normal.info.is_float ? 16 : maps.normal.info.bits_per_channel;
     if (maps.have_roughness) {
         in.roughness = &maps.roughness.image;
-        if (!maps.roughness.bytes8.empty()) in.roughness = nullptr, in.roughness_map = bytes_map(maps.roughness.bytes8);
+        if (!maps.roughness.integers.empty())
+            in.roughness = nullptr, in.roughness_map = texture_map_of(maps.roughness.integers);
         in.roughness_bits = maps.roughness.info.is_float ? 16 : maps.roughness.info.bits_per_channel;
     }
     in.roughness_channel = job.roughness_channel;
@@ -537,8 +546,8 @@ Result<TextureOutputsWritten> bake_job_outputs(const TextureJob& job, const Text
                                                const io::BakeOutput& out) {
     auto encoded = bake_texture_encoded(in, job.settings, job.texture_format, "texture", job.progress, job.fraction);
     if (!encoded) return out.final_names(encoded.error());
-    maps.normal.image = Image{}, maps.normal.bytes8 = io::Bytes8{};
-    maps.roughness.image = Image{}, maps.roughness.bytes8 = io::Bytes8{};
+    maps.normal.image = Image{}, maps.normal.integers = io::IntegerTexels{};
+    maps.roughness.image = Image{}, maps.roughness.integers = io::IntegerTexels{};
     if (job.progress)
         for (const io::EncodedFile& f : encoded->files) job.progress("writing " + f.stem);
     auto files = io::write_encoded_textures(encoded->files, out.stage());

@@ -6,6 +6,7 @@
 
 #include "bake/texture_bake.h"
 #include "io/files/input_policy.h"
+#include "io/image/image_io.h"
 #include "io/output/manifest.h"
 #include "io/output/output_folder.h"
 #include "io/texture/texture_writer.h"
@@ -78,14 +79,18 @@ struct TextureInputs {
     float roughness_value = 0.5f;
     int normal_bits = 8;                           // 8 or 16 (integer files), 16/32 float: output encodings
     int roughness_bits = 8;
-    // The maps held as 8-bit texels instead (the texture job's plain PNG inputs, a quarter of the float
-    // images' memory): used by bake_texture_encoded in place of `normal` / `roughness` when their channels
-    // are set. The float-chain path (bake_texture_inputs) reads only the images.
+    // The maps held as 8- or 16-bit texels instead (the texture job's plain PNG inputs, a quarter or half of
+    // the float images' memory): used by bake_texture_encoded in place of `normal` / `roughness` when their
+    // channels are set. The float-chain path (bake_texture_inputs) reads only the images.
     TextureMap normal_map, roughness_map;
-    // The caller drops the 8-bit maps after the bake: their rows may be returned to the system (read as
+    // The caller drops the integer maps after the bake: their rows may be returned to the system (read as
     // zeroes) once the bake is past them.
     bool release_rows = false;
 };
+
+// The bake's view of decoded integer texels (a TextureInputs map, a scene's image); they must stay where
+// they are while it is used.
+TextureMap texture_map_of(const io::IntegerTexels& texels);
 
 struct TextureOutputsWritten {
     std::vector<io::ManifestOutput> outputs;       // paths relative to the output folder, hashes filled

@@ -156,7 +156,7 @@ Result<void> check_png_image_data(std::span<const uint8_t> b, const std::string&
     return {};
 }
 
-Result<DecodedImage> decode_image(const fs::path& path, const InputLimits& limits, bool keep_8bit) {
+Result<DecodedImage> decode_image(const fs::path& path, const InputLimits& limits, bool keep_integers) {
     const std::string name = path.string();
     std::error_code ec;
     if (fs::is_directory(path, ec)) return make_error(name + ": is a folder, not an image");
@@ -177,7 +177,7 @@ Result<DecodedImage> decode_image(const fs::path& path, const InputLimits& limit
             f.close();
             auto bytes = MappedFile::open(path);
             if (!bytes) return bytes.error();
-            return decode_image_memory(bytes->bytes(), name, limits, keep_8bit);
+            return decode_image_memory(bytes->bytes(), name, limits, keep_integers);
         }
     }
     auto oiio = oiio::api();
@@ -186,12 +186,12 @@ Result<DecodedImage> decode_image(const fs::path& path, const InputLimits& limit
 }
 
 Result<DecodedImage> decode_image_memory(std::span<const uint8_t> bytes, const std::string& name_for_errors,
-                                         const InputLimits& limits, bool keep_8bit) {
+                                         const InputLimits& limits, bool keep_integers) {
     if (bytes.empty()) return make_error(name_for_errors + ": no image data");
     if (is_lfs_pointer(bytes)) return make_error(name_for_errors + ": " + kLfsPointerProblem);
     if (auto ok = check_png_structure(bytes, name_for_errors, limits); !ok) return ok.error();
     // Plain PNGs (most texture libraries) without loading OpenImageIO; the same values and facts.
-    if (auto png = decode_plain_png(bytes, keep_8bit)) return std::move(*png);
+    if (auto png = decode_plain_png(bytes, keep_integers)) return std::move(*png);
     if (auto ok = check_png_image_data(bytes, name_for_errors); !ok) return ok.error();
     if (auto ok = check_jpeg_markers(bytes, name_for_errors); !ok) return ok.error();
     // OpenImageIO picks the decoder from the name's extension; take it from the leading bytes instead.

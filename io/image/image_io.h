@@ -23,33 +23,37 @@ struct ImageInfo {
     std::string color_space;    // the colour space the file claims ("sRGB", "Linear", or empty); never applied
 };
 
-// 8-bit texels as stored, for callers that convert values as they read them: width x height texels of
-// `channels` bytes each, row y at data.data() + offset + y * row_bytes; value v stands for
-// float(v) * (1.0f / 255.0f), what `image` would hold. A quarter of the float image's memory.
-struct Bytes8 {
-    std::vector<uint8_t> data;
+// 8- or 16-bit integer texels as stored, for callers that convert values as they read them: width x height
+// texels of `channels` values each, row y starting offset + y * row_stride values into `bytes` (8-bit) or
+// `words` (16-bit, native byte order); value v stands for float(v) * (1.0f / (2^bits - 1)), what `image`
+// would hold. A quarter (8-bit) or half (16-bit) of the float image's memory.
+struct IntegerTexels {
+    std::vector<uint8_t> bytes;    // 8-bit
+    std::vector<uint16_t> words;   // 16-bit
+    int bits = 8;
     int width = 0, height = 0, channels = 0;
-    size_t offset = 0, row_bytes = 0;
-    bool empty() const { return data.empty(); }
+    size_t offset = 0, row_stride = 0;  // in values
+    bool empty() const { return bytes.empty() && words.empty(); }
 };
 
 struct DecodedImage {
-    Image image;     // empty when `bytes8` holds the texels
+    Image image;               // empty when `integers` holds the texels
     ImageInfo info;
-    Bytes8 bytes8;   // only when asked for (keep_8bit) and the file is a plain 8-bit PNG
+    IntegerTexels integers;    // only when asked for (keep_integers) and the file is a plain 8/16-bit PNG
 };
 
 // Reads the first subimage, level 0. Errors name the file ("<path>: <problem>"): missing, unreadable,
 // unknown format, truncated, 0x0, more than 2^15 texels per side, more texels than limits.texels.
-// Non-finite values are returned as is (callers validate; see has_non_finite()). keep_8bit: a plain 8-bit
-// PNG (io/image/png_decode.h) comes back in `bytes8`, its rows as they were inflated (no copy), `image`
-// empty; every other file as `image`.
+// Non-finite values are returned as is (callers validate; see has_non_finite()). keep_integers: a plain
+// 8- or 16-bit PNG (io/image/png_decode.h) comes back in `integers` (8-bit: its rows as they were inflated,
+// no copy; 16-bit: the inflated rows turned into native uint16 in place), `image` empty; every other file as
+// `image`.
 Result<DecodedImage> decode_image(const std::filesystem::path& path, const InputLimits& limits = {},
-                                  bool keep_8bit = false);
+                                  bool keep_integers = false);
 
 // Same, from bytes in memory (embedded GLB images); `name_for_errors` is used in place of a path.
 Result<DecodedImage> decode_image_memory(std::span<const uint8_t> bytes, const std::string& name_for_errors,
-                                         const InputLimits& limits = {}, bool keep_8bit = false);
+                                         const InputLimits& limits = {}, bool keep_integers = false);
 
 // The chunk structure of a PNG (lengths, CRCs, IHDR fields) and its size against the texel limit
 // (io/files/input_policy.h), from the bytes alone; anything that is not a PNG passes.

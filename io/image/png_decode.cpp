@@ -29,7 +29,7 @@ int paeth(int a, int b, int c) {
 
 }  // namespace
 
-std::optional<DecodedImage> decode_plain_png(std::span<const uint8_t> b, bool keep_8bit) {
+std::optional<DecodedImage> decode_plain_png(std::span<const uint8_t> b, bool keep_integers) {
     static const uint8_t signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
     if (b.size() < 8 || std::memcmp(b.data(), signature, 8) != 0) return std::nullopt;
     uint32_t width = 0, height = 0;
@@ -67,20 +67,27 @@ std::optional<DecodedImage> decode_plain_png(std::span<const uint8_t> b, bool ke
     }
     const size_t bytes_per_pixel = size_t(channels) * size_t(depth / 8);
     const size_t stride = size_t(width) * bytes_per_pixel;
-    std::vector<uint8_t> raw(size_t(height) * (stride + 1));
+    // The rows with their filter bytes; a 16-bit file's in uint16 storage, so that its values can be made
+    // native uint16 in place (the storage is accessed as bytes until then, which any object allows).
+    const size_t raw_bytes = size_t(height) * (stride + 1);
+    std::vector<uint8_t> raw8;
+    std::vector<uint16_t> raw16;
+    if (depth == 16) raw16.resize((raw_bytes + 1) / 2);
+    else raw8.resize(raw_bytes);
+    uint8_t* const raw = depth == 16 ? reinterpret_cast<uint8_t*>(raw16.data()) : raw8.data();
     // libdeflate inflates the whole stream at once (its size is known), 1.6-8x faster than zlib's inflate on
     // 4096^2 maps (docs/texture-bake.md). Like zlib's uncompress(), bytes after the stream's end are ignored.
     libdeflate_decompressor* inflater = libdeflate_alloc_decompressor();
     if (!inflater) return std::nullopt;
     size_t used = 0, raw_size = 0;
     const libdeflate_result inflated = libdeflate_zlib_decompress_ex(inflater, compressed.data(), compressed.size(),
-                                                                     raw.data(), raw.size(), &used, &raw_size);
+                                                                     raw, raw_bytes, &used, &raw_size);
     libdeflate_free_decompressor(inflater);
-    if (inflated != LIBDEFLATE_SUCCESS || raw_size != raw.size()) return std::nullopt;
+    if (inflated != LIBDEFLATE_SUCCESS || raw_size != raw_bytes) return std::nullopt;
 
     // Unfilter in place: row y's bytes follow its filter byte; the previous row is already decoded.
     for (size_t y = 0; y < height; ++y) {
-        uint8_t* row = raw.data() + y * (stride + 1) + 1;
+        uint8_t* row = raw + y * (stride + 1) + 1;
         const uint8_t* up = y ? row - (stride + 1) : nullptr;
         const int filter = row[-1];
         for (size_t i = 0; i < stride; ++i) {
@@ -103,10 +110,25 @@ std::optional<DecodedImage> decode_plain_png(std::span<const uint8_t> b, bool ke
     out.info.is_float = false;
     out.info.format = "png";
     out.info.color_space = "sRGB";  // OpenImageIO's claim for a PNG without colour chunks
-    if (keep_8bit && depth == 8) {
-        out.bytes8.width = int(width), out.bytes8.height = int(height), out.bytes8.channels = channels;
-        out.bytes8.offset = 1, out.bytes8.row_bytes = stride + 1;
-        out.bytes8.data = std::move(raw);
+    const size_t values = size_t(width) * size_t(channels);
+    if (keep_integers) {
+        IntegerTexels& t = out.integers;
+        t.bits = depth, t.width = int(width), t.height = int(height), t.channels = channels;
+        if (depth == 8) {
+            t.offset = 1, t.row_stride = stride + 1;
+            t.bytes = std::move(raw8);
+            return out;
+        }
+        // Big-endian pairs after each filter byte to native values, row after row: value i of row y lands at
+        // byte 2 (y values + i), before the bytes of the values not read yet (y (stride + 1) + 1 + 2 i on).
+        for (size_t y = 0; y < height; ++y) {
+            const uint8_t* row = raw + y * (stride + 1) + 1;
+            uint16_t* dst = raw16.data() + y * values;
+            for (size_t i = 0; i < values; ++i) dst[i] = uint16_t(row[2 * i] << 8 | row[2 * i + 1]);
+        }
+        raw16.resize(size_t(height) * values);
+        t.offset = 0, t.row_stride = values;
+        t.words = std::move(raw16);
         return out;
     }
     out.image = Image(int(width), int(height), channels);
@@ -114,8 +136,7 @@ std::optional<DecodedImage> decode_plain_png(std::span<const uint8_t> b, bool ke
     const float scale = depth == 8 ? 1.0f / 255.0f : 1.0f / 65535.0f;
     float* dst = out.image.pixels.data();
     for (size_t y = 0; y < height; ++y) {
-        const uint8_t* row = raw.data() + y * (stride + 1) + 1;
-        const size_t values = size_t(width) * size_t(channels);
+        const uint8_t* row = raw + y * (stride + 1) + 1;
         if (depth == 8)
             for (size_t i = 0; i < values; ++i) *dst++ = float(row[i]) * scale;
         else

@@ -14,8 +14,9 @@ namespace specbake::io {
 // alpha unassociated, colour space "sRGB", format "png"), or nothing when the file is anything else:
 // palette, interlaced, a gAMA/sRGB/iCCP/cHRM/sBIT/tRNS or unknown chunk, a CRC or zlib error, a size
 // outside 1..2^15. The caller then decodes it through OpenImageIO, which also words the errors.
-// keep_8bit: an 8-bit file's texels stay bytes (DecodedImage::bytes8: the inflated rows, each after its
-// filter byte), `image` empty.
-std::optional<DecodedImage> decode_plain_png(std::span<const uint8_t> bytes, bool keep_8bit = false);
+// keep_integers: the texels stay integers (DecodedImage::integers), `image` empty: an 8-bit file's as the
+// inflated rows, each after its filter byte; a 16-bit file's as native uint16 rows, converted in the
+// buffer they were inflated into.
+std::optional<DecodedImage> decode_plain_png(std::span<const uint8_t> bytes, bool keep_integers = false);
 
 }  // namespace specbake::io

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <mutex>
 #include <random>
+#include <tuple>
 
 namespace specbake {
 namespace {
@@ -473,116 +474,128 @@ TEST(TextureBake, BlocksStreamEveryTexelOnceWithTheChainValues) {
     }
 }
 
-// 8-bit codes of `image` (values rounded to k / 255) in rows padded like a PNG's inflated data (one filter
-// byte before each row), and the float image those codes decode to (float(k) * (1.0f / 255.0f)).
-struct Bytes8Map {
+// `bits`-bit codes of `image` (values rounded to k / (2^bits - 1)), and the float image those codes decode to
+// (float(k) * (1.0f / (2^bits - 1)), as io/ decodes integer files). 8-bit rows are padded like a PNG's
+// inflated data (one filter byte before each row), 16-bit rows by three values after each row.
+struct IntegerMap {
     std::vector<uint8_t> bytes;
+    std::vector<uint16_t> words;
     TextureMap map;
     Image decoded;
 };
-Bytes8Map as_bytes8(const Image& image) {
-    Bytes8Map b;
+IntegerMap as_integers(const Image& image, int bits) {
+    IntegerMap b;
     const size_t row = size_t(image.width) * size_t(image.channels);
-    b.bytes.assign(size_t(image.height) * (row + 1), 0xEE);
+    const size_t stride = bits == 8 ? row + 1 : row + 3, first = bits == 8 ? 1 : 0;
+    const double top = bits == 8 ? 255.0 : 65535.0;
+    const float scale = bits == 8 ? 1.0f / 255.0f : 1.0f / 65535.0f;
+    if (bits == 8) b.bytes.assign(size_t(image.height) * stride, 0xEE);
+    else b.words.assign(size_t(image.height) * stride, 0xEEEE);
     b.decoded = Image(image.width, image.height, image.channels);
     for (int y = 0; y < image.height; ++y)
         for (size_t i = 0; i < row; ++i) {
-            const long k = std::lround(std::clamp(double(image.pixels[size_t(y) * row + i]), 0.0, 1.0) * 255.0);
-            b.bytes[size_t(y) * (row + 1) + 1 + i] = uint8_t(k);
-            b.decoded.pixels[size_t(y) * row + i] = float(k) * (1.0f / 255.0f);  // as io/ decodes 8-bit files
+            const long k = std::lround(std::clamp(double(image.pixels[size_t(y) * row + i]), 0.0, 1.0) * top);
+            if (bits == 8) b.bytes[size_t(y) * stride + first + i] = uint8_t(k);
+            else b.words[size_t(y) * stride + first + i] = uint16_t(k);
+            b.decoded.pixels[size_t(y) * row + i] = float(k) * scale;
         }
-    b.map = TextureMap{image.width, image.height, image.channels, row + 1, nullptr, b.bytes.data() + 1};
+    b.map = TextureMap{image.width, image.height, image.channels, stride};
+    if (bits == 8) b.map.u8 = b.bytes.data() + first;
+    else b.map.u16 = b.words.data() + first;
     return b;
 }
 
-TEST(TextureBake, EightBitMapsBakeAsTheirDecodedFloats) {
-    struct Case {
-        int W, H, normal_channels, rough_w, rough_h, rough_channels, channel;
-    };
-    for (const Case& c : {Case{64, 32, 3, 64, 32, 3, 1}, Case{37, 23, 3, 37, 23, 1, 0}, Case{40, 24, 2, 40, 24, 3, 1},
-                          Case{48, 16, 4, 24, 8, 3, 1}, Case{1030, 6, 3, 1030, 6, 3, 1}, Case{9, 5, 3, 0, 0, 0, 0}}) {
-        SCOPED_TRACE(std::to_string(c.W) + "x" + std::to_string(c.H) + " normal channels " +
-                     std::to_string(c.normal_channels));
-        Image nm = random_normal_map(c.W, c.H, 21, 0.3);
-        if (c.normal_channels != 3) {
-            Image n(c.W, c.H, c.normal_channels);
-            for (size_t t = 0; t < n.texel_count(); ++t)
-                for (int k = 0; k < c.normal_channels; ++k)
-                    n.pixels[t * size_t(c.normal_channels) + size_t(k)] = k < 3 ? nm.pixels[t * 3 + size_t(k)] : 0.25f;
-            nm = n;
+TEST(TextureBake, IntegerMapsBakeAsTheirDecodedFloats) {
+    for (const int bits : {8, 16}) {
+        SCOPED_TRACE(std::to_string(bits) + "-bit");
+        struct Case {
+            int W, H, normal_channels, rough_w, rough_h, rough_channels, channel;
+        };
+        for (const Case& c : {Case{64, 32, 3, 64, 32, 3, 1}, Case{37, 23, 3, 37, 23, 1, 0}, Case{40, 24, 2, 40, 24, 3, 1},
+                              Case{48, 16, 4, 24, 8, 3, 1}, Case{1030, 6, 3, 1030, 6, 3, 1}, Case{9, 5, 3, 0, 0, 0, 0}}) {
+            SCOPED_TRACE(std::to_string(c.W) + "x" + std::to_string(c.H) + " normal channels " +
+                         std::to_string(c.normal_channels));
+            Image nm = random_normal_map(c.W, c.H, 21, 0.3);
+            if (c.normal_channels != 3) {
+                Image n(c.W, c.H, c.normal_channels);
+                for (size_t t = 0; t < n.texel_count(); ++t)
+                    for (int k = 0; k < c.normal_channels; ++k)
+                        n.pixels[t * size_t(c.normal_channels) + size_t(k)] = k < 3 ? nm.pixels[t * 3 + size_t(k)] : 0.25f;
+                nm = n;
+            }
+            Image rough = c.rough_channels ? random_orm(c.rough_w, c.rough_h, 22) : Image{};
+            if (c.rough_channels == 1) {
+                Image r(c.rough_w, c.rough_h, 1);
+                for (size_t t = 0; t < r.texel_count(); ++t) r.pixels[t] = rough.pixels[t * 3 + 1];
+                rough = r;
+            }
+            const IntegerMap ni = as_integers(nm, bits);
+            const IntegerMap ri = c.rough_channels ? as_integers(rough, bits) : IntegerMap{};
+            for (int threads : {1, 2}) {
+                TextureBakeSettings s;
+                s.threads = threads;
+                auto floats = bake_texture(ni.decoded, c.rough_channels ? &ri.decoded : nullptr, c.channel, 0.4f, s);
+                ASSERT_TRUE(floats.ok()) << floats.error().message;
+                std::mutex m;
+                bool equal = true;
+                auto same = [](const float* block, const MipChain& chain, const TextureBakeRows& r) {
+                    if (!block) return chain.levels.empty();
+                    const Image& level = chain.levels[size_t(r.level)];
+                    const size_t row_floats = size_t(r.width) * size_t(level.channels);
+                    for (int k = 0; k < r.rows; ++k)
+                        if (std::memcmp(block + size_t(k) * row_floats, level.texel(r.x0, r.y0 + k), row_floats * sizeof(float)))
+                            return false;
+                    return true;
+                };
+                auto bytes = bake_texture_rows(ni.map, c.rough_channels ? &ri.map : nullptr, c.channel, 0.4f, s,
+                                               [&](const TextureBakeRows& r) {
+                                                   std::lock_guard<std::mutex> lock(m);
+                                                   equal = equal && same(r.roughness, floats->roughness, r) &&
+                                                           same(r.kernel, floats->kernel, r) &&
+                                                           same(r.lean, floats->lean, r) && same(r.normal, floats->normal, r);
+                                               });
+                ASSERT_TRUE(bytes.ok()) << bytes.error().message;
+                EXPECT_TRUE(equal);
+                EXPECT_EQ(bytes->max_roughness_change, floats->max_roughness_change);
+                EXPECT_EQ(bytes->notes.z_reconstructed, floats->notes.z_reconstructed);
+                EXPECT_EQ(bytes->notes.looks_srgb, floats->notes.looks_srgb);
+                EXPECT_EQ(bytes->notes.roughness_resampled, floats->notes.roughness_resampled);
+                EXPECT_EQ(bytes->notes.warnings, floats->notes.warnings);
+            }
         }
-        Image rough = c.rough_channels ? random_orm(c.rough_w, c.rough_h, 22) : Image{};
-        if (c.rough_channels == 1) {
-            Image r(c.rough_w, c.rough_h, 1);
-            for (size_t t = 0; t < r.texel_count(); ++t) r.pixels[t] = rough.pixels[t * 3 + 1];
-            rough = r;
-        }
-        const Bytes8Map n8 = as_bytes8(nm);
-        const Bytes8Map r8 = c.rough_channels ? as_bytes8(rough) : Bytes8Map{};
-        for (int threads : {1, 2}) {
-            TextureBakeSettings s;
-            s.threads = threads;
-            auto floats = bake_texture(n8.decoded, c.rough_channels ? &r8.decoded : nullptr, c.channel, 0.4f, s);
-            ASSERT_TRUE(floats.ok()) << floats.error().message;
-            std::mutex m;
-            bool equal = true;
-            auto same = [](const float* block, const MipChain& chain, const TextureBakeRows& r) {
-                if (!block) return chain.levels.empty();
-                const Image& level = chain.levels[size_t(r.level)];
-                const size_t row_floats = size_t(r.width) * size_t(level.channels);
-                for (int k = 0; k < r.rows; ++k)
-                    if (std::memcmp(block + size_t(k) * row_floats, level.texel(r.x0, r.y0 + k), row_floats * sizeof(float)))
-                        return false;
-                return true;
-            };
-            auto bytes = bake_texture_rows(n8.map, c.rough_channels ? &r8.map : nullptr, c.channel, 0.4f, s,
-                                           [&](const TextureBakeRows& r) {
-                                               std::lock_guard<std::mutex> lock(m);
-                                               equal = equal && same(r.roughness, floats->roughness, r) &&
-                                                       same(r.kernel, floats->kernel, r) &&
-                                                       same(r.lean, floats->lean, r) && same(r.normal, floats->normal, r);
-                                           });
-            ASSERT_TRUE(bytes.ok()) << bytes.error().message;
-            EXPECT_TRUE(equal);
-            EXPECT_EQ(bytes->max_roughness_change, floats->max_roughness_change);
-            EXPECT_EQ(bytes->notes.z_reconstructed, floats->notes.z_reconstructed);
-            EXPECT_EQ(bytes->notes.looks_srgb, floats->notes.looks_srgb);
-            EXPECT_EQ(bytes->notes.roughness_resampled, floats->notes.roughness_resampled);
-            EXPECT_EQ(bytes->notes.warnings, floats->notes.warnings);
-        }
+        // The notes read from the codes: a constant full-scale blue channel, and sRGB-looking values.
+        Image flat(8, 8, 3);
+        for (size_t t = 0; t < flat.texel_count(); ++t)
+            flat.pixels[t * 3] = 0.5f + 0.3f * float(t % 3) / 3.0f, flat.pixels[t * 3 + 1] = 0.5f, flat.pixels[t * 3 + 2] = 1.0f;
+        const IntegerMap fi = as_integers(flat, bits);
+        auto rows = bake_texture_rows(fi.map, nullptr, 0, 0.5f, {}, [](const TextureBakeRows&) {});
+        ASSERT_TRUE(rows.ok());
+        EXPECT_TRUE(rows->notes.z_reconstructed);
+        Image srgb = random_normal_map(32, 32, 13, 0.2);  // pushed through the sRGB encode curve
+        for (float& v : srgb.pixels) v = v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1 / 2.4f) - 0.055f;
+        const IntegerMap si = as_integers(srgb, bits);
+        auto warned = bake_texture_rows(si.map, nullptr, 0, 0.5f, {}, [](const TextureBakeRows&) {});
+        ASSERT_TRUE(warned.ok());
+        EXPECT_TRUE(warned->notes.looks_srgb);
     }
-    // The notes read from the codes: a constant full-scale blue channel, and sRGB-looking values.
-    Image flat(8, 8, 3);
-    for (size_t t = 0; t < flat.texel_count(); ++t)
-        flat.pixels[t * 3] = 0.5f + 0.3f * float(t % 3) / 3.0f, flat.pixels[t * 3 + 1] = 0.5f, flat.pixels[t * 3 + 2] = 1.0f;
-    const Bytes8Map f8 = as_bytes8(flat);
-    auto rows = bake_texture_rows(f8.map, nullptr, 0, 0.5f, {}, [](const TextureBakeRows&) {});
-    ASSERT_TRUE(rows.ok());
-    EXPECT_TRUE(rows->notes.z_reconstructed);
-    Image srgb = random_normal_map(32, 32, 13, 0.2);  // pushed through the sRGB encode curve
-    for (float& v : srgb.pixels) v = v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1 / 2.4f) - 0.055f;
-    const Bytes8Map s8 = as_bytes8(srgb);
-    auto warned = bake_texture_rows(s8.map, nullptr, 0, 0.5f, {}, [](const TextureBakeRows&) {});
-    ASSERT_TRUE(warned.ok());
-    EXPECT_TRUE(warned->notes.looks_srgb);
 }
 
 // Input rows reported as no longer read can be overwritten (a caller releases them) without changing any
 // output: here they are poisoned as soon as they are reported.
 TEST(TextureBake, InputRowsReportedDoneAreNotReadAgain) {
-    for (const auto& [W, H] : {std::pair{256, 512}, std::pair{512, 96}}) {
-        SCOPED_TRACE(std::to_string(W) + "x" + std::to_string(H));
-        Bytes8Map n8 = as_bytes8(random_normal_map(W, H, 41, 0.3));
-        Bytes8Map r8 = as_bytes8(random_orm(W, H, 42));
+    for (const auto& [W, H, bits] : {std::tuple{256, 512, 8}, std::tuple{512, 96, 8}, std::tuple{256, 512, 16}, std::tuple{512, 96, 16}}) {
+        SCOPED_TRACE(std::to_string(W) + "x" + std::to_string(H) + " " + std::to_string(bits) + "-bit");
+        IntegerMap ni = as_integers(random_normal_map(W, H, 41, 0.3), bits);
+        IntegerMap ri = as_integers(random_orm(W, H, 42), bits);
         TextureBakeSettings s;
         s.threads = 2;
-        auto reference = bake_texture(n8.decoded, &r8.decoded, 1, 0, s);
+        auto reference = bake_texture(ni.decoded, &ri.decoded, 1, 0, s);
         ASSERT_TRUE(reference.ok());
         std::mutex m;
         bool equal = true;
         int released = 0;
         auto rows = bake_texture_rows(
-            n8.map, &r8.map, 1, 0, s,
+            ni.map, &ri.map, 1, 0, s,
             [&](const TextureBakeRows& b) {
                 std::lock_guard<std::mutex> lock(m);
                 const Image& level = reference->lean.levels[size_t(b.level)];
@@ -593,8 +606,10 @@ TEST(TextureBake, InputRowsReportedDoneAreNotReadAgain) {
             [](int, int) {},
             [&](int upto) {
                 EXPECT_GE(upto, released);
-                for (Bytes8Map* b : {&n8, &r8})
-                    std::fill_n(b->bytes.begin(), size_t(upto) * b->map.row_stride, uint8_t(0x5A));
+                for (IntegerMap* b : {&ni, &ri}) {
+                    if (bits == 8) std::fill_n(b->bytes.begin(), size_t(upto) * b->map.row_stride, uint8_t(0x5A));
+                    else std::fill_n(b->words.begin(), size_t(upto) * b->map.row_stride, uint16_t(0x5A5A));
+                }
                 released = upto;
             });
         ASSERT_TRUE(rows.ok());

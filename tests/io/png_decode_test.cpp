@@ -167,36 +167,76 @@ TEST(PlainPng, EveryDeflateBlockKindInflatesAsOpenImageIOReadsIt) {
     EXPECT_FALSE(decode_plain_png(cut).has_value()) << "a stream cut short";
 }
 
-TEST(PlainPng, EightBitTexelsKeptAsBytesStandForOpenImageIOsFloats) {
-    for (int colour : {0, 4, 2, 6}) {
-        SCOPED_TRACE("colour type " + std::to_string(colour));
-        std::vector<uint8_t> png = make_png(37, 23, colour, 8, uint32_t(colour * 7 + 1));
-        auto mine = decode_plain_png(png, true);
-        ASSERT_TRUE(mine.has_value());
-        EXPECT_TRUE(mine->image.pixels.empty());
-        int channels = 0;
-        std::string colour_space;
-        const std::vector<float> ref = oiio_decode(png, channels, colour_space);
-        const Bytes8& b = mine->bytes8;
-        ASSERT_EQ(b.width, 37);
-        ASSERT_EQ(b.height, 23);
-        ASSERT_EQ(b.channels, channels);
-        ASSERT_GE(b.data.size(), b.offset + 22 * b.row_bytes + 37 * size_t(channels));
-        bool same = true;
-        for (int y = 0; y < 23; ++y)
-            for (size_t i = 0; i < 37 * size_t(channels); ++i)
-                same = same && float(b.data[b.offset + size_t(y) * b.row_bytes + i]) * (1.0f / 255.0f) ==
-                                   ref[size_t(y) * 37 * size_t(channels) + i];
-        EXPECT_TRUE(same) << "a byte does not stand for OpenImageIO's float";
-        EXPECT_EQ(mine->info.bits_per_channel, 8);
-        EXPECT_EQ(mine->info.color_space, colour_space);
+TEST(PlainPng, IntegerTexelsStandForOpenImageIOsFloats) {
+    for (int depth : {8, 16}) {
+        for (int colour : {0, 4, 2, 6}) {
+            SCOPED_TRACE("colour type " + std::to_string(colour) + ", " + std::to_string(depth) + " bits");
+            std::vector<uint8_t> png = make_png(37, 23, colour, depth, uint32_t(colour * 7 + depth));
+            auto mine = decode_plain_png(png, true);
+            ASSERT_TRUE(mine.has_value());
+            EXPECT_TRUE(mine->image.pixels.empty());
+            int channels = 0;
+            std::string colour_space;
+            const std::vector<float> ref = oiio_decode(png, channels, colour_space);
+            const IntegerTexels& t = mine->integers;
+            ASSERT_EQ(t.bits, depth);
+            ASSERT_EQ(t.width, 37);
+            ASSERT_EQ(t.height, 23);
+            ASSERT_EQ(t.channels, channels);
+            ASSERT_GE(depth == 8 ? t.bytes.size() : t.words.size(), t.offset + 22 * t.row_stride + 37 * size_t(channels));
+            EXPECT_TRUE(depth == 8 ? t.words.empty() : t.bytes.empty());
+            const float scale = depth == 8 ? 1.0f / 255.0f : 1.0f / 65535.0f;
+            bool same = true;
+            for (int y = 0; y < 23; ++y)
+                for (size_t i = 0; i < 37 * size_t(channels); ++i) {
+                    const size_t at = t.offset + size_t(y) * t.row_stride + i;
+                    const float v = float(depth == 8 ? t.bytes[at] : t.words[at]) * scale;
+                    same = same && v == ref[size_t(y) * 37 * size_t(channels) + i];
+                }
+            EXPECT_TRUE(same) << "an integer does not stand for OpenImageIO's float";
+            EXPECT_EQ(mine->info.bits_per_channel, depth);
+            EXPECT_EQ(mine->info.color_space, colour_space);
+        }
     }
-    // 16-bit files come back as floats.
-    std::vector<uint8_t> png16 = make_png(5, 4, 2, 16, 9);
-    auto wide = decode_plain_png(png16, true);
-    ASSERT_TRUE(wide.has_value());
-    EXPECT_TRUE(wide->bytes8.empty());
-    EXPECT_EQ(wide->image.pixels.size(), size_t(5 * 4 * 3));
+}
+
+// 16-bit samples are big-endian (PNG spec Sec. 7.1): a hand-made 3 x 2 gray file of known values, one row
+// stored plain (filter 0) and one with filter Sub, whose sums carry from the low byte into the high one.
+TEST(PlainPng, SixteenBitValuesAreBigEndianSamples) {
+    const std::vector<uint16_t> values = {0x0000, 0x0102, 0xFFFF, 0x00FF, 0x0100, 0x8001};
+    std::vector<uint8_t> raw = {0, 0x00, 0x00, 0x01, 0x02, 0xFF, 0xFF};
+    // Row 1 with Sub: each byte minus the byte two before it (one sample back), modulo 256.
+    const uint8_t row1[6] = {0x00, 0xFF, 0x01, 0x00, 0x80, 0x01};
+    raw.push_back(1);
+    for (int i = 0; i < 6; ++i) raw.push_back(uint8_t(row1[i] - (i >= 2 ? row1[i - 2] : 0)));
+    std::vector<uint8_t> z(compressBound(uLong(raw.size())));
+    uLongf size = z.size();
+    ASSERT_EQ(compress(z.data(), &size, raw.data(), uLong(raw.size())), Z_OK);
+    z.resize(size);
+    std::vector<uint8_t> png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+    std::vector<uint8_t> ihdr;
+    put32(ihdr, 3);
+    put32(ihdr, 2);
+    ihdr.insert(ihdr.end(), {16, 0, 0, 0, 0});
+    chunk(png, "IHDR", ihdr);
+    chunk(png, "IDAT", z);
+    chunk(png, "IEND", {});
+    auto kept = decode_plain_png(png, true);
+    ASSERT_TRUE(kept.has_value());
+    ASSERT_EQ(kept->integers.bits, 16);
+    ASSERT_EQ(kept->integers.row_stride, 3u);
+    EXPECT_EQ(std::vector<uint16_t>(kept->integers.words.begin(), kept->integers.words.begin() + 6), values);
+    int channels = 0;
+    std::string colour_space;
+    const std::vector<float> ref = oiio_decode(png, channels, colour_space);
+    ASSERT_EQ(ref.size(), 6u);
+    auto floats = decode_plain_png(png);
+    ASSERT_TRUE(floats.has_value());
+    EXPECT_EQ(floats->image.pixels, ref);
+    for (size_t i = 0; i < 6; ++i) {
+        EXPECT_NEAR(ref[i], values[i] / 65535.0, 1e-7) << "sample " << i;
+        EXPECT_EQ(float(values[i]) * (1.0f / 65535.0f), ref[i]) << "sample " << i;
+    }
 }
 
 TEST(PlainPng, EverythingElseIsLeftToOpenImageIO) {
