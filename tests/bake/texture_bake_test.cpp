@@ -585,6 +585,7 @@ TEST(TextureBake, IntegerMapsBakeAsTheirDecodedFloats) {
 TEST(TextureBake, InputRowsReportedDoneAreNotReadAgain) {
     for (const auto& [W, H, bits] : {std::tuple{256, 512, 8}, std::tuple{512, 96, 8}, std::tuple{256, 512, 16}, std::tuple{512, 96, 16}}) {
         SCOPED_TRACE(std::to_string(W) + "x" + std::to_string(H) + " " + std::to_string(bits) + "-bit");
+        const int depth = bits;  // a lambda cannot capture a structured binding before C++20 in every compiler
         IntegerMap ni = as_integers(random_normal_map(W, H, 41, 0.3), bits);
         IntegerMap ri = as_integers(random_orm(W, H, 42), bits);
         TextureBakeSettings s;
@@ -607,7 +608,7 @@ TEST(TextureBake, InputRowsReportedDoneAreNotReadAgain) {
             [&](int upto) {
                 EXPECT_GE(upto, released);
                 for (IntegerMap* b : {&ni, &ri}) {
-                    if (bits == 8) std::fill_n(b->bytes.begin(), size_t(upto) * b->map.row_stride, uint8_t(0x5A));
+                    if (depth == 8) std::fill_n(b->bytes.begin(), size_t(upto) * b->map.row_stride, uint8_t(0x5A));
                     else std::fill_n(b->words.begin(), size_t(upto) * b->map.row_stride, uint16_t(0x5A5A));
                 }
                 released = upto;
