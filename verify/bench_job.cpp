@@ -41,24 +41,46 @@ struct RatioMean {
         log_sum += std::log(std::max(candidate, kFloor) / none);
         ++n;
     }
+    // Counted whatever none's value: both sides floored (RMSE, where none is zero only if it equals the
+    // ground truth).
+    void add_floored(double candidate, double none) {
+        log_sum += std::log(std::max(candidate, kFloor) / std::max(none, kFloor));
+        ++n;
+    }
     double value() const { return n ? std::exp(log_sum / n) : 1.0; }
+};
+
+// The six summary measures of a candidate against its baseline over a set of scenes: geometric means of
+// RMSE, RMSE (tm), flicker, flicker (tm), t-err and t-err (tm) as ratios to the baseline's.
+struct RatioMeans {
+    RatioMean rmse, rmse_tm, flicker, flicker_tm, terr, terr_tm;
+    void add(const SimMetrics& m, const SimMetrics& base) {
+        rmse.add_floored(m.rmse, base.rmse);
+        rmse_tm.add_floored(m.rmse_tonemapped, base.rmse_tonemapped);
+        flicker.add(m.flicker_linear, base.flicker_linear);
+        flicker_tm.add(m.flicker, base.flicker);
+        terr.add(m.temporal_error_linear, base.temporal_error_linear);
+        terr_tm.add(m.temporal_error, base.temporal_error);
+    }
+    std::array<double, 6> values() const {
+        return {rmse.value(), rmse_tm.value(), flicker.value(), flicker_tm.value(), terr.value(), terr_tm.value()};
+    }
 };
 
 // Per candidate, aggregated over the scenes it ran on.
 struct Aggregate {
     std::string name, family;
-    double log_error = 0, log_error_linear = 0;
-    RatioMean flicker, flicker_tm, terr, terr_tm;
+    RatioMeans ratios;
     double energy = 0, peak = 0;
     int n = 0;
     std::optional<int> spirv;
     std::vector<double> frame_rel, bake_ms;
-    double rel_error() const { return n ? std::exp(log_error / n) : 1.0; }
-    double rel_error_linear() const { return n ? std::exp(log_error_linear / n) : 1.0; }
-    double rel_flicker() const { return flicker.value(); }
-    double rel_flicker_tm() const { return flicker_tm.value(); }
-    double rel_terr() const { return terr.value(); }
-    double rel_terr_tm() const { return terr_tm.value(); }
+    double rel_error() const { return ratios.rmse_tm.value(); }
+    double rel_error_linear() const { return ratios.rmse.value(); }
+    double rel_flicker() const { return ratios.flicker.value(); }
+    double rel_flicker_tm() const { return ratios.flicker_tm.value(); }
+    double rel_terr() const { return ratios.terr.value(); }
+    double rel_terr_tm() const { return ratios.terr_tm.value(); }
 };
 
 enum class Family { All, Analytic, Real };
@@ -87,13 +109,7 @@ std::vector<Aggregate> aggregate(const BenchReport& r, Family family = Family::A
                 out.back().family = c.family;
             }
             Aggregate& a = out[it->second];
-            a.log_error += std::log(std::max(c.metrics.rmse_tonemapped, kFloor) /
-                                    std::max(none->metrics.rmse_tonemapped, kFloor));
-            a.log_error_linear += std::log(std::max(c.metrics.rmse, kFloor) / std::max(none->metrics.rmse, kFloor));
-            a.flicker.add(c.metrics.flicker_linear, none->metrics.flicker_linear);
-            a.flicker_tm.add(c.metrics.flicker, none->metrics.flicker);
-            a.terr.add(c.metrics.temporal_error_linear, none->metrics.temporal_error_linear);
-            a.terr_tm.add(c.metrics.temporal_error, none->metrics.temporal_error);
+            a.ratios.add(c.metrics, none->metrics);
             a.energy += c.metrics.energy_ratio;
             a.peak += c.metrics.peak_ratio;
             ++a.n;
@@ -290,25 +306,17 @@ struct OverScenes {
     int holds = 0, n = 0;
 };
 OverScenes over_scenes(const BenchReport& r, const std::string& name, const std::vector<size_t>& scenes) {
-    double log_rmse = 0, log_rmse_tm = 0;
-    RatioMean flicker, flicker_tm, terr, terr_tm;
+    RatioMeans ratios;
     OverScenes o;
     for (size_t i : scenes) {
         const CandidateReport* none = find_row(r.scenes[i], "none");
         const CandidateReport* c = find_row(r.scenes[i], name);
         if (!none || !c) continue;
-        const SimMetrics &m = c->metrics, &b = none->metrics;
-        log_rmse += std::log(std::max(m.rmse, kFloor) / std::max(b.rmse, kFloor));
-        log_rmse_tm += std::log(std::max(m.rmse_tonemapped, kFloor) / std::max(b.rmse_tonemapped, kFloor));
-        flicker.add(m.flicker_linear, b.flicker_linear);
-        flicker_tm.add(m.flicker, b.flicker);
-        terr.add(m.temporal_error_linear, b.temporal_error_linear);
-        terr_tm.add(m.temporal_error, b.temporal_error);
-        o.holds += does_no_harm(m, b) ? 1 : 0;
+        ratios.add(c->metrics, none->metrics);
+        o.holds += does_no_harm(c->metrics, none->metrics) ? 1 : 0;
         ++o.n;
     }
-    o.means = {o.n ? std::exp(log_rmse / o.n) : 1.0, o.n ? std::exp(log_rmse_tm / o.n) : 1.0, flicker.value(),
-               flicker_tm.value(), terr.value(), terr_tm.value()};
+    o.means = ratios.values();
     return o;
 }
 
