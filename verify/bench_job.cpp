@@ -467,6 +467,66 @@ std::string bench_csv(const BenchReport& r) {
     return out;
 }
 
+// A labelled dot of the plot and where its label went: the text's left end and baseline, its width, and
+// whether it sits far enough from its dot to need a leader line.
+struct PlotPoint {
+    double x, y;
+    std::string name, colour;
+};
+struct PlacedLabel {
+    double x, y, width;
+    bool leader;
+};
+struct PlotBox {
+    double left, top, right, bottom;
+};
+
+// Width of a label at the plot's 10 px sans-serif: 6.5 px a character bounds the glyphs' advance
+// (0.5-0.6 em for lower case and digits; W and M aside).
+constexpr double kLabelCharWidth = 6.5, kLabelHeight = 11.0;
+
+// Labels placed so that none overlaps another label or a dot: beside its dot, right then left, at the
+// dot's height or shifted up or down in steps of a line, the nearest free place inside `area` first, then
+// the same further out to the sides; the dots are placed from the top of the panel down. A label that
+// finds no free place stays beside its dot.
+std::vector<PlacedLabel> place_labels(const std::vector<PlotPoint>& points, const PlotBox& area) {
+    std::vector<PlotBox> taken;
+    for (const PlotPoint& p : points) taken.push_back({p.x - 4, p.y - 4, p.x + 4, p.y + 4});
+    const auto free = [&](const PlotBox& b) {
+        if (b.left < area.left || b.right > area.right || b.top < area.top || b.bottom > area.bottom) return false;
+        for (const PlotBox& t : taken)
+            if (b.left < t.right && t.left < b.right && b.top < t.bottom && t.top < b.bottom) return false;
+        return true;
+    };
+    std::vector<size_t> order(points.size());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return points[a].y < points[b].y; });
+    std::vector<PlacedLabel> out(points.size());
+    for (size_t i : order) {
+        const PlotPoint& p = points[i];
+        const double w = kLabelCharWidth * double(p.name.size());
+        PlacedLabel chosen{p.x + 6, p.y - 4, w, false};
+        bool found = false;
+        for (int shift = 0; shift < 4 && !found; ++shift) {
+            for (int step = 0; step <= 40 && !found; ++step) {
+                const double dy = (step % 2 ? -1.0 : 1.0) * double((step + 1) / 2) * kLabelHeight;
+                for (int side = 0; side < 2 && !found; ++side) {
+                    const double dx = 6 + 45.0 * shift;
+                    const double x = side == 0 ? p.x + dx : p.x - dx - w, baseline = p.y + 3 + dy;
+                    const PlotBox box{x, baseline - 9, x + w, baseline + 2};
+                    if (free(box)) {
+                        chosen = {x, baseline, w, std::abs(dy) > 0 || shift > 0};
+                        taken.push_back(box);
+                        found = true;
+                    }
+                }
+            }
+        }
+        out[i] = chosen;
+    }
+    return out;
+}
+
 std::string bench_svg(const BenchReport& r) {
     const std::vector<Aggregate> rows = aggregate(r);
     const int panel_w = 460, panel_h = 360, margin = 60, width = 2 * panel_w + 110, height = panel_h + 105;
@@ -517,15 +577,26 @@ std::string bench_svg(const BenchReport& r) {
             svg += "<text x=\"" + format_double("%.1f", px(x)) + "\" y=\"" + std::to_string(oy + ph + 14) +
                    "\" text-anchor=\"middle\">" + format_double("%.0f", x) + "</text>\n";
         }
+        std::vector<PlotPoint> points;
         for (size_t i = 0; i < rows.size(); ++i) {
             const Aggregate& a = rows[i];
             const double x = have_x ? (a.spirv ? double(*a.spirv) : double(x_min)) : double(i);
             const double y = panel ? a.rel_flicker() : a.rel_error_linear();
-            auto colour = colours.count(a.family) ? colours.at(a.family) : "#555";
-            svg += "<circle cx=\"" + format_double("%.1f", px(x)) + "\" cy=\"" + format_double("%.1f", py(y)) + "\" r=\"3.5\" fill=\"" +
-                   colour + "\"/>\n";
-            svg += "<text x=\"" + format_double("%.1f", px(x) + 5) + "\" y=\"" + format_double("%.1f", py(y) - 4 - 9.0 * double(i % 2)) +
-                   "\" fill=\"" + colour + "\">" + a.name + "</text>\n";
+            points.push_back({px(x), py(y), a.name, colours.count(a.family) ? colours.at(a.family) : "#555"});
+        }
+        const std::vector<PlacedLabel> labels =
+            place_labels(points, {double(ox), double(oy), double(ox + pw + (panel ? margin + 10 : 38)), double(oy + ph)});
+        for (size_t i = 0; i < points.size(); ++i) {
+            const PlotPoint& p = points[i];
+            const PlacedLabel& l = labels[i];
+            svg += "<circle cx=\"" + format_double("%.1f", p.x) + "\" cy=\"" + format_double("%.1f", p.y) + "\" r=\"3.5\" fill=\"" +
+                   p.colour + "\"/>\n";
+            if (l.leader)
+                svg += "<line x1=\"" + format_double("%.1f", p.x) + "\" y1=\"" + format_double("%.1f", p.y) + "\" x2=\"" +
+                       format_double("%.1f", l.x < p.x ? l.x + l.width : l.x) + "\" y2=\"" + format_double("%.1f", l.y - 3) +
+                       "\" stroke=\"" + p.colour + "\" stroke-width=\"0.5\"/>\n";
+            svg += "<text x=\"" + format_double("%.1f", l.x) + "\" y=\"" + format_double("%.1f", l.y) + "\" fill=\"" +
+                   p.colour + "\">" + p.name + "</text>\n";
         }
     }
     svg += "<text x=\"" + std::to_string(margin) + "\" y=\"" + std::to_string(height - 26) +

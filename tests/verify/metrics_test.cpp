@@ -289,5 +289,71 @@ TEST(VerifyBenchSummary, PlotDrawsTiersAndPeersInTheirColours) {
     EXPECT_NE(svg.find("pink tiers"), std::string::npos) << svg;
 }
 
+// Twelve rows that land on almost the same spot of both panels (the engines' run-time filters do, at
+// 264-272 instructions and 0.6-1.1x): every label is drawn, none overlaps another label or a dot, each
+// stays inside the canvas, and a label moved off its dot is tied to it by a line. Text boxes are bounded
+// here by 6.5 px a character at the plot's 10 px font (wider than any glyph's advance in common sans
+// fonts but W and M), not by the plot's own figure.
+TEST(VerifyBenchSummary, PlotLabelsOfACrowdedClusterDoNotOverlap) {
+    SceneReport s;
+    s.scene = "sphere";
+    const auto row = [](std::string name, const char* family, int spirv, double v) {
+        CandidateReport c;
+        c.name = std::move(name);
+        c.family = family;
+        c.spirv_instructions = spirv;
+        c.metrics.rmse = c.metrics.rmse_tonemapped = v;
+        c.metrics.flicker_linear = c.metrics.flicker = v;
+        return c;
+    };
+    s.candidates.push_back(row("none", "none", 254, 1.0));
+    const char* names[] = {"filament", "godot", "unity-hdrp", "threejs", "babylon", "filament-prefilter",
+                           "godot-importer", "unity-hdrp-nf", "unreal-toksvig", "baked-texture", "fast", "limit"};
+    for (int i = 0; i < 12; ++i) s.candidates.push_back(row(names[i], "peer", 264 + i % 4, 0.80 + 0.01 * (i % 5)));
+    BenchReport report;
+    report.scenes = {s};
+    const std::string svg = bench_svg(report);
+    struct Box {
+        double l, t, r, b;
+        std::string text;
+    };
+    std::vector<Box> texts, dots;
+    std::vector<std::array<double, 4>> lines;
+    const auto attr = [](const std::string& el, const std::string& name) {
+        const size_t at = el.find(" " + name + "=\"");
+        return at == std::string::npos ? NAN : std::stod(el.substr(at + name.size() + 3));
+    };
+    for (size_t at = svg.find('<'); at != std::string::npos; at = svg.find('<', at + 1)) {
+        const size_t end = svg.find('>', at);
+        const std::string el = svg.substr(at, end - at);
+        if (el.rfind("<circle", 0) == 0) {
+            const double x = attr(el, "cx"), y = attr(el, "cy");
+            dots.push_back({x - 3.5, y - 3.5, x + 3.5, y + 3.5, ""});
+        } else if (el.rfind("<line", 0) == 0 && el.find("stroke-width=\"0.5\"") != std::string::npos) {
+            lines.push_back({attr(el, "x1"), attr(el, "y1"), attr(el, "x2"), attr(el, "y2")});
+        } else if (el.rfind("<text", 0) == 0 && el.find("text-anchor") == std::string::npos &&
+                   el.find("font-size") == std::string::npos) {
+            const std::string text = svg.substr(end + 1, svg.find('<', end) - end - 1);
+            if (text.find(' ') != std::string::npos) continue;  // the captions below the panels
+            const double x = attr(el, "x"), y = attr(el, "y");
+            texts.push_back({x, y - 8, x + 6.5 * double(text.size()), y + 1, text});
+        }
+    }
+    ASSERT_EQ(texts.size(), 2u * 13u) << svg;  // every row's label in both panels
+    ASSERT_EQ(dots.size(), 2u * 13u);
+    const auto overlap = [](const Box& a, const Box& b) {
+        return a.l < b.r && b.l < a.r && a.t < b.b && b.t < a.b;
+    };
+    for (size_t i = 0; i < texts.size(); ++i) {
+        EXPECT_GE(texts[i].l, 0.0) << texts[i].text;
+        EXPECT_LE(texts[i].r, 1030.0) << texts[i].text;
+        for (size_t j = i + 1; j < texts.size(); ++j)
+            EXPECT_FALSE(overlap(texts[i], texts[j])) << texts[i].text << " and " << texts[j].text << "\n" << svg;
+        for (const Box& d : dots) EXPECT_FALSE(overlap(texts[i], d)) << texts[i].text << "\n" << svg;
+    }
+    // A label away from its dot has a line from the dot: some labels in the cluster must have moved.
+    EXPECT_GE(lines.size(), 4u) << svg;
+}
+
 }  // namespace
 }  // namespace specbake::verify
