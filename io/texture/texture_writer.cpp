@@ -15,10 +15,13 @@
 #include <tbb/parallel_for.h>
 
 #define ZSTD_STATIC_LINKING_ONLY  // ZSTD_getCParams: the window the stream reads back
+#include <fcntl.h>
 #include <sys/mman.h>
+#include <unistd.h>
 #include <zstd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -246,7 +249,72 @@ struct EncodedTexture::ExrStream {
     bool done = false;
 };
 
-EncodedTexture::~EncodedTexture() = default;
+EncodedTexture::~EncodedTexture() {
+    if (fd_ >= 0) ::close(fd_);
+}
+
+namespace {
+
+// Writes [p, p + n) at `offset` of `fd`; the error names `name` and gives the system's reason.
+Result<void> write_at(int fd, const uint8_t* p, size_t n, size_t offset, const fs::path& name) {
+    while (n > 0) {
+        const ssize_t k = ::pwrite(fd, p, std::min<size_t>(n, size_t(1) << 30), off_t(offset));
+        if (k < 0 && errno == EINTR) continue;
+        if (k <= 0) return make_error(name.string() + ": cannot write: " + std::strerror(k < 0 ? errno : ENOSPC));
+        p += k, n -= size_t(k), offset += size_t(k);
+    }
+    return {};
+}
+
+}  // namespace
+
+Result<void> EncodedTexture::stream_to(const fs::path& final_path) {
+    if (container_ != TextureContainer::Dds) return make_error(final_path.string() + ": only DDS files are written as they are baked");
+    if (file_) return make_error(final_path.string() + ": the file is already being written");
+    std::error_code ec;
+    if (final_path.has_parent_path()) fs::create_directories(final_path.parent_path(), ec);
+    if (ec) return make_error(final_path.parent_path().string() + ": cannot create folder: " + ec.message());
+    auto out = std::make_unique<AtomicOutput>(final_path);
+    fd_ = ::open(out->temp_path().c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd_ < 0) return make_error(final_path.string() + ": cannot open for writing: " + std::strerror(errno));
+    file_ = std::move(out);
+    rows_written_.assign(layout_.level_offset.size(), 0);
+    // The header: every byte before level 0.
+    return write_at(fd_, data_.get(), layout_.level_offset[0], 0, final_path);
+}
+
+// Rows [written, rows) of `level` to the file at their offset; the whole 2 MiB pages (the huge pages the
+// buffer was hinted for) of the level's rows in the file go back to the system.
+Result<void> EncodedTexture::write_rows(int level, int rows) {
+    int& written = rows_written_[size_t(level)];
+    const int upto = std::min(rows, std::max(1, height_ >> level));
+    if (upto <= written) return {};
+    const size_t row_bytes =
+        size_t(std::max(1, width_ >> level)) * size_t(layout_.stored_channels) * size_t(encoding_bytes(encoding_));
+    const size_t at = layout_.level_offset[size_t(level)];
+    const uint8_t* start = data_.get() + at;
+    const size_t from = size_t(written) * row_bytes, to = size_t(upto) * row_bytes;
+    if (auto ok = write_at(fd_, start + from, to - from, at + from, file_->final_path()); !ok) return ok;
+    written = upto;
+    detail::advise_whole_pages(start, to, uintptr_t(2) << 20, MADV_DONTNEED);
+    return {};
+}
+
+Result<std::string> EncodedTexture::finish_file(const fs::path& final_path, std::unique_ptr<AtomicOutput>& out) {
+    if (!file_) return make_error(final_path.string() + ": the file was not written as it was baked");
+    if (file_->final_path() != final_path)
+        return make_error(final_path.string() + ": the texture was written as " + file_->final_path().string());
+    for (int L = 0; L < int(rows_written_.size()); ++L)
+        if (auto ok = write_rows(L, std::max(1, height_ >> L)); !ok) return ok.error();
+    const int fd = fd_;
+    fd_ = -1;
+    if (::close(fd) != 0) return make_error(final_path.string() + ": cannot write: " + std::strerror(errno));
+    out = std::move(file_);
+    // Hashed as written: read back in windows from the page cache, the raw rows being gone.
+    auto hash = sha256_file(out->temp_path());
+    if (!hash) return make_error(final_path.string() + ": " + hash.error().message);
+    return *hash;
+}
 
 // Compresses the EXR chunks that rows up to `rows` of `level` complete (whole 64-row tile rows of a
 // mipmapped file's level, whole 16-row blocks of a per-mip file; the rest with the level's last row) and
@@ -302,6 +370,7 @@ Result<std::vector<std::span<const uint8_t>>> EncodedTexture::exr_file(int level
 }
 
 Result<void> EncodedTexture::compress_rows(int level, int rows) {
+    if (file_) return write_rows(level, rows);
     if (exr()) return feed_exr(level, rows);
     if (png()) {
         auto& stream = png_[size_t(level)];
@@ -524,6 +593,19 @@ ManifestOutput level_file_entry(const EncodedTexture& t, const EncodedFile& f, c
 Result<void> write_container(const EncodedFile& f, TargetFile& target) {
     const EncodedTexture& t = *f.texture;
     ManifestOutput& entry = target.entry;
+    if (t.streams_to_file()) {  // DDS written as it was baked (stream_to): the rest of its rows, the hash
+        if (f.block != BlockFormat::None)
+            return make_error(target.out->final_path().string() + ": a file written as it was baked cannot be block-compressed");
+        const fs::path final_path = target.out->final_path();
+        auto hash = f.texture->finish_file(final_path, target.out);
+        if (!hash) return hash.error();
+        entry.sha256 = *hash;
+        entry.extra["bytes"] = t.bytes().size();
+        entry.extra["uncompressed_bytes"] = t.bytes().size();
+        entry.extra["block_compression"] = block_format_name(f.block);
+        entry.extra["supercompression"] = "none";
+        return {};
+    }
     Ktx2Pieces packed;
     BlockFile blocks;
     std::vector<std::span<const uint8_t>> pieces{t.bytes()};
