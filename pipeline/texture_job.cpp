@@ -346,6 +346,8 @@ Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, cons
                                                                     format.wrap));
         out.textures.back()->set_channel_meaning(f.names);
         out.files.push_back({out.textures.back().get(), f.stem, f.kind, f.names, block_format_of(f, supercompression)});
+        // BC levels are made as the rows finish (ASTC from the whole levels, at the write).
+        if (out.files.back().block != io::BlockFormat::None) out.textures.back()->set_block_format(out.files.back().block);
         // Uncompressed DDS goes to its file as the rows finish (level 0 first in the file, as baked).
         if (!stream_dir.empty() && container == io::TextureContainer::Dds && out.files.back().block == io::BlockFormat::None)
             if (auto ok = out.textures.back()->stream_to(stream_dir / (f.stem + ".dds")); !ok) return ok.error();
@@ -364,7 +366,7 @@ Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, cons
     // written; io::EncodedTexture::compress_rows).
     std::vector<size_t> streamed;
     for (size_t i = 0; i < files.size(); ++i)
-        if (out.textures[i]->streams() && out.files[i].block == io::BlockFormat::None) streamed.push_back(i);
+        if (out.textures[i]->streams() && out.files[i].block == out.textures[i]->block_format()) streamed.push_back(i);
     std::optional<Error> stream_error;
     std::mutex stream_error_lock;
     const TextureBakeRowsDone rows_done = [&](int level, int rows) {

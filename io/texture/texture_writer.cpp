@@ -249,6 +249,72 @@ struct EncodedTexture::ExrStream {
     bool done = false;
 };
 
+namespace {
+
+// `texels` texels of `channels` stored channels at `src` as 8-bit texels in stored channel order (DDS
+// A8R8G8B8 back to RGBA; 16-bit unorm rounded to 8 bits: BC endpoints and the ASTC LDR decode hold 8
+// bits), in `scratch` when they are not `src` itself.
+const uint8_t* as_unorm8(const uint8_t* src, size_t texels, int channels, TexelEncoding encoding, bool bgra,
+                         std::vector<uint8_t>& scratch) {
+    if (bgra) {  // the DDS A8R8G8B8 byte order back to RGBA for the block encoder
+        scratch.assign(src, src + texels * 4);
+        dds_swap_red_blue(scratch.data(), texels);
+        src = scratch.data();
+    }
+    if (encoding == TexelEncoding::Unorm16) {
+        std::vector<uint8_t> narrowed(texels * size_t(channels));
+        for (size_t k = 0; k < narrowed.size(); ++k) {
+            uint16_t v;
+            std::memcpy(&v, src + 2 * k, 2);
+            narrowed[k] = uint8_t((uint32_t(v) * 255u + 32767u) / 65535u);
+        }
+        scratch = std::move(narrowed);
+        src = scratch.data();
+    }
+    return src;
+}
+
+}  // namespace
+
+void EncodedTexture::set_block_format(BlockFormat format) {
+    if (!is_container_file(container_) || is_astc(format) || format == BlockFormat::None ||
+        (encoding_ != TexelEncoding::Unorm8 && encoding_ != TexelEncoding::Unorm16))
+        return;
+    block_ = format;
+    block_levels_.assign(layout_.level_offset.size(), {});
+    block_done_.assign(layout_.level_offset.size(), 0);
+}
+
+// BC blocks of the whole 4-row block rows that rows [0, rows) of `level` complete (the rest with the
+// level's last row): compress_level of a block row reads only its own rows, clamping at the level's last
+// row as it does for the whole level, so the blocks are those of the whole level. The whole 2 MiB pages
+// (the huge pages the buffer was hinted for) of the rows compressed go back to the system.
+Result<void> EncodedTexture::block_rows(int level, int rows) {
+    const int w = std::max(1, width_ >> level), h = std::max(1, height_ >> level);
+    int& done = block_done_[size_t(level)];
+    const int upto = rows >= h ? h : rows / 4 * 4;
+    if (upto <= done) return {};
+    const int channels = layout_.stored_channels;
+    const size_t row_bytes = size_t(w) * size_t(channels) * size_t(encoding_bytes(encoding_));
+    const uint8_t* start = data_.get() + layout_.level_offset[size_t(level)];
+    std::vector<uint8_t> scratch;
+    const uint8_t* src = as_unorm8(start + size_t(done) * row_bytes, size_t(w) * size_t(upto - done), channels,
+                                   encoding_, bgra_, scratch);
+    const std::vector<uint8_t> blocks = compress_level(block_, src, w, upto - done, channels);
+    std::vector<uint8_t>& out = block_levels_[size_t(level)];
+    out.insert(out.end(), blocks.begin(), blocks.end());
+    done = upto;
+    detail::advise_whole_pages(start, size_t(upto) * row_bytes, uintptr_t(2) << 20, MADV_DONTNEED);
+    return {};
+}
+
+std::vector<std::vector<uint8_t>> EncodedTexture::take_block_levels() {
+    if (block_ == BlockFormat::None) return {};
+    for (int L = 0; L < int(block_done_.size()); ++L)  // rows never reported: still held, compressed now
+        (void)block_rows(L, std::max(1, height_ >> L));
+    return std::move(block_levels_);
+}
+
 EncodedTexture::~EncodedTexture() {
     if (fd_ >= 0) ::close(fd_);
 }
@@ -370,6 +436,7 @@ Result<std::vector<std::span<const uint8_t>>> EncodedTexture::exr_file(int level
 }
 
 Result<void> EncodedTexture::compress_rows(int level, int rows) {
+    if (block_ != BlockFormat::None) return block_rows(level, rows);
     if (file_) return write_rows(level, rows);
     if (exr()) return feed_exr(level, rows);
     if (png()) {
@@ -480,25 +547,9 @@ namespace {
 // they are not the level's own bytes.
 const uint8_t* level_as_unorm8(const EncodedTexture& t, size_t L, std::vector<uint8_t>& scratch) {
     const ContainerLayout& layout = t.layout();
-    const int channels = layout.stored_channels;
     const int w = std::max(1, t.width() >> L), h = std::max(1, t.height() >> L);
-    const uint8_t* src = t.bytes().data() + layout.level_offset[L];
-    if (t.bgra()) {  // the DDS A8R8G8B8 byte order back to RGBA for the block encoder
-        scratch.assign(src, src + size_t(w) * size_t(h) * 4);
-        dds_swap_red_blue(scratch.data(), size_t(w) * size_t(h));
-        src = scratch.data();
-    }
-    if (t.encoding() == TexelEncoding::Unorm16) {
-        std::vector<uint8_t> narrowed(size_t(w) * size_t(h) * size_t(channels));
-        for (size_t k = 0; k < narrowed.size(); ++k) {
-            uint16_t v;
-            std::memcpy(&v, src + 2 * k, 2);
-            narrowed[k] = uint8_t((uint32_t(v) * 255u + 32767u) / 65535u);
-        }
-        scratch = std::move(narrowed);
-        src = scratch.data();
-    }
-    return src;
+    return as_unorm8(t.bytes().data() + layout.level_offset[L], size_t(w) * size_t(h), layout.stored_channels,
+                     t.encoding(), t.bgra(), scratch);
 }
 
 // The file of `t` with every level block-compressed as `format`, zstd-supercompressed when `t` asks for it
@@ -610,7 +661,13 @@ Result<void> write_container(const EncodedFile& f, TargetFile& target) {
     BlockFile blocks;
     std::vector<std::span<const uint8_t>> pieces{t.bytes()};
     if (f.block != BlockFormat::None) {
-        auto b = block_compressed(t, f.block);
+        // Blocks made as the rows arrived (set_block_format), else from the whole levels now.
+        std::vector<std::vector<uint8_t>> streamed =
+            t.block_format() == f.block ? f.texture->take_block_levels() : std::vector<std::vector<uint8_t>>{};
+        auto b = !streamed.empty() ? block_file(t.container(), f.block, t.width(), t.height(), std::move(streamed),
+                                                t.supercompressed() ? t.supercompression().zstd_level : 0,
+                                                t.supercompression().astc_block)
+                                   : block_compressed(t, f.block);
         if (!b) return make_error(target.out->final_path().string() + ": " + b.error().message);
         blocks = std::move(*b);
         pieces = blocks.pieces();

@@ -2,6 +2,7 @@
 // EXR/PNG, a DDS parse written here from the DDS/DX10 layout, byte-level KTX2 structure checks).
 #include "io/files/sha256.h"
 #include "io/image/image_io.h"
+#include "io/texture/block_compress.h"
 #include "io/texture/dds.h"
 #include "io/texture/ktx2.h"
 #include "io/texture/png_stream.h"
@@ -401,6 +402,52 @@ TEST(EncodedTexture, BlocksInAnyOrderGiveTheWholeChainFile) {
             ASSERT_EQ(t.bytes().size(), whole.size());
             EXPECT_TRUE(std::equal(whole.begin(), whole.end(), t.bytes().begin()));
         }
+    }
+}
+
+// BC levels made as the rows arrive (set_block_format, compress_rows in bands that cut 4-row block rows)
+// give the file made from the whole levels at the write, for KTX2 (plain and zstd) and DDS, 8- and 16-bit
+// data, sizes whose levels end in partial block rows (the whole-level encoder is checked against a BC
+// decoder written from the spec in tests/cli/block_compress_test.cpp).
+TEST(EncodedTexture, BlocksMadeAsTheRowsArriveGiveTheWholeLevelFile) {
+    struct Case { TextureContainer container; bool zstd; TexelEncoding e; int width, height, channels; BlockFormat block; };
+    std::mt19937 rng(21);
+    for (const Case& c : {Case{TextureContainer::Ktx2, true, TexelEncoding::Unorm8, 300, 203, 1, BlockFormat::Bc4},
+                          Case{TextureContainer::Ktx2, false, TexelEncoding::Unorm16, 130, 77, 3, BlockFormat::Bc1},
+                          Case{TextureContainer::Dds, false, TexelEncoding::Unorm8, 257, 130, 3, BlockFormat::Bc1},
+                          Case{TextureContainer::Dds, false, TexelEncoding::Unorm8, 64, 37, 3, BlockFormat::Bc3},
+                          Case{TextureContainer::Ktx2, true, TexelEncoding::Unorm8, 90, 61, 1, BlockFormat::Bc4}}) {
+        SCOPED_TRACE(std::string(container_name(c.container)) + " " + encoding_name(c.e) + " " +
+                     std::to_string(c.width) + "x" + std::to_string(c.height) + " " + block_format_name(c.block));
+        const MipChain chain = random_chain(c.width, c.height, c.channels, unsigned(c.height));
+        const int levels = int(chain.levels.size());
+        Supercompression s;
+        s.zstd = c.zstd;
+        EncodedTexture banded(c.container, c.e, c.width, c.height, levels, c.channels, s);
+        banded.set_block_format(c.block);
+        ASSERT_EQ(banded.block_format(), c.block);
+        ASSERT_TRUE(banded.streams());
+        for (int L = 0; L < levels; ++L) {
+            const Image& level = chain.levels[size_t(L)];
+            for (int y = 0; y < level.height;) {
+                const int rows = std::min(level.height - y, 1 + int(rng() % 23));
+                banded.put_block(L, 0, y, level.width, rows,
+                                 level.pixels.data() + size_t(y) * size_t(level.width) * size_t(c.channels), c.channels, 0);
+                y += rows;
+                ASSERT_TRUE(banded.compress_rows(L, y).ok());
+            }
+        }
+        const fs::path dir = fresh_dir("bc_bands");
+        const EncodedFile file{&banded, "b", "roughness", {}, c.block};
+        auto written = write_encoded_textures({&file, 1}, dir);
+        ASSERT_TRUE(written.ok()) << written.error().message;
+        auto whole = write_texture(chain, c.e, TextureFileFormat(c.container, s), dir, "w", "roughness", {}, c.block);
+        ASSERT_TRUE(whole.ok()) << whole.error().message;
+        const std::string ext = std::string(".") + container_name(c.container);
+        const std::vector<uint8_t> got = slurp(dir / ("b" + ext)), want = slurp(dir / ("w" + ext));
+        EXPECT_EQ(got.size(), want.size());
+        EXPECT_TRUE(got == want) << "the blocks made as the rows arrived differ from those of the whole levels";
+        fs::remove_all(dir);
     }
 }
 
