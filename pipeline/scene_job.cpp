@@ -160,7 +160,7 @@ TextureBakeEncoder texture_encoder(SceneBake& bake) {
         in.roughness_bits = w.roughness_bits;
         in.release_rows = w.release_rows;
         auto encoded = std::make_shared<EncodedTextureOutputs>();
-        auto baked = bake_texture_encoded(in, settings, job.texture_format, d.stem);
+        auto baked = bake_texture_encoded(in, settings, job.texture_format, d.stem, {}, {}, bake.out_dir);
         if (!baked) return baked.error();
         *encoded = std::move(*baked);
         EncodedTextureBake out{encoded->max_roughness_change, encoded->notes, {}};

@@ -315,7 +315,7 @@ Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& in, cons
                                                    const io::TextureFileFormat& format, const fs::path& dir,
                                                    const std::string& stem, const ProgressFn& progress,
                                                    const FractionFn& fraction) {
-    auto encoded = bake_texture_encoded(in, settings, format, stem, progress, fraction);
+    auto encoded = bake_texture_encoded(in, settings, format, stem, progress, fraction, dir);
     if (!encoded) return encoded.error();
     TextureOutputsWritten result;
     result.notes = encoded->notes;
@@ -330,7 +330,8 @@ Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& in, cons
 
 Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, const TextureBakeSettings& settings,
                                                    const io::TextureFileFormat& format, const std::string& stem,
-                                                   const ProgressFn& progress, const FractionFn& fraction) {
+                                                   const ProgressFn& progress, const FractionFn& fraction,
+                                                   const fs::path& stream_dir) {
     const io::TextureContainer container = format.container;
     const io::Supercompression& supercompression = format.supercompression;
     const InputMaps maps = maps_of(in);
@@ -345,6 +346,11 @@ Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, cons
                                                                     format.wrap));
         out.textures.back()->set_channel_meaning(f.names);
         out.files.push_back({out.textures.back().get(), f.stem, f.kind, f.names, block_format_of(f, supercompression)});
+        // BC levels are made as the rows finish (ASTC from the whole levels, at the write).
+        if (out.files.back().block != io::BlockFormat::None) out.textures.back()->set_block_format(out.files.back().block);
+        // Uncompressed DDS goes to its file as the rows finish (level 0 first in the file, as baked).
+        if (!stream_dir.empty() && container == io::TextureContainer::Dds && out.files.back().block == io::BlockFormat::None)
+            if (auto ok = out.textures.back()->stream_to(stream_dir / (f.stem + ".dds")); !ok) return ok.error();
     }
     if (progress)
         progress("baking " + std::to_string(maps.normal.width) + "x" + std::to_string(maps.normal.height) + " " +
@@ -355,11 +361,12 @@ Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, cons
         total_texels += double(std::max(1, shape.width >> L)) * double(std::max(1, shape.height >> L));
     std::atomic<size_t> texels_done{0};
     // zstd-supercompressed KTX2 files, per-mip PNGs and EXRs compress their levels' rows as the bake
-    // finishes them, top down, so neither a whole level's raw bytes nor the raw file are held (a mipmapped
-    // EXR holds its levels >= 1 until level 0 is written; io::EncodedTexture::compress_rows).
+    // finishes them, top down, and DDS files given `stream_dir` write them to the file, so neither a whole
+    // level's raw bytes nor the raw file are held (a mipmapped EXR holds its levels >= 1 until level 0 is
+    // written; io::EncodedTexture::compress_rows).
     std::vector<size_t> streamed;
     for (size_t i = 0; i < files.size(); ++i)
-        if (out.textures[i]->streams() && out.files[i].block == io::BlockFormat::None) streamed.push_back(i);
+        if (out.textures[i]->streams() && out.files[i].block == out.textures[i]->block_format()) streamed.push_back(i);
     std::optional<Error> stream_error;
     std::mutex stream_error_lock;
     const TextureBakeRowsDone rows_done = [&](int level, int rows) {
@@ -544,7 +551,8 @@ TextureInputs texture_inputs_of(const JobMaps& maps, const TextureJob& job) {
 // packed files are never all held at once. Errors name the final files.
 Result<TextureOutputsWritten> bake_job_outputs(const TextureJob& job, const TextureInputs& in, JobMaps& maps,
                                                const io::BakeOutput& out) {
-    auto encoded = bake_texture_encoded(in, job.settings, job.texture_format, "texture", job.progress, job.fraction);
+    auto encoded = bake_texture_encoded(in, job.settings, job.texture_format, "texture", job.progress, job.fraction,
+                                        out.stage());
     if (!encoded) return out.final_names(encoded.error());
     maps.normal.image = Image{}, maps.normal.integers = io::IntegerTexels{};
     maps.roughness.image = Image{}, maps.roughness.integers = io::IntegerTexels{};

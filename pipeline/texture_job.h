@@ -108,6 +108,8 @@ Result<TextureOutputsWritten> bake_texture_outputs(const TextureInputs& inputs, 
 
 // bake_texture_outputs() up to the write: the bake encodes every finished row straight
 // into the files' bytes (no float chain of the whole map is held). files[i] refers to textures[i].
+// `stream_dir`, when given, is the folder write_encoded_textures will write the files to: uncompressed DDS
+// files are written there (under temporary names) as their rows finish (io::EncodedTexture::stream_to).
 struct EncodedTextureOutputs {
     std::vector<std::unique_ptr<io::EncodedTexture>> textures;
     std::vector<io::EncodedFile> files;
@@ -116,7 +118,8 @@ struct EncodedTextureOutputs {
 };
 Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& inputs, const TextureBakeSettings& settings,
                                                    const io::TextureFileFormat& format, const std::string& stem,
-                                                   const ProgressFn& progress = {}, const FractionFn& fraction = {});
+                                                   const ProgressFn& progress = {}, const FractionFn& fraction = {},
+                                                   const std::filesystem::path& stream_dir = {});
 
 // The two steps of bake_texture_outputs(), for a caller that needs the bake before deciding to write it
 // (`specbake bake` measures the plan's statistic on the bake it writes). Errors name the input files.

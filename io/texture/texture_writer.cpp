@@ -15,10 +15,13 @@
 #include <tbb/parallel_for.h>
 
 #define ZSTD_STATIC_LINKING_ONLY  // ZSTD_getCParams: the window the stream reads back
+#include <fcntl.h>
 #include <sys/mman.h>
+#include <unistd.h>
 #include <zstd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -246,7 +249,138 @@ struct EncodedTexture::ExrStream {
     bool done = false;
 };
 
-EncodedTexture::~EncodedTexture() = default;
+namespace {
+
+// `texels` texels of `channels` stored channels at `src` as 8-bit texels in stored channel order (DDS
+// A8R8G8B8 back to RGBA; 16-bit unorm rounded to 8 bits: BC endpoints and the ASTC LDR decode hold 8
+// bits), in `scratch` when they are not `src` itself.
+const uint8_t* as_unorm8(const uint8_t* src, size_t texels, int channels, TexelEncoding encoding, bool bgra,
+                         std::vector<uint8_t>& scratch) {
+    if (bgra) {  // the DDS A8R8G8B8 byte order back to RGBA for the block encoder
+        scratch.assign(src, src + texels * 4);
+        dds_swap_red_blue(scratch.data(), texels);
+        src = scratch.data();
+    }
+    if (encoding == TexelEncoding::Unorm16) {
+        std::vector<uint8_t> narrowed(texels * size_t(channels));
+        for (size_t k = 0; k < narrowed.size(); ++k) {
+            uint16_t v;
+            std::memcpy(&v, src + 2 * k, 2);
+            narrowed[k] = uint8_t((uint32_t(v) * 255u + 32767u) / 65535u);
+        }
+        scratch = std::move(narrowed);
+        src = scratch.data();
+    }
+    return src;
+}
+
+}  // namespace
+
+void EncodedTexture::set_block_format(BlockFormat format) {
+    if (!is_container_file(container_) || is_astc(format) || format == BlockFormat::None ||
+        (encoding_ != TexelEncoding::Unorm8 && encoding_ != TexelEncoding::Unorm16))
+        return;
+    block_ = format;
+    block_levels_.assign(layout_.level_offset.size(), {});
+    block_done_.assign(layout_.level_offset.size(), 0);
+}
+
+// BC blocks of the whole 4-row block rows that rows [0, rows) of `level` complete (the rest with the
+// level's last row): compress_level of a block row reads only its own rows, clamping at the level's last
+// row as it does for the whole level, so the blocks are those of the whole level. The whole 2 MiB pages
+// (the huge pages the buffer was hinted for) of the rows compressed go back to the system.
+Result<void> EncodedTexture::block_rows(int level, int rows) {
+    const int w = std::max(1, width_ >> level), h = std::max(1, height_ >> level);
+    int& done = block_done_[size_t(level)];
+    const int upto = rows >= h ? h : rows / 4 * 4;
+    if (upto <= done) return {};
+    const int channels = layout_.stored_channels;
+    const size_t row_bytes = size_t(w) * size_t(channels) * size_t(encoding_bytes(encoding_));
+    const uint8_t* start = data_.get() + layout_.level_offset[size_t(level)];
+    std::vector<uint8_t> scratch;
+    const uint8_t* src = as_unorm8(start + size_t(done) * row_bytes, size_t(w) * size_t(upto - done), channels,
+                                   encoding_, bgra_, scratch);
+    const std::vector<uint8_t> blocks = compress_level(block_, src, w, upto - done, channels);
+    std::vector<uint8_t>& out = block_levels_[size_t(level)];
+    out.insert(out.end(), blocks.begin(), blocks.end());
+    done = upto;
+    detail::advise_whole_pages(start, size_t(upto) * row_bytes, uintptr_t(2) << 20, MADV_DONTNEED);
+    return {};
+}
+
+std::vector<std::vector<uint8_t>> EncodedTexture::take_block_levels() {
+    if (block_ == BlockFormat::None) return {};
+    for (int L = 0; L < int(block_done_.size()); ++L)  // rows never reported: still held, compressed now
+        (void)block_rows(L, std::max(1, height_ >> L));
+    return std::move(block_levels_);
+}
+
+EncodedTexture::~EncodedTexture() {
+    if (fd_ >= 0) ::close(fd_);
+}
+
+namespace {
+
+// Writes [p, p + n) at `offset` of `fd`; the error names `name` and gives the system's reason.
+Result<void> write_at(int fd, const uint8_t* p, size_t n, size_t offset, const fs::path& name) {
+    while (n > 0) {
+        const ssize_t k = ::pwrite(fd, p, std::min<size_t>(n, size_t(1) << 30), off_t(offset));
+        if (k < 0 && errno == EINTR) continue;
+        if (k <= 0) return make_error(name.string() + ": cannot write: " + std::strerror(k < 0 ? errno : ENOSPC));
+        p += k, n -= size_t(k), offset += size_t(k);
+    }
+    return {};
+}
+
+}  // namespace
+
+Result<void> EncodedTexture::stream_to(const fs::path& final_path) {
+    if (container_ != TextureContainer::Dds) return make_error(final_path.string() + ": only DDS files are written as they are baked");
+    if (file_) return make_error(final_path.string() + ": the file is already being written");
+    std::error_code ec;
+    if (final_path.has_parent_path()) fs::create_directories(final_path.parent_path(), ec);
+    if (ec) return make_error(final_path.parent_path().string() + ": cannot create folder: " + ec.message());
+    auto out = std::make_unique<AtomicOutput>(final_path);
+    fd_ = ::open(out->temp_path().c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd_ < 0) return make_error(final_path.string() + ": cannot open for writing: " + std::strerror(errno));
+    file_ = std::move(out);
+    rows_written_.assign(layout_.level_offset.size(), 0);
+    // The header: every byte before level 0.
+    return write_at(fd_, data_.get(), layout_.level_offset[0], 0, final_path);
+}
+
+// Rows [written, rows) of `level` to the file at their offset; the whole 2 MiB pages (the huge pages the
+// buffer was hinted for) of the level's rows in the file go back to the system.
+Result<void> EncodedTexture::write_rows(int level, int rows) {
+    int& written = rows_written_[size_t(level)];
+    const int upto = std::min(rows, std::max(1, height_ >> level));
+    if (upto <= written) return {};
+    const size_t row_bytes =
+        size_t(std::max(1, width_ >> level)) * size_t(layout_.stored_channels) * size_t(encoding_bytes(encoding_));
+    const size_t at = layout_.level_offset[size_t(level)];
+    const uint8_t* start = data_.get() + at;
+    const size_t from = size_t(written) * row_bytes, to = size_t(upto) * row_bytes;
+    if (auto ok = write_at(fd_, start + from, to - from, at + from, file_->final_path()); !ok) return ok;
+    written = upto;
+    detail::advise_whole_pages(start, to, uintptr_t(2) << 20, MADV_DONTNEED);
+    return {};
+}
+
+Result<std::string> EncodedTexture::finish_file(const fs::path& final_path, std::unique_ptr<AtomicOutput>& out) {
+    if (!file_) return make_error(final_path.string() + ": the file was not written as it was baked");
+    if (file_->final_path() != final_path)
+        return make_error(final_path.string() + ": the texture was written as " + file_->final_path().string());
+    for (int L = 0; L < int(rows_written_.size()); ++L)
+        if (auto ok = write_rows(L, std::max(1, height_ >> L)); !ok) return ok.error();
+    const int fd = fd_;
+    fd_ = -1;
+    if (::close(fd) != 0) return make_error(final_path.string() + ": cannot write: " + std::strerror(errno));
+    out = std::move(file_);
+    // Hashed as written: read back in windows from the page cache, the raw rows being gone.
+    auto hash = sha256_file(out->temp_path());
+    if (!hash) return make_error(final_path.string() + ": " + hash.error().message);
+    return *hash;
+}
 
 // Compresses the EXR chunks that rows up to `rows` of `level` complete (whole 64-row tile rows of a
 // mipmapped file's level, whole 16-row blocks of a per-mip file; the rest with the level's last row) and
@@ -302,6 +436,8 @@ Result<std::vector<std::span<const uint8_t>>> EncodedTexture::exr_file(int level
 }
 
 Result<void> EncodedTexture::compress_rows(int level, int rows) {
+    if (block_ != BlockFormat::None) return block_rows(level, rows);
+    if (file_) return write_rows(level, rows);
     if (exr()) return feed_exr(level, rows);
     if (png()) {
         auto& stream = png_[size_t(level)];
@@ -411,25 +547,9 @@ namespace {
 // they are not the level's own bytes.
 const uint8_t* level_as_unorm8(const EncodedTexture& t, size_t L, std::vector<uint8_t>& scratch) {
     const ContainerLayout& layout = t.layout();
-    const int channels = layout.stored_channels;
     const int w = std::max(1, t.width() >> L), h = std::max(1, t.height() >> L);
-    const uint8_t* src = t.bytes().data() + layout.level_offset[L];
-    if (t.bgra()) {  // the DDS A8R8G8B8 byte order back to RGBA for the block encoder
-        scratch.assign(src, src + size_t(w) * size_t(h) * 4);
-        dds_swap_red_blue(scratch.data(), size_t(w) * size_t(h));
-        src = scratch.data();
-    }
-    if (t.encoding() == TexelEncoding::Unorm16) {
-        std::vector<uint8_t> narrowed(size_t(w) * size_t(h) * size_t(channels));
-        for (size_t k = 0; k < narrowed.size(); ++k) {
-            uint16_t v;
-            std::memcpy(&v, src + 2 * k, 2);
-            narrowed[k] = uint8_t((uint32_t(v) * 255u + 32767u) / 65535u);
-        }
-        scratch = std::move(narrowed);
-        src = scratch.data();
-    }
-    return src;
+    return as_unorm8(t.bytes().data() + layout.level_offset[L], size_t(w) * size_t(h), layout.stored_channels,
+                     t.encoding(), t.bgra(), scratch);
 }
 
 // The file of `t` with every level block-compressed as `format`, zstd-supercompressed when `t` asks for it
@@ -524,11 +644,30 @@ ManifestOutput level_file_entry(const EncodedTexture& t, const EncodedFile& f, c
 Result<void> write_container(const EncodedFile& f, TargetFile& target) {
     const EncodedTexture& t = *f.texture;
     ManifestOutput& entry = target.entry;
+    if (t.streams_to_file()) {  // DDS written as it was baked (stream_to): the rest of its rows, the hash
+        if (f.block != BlockFormat::None)
+            return make_error(target.out->final_path().string() + ": a file written as it was baked cannot be block-compressed");
+        const fs::path final_path = target.out->final_path();
+        auto hash = f.texture->finish_file(final_path, target.out);
+        if (!hash) return hash.error();
+        entry.sha256 = *hash;
+        entry.extra["bytes"] = t.bytes().size();
+        entry.extra["uncompressed_bytes"] = t.bytes().size();
+        entry.extra["block_compression"] = block_format_name(f.block);
+        entry.extra["supercompression"] = "none";
+        return {};
+    }
     Ktx2Pieces packed;
     BlockFile blocks;
     std::vector<std::span<const uint8_t>> pieces{t.bytes()};
     if (f.block != BlockFormat::None) {
-        auto b = block_compressed(t, f.block);
+        // Blocks made as the rows arrived (set_block_format), else from the whole levels now.
+        std::vector<std::vector<uint8_t>> streamed =
+            t.block_format() == f.block ? f.texture->take_block_levels() : std::vector<std::vector<uint8_t>>{};
+        auto b = !streamed.empty() ? block_file(t.container(), f.block, t.width(), t.height(), std::move(streamed),
+                                                t.supercompressed() ? t.supercompression().zstd_level : 0,
+                                                t.supercompression().astc_block)
+                                   : block_compressed(t, f.block);
         if (!b) return make_error(target.out->final_path().string() + ": " + b.error().message);
         blocks = std::move(*b);
         pieces = blocks.pieces();

@@ -24,6 +24,7 @@
 namespace specbake::io {
 
 class PngLevelStream;
+class AtomicOutput;
 
 enum class TextureContainer { Ktx2, Dds, Exr, PngPerMip };
 
@@ -135,8 +136,28 @@ public:
     // True when the written file is supercompressed (KTX2 with zstd on).
     bool supercompressed() const { return container_ == TextureContainer::Ktx2 && supercompression_.zstd; }
     // True when compress_rows() encodes the rows as they arrive: zstd-supercompressed KTX2, per-mip PNG
-    // and EXR files.
-    bool streams() const { return supercompressed() || png() || exr(); }
+    // and EXR files, and DDS files given a path by stream_to().
+    bool streams() const { return supercompressed() || png() || exr() || streams_to_file() || block_ != BlockFormat{}; }
+    // KTX2 and DDS of 8/16-bit unorm data: the levels are BC-compressed as `format` (not ASTC) by
+    // compress_rows, whole 4-row block rows as they arrive, the raw pages returned; the file is written from
+    // the blocks (write_encoded_textures, when its EncodedFile asks for the same format). Call before any
+    // compress_rows().
+    void set_block_format(BlockFormat format);
+    BlockFormat block_format() const { return block_; }
+    // The blocks of every level (moved out; rows compress_rows was not told of are compressed now), or empty
+    // when no block format was set.
+    std::vector<std::vector<uint8_t>> take_block_levels();
+    // DDS: the file is written to a temporary name next to `final_path` while the bake runs: the header now,
+    // then every row compress_rows() is told of at its place in the file, after which the raw pages those rows
+    // filled are returned to the system (they read as zeroes in bytes() afterwards), so the raw file is never
+    // all held. write_encoded_textures writes the rows never reported, hashes the file as written and renames
+    // it to `final_path` (it must write the texture to that path). Call before any compress_rows(); the file
+    // is removed unless written. Not for block-compressed files, whose blocks are made from the whole level.
+    Result<void> stream_to(const std::filesystem::path& final_path);
+    bool streams_to_file() const { return file_ != nullptr; }
+    // A file stream_to() began: writes the rows not yet written, closes it and returns its SHA-256 (hex) read
+    // back from the file; the temporary output moves to `out` (renamed by the caller once every file is done).
+    Result<std::string> finish_file(const std::filesystem::path& final_path, std::unique_ptr<AtomicOutput>& out);
     // True for per-mip PNG files (integer data in the PngPerMip container).
     bool png() const {
         return container_ == TextureContainer::PngPerMip &&
@@ -159,6 +180,8 @@ public:
     // EXR: ZIP-compresses the chunks rows [0, rows) of `level` complete (io/image/exr_encode.h: whole 64-row
     // tile rows of a mipmapped file's level, whole 16-row blocks of a per-mip file) and returns the raw
     // pages compressed to the system; only compressed chunks are held.
+    // DDS given a path by stream_to(): writes rows [0, rows) of `level` not yet written to the file and
+    // returns the whole 2 MiB pages they fill to the system.
     // KTX2 with zstd: zstd-compresses rows [0, rows) of `level`, put before the call, as a stream of the
     // level (whole zstd blocks; the rest once rows is the level's height), and returns the raw pages zstd
     // no longer reads (older than its window) to the system, so a level's raw bytes are never all held.
@@ -182,6 +205,14 @@ private:
     struct LevelStream;
     struct ExrStream;
     Result<void> feed_exr(int level, int rows);
+    Result<void> write_rows(int level, int rows);
+    Result<void> block_rows(int level, int rows);
+    BlockFormat block_{};                           // BC levels made as the rows arrive
+    std::vector<std::vector<uint8_t>> block_levels_;
+    std::vector<int> block_done_;                   // per level, rows [0, n) are in block_levels_
+    std::unique_ptr<AtomicOutput> file_;  // DDS written as the bake runs (stream_to)
+    int fd_ = -1;
+    std::vector<int> rows_written_;       // per level, rows [0, n) are in the file
     std::vector<std::unique_ptr<LevelStream>> streams_;
     std::vector<std::unique_ptr<ExrStream>> exr_;  // one a level (per-mip) or one (mipmapped)
     std::string exr_problem_;                      // why an EXR encoder could not be made

@@ -1,6 +1,8 @@
 // Image decoding and texture containers: round trips through independent readers (OpenImageIO for
 // EXR/PNG, a DDS parse written here from the DDS/DX10 layout, byte-level KTX2 structure checks).
+#include "io/files/sha256.h"
 #include "io/image/image_io.h"
+#include "io/texture/block_compress.h"
 #include "io/texture/dds.h"
 #include "io/texture/ktx2.h"
 #include "io/texture/png_stream.h"
@@ -403,6 +405,52 @@ TEST(EncodedTexture, BlocksInAnyOrderGiveTheWholeChainFile) {
     }
 }
 
+// BC levels made as the rows arrive (set_block_format, compress_rows in bands that cut 4-row block rows)
+// give the file made from the whole levels at the write, for KTX2 (plain and zstd) and DDS, 8- and 16-bit
+// data, sizes whose levels end in partial block rows (the whole-level encoder is checked against a BC
+// decoder written from the spec in tests/cli/block_compress_test.cpp).
+TEST(EncodedTexture, BlocksMadeAsTheRowsArriveGiveTheWholeLevelFile) {
+    struct Case { TextureContainer container; bool zstd; TexelEncoding e; int width, height, channels; BlockFormat block; };
+    std::mt19937 rng(21);
+    for (const Case& c : {Case{TextureContainer::Ktx2, true, TexelEncoding::Unorm8, 300, 203, 1, BlockFormat::Bc4},
+                          Case{TextureContainer::Ktx2, false, TexelEncoding::Unorm16, 130, 77, 3, BlockFormat::Bc1},
+                          Case{TextureContainer::Dds, false, TexelEncoding::Unorm8, 257, 130, 3, BlockFormat::Bc1},
+                          Case{TextureContainer::Dds, false, TexelEncoding::Unorm8, 64, 37, 3, BlockFormat::Bc3},
+                          Case{TextureContainer::Ktx2, true, TexelEncoding::Unorm8, 90, 61, 1, BlockFormat::Bc4}}) {
+        SCOPED_TRACE(std::string(container_name(c.container)) + " " + encoding_name(c.e) + " " +
+                     std::to_string(c.width) + "x" + std::to_string(c.height) + " " + block_format_name(c.block));
+        const MipChain chain = random_chain(c.width, c.height, c.channels, unsigned(c.height));
+        const int levels = int(chain.levels.size());
+        Supercompression s;
+        s.zstd = c.zstd;
+        EncodedTexture banded(c.container, c.e, c.width, c.height, levels, c.channels, s);
+        banded.set_block_format(c.block);
+        ASSERT_EQ(banded.block_format(), c.block);
+        ASSERT_TRUE(banded.streams());
+        for (int L = 0; L < levels; ++L) {
+            const Image& level = chain.levels[size_t(L)];
+            for (int y = 0; y < level.height;) {
+                const int rows = std::min(level.height - y, 1 + int(rng() % 23));
+                banded.put_block(L, 0, y, level.width, rows,
+                                 level.pixels.data() + size_t(y) * size_t(level.width) * size_t(c.channels), c.channels, 0);
+                y += rows;
+                ASSERT_TRUE(banded.compress_rows(L, y).ok());
+            }
+        }
+        const fs::path dir = fresh_dir("bc_bands");
+        const EncodedFile file{&banded, "b", "roughness", {}, c.block};
+        auto written = write_encoded_textures({&file, 1}, dir);
+        ASSERT_TRUE(written.ok()) << written.error().message;
+        auto whole = write_texture(chain, c.e, TextureFileFormat(c.container, s), dir, "w", "roughness", {}, c.block);
+        ASSERT_TRUE(whole.ok()) << whole.error().message;
+        const std::string ext = std::string(".") + container_name(c.container);
+        const std::vector<uint8_t> got = slurp(dir / ("b" + ext)), want = slurp(dir / ("w" + ext));
+        EXPECT_EQ(got.size(), want.size());
+        EXPECT_TRUE(got == want) << "the blocks made as the rows arrived differ from those of the whole levels";
+        fs::remove_all(dir);
+    }
+}
+
 // 8/16-bit unorm data get the legacy header (the D3D9 pixel formats Microsoft's DDS reference maps to
 // DXGI: L8, A8L8, A8R8G8B8 masks with the texels in B, G, R, A order, L16, FourCC 36); R16G16 and float
 // data the DX10 header.
@@ -477,6 +525,171 @@ TEST(Dds, LegacyHeaderWhereOneExistsElseDx10) {
             (void)OIIO::geterror();
         }
     }
+    fs::remove_all(dir);
+}
+
+// A DDS file as the documented layout and the encoding rules give it, worked out here: "DDS ", DDS_HEADER
+// (flags CAPS | HEIGHT | WIDTH | PITCH | PIXELFORMAT | MIPMAPCOUNT, the top level's pitch, the mip count,
+// a DDS_PIXELFORMAT of its own), DDS_HEADER_DXT10 where the format has no legacy form, then every level top
+// down, tightly packed: unorm as std::lround(clamp(v, 0, 1) * max), half as Imath rounds it, three
+// channels stored as four with A = 1, A8R8G8B8 texels as B, G, R, A.
+struct HandDdsFormat { uint32_t pf_flags, fourcc, bits, masks[4], dxgi; };
+std::vector<uint8_t> hand_dds(const MipChain& chain, TexelEncoding e, const HandDdsFormat& f) {
+    const int channels = chain.channels(), stored = channels == 3 ? 4 : channels;
+    const int bytes = e == TexelEncoding::Unorm8 ? 1 : e == TexelEncoding::Float32 ? 4 : 2;
+    std::vector<uint8_t> b;
+    auto put = [&](uint32_t v) {
+        for (int k = 0; k < 4; ++k) b.push_back(uint8_t(v >> (8 * k)));
+    };
+    put(0x20534444u);
+    put(124);
+    put(0x1u | 0x2u | 0x4u | 0x8u | 0x1000u | 0x20000u);
+    put(uint32_t(chain.height()));
+    put(uint32_t(chain.width()));
+    put(uint32_t(chain.width() * stored * bytes));
+    put(0);  // depth
+    put(uint32_t(chain.levels.size()));
+    for (int k = 0; k < 11; ++k) put(0);  // reserved
+    put(32);
+    put(f.pf_flags);
+    put(f.fourcc);
+    put(f.bits);
+    for (uint32_t m : f.masks) put(m);
+    put(0x1000u | 0x8u | 0x400000u);  // TEXTURE | COMPLEX | MIPMAP
+    for (int k = 0; k < 4; ++k) put(0);  // caps2-4, reserved
+    if (f.fourcc == 0x30315844u) {        // DDS_HEADER_DXT10
+        put(f.dxgi);
+        put(3);  // TEXTURE2D
+        put(0);
+        put(1);
+        put(stored != channels ? 3 : 0);  // alpha mode: opaque for the padded A
+    }
+    EXPECT_EQ(b.size(), f.fourcc == 0x30315844u ? 148u : 128u);
+    const bool bgra = f.bits == 32 && f.masks[0] == 0xFF0000u;
+    for (const Image& level : chain.levels) {
+        for (size_t i = 0; i < level.texel_count(); ++i) {
+            for (int k = 0; k < stored; ++k) {
+                const int ch = bgra && k != 3 ? 2 - k : k;
+                const float v = ch < channels ? level.pixels[i * size_t(channels) + size_t(ch)] : 1.0f;
+                const float c = std::clamp(v, 0.0f, 1.0f);
+                if (e == TexelEncoding::Unorm8) {
+                    b.push_back(uint8_t(std::lround(c * 255.0f)));
+                } else if (e == TexelEncoding::Unorm16) {
+                    const uint32_t u = uint32_t(std::lround(c * 65535.0f));
+                    b.push_back(uint8_t(u)), b.push_back(uint8_t(u >> 8));
+                } else if (e == TexelEncoding::Float16) {
+                    const uint16_t h = Imath::half(v).bits();
+                    b.push_back(uint8_t(h)), b.push_back(uint8_t(h >> 8));
+                } else {
+                    uint32_t u;
+                    std::memcpy(&u, &v, 4);
+                    put(u);
+                }
+            }
+        }
+    }
+    return b;
+}
+
+// The temporary files next to `dir`/`stem`.* (AtomicOutput names them ".<stem>.tmp<pid>-<n><ext>").
+std::vector<fs::path> temporaries(const fs::path& dir, const std::string& stem) {
+    std::vector<fs::path> found;
+    for (const auto& entry : fs::directory_iterator(dir))
+        if (entry.path().filename().string().rfind("." + stem + ".tmp", 0) == 0) found.push_back(entry.path());
+    return found;
+}
+
+// A DDS file written to its file as its rows arrive (stream_to, compress_rows band by band, the raw pages
+// behind them returned) is, byte for byte, the file worked out by hand from the layout, as is the file
+// written whole; the rows reported are in the (temporary) file before the texture is finished, and no
+// temporary is left once it is written.
+TEST(Dds, WrittenAsItsRowsArriveIsTheHandWorkedFile) {
+    constexpr uint32_t lum = 0x20000, alpha = 0x1, rgb = 0x40, four = 0x4, dx10 = 0x30315844u;
+    struct Case { TexelEncoding e; int width, height, channels; HandDdsFormat f; };
+    std::mt19937 rng(12);
+    for (const Case& c : {Case{TexelEncoding::Unorm8, 1100, 700, 3, {rgb | alpha, 0, 32, {0xFF0000, 0xFF00, 0xFF, 0xFF000000u}, 0}},
+                          Case{TexelEncoding::Unorm8, 37, 23, 1, {lum, 0, 8, {0xFF, 0, 0, 0}, 0}},
+                          Case{TexelEncoding::Unorm8, 64, 32, 2, {lum | alpha, 0, 16, {0xFF, 0, 0, 0xFF00}, 0}},
+                          Case{TexelEncoding::Unorm16, 300, 200, 3, {four, 36, 0, {0, 0, 0, 0}, 0}},
+                          Case{TexelEncoding::Unorm16, 41, 9, 1, {lum, 0, 16, {0xFFFF, 0, 0, 0}, 0}},
+                          Case{TexelEncoding::Unorm16, 20, 12, 2, {four, dx10, 0, {0, 0, 0, 0}, 35}},
+                          Case{TexelEncoding::Float16, 600, 520, 4, {four, dx10, 0, {0, 0, 0, 0}, 10}},
+                          Case{TexelEncoding::Float16, 33, 70, 3, {four, dx10, 0, {0, 0, 0, 0}, 10}},
+                          Case{TexelEncoding::Float32, 17, 30, 1, {four, dx10, 0, {0, 0, 0, 0}, 41}}}) {
+        SCOPED_TRACE(std::string(encoding_name(c.e)) + " " + std::to_string(c.width) + "x" + std::to_string(c.height) +
+                     "x" + std::to_string(c.channels));
+        const fs::path dir = fresh_dir("dds_streamed");
+        const MipChain chain = random_chain(c.width, c.height, c.channels, unsigned(c.width), -0.1f, 1.1f);
+        const std::vector<uint8_t> want = hand_dds(chain, c.e, c.f);
+        const int levels = int(chain.levels.size());
+        EncodedTexture t(TextureContainer::Dds, c.e, c.width, c.height, levels, c.channels);
+        ASSERT_TRUE(t.stream_to(dir / "t.dds").ok());
+        ASSERT_TRUE(t.streams() && t.streams_to_file());
+        const size_t header = c.f.fourcc == dx10 ? 148 : 128;
+        const size_t row_bytes = size_t(c.width) * size_t(c.channels == 3 ? 4 : c.channels) *
+                                 size_t(c.e == TexelEncoding::Unorm8 ? 1 : c.e == TexelEncoding::Float32 ? 4 : 2);
+        for (int L = 0; L < levels; ++L) {
+            const Image& level = chain.levels[size_t(L)];
+            for (int y = 0; y < level.height;) {
+                const int rows = std::min(level.height - y, 1 + int(rng() % 40));
+                t.put_block(L, 0, y, level.width, rows,
+                            level.pixels.data() + size_t(y) * size_t(level.width) * size_t(c.channels), c.channels, 0);
+                y += rows;
+                ASSERT_TRUE(t.compress_rows(L, y).ok());
+                if (L == 0 && y == rows) {  // the first band: already in the file, which is not yet in place
+                    EXPECT_FALSE(fs::exists(dir / "t.dds"));
+                    const std::vector<fs::path> temp = temporaries(dir, "t");
+                    ASSERT_EQ(temp.size(), 1u);
+                    const std::vector<uint8_t> early = slurp(temp[0]);
+                    const size_t n = header + size_t(rows) * row_bytes;
+                    ASSERT_GE(early.size(), n);
+                    EXPECT_TRUE(std::equal(want.begin(), want.begin() + long(n), early.begin()))
+                        << "the header and the first rows are not in the file as they arrived";
+                }
+            }
+        }
+        const EncodedFile file{&t, "t", "roughness", {}};
+        auto written = write_encoded_textures({&file, 1}, dir);
+        ASSERT_TRUE(written.ok()) << written.error().message;
+        const std::vector<uint8_t> got = slurp(dir / "t.dds");
+        EXPECT_EQ(got.size(), want.size());
+        EXPECT_TRUE(got == want) << "the streamed file differs from the hand-worked one";
+        ASSERT_EQ(written->size(), 1u);
+        EXPECT_EQ((*written)[0].sha256, sha256_hex(got));
+        EXPECT_EQ((*written)[0].extra["bytes"], want.size());
+        EXPECT_TRUE(temporaries(dir, "t").empty());
+        // The same file written whole (no stream_to) as before.
+        auto whole = write_texture(chain, c.e, TextureFileFormat(TextureContainer::Dds), dir, "w", "roughness");
+        ASSERT_TRUE(whole.ok()) << whole.error().message;
+        EXPECT_TRUE(slurp(dir / "w.dds") == want) << "the file written whole differs from the hand-worked one";
+        EXPECT_EQ((*whole)[0].sha256, (*written)[0].sha256);
+        fs::remove_all(dir);
+    }
+}
+
+// A DDS file begun by stream_to and never written leaves nothing behind; one written to another path than
+// the one it was begun for is refused.
+TEST(Dds, UnfinishedStreamLeavesNoFile) {
+    const fs::path dir = fresh_dir("dds_unfinished");
+    const MipChain chain = random_chain(16, 8, 1, 3);
+    {
+        EncodedTexture t(TextureContainer::Dds, TexelEncoding::Unorm8, 16, 8, int(chain.levels.size()), 1);
+        ASSERT_TRUE(t.stream_to(dir / "t.dds").ok());
+        t.put_block(0, 0, 0, 16, 8, chain.levels[0].pixels.data(), 1, 0);
+        ASSERT_TRUE(t.compress_rows(0, 8).ok());
+        EXPECT_EQ(temporaries(dir, "t").size(), 1u);
+        for (int L = 1; L < int(chain.levels.size()); ++L) {
+            const Image& l = chain.levels[size_t(L)];
+            t.put_block(L, 0, 0, l.width, l.height, l.pixels.data(), 1, 0);
+        }
+        const EncodedFile file{&t, "other", "roughness", {}};
+        EXPECT_FALSE(write_encoded_textures({&file, 1}, dir).ok());
+        EXPECT_FALSE(fs::exists(dir / "other.dds"));
+    }
+    EXPECT_TRUE(temporaries(dir, "t").empty());
+    EXPECT_FALSE(fs::exists(dir / "t.dds"));
+    EncodedTexture ktx2(TextureContainer::Ktx2, TexelEncoding::Unorm8, 16, 8, int(chain.levels.size()), 1);
+    EXPECT_FALSE(ktx2.stream_to(dir / "t.ktx2").ok());
     fs::remove_all(dir);
 }
 
@@ -707,16 +920,19 @@ TEST(PngPerMip, OneFilePerLevel) {
 // OpenImageIO (libpng) reads back exactly the texels given, for every channel count and depth, sizes of
 // one strip and of several, the last one short.
 TEST(PngLevelStream, StreamedInBandsReadsBackExactlyThroughOpenImageIO) {
-    struct Case { int width, height, channels, bits; };
+    // noisy_top: the upper half uniform noise (16-bit strips of it are Huffman-coded alone), the rest ramps.
+    struct Case { int width, height, channels, bits; bool noisy_top = false; };
     std::mt19937 rng(5);
     for (const Case c : {Case{1, 1, 1, 8}, Case{7, 3, 4, 16}, Case{300, 1000, 2, 8}, Case{2100, 70, 4, 8},
-                         Case{513, 400, 1, 16}}) {
+                         Case{513, 400, 1, 16}, Case{1030, 300, 4, 16, true}, Case{700, 90, 2, 8, true}}) {
         SCOPED_TRACE(std::to_string(c.width) + "x" + std::to_string(c.height) + " " + std::to_string(c.channels) +
                      " channels, " + std::to_string(c.bits) + " bits");
         const size_t row_bytes = size_t(c.width) * size_t(c.channels) * size_t(c.bits / 8);
         std::vector<uint8_t> texels(row_bytes * size_t(c.height));
         // Smooth ramps with noise: compressible, but not trivially.
         for (size_t i = 0; i < texels.size(); ++i) texels[i] = uint8_t(i / 7 + rng() % 5);
+        if (c.noisy_top)
+            for (size_t i = 0; i < row_bytes * size_t(c.height / 2); ++i) texels[i] = uint8_t(rng());
         PngLevelStream whole(c.width, c.height, c.channels, c.bits, 2);
         ASSERT_TRUE(whole.add_rows(texels.data(), c.height).ok());
         ASSERT_TRUE(whole.done());
