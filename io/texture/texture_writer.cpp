@@ -277,22 +277,26 @@ const uint8_t* as_unorm8(const uint8_t* src, size_t texels, int channels, TexelE
 }  // namespace
 
 void EncodedTexture::set_block_format(BlockFormat format) {
-    if (!is_container_file(container_) || is_astc(format) || format == BlockFormat::None ||
-        (encoding_ != TexelEncoding::Unorm8 && encoding_ != TexelEncoding::Unorm16))
+    if (!is_container_file(container_) || format == BlockFormat::None ||
+        (encoding_ != TexelEncoding::Unorm8 && encoding_ != TexelEncoding::Unorm16) ||
+        (is_astc(format) && !astc_block_supported(supercompression_.astc_block)))
         return;
     block_ = format;
     block_levels_.assign(layout_.level_offset.size(), {});
     block_done_.assign(layout_.level_offset.size(), 0);
 }
 
-// BC blocks of the whole 4-row block rows that rows [0, rows) of `level` complete (the rest with the
-// level's last row): compress_level of a block row reads only its own rows, clamping at the level's last
-// row as it does for the whole level, so the blocks are those of the whole level. The whole 2 MiB pages
-// (the huge pages the buffer was hinted for) of the rows compressed go back to the system.
+// Blocks of the whole block rows that rows [0, rows) of `level` complete (the rest with the level's last
+// row): 4-row strips for BC, footprint-high strips for ASTC. Each block is encoded from its own texels alone
+// (BC's compress_level; astcenc hands out blocks one by one), a strip's last block row is padded from the
+// level's last row as the whole level's is, and the strips start on block rows: the blocks are those of the
+// whole level, in its order. The whole 2 MiB pages (the huge pages the buffer was hinted for) of the rows
+// compressed go back to the system.
 Result<void> EncodedTexture::block_rows(int level, int rows) {
     const int w = std::max(1, width_ >> level), h = std::max(1, height_ >> level);
     int& done = block_done_[size_t(level)];
-    const int upto = rows >= h ? h : rows / 4 * 4;
+    const int unit = is_astc(block_) ? supercompression_.astc_block : 4;
+    const int upto = rows >= h ? h : rows / unit * unit;
     if (upto <= done) return {};
     const int channels = layout_.stored_channels;
     const size_t row_bytes = size_t(w) * size_t(channels) * size_t(encoding_bytes(encoding_));
@@ -300,7 +304,19 @@ Result<void> EncodedTexture::block_rows(int level, int rows) {
     std::vector<uint8_t> scratch;
     const uint8_t* src = as_unorm8(start + size_t(done) * row_bytes, size_t(w) * size_t(upto - done), channels,
                                    encoding_, bgra_, scratch);
-    const std::vector<uint8_t> blocks = compress_level(block_, src, w, upto - done, channels);
+    std::vector<uint8_t> blocks;
+    if (is_astc(block_)) {
+        if (!astc_) {
+            auto encoder = AstcEncoder::create(unit);
+            if (!encoder) return encoder.error();
+            astc_ = std::make_unique<AstcEncoder>(std::move(*encoder));
+        }
+        auto strip = astc_->compress(src, w, upto - done, channels, block_channels(block_));
+        if (!strip) return strip.error();
+        blocks = std::move(*strip);
+    } else {
+        blocks = compress_level(block_, src, w, upto - done, channels);
+    }
     std::vector<uint8_t>& out = block_levels_[size_t(level)];
     out.insert(out.end(), blocks.begin(), blocks.end());
     done = upto;
@@ -308,10 +324,10 @@ Result<void> EncodedTexture::block_rows(int level, int rows) {
     return {};
 }
 
-std::vector<std::vector<uint8_t>> EncodedTexture::take_block_levels() {
-    if (block_ == BlockFormat::None) return {};
+Result<std::vector<std::vector<uint8_t>>> EncodedTexture::take_block_levels() {
+    if (block_ == BlockFormat::None) return std::vector<std::vector<uint8_t>>{};
     for (int L = 0; L < int(block_done_.size()); ++L)  // rows never reported: still held, compressed now
-        (void)block_rows(L, std::max(1, height_ >> L));
+        if (auto ok = block_rows(L, std::max(1, height_ >> L)); !ok) return ok.error();
     return std::move(block_levels_);
 }
 
@@ -662,8 +678,12 @@ Result<void> write_container(const EncodedFile& f, TargetFile& target) {
     std::vector<std::span<const uint8_t>> pieces{t.bytes()};
     if (f.block != BlockFormat::None) {
         // Blocks made as the rows arrived (set_block_format), else from the whole levels now.
-        std::vector<std::vector<uint8_t>> streamed =
-            t.block_format() == f.block ? f.texture->take_block_levels() : std::vector<std::vector<uint8_t>>{};
+        std::vector<std::vector<uint8_t>> streamed;
+        if (t.block_format() == f.block) {
+            auto levels = f.texture->take_block_levels();
+            if (!levels) return make_error(target.out->final_path().string() + ": " + levels.error().message);
+            streamed = std::move(*levels);
+        }
         auto b = !streamed.empty() ? block_file(t.container(), f.block, t.width(), t.height(), std::move(streamed),
                                                 t.supercompressed() ? t.supercompression().zstd_level : 0,
                                                 t.supercompression().astc_block)

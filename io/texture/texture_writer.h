@@ -25,6 +25,7 @@ namespace specbake::io {
 
 class PngLevelStream;
 class AtomicOutput;
+class AstcEncoder;
 
 enum class TextureContainer { Ktx2, Dds, Exr, PngPerMip };
 
@@ -138,15 +139,15 @@ public:
     // True when compress_rows() encodes the rows as they arrive: zstd-supercompressed KTX2, per-mip PNG
     // and EXR files, and DDS files given a path by stream_to().
     bool streams() const { return supercompressed() || png() || exr() || streams_to_file() || block_ != BlockFormat{}; }
-    // KTX2 and DDS of 8/16-bit unorm data: the levels are BC-compressed as `format` (not ASTC) by
-    // compress_rows, whole 4-row block rows as they arrive, the raw pages returned; the file is written from
-    // the blocks (write_encoded_textures, when its EncodedFile asks for the same format). Call before any
-    // compress_rows().
+    // KTX2 and DDS of 8/16-bit unorm data: the levels are block-compressed as `format` by compress_rows,
+    // whole block rows as they arrive (4 rows for BC, the footprint's side for ASTC), the raw pages returned;
+    // the file is written from the blocks (write_encoded_textures, when its EncodedFile asks for the same
+    // format). Call before any compress_rows().
     void set_block_format(BlockFormat format);
     BlockFormat block_format() const { return block_; }
     // The blocks of every level (moved out; rows compress_rows was not told of are compressed now), or empty
-    // when no block format was set.
-    std::vector<std::vector<uint8_t>> take_block_levels();
+    // when no block format was set; an error if the encoder failed on the rows still held.
+    Result<std::vector<std::vector<uint8_t>>> take_block_levels();
     // DDS: the file is written to a temporary name next to `final_path` while the bake runs: the header now,
     // then every row compress_rows() is told of at its place in the file, after which the raw pages those rows
     // filled are returned to the system (they read as zeroes in bytes() afterwards), so the raw file is never
@@ -210,6 +211,7 @@ private:
     BlockFormat block_{};                           // BC levels made as the rows arrive
     std::vector<std::vector<uint8_t>> block_levels_;
     std::vector<int> block_done_;                   // per level, rows [0, n) are in block_levels_
+    std::unique_ptr<AstcEncoder> astc_;             // the ASTC encoder's set-up, reused strip after strip
     std::unique_ptr<AtomicOutput> file_;  // DDS written as the bake runs (stream_to)
     int fd_ = -1;
     std::vector<int> rows_written_;       // per level, rows [0, n) are in the file

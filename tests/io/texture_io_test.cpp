@@ -410,19 +410,32 @@ TEST(EncodedTexture, BlocksInAnyOrderGiveTheWholeChainFile) {
 // data, sizes whose levels end in partial block rows (the whole-level encoder is checked against a BC
 // decoder written from the spec in tests/cli/block_compress_test.cpp).
 TEST(EncodedTexture, BlocksMadeAsTheRowsArriveGiveTheWholeLevelFile) {
-    struct Case { TextureContainer container; bool zstd; TexelEncoding e; int width, height, channels; BlockFormat block; };
+    struct Case {
+        TextureContainer container;
+        bool zstd;
+        TexelEncoding e;
+        int width, height, channels;
+        BlockFormat block;
+        int astc_side = 4;
+    };
     std::mt19937 rng(21);
+    // ASTC strips are footprint-high (6 and 8 rows here, sizes that leave partial blocks at both edges).
     for (const Case& c : {Case{TextureContainer::Ktx2, true, TexelEncoding::Unorm8, 300, 203, 1, BlockFormat::Bc4},
                           Case{TextureContainer::Ktx2, false, TexelEncoding::Unorm16, 130, 77, 3, BlockFormat::Bc1},
                           Case{TextureContainer::Dds, false, TexelEncoding::Unorm8, 257, 130, 3, BlockFormat::Bc1},
                           Case{TextureContainer::Dds, false, TexelEncoding::Unorm8, 64, 37, 3, BlockFormat::Bc3},
-                          Case{TextureContainer::Ktx2, true, TexelEncoding::Unorm8, 90, 61, 1, BlockFormat::Bc4}}) {
+                          Case{TextureContainer::Ktx2, true, TexelEncoding::Unorm8, 90, 61, 1, BlockFormat::Bc4},
+                          Case{TextureContainer::Ktx2, true, TexelEncoding::Unorm8, 100, 75, 1, BlockFormat::AstcR, 6},
+                          Case{TextureContainer::Ktx2, false, TexelEncoding::Unorm16, 70, 45, 2, BlockFormat::AstcRg, 8},
+                          Case{TextureContainer::Ktx2, true, TexelEncoding::Unorm8, 33, 29, 4, BlockFormat::AstcRgba, 4}}) {
         SCOPED_TRACE(std::string(container_name(c.container)) + " " + encoding_name(c.e) + " " +
-                     std::to_string(c.width) + "x" + std::to_string(c.height) + " " + block_format_name(c.block));
+                     std::to_string(c.width) + "x" + std::to_string(c.height) + " " + block_format_name(c.block) +
+                     " " + std::to_string(c.astc_side));
         const MipChain chain = random_chain(c.width, c.height, c.channels, unsigned(c.height));
         const int levels = int(chain.levels.size());
         Supercompression s;
         s.zstd = c.zstd;
+        s.astc_block = c.astc_side;
         EncodedTexture banded(c.container, c.e, c.width, c.height, levels, c.channels, s);
         banded.set_block_format(c.block);
         ASSERT_EQ(banded.block_format(), c.block);
