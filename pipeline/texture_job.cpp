@@ -346,7 +346,7 @@ Result<EncodedTextureOutputs> bake_texture_encoded(const TextureInputs& in, cons
                                                                     format.wrap));
         out.textures.back()->set_channel_meaning(f.names);
         out.files.push_back({out.textures.back().get(), f.stem, f.kind, f.names, block_format_of(f, supercompression)});
-        // BC levels are made as the rows finish (ASTC from the whole levels, at the write).
+        // Block-compressed levels (BC, ASTC) are made as the rows finish.
         if (out.files.back().block != io::BlockFormat::None) out.textures.back()->set_block_format(out.files.back().block);
         // Uncompressed DDS goes to its file as the rows finish (level 0 first in the file, as baked).
         if (!stream_dir.empty() && container == io::TextureContainer::Dds && out.files.back().block == io::BlockFormat::None)

@@ -274,6 +274,19 @@ const uint8_t* as_unorm8(const uint8_t* src, size_t texels, int channels, TexelE
     return src;
 }
 
+// `height` rows of `width` 8-bit texels (`channels` stored) as blocks of `format`: BC by compress_level,
+// ASTC by `astc`, whose set-up (footprint `side`) is made on first use and kept for the next call.
+Result<std::vector<uint8_t>> encode_blocks(BlockFormat format, int side, std::unique_ptr<AstcEncoder>& astc,
+                                           const uint8_t* texels, int width, int height, int channels) {
+    if (!is_astc(format)) return compress_level(format, texels, width, height, channels);
+    if (!astc) {
+        auto encoder = AstcEncoder::create(side);
+        if (!encoder) return encoder.error();
+        astc = std::make_unique<AstcEncoder>(std::move(*encoder));
+    }
+    return astc->compress(texels, width, height, channels, block_channels(format));
+}
+
 }  // namespace
 
 void EncodedTexture::set_block_format(BlockFormat format) {
@@ -304,21 +317,10 @@ Result<void> EncodedTexture::block_rows(int level, int rows) {
     std::vector<uint8_t> scratch;
     const uint8_t* src = as_unorm8(start + size_t(done) * row_bytes, size_t(w) * size_t(upto - done), channels,
                                    encoding_, bgra_, scratch);
-    std::vector<uint8_t> blocks;
-    if (is_astc(block_)) {
-        if (!astc_) {
-            auto encoder = AstcEncoder::create(unit);
-            if (!encoder) return encoder.error();
-            astc_ = std::make_unique<AstcEncoder>(std::move(*encoder));
-        }
-        auto strip = astc_->compress(src, w, upto - done, channels, block_channels(block_));
-        if (!strip) return strip.error();
-        blocks = std::move(*strip);
-    } else {
-        blocks = compress_level(block_, src, w, upto - done, channels);
-    }
+    auto blocks = encode_blocks(block_, unit, astc_, src, w, upto - done, channels);
+    if (!blocks) return blocks.error();
     std::vector<uint8_t>& out = block_levels_[size_t(level)];
-    out.insert(out.end(), blocks.begin(), blocks.end());
+    out.insert(out.end(), blocks->begin(), blocks->end());
     done = upto;
     detail::advise_whole_pages(start, size_t(upto) * row_bytes, uintptr_t(2) << 20, MADV_DONTNEED);
     return {};
@@ -578,13 +580,12 @@ Result<BlockFile> block_compressed(const EncodedTexture& t, BlockFormat format) 
     const int astc_side = t.supercompression().astc_block;
     std::vector<std::vector<uint8_t>> levels(layout.level_offset.size());
     if (is_astc(format)) {
-        auto encoder = AstcEncoder::create(astc_side);
-        if (!encoder) return encoder.error();
+        std::unique_ptr<AstcEncoder> astc;
         for (size_t L = 0; L < levels.size(); ++L) {
             std::vector<uint8_t> scratch;
             const uint8_t* src = level_as_unorm8(t, L, scratch);
-            auto blocks = encoder->compress(src, std::max(1, t.width() >> L), std::max(1, t.height() >> L), channels,
-                                            block_channels(format));
+            auto blocks = encode_blocks(format, astc_side, astc, src, std::max(1, t.width() >> L),
+                                        std::max(1, t.height() >> L), channels);
             if (!blocks) return blocks.error();
             levels[L] = std::move(*blocks);
         }

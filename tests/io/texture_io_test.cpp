@@ -22,6 +22,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <random>
 #include <thread>
 
@@ -54,6 +55,26 @@ MipChain random_chain(int W, int H, int channels, unsigned seed, float lo = 0.0f
         if ((W >> L) <= 1 && (H >> L) <= 1) break;
     }
     return c;
+}
+
+// Puts every level of `chain` into `t` in bands of 1 to `max_rows` rows (drawn from `rng`), each band
+// reported with compress_rows as the bake reports finished rows; `after_band(level, rows_done, band)` runs
+// after each report. False (with the failing level and row) when compress_rows fails.
+::testing::AssertionResult put_in_bands(EncodedTexture& t, const MipChain& chain, std::mt19937& rng, int max_rows,
+                                        const std::function<void(int, int, int)>& after_band = {}) {
+    for (int L = 0; L < int(chain.levels.size()); ++L) {
+        const Image& level = chain.levels[size_t(L)];
+        for (int y = 0; y < level.height;) {
+            const int rows = std::min(level.height - y, 1 + int(rng() % unsigned(max_rows)));
+            t.put_block(L, 0, y, level.width, rows,
+                        level.pixels.data() + size_t(y) * size_t(level.width) * size_t(level.channels), level.channels, 0);
+            y += rows;
+            if (auto ok = t.compress_rows(L, y); !ok)
+                return ::testing::AssertionFailure() << "compress_rows(" << L << ", " << y << "): " << ok.error().message;
+            if (after_band) after_band(L, y, rows);
+        }
+    }
+    return ::testing::AssertionSuccess();
 }
 
 double tolerance(TexelEncoding e) {
@@ -440,16 +461,7 @@ TEST(EncodedTexture, BlocksMadeAsTheRowsArriveGiveTheWholeLevelFile) {
         banded.set_block_format(c.block);
         ASSERT_EQ(banded.block_format(), c.block);
         ASSERT_TRUE(banded.streams());
-        for (int L = 0; L < levels; ++L) {
-            const Image& level = chain.levels[size_t(L)];
-            for (int y = 0; y < level.height;) {
-                const int rows = std::min(level.height - y, 1 + int(rng() % 23));
-                banded.put_block(L, 0, y, level.width, rows,
-                                 level.pixels.data() + size_t(y) * size_t(level.width) * size_t(c.channels), c.channels, 0);
-                y += rows;
-                ASSERT_TRUE(banded.compress_rows(L, y).ok());
-            }
-        }
+        ASSERT_TRUE(put_in_bands(banded, chain, rng, 23));
         const fs::path dir = fresh_dir("bc_bands");
         const EncodedFile file{&banded, "b", "roughness", {}, c.block};
         auto written = write_encoded_textures({&file, 1}, dir);
@@ -641,26 +653,21 @@ TEST(Dds, WrittenAsItsRowsArriveIsTheHandWorkedFile) {
         const size_t header = c.f.fourcc == dx10 ? 148 : 128;
         const size_t row_bytes = size_t(c.width) * size_t(c.channels == 3 ? 4 : c.channels) *
                                  size_t(c.e == TexelEncoding::Unorm8 ? 1 : c.e == TexelEncoding::Float32 ? 4 : 2);
-        for (int L = 0; L < levels; ++L) {
-            const Image& level = chain.levels[size_t(L)];
-            for (int y = 0; y < level.height;) {
-                const int rows = std::min(level.height - y, 1 + int(rng() % 40));
-                t.put_block(L, 0, y, level.width, rows,
-                            level.pixels.data() + size_t(y) * size_t(level.width) * size_t(c.channels), c.channels, 0);
-                y += rows;
-                ASSERT_TRUE(t.compress_rows(L, y).ok());
-                if (L == 0 && y == rows) {  // the first band: already in the file, which is not yet in place
-                    EXPECT_FALSE(fs::exists(dir / "t.dds"));
-                    const std::vector<fs::path> temp = temporaries(dir, "t");
-                    ASSERT_EQ(temp.size(), 1u);
-                    const std::vector<uint8_t> early = slurp(temp[0]);
-                    const size_t n = header + size_t(rows) * row_bytes;
-                    ASSERT_GE(early.size(), n);
-                    EXPECT_TRUE(std::equal(want.begin(), want.begin() + long(n), early.begin()))
-                        << "the header and the first rows are not in the file as they arrived";
-                }
-            }
-        }
+        bool first_band_checked = false;
+        ASSERT_TRUE(put_in_bands(t, chain, rng, 40, [&](int L, int y, int rows) {
+            if (L != 0 || y != rows) return;
+            // The first band: already in the file, which is not yet in place.
+            first_band_checked = true;
+            EXPECT_FALSE(fs::exists(dir / "t.dds"));
+            const std::vector<fs::path> temp = temporaries(dir, "t");
+            ASSERT_EQ(temp.size(), 1u);
+            const std::vector<uint8_t> early = slurp(temp[0]);
+            const size_t n = header + size_t(rows) * row_bytes;
+            ASSERT_GE(early.size(), n);
+            EXPECT_TRUE(std::equal(want.begin(), want.begin() + long(n), early.begin()))
+                << "the header and the first rows are not in the file as they arrived";
+        }));
+        EXPECT_TRUE(first_band_checked);
         const EncodedFile file{&t, "t", "roughness", {}};
         auto written = write_encoded_textures({&file, 1}, dir);
         ASSERT_TRUE(written.ok()) << written.error().message;
@@ -811,14 +818,8 @@ TEST(Exr, StreamedInBandsEqualsWrittenWhole) {
         for (int L = 0; L < levels; ++L) {
             const Image& level = chain.levels[size_t(L)];
             whole.put_block(L, 0, 0, level.width, level.height, level.pixels.data(), c.channels, 0);
-            for (int y = 0; y < level.height;) {
-                const int rows = std::min(level.height - y, 1 + int(rng() % 40));
-                banded.put_block(L, 0, y, level.width, rows,
-                                 level.pixels.data() + size_t(y) * size_t(level.width) * size_t(c.channels), c.channels, 0);
-                y += rows;
-                ASSERT_TRUE(banded.compress_rows(L, y).ok());
-            }
         }
+        ASSERT_TRUE(put_in_bands(banded, chain, rng, 40));
         const fs::path dir = fresh_dir("exr_bands");
         const EncodedFile file{&banded, "t", "kernel", given};
         auto written = write_encoded_textures({&file, 1}, dir);
