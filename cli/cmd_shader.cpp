@@ -84,7 +84,11 @@ void add_shader_command(CLI::App& app, std::function<int()>& run) {
         "  SPECAA_QUALITY_BALANCED (1)   isotropic filtered roughness and the footprint's convolved NDF in closed\n"
         "                                form (no loop)\n"
         "  SPECAA_QUALITY_REFERENCE (2)  the default: the anisotropic matrix form and the convolution by quadrature\n"
-        "  SPIR-V instructions and accuracy per tier: docs/shader-include.md#quality-tiers.");
+        "  SPIR-V instructions and accuracy per tier: docs/shader-include.md#quality-tiers.\n"
+        "\n"
+        "Curvature: where 'specbake bake' wrote the _SPECAA_CURVATURE vertex attribute, #define SPECAA_USE_CURVATURE\n"
+        "and pass it: the default rule takes its per-pixel kernel from it (continuous across triangle edges)\n"
+        "instead of quad derivatives (docs/shader-include.md#the-default-entry-point).");
     sub->callback([&run, opts] { run = [opts] { return run_shader(*opts); }; });
 }
 

@@ -23,7 +23,7 @@ namespace specbake::cli {
 struct SceneCliOptions {
     std::vector<std::string> scenes;
     std::string output_dir;
-    std::string estimator = "shape-operator";
+    std::string estimator = "patch";
     std::string format = "same";
     std::string container = "ktx2";
     std::string gltf_mode = "sidecar";
@@ -61,10 +61,11 @@ inline CLI::Validator finite_number(bool zero_allowed) {
 // Curvature options (all scene subcommands).
 inline void add_curvature_options(CLI::App* sub, SceneCliOptions& o) {
     sub->add_option("--estimator", o.estimator,
-                    "Curvature estimator: shape-operator (SPEC Sec. 4 per-face fit), second-order (per-vertex fit "
-                    "with the curvature derivative, more accurate on irregular meshes), jet-fitting (geometric, "
-                    "CGAL), normal-cone (cheap bound), patch (the per-face fit averaged over each vertex's smooth patch: "
-                    "faces much steeper than most of the one-ring count little)")
+                    "Curvature estimator: patch (the default: SPEC Sec. 4's per-face fit averaged over each vertex's "
+                    "smooth patch, so that faces much steeper than most of the one-ring, a lip or a bevel, count "
+                    "little), shape-operator (the per-face fit averaged over the whole one-ring), second-order "
+                    "(per-vertex fit with the curvature derivative, more accurate on irregular meshes), jet-fitting "
+                    "(geometric, CGAL), normal-cone (cheap bound)")
         ->check(CLI::IsMember({"shape-operator", "second-order", "jet-fitting", "normal-cone", "patch"}))
         ->capture_default_str();
     sub->add_option("--min-curvature", o.min_relative_curvature,
@@ -167,7 +168,7 @@ inline Result<SceneJob> make_scene_job(const SceneCliOptions& o) {
     if (auto ok = apply_block_options(o.blocks, "--container", job.texture_format); !ok)
         return ok.error();
     PlanOptions& p = job.plan;
-    p.estimator = parse_curvature_estimator(o.estimator).value_or(CurvatureEstimator::ShapeOperator);
+    p.estimator = parse_curvature_estimator(o.estimator).value_or(CurvatureEstimator::Patch);
     p.min_roughness_gain = o.min_roughness_gain;
     p.min_relative_curvature = o.min_relative_curvature;
     p.kappa = o.kappa;

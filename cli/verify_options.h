@@ -28,7 +28,7 @@ struct SimCommandOptions {
     std::vector<std::string> defines;  // NAME or NAME=VALUE
     std::vector<std::string> variants;  // LABEL:NAME[=VALUE][+NAME[=VALUE]...]
     std::vector<std::string> only;      // candidate names to keep besides the baselines; empty: all
-    std::string curvature_estimator = "shape-operator";
+    std::string curvature_estimator = "patch";
 };
 
 inline void add_sim_command_options(CLI::App* sub, SimCommandOptions& o) {
@@ -67,8 +67,8 @@ inline void add_sim_command_options(CLI::App* sub, SimCommandOptions& o) {
         ->type_name("LABEL:NAME[=VALUE][+NAME[=VALUE]]");
     sub->add_option("--curvature-estimator", o.curvature_estimator,
                     "On scene files, the per-vertex curvature that --define and --variant candidates with "
-                    "SPECAA_USE_CURVATURE read: shape-operator (what bake writes by default), patch, "
-                    "second-order, jet-fitting or normal-cone (analytic scenes use their exact curvature)")
+                    "SPECAA_USE_CURVATURE read (the default among them): patch (what bake writes by default), "
+                    "shape-operator, second-order, jet-fitting or normal-cone (analytic scenes use their exact curvature)")
         ->capture_default_str()
         ->check(CLI::IsMember({"shape-operator", "patch", "second-order", "jet-fitting", "normal-cone"}));
 }

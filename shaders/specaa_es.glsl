@@ -82,7 +82,8 @@ float specaa_lod_from_derivatives(vec2 size, vec2 uv) {
 //   SPECAA_SIGMA2   pixel-filter variance in pixels^2, default 1/(2 pi) (TK21 App. B).
 //   SPECAA_KAPPA    clamp of derivative-based kernels, default 0.18 (TK21 Eq. 10, K16).
 //   SPECAA_GGX_SPREAD  specaa_default_D with a kernel or LEAN texture: GGX(A) where the minified
-//                   footprint's spread k_max exceeds 1 / this, default 8.
+//                   footprint's spread k_max (the baked spread's major axis or the per-pixel
+//                   kernel's minor one) exceeds 1 / this, default 8.
 //   Baked data for the default entry point (at most one of the roughness texture and kernel/LEAN):
 //   SPECAA_ROUGHNESS_TEXTURE name   baked filtered roughness mips (perceptual r), channel
 //                                   SPECAA_ROUGHNESS_CHANNEL (default g: the RGBA ORM layout, A = 1;
@@ -124,8 +125,9 @@ float specaa_lod_from_derivatives(vec2 size, vec2 uv) {
 //   SPECAA_CLOSED_FORM_D            the reference tier's convolution in closed form
 //                                   (specaa_convolved_D_closed_form on its anisotropic matrix): the closed
 //                                   form's share of the balanced tier's error, apart from its isotropic A.
-//   SPECAA_BLEND_FROM_BAKED_SPREAD  opt-in: specaa_default_D's blend weight from the baked spread alone,
-//                                   not from all of K = A - a I (the per-pixel kernel included).
+//   SPECAA_BLEND_FROM_LARGEST_AXIS  specaa_default_D's blend weight from the largest eigenvalue of all of
+//                                   K = A - a I, the per-pixel kernel included (the rule before the shape).
+//   SPECAA_BLEND_FROM_BAKED_SPREAD  specaa_default_D's blend weight from the baked spread alone.
 // Textures are sampled with implicit derivatives, so the hardware selects the mip: the baked mips are
 // the footprint filter of the normal map, the per-pixel kernel adds the geometric curvature.
 //
@@ -1098,7 +1100,8 @@ float specaa_footprint_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
 //   curvature, a Gaussian, and the convolution is exact.
 // - Baked kernel or LEAN texture (the material's own a; K holds the texel's spread and the pixel kernel
 //   of the vertex normal's curvature):
-//   w = saturate(LOD) saturate(SPECAA_GGX_SPREAD k_max). Under magnification (LOD <= 0) the footprint lies
+//   w = saturate(LOD) saturate(SPECAA_GGX_SPREAD k_max), k_max = max(major axis of the baked spread, minor
+//   axis of the per-pixel kernel) (the spread's shape, below). Under magnification (LOD <= 0) the footprint lies
 //   inside one texel and the interpolated normals vary smoothly: the convolution. Minified, a small spread
 //   of small slopes is still close to Gaussian (slope and projected variance within 10% up to
 //   k_max ~ 0.05), but a broad one covers much of the hemisphere (a normal map's domes and bevels hold
@@ -1151,29 +1154,32 @@ float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 filteredA, SpecaaSurface s
         A = roughA;
     }
 #endif
-    // The blend weight is judged on all of K = A - a I, the per-pixel kernel included. Opt-in
-    // SPECAA_BLEND_FROM_BAKED_SPREAD judges it on the baked spread alone: the pixel kernel is the image of
-    // the Gaussian pixel filter under the surface's curvature (TK21 Eq. 3), for which the convolution is
-    // exact, and a large one (rims, strongly curved small parts: up to kappa) otherwise switches the pixel
-    // to GGX(A), whose tails put a flickering halo around highlights and along rims on models outside the
-    // bench's corpus; but where the clamped pixel kernel hides geometry a pixel wide (domes of mesh), GGX(A)
-    // is what fits, and the bench's NormalTangentTest far fails without it (docs/accuracy.md#do-no-harm-in-the-field).
+    // The blend weight is judged on the spread's shape: the baked spread's major axis and the minor axis of
+    // the rest of K = A - a I (the per-pixel kernel). The pixel kernel is the image of the Gaussian pixel
+    // filter under the surface's curvature (TK21 Eq. 3), for which the convolution is exact; a large one
+    // along one direction only (a rim's or a strongly curved small part's arc of normals, up to kappa) keeps
+    // the convolution, as GGX(A)'s tails would put a flickering halo along it; one large in every direction
+    // (geometry of mesh within the footprint, a dome a pixel wide, which the clamped kernel hides) takes
+    // GGX(A), which is what fits there (docs/accuracy.md#the-ggxa-share-judged-on-the-spreads-shape).
+    // The balanced tier's A is isotropic (no shape to judge): its largest eigenvalue, without the baked
+    // texel's second read. Diagnostics: SPECAA_BLEND_FROM_LARGEST_AXIS judges it on the largest eigenvalue of
+    // all of K (the rule before), SPECAA_BLEND_FROM_BAKED_SPREAD on the baked spread alone.
     SPECAA_FLOAT3 spread = A - SPECAA_FLOAT3(a, a, 0.0);
-#if defined(SPECAA_BLEND_FROM_BAKED_SPREAD) && defined(SPECAA_KERNEL_TEXTURE) && defined(SPECAA_KERNEL_ANISOTROPIC) && defined(SPECAA_KERNEL_TWO_LOBES)
-    spread = roughK;
-#elif defined(SPECAA_BLEND_FROM_BAKED_SPREAD)
-    spread = specaa_baked_kernel_matrix(s);
-#endif
-#if defined(SPECAA_BLEND_FROM_MINOR_AXIS)
-    // Diagnostic: the baked spread's major axis and the rest's minor one (a spread along one direction, a
-    // rim's arc of normals, keeps the convolution; one in every direction, geometry within the footprint,
-    // takes GGX(A)).
+#if defined(SPECAA_BLEND_FROM_LARGEST_AXIS) || SPECAA_QUALITY == SPECAA_QUALITY_BALANCED
+    float w = SPECAA_SATURATE(lod) * SPECAA_SATURATE(SPECAA_GGX_SPREAD * specaa_sym_max_eigenvalue(spread));
+#else
+#if defined(SPECAA_KERNEL_TEXTURE) && defined(SPECAA_KERNEL_ANISOTROPIC) && defined(SPECAA_KERNEL_TWO_LOBES)
+    SPECAA_FLOAT3 bakedSpread = roughK;
+#else
     SPECAA_FLOAT3 bakedSpread = specaa_baked_kernel_matrix(s);
+#endif
+#if defined(SPECAA_BLEND_FROM_BAKED_SPREAD)
+    float w = SPECAA_SATURATE(lod) * SPECAA_SATURATE(SPECAA_GGX_SPREAD * specaa_sym_max_eigenvalue(bakedSpread));
+#else
     SPECAA_FLOAT3 rest = spread - bakedSpread;
     float restMinor = 0.5 * (rest.x + rest.y) - sqrt(0.25 * (rest.x - rest.y) * (rest.x - rest.y) + rest.z * rest.z);
     float w = SPECAA_SATURATE(lod) * SPECAA_SATURATE(SPECAA_GGX_SPREAD * max(specaa_sym_max_eigenvalue(bakedSpread), restMinor));
-#else
-    float w = SPECAA_SATURATE(lod) * SPECAA_SATURATE(SPECAA_GGX_SPREAD * specaa_sym_max_eigenvalue(spread));
+#endif
 #endif
 #else
     float w = 0.0;

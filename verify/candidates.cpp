@@ -125,9 +125,18 @@ void add_default_candidates(std::vector<SimCandidate>& c, bool normal_mapped) {
         const std::string bake = !normal_mapped ? "" : baked == Baked::IsotropicKernel ? kIsotropicKernelBake : "mean-projected";
         c.push_back({name, "default", source, {defines + ndf, kMatrixDefault, "exact", bake}, bake, ""});
     };
+    // The default reads the per-vertex curvature the scene bake writes (_SPECAA_CURVATURE, SPECAA_USE_CURVATURE):
+    // a pixel kernel continuous across triangle edges (docs/accuracy.md#the-default-rule-and-the-curvature-it-reads).
     matrix_default("default",
                    "specaa_filtered_alpha2_matrix with specaa_default_D (baked Sigma kernel mips + anisotropic "
-                   "per-pixel kernel; GGX convolved with the footprint, GGX of the matrix as the spread grows)",
+                   "per-pixel kernel from the baked curvature; GGX convolved with the footprint, GGX of the matrix "
+                   "where the spread is broad in every direction)",
+                   std::string("#define SPECAA_USE_CURVATURE\n") + kDefaultNdf, Baked::Kernel);
+    c.back().curvature_bake = c.back().shader.curvature_source = "exact";
+    // The same without the curvature attribute: the per-pixel kernel from the quad derivatives of the normal.
+    matrix_default("default-derivatives",
+                   "specaa_filtered_alpha2_matrix with specaa_default_D, the per-pixel kernel from quad derivatives "
+                   "(no curvature attribute bound)",
                    kDefaultNdf, Baked::Kernel);
     // The include's cheaper quality tiers (SPECAA_QUALITY; the default above is the reference tier), each on
     // the baked data it is meant for: the rows an engine's own filter is held against (bench summary).
@@ -193,20 +202,20 @@ void add_default_candidates(std::vector<SimCandidate>& c, bool normal_mapped) {
                  normal_mapped ? "mean-projected" : "", ""});
 }
 
-// Scene files: curvature comes from the default estimator, as `specbake bake` writes it, and is timed as
-// the candidates' bake; its own variant row would repeat "baked-curvature".
-void use_estimated_curvature(std::vector<SimCandidate>& c) {
-    std::erase_if(c, [](const SimCandidate& x) { return x.name == "baked-curvature/shape-operator"; });
+// Scene files: curvature comes from the given estimator (`specbake bake` writes the default one), and is
+// timed as the candidates' bake; its own variant row would repeat "baked-curvature".
+void use_estimated_curvature(std::vector<SimCandidate>& c, const std::string& estimator) {
+    std::erase_if(c, [&](const SimCandidate& x) { return x.name == "baked-curvature/" + estimator; });
     for (SimCandidate& x : c) {
         if (x.curvature_bake != "exact") continue;
-        x.curvature_bake = "shape-operator";
-        x.shader.curvature_source = "shape-operator";
+        x.curvature_bake = estimator;
+        x.shader.curvature_source = estimator;
     }
 }
 
 }  // namespace
 
-std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool variants) {
+std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool variants, const std::string& estimator) {
     const bool normal_mapped = std::any_of(scene.objects.begin(), scene.objects.end(),
                                            [](const SimObject& o) { return o.material.normal_map >= 0; });
     std::vector<SimCandidate> c;
@@ -214,7 +223,7 @@ std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool varia
     add_baked_candidates(c, normal_mapped);
     add_default_candidates(c, normal_mapped);
     if (variants) add_variants(c, normal_mapped);
-    if (!has_exact_curvature(scene)) use_estimated_curvature(c);
+    if (!has_exact_curvature(scene)) use_estimated_curvature(c, estimator);
     return c;
 }
 
@@ -241,7 +250,7 @@ void add_variants(std::vector<SimCandidate>& c, bool normal_mapped) {
                       kIsotropicDefault, "exact", "mean-projected"},
                      "mean-projected", ""});
     }
-    for (const char* estimator : {"shape-operator", "second-order", "jet-fitting", "normal-cone"}) {
+    for (const char* estimator : {"shape-operator", "patch", "second-order", "jet-fitting", "normal-cone"}) {
         c.push_back({std::string("baked-curvature/") + estimator, "variant", "SPEC Sec. 4 estimator",
                      {"#define SPECAA_USE_CURVATURE\n", kIsotropicDefault, estimator, ""}, "", estimator});
     }

@@ -41,7 +41,8 @@ struct SimCandidate {
 // Candidates that apply to `scene` (baked-texture ones only when it has a normal map). With `variants`,
 // also the bake variants (approx filter, sum/max reductions, kernel and LEAN textures, curvature
 // estimators).
-std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool variants);
+std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool variants,
+                                              const std::string& estimator = "patch");
 
 // The glint candidates (C21) of a scene whose materials ask for glints (family "glint"): the smooth BRDF
 // (analytic SDF), glints without anti-aliasing (C20: s_K = 0), GGAA (C21 Eq. 15, 19, 21, s_K = 0.5) and,

@@ -99,7 +99,7 @@ std::string with_baked_roughness(const std::string& lines, SimCandidate& v) {
 std::vector<SimCandidate> select_candidates(const SimScene& scene, const VerifyOptions& options,
                                             std::vector<std::string>& notes) {
     std::vector<SimCandidate> candidates;
-    if (!scene.glints_only) candidates = simulator_candidates(scene, options.variants);
+    if (!scene.glints_only) candidates = simulator_candidates(scene, options.variants, options.curvature_estimator);
     for (SimCandidate& c : glint_candidates(scene)) candidates.push_back(std::move(c));
     if (!options.only.empty()) {
         for (const std::string& name : options.only) {

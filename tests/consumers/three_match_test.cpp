@@ -1,6 +1,8 @@
 // specbake's three.js plugin against specbake's own simulator on shared models (../shared/assets/gltf, read
-// in place): `specbake verify --only default --frame-data` renders frame 0 of the default candidate (the
-// include's specaa_filtered_alpha2_matrix + specaa_default_D on the baked Sigma kernel) and writes the camera
+// in place): `specbake verify --only default-derivatives --frame-data` renders frame 0 of the default rule
+// with the per-pixel kernel from quad derivatives, as the plugin binds it (the include's
+// specaa_filtered_alpha2_matrix + specaa_default_D on the baked Sigma kernel; the plugin does not read the
+// _SPECAA_CURVATURE attribute, web/three/README.md) and writes the camera
 // and lights it used; browser_match.mjs draws the `specbake bake` output of the same file with GLTFLoader and
 // the plugin under that camera and light, specular only with F = 1, in headless Chromium (three r187). The
 // same include runs in both, so what differs is the wiring: attributes, tangent frames, texture bindings,
@@ -89,7 +91,7 @@ TEST_F(ThreeSimulatorMatch, PatchedFrameMatchesTheSimulatorsDefault) {
     std::string inputs;
     for (const std::string& m : models) {
         const fs::path file = assets / m / (m + ".gltf");
-        specbake("-q verify " + quote(file) + " --only default --frames 1 --repeats 0 --no-floor --no-limit --no-variants "
+        specbake("-q verify " + quote(file) + " --only default-derivatives --frames 1 --repeats 0 --no-floor --no-limit --no-variants "
                  "--spp 16 --size 128x128 --frame-data " + quote(data / "frames" / m));
         inputs += " " + quote(file);
         job["scenes"].push_back({{"id", m}, {"path", "baked/" + m + "/" + m + ".gltf"}, {"frame", "frames/" + m + "/frame.json"}});
@@ -106,7 +108,7 @@ TEST_F(ThreeSimulatorMatch, PatchedFrameMatchesTheSimulatorsDefault) {
         ASSERT_TRUE(r.value("ok", false)) << id << ": " << r.value("error", "");
         for (const auto& line : r["console"]) ADD_FAILURE() << id << ": page console: " << line.value("text", "");
         ASSERT_EQ(r["report"]["patched"].size(), 1u) << id << ": " << r["report"].dump();
-        const Frame sim = read_pfm(data / "frames" / id / "default.pfm");
+        const Frame sim = read_pfm(data / "frames" / id / "default-derivatives.pfm");
         ASSERT_EQ(sim.width, r.value("width", 0)) << id;
         const Match on = compare(sim, r["on"]), off = compare(sim, r["off"]);
         for (const auto& [label, m] : {std::pair{"patched", on}, std::pair{"own", off}})

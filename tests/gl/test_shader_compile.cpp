@@ -78,7 +78,7 @@ TEST(ShaderCompile, DiagnosticSwitchesCompileToValidSpirvInBothLanguages) {
     const std::string spv = (dir.path() / "x.spv").string();
     for (const char* define : {"SPECAA_NO_BAKED_KERNEL", "SPECAA_DEFAULT_D_WEIGHT=0.0", "SPECAA_KERNEL_LOD_BIAS=-1.0",
                                "SPECAA_GATE_PIXEL_KERNEL", "SPECAA_BLEND_FROM_BAKED_SPREAD", "SPECAA_KERNEL_AREA_LOD",
-                               "SPECAA_USE_CURVATURE -DSPECAA_PIXEL_KERNEL_MIN", "SPECAA_BLEND_FROM_MINOR_AXIS"}) {
+                               "SPECAA_USE_CURVATURE -DSPECAA_PIXEL_KERNEL_MIN", "SPECAA_BLEND_FROM_LARGEST_AXIS"}) {
         std::string out;
         EXPECT_EQ(run_command(std::string("glslangValidator -G -S frag -D") + define + " -I'" + kShaders + "' '" +
                                   kShaders + "/examples/minimal.frag' -o '" + spv +
