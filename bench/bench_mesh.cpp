@@ -143,6 +143,7 @@ void curvature(benchmark::State& state, const TriMesh& mesh, CurvatureEstimator 
 }
 
 void BM_CurvatureShapeOperator1M(benchmark::State& state) { curvature(state, million(), CurvatureEstimator::ShapeOperator); }
+void BM_CurvaturePatch1M(benchmark::State& state) { curvature(state, million(), CurvatureEstimator::Patch); }
 void BM_CurvatureSecondOrder1M(benchmark::State& state) { curvature(state, million(), CurvatureEstimator::SecondOrder); }
 void BM_CurvatureNormalCone1M(benchmark::State& state) { curvature(state, million(), CurvatureEstimator::NormalCone); }
 void BM_CurvatureJetFitting100k(benchmark::State& state) {
@@ -162,6 +163,7 @@ void BM_WeldForCurvature1M(benchmark::State& state) {
 }
 BENCHMARK(BM_WeldForCurvature1M)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 BENCHMARK(BM_CurvatureShapeOperator1M)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+BENCHMARK(BM_CurvaturePatch1M)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 BENCHMARK(BM_CurvatureSecondOrder1M)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 BENCHMARK(BM_CurvatureNormalCone1M)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 BENCHMARK(BM_CurvatureJetFitting100k)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
