@@ -23,7 +23,7 @@ namespace specbake::cli {
 struct SceneCliOptions {
     std::vector<std::string> scenes;
     std::string output_dir;
-    std::string estimator = "patch";
+    std::string estimator{to_string(kDefaultCurvatureEstimator)};
     std::string format = "same";
     std::string container = "ktx2";
     std::string gltf_mode = "sidecar";
@@ -168,7 +168,7 @@ inline Result<SceneJob> make_scene_job(const SceneCliOptions& o) {
     if (auto ok = apply_block_options(o.blocks, "--container", job.texture_format); !ok)
         return ok.error();
     PlanOptions& p = job.plan;
-    p.estimator = parse_curvature_estimator(o.estimator).value_or(CurvatureEstimator::Patch);
+    p.estimator = parse_curvature_estimator(o.estimator).value_or(kDefaultCurvatureEstimator);
     p.min_roughness_gain = o.min_roughness_gain;
     p.min_relative_curvature = o.min_relative_curvature;
     p.kappa = o.kappa;

@@ -28,7 +28,7 @@ struct SimCommandOptions {
     std::vector<std::string> defines;  // NAME or NAME=VALUE
     std::vector<std::string> variants;  // LABEL:NAME[=VALUE][+NAME[=VALUE]...]
     std::vector<std::string> only;      // candidate names to keep besides the baselines; empty: all
-    std::string curvature_estimator = "patch";
+    std::string curvature_estimator{to_string(kDefaultCurvatureEstimator)};
 };
 
 inline void add_sim_command_options(CLI::App* sub, SimCommandOptions& o) {

@@ -14,7 +14,7 @@
 namespace specbake {
 
 enum class CurvatureEstimator {
-    ShapeOperator,  // default (SPEC Sec. 4): per-face least-squares shape operator from the normal differences
+    ShapeOperator,  // SPEC Sec. 4: per-face least-squares shape operator from the normal differences
                     // along the face's edges, mixed-Voronoi weighted at the vertices (Rusinkiewicz 2004)
     JetFitting,     // CGAL Monge jet fitting of welded positions: geometric curvature, oriented by the normals
     NormalCone,     // one-ring bound: largest normal turn per edge length, cheapest
@@ -23,6 +23,10 @@ enum class CurvatureEstimator {
     Patch,          // the per-face operators of ShapeOperator, averaged at a vertex over its smooth patch:
                     // faces steeper than the one-ring's area-weighted median weigh by (median / |S_f|)^2
 };
+
+// What `bake`, `plan`, `mesh` and `verify` use unless told otherwise: the curvature the default run-time rule
+// reads (docs/accuracy.md#the-default-rule-and-the-curvature-it-reads).
+inline constexpr CurvatureEstimator kDefaultCurvatureEstimator = CurvatureEstimator::Patch;
 
 struct CurvatureOptions {
     WeldOptions weld;

@@ -80,7 +80,7 @@ struct PlanOptions {
     double kappa = 0.18;                  // kernel clamp, SPEC Sec. 2
     double min_roughness_gain = 0.05;
     double min_relative_curvature = 0.05;
-    CurvatureEstimator estimator = CurvatureEstimator::Patch;
+    CurvatureEstimator estimator = kDefaultCurvatureEstimator;
     int threads = 0;
     // What the scene may make the job read and allocate: the scene is loaded and its images decoded under it.
     io::InputPolicy input_policy;

@@ -42,7 +42,7 @@ struct SimCandidate {
 // also the bake variants (approx filter, sum/max reductions, kernel and LEAN textures, curvature
 // estimators).
 std::vector<SimCandidate> simulator_candidates(const SimScene& scene, bool variants,
-                                              const std::string& estimator = "patch");
+                                              const std::string& estimator = std::string(to_string(kDefaultCurvatureEstimator)));
 
 // The glint candidates (C21) of a scene whose materials ask for glints (family "glint"): the smooth BRDF
 // (analytic SDF), glints without anti-aliasing (C20: s_K = 0), GGAA (C21 Eq. 15, 19, 21, s_K = 0.5) and,

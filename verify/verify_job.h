@@ -4,6 +4,7 @@
 #pragma once
 
 #include "core/result.h"
+#include "mesh/curvature.h"
 #include "verify/candidates.h"
 #include "verify/metrics.h"
 #include "verify/scene.h"
@@ -48,7 +49,7 @@ struct VerifyOptions {
     // The curvature estimator (mesh/curvature.h spelling) whose per-vertex estimate the candidates made
     // with `defines` or `default_variants` read when those include SPECAA_USE_CURVATURE, on scenes without
     // exact curvature.
-    std::string curvature_estimator = "patch";
+    std::string curvature_estimator{to_string(kDefaultCurvatureEstimator)};
     // Ground-truth samples integrate the highlight over their stratum (false: point samples).
     bool footprint_ground_truth = true;
     // Receives one line per finished stage (bakes, each ground-truth frame, timing); may be empty.
