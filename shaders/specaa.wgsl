@@ -97,6 +97,8 @@ fn specaa_lod_from_derivatives(size: vec2<f32>, uv: vec2<f32>) -> f32 {
 //   SPECAA_BLEND_FROM_LARGEST_AXIS  specaa_default_D's blend weight from the largest eigenvalue of all of
 //                                   K = A - a I, the per-pixel kernel included (the rule before the shape).
 //   SPECAA_BLEND_FROM_BAKED_SPREAD  specaa_default_D's blend weight from the baked spread alone.
+//   SPECAA_NO_VIEW_TURN             the per-pixel kernel without the half vector's turn with the view
+//                                   direction (the normal's spread alone, the kernel before s.view).
 // Textures are sampled with implicit derivatives, so the hardware selects the mip: the baked mips are
 // the footprint filter of the normal map, the per-pixel kernel adds the geometric curvature.
 //
@@ -453,11 +455,17 @@ fn specaa_pixel_footprint_from_depth(viewDepth: f32, tanHalfFovY: f32, viewportH
 // Curvature kernel matrix K = 2 sigma^2 (S u u^T S + S v v^T S), TK21 Eq. (3) with the projected-normal
 // derivatives S u, S v of the curved shading-normal field (K16 "virtual quadric") instead of quad
 // differences. footprint = (u.x, u.y, v.x, v.y) from specaa_footprint*.
-fn specaa_curvature_kernel(curvature: vec4<f32>, footprint: vec4<f32>) -> vec3<f32> {
+// turn: the half vector's turn per screen axis in the same frame, (x.t, x.b, y.t, y.b) (specaa_view_turn),
+// taken off the normal's: the spread of h relative to n over the footprint.
+fn specaa_curvature_kernel_turned(curvature: vec4<f32>, footprint: vec4<f32>, turn: vec4<f32>) -> vec3<f32> {
     let S: vec3<f32> = specaa_shape_operator(curvature);
     let du: vec2<f32> = vec2<f32>(S.x * footprint.x + S.z * footprint.y, S.z * footprint.x + S.y * footprint.y);
     let dv: vec2<f32> = vec2<f32>(S.x * footprint.z + S.z * footprint.w, S.z * footprint.z + S.y * footprint.w);
-    return specaa_kernel_matrix(du, dv);
+    return specaa_kernel_matrix(du - turn.xy, dv - turn.zw);
+}
+// The normal's spread alone (no turn of the half vector).
+fn specaa_curvature_kernel(curvature: vec4<f32>, footprint: vec4<f32>) -> vec3<f32> {
+    return specaa_curvature_kernel_turned(curvature, footprint, vec4<f32>(0.0, 0.0, 0.0, 0.0));
 }
 // Isotropic curvature kernel for a square footprint of width w: mean reduction tr(Sigma) =
 // sigma^2 w^2 (k1^2 + k2^2) (TK21 Eq. 14 with |dn| = |k| w per principal direction).
@@ -717,6 +725,7 @@ struct SpecaaSurface {
     tangent: vec3<f32>, // T = TANGENT.xyz (matrix form, SPECAA_USE_CURVATURE)
     bitangent: vec3<f32>, // B = cross(N, T) * TANGENT.w
     curvature: vec4<f32>, // _SPECAA_CURVATURE (k1, k2, d.x, d.y) (SPECAA_USE_CURVATURE)
+    view: vec3<f32>, // unit vector from the surface to the eye, in the space of normal and tangent
 }
 // Squared roughness a of the material: the baked filtered roughness texture if bound, else r^4.
 // Clamped to [0, 1], NaN as 1 (edge policy).
@@ -763,6 +772,29 @@ fn specaa_curvature_footprint(s: SpecaaSurface, footprint: ptr<function, vec4<f3
                      vec4<u32>(0x7fffffffu, 0x7fffffffu, 0x7fffffffu, 0x7fffffffu);
     return max(specaa_max_component(m), max(max(c.x, c.y), max(c.z, c.w))) < 0x7f800000u;
 }
+// The half vector's turn across the pixel footprint from the view direction's turn along one screen axis
+// (dView: the quad derivative of s.view along it), tangential to the normal. The highlight lies where the
+// half vector h = (l + v) / |l + v| meets the normal, so the spread the pixel filter sees is that of h
+// relative to n: per screen axis dn - dh, not dn alone (K16, TK21 Eq. (2) filter the half vector's
+// derivatives). At the highlight h = n, so |l + v| = 2 n.v and dh is the tangential part of
+// dv / (2 n.v); the light's direction is taken as fixed (a distant light; a point light's own turn is left
+// out). Without it the kernel is the normal's spread only: a convex surface's highlight comes out
+// narrower in the image than the pixel filter makes it, and a flat one's is not filtered at all
+// (docs/accuracy.md#the-view-directions-turn). n.v is floored at 1e-3 (the kernel is clamped to kappa
+// after); a turn that is not finite adds nothing (edge policy). The fast tier leaves it out (+60 SPIR-V
+// instructions there, over its budget), and so does SPECAA_NO_VIEW_TURN (diagnostic).
+fn specaa_view_turn_axis(s: SpecaaSurface, dView: vec3<f32>) -> vec3<f32> {
+    let turn: vec3<f32> = (dView - s.normal * dot(s.normal, dView)) * (0.5 / max(dot(s.normal, s.view), 1.0e-3));
+    return select(vec3<f32>(0.0, 0.0, 0.0), turn, specaa_is_finite3(turn));
+}
+// Both screen axes' turns in the (T, B) frame, (x.t, x.b, y.t, y.b), for specaa_curvature_kernel_turned.
+fn specaa_view_turn(s: SpecaaSurface, tangent: vec3<f32>, bitangent: vec3<f32>) -> vec4<f32> {
+    let t: vec3<f32> = normalize(tangent);
+    let b: vec3<f32> = normalize(bitangent);
+    let x: vec3<f32> = specaa_view_turn_axis(s, dpdx(s.view));
+    let y: vec3<f32> = specaa_view_turn_axis(s, dpdy(s.view));
+    return vec4<f32>(dot(x, t), dot(x, b), dot(y, t), dot(y, b));
+}
 // Per-pixel kernel matrix of the curved geometry in the (T, B) frame: from _SPECAA_CURVATURE and the
 // position footprint, or from the quad derivatives of the vertex normal projected onto T and B
 // (TK21 Sec. 5.1). Each eigenvalue clamped to at most kappa, the eigenvectors kept (TK21 Sec. 4: "clamp the
@@ -778,7 +810,10 @@ fn specaa_pixel_kernel_matrix(s: SpecaaSurface) -> vec3<f32> {
     let m: vec3<u32> = max(max(specaa_magnitude_bits3(s.normal), specaa_magnitude_bits3(dnU)),
                          max(specaa_magnitude_bits3(dnV), max(specaa_magnitude_bits3(t), specaa_magnitude_bits3(b))));
     let usable: bool = specaa_max_component(m) < 0x7f800000u;
-    let K: vec3<f32> = specaa_kernel_matrix(vec2<f32>(dot(dnU, t), dot(dnU, b)), vec2<f32>(dot(dnV, t), dot(dnV, b)));
+    let turnU: vec3<f32> = specaa_view_turn_axis(s, dpdx(s.view));
+    let turnV: vec3<f32> = specaa_view_turn_axis(s, dpdy(s.view));
+    let K: vec3<f32> = specaa_kernel_matrix(vec2<f32>(dot(dnU - turnU, t), dot(dnU - turnU, b)),
+                                           vec2<f32>(dot(dnV - turnV, t), dot(dnV - turnV, b)));
     let lmax: f32 = specaa_sym_max_eigenvalue(K);
     let clamped: vec3<f32> = select(K, specaa_sym_clamp_eigenvalues(K, SPECAA_KAPPA), lmax > SPECAA_KAPPA);
     let bounded: bool = max(specaa_magnitude_bits(lmax), specaa_max_component(specaa_magnitude_bits3(clamped))) < 0x7f800000u;
@@ -792,7 +827,7 @@ fn specaa_pixel_kernel(s: SpecaaSurface) -> f32 {
     let usable: bool = specaa_max_component(max(specaa_magnitude_bits3(s.normal),
                                            max(specaa_magnitude_bits3(dnU), specaa_magnitude_bits3(dnV)))) < 0x7f800000u;
     // Finite derivatives give a kernel in [0, +inf] (never NaN): min() is specaa_clamp_kernel there.
-    return select(0.0, min(specaa_iso_kernel_mean(dnU, dnV), SPECAA_KAPPA), usable);
+    return select(0.0, min(specaa_iso_kernel_mean(dnU - specaa_view_turn_axis(s, dpdx(s.view)), dnV - specaa_view_turn_axis(s, dpdy(s.view))), SPECAA_KAPPA), usable);
 }
 // Filtered squared roughness a (isotropic form of the default). The baked and per-pixel kernels are variances of
 // independent footprints, so they add in projected space (TK21 Eq. 6) before mapping back (Eq. 7).

@@ -220,6 +220,7 @@ void main() {
     s.tangent = t;
     s.bitangent = b;
     s.curvature = vCurvature;
+    s.view = v;
     float alpha = s.roughness * s.roughness;
     float a = alpha * alpha;
     float viewDepth = dot(vPosition - uCameraPosition, uCameraForward);

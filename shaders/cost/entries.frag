@@ -19,8 +19,9 @@ layout(location = 3) in vec4 vTangent;
 layout(location = 4) in vec4 vCurvature;
 layout(location = 5) in vec2 vUv;
 layout(location = 6) in float vRoughness;
+layout(location = 7) in vec3 vView;
 layout(location = 0) out vec4 fragColor;
 
 void main() {
-    fragColor = specaa_cost_eval(vHalfVector, vNormal, vPosition, vTangent, vCurvature, vUv, vRoughness);
+    fragColor = specaa_cost_eval(vHalfVector, vNormal, vPosition, vTangent, vCurvature, vUv, vRoughness, vView);
 }

@@ -15,6 +15,6 @@ SamplerState uGlintSampler : register(s1);
 
 float4 main(float3 hTS : TEXCOORD0, float3 normal : NORMAL, float3 position : TEXCOORD1,
             float4 tangent : TANGENT, float4 curvature : TEXCOORD2, float2 uv : TEXCOORD3,
-            float roughness : TEXCOORD4) : SV_Target {
-    return specaa_cost_eval(hTS, normal, position, tangent, curvature, uv, roughness);
+            float roughness : TEXCOORD4, float3 view : TEXCOORD5) : SV_Target {
+    return specaa_cost_eval(hTS, normal, position, tangent, curvature, uv, roughness, view);
 }

@@ -31,10 +31,11 @@ void main() {
     s.normal = n;
     s.tangent = vTangent.xyz;
     s.bitangent = cross(n, vTangent.xyz) * vTangent.w;
+    vec3 v = normalize(vViewDir);
+    s.view = v;  // the half vector turns with it across the pixel: part of the per-pixel kernel
     // The default rule: an anisotropic roughness matrix in the (T, B) frame.
     vec3 A = specaa_filtered_alpha2_matrix(s);
 
-    vec3 v = normalize(vViewDir);
     vec3 h = normalize(v + lightDir);
     // Tangent-space vectors in the frame A lives in: T orthogonalised against n, B = cross(n, T) * w.
     vec3 t = normalize(vTangent.xyz - n * dot(n, vTangent.xyz));

@@ -30,10 +30,11 @@ float4 main(PixelInput input) : SV_Target {
     s.normal = n;
     s.tangent = input.tangent.xyz;
     s.bitangent = cross(n, input.tangent.xyz) * input.tangent.w;
+    float3 v = normalize(input.viewDir);
+    s.view = v;  // the half vector turns with it across the pixel: part of the per-pixel kernel
     // The default rule: an anisotropic roughness matrix in the (T, B) frame.
     float3 A = specaa_filtered_alpha2_matrix(s);
 
-    float3 v = normalize(input.viewDir);
     float3 h = normalize(v + lightDir);
     // Tangent-space vectors in the frame A lives in: T orthogonalised against n, B = cross(n, T) * w.
     float3 t = normalize(input.tangent.xyz - n * dot(n, input.tangent.xyz));

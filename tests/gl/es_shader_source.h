@@ -94,9 +94,9 @@ inline std::string fragment_source(const std::string& include, const std::string
     s += include;
     s += entries_inc;
     s += "in vec3 vHalfVector;\nin vec3 vNormal;\nin vec3 vPosition;\nin vec4 vTangent;\nin vec4 vCurvature;\n"
-         "in vec2 vUv;\nin float vRoughness;\nout vec4 fragColor;\n"
+         "in vec2 vUv;\nin float vRoughness;\nin vec3 vView;\nout vec4 fragColor;\n"
          "void main() {\n"
-         "    fragColor = specaa_cost_eval(vHalfVector, vNormal, vPosition, vTangent, vCurvature, vUv, vRoughness);\n"
+         "    fragColor = specaa_cost_eval(vHalfVector, vNormal, vPosition, vTangent, vCurvature, vUv, vRoughness, vView);\n"
          "}\n";
     return s;
 }
@@ -105,7 +105,7 @@ inline std::string vertex_source() {
     return "#version 300 es\n"
            "in vec4 aPosition;\n"
            "out vec3 vHalfVector;\nout vec3 vNormal;\nout vec3 vPosition;\nout vec4 vTangent;\nout vec4 vCurvature;\n"
-           "out vec2 vUv;\nout float vRoughness;\n"
+           "out vec2 vUv;\nout float vRoughness;\nout vec3 vView;\n"
            "void main() {\n"
            "    vHalfVector = normalize(aPosition.xyz + vec3(0.0, 0.0, 2.0));\n"
            "    vNormal = vec3(0.0, 0.0, 1.0);\n"
@@ -114,6 +114,7 @@ inline std::string vertex_source() {
            "    vCurvature = vec4(0.5, 0.25, 1.0, 0.0);\n"
            "    vUv = aPosition.xy * 0.5 + 0.5;\n"
            "    vRoughness = 0.3;\n"
+           "    vView = normalize(vec3(0.0, 0.0, 3.0) - aPosition.xyz);\n"
            "    gl_Position = aPosition;\n"
            "}\n";
 }

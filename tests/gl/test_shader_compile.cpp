@@ -63,8 +63,9 @@ TEST(ShaderCompile, GlslIncludeCompilesAsVersion330) {
     const auto path = dir.path() / "v330.frag";
     std::ofstream(path) << "#version 330 core\nuniform sampler2D uKernel;\n#define SPECAA_KERNEL_TEXTURE uKernel\n"
                         << read_source_file("shaders/specaa.glsl")
-                        << "in vec3 vNormal;\nin vec2 vUv;\nout vec4 color;\nvoid main() {\n"
+                        << "in vec3 vNormal;\nin vec2 vUv;\nin vec3 vView;\nout vec4 color;\nvoid main() {\n"
                            "    SpecaaSurface s;\n    s.roughness = 0.2;\n    s.uv = vUv;\n    s.normal = normalize(vNormal);\n"
+                           "    s.view = normalize(vView);\n"
                            "    color = vec4(specaa_filtered_roughness(s));\n}\n";
     std::string out;
     EXPECT_EQ(run_command("glslangValidator -S frag '" + path.string() + "'", out), 0) << out;
@@ -101,8 +102,9 @@ TEST(ShaderCompile, DefaultNdfCompilesWithTheDriverAsVersion330And450) {
         const std::string source =
             std::string(version) + binding +
             read_source_file("shaders/specaa.glsl") +
-            "in vec3 vNormal;\nin vec4 vTangent;\nin vec2 vUv;\nin vec3 vH;\nout vec4 color;\nvoid main() {\n"
+            "in vec3 vNormal;\nin vec4 vTangent;\nin vec2 vUv;\nin vec3 vH;\nin vec3 vView;\nout vec4 color;\nvoid main() {\n"
             "    SpecaaSurface s;\n    s.roughness = 0.2;\n    s.uv = vUv;\n    s.normal = normalize(vNormal);\n"
+            "    s.view = normalize(vView);\n"
             "    s.tangent = vTangent.xyz;\n    s.bitangent = cross(s.normal, vTangent.xyz) * vTangent.w;\n"
             "    vec3 A = specaa_filtered_alpha2_matrix(s);\n"
             "    color = vec4(specaa_default_D(normalize(vH), A, s));\n}\n";

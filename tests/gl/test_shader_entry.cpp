@@ -28,6 +28,7 @@ constexpr double kSigma2 = kDefaultSigma2;
 constexpr double kKappa = kDefaultKappa;
 constexpr double kRoughness = 0.3;    // material r when no roughness texture is bound
 constexpr double kNormalSlope = 0.02;  // n = normalize(kNormalSlope * x, 0, 1) at window x
+constexpr double kViewSlope = 0.03;    // v = normalize(0, kViewSlope * y, 1) at window y: the view turns along y
 constexpr double kWorldPerPixel = 0.01;
 constexpr double kK1 = 3.0, kK2 = -1.0, kDirAngle = 0.4;  // _SPECAA_CURVATURE
 constexpr double kGate = 0.5;  // SPECAA_KERNEL_GATE
@@ -88,6 +89,7 @@ std::string fragment_source(const Config& c) {
     return defines + read_source_file("shaders/specaa.glsl") + R"(
 uniform float uUvPerPixel;
 uniform float uNormalSlope;
+uniform float uViewSlope;
 uniform float uWorldPerPixel;
 uniform vec4 uCurvature;
 uniform float uRoughness;
@@ -104,6 +106,7 @@ void main() {
     s.tangent = vec3(1.0, 0.0, 0.0);
     s.bitangent = vec3(0.0, 1.0, 0.0);
     s.curvature = uCurvature;
+    s.view = normalize(vec3(0.0, uViewSlope * gl_FragCoord.y, 1.0));
     o0 = vec4(specaa_filtered_alpha2(s), specaa_filtered_roughness(s), 0.0, 0.0);
     vec3 A = specaa_filtered_alpha2_matrix(s);
     o1 = vec4(A, 0.0);
@@ -176,6 +179,7 @@ void run_config(const Config& c) {
     glUseProgram(program);
     const double dir = kDirAngle;
     glUniform1f(glGetUniformLocation(program, "uNormalSlope"), float(kNormalSlope));
+    glUniform1f(glGetUniformLocation(program, "uViewSlope"), float(kViewSlope));
     glUniform1f(glGetUniformLocation(program, "uWorldPerPixel"), float(c.world_per_pixel));
     glUniform4f(glGetUniformLocation(program, "uCurvature"), float(kK1), float(kK2), float(2 * std::cos(dir)), float(2 * std::sin(dir)));
     glUniform1f(glGetUniformLocation(program, "uRoughness"), float(c.roughness));
@@ -221,20 +225,28 @@ void run_config(const Config& c) {
                     k_tex = fade * k_tex;
                 }
                 // Per-pixel kernel: normal differences across the quad (x&~1 -> x|1), or the curvature
-                // kernel of the footprint (w, 0), (0, w) in the (T, B) frame.
+                // kernel of the footprint (w, 0), (0, w) in the (T, B) frame; each less the half vector's
+                // turn with the view across the quad (y&~1 -> y|1), tangential to the fragment's normal,
+                // over 2 n.v (the view does not change along x). The fast tier leaves the turn out.
+                auto normal_x = [](int px) { const double t = double(float(kNormalSlope)) * (px + 0.5); return Vec3<double>{t / std::hypot(t, 1.0), 0.0, 1.0 / std::hypot(t, 1.0)}; };
+                auto view_y = [](int py) { const double t = double(float(kViewSlope)) * (py + 0.5); return Vec3<double>{0.0, t / std::hypot(t, 1.0), 1.0 / std::hypot(t, 1.0)}; };
+                const Vec3<double> n_px = normal_x(x), v_px = view_y(y), dview = view_y(y | 1) - view_y(y & ~1);
+                const double turn_scale = c.quality == 0 ? 0.0 : 0.5 / std::max(dot(n_px, v_px), 1e-3);
+                const Vec3<double> turn = turn_scale * (dview - dot(n_px, dview) * n_px);
                 Sym2<double> k_px{};
                 double want_iso = 0.0;  // specaa_filtered_alpha2
                 if (c.pixel_kernel && c.curvature) {
                     const double cx = std::cos(dir), cy = std::sin(dir);
                     const Sym2<double> S{kK1 * cx * cx + kK2 * cy * cy, (kK1 - kK2) * cx * cy, kK1 * cy * cy + kK2 * cx * cx};
-                    const double w2 = c.world_per_pixel * c.world_per_pixel;
-                    k_px = (2 * kSigma2 * w2) * Sym2<double>{S.xx * S.xx + S.xy * S.xy, S.xy * (S.xx + S.yy), S.yy * S.yy + S.xy * S.xy};
+                    const double w = c.world_per_pixel;
+                    const double du_x = S.xx * w, du_y = S.xy * w, dv_x = S.xy * w - turn.x, dv_y = S.yy * w - turn.y;
+                    k_px = (2 * kSigma2) * Sym2<double>{du_x * du_x + dv_x * dv_x, du_x * du_y + dv_x * dv_y, du_y * du_y + dv_y * dv_y};
                 } else if (c.pixel_kernel) {
-                    auto normal_x = [](int px) { const double t = double(float(kNormalSlope)) * (px + 0.5); return Vec3<double>{t / std::hypot(t, 1.0), 0.0, 1.0 / std::hypot(t, 1.0)}; };
                     const auto dn = normal_x(x | 1) - normal_x(x & ~1);
-                    // Isotropic path: sigma^2 |dn|^2 (TK21 Eq. 14); matrix path: projected onto T = x.
-                    k_px = {2 * kSigma2 * dn.x * dn.x, 0.0, 0.0};
-                    const double t_iso = std::min(kSigma2 * dot(dn, dn), kKappa);
+                    // Isotropic path: sigma^2 (|dn_x|^2 + |dn_y - turn|^2) (TK21 Eq. 14); matrix path: projected
+                    // onto T = x and B = y.
+                    k_px = (2 * kSigma2) * Sym2<double>{dn.x * dn.x + turn.x * turn.x, turn.x * turn.y, turn.y * turn.y};
+                    const double t_iso = std::min(kSigma2 * (dot(dn, dn) + dot(turn, turn)), kKappa);
                     const double t = 0.5 * (k_tex.xx + k_tex.yy) + t_iso;
                     const double want = filter_projected_isotropic(a0, t);
                     want_iso = want;

@@ -169,6 +169,7 @@ struct VsOut {
     s.normal = normalize(v.normal);
     s.tangent = v.tangent.xyz;
     s.bitangent = cross(s.normal, v.tangent.xyz) * v.tangent.w;
+    s.view = normalize(vec3<f32>(v.uv, 1.0));
     let h = normalize(vec3<f32>(0.1, 0.2, 1.0));
     var r = 0.0;
 )";
@@ -327,6 +328,7 @@ const char* kKernelDraw = R"(
     s.roughness = 0.05 + 0.9 * p.y / 16.0;
     s.uv = p.xy * select(0.01, 4.0, p.x > 8.0);
     s.normal = vec3<f32>(0.0, 0.0, 1.0);
+    s.view = vec3<f32>(0.0, 0.0, 1.0);
     s.tangent = vec3<f32>(1.0, 0.0, 0.0);
     s.bitangent = vec3<f32>(0.0, 1.0, 0.0);
     let h = normalize(vec3<f32>(0.06 * f32(u32(p.x) % 8u), 0.03, 1.0));

@@ -129,6 +129,8 @@ float specaa_lod_from_derivatives(vec2 size, vec2 uv) {
 //   SPECAA_BLEND_FROM_LARGEST_AXIS  specaa_default_D's blend weight from the largest eigenvalue of all of
 //                                   K = A - a I, the per-pixel kernel included (the rule before the shape).
 //   SPECAA_BLEND_FROM_BAKED_SPREAD  specaa_default_D's blend weight from the baked spread alone.
+//   SPECAA_NO_VIEW_TURN             the per-pixel kernel without the half vector's turn with the view
+//                                   direction (the normal's spread alone, the kernel before s.view).
 // Textures are sampled with implicit derivatives, so the hardware selects the mip: the baked mips are
 // the footprint filter of the normal map, the per-pixel kernel adds the geometric curvature.
 //
@@ -583,11 +585,18 @@ float specaa_pixel_footprint_from_depth(float viewDepth, float tanHalfFovY, floa
 // Curvature kernel matrix K = 2 sigma^2 (S u u^T S + S v v^T S), TK21 Eq. (3) with the projected-normal
 // derivatives S u, S v of the curved shading-normal field (K16 "virtual quadric") instead of quad
 // differences. footprint = (u.x, u.y, v.x, v.y) from specaa_footprint*.
-SPECAA_FLOAT3 specaa_curvature_kernel(SPECAA_FLOAT4 curvature, SPECAA_FLOAT4 footprint) {
+// turn: the half vector's turn per screen axis in the same frame, (x.t, x.b, y.t, y.b) (specaa_view_turn),
+// taken off the normal's: the spread of h relative to n over the footprint.
+SPECAA_FLOAT3 specaa_curvature_kernel_turned(SPECAA_FLOAT4 curvature, SPECAA_FLOAT4 footprint, SPECAA_FLOAT4 turn) {
     SPECAA_FLOAT3 S = specaa_shape_operator(curvature);
     SPECAA_FLOAT2 du = SPECAA_FLOAT2(S.x * footprint.x + S.z * footprint.y, S.z * footprint.x + S.y * footprint.y);
     SPECAA_FLOAT2 dv = SPECAA_FLOAT2(S.x * footprint.z + S.z * footprint.w, S.z * footprint.z + S.y * footprint.w);
-    return specaa_kernel_matrix(du, dv);
+    return specaa_kernel_matrix(du - turn.xy, dv - turn.zw);
+}
+
+// The normal's spread alone (no turn of the half vector).
+SPECAA_FLOAT3 specaa_curvature_kernel(SPECAA_FLOAT4 curvature, SPECAA_FLOAT4 footprint) {
+    return specaa_curvature_kernel_turned(curvature, footprint, SPECAA_FLOAT4(0.0, 0.0, 0.0, 0.0));
 }
 
 // Isotropic curvature kernel for a square footprint of width w: mean reduction tr(Sigma) =
@@ -875,6 +884,7 @@ struct SpecaaSurface {
     SPECAA_FLOAT3 tangent;       // T = TANGENT.xyz (matrix form, SPECAA_USE_CURVATURE)
     SPECAA_FLOAT3 bitangent;     // B = cross(N, T) * TANGENT.w
     SPECAA_FLOAT4 curvature;     // _SPECAA_CURVATURE (k1, k2, d.x, d.y) (SPECAA_USE_CURVATURE)
+    SPECAA_FLOAT3 view;          // unit vector from the surface to the eye, in the space of normal and tangent
 };
 
 #if defined(SPECAA_ROUGHNESS_TEXTURE) && (defined(SPECAA_KERNEL_TEXTURE) || defined(SPECAA_LEAN_TEXTURE0))
@@ -973,6 +983,35 @@ bool specaa_curvature_footprint(SpecaaSurface s, out SPECAA_FLOAT4 footprint) {
     return max(specaa_max_component(m), max(max(c.x, c.y), max(c.z, c.w))) < SPECAA_NOT_FINITE;
 }
 
+// The half vector's turn across the pixel footprint from the view direction's turn along one screen axis
+// (dView: the quad derivative of s.view along it), tangential to the normal. The highlight lies where the
+// half vector h = (l + v) / |l + v| meets the normal, so the spread the pixel filter sees is that of h
+// relative to n: per screen axis dn - dh, not dn alone (K16, TK21 Eq. (2) filter the half vector's
+// derivatives). At the highlight h = n, so |l + v| = 2 n.v and dh is the tangential part of
+// dv / (2 n.v); the light's direction is taken as fixed (a distant light; a point light's own turn is left
+// out). Without it the kernel is the normal's spread only: a convex surface's highlight comes out
+// narrower in the image than the pixel filter makes it, and a flat one's is not filtered at all
+// (docs/accuracy.md#the-view-directions-turn). n.v is floored at 1e-3 (the kernel is clamped to kappa
+// after); a turn that is not finite adds nothing (edge policy). The fast tier leaves it out (+60 SPIR-V
+// instructions there, over its budget), and so does SPECAA_NO_VIEW_TURN (diagnostic).
+SPECAA_FLOAT3 specaa_view_turn_axis(SpecaaSurface s, SPECAA_FLOAT3 dView) {
+#if defined(SPECAA_NO_VIEW_TURN) || SPECAA_QUALITY == SPECAA_QUALITY_FAST
+    return SPECAA_FLOAT3(0.0, 0.0, 0.0);
+#else
+    SPECAA_FLOAT3 turn = (dView - s.normal * dot(s.normal, dView)) * (0.5 / max(dot(s.normal, s.view), 1.0e-3));
+    return SPECAA_SELECT3(specaa_is_finite3(turn), turn, SPECAA_FLOAT3(0.0, 0.0, 0.0));
+#endif
+}
+
+// Both screen axes' turns in the (T, B) frame, (x.t, x.b, y.t, y.b), for specaa_curvature_kernel_turned.
+SPECAA_FLOAT4 specaa_view_turn(SpecaaSurface s, SPECAA_FLOAT3 tangent, SPECAA_FLOAT3 bitangent) {
+    SPECAA_FLOAT3 t = normalize(tangent);
+    SPECAA_FLOAT3 b = normalize(bitangent);
+    SPECAA_FLOAT3 x = specaa_view_turn_axis(s, SPECAA_DDX(s.view));
+    SPECAA_FLOAT3 y = specaa_view_turn_axis(s, SPECAA_DDY(s.view));
+    return SPECAA_FLOAT4(dot(x, t), dot(x, b), dot(y, t), dot(y, b));
+}
+
 // Per-pixel kernel matrix of the curved geometry in the (T, B) frame: from _SPECAA_CURVATURE and the
 // position footprint, or from the quad derivatives of the vertex normal projected onto T and B
 // (TK21 Sec. 5.1). Each eigenvalue clamped to at most kappa, the eigenvectors kept (TK21 Sec. 4: "clamp the
@@ -987,7 +1026,7 @@ SPECAA_FLOAT3 specaa_pixel_kernel_matrix(SpecaaSurface s) {
 #if defined(SPECAA_USE_CURVATURE) && !defined(SPECAA_PIXEL_KERNEL_MIN)
     SPECAA_FLOAT4 footprint;
     bool usable = specaa_curvature_footprint(s, footprint);
-    SPECAA_FLOAT3 K = specaa_curvature_kernel(s.curvature, footprint);
+    SPECAA_FLOAT3 K = specaa_curvature_kernel_turned(s.curvature, footprint, specaa_view_turn(s, s.tangent, s.bitangent));
 #else
     SPECAA_FLOAT3 dnU = SPECAA_DDX(s.normal);
     SPECAA_FLOAT3 dnV = SPECAA_DDY(s.normal);
@@ -996,12 +1035,15 @@ SPECAA_FLOAT3 specaa_pixel_kernel_matrix(SpecaaSurface s) {
     SPECAA_UINT3 m = max(max(specaa_magnitude_bits3(s.normal), specaa_magnitude_bits3(dnU)),
                          max(specaa_magnitude_bits3(dnV), max(specaa_magnitude_bits3(t), specaa_magnitude_bits3(b))));
     bool usable = specaa_max_component(m) < SPECAA_NOT_FINITE;
-    SPECAA_FLOAT3 K = specaa_kernel_matrix(SPECAA_FLOAT2(dot(dnU, t), dot(dnU, b)), SPECAA_FLOAT2(dot(dnV, t), dot(dnV, b)));
+    SPECAA_FLOAT3 turnU = specaa_view_turn_axis(s, SPECAA_DDX(s.view));
+    SPECAA_FLOAT3 turnV = specaa_view_turn_axis(s, SPECAA_DDY(s.view));
+    SPECAA_FLOAT3 K = specaa_kernel_matrix(SPECAA_FLOAT2(dot(dnU - turnU, t), dot(dnU - turnU, b)),
+                                           SPECAA_FLOAT2(dot(dnV - turnV, t), dot(dnV - turnV, b)));
 #if defined(SPECAA_USE_CURVATURE) && defined(SPECAA_PIXEL_KERNEL_MIN)
     // Diagnostic: the smaller (by trace) of the quad-derivative kernel and the vertex-curvature kernel.
     SPECAA_FLOAT4 footprint;
     bool usableCurvature = specaa_curvature_footprint(s, footprint);
-    SPECAA_FLOAT3 Kc = specaa_curvature_kernel(s.curvature, footprint);
+    SPECAA_FLOAT3 Kc = specaa_curvature_kernel_turned(s.curvature, footprint, specaa_view_turn(s, s.tangent, s.bitangent));
     K = SPECAA_SELECT3(usableCurvature && Kc.x + Kc.y < K.x + K.y, Kc, K);
 #endif
 #endif
@@ -1021,7 +1063,7 @@ float specaa_pixel_kernel(SpecaaSurface s) {
 #elif defined(SPECAA_USE_CURVATURE)
     SPECAA_FLOAT4 footprint;
     bool usable = specaa_curvature_footprint(s, footprint);
-    SPECAA_FLOAT3 K = specaa_curvature_kernel(s.curvature, footprint);
+    SPECAA_FLOAT3 K = specaa_curvature_kernel_turned(s.curvature, footprint, specaa_view_turn(s, s.tangent, s.bitangent));
     return SPECAA_SELECT(usable, specaa_clamp_kernel(0.5 * (K.x + K.y)), 0.0);
 #else
     SPECAA_FLOAT3 dnU = SPECAA_DDX(s.normal);
@@ -1029,7 +1071,8 @@ float specaa_pixel_kernel(SpecaaSurface s) {
     bool usable = specaa_max_component(max(specaa_magnitude_bits3(s.normal),
                                            max(specaa_magnitude_bits3(dnU), specaa_magnitude_bits3(dnV)))) < SPECAA_NOT_FINITE;
     // Finite derivatives give a kernel in [0, +inf] (never NaN): min() is specaa_clamp_kernel there.
-    return SPECAA_SELECT(usable, min(specaa_iso_kernel_mean(dnU, dnV), SPECAA_KAPPA), 0.0);
+    return SPECAA_SELECT(usable, min(specaa_iso_kernel_mean(dnU - specaa_view_turn_axis(s, SPECAA_DDX(s.view)),
+                                                         dnV - specaa_view_turn_axis(s, SPECAA_DDY(s.view))), SPECAA_KAPPA), 0.0);
 #endif
 }
 

@@ -136,6 +136,8 @@ specbakeSurface.tangent = normalize( cross( abs( nonPerturbedNormal.y ) < 0.99 ?
 specbakeSurface.bitangent = cross( nonPerturbedNormal, specbakeSurface.tangent );
 #endif
 specbakeSurface.curvature = vec4( 0.0 );
+// The direction to the eye (view space, as the normal): the half vector turns with it across the pixel.
+specbakeSurface.view = isOrthographic ? vec3( 0.0, 0.0, 1.0 ) : normalize( vViewPosition );
 specbakeA = specaa_filtered_alpha2_matrix( specbakeSurface );
 // Environment, area lights and the multiple-scattering terms read material.roughness: the isotropic form.
 material.roughness = clamp( specaa_filtered_roughness( specbakeSurface ), 0.045, 1.0 );
