@@ -1,7 +1,7 @@
 // The per-face shape-operator fit of Rusinkiewicz 2004 four faces at a time (mesh/lanes.h), and the
-// vectorised passes around it, for the estimators built on it (internal to specbake_mesh;
-// curvature_shape_operator.cpp explains the layout). Include it only from translation units that may take
-// lanes.h (which turns off floating-point contraction for them).
+// vectorised passes around it, shared by the estimators built on it (internal to specbake_mesh):
+// curvature_shape_operator.cpp, which explains the layout, and curvature_patch.cpp. Include it only from
+// translation units that may take lanes.h (which turns off floating-point contraction for them).
 #pragma once
 
 #include <tbb/parallel_for.h>
@@ -36,12 +36,12 @@ struct GroupSum {
 // What the face fits read besides the mesh: the vertices' unit normals (double, each normalised once rather
 // than once per triangle) and the groups' unit normals (detail::group_frame's n: the first vertex's normal
 // divided by its length, +z for a zero normal). A zero vertex normal gives non-finite components, so that its
-// triangles are skipped by the finiteness check of the fit.
+// triangles are skipped by the finiteness check of the fit, or zeros with zero_stays_zero.
 struct FitNormals {
     ScratchArray<double> unit;  // 3 per vertex
     ScratchArray<GroupNormal> group;
 };
-FitNormals fit_normals(const TriMesh& mesh, const WeldedTopology& topology);
+FitNormals fit_normals(const TriMesh& mesh, const WeldedTopology& topology, bool zero_stays_zero);
 
 // Output (k1, k2, d.x, d.y) of every vertex from its group's sums: the operator sums / weight (zero without
 // weight), detail::principal_curvatures of it in the group's frame and detail::vertex_curvature_at, with the
@@ -298,6 +298,11 @@ SPECBAKE_INLINE void add_corner(detail::GroupSum& sum, v4d shape) {
 }
 SPECBAKE_INLINE void add_corner(detail::GroupSum& sum, v4f shape) {
     add_corner(sum, __builtin_convertvector(shape, v4d));
+}
+SPECBAKE_INLINE void add_corner(detail::GroupSum& sum, const detail::GroupSum& shape) {
+    v4d x;
+    std::memcpy(&x, shape.s, sizeof x);
+    add_corner(sum, x);
 }
 
 // The records of the corners of `lanes` faces (shape[i][l]: corner i of lane l, in group group[i][l]), in

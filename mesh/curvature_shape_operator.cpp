@@ -50,7 +50,7 @@ inline void load3(const float* x, double out[3]) {
 inline double dot3(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
 // The passes over the mesh are compiled for AVX2 and for the baseline instruction set (mesh/lanes.h); the
-// face fit is in mesh/curvature_face_fit.h.
+// face fit is shared with the patch estimator (mesh/curvature_face_fit.h).
 using namespace lanes;
 using detail::GroupNormal;
 using detail::GroupSum;
@@ -90,9 +90,11 @@ SPECBAKE_AVX2_CLONES void shape_faces(const FaceInput& in, const uint32_t* first
     }
 }
 
-// Unit normals (double) of vertices [begin, end): each normal times the reciprocal of its length. Four
-// vertices per vector, read and written as three vectors of consecutive components.
-SPECBAKE_AVX2_CLONES void normalise_normals(const float* normals, size_t begin, size_t end, double* out) {
+// Unit normals (double) of vertices [begin, end): each normal times the reciprocal of its length (a zero
+// normal: non-finite components, or zeros with zero_stays_zero). Four vertices per vector, read and written
+// as three vectors of consecutive components.
+SPECBAKE_AVX2_CLONES void normalise_normals(const float* normals, size_t begin, size_t end, double* out,
+                                            bool zero_stays_zero) {
     size_t v = begin;
     for (; v + kLanes <= end; v += kLanes) {
         v4f f[3];
@@ -100,7 +102,9 @@ SPECBAKE_AVX2_CLONES void normalise_normals(const float* normals, size_t begin, 
         const v4d a = __builtin_convertvector(f[0], v4d), b = __builtin_convertvector(f[1], v4d),
                   c = __builtin_convertvector(f[2], v4d);  // x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3
         const v4d x = v4d{a[0], a[3], b[2], c[1]}, y = v4d{a[1], b[0], b[3], c[2]}, z = v4d{a[2], b[1], c[0], c[3]};
-        const v4d inv = 1.0 / sqrt4(x * x + y * y + z * z);
+        const v4d len2 = x * x + y * y + z * z;
+        v4d inv = 1.0 / sqrt4(len2);
+        if (zero_stays_zero) inv = len2 > 0.0 ? inv : splat(0.0);
         const v4d scaled[3] = {a * v4d{inv[0], inv[0], inv[0], inv[1]}, b * v4d{inv[1], inv[1], inv[2], inv[2]},
                                c * v4d{inv[2], inv[3], inv[3], inv[3]}};
         std::memcpy(&out[3 * v], scaled, sizeof scaled);
@@ -108,7 +112,8 @@ SPECBAKE_AVX2_CLONES void normalise_normals(const float* normals, size_t begin, 
     for (; v < end; ++v) {
         double n[3];
         load3(&normals[3 * v], n);
-        const double inv = 1.0 / std::sqrt(dot3(n, n));
+        const double len2 = dot3(n, n);
+        const double inv = zero_stays_zero && !(len2 > 0.0) ? 0.0 : 1.0 / std::sqrt(len2);
         for (int k = 0; k < 3; ++k) out[3 * v + k] = n[k] * inv;
     }
 }
@@ -239,12 +244,12 @@ SPECBAKE_AVX2_CLONES void vertex_outputs(const VertexInput& in, size_t begin, si
 
 namespace detail {
 
-FitNormals fit_normals(const TriMesh& mesh, const WeldedTopology& topology) {
+FitNormals fit_normals(const TriMesh& mesh, const WeldedTopology& topology, bool zero_stays_zero) {
     const size_t verts = mesh.vertex_count();
     const uint32_t groups = topology.group_count;
     FitNormals out{ScratchArray<double>(3 * verts), ScratchArray<GroupNormal>(groups)};
     tbb::parallel_for(tbb::blocked_range<size_t>(0, verts, 8192), [&](const auto& range) {
-        normalise_normals(mesh.normals.data(), range.begin(), range.end(), out.unit.data());
+        normalise_normals(mesh.normals.data(), range.begin(), range.end(), out.unit.data(), zero_stays_zero);
     });
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, groups, 4096), [&](const auto& range) {
         group_normals(mesh.normals.data(), topology.group_vertex.data(), range.begin(), range.end(),
@@ -270,7 +275,7 @@ VertexCurvature vertex_curvature_from_sums(const TriMesh& mesh, const WeldedTopo
 }  // namespace detail
 
 VertexCurvature curvature_shape_operator(const TriMesh& mesh, const WeldedTopology& topology) {
-    const detail::FitNormals normals = detail::fit_normals(mesh, topology);
+    const detail::FitNormals normals = detail::fit_normals(mesh, topology, false);
     detail::ScratchArray<GroupSum> sums(topology.group_count);
     const FaceInput input{mesh.indices.data(),   topology.position_id.data(), topology.group_id.data(),
                           mesh.positions.data(), normals.unit.data(),         normals.group.data()};
