@@ -1,6 +1,6 @@
 // CurvatureEstimator::Patch: the shape operator of the shading-normal field (Rusinkiewicz 2004, as the
-// default estimator computes per face), aggregated at each curvature group over the faces of the smooth
-// patch the group belongs to rather than over all of its one-ring.
+// shape-operator estimator computes per face), aggregated at each curvature group over the faces of the
+// smooth patch the group belongs to rather than over all of its one-ring.
 //
 // Why: the run-time kernel interpolates the per-vertex operator across each face, so a vertex value has to
 // describe the faces that interpolate it. Where a one-ring holds faces of very different gradient (a lip of
@@ -12,146 +12,230 @@
 // faces: faces steeper than the one-ring's majority count as little as their share of the squared gradient
 // the majority would give them (a Cauchy-type robust weight with the median as its scale, no constant of
 // its own), faces at or below the median keep their full weight. Where the one-ring is one smooth patch
-// (every m_f near m_med) this is the default estimator's average; where it is two, the vertex takes the
+// (every m_f near m_med) this is shape-operator's average; where it is two, the vertex takes the
 // majority's. The faces of the minority then interpolate a smaller kernel than their own gradient, which
 // filters less there (never more than the majority patch's gradient warrants).
 //
-// Each face operator is expressed in the group frame after rotating that frame into the face's plane
-// (Rusinkiewicz 2004 Sec. 4), as the default estimator does.
+// Each face operator is expressed in the group frame after rotating the face's frame into the group's
+// tangent plane (Rusinkiewicz 2004 Sec. 4), as shape-operator does.
+//
+// Layout for speed: the per-face least squares is shape-operator's, four faces at a time
+// (curvature_face_fit.h). m_med needs all of a group's faces before any can be weighted, so the faces are
+// fitted twice: a first pass keeps each face's m_f and corner areas, a pass over the groups (their corners
+// listed by detail::group_corners) takes each group's median, four groups at a time through a sorting
+// network on (m_f, area) without branches, and a second pass over the faces fits them again (cheaper than
+// storing every corner's operator), weighs each corner and adds it to its group's sums in corner order as
+// shape-operator does, so the result does not depend on the thread count.
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <vector>
 
 #include "mesh/curvature.h"
+#include "mesh/curvature_face_fit.h"
 #include "mesh/curvature_frames.h"
+#include "mesh/scratch_array.h"
 
 namespace specbake {
 
 namespace {
 
-struct FaceOperator {
-    detail::Vec3d fu, fv;  // the face's frame
-    double a = 0, b = 0, c = 0;
-    double magnitude = 0;  // Frobenius norm sqrt(a^2 + 2 b^2 + c^2)
-    double w[3] = {0, 0, 0};  // mixed-Voronoi area of each corner
-    bool valid = false;
+using namespace lanes;
+
+// A face's operator norm m_f = sqrt(a^2 + 2 b^2 + c^2) (-1 for a face that carries no information) and the
+// mixed-Voronoi areas of its corners.
+struct FaceMagnitude {
+    double m, w[3];
 };
 
-FaceOperator face_operator(const TriMesh& mesh, const WeldedTopology& topology, size_t t) {
-    using detail::Vec3d;
-    FaceOperator out;
-    if (detail::skip_triangle(mesh, topology, t)) return out;
-    const uint32_t* f = &mesh.indices[3 * t];
-    Vec3d p[3], n[3];
-    for (int i = 0; i < 3; ++i) {
-        p[i] = detail::position(mesh, f[i]);
-        n[i] = detail::normal(mesh, f[i]).normalized();
+SPECBAKE_INLINE v4d magnitude4(const FaceFit4& fit) {
+    return sqrt4(fit.sa * fit.sa + 2.0 * fit.sb * fit.sb + fit.sc * fit.sc);
+}
+
+// The faces [begin, end), four at a time (curvature_face_fit.h): m_f and the corner areas of each.
+SPECBAKE_AVX2_CLONES void face_magnitudes(const FaceInput& in, size_t begin, size_t end, FaceMagnitude* out) {
+    for (size_t t = begin; t < end; t += kLanes) {
+        const int lanes = int(std::min<size_t>(kLanes, end - t));
+        FaceFit4 fit;
+        fit_faces4(in, t, lanes, fit);
+        const v4d m = fit.usable ? magnitude4(fit) : splat(-1.0);
+        for (int l = 0; l < lanes; ++l) out[t + size_t(l)] = {m[l], {fit.w[0][l], fit.w[1][l], fit.w[2][l]}};
     }
-    const Vec3d cr = (p[1] - p[0]).cross(p[2] - p[0]);
-    const double twice_area = cr.norm();
-    if (!(twice_area > 0.0)) return out;
-    const Vec3d nf = cr / twice_area;
-    out.fu = (p[1] - p[0]).normalized();
-    out.fv = nf.cross(out.fu);
-    // Least squares of S e_i = dn_i over the three edges (Rusinkiewicz 2004 Sec. 3).
-    Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
-    Eigen::Vector3d r = Eigen::Vector3d::Zero();
-    double l[3];
-    for (int i = 0; i < 3; ++i) {
-        const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
-        const Vec3d e = p[i2] - p[i1], dn = n[i2] - n[i1];
-        l[i] = e.squaredNorm();
-        const double eu = e.dot(out.fu), ev = e.dot(out.fv), dnu = dn.dot(out.fu), dnv = dn.dot(out.fv);
-        const Eigen::Vector3d row0(eu, ev, 0.0), row1(0.0, eu, ev);
-        M += row0 * row0.transpose() + row1 * row1.transpose();
-        r += row0 * dnu + row1 * dnv;
+}
+
+// A group's faces (m_f, corner area).
+struct Entry {
+    double m, w;
+};
+
+// The area-weighted median m_med of a group's entries: the first m, in increasing order of (m, w) (as
+// std::sort orders the pairs), at which the areas accumulated in that order reach half the total (the
+// areas summed in corner order).
+double weighted_median(Entry* x, size_t n, double total) {
+    std::sort(x, x + n, [](const Entry& p, const Entry& q) { return p.m < q.m || (p.m == q.m && p.w < q.w); });
+    double acc = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+        acc += x[i].w;
+        if (acc >= 0.5 * total) return x[i].m;
     }
-    const Eigen::Vector3d s = M.ldlt().solve(r);
-    if (!s.allFinite()) return out;
-    out.a = s[0];
-    out.b = s[1];
-    out.c = s[2];
-    out.magnitude = std::sqrt(s[0] * s[0] + 2.0 * s[1] * s[1] + s[2] * s[2]);
-    detail::mixed_voronoi_areas(l[0], l[1], l[2], 0.5 * twice_area, out.w);
-    out.valid = true;
-    return out;
+    return x[n - 1].m;
+}
+
+// weighted_median of four groups at once, one per lane, each of up to kSorted entries (m[k], w[k]: entry k
+// of each lane; lanes with fewer entries padded with m = +inf, w = 0, which sort last and add nothing): a
+// sorting network on (m, w), then the accumulation in that order, without branches.
+constexpr int kSorted = 8;
+SPECBAKE_INLINE v4d weighted_median4(v4d (&m)[kSorted], v4d (&w)[kSorted], v4d total) {
+    static constexpr int kNetwork[19][2] = {{0, 2}, {1, 3}, {4, 6}, {5, 7}, {0, 4}, {1, 5}, {2, 6},
+                                            {3, 7}, {0, 1}, {2, 3}, {4, 5}, {6, 7}, {2, 4}, {3, 5},
+                                            {1, 4}, {3, 6}, {1, 2}, {3, 4}, {5, 6}};
+#pragma GCC unroll 19
+    for (int c = 0; c < 19; ++c) {
+        const int i = kNetwork[c][0], j = kNetwork[c][1];
+        const v4l swap = (m[j] < m[i]) | ((m[j] == m[i]) & (w[j] < w[i]));
+        const v4d mi = m[i], wi = w[i];
+        m[i] = swap ? m[j] : mi;
+        w[i] = swap ? w[j] : wi;
+        m[j] = swap ? mi : m[j];
+        w[j] = swap ? wi : w[j];
+    }
+    const v4d half = 0.5 * total;
+    v4d acc = splat(0.0), median = splat(0.0), largest = splat(0.0);
+    v4l reached = acc != acc;  // all false
+#pragma GCC unroll 8
+    for (int k = 0; k < kSorted; ++k) {
+        acc += w[k];
+        const v4l here = ~reached & (acc >= half);
+        median = here ? m[k] : median;
+        reached |= here;
+        largest = m[k] < HUGE_VAL ? m[k] : largest;
+    }
+    return reached ? median : largest;  // as weighted_median, should the accumulated areas stop short of half
+}
+
+// m_med of groups [begin, end) from their faces' m_f and corner areas (0 for a group without area), four
+// groups at a time; a group of more than kSorted usable faces on its own.
+SPECBAKE_AVX2_CLONES void group_medians(const detail::GroupCorners& lists, const FaceMagnitude* faces,
+                                        uint32_t begin, uint32_t end, double* median) {
+    std::vector<Entry> many;
+    for (uint32_t g0 = begin; g0 < end; g0 += kLanes) {
+        const int lanes = int(std::min<uint32_t>(kLanes, end - g0));
+        double m[kSorted][kLanes], w[kSorted][kLanes], total[kLanes];
+        bool large[kLanes] = {false, false, false, false};
+        for (int l = 0; l < kLanes; ++l) {
+            for (int k = 0; k < kSorted; ++k) {
+                m[k][l] = HUGE_VAL;
+                w[k][l] = 0.0;
+            }
+            total[l] = 0.0;
+            if (l >= lanes) continue;
+            const uint32_t g = g0 + uint32_t(l), first = lists.start[g], last = lists.start[g + 1];
+            int n = 0;
+            for (uint32_t k = first; k < last; ++k) {
+                const uint32_t corner = lists.order[k];
+                const FaceMagnitude& face = faces[corner / 3];
+                if (face.m < 0.0) continue;
+                if (n < kSorted) {
+                    m[n][l] = face.m;
+                    w[n][l] = face.w[corner % 3];
+                }
+                ++n;
+                total[l] += face.w[corner % 3];
+            }
+            large[l] = n > kSorted;
+        }
+        v4d mv[kSorted], wv[kSorted];
+        for (int k = 0; k < kSorted; ++k) {
+            std::memcpy(&mv[k], m[k], sizeof mv[k]);
+            std::memcpy(&wv[k], w[k], sizeof wv[k]);
+        }
+        v4d t;
+        std::memcpy(&t, total, sizeof t);
+        const v4d med = weighted_median4(mv, wv, t);
+        for (int l = 0; l < lanes; ++l) {
+            const uint32_t g = g0 + uint32_t(l);
+            if (!(total[l] > 0.0)) {
+                median[g] = 0.0;
+            } else if (!large[l]) {
+                median[g] = med[l];
+            } else {
+                many.clear();
+                for (uint32_t k = lists.start[g]; k < lists.start[g + 1]; ++k) {
+                    const uint32_t corner = lists.order[k];
+                    const FaceMagnitude& face = faces[corner / 3];
+                    if (face.m >= 0.0) many.push_back({face.m, face.w[corner % 3]});
+                }
+                median[g] = weighted_median(many.data(), many.size(), total[l]);
+            }
+        }
+    }
+}
+
+// The face pass over faces [begin, end), four at a time: each corner's operator in its group's frame
+// (Rusinkiewicz 2004 Sec. 4), weighted by its area times min(1, m_med / m_f)^2, and that weight, added in
+// corner order to its group's sums (add_corners).
+SPECBAKE_AVX2_CLONES void weigh_faces(const FaceInput& in, const double* median, const uint32_t* first_chunk,
+                                      uint32_t chunk, size_t begin, size_t end, detail::GroupSum* sums,
+                                      std::vector<DeferredCorner<detail::GroupSum>>& deferred) {
+    for (size_t t = begin; t < end; t += kLanes) {
+        const int lanes = int(std::min<size_t>(kLanes, end - t));
+        FaceFit4 fit;
+        fit_faces4(in, t, lanes, fit);
+        corner_groups4(in, fit);
+        const v4d m = magnitude4(fit), zero = splat(0.0);
+        detail::GroupSum shape[3][kLanes];  // (a, b, c, weight) of corner i of lane l
+#pragma GCC unroll 3
+        for (int i = 0; i < 3; ++i) {
+            const v4d med = {median[fit.group[i][0]], median[fit.group[i][1]], median[fit.group[i][2]],
+                             median[fit.group[i][3]]};
+            const v4d q = med / m;
+            const v4l steeper = (m > med) & (m > 0.0);
+            const v4d w = steeper ? fit.w[i] * (q * q) : fit.w[i];
+            v4d a, b, c;
+            operator_in_group4(fit, i, a, b, c);
+            const v4d wa = fit.usable ? w * a : zero, wb = fit.usable ? w * b : zero,
+                      wc = fit.usable ? w * c : zero, wu = fit.usable ? w : zero;
+#pragma GCC unroll 4
+            for (int l = 0; l < kLanes; ++l) shape[i][l] = {{wa[l], wb[l], wc[l], wu[l]}};
+        }
+        add_corners(fit.group, shape, lanes, first_chunk, chunk, sums, deferred);
+    }
 }
 
 }  // namespace
 
 VertexCurvature curvature_patch(const TriMesh& mesh, const WeldedTopology& topology) {
-    using detail::Shape2;
-    using detail::Vec3d;
-    const detail::GroupFrames frames = detail::make_group_frames(mesh, topology);
-    const detail::GroupCorners lists = detail::group_corners(mesh, topology);
-    const size_t faces = mesh.indices.size() / 3;
-    std::vector<FaceOperator> ops(faces);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, faces, 4096), [&](const auto& range) {
-        for (size_t t = range.begin(); t != range.end(); ++t) ops[t] = face_operator(mesh, topology, t);
-    });
-    std::vector<Shape2> shape(topology.group_count);
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, topology.group_count, 4096), [&](const auto& range) {
-        std::vector<std::pair<double, double>> by_magnitude;  // (m_f, weight), reused
-        for (uint32_t g = range.begin(); g != range.end(); ++g) {
-            by_magnitude.clear();
-            double total = 0.0;
-            for (uint32_t k = lists.start[g]; k < lists.start[g + 1]; ++k) {
-                const uint32_t corner = lists.order[k];
-                const FaceOperator& op = ops[corner / 3];
-                if (!op.valid) continue;
-                by_magnitude.push_back({op.magnitude, op.w[corner % 3]});
-                total += op.w[corner % 3];
-            }
-            if (!(total > 0.0)) continue;
-            std::sort(by_magnitude.begin(), by_magnitude.end());
-            double median = by_magnitude.back().first, acc = 0.0;
-            for (const auto& [m, w] : by_magnitude) {
-                acc += w;
-                if (acc >= 0.5 * total) {
-                    median = m;
-                    break;
-                }
-            }
-            const Vec3d& u = frames.u[g];
-            const Vec3d& v = frames.v[g];
-            double sa = 0, sb = 0, sc = 0, sw = 0;
-            for (uint32_t k = lists.start[g]; k < lists.start[g + 1]; ++k) {
-                const uint32_t corner = lists.order[k];
-                const FaceOperator& op = ops[corner / 3];
-                if (!op.valid) continue;
-                double w = op.w[corner % 3];
-                if (op.magnitude > median && op.magnitude > 0.0) {
-                    const double q = median / op.magnitude;
-                    w *= q * q;
-                }
-                // The group's (u, v) rotated about nf x ng into the face's plane (Rusinkiewicz 2004 Sec. 4),
-                // then the face operator in that basis: exact for spherical normals whatever the angle
-                // between face and group normal.
-                const Vec3d nf = op.fu.cross(op.fv);
-                const Vec3d ng = u.cross(v);
-                const double ndot = ng.dot(nf);
-                Vec3d ru = u, rv = v;
-                if (ndot <= -1.0) {
-                    ru = -u;
-                    rv = -v;
-                } else {
-                    const Vec3d perp = nf - ndot * ng;
-                    const Vec3d dperp = (ng + nf) / (1.0 + ndot);
-                    ru -= dperp * ru.dot(perp);
-                    rv -= dperp * rv.dot(perp);
-                }
-                const double u1 = ru.dot(op.fu), v1 = ru.dot(op.fv), u2 = rv.dot(op.fu), v2 = rv.dot(op.fv);
-                sa += w * (op.a * u1 * u1 + op.b * 2.0 * u1 * v1 + op.c * v1 * v1);
-                sb += w * (op.a * u1 * u2 + op.b * (u1 * v2 + u2 * v1) + op.c * v1 * v2);
-                sc += w * (op.a * u2 * u2 + op.b * 2.0 * u2 * v2 + op.c * v2 * v2);
-                sw += w;
-            }
-            if (sw > 0.0) shape[g] = Shape2{sa / sw, sb / sw, sc / sw};
-        }
-    });
-    return detail::vertex_curvature_from_groups(mesh, topology, frames, shape);
+    // A zero normal stays zero here: its faces are fitted with it.
+    const detail::FitNormals normals = detail::fit_normals(mesh, topology, true);
+    const FaceInput input{mesh.indices.data(),   topology.position_id.data(), topology.group_id.data(),
+                          mesh.positions.data(), normals.unit.data(),         normals.group.data()};
+    const size_t faces = mesh.triangle_count();
+    const uint32_t groups = topology.group_count;
+
+    // m_med of each group, from m_f and the corner areas of its faces.
+    detail::ScratchArray<double> median(groups);
+    {
+        const detail::GroupCorners lists = detail::group_corners(mesh, topology);
+        detail::ScratchArray<FaceMagnitude> magnitude(faces);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, faces, 4096), [&](const auto& range) {
+            face_magnitudes(input, range.begin(), range.end(), magnitude.data());
+        });
+        tbb::parallel_for(tbb::blocked_range<uint32_t>(0, groups, 4096), [&](const auto& range) {
+            group_medians(lists, magnitude.data(), range.begin(), range.end(), median.data());
+        });
+    }
+
+    // The faces fitted again (cheaper than keeping each corner's operator), weighted and summed per group.
+    detail::ScratchArray<detail::GroupSum> sums(groups);
+    sum_corners_in_order<detail::GroupSum>(
+        mesh, topology, sums.data(),
+        [&](const uint32_t* first_chunk, uint32_t chunk, size_t begin, size_t end,
+            std::vector<DeferredCorner<detail::GroupSum>>& deferred) {
+            weigh_faces(input, median.data(), first_chunk, chunk, begin, end, sums.data(), deferred);
+        });
+    return detail::vertex_curvature_from_sums(mesh, topology, sums.data(), normals.group.data());
 }
 
 }  // namespace specbake
