@@ -795,6 +795,14 @@ fn specaa_view_turn(s: SpecaaSurface, tangent: vec3<f32>, bitangent: vec3<f32>) 
     let y: vec3<f32> = specaa_view_turn_axis(s, dpdy(s.view));
     return vec4<f32>(dot(x, t), dot(x, b), dot(y, t), dot(y, b));
 }
+// The per-pixel kernel from _SPECAA_CURVATURE over the position's footprint, less the half vector's turn,
+// unclamped; returns whether the inputs are usable (specaa_curvature_footprint).
+fn specaa_curvature_pixel_kernel(s: SpecaaSurface, K: ptr<function, vec3<f32>>) -> bool {
+    var footprint: vec4<f32>;
+    let usable: bool = specaa_curvature_footprint(s, &footprint);
+    (*K) = specaa_curvature_kernel_turned(s.curvature, footprint, specaa_view_turn(s, s.tangent, s.bitangent));
+    return usable;
+}
 // Per-pixel kernel matrix of the curved geometry in the (T, B) frame: from _SPECAA_CURVATURE and the
 // position footprint, or from the quad derivatives of the vertex normal projected onto T and B
 // (TK21 Sec. 5.1). Each eigenvalue clamped to at most kappa, the eigenvectors kept (TK21 Sec. 4: "clamp the
@@ -810,6 +818,7 @@ fn specaa_pixel_kernel_matrix(s: SpecaaSurface) -> vec3<f32> {
     let m: vec3<u32> = max(max(specaa_magnitude_bits3(s.normal), specaa_magnitude_bits3(dnU)),
                          max(specaa_magnitude_bits3(dnV), max(specaa_magnitude_bits3(t), specaa_magnitude_bits3(b))));
     let usable: bool = specaa_max_component(m) < 0x7f800000u;
+    // The turn taken off before projecting: four dot products fewer than specaa_view_turn's (x.t, x.b, y.t, y.b).
     let turnU: vec3<f32> = specaa_view_turn_axis(s, dpdx(s.view));
     let turnV: vec3<f32> = specaa_view_turn_axis(s, dpdy(s.view));
     let K: vec3<f32> = specaa_kernel_matrix(vec2<f32>(dot(dnU - turnU, t), dot(dnU - turnU, b)),

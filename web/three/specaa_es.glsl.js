@@ -1012,6 +1012,15 @@ SPECAA_FLOAT4 specaa_view_turn(SpecaaSurface s, SPECAA_FLOAT3 tangent, SPECAA_FL
     return SPECAA_FLOAT4(dot(x, t), dot(x, b), dot(y, t), dot(y, b));
 }
 
+// The per-pixel kernel from _SPECAA_CURVATURE over the position's footprint, less the half vector's turn,
+// unclamped; returns whether the inputs are usable (specaa_curvature_footprint).
+bool specaa_curvature_pixel_kernel(SpecaaSurface s, out SPECAA_FLOAT3 K) {
+    SPECAA_FLOAT4 footprint;
+    bool usable = specaa_curvature_footprint(s, footprint);
+    K = specaa_curvature_kernel_turned(s.curvature, footprint, specaa_view_turn(s, s.tangent, s.bitangent));
+    return usable;
+}
+
 // Per-pixel kernel matrix of the curved geometry in the (T, B) frame: from _SPECAA_CURVATURE and the
 // position footprint, or from the quad derivatives of the vertex normal projected onto T and B
 // (TK21 Sec. 5.1). Each eigenvalue clamped to at most kappa, the eigenvectors kept (TK21 Sec. 4: "clamp the
@@ -1024,9 +1033,8 @@ SPECAA_FLOAT3 specaa_pixel_kernel_matrix(SpecaaSurface s) {
     return SPECAA_FLOAT3(0.0, 0.0, 0.0);
 #else
 #if defined(SPECAA_USE_CURVATURE) && !defined(SPECAA_PIXEL_KERNEL_MIN)
-    SPECAA_FLOAT4 footprint;
-    bool usable = specaa_curvature_footprint(s, footprint);
-    SPECAA_FLOAT3 K = specaa_curvature_kernel_turned(s.curvature, footprint, specaa_view_turn(s, s.tangent, s.bitangent));
+    SPECAA_FLOAT3 K;
+    bool usable = specaa_curvature_pixel_kernel(s, K);
 #else
     SPECAA_FLOAT3 dnU = SPECAA_DDX(s.normal);
     SPECAA_FLOAT3 dnV = SPECAA_DDY(s.normal);
@@ -1035,15 +1043,15 @@ SPECAA_FLOAT3 specaa_pixel_kernel_matrix(SpecaaSurface s) {
     SPECAA_UINT3 m = max(max(specaa_magnitude_bits3(s.normal), specaa_magnitude_bits3(dnU)),
                          max(specaa_magnitude_bits3(dnV), max(specaa_magnitude_bits3(t), specaa_magnitude_bits3(b))));
     bool usable = specaa_max_component(m) < SPECAA_NOT_FINITE;
+    // The turn taken off before projecting: four dot products fewer than specaa_view_turn's (x.t, x.b, y.t, y.b).
     SPECAA_FLOAT3 turnU = specaa_view_turn_axis(s, SPECAA_DDX(s.view));
     SPECAA_FLOAT3 turnV = specaa_view_turn_axis(s, SPECAA_DDY(s.view));
     SPECAA_FLOAT3 K = specaa_kernel_matrix(SPECAA_FLOAT2(dot(dnU - turnU, t), dot(dnU - turnU, b)),
                                            SPECAA_FLOAT2(dot(dnV - turnV, t), dot(dnV - turnV, b)));
 #if defined(SPECAA_USE_CURVATURE) && defined(SPECAA_PIXEL_KERNEL_MIN)
     // Diagnostic: the smaller (by trace) of the quad-derivative kernel and the vertex-curvature kernel.
-    SPECAA_FLOAT4 footprint;
-    bool usableCurvature = specaa_curvature_footprint(s, footprint);
-    SPECAA_FLOAT3 Kc = specaa_curvature_kernel_turned(s.curvature, footprint, specaa_view_turn(s, s.tangent, s.bitangent));
+    SPECAA_FLOAT3 Kc;
+    bool usableCurvature = specaa_curvature_pixel_kernel(s, Kc);
     K = SPECAA_SELECT3(usableCurvature && Kc.x + Kc.y < K.x + K.y, Kc, K);
 #endif
 #endif
@@ -1061,9 +1069,8 @@ float specaa_pixel_kernel(SpecaaSurface s) {
 #if defined(SPECAA_NO_PIXEL_KERNEL)
     return 0.0;
 #elif defined(SPECAA_USE_CURVATURE)
-    SPECAA_FLOAT4 footprint;
-    bool usable = specaa_curvature_footprint(s, footprint);
-    SPECAA_FLOAT3 K = specaa_curvature_kernel_turned(s.curvature, footprint, specaa_view_turn(s, s.tangent, s.bitangent));
+    SPECAA_FLOAT3 K;
+    bool usable = specaa_curvature_pixel_kernel(s, K);
     return SPECAA_SELECT(usable, specaa_clamp_kernel(0.5 * (K.x + K.y)), 0.0);
 #else
     SPECAA_FLOAT3 dnU = SPECAA_DDX(s.normal);
