@@ -42,8 +42,8 @@ else
 fi
 
 # The run-time peers (the engines' derivative filters), the baked roughness alone, and the three tiers as
-# the bench scores them: fast (SPECAA_QUALITY=0) on the baked roughness, the binding it is meant for,
-# balanced (SPECAA_QUALITY=1) on the Sigma kernel mips, and the reference, the default as shipped (Sigma
+# the bench scores them: fast (SPECAA_QUALITY=0) and balanced (SPECAA_QUALITY=1) on the baked roughness,
+# the binding they are meant for, and the reference, the default as shipped (Sigma
 # kernel mips and the baked curvature), also without the curvature attribute (default-derivatives).
 only=filament,godot,unity-hdrp,threejs,babylon,baked-texture,fast,balanced,default-derivatives,default
 variants=()
@@ -76,7 +76,7 @@ order = ['none', 'baked-texture', 'filament', 'godot', 'unity-hdrp', 'threejs', 
          'fast', 'balanced', 'default-derivatives', 'default']
 label = {'default': 'default (reference tier, baked curvature)',
          'default-derivatives': 'reference tier without the curvature attribute',
-         'balanced': 'balanced tier (SPECAA_QUALITY=1)', 'fast': 'fast tier (SPECAA_QUALITY=0), baked roughness',
+         'balanced': 'balanced tier (SPECAA_QUALITY=1), baked roughness', 'fast': 'fast tier (SPECAA_QUALITY=0), baked roughness',
          'baked-texture': 'baked roughness alone'}
 rows = {}
 for n in lights:

@@ -72,9 +72,10 @@ float specaa_lod_from_derivatives(vec2 size, vec2 uv) {
 //                                                with the material's tails (specaa_filtered_D_isotropic):
 //                                                the cheapest; bind the baked roughness (+29-44 SPIR-V
 //                                                instructions over GGX(a); with the Sigma kernel +80-83).
-//                   SPECAA_QUALITY_BALANCED (1)  the same isotropic A with GGX of the material convolved
-//                                                with the footprint in closed form
-//                                                (specaa_convolved_D_closed_form, no loop).
+//                   SPECAA_QUALITY_BALANCED (1)  the same isotropic A, and GGX of the material convolved
+//                                                with the footprint a' - a in closed form
+//                                                (specaa_convolved_D_isotropic, no loop); bind the baked
+//                                                roughness (+121-146 over GGX(a)).
 //                   SPECAA_QUALITY_REFERENCE (2) the default (the anisotropic matrix form and the convolution
 //                                                by quadrature, specaa_convolved_D: a loop of 12-32 lobes).
 //                   Default SPECAA_QUALITY_REFERENCE. Costs and accuracy per tier:
@@ -120,6 +121,8 @@ float specaa_lod_from_derivatives(vec2 size, vec2 uv) {
 //   SPECAA_KERNEL_LOD_BIAS b        the Sigma kernel texel sampled with this LOD bias (the mip the
 //                                   hardware picks against a finer or coarser footprint).
 //   SPECAA_GATE_PIXEL_KERNEL        the per-pixel kernel faded out like the baked one (SPECAA_KERNEL_GATE).
+//   SPECAA_PIXEL_KERNEL_MIN, _MAX, _MEAN  with SPECAA_USE_CURVATURE: per pixel the smaller or the larger (by
+//                                   trace) of the quad-derivative kernel and the curvature kernel, or their mean.
 //   SPECAA_KERNEL_AREA_LOD          the Sigma kernel texel sampled at the mip of the footprint's area, not of
 //                                   its major axis (the hardware's isotropic choice).
 //   SPECAA_CLOSED_FORM_D            the reference tier's convolution in closed form
@@ -130,6 +133,7 @@ float specaa_lod_from_derivatives(vec2 size, vec2 uv) {
 //   SPECAA_BLEND_FROM_BAKED_SPREAD  specaa_default_D's blend weight from the baked spread alone.
 //   SPECAA_NO_VIEW_TURN             the per-pixel kernel without the half vector's turn with the view
 //                                   direction (the normal's spread alone, the kernel before s.view).
+//   SPECAA_TIER_VIEW_TURN           the fast and balanced tiers with the half vector's turn (which they leave out).
 // Textures are sampled with implicit derivatives, so the hardware selects the mip: the baked mips are
 // the footprint filter of the normal map, the per-pixel kernel adds the geometric curvature.
 //
@@ -769,7 +773,7 @@ SPECAA_FLOAT4 specaa_closed_form_nodes(float b) {
                                  : SPECAA_FLOAT3(0.425394192, -0.115584935, 0.133253855);
     SPECAA_FLOAT3 p = c0 + z * (c1 + z * (c2 + z * c3));
     float rest = exp(-1.0 / b);
-    float w1 = z < -0.25 ? p.y * b / (1.0 + b) : rest / (1.0 + exp(-p.y));
+    float w1 = SPECAA_SELECT(z < -0.25, p.y * b / (1.0 + b), rest / (1.0 + exp(-p.y)));  // selects: no branch
     return SPECAA_FLOAT4(w1, rest - w1, exp(-p.x), exp(-p.z));
 }
 
@@ -778,8 +782,8 @@ float specaa_closed_form_tail(float r2, float z2, float a, float k) {
     float L = (r2 / z2 + a) / k;
     float Lc = min(L, 80.0);  // e^-L (1 + L) below float's range beyond (and no inf * 0 at h_z = 0)
     float s2 = r2 + a * z2;
-    return L > 0.05 ? a * (1.0 - exp(-Lc) * (1.0 + Lc)) / (SPECAA_PI * s2 * s2)
-                    : (0.5 - L / 3.0 + L * L / 8.0) * a / (SPECAA_PI * k * k * z2 * z2);
+    return SPECAA_SELECT(L > 0.05, a * (1.0 - exp(-Lc) * (1.0 + Lc)) / (SPECAA_PI * s2 * s2),
+                         (0.5 - L / 3.0 + L * L / 8.0) * a / (SPECAA_PI * k * k * z2 * z2));
 }
 
 // GGX(a) convolved with a small footprint, to second order in K (the convolution's Taylor expansion, written
@@ -827,7 +831,6 @@ float specaa_convolved_D_closed_form(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alp
 // The closed form for an isotropic footprint K = k I (the balanced tier's, whose A is isotropic): no matrix
 // algebra; k = 0 is GGX(a).
 float specaa_convolved_D_isotropic(SPECAA_FLOAT3 h, float alpha2, float kernel) {
-    if (h.z <= 0.0) return 0.0;
     float a = max(alpha2, 1.0e-12);
     float k = max(kernel, 1.0e-6 * a);
     SPECAA_FLOAT4 n = specaa_closed_form_nodes(k / a);
@@ -836,13 +839,14 @@ float specaa_convolved_D_isotropic(SPECAA_FLOAT3 h, float alpha2, float kernel) 
     SPECAA_FLOAT2 v = k + a * n.zw;  // the nodes' widths
     SPECAA_FLOAT2 g = exp(-r2 / (z2 * v));
     float unit = SPECAA_PI * z2 * z2;
-    float nodeX = g.x > 0.0 ? n.x * g.x / (unit * v.x) : 0.0;
-    float nodeY = g.y > 0.0 ? n.y * g.y / (unit * v.y) : 0.0;
+    // Selects rather than branches (both sides are evaluated; the discarded one may be inf or NaN at h_z = 0).
+    float nodeX = SPECAA_SELECT(g.x > 0.0, n.x * g.x / (unit * v.x), 0.0);
+    float nodeY = SPECAA_SELECT(g.y > 0.0, n.y * g.y / (unit * v.y), 0.0);
     float nodes = nodeX + nodeY;
     float fitted = specaa_closed_form_tail(r2, z2, a, k) + nodes;
     float small = specaa_small_footprint_D(r2, z2, a, 2.0 * k, k * r2);
     float share = specaa_closed_form_share(k / a);  // written out: the expansion is huge and wrong at large k
-    return max(0.0, share * fitted + (1.0 - share) * small);
+    return SPECAA_SELECT(h.z > 0.0, max(0.0, share * fitted + (1.0 - share) * small), 0.0);
 }
 
 // GGX Smith Lambda, TK21 App. A.3: -1/2 + sqrt(s + o.z^2) / (2 |o.z|), s = [o.x, o.y] A [o.x, o.y]^T,
@@ -991,10 +995,13 @@ bool specaa_curvature_footprint(SpecaaSurface s, out SPECAA_FLOAT4 footprint) {
 // out). Without it the kernel is the normal's spread only: a convex surface's highlight comes out
 // narrower in the image than the pixel filter makes it, and a flat one's is not filtered at all
 // (docs/accuracy.md#the-view-directions-turn). n.v is floored at 1e-3 (the kernel is clamped to kappa
-// after); a turn that is not finite adds nothing (edge policy). The fast tier leaves it out (+60 SPIR-V
-// instructions there, over its budget), and so does SPECAA_NO_VIEW_TURN (diagnostic).
+// after); a turn that is not finite adds nothing (edge policy). The fast and balanced tiers leave it out:
+// their isotropic kernel spreads the turn, which lies along the view's tangential direction, over both axes,
+// and their tone-mapped measures got worse with it (SPECAA_TIER_VIEW_TURN, a diagnostic, puts it back:
+// docs/accuracy.md#the-fast-tier); it would also cost +60 SPIR-V instructions in the fast tier, over its budget.
+// SPECAA_NO_VIEW_TURN (diagnostic) leaves it out of the reference tier too.
 SPECAA_FLOAT3 specaa_view_turn_axis(SpecaaSurface s, SPECAA_FLOAT3 dView) {
-#if defined(SPECAA_NO_VIEW_TURN) || SPECAA_QUALITY == SPECAA_QUALITY_FAST
+#if defined(SPECAA_NO_VIEW_TURN) || (SPECAA_QUALITY != SPECAA_QUALITY_REFERENCE && !defined(SPECAA_TIER_VIEW_TURN))
     return SPECAA_FLOAT3(0.0, 0.0, 0.0);
 #else
     SPECAA_FLOAT3 turn = (dView - s.normal * dot(s.normal, dView)) * (0.5 / max(dot(s.normal, s.view), 1.0e-3));
@@ -1031,7 +1038,7 @@ SPECAA_FLOAT3 specaa_pixel_kernel_matrix(SpecaaSurface s) {
 #if defined(SPECAA_NO_PIXEL_KERNEL)
     return SPECAA_FLOAT3(0.0, 0.0, 0.0);
 #else
-#if defined(SPECAA_USE_CURVATURE) && !defined(SPECAA_PIXEL_KERNEL_MIN)
+#if defined(SPECAA_USE_CURVATURE) && !defined(SPECAA_PIXEL_KERNEL_MIN) && !defined(SPECAA_PIXEL_KERNEL_MAX) && !defined(SPECAA_PIXEL_KERNEL_MEAN)
     SPECAA_FLOAT3 K;
     bool usable = specaa_curvature_pixel_kernel(s, K);
 #else
@@ -1052,6 +1059,16 @@ SPECAA_FLOAT3 specaa_pixel_kernel_matrix(SpecaaSurface s) {
     SPECAA_FLOAT3 Kc;
     bool usableCurvature = specaa_curvature_pixel_kernel(s, Kc);
     K = SPECAA_SELECT3(usableCurvature && Kc.x + Kc.y < K.x + K.y, Kc, K);
+#elif defined(SPECAA_USE_CURVATURE) && defined(SPECAA_PIXEL_KERNEL_MAX)
+    // Diagnostic: the larger (by trace) of the two; SPECAA_PIXEL_KERNEL_MEAN: their mean
+    // (docs/accuracy.md#the-faces-own-turn-and-the-vertexs-average).
+    SPECAA_FLOAT3 Kc;
+    bool usableCurvature = specaa_curvature_pixel_kernel(s, Kc);
+    K = SPECAA_SELECT3(usableCurvature && Kc.x + Kc.y > K.x + K.y, Kc, K);
+#elif defined(SPECAA_USE_CURVATURE) && defined(SPECAA_PIXEL_KERNEL_MEAN)
+    SPECAA_FLOAT3 Kc;
+    bool usableCurvature = specaa_curvature_pixel_kernel(s, Kc);
+    K = SPECAA_SELECT3(usableCurvature, 0.5 * (Kc + K), K);
 #endif
 #endif
     float lmax = specaa_sym_max_eigenvalue(K);
@@ -1102,8 +1119,9 @@ SPECAA_FLOAT3 specaa_widened_matrix(float a, SPECAA_FLOAT3 K) {
 // specaa_ggx_D with tau = a^2 of the unfiltered material). Same composition as specaa_filtered_alpha2, with the per-pixel
 // kernel kept anisotropic.
 SPECAA_FLOAT3 specaa_filtered_alpha2_matrix(SpecaaSurface s) {
-#if SPECAA_QUALITY == SPECAA_QUALITY_FAST
-    // The fast tier: the isotropic form (specaa_filtered_alpha2's value, to rounding) written for its bindings.
+#if SPECAA_QUALITY != SPECAA_QUALITY_REFERENCE
+    // The fast and balanced tiers: the isotropic form (specaa_filtered_alpha2's value, to rounding) written for
+    // their bindings.
     float t = specaa_pixel_kernel(s);
 #if defined(SPECAA_KERNEL_TEXTURE) || defined(SPECAA_LEAN_TEXTURE0)
     float a = specaa_base_alpha2(s);
@@ -1113,10 +1131,6 @@ SPECAA_FLOAT3 specaa_filtered_alpha2_matrix(SpecaaSurface s) {
     // a in [0, 1] and t in [0, kappa]: finite.
     float f = specaa_filter_projected_isotropic(specaa_base_alpha2(s), t);
 #endif
-    return SPECAA_FLOAT3(f, f, 0.0);
-#elif SPECAA_QUALITY != SPECAA_QUALITY_REFERENCE
-    // The balanced tier: the isotropic form (SPECAA_QUALITY).
-    float f = specaa_filtered_alpha2(s);
     return SPECAA_FLOAT3(f, f, 0.0);
 #elif defined(SPECAA_GATE_PIXEL_KERNEL)
     float a = specaa_base_alpha2(s);
@@ -1129,17 +1143,13 @@ SPECAA_FLOAT3 specaa_filtered_alpha2_matrix(SpecaaSurface s) {
 // Level of detail the hardware samples a texture at uv (negative under magnification).
 float specaa_texture_lod(SPECAA_TEXTURE_PARAMS(tex, smp), SPECAA_FLOAT2 uv) { return SPECAA_QUERY_LOD(tex, smp, uv); }
 
-// GGX(alpha2) convolved with the footprint K = A - a I of the tier (SPECAA_QUALITY): the quadrature
-// (reference) or its closed form for an isotropic K (balanced).
+// GGX(alpha2) convolved with the footprint K = A - a I (the reference tier's specaa_default_D): the quadrature,
+// or with SPECAA_CLOSED_FORM_D (diagnostic) its closed form on the anisotropic matrix.
 float specaa_footprint_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
-#if SPECAA_QUALITY == SPECAA_QUALITY_REFERENCE && defined(SPECAA_CLOSED_FORM_D)
+#if defined(SPECAA_CLOSED_FORM_D)
     return specaa_convolved_D_closed_form(h, A, alpha2);
-#elif SPECAA_QUALITY == SPECAA_QUALITY_REFERENCE
-    return specaa_convolved_D(h, A, alpha2);
 #else
-    // The tier's A is isotropic (specaa_filtered_alpha2_matrix); the opt-in two lobes' flat share is not, and
-    // takes the mean of its kernel.
-    return specaa_convolved_D_isotropic(h, alpha2, max(0.5 * (A.x + A.y) - alpha2, 0.0));
+    return specaa_convolved_D(h, A, alpha2);
 #endif
 }
 
@@ -1175,9 +1185,17 @@ float specaa_footprint_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
 // GGX(A) alone makes the material's tails a' / a times too bright, a halo around every highlight whose
 // footprint spread is large against a (the analytic scenes at alpha 0.01: tone-mapped flicker 3.6x no
 // filtering's on the sphere, 9.9x on the cylinder; docs/accuracy.md#the-fast-tier).
+// SPECAA_QUALITY balanced: the convolution itself, in closed form (specaa_convolved_D_isotropic) on the same
+// A, whatever the binding (no GGX(A) share, no texture LOD query): the baked roughness holds the texel's
+// spread in a, with GGX's tails, and the footprint adds the pixel kernel's Gaussian. The fast tier's tail
+// mixture is 14% too bright at the peak and half as bright as the convolution on its flanks (tan^2 around
+// 4-16 a' at a footprint ten times a), which is where its tone-mapped harm on the analytic scenes came from
+// (docs/accuracy.md#the-balanced-tier).
 float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 filteredA, SpecaaSurface s) {
 #if SPECAA_QUALITY == SPECAA_QUALITY_FAST
     return specaa_filtered_D_isotropic(h, specaa_base_alpha2(s), filteredA.x);
+#elif SPECAA_QUALITY == SPECAA_QUALITY_BALANCED
+    return specaa_convolved_D_isotropic(h, specaa_base_alpha2(s), max(filteredA.x - specaa_base_alpha2(s), 0.0));
 #else
     SPECAA_FLOAT3 A = filteredA;
     float a = specaa_base_alpha2(s);
@@ -1211,11 +1229,10 @@ float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 filteredA, SpecaaSurface s
     // the convolution, as GGX(A)'s tails would put a flickering halo along it; one large in every direction
     // (geometry of mesh within the footprint, a dome a pixel wide, which the clamped kernel hides) takes
     // GGX(A), which is what fits there (docs/accuracy.md#the-ggxa-share-judged-on-the-spreads-shape).
-    // The balanced tier's A is isotropic (no shape to judge): its largest eigenvalue, without the baked
-    // texel's second read. Diagnostics: SPECAA_BLEND_FROM_LARGEST_AXIS judges it on the largest eigenvalue of
+    // Diagnostics: SPECAA_BLEND_FROM_LARGEST_AXIS judges it on the largest eigenvalue of
     // all of K (the rule before), SPECAA_BLEND_FROM_BAKED_SPREAD on the baked spread alone.
     SPECAA_FLOAT3 spread = A - SPECAA_FLOAT3(a, a, 0.0);
-#if defined(SPECAA_BLEND_FROM_LARGEST_AXIS) || SPECAA_QUALITY == SPECAA_QUALITY_BALANCED
+#if defined(SPECAA_BLEND_FROM_LARGEST_AXIS)
     float w = SPECAA_SATURATE(lod) * SPECAA_SATURATE(SPECAA_GGX_SPREAD * specaa_sym_max_eigenvalue(spread));
 #else
 #if defined(SPECAA_KERNEL_TEXTURE) && defined(SPECAA_KERNEL_ANISOTROPIC) && defined(SPECAA_KERNEL_TWO_LOBES)

@@ -148,8 +148,10 @@ void add_default_candidates(std::vector<SimCandidate>& c, bool normal_mapped) {
          "SPECAA_QUALITY_FAST on the baked roughness: the isotropic filtered roughness, the material's tails kept "
          "(TK21 Sec. 7)",
          "0", Baked::Roughness);
-    tier("balanced", "SPECAA_QUALITY_BALANCED: the isotropic A with GGX convolved with the footprint in closed form",
-         "1", Baked::Kernel);
+    tier("balanced",
+         "SPECAA_QUALITY_BALANCED on the baked roughness: the fast tier's isotropic filtered roughness, GGX convolved "
+         "with the footprint in closed form",
+         "1", Baked::Roughness);
     if (normal_mapped)
         matrix_default("default-isotropic-kernel",
                        "specaa_filtered_alpha2_matrix with specaa_default_D on the isotropic kernel mips (t = tr Sigma; "

@@ -79,7 +79,9 @@ TEST(ShaderCompile, DiagnosticSwitchesCompileToValidSpirvInBothLanguages) {
     const std::string spv = (dir.path() / "x.spv").string();
     for (const char* define : {"SPECAA_NO_BAKED_KERNEL", "SPECAA_DEFAULT_D_WEIGHT=0.0", "SPECAA_KERNEL_LOD_BIAS=-1.0",
                                "SPECAA_GATE_PIXEL_KERNEL", "SPECAA_BLEND_FROM_BAKED_SPREAD", "SPECAA_KERNEL_AREA_LOD",
-                               "SPECAA_USE_CURVATURE -DSPECAA_PIXEL_KERNEL_MIN", "SPECAA_BLEND_FROM_LARGEST_AXIS"}) {
+                               "SPECAA_USE_CURVATURE -DSPECAA_PIXEL_KERNEL_MIN", "SPECAA_USE_CURVATURE -DSPECAA_PIXEL_KERNEL_MAX",
+                               "SPECAA_USE_CURVATURE -DSPECAA_PIXEL_KERNEL_MEAN", "SPECAA_BLEND_FROM_LARGEST_AXIS",
+                               "SPECAA_QUALITY=0 -DSPECAA_TIER_VIEW_TURN", "SPECAA_QUALITY=1 -DSPECAA_TIER_VIEW_TURN"}) {
         std::string out;
         EXPECT_EQ(run_command(std::string("glslangValidator -G -S frag -D") + define + " -I'" + kShaders + "' '" +
                                   kShaders + "/examples/minimal.frag' -o '" + spv +
@@ -153,7 +155,7 @@ int cost_entry_instructions(bool hlsl, const std::string& defines, const TempDir
 // The fast tier's budget (issue 35): its matrix and NDF (the edge policy included) cost at most 50 SPIR-V
 // instructions over an unfiltered shader's GGX(a), with derivatives only and with the baked roughness, in
 // both languages.
-TEST(ShaderCompile, FastTierCostsAtMost50InstructionsOverUnfilteredGgx) {
+TEST(ShaderCompile, FastAndBalancedTiersCostAtMost50And150InstructionsOverUnfilteredGgx) {
     SPECBAKE_REQUIRE_TOOLS();
     TempDir dir;
     for (bool hlsl : {false, true}) {
@@ -166,12 +168,16 @@ TEST(ShaderCompile, FastTierCostsAtMost50InstructionsOverUnfilteredGgx) {
                 hlsl, std::string("-DSPECAA_COST_DEFAULT_NDF -DSPECAA_QUALITY=0 ") + binding, dir, log);
             ASSERT_GT(fast, 0) << language << " fast tier " << binding << ": " << log;
             EXPECT_LE(fast - none, 50) << language << " fast tier " << binding << ": " << fast << " against " << none;
+            const int balanced = cost_entry_instructions(
+                hlsl, std::string("-DSPECAA_COST_DEFAULT_NDF -DSPECAA_QUALITY=1 ") + binding, dir, log);
+            ASSERT_GT(balanced, 0) << language << " balanced tier " << binding << ": " << log;
+            EXPECT_LE(balanced - none, 150) << language << " balanced tier " << binding << ": " << balanced << " against " << none;
             // The reference tier of the same entry costs far more: the count sees the filtering at all.
             const int reference = cost_entry_instructions(
                 hlsl, std::string("-DSPECAA_COST_DEFAULT_NDF -DSPECAA_QUALITY=2 ") + binding, dir, log);
             EXPECT_GT(reference - none, 200) << language << " reference tier " << binding << ": " << log;
-            std::printf("%s fast tier %s: %d instructions, +%d over GGX(a)\n", language,
-                        *binding ? "+ baked roughness" : "(derivatives only)", fast, fast - none);
+            std::printf("%s %s: fast tier %d instructions, +%d over GGX(a); balanced tier %d, +%d\n", language,
+                        *binding ? "+ baked roughness" : "(derivatives only)", fast, fast - none, balanced, balanced - none);
         }
     }
 }

@@ -227,11 +227,11 @@ void run_config(const Config& c) {
                 // Per-pixel kernel: normal differences across the quad (x&~1 -> x|1), or the curvature
                 // kernel of the footprint (w, 0), (0, w) in the (T, B) frame; each less the half vector's
                 // turn with the view across the quad (y&~1 -> y|1), tangential to the fragment's normal,
-                // over 2 n.v (the view does not change along x). The fast tier leaves the turn out.
+                // over 2 n.v (the view does not change along x). The fast and balanced tiers leave the turn out.
                 auto normal_x = [](int px) { const double t = double(float(kNormalSlope)) * (px + 0.5); return Vec3<double>{t / std::hypot(t, 1.0), 0.0, 1.0 / std::hypot(t, 1.0)}; };
                 auto view_y = [](int py) { const double t = double(float(kViewSlope)) * (py + 0.5); return Vec3<double>{0.0, t / std::hypot(t, 1.0), 1.0 / std::hypot(t, 1.0)}; };
                 const Vec3<double> n_px = normal_x(x), v_px = view_y(y), dview = view_y(y | 1) - view_y(y & ~1);
-                const double turn_scale = c.quality == 0 ? 0.0 : 0.5 / std::max(dot(n_px, v_px), 1e-3);
+                const double turn_scale = c.quality != 2 ? 0.0 : 0.5 / std::max(dot(n_px, v_px), 1e-3);
                 const Vec3<double> turn = turn_scale * (dview - dot(n_px, dview) * n_px);
                 Sym2<double> k_px{};
                 double want_iso = 0.0;  // specaa_filtered_alpha2
@@ -264,13 +264,22 @@ void run_config(const Config& c) {
                 }
                 if (std::abs(out0[i + 1] - std::pow(double(out0[i]), 0.25)) > kTol && ++failures <= 5)
                     ADD_FAILURE() << c.name << ": r != a^(1/4)";
-                if (c.quality == 0) {
-                    // The fast tier: the isotropic form as its matrix, and specaa_filtered_D on it, the material's
-                    // tails (filtered_ndf of a' I with the unfiltered a).
+                if (c.quality != 2) {
+                    // The fast and balanced tiers: the isotropic form as their matrix; the fast tier's NDF
+                    // specaa_filtered_D on it, the material's tails (filtered_ndf of a' I with the unfiltered a),
+                    // the balanced tier's GGX(a) convolved with the footprint a' - a in closed form.
                     if ((std::abs(out1[i] - want_iso) > kTol * want_iso || std::abs(out1[i + 1] - want_iso) > kTol * want_iso ||
                          out1[i + 2] != 0.0f) && ++failures <= 5)
                         ADD_FAILURE() << c.name << " level " << L << " pixel " << x << "," << y << ": fast matrix " << out1[i]
                                       << " " << out1[i + 1] << " " << out1[i + 2] << " want " << want_iso;
+                    if (c.quality == 1) {
+                        // The closed form's float evaluation (its cubic fits, exp) against double: 2e-3.
+                        const double balanced_d = convolved_ndf_closed_form(h, Sym2<double>{want_iso, 0.0, want_iso}, a0);
+                        if (std::abs(out2[i] - balanced_d) > 2e-3 * balanced_d && ++failures <= 5)
+                            ADD_FAILURE() << c.name << " level " << L << " pixel " << x << "," << y << ": balanced D "
+                                          << out2[i] << " want " << balanced_d;
+                        continue;
+                    }
                     const double fast_d = filtered_ndf(h, Sym2<double>{want_iso, 0.0, want_iso}, a0);
                     if (std::abs(out2[i] - fast_d) > 1e-4 * fast_d && ++failures <= 5)
                         ADD_FAILURE() << c.name << " level " << L << " pixel " << x << "," << y << ": fast D " << out2[i]
@@ -346,6 +355,18 @@ TEST(ShaderEntry, FastTierAnisotropicKernelGatedUnderARoughMaterial) {
 }
 TEST(ShaderEntry, FastTierLeanPlusCurvature) {
     run_config({"fast, LEAN+curvature", Baked::Lean, true, true, kWorldPerPixel, false, kRoughness, 0});
+}
+
+// The balanced tier (SPECAA_QUALITY 1): the fast tier's matrix, the closed-form convolution as its NDF.
+TEST(ShaderEntry, BalancedTierDerivativesOnly) { run_config({"balanced, derivatives", Baked::None, false, true, kWorldPerPixel, false, kRoughness, 1}); }
+TEST(ShaderEntry, BalancedTierRoughnessTexturePlusDerivatives) {
+    run_config({"balanced, roughness+derivatives", Baked::Roughness, false, true, kWorldPerPixel, false, kRoughness, 1});
+}
+TEST(ShaderEntry, BalancedTierAnisotropicKernelPlusDerivatives) {
+    run_config({"balanced, anisotropic kernel+derivatives", Baked::KernelAnisotropic, false, true, kWorldPerPixel, false, kRoughness, 1});
+}
+TEST(ShaderEntry, BalancedTierLeanPlusCurvature) {
+    run_config({"balanced, LEAN+curvature", Baked::Lean, true, true, kWorldPerPixel, false, kRoughness, 1});
 }
 
 TEST(ShaderEntry, DerivativesOnly) { run_config({"derivatives", Baked::None, false, true}); }

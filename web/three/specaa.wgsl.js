@@ -42,9 +42,10 @@ fn specaa_lod_from_derivatives(size: vec2<f32>, uv: vec2<f32>) -> f32 {
 //                                                with the material's tails (specaa_filtered_D_isotropic):
 //                                                the cheapest; bind the baked roughness (+29-44 SPIR-V
 //                                                instructions over GGX(a); with the Sigma kernel +80-83).
-//                   SPECAA_QUALITY_BALANCED (1)  the same isotropic A with GGX of the material convolved
-//                                                with the footprint in closed form
-//                                                (specaa_convolved_D_closed_form, no loop).
+//                   SPECAA_QUALITY_BALANCED (1)  the same isotropic A, and GGX of the material convolved
+//                                                with the footprint a' - a in closed form
+//                                                (specaa_convolved_D_isotropic, no loop); bind the baked
+//                                                roughness (+121-146 over GGX(a)).
 //                   SPECAA_QUALITY_REFERENCE (2) the default (the anisotropic matrix form and the convolution
 //                                                by quadrature, specaa_convolved_D: a loop of 12-32 lobes).
 //                   Default SPECAA_QUALITY_REFERENCE. Costs and accuracy per tier:
@@ -90,6 +91,8 @@ fn specaa_lod_from_derivatives(size: vec2<f32>, uv: vec2<f32>) -> f32 {
 //   SPECAA_KERNEL_LOD_BIAS b        the Sigma kernel texel sampled with this LOD bias (the mip the
 //                                   hardware picks against a finer or coarser footprint).
 //   SPECAA_GATE_PIXEL_KERNEL        the per-pixel kernel faded out like the baked one (SPECAA_KERNEL_GATE).
+//   SPECAA_PIXEL_KERNEL_MIN, _MAX, _MEAN  with SPECAA_USE_CURVATURE: per pixel the smaller or the larger (by
+//                                   trace) of the quad-derivative kernel and the curvature kernel, or their mean.
 //   SPECAA_KERNEL_AREA_LOD          the Sigma kernel texel sampled at the mip of the footprint's area, not of
 //                                   its major axis (the hardware's isotropic choice).
 //   SPECAA_CLOSED_FORM_D            the reference tier's convolution in closed form
@@ -100,6 +103,7 @@ fn specaa_lod_from_derivatives(size: vec2<f32>, uv: vec2<f32>) -> f32 {
 //   SPECAA_BLEND_FROM_BAKED_SPREAD  specaa_default_D's blend weight from the baked spread alone.
 //   SPECAA_NO_VIEW_TURN             the per-pixel kernel without the half vector's turn with the view
 //                                   direction (the normal's spread alone, the kernel before s.view).
+//   SPECAA_TIER_VIEW_TURN           the fast and balanced tiers with the half vector's turn (which they leave out).
 // Textures are sampled with implicit derivatives, so the hardware selects the mip: the baked mips are
 // the footprint filter of the normal map, the per-pixel kernel adds the geometric curvature.
 //
@@ -624,7 +628,7 @@ fn specaa_closed_form_nodes(b: f32) -> vec4<f32> {
     let c3: vec3<f32> = select(vec3<f32>(0.425394192, -0.115584935, 0.133253855), vec3<f32>(0.357309142, -0.297962248, -0.559140109), z < -0.25);
     let p: vec3<f32> = c0 + z * (c1 + z * (c2 + z * c3));
     let rest: f32 = exp(-1.0 / b);
-    let w1: f32 = select(rest / (1.0 + exp(-p.y)), p.y * b / (1.0 + b), z < -0.25);
+    let w1: f32 = select(rest / (1.0 + exp(-p.y)), p.y * b / (1.0 + b), z < -0.25); // selects: no branch
     return vec4<f32>(w1, rest - w1, exp(-p.x), exp(-p.z));
 }
 // The truncated mixture of the closed form (GGX(a)'s lobes wider than k), r2 = |h.xy|^2, z2 = h_z^2 > 0.
@@ -674,7 +678,6 @@ fn specaa_convolved_D_closed_form(h: vec3<f32>, A: vec3<f32>, alpha2: f32) -> f3
 // The closed form for an isotropic footprint K = k I (the balanced tier's, whose A is isotropic): no matrix
 // algebra; k = 0 is GGX(a).
 fn specaa_convolved_D_isotropic(h: vec3<f32>, alpha2: f32, kernel: f32) -> f32 {
-    if (h.z <= 0.0) { return 0.0; }
     let a: f32 = max(alpha2, 1.0e-12);
     let k: f32 = max(kernel, 1.0e-6 * a);
     let n: vec4<f32> = specaa_closed_form_nodes(k / a);
@@ -683,13 +686,14 @@ fn specaa_convolved_D_isotropic(h: vec3<f32>, alpha2: f32, kernel: f32) -> f32 {
     let v: vec2<f32> = k + a * n.zw; // the nodes' widths
     let g: vec2<f32> = exp(-r2 / (z2 * v));
     let unit: f32 = 3.14159265358979 * z2 * z2;
+    // Selects rather than branches (both sides are evaluated; the discarded one may be inf or NaN at h_z = 0).
     let nodeX: f32 = select(0.0, n.x * g.x / (unit * v.x), g.x > 0.0);
     let nodeY: f32 = select(0.0, n.y * g.y / (unit * v.y), g.y > 0.0);
     let nodes: f32 = nodeX + nodeY;
     let fitted: f32 = specaa_closed_form_tail(r2, z2, a, k) + nodes;
     let small: f32 = specaa_small_footprint_D(r2, z2, a, 2.0 * k, k * r2);
     let share: f32 = specaa_closed_form_share(k / a); // written out: the expansion is huge and wrong at large k
-    return max(0.0, share * fitted + (1.0 - share) * small);
+    return select(0.0, max(0.0, share * fitted + (1.0 - share) * small), h.z > 0.0);
 }
 // GGX Smith Lambda, TK21 App. A.3: -1/2 + sqrt(s + o.z^2) / (2 |o.z|), s = [o.x, o.y] A [o.x, o.y]^T,
 // evaluated as s / (2 |o.z| (sqrt(s + o.z^2) + |o.z|)) (same value, no cancellation for smooth A).
@@ -782,8 +786,11 @@ fn specaa_curvature_footprint(s: SpecaaSurface, footprint: ptr<function, vec4<f3
 // out). Without it the kernel is the normal's spread only: a convex surface's highlight comes out
 // narrower in the image than the pixel filter makes it, and a flat one's is not filtered at all
 // (docs/accuracy.md#the-view-directions-turn). n.v is floored at 1e-3 (the kernel is clamped to kappa
-// after); a turn that is not finite adds nothing (edge policy). The fast tier leaves it out (+60 SPIR-V
-// instructions there, over its budget), and so does SPECAA_NO_VIEW_TURN (diagnostic).
+// after); a turn that is not finite adds nothing (edge policy). The fast and balanced tiers leave it out:
+// their isotropic kernel spreads the turn, which lies along the view's tangential direction, over both axes,
+// and their tone-mapped measures got worse with it (SPECAA_TIER_VIEW_TURN, a diagnostic, puts it back:
+// docs/accuracy.md#the-fast-tier); it would also cost +60 SPIR-V instructions in the fast tier, over its budget.
+// SPECAA_NO_VIEW_TURN (diagnostic) leaves it out of the reference tier too.
 fn specaa_view_turn_axis(s: SpecaaSurface, dView: vec3<f32>) -> vec3<f32> {
     let turn: vec3<f32> = (dView - s.normal * dot(s.normal, dView)) * (0.5 / max(dot(s.normal, s.view), 1.0e-3));
     return select(vec3<f32>(0.0, 0.0, 0.0), turn, specaa_is_finite3(turn));
@@ -860,8 +867,8 @@ fn specaa_filtered_alpha2_matrix(s: SpecaaSurface) -> vec3<f32> {
 }
 // Level of detail the hardware samples a texture at uv (negative under magnification).
 fn specaa_texture_lod(tex: texture_2d<f32>, smp: sampler, uv: vec2<f32>) -> f32 { return specaa_lod_from_derivatives(vec2<f32>(textureDimensions(tex, 0)), uv); }
-// GGX(alpha2) convolved with the footprint K = A - a I of the tier (SPECAA_QUALITY): the quadrature
-// (reference) or its closed form for an isotropic K (balanced).
+// GGX(alpha2) convolved with the footprint K = A - a I (the reference tier's specaa_default_D): the quadrature,
+// or with SPECAA_CLOSED_FORM_D (diagnostic) its closed form on the anisotropic matrix.
 fn specaa_footprint_D(h: vec3<f32>, A: vec3<f32>, alpha2: f32) -> f32 {
     return specaa_convolved_D(h, A, alpha2);
 }
@@ -897,6 +904,12 @@ fn specaa_footprint_D(h: vec3<f32>, A: vec3<f32>, alpha2: f32) -> f32 {
 // GGX(A) alone makes the material's tails a' / a times too bright, a halo around every highlight whose
 // footprint spread is large against a (the analytic scenes at alpha 0.01: tone-mapped flicker 3.6x no
 // filtering's on the sphere, 9.9x on the cylinder; docs/accuracy.md#the-fast-tier).
+// SPECAA_QUALITY balanced: the convolution itself, in closed form (specaa_convolved_D_isotropic) on the same
+// A, whatever the binding (no GGX(A) share, no texture LOD query): the baked roughness holds the texel's
+// spread in a, with GGX's tails, and the footprint adds the pixel kernel's Gaussian. The fast tier's tail
+// mixture is 14% too bright at the peak and half as bright as the convolution on its flanks (tan^2 around
+// 4-16 a' at a footprint ten times a), which is where its tone-mapped harm on the analytic scenes came from
+// (docs/accuracy.md#the-balanced-tier).
 fn specaa_default_D(h: vec3<f32>, filteredA: vec3<f32>, s: SpecaaSurface) -> f32 {
     let A: vec3<f32> = filteredA;
     let a: f32 = specaa_base_alpha2(s);
@@ -983,8 +996,7 @@ fn specaa_default_D_kernel(h: vec3<f32>, filteredA: vec3<f32>, s: SpecaaSurface,
     // the convolution, as GGX(A)'s tails would put a flickering halo along it; one large in every direction
     // (geometry of mesh within the footprint, a dome a pixel wide, which the clamped kernel hides) takes
     // GGX(A), which is what fits there (docs/accuracy.md#the-ggxa-share-judged-on-the-spreads-shape).
-    // The balanced tier's A is isotropic (no shape to judge): its largest eigenvalue, without the baked
-    // texel's second read. Diagnostics: SPECAA_BLEND_FROM_LARGEST_AXIS judges it on the largest eigenvalue of
+    // Diagnostics: SPECAA_BLEND_FROM_LARGEST_AXIS judges it on the largest eigenvalue of
     // all of K (the rule before), SPECAA_BLEND_FROM_BAKED_SPREAD on the baked spread alone.
     let spread: vec3<f32> = A - vec3<f32>(a, a, 0.0);
     let bakedSpread: vec3<f32> = specaa_baked_kernel_matrix_kernel(s, kernelTexture, kernelSampler);
