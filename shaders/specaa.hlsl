@@ -979,7 +979,7 @@ bool specaa_curvature_footprint(SpecaaSurface s, out SPECAA_FLOAT4 footprint) {
 // after); a turn that is not finite adds nothing (edge policy). The fast and balanced tiers leave it out:
 // their isotropic kernel spreads the turn, which lies along the view's tangential direction, over both axes,
 // and their tone-mapped measures got worse with it (SPECAA_TIER_VIEW_TURN, a diagnostic, puts it back:
-// docs/accuracy.md#the-fast-tier); it would also cost +60 SPIR-V instructions in the fast tier, over its budget.
+// docs/accuracy.md#the-balanced-tier); it would also cost +60 SPIR-V instructions in the fast tier, over its budget.
 // SPECAA_NO_VIEW_TURN (diagnostic) leaves it out of the reference tier too.
 SPECAA_FLOAT3 specaa_view_turn_axis(SpecaaSurface s, SPECAA_FLOAT3 dView) {
 #if defined(SPECAA_NO_VIEW_TURN) || (SPECAA_QUALITY != SPECAA_QUALITY_REFERENCE && !defined(SPECAA_TIER_VIEW_TURN))
@@ -1168,9 +1168,9 @@ float specaa_footprint_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
 // filtering's on the sphere, 9.9x on the cylinder; docs/accuracy.md#the-fast-tier).
 // SPECAA_QUALITY balanced: the convolution itself, in closed form (specaa_convolved_D_isotropic) on the same
 // A, whatever the binding (no GGX(A) share, no texture LOD query): the baked roughness holds the texel's
-// spread in a, with GGX's tails, and the footprint adds the pixel kernel's Gaussian. The fast tier's tail
-// mixture is 14% too bright at the peak and half as bright as the convolution on its flanks (tan^2 around
-// 4-16 a' at a footprint ten times a), which is where its tone-mapped harm on the analytic scenes came from
+// spread in a, with GGX's tails, and the footprint adds the pixel kernel's Gaussian. For a footprint ten
+// times a the fast tier's tail mixture is 14% brighter than the convolution at the peak and half as bright
+// on its flanks (0.49x at tan^2 = 7.8 a'): the tone-mapped harm it does on the analytic scenes
 // (docs/accuracy.md#the-balanced-tier).
 float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 filteredA, SpecaaSurface s) {
 #if SPECAA_QUALITY == SPECAA_QUALITY_FAST

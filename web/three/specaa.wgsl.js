@@ -789,7 +789,7 @@ fn specaa_curvature_footprint(s: SpecaaSurface, footprint: ptr<function, vec4<f3
 // after); a turn that is not finite adds nothing (edge policy). The fast and balanced tiers leave it out:
 // their isotropic kernel spreads the turn, which lies along the view's tangential direction, over both axes,
 // and their tone-mapped measures got worse with it (SPECAA_TIER_VIEW_TURN, a diagnostic, puts it back:
-// docs/accuracy.md#the-fast-tier); it would also cost +60 SPIR-V instructions in the fast tier, over its budget.
+// docs/accuracy.md#the-balanced-tier); it would also cost +60 SPIR-V instructions in the fast tier, over its budget.
 // SPECAA_NO_VIEW_TURN (diagnostic) leaves it out of the reference tier too.
 fn specaa_view_turn_axis(s: SpecaaSurface, dView: vec3<f32>) -> vec3<f32> {
     let turn: vec3<f32> = (dView - s.normal * dot(s.normal, dView)) * (0.5 / max(dot(s.normal, s.view), 1.0e-3));
@@ -906,9 +906,9 @@ fn specaa_footprint_D(h: vec3<f32>, A: vec3<f32>, alpha2: f32) -> f32 {
 // filtering's on the sphere, 9.9x on the cylinder; docs/accuracy.md#the-fast-tier).
 // SPECAA_QUALITY balanced: the convolution itself, in closed form (specaa_convolved_D_isotropic) on the same
 // A, whatever the binding (no GGX(A) share, no texture LOD query): the baked roughness holds the texel's
-// spread in a, with GGX's tails, and the footprint adds the pixel kernel's Gaussian. The fast tier's tail
-// mixture is 14% too bright at the peak and half as bright as the convolution on its flanks (tan^2 around
-// 4-16 a' at a footprint ten times a), which is where its tone-mapped harm on the analytic scenes came from
+// spread in a, with GGX's tails, and the footprint adds the pixel kernel's Gaussian. For a footprint ten
+// times a the fast tier's tail mixture is 14% brighter than the convolution at the peak and half as bright
+// on its flanks (0.49x at tan^2 = 7.8 a'): the tone-mapped harm it does on the analytic scenes
 // (docs/accuracy.md#the-balanced-tier).
 fn specaa_default_D(h: vec3<f32>, filteredA: vec3<f32>, s: SpecaaSurface) -> f32 {
     let A: vec3<f32> = filteredA;
