@@ -67,7 +67,7 @@ float specaa_lod_from_derivatives(vec2 size, vec2 uv) {
 //                   SPECAA_QUALITY_BALANCED (1)  the same isotropic A, and GGX of the material convolved
 //                                                with the footprint a' - a in closed form
 //                                                (specaa_convolved_D_isotropic, no loop); bind the baked
-//                                                roughness (+121-146 over GGX(a)).
+//                                                roughness (+121-136 over GGX(a)).
 //                   SPECAA_QUALITY_REFERENCE (2) the default (the anisotropic matrix form and the convolution
 //                                                by quadrature, specaa_convolved_D: a loop of 12-32 lobes).
 //                   Default SPECAA_QUALITY_REFERENCE. Costs and accuracy per tier:
@@ -1030,7 +1030,10 @@ SPECAA_FLOAT3 specaa_pixel_kernel_matrix(SpecaaSurface s) {
 #if defined(SPECAA_NO_PIXEL_KERNEL)
     return SPECAA_FLOAT3(0.0, 0.0, 0.0);
 #else
-#if defined(SPECAA_USE_CURVATURE) && !defined(SPECAA_PIXEL_KERNEL_MIN) && !defined(SPECAA_PIXEL_KERNEL_MAX) && !defined(SPECAA_PIXEL_KERNEL_MEAN)
+#if defined(SPECAA_USE_CURVATURE) && (defined(SPECAA_PIXEL_KERNEL_MIN) || defined(SPECAA_PIXEL_KERNEL_MAX) || defined(SPECAA_PIXEL_KERNEL_MEAN))
+#define SPECAA_PIXEL_KERNEL_BOTH  // diagnostics: the quad-derivative kernel and the curvature kernel combined
+#endif
+#if defined(SPECAA_USE_CURVATURE) && !defined(SPECAA_PIXEL_KERNEL_BOTH)
     SPECAA_FLOAT3 K;
     bool usable = specaa_curvature_pixel_kernel(s, K);
 #else
@@ -1046,21 +1049,19 @@ SPECAA_FLOAT3 specaa_pixel_kernel_matrix(SpecaaSurface s) {
     SPECAA_FLOAT3 turnV = specaa_view_turn_axis(s, SPECAA_DDY(s.view));
     SPECAA_FLOAT3 K = specaa_kernel_matrix(SPECAA_FLOAT2(dot(dnU - turnU, t), dot(dnU - turnU, b)),
                                            SPECAA_FLOAT2(dot(dnV - turnV, t), dot(dnV - turnV, b)));
-#if defined(SPECAA_USE_CURVATURE) && defined(SPECAA_PIXEL_KERNEL_MIN)
-    // Diagnostic: the smaller (by trace) of the quad-derivative kernel and the vertex-curvature kernel.
-    SPECAA_FLOAT3 Kc;
-    bool usableCurvature = specaa_curvature_pixel_kernel(s, Kc);
-    K = SPECAA_SELECT3(usableCurvature && Kc.x + Kc.y < K.x + K.y, Kc, K);
-#elif defined(SPECAA_USE_CURVATURE) && defined(SPECAA_PIXEL_KERNEL_MAX)
-    // Diagnostic: the larger (by trace) of the two; SPECAA_PIXEL_KERNEL_MEAN: their mean
+#if defined(SPECAA_PIXEL_KERNEL_BOTH)
+    // Diagnostics: per pixel the smaller (SPECAA_PIXEL_KERNEL_MIN) or the larger (_MAX) by trace of the
+    // quad-derivative kernel and the vertex-curvature kernel, or their mean (_MEAN)
     // (docs/accuracy.md#the-faces-own-turn-and-the-vertexs-average).
     SPECAA_FLOAT3 Kc;
     bool usableCurvature = specaa_curvature_pixel_kernel(s, Kc);
+#if defined(SPECAA_PIXEL_KERNEL_MIN)
+    K = SPECAA_SELECT3(usableCurvature && Kc.x + Kc.y < K.x + K.y, Kc, K);
+#elif defined(SPECAA_PIXEL_KERNEL_MAX)
     K = SPECAA_SELECT3(usableCurvature && Kc.x + Kc.y > K.x + K.y, Kc, K);
-#elif defined(SPECAA_USE_CURVATURE) && defined(SPECAA_PIXEL_KERNEL_MEAN)
-    SPECAA_FLOAT3 Kc;
-    bool usableCurvature = specaa_curvature_pixel_kernel(s, Kc);
+#else
     K = SPECAA_SELECT3(usableCurvature, 0.5 * (Kc + K), K);
+#endif
 #endif
 #endif
     float lmax = specaa_sym_max_eigenvalue(K);
@@ -1187,7 +1188,8 @@ float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 filteredA, SpecaaSurface s
 #if SPECAA_QUALITY == SPECAA_QUALITY_FAST
     return specaa_filtered_D_isotropic(h, specaa_base_alpha2(s), filteredA.x);
 #elif SPECAA_QUALITY == SPECAA_QUALITY_BALANCED
-    return specaa_convolved_D_isotropic(h, specaa_base_alpha2(s), max(filteredA.x - specaa_base_alpha2(s), 0.0));
+    float a = specaa_base_alpha2(s);
+    return specaa_convolved_D_isotropic(h, a, max(filteredA.x - a, 0.0));
 #else
     SPECAA_FLOAT3 A = filteredA;
     float a = specaa_base_alpha2(s);

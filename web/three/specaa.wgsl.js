@@ -45,7 +45,7 @@ fn specaa_lod_from_derivatives(size: vec2<f32>, uv: vec2<f32>) -> f32 {
 //                   SPECAA_QUALITY_BALANCED (1)  the same isotropic A, and GGX of the material convolved
 //                                                with the footprint a' - a in closed form
 //                                                (specaa_convolved_D_isotropic, no loop); bind the baked
-//                                                roughness (+121-146 over GGX(a)).
+//                                                roughness (+121-136 over GGX(a)).
 //                   SPECAA_QUALITY_REFERENCE (2) the default (the anisotropic matrix form and the convolution
 //                                                by quadrature, specaa_convolved_D: a loop of 12-32 lobes).
 //                   Default SPECAA_QUALITY_REFERENCE. Costs and accuracy per tier:
