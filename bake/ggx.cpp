@@ -52,6 +52,23 @@ T filtered_ndf(const Vec3<T>& h, const Sym2<T>& A, T alpha2) {
     return ggx + (T(1) - rho) * (beckmann_ndf(h, A, tau) - ggx);
 }
 
+template <class T>
+T filtered_ndf_isotropic(const Vec3<T>& h, T alpha2, T filtered) {
+    if (!(h.z > T(0))) return T(0);
+    const T f = std::max(filtered, T(1e-12));
+    const T a = std::min(alpha2, f);
+    const T t = std::sqrt(a * f);
+    const T g = std::max(std::min(f, T(1.8) * t), T(1e-12));  // a mirror (a = 0): no GGX part
+    const T fb = f + T(1.2) * t - T(0.6) * a;
+    // GGX(g) and Beckmann(f_b) in forms finite as h_z -> 0: rho GGX(g) = a / (pi (g h_z^2 + |h.xy|^2)^2), and
+    // Beckmann e^(-u / f_b) (1 + u)^2 / (pi f_b) with u = tan^2(theta_h) bounded where the exponential is 0.
+    const T r2 = h.x * h.x + h.y * h.y, z2 = h.z * h.z;
+    const T s2 = g * z2 + r2;
+    const T u = std::min(r2 / z2, T(1e18));
+    const T beckmann = std::exp(-u / fb) * (T(1) + u) * (T(1) + u) / (std::numbers::pi_v<T> * fb);
+    return (T(1) - a / g) * beckmann + a / (std::numbers::pi_v<T> * s2 * s2);
+}
+
 // The kernel A - a I added to the material's a, projected onto the PSD cone (an anisotropic material's
 // A - a I can be indefinite), by the include's formula (specaa_sym_clamp_psd).
 template <class T>
@@ -263,6 +280,7 @@ T ggx_g2(const Vec3<T>& i, const Vec3<T>& o, const Vec3<T>& h, const Sym2<T>& A)
     template T ggx_ndf<T>(const Vec3<T>&, const Sym2<T>&, T);                  \
     template T beckmann_ndf<T>(const Vec3<T>&, const Sym2<T>&, T);             \
     template T filtered_ndf<T>(const Vec3<T>&, const Sym2<T>&, T);             \
+    template T filtered_ndf_isotropic<T>(const Vec3<T>&, T, T);                 \
     template T convolved_ndf<T>(const Vec3<T>&, const Sym2<T>&, T);            \
     template T convolved_ndf_closed_form<T>(const Vec3<T>&, const Sym2<T>&, T); \
     template T convolved_ndf_isotropic<T>(const Vec3<T>&, T, T);                \

@@ -31,6 +31,14 @@ T beckmann_ndf(const Vec3<T>& h, const Sym2<T>& A, T tau);
 template <class T>
 T filtered_ndf(const Vec3<T>& h, const Sym2<T>& A, T alpha2);
 
+// The fast tier's NDF for an isotropic filtered a' = filtered (the include's specaa_filtered_D_isotropic): a
+// two-lobe stand-in for GGX(alpha2) convolved with the footprint k = a' - a, rho GGX(g) + (1 - rho) Beckmann(f_b)
+// with g = min(a', 1.8 sqrt(a a')), rho = a / g (so the tail is GGX(a)'s, a / (pi tan^4)) and
+// f_b = a' + 1.2 sqrt(a a') - 0.6 a; integrates to one; GGX(a) at a' = a. The minimax fit of that form to the
+// convolution: 30% largest relative error of D (the plain mixture g = f_b = a', 51%).
+template <class T>
+T filtered_ndf_isotropic(const Vec3<T>& h, T alpha2, T filtered);
+
 // NDF of GGX(alpha2) seen through a Gaussian footprint (the include's specaa_convolved_D): GGX(alpha2 I)
 // convolved with the footprint's slope distribution N(0, K / 2), K = A - alpha2 I (TK21 Eq. 3). GGX is a
 // Gaussian scale mixture, GGX(a) = int_0^inf e^-w Beckmann(a / w I) dw, so the convolution is exactly

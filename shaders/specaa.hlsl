@@ -638,21 +638,38 @@ float specaa_filtered_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
     return ggx + (1.0 - rho) * (specaa_beckmann_D(h, A, tau) - ggx);
 }
 
-// specaa_filtered_D for an isotropic A = f I (the fast tier's NDF): rho GGX(f) + (1 - rho) Beckmann(f) with
-// rho = a / f, which keeps the unfiltered lobe's tails, a / (pi tan^4(theta_h)), where GGX(f) alone makes them
-// f / a times too bright (TK21 Sec. 7); integrates to one. Stable forms: GGX f / (pi (f h_z^2 + |h.xy|^2)^2)
-// (finite as h_z -> 0), Beckmann e^(-u / f) (1 + u)^2 / (pi f) with u = tan^2(theta_h), 0 where the
-// exponential underflows; 0 for h_z <= 0. f is floored at 1e-12 so that a mirror stays finite.
+// specaa_filtered_D for an isotropic A = f I (the fast tier's NDF): rho GGX(g) + (1 - rho) Beckmann(f_b), a
+// two-lobe stand-in for GGX(a) convolved with the footprint (specaa_convolved_D) that keeps the unfiltered
+// lobe's tails exactly and integrates to one: rho g = a, so the GGX part falls as a / (pi tan^4(theta_h)) like
+// GGX(a) (TK21 Sec. 7), and both parts integrate to one. With g = f (rho = a / f) and f_b = f (the tier's
+// NDF before, `SPECAA_FAST_PLAIN_MIXTURE`) the core is right but the flanks are not: against the
+// convolution the mixture is 1.24 / 1.14x at the peak for k = a / 10a and 0.70 / 0.49x on the flanks (tan^2 =
+// 6.5-11 f), 51% largest relative error. A narrower GGX part g = min(f, 1.8 sqrt(a f)) (its share rho = a / g
+// larger) fills the flanks, a wider Beckmann part f_b = f + 1.2 sqrt(a f) - 0.6 a keeps the peak: the minimax
+// fit of (g, f_b) in that two-parameter form to the convolution over k / a in [1e-2, 1e3] and tan^2 / a in
+// [0, 1e6] (fitted in double against the convolution's scale-mixture integral), 30% largest relative error
+// (docs/accuracy.md#the-fast-tiers-ndf). Stable forms: a / (pi (g h_z^2 + |h.xy|^2)^2) (finite as h_z -> 0),
+// Beckmann e^(-u / f_b) (1 + u)^2 / (pi f_b) with u = tan^2(theta_h), 0 where the exponential underflows; 0
+// for h_z <= 0. f is floored at 1e-12 so that a mirror stays finite. C++ twin: bake/ggx.cpp
+// filtered_ndf_isotropic.
 float specaa_filtered_D_isotropic(SPECAA_FLOAT3 h, float alpha2, float filteredAlpha2) {
     float f = max(filteredAlpha2, 1.0e-12);
+    float a = min(alpha2, f);
     float r2 = dot(h.xy, h.xy);
     float z2 = h.z * h.z;
-    float s2 = f * z2 + r2;
-    float ggx = f / (SPECAA_PI * s2 * s2);
-    float u = r2 / z2;
-    float e = exp(-u / f);
-    float beckmann = SPECAA_SELECT(e > 0.0, e * (1.0 + u) * (1.0 + u) / (SPECAA_PI * f), 0.0);
-    return SPECAA_SELECT(h.z > 0.0, beckmann + SPECAA_SATURATE(alpha2 / f) * (ggx - beckmann), 0.0);
+#if defined(SPECAA_FAST_PLAIN_MIXTURE)
+    float g = f;
+    float fb = f;
+#else
+    float t = sqrt(a * f);  // in [a, f]
+    float g = max(min(f, 1.8 * t), 1.0e-12);  // a mirror (a = 0): no GGX part
+    float fb = f + 1.2 * t - 0.6 * a;
+#endif
+    float s2 = g * z2 + r2;
+    // tan^2(theta_h), bounded so that (1 + u)^2 stays finite where e^(-u / f_b) is 0 (h_z -> 0).
+    float u = min(r2 / z2, 1.0e18);
+    float beckmann = exp(-u / fb) * (1.0 + u) * (1.0 + u) / (SPECAA_PI * fb);
+    return SPECAA_SELECT(h.z > 0.0, beckmann * (1.0 - a / g) + a / (SPECAA_PI * s2 * s2), 0.0);
 }
 
 // NDF of GGX(alpha2) seen through the pixel footprint: GGX(a) convolved with the footprint's distribution

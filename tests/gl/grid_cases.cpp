@@ -214,10 +214,10 @@ GridGroup ggx_group() {
         const double isotropic = convolved_ndf_isotropic(h, a, std::max(0.5 * (A.xx + A.yy) - a, 0.0));
         if (!(std::abs(r.out[1][3] - isotropic) <= 1e-3 * (1.0 + exponent) * isotropic + kAbsTol))
             return describe("convolved D in closed form, isotropic (balanced tier)", c, {r.out[1][3]}, {isotropic});
-        // The tail-weighted mixture on the isotropic A = f I (the fast tier's NDF), f = tr(A) / 2 >= a, against
-        // filtered_ndf of that matrix, with Beckmann's tolerance for its exponent tan^2(theta_h) / f.
+        // The fast tier's two-lobe NDF on the isotropic A = f I, f = tr(A) / 2 >= a, against
+        // filtered_ndf_isotropic, with Beckmann's tolerance for its exponent (at most tan^2(theta_h) / f).
         const double fi = 0.5 * (A.xx + A.yy);
-        const double fast = filtered_ndf(h, Sym2<double>{fi, 0.0, fi}, a);
+        const double fast = filtered_ndf_isotropic(h, a, fi);
         const double fast_exponent = h.z > 0 ? (h.x * h.x + h.y * h.y) / (h.z * h.z * fi) : 0.0;
         if (!(std::abs(r.out[2][0] - fast) <= kRelTol * (1.0 + fast_exponent) * fast + kAbsTol))
             return describe("filtered D on an isotropic A (fast tier)", c, {r.out[2][0]}, {fast});

@@ -520,21 +520,33 @@ fn specaa_filtered_D(h: vec3<f32>, A: vec3<f32>, alpha2: f32) -> f32 {
     let ggx: f32 = specaa_ggx_D(h, A, tau);
     return ggx + (1.0 - rho) * (specaa_beckmann_D(h, A, tau) - ggx);
 }
-// specaa_filtered_D for an isotropic A = f I (the fast tier's NDF): rho GGX(f) + (1 - rho) Beckmann(f) with
-// rho = a / f, which keeps the unfiltered lobe's tails, a / (pi tan^4(theta_h)), where GGX(f) alone makes them
-// f / a times too bright (TK21 Sec. 7); integrates to one. Stable forms: GGX f / (pi (f h_z^2 + |h.xy|^2)^2)
-// (finite as h_z -> 0), Beckmann e^(-u / f) (1 + u)^2 / (pi f) with u = tan^2(theta_h), 0 where the
-// exponential underflows; 0 for h_z <= 0. f is floored at 1e-12 so that a mirror stays finite.
+// specaa_filtered_D for an isotropic A = f I (the fast tier's NDF): rho GGX(g) + (1 - rho) Beckmann(f_b), a
+// two-lobe stand-in for GGX(a) convolved with the footprint (specaa_convolved_D) that keeps the unfiltered
+// lobe's tails exactly and integrates to one: rho g = a, so the GGX part falls as a / (pi tan^4(theta_h)) like
+// GGX(a) (TK21 Sec. 7), and both parts integrate to one. With g = f (rho = a / f) and f_b = f (the tier's
+// NDF before, \`SPECAA_FAST_PLAIN_MIXTURE\`) the core is right but the flanks are not: against the
+// convolution the mixture is 1.24 / 1.14x at the peak for k = a / 10a and 0.70 / 0.49x on the flanks (tan^2 =
+// 6.5-11 f), 51% largest relative error. A narrower GGX part g = min(f, 1.8 sqrt(a f)) (its share rho = a / g
+// larger) fills the flanks, a wider Beckmann part f_b = f + 1.2 sqrt(a f) - 0.6 a keeps the peak: the minimax
+// fit of (g, f_b) in that two-parameter form to the convolution over k / a in [1e-2, 1e3] and tan^2 / a in
+// [0, 1e6] (fitted in double against the convolution's scale-mixture integral), 30% largest relative error
+// (docs/accuracy.md#the-fast-tiers-ndf). Stable forms: a / (pi (g h_z^2 + |h.xy|^2)^2) (finite as h_z -> 0),
+// Beckmann e^(-u / f_b) (1 + u)^2 / (pi f_b) with u = tan^2(theta_h), 0 where the exponential underflows; 0
+// for h_z <= 0. f is floored at 1e-12 so that a mirror stays finite. C++ twin: bake/ggx.cpp
+// filtered_ndf_isotropic.
 fn specaa_filtered_D_isotropic(h: vec3<f32>, alpha2: f32, filteredAlpha2: f32) -> f32 {
     let f: f32 = max(filteredAlpha2, 1.0e-12);
+    let a: f32 = min(alpha2, f);
     let r2: f32 = dot(h.xy, h.xy);
     let z2: f32 = h.z * h.z;
-    let s2: f32 = f * z2 + r2;
-    let ggx: f32 = f / (3.14159265358979 * s2 * s2);
-    let u: f32 = r2 / z2;
-    let e: f32 = exp(-u / f);
-    let beckmann: f32 = select(0.0, e * (1.0 + u) * (1.0 + u) / (3.14159265358979 * f), e > 0.0);
-    return select(0.0, beckmann + saturate(alpha2 / f) * (ggx - beckmann), h.z > 0.0);
+    let t: f32 = sqrt(a * f); // in [a, f]
+    let g: f32 = max(min(f, 1.8 * t), 1.0e-12); // a mirror (a = 0): no GGX part
+    let fb: f32 = f + 1.2 * t - 0.6 * a;
+    let s2: f32 = g * z2 + r2;
+    // tan^2(theta_h), bounded so that (1 + u)^2 stays finite where e^(-u / f_b) is 0 (h_z -> 0).
+    let u: f32 = min(r2 / z2, 1.0e18);
+    let beckmann: f32 = exp(-u / fb) * (1.0 + u) * (1.0 + u) / (3.14159265358979 * fb);
+    return select(0.0, beckmann * (1.0 - a / g) + a / (3.14159265358979 * s2 * s2), h.z > 0.0);
 }
 // NDF of GGX(alpha2) seen through the pixel footprint: GGX(a) convolved with the footprint's distribution
 // of slopes, N(0, K / 2) with K = A - a I (TK21 Eq. 3: the kernel is twice the footprint's slope
