@@ -145,8 +145,8 @@ void add_default_candidates(std::vector<SimCandidate>& c, bool normal_mapped) {
         c.back().family = "tier";
     };
     tier("fast",
-         "SPECAA_QUALITY_FAST on the baked roughness: the isotropic filtered roughness, the material's tails kept "
-         "(TK21 Sec. 7)",
+         "SPECAA_QUALITY_FAST on the baked roughness: the isotropic filtered roughness, two lobes fitted to the "
+         "convolution with the material's tails kept (TK21 Sec. 7)",
          "0", Baked::Roughness);
     tier("balanced",
          "SPECAA_QUALITY_BALANCED on the baked roughness: the fast tier's isotropic filtered roughness, GGX convolved "

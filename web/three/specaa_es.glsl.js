@@ -69,10 +69,11 @@ float specaa_lod_from_derivatives(vec2 size, vec2 uv) {
 //   SPECAA_QUALITY  the cost tier of the default entry points (specaa_filtered_alpha2_matrix,
 //                   specaa_default_D); pick by the run-time cost you accept per light:
 //                   SPECAA_QUALITY_FAST (0)      the isotropic filtered roughness (baked data + per-pixel
-//                                                kernel, specaa_filtered_alpha2) as A = a' I, and GGX(A)
-//                                                with the material's tails (specaa_filtered_D_isotropic):
-//                                                the cheapest; bind the baked roughness (+29-44 SPIR-V
-//                                                instructions over GGX(a); with the Sigma kernel +80-83).
+//                                                kernel, specaa_filtered_alpha2) as A = a' I, and two lobes
+//                                                fitted to the convolution with the material's tails
+//                                                (specaa_filtered_D_isotropic): the cheapest; bind the baked
+//                                                roughness (+35-50 SPIR-V instructions over GGX(a); with the
+//                                                Sigma kernel +86-89).
 //                   SPECAA_QUALITY_BALANCED (1)  the same isotropic A, and GGX of the material convolved
 //                                                with the footprint a' - a in closed form
 //                                                (specaa_convolved_D_isotropic, no loop); bind the baked
@@ -659,19 +660,18 @@ float specaa_filtered_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
 }
 
 // specaa_filtered_D for an isotropic A = f I (the fast tier's NDF): rho GGX(g) + (1 - rho) Beckmann(f_b), a
-// two-lobe stand-in for GGX(a) convolved with the footprint (specaa_convolved_D) that keeps the unfiltered
-// lobe's tails exactly and integrates to one: rho g = a, so the GGX part falls as a / (pi tan^4(theta_h)) like
-// GGX(a) (TK21 Sec. 7), and both parts integrate to one. With g = f (rho = a / f) and f_b = f (the tier's
-// NDF before, \`SPECAA_FAST_PLAIN_MIXTURE\`) the core is right but the flanks are not: against the
-// convolution the mixture is 1.24 / 1.14x at the peak for k = a / 10a and 0.70 / 0.49x on the flanks (tan^2 =
-// 6.5-11 f), 51% largest relative error. A narrower GGX part g = min(f, 1.8 sqrt(a f)) (its share rho = a / g
-// larger) fills the flanks, a wider Beckmann part f_b = f + 1.2 sqrt(a f) - 0.6 a keeps the peak: the minimax
-// fit of (g, f_b) in that two-parameter form to the convolution over k / a in [1e-2, 1e3] and tan^2 / a in
-// [0, 1e6] (fitted in double against the convolution's scale-mixture integral), 30% largest relative error
-// (docs/accuracy.md#the-fast-tiers-ndf). Stable forms: a / (pi (g h_z^2 + |h.xy|^2)^2) (finite as h_z -> 0),
-// Beckmann e^(-u / f_b) (1 + u)^2 / (pi f_b) with u = tan^2(theta_h), 0 where the exponential underflows; 0
-// for h_z <= 0. f is floored at 1e-12 so that a mirror stays finite. C++ twin: bake/ggx.cpp
-// filtered_ndf_isotropic.
+// two-lobe stand-in for GGX(a) convolved with the footprint k = f - a (specaa_convolved_D) that keeps the
+// unfiltered lobe's tails exactly and integrates to one: rho g = a, so the GGX part falls as
+// a / (pi tan^4(theta_h)) like GGX(a) (TK21 Sec. 7), and each part integrates to one. With g = f_b = f
+// (rho = a / f; the tier's NDF before, \`SPECAA_FAST_PLAIN_MIXTURE\`) the peak is 1.24 / 1.14x the
+// convolution's for k = a / 10 a and the flanks 0.70 / 0.49x (tan^2 = 6.5-11 f): 51% largest relative
+// error. A narrower GGX part, g = min(f, 1.8 sqrt(a f)) (its share a / g larger), fills the flanks and a
+// wider Beckmann part, f_b = f + 1.2 sqrt(a f) - 0.6 a, lowers the peak: (g, f_b) fitted in that form to the
+// convolution (its scale-mixture integral in double) for the smallest largest relative error over k / a in
+// [1e-2, 1e3] and tan^2 / a in [0, 1e6]: 30% (docs/accuracy.md#the-fast-tiers-ndf). Stable forms:
+// a / (pi (g h_z^2 + |h.xy|^2)^2) (finite as h_z -> 0), Beckmann e^(-u / f_b) (1 + u)^2 / (pi f_b) with
+// u = tan^2(theta_h) bounded where the exponential is 0; 0 for h_z <= 0. f and g are floored at 1e-12 so that
+// a mirror stays finite. C++ twin: bake/ggx.cpp filtered_ndf_isotropic.
 float specaa_filtered_D_isotropic(SPECAA_FLOAT3 h, float alpha2, float filteredAlpha2) {
     float f = max(filteredAlpha2, 1.0e-12);
     float a = min(alpha2, f);
@@ -1203,13 +1203,14 @@ float specaa_footprint_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 A, float alpha2) {
 // SPECAA_QUALITY fast: specaa_filtered_D_isotropic on its isotropic A (no texture LOD query, no convolution):
 // GGX(A) alone makes the material's tails a' / a times too bright, a halo around every highlight whose
 // footprint spread is large against a (the analytic scenes at alpha 0.01: tone-mapped flicker 3.6x no
-// filtering's on the sphere, 9.9x on the cylinder; docs/accuracy.md#the-fast-tier).
+// filtering's on the sphere, 9.9x on the cylinder; docs/accuracy.md#the-fast-tier); its two lobes keep
+// the material's tails and come within 30% of the convolution (docs/accuracy.md#the-fast-tiers-ndf).
 // SPECAA_QUALITY balanced: the convolution itself, in closed form (specaa_convolved_D_isotropic) on the same
 // A, whatever the binding (no GGX(A) share, no texture LOD query): the baked roughness holds the texel's
 // spread in a, with GGX's tails, and the footprint adds the pixel kernel's Gaussian. For a footprint ten
-// times a the fast tier's tail mixture is 14% brighter than the convolution at the peak and half as bright
-// on its flanks (0.49x at tan^2 = 7.8 a'): the tone-mapped harm it does on the analytic scenes
-// (docs/accuracy.md#the-balanced-tier).
+// times a the plain tail mixture (a / a') GGX(a') + (1 - a / a') Beckmann(a') is 14% brighter than the
+// convolution at the peak and half as bright on its flanks (0.49x at tan^2 = 7.8 a'): the tone-mapped harm
+// the fast tier did on the analytic scenes (docs/accuracy.md#the-balanced-tier).
 float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 filteredA, SpecaaSurface s) {
 #if SPECAA_QUALITY == SPECAA_QUALITY_FAST
     return specaa_filtered_D_isotropic(h, specaa_base_alpha2(s), filteredA.x);
