@@ -1120,6 +1120,47 @@ float specaa_filtered_alpha2(SpecaaSurface s) {
 // Filtered perceptual roughness r = a^(1/4): drop-in for the material's roughness.
 float specaa_filtered_roughness(SpecaaSurface s) { return specaa_roughness_from_alpha2(specaa_filtered_alpha2(s)); }
 
+// The per-pixel kernel for a prefiltered environment lookup along r = reflect(-v, n) (split-sum image-based
+// lighting: the lobe is looked up around r, one lookup per pixel). Across the pixel the lookup direction
+// turns by dr, with the normal and with the view: dr = 2 (dn.v + n.dv) n + 2 (n.v) dn - dv. The pixel
+// filter spreads the lookup over those directions, and a turn of h by e moves r by 2 e at the lobe's centre,
+// so per screen axis the kernel's derivative is half the part of dr across r (TK21 Eq. 3 with dr / 2 for the
+// normal's derivative). At normal incidence that is dn - dv_t / 2, the highlight's kernel with the half
+// vector's turn (specaa_view_turn_axis); towards grazing the two part: the highlight's turn grows as
+// 1 / (2 n.v) (a light at the mirror direction of a grazing view), while r's turn stays about |dv|, so the
+// highlight's kernel is too wide for the environment there (three.js's environment-lit sphere, RMSE against
+// its 16 x 16 supersampled image 0.1065 unfiltered: 0.199 with the highlight's kernel, 0.115 with this one:
+// web/three/README.md#tested). Quad derivatives of r over the vertex normal s.normal and s.view, clamped to
+// kappa; a zero s.view (not filled) gives the normal's kernel (specaa_pixel_kernel); non-finite inputs give 0
+// (edge policy).
+float specaa_environment_kernel(SpecaaSurface s) {
+#if defined(SPECAA_NO_PIXEL_KERNEL)
+    return 0.0;
+#else
+    SPECAA_FLOAT3 r = reflect(-s.view, s.normal);
+    SPECAA_FLOAT3 ex = 0.5 * SPECAA_DDX(r);
+    SPECAA_FLOAT3 ey = 0.5 * SPECAA_DDY(r);
+    ex -= r * dot(ex, r);
+    ey -= r * dot(ey, r);
+    bool usable = specaa_max_component(max(specaa_magnitude_bits3(r), max(specaa_magnitude_bits3(ex), specaa_magnitude_bits3(ey)))) <
+                  SPECAA_NOT_FINITE;
+    float k = SPECAA_SELECT(usable, min(specaa_iso_kernel_mean(ex, ey), SPECAA_KAPPA), 0.0);
+    return SPECAA_SELECT(dot(s.view, s.view) > 0.0, k, specaa_pixel_kernel(s));
+#endif
+}
+
+// Filtered squared roughness for a prefiltered environment lookup (the a to pick its mip by): the baked
+// spread and specaa_environment_kernel added in projected space (TK21 Eq. 6-7), as specaa_filtered_alpha2
+// adds the highlight's kernel.
+float specaa_environment_alpha2(SpecaaSurface s) {
+    SPECAA_FLOAT3 baked = specaa_baked_kernel_matrix(s);
+    float a = specaa_filter_projected_isotropic(specaa_base_alpha2(s), 0.5 * (baked.x + baked.y) + specaa_environment_kernel(s));
+    return SPECAA_SELECT(specaa_is_finite(a), a, 1.0);
+}
+
+// Filtered perceptual roughness r = a^(1/4) for a prefiltered environment lookup.
+float specaa_environment_roughness(SpecaaSurface s) { return specaa_roughness_from_alpha2(specaa_environment_alpha2(s)); }
+
 // Isotropic a widened by the kernel matrix K in projected space (TK21 Eq. 6-7), non-finite results as I.
 SPECAA_FLOAT3 specaa_widened_matrix(float a, SPECAA_FLOAT3 K) {
     return specaa_guard_matrix(true, SPECAA_FLOAT2(a, a), specaa_filter_projected_matrix(SPECAA_FLOAT2(a, a), K));

@@ -866,6 +866,40 @@ fn specaa_filtered_alpha2(s: SpecaaSurface) -> f32 {
 }
 // Filtered perceptual roughness r = a^(1/4): drop-in for the material's roughness.
 fn specaa_filtered_roughness(s: SpecaaSurface) -> f32 { return specaa_roughness_from_alpha2(specaa_filtered_alpha2(s)); }
+// The per-pixel kernel for a prefiltered environment lookup along r = reflect(-v, n) (split-sum image-based
+// lighting: the lobe is looked up around r, one lookup per pixel). Across the pixel the lookup direction
+// turns by dr, with the normal and with the view: dr = 2 (dn.v + n.dv) n + 2 (n.v) dn - dv. The pixel
+// filter spreads the lookup over those directions, and a turn of h by e moves r by 2 e at the lobe's centre,
+// so per screen axis the kernel's derivative is half the part of dr across r (TK21 Eq. 3 with dr / 2 for the
+// normal's derivative). At normal incidence that is dn - dv_t / 2, the highlight's kernel with the half
+// vector's turn (specaa_view_turn_axis); towards grazing the two part: the highlight's turn grows as
+// 1 / (2 n.v) (a light at the mirror direction of a grazing view), while r's turn stays about |dv|, so the
+// highlight's kernel is too wide for the environment there (three.js's environment-lit sphere, RMSE against
+// its 16 x 16 supersampled image 0.1065 unfiltered: 0.199 with the highlight's kernel, 0.115 with this one:
+// web/three/README.md#tested). Quad derivatives of r over the vertex normal s.normal and s.view, clamped to
+// kappa; a zero s.view (not filled) gives the normal's kernel (specaa_pixel_kernel); non-finite inputs give 0
+// (edge policy).
+fn specaa_environment_kernel(s: SpecaaSurface) -> f32 {
+    let r: vec3<f32> = reflect(-s.view, s.normal);
+    var ex: vec3<f32> = 0.5 * dpdx(r);
+    var ey: vec3<f32> = 0.5 * dpdy(r);
+    ex -= r * dot(ex, r);
+    ey -= r * dot(ey, r);
+    let usable: bool = specaa_max_component(max(specaa_magnitude_bits3(r), max(specaa_magnitude_bits3(ex), specaa_magnitude_bits3(ey)))) <
+                  0x7f800000u;
+    let k: f32 = select(0.0, min(specaa_iso_kernel_mean(ex, ey), SPECAA_KAPPA), usable);
+    return select(specaa_pixel_kernel(s), k, dot(s.view, s.view) > 0.0);
+}
+// Filtered squared roughness for a prefiltered environment lookup (the a to pick its mip by): the baked
+// spread and specaa_environment_kernel added in projected space (TK21 Eq. 6-7), as specaa_filtered_alpha2
+// adds the highlight's kernel.
+fn specaa_environment_alpha2(s: SpecaaSurface) -> f32 {
+    let baked: vec3<f32> = specaa_baked_kernel_matrix(s);
+    let a: f32 = specaa_filter_projected_isotropic(specaa_base_alpha2(s), 0.5 * (baked.x + baked.y) + specaa_environment_kernel(s));
+    return select(1.0, a, specaa_is_finite(a));
+}
+// Filtered perceptual roughness r = a^(1/4) for a prefiltered environment lookup.
+fn specaa_environment_roughness(s: SpecaaSurface) -> f32 { return specaa_roughness_from_alpha2(specaa_environment_alpha2(s)); }
 // Isotropic a widened by the kernel matrix K in projected space (TK21 Eq. 6-7), non-finite results as I.
 fn specaa_widened_matrix(a: f32, K: vec3<f32>) -> vec3<f32> {
     return specaa_guard_matrix(true, vec2<f32>(a, a), specaa_filter_projected_matrix(vec2<f32>(a, a), K));
@@ -988,6 +1022,16 @@ fn specaa_filtered_alpha2_kernel(s: SpecaaSurface, kernelTexture: texture_2d<f32
 
 // specaa_filtered_roughness with the baked texture.
 fn specaa_filtered_roughness_kernel(s: SpecaaSurface, kernelTexture: texture_2d<f32>, kernelSampler: sampler) -> f32 { return specaa_roughness_from_alpha2(specaa_filtered_alpha2_kernel(s, kernelTexture, kernelSampler)); }
+
+// specaa_environment_alpha2 with the baked texture.
+fn specaa_environment_alpha2_kernel(s: SpecaaSurface, kernelTexture: texture_2d<f32>, kernelSampler: sampler) -> f32 {
+    let baked: vec3<f32> = specaa_baked_kernel_matrix_kernel(s, kernelTexture, kernelSampler);
+    let a: f32 = specaa_filter_projected_isotropic(specaa_base_alpha2(s), 0.5 * (baked.x + baked.y) + specaa_environment_kernel(s));
+    return select(1.0, a, specaa_is_finite(a));
+}
+
+// specaa_environment_roughness with the baked texture.
+fn specaa_environment_roughness_kernel(s: SpecaaSurface, kernelTexture: texture_2d<f32>, kernelSampler: sampler) -> f32 { return specaa_roughness_from_alpha2(specaa_environment_alpha2_kernel(s, kernelTexture, kernelSampler)); }
 
 // specaa_filtered_alpha2_matrix with the baked texture.
 fn specaa_filtered_alpha2_matrix_kernel(s: SpecaaSurface, kernelTexture: texture_2d<f32>, kernelSampler: sampler) -> vec3<f32> {

@@ -131,7 +131,7 @@ async function checkScene(entry) {
     const onAgain = render(patched.scene);
     return {
         report: plugin.report, optOutCalls: states, chains,
-        states: materials.map((m) => m.userData.specbake ? { base: m.userData.specbake.base, coat: m.userData.specbake.coat } : null),
+        states: materials.map((m) => m.userData.specbake ? { base: m.userData.specbake.base, coat: m.userData.specbake.coat, curvature: m.userData.specbake.curvature } : null),
         programs: renderer.info.programs.length, programsBefore,
         reference: stats(reference, null, ground), on: stats(on, reference, ground), off: stats(off, reference, ground),
         onAgain: stats(onAgain, on, ground),

@@ -4,7 +4,8 @@
 // roughness, no baked data; the coat's roughness or none; .gltf and .glb) and in replace mode. Every
 // patched material must compile (no shader error), bind its chains with trilinear filtering and every
 // level, render finite values, render exactly three.js's image when opted out and its own again when
-// opted back in; with baked data the quads must be closer (RMSE) to three.js's own shading supersampled
+// opted back in, and read the baked _SPECAA_CURVATURE; with baked data the quads must be closer (RMSE) to
+// three.js's own shading supersampled
 // 16 x 16 per pixel from the full-resolution textures than three.js's image is. Replace-mode files are left
 // alone.
 #include "consumer_harness.h"
@@ -113,6 +114,9 @@ TEST_F(ThreePlugin, PatchesEveryBindingRendersAndOptsOut) {
         const std::string base = state["base"].value("kind", "") + (state["base"].value("kind", "") == "kernel" &&
                                                                         !state["base"].value("anisotropic", false) ? "-t" : "");
         EXPECT_EQ(base, b.base) << id;
+        // Every baked primitive here carries _SPECAA_CURVATURE and TANGENT (the quad's shading normals tilt
+        // outward at its corners, so it curves too): the plugin must read it (SPECAA_USE_CURVATURE).
+        EXPECT_TRUE(state.value("curvature", false)) << id << ": the baked _SPECAA_CURVATURE is not read";
         if (coated)
             EXPECT_EQ(state["coat"].value("kind", ""), b.coat) << id;
         else

@@ -46,6 +46,7 @@ const D3 kLight = normalize(D3{0.8, 0.3, 0.6});
 struct Sample {
     D3 p, n, t, b;  // hit point, outward normal, tangent frame (T, B)
     D3 h;           // tangent-space half vector (h.T, h.B, h.n)
+    D3 r;           // mirror direction of the view, 2 (n.v) n - v
     double n_dot_v;
 };
 
@@ -75,13 +76,15 @@ std::optional<Sample> trace(int surface, int x, int y) {
     const D3 hw = normalize(v + kLight);
     s.h = {dot(hw, s.t), dot(hw, s.b), dot(hw, s.n)};
     s.n_dot_v = dot(s.n, v);
+    s.r = 2.0 * s.n_dot_v * s.n - v;
     return s;
 }
 
 // The surface shader (tests/gl/shaders/surface_eval.inc) wrapped for GLSL and for HLSL. HLSL's
 // SV_Position has y down (Vulkan origin), so its wrapper flips y back to the GL window convention.
-std::string surface_glsl(int surface) {
+std::string surface_glsl(int surface, bool environment = false) {
     return "#version 450\n#define SPECAA_TEST_SURFACE " + std::to_string(surface) + "\n" +
+           (environment ? "#define SPECAA_TEST_ENVIRONMENT\n" : "") +
            read_source_file("shaders/specaa.glsl") + read_source_file("tests/gl/shaders/surface_eval.inc") + R"(
 layout(location = 0) out vec4 o0;
 layout(location = 1) out vec4 o1;
@@ -224,6 +227,72 @@ void render_and_compare(GLuint program, int surface, const char* name) {
     glDeleteProgram(program);
 }
 
+// specaa_environment_kernel on the ray-cast surfaces against the closed-form mirror direction r = 2 (n.v) n - v
+// at the pixel centres of the quad: per screen axis half the quad's difference of r, less its part along this
+// pixel's r, kernel sigma^2 (|e_x|^2 + |e_y|^2) clamped to kappa; a = 1/16 widened by it in projected space
+// (TK21 Eq. 6-7: (a + k (1 - a)) / (1 + k (1 - a))); with s.view zero, the normal's kernel (iso-mean).
+void environment_compare(int surface, const char* name) {
+    SPECBAKE_REQUIRE_GL(gl);
+    std::string log;
+    const GLuint program = build_program_glsl(kFullscreenVertex, surface_glsl(surface, true), log);
+    ASSERT_NE(program, 0u) << log;
+    GLuint vao = 0, targets[4] = {};
+    glGenVertexArrays(1, &vao);
+    glBindVertexArray(vao);
+    const GLuint fbo = create_float_targets(4, kSize, kSize, targets);
+    glViewport(0, 0, kSize, kSize);
+    glUseProgram(program);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    std::vector<float> out(kSize * kSize * 4);
+    glReadBuffer(GL_COLOR_ATTACHMENT0);
+    glReadPixels(0, 0, kSize, kSize, GL_RGBA, GL_FLOAT, out.data());
+    ASSERT_EQ(glGetError(), static_cast<GLenum>(GL_NO_ERROR));
+    int compared = 0, grazing = 0, failures = 0, clamped = 0;
+    double widest_ratio = 0;  // the highlight's kernel (with the half vector's turn) over the environment's
+    for (int y = 0; y < kSize; ++y)
+        for (int x = 0; x < kSize; ++x) {
+            const auto s0x = trace(surface, x & ~1, y), s1x = trace(surface, x | 1, y);
+            const auto s0y = trace(surface, x, y & ~1), s1y = trace(surface, x, y | 1);
+            const auto s = trace(surface, x, y);
+            if (!s0x || !s1x || !s0y || !s1y || !s) continue;
+            if (std::min({s0x->n_dot_v, s1x->n_dot_v, s0y->n_dot_v, s1y->n_dot_v}) < 0.02) continue;
+            const size_t i = static_cast<size_t>(y * kSize + x) * 4;
+            D3 ex = 0.5 * (s1x->r - s0x->r), ey = 0.5 * (s1y->r - s0y->r);
+            ex = ex - dot(ex, s->r) * s->r;
+            ey = ey - dot(ey, s->r) * s->r;
+            const double k = std::min(kSigma2 * (dot(ex, ex) + dot(ey, ey)), kKappa);
+            const double a = 1.0 / 16.0, kk = k * (1.0 - a), alpha2 = (a + kk) / (1.0 + kk);
+            const D3 dnu = s1x->n - s0x->n, dnv = s1y->n - s0y->n;
+            const double normal_kernel = std::min(kSigma2 * (dot(dnu, dnu) + dot(dnv, dnv)), kKappa);
+            const bool ok = near(out[i], k, k) && near(out[i + 1], alpha2, alpha2) && near(out[i + 2], normal_kernel, normal_kernel);
+            if (!ok && ++failures <= 5)
+                ADD_FAILURE() << name << " pixel (" << x << ", " << y << ") n.v " << s->n_dot_v << ": environment kernel gpu "
+                              << out[i] << " ref " << k << ", a gpu " << out[i + 1] << " ref " << alpha2
+                              << ", with no view gpu " << out[i + 2] << " ref " << normal_kernel;
+            ++compared;
+            if (s->n_dot_v < 0.3) ++grazing;
+            if (k >= kKappa) ++clamped;
+            // The highlight's kernel with the half vector's turn, tangential dv / (2 n.v) taken off dn (the default's).
+            const D3 v0x = -1.0 * (s0x->r - 2.0 * s0x->n_dot_v * s0x->n), v1x = -1.0 * (s1x->r - 2.0 * s1x->n_dot_v * s1x->n);
+            const D3 v0y = -1.0 * (s0y->r - 2.0 * s0y->n_dot_v * s0y->n), v1y = -1.0 * (s1y->r - 2.0 * s1y->n_dot_v * s1y->n);
+            D3 tx = v1x - v0x, ty = v1y - v0y;
+            tx = (0.5 / s->n_dot_v) * (tx - dot(tx, s->n) * s->n);
+            ty = (0.5 / s->n_dot_v) * (ty - dot(ty, s->n) * s->n);
+            const D3 hx = dnu - tx, hy = dnv - ty;
+            const double highlight = kSigma2 * (dot(hx, hx) + dot(hy, hy));
+            if (k > 0 && k < kKappa) widest_ratio = std::max(widest_ratio, highlight / k);
+        }
+    EXPECT_EQ(failures, 0) << name << ": " << failures << " of " << compared << " pixels differ";
+    EXPECT_GT(compared, kSize * kSize / 8) << name;
+    EXPECT_GT(grazing, 100) << name;
+    std::printf("%s: environment kernel at %d pixels (%d at n.v < 0.3, %d clamped to kappa); the highlight's kernel is "
+                "up to %.1fx the environment's\n", name, compared, grazing, clamped, widest_ratio);
+    glDeleteTextures(4, targets);
+    glDeleteFramebuffers(1, &fbo);
+    glDeleteVertexArrays(1, &vao);
+    glDeleteProgram(program);
+}
+
 void run_glsl(int surface, const char* name) {
     SPECBAKE_REQUIRE_GL(gl);
     std::string log;
@@ -259,6 +328,8 @@ TEST(ShaderDerivatives, SphereMatchesClosedForm) { run_glsl(0, "sphere"); }
 TEST(ShaderDerivatives, CylinderAtGrazingAnglesMatchesClosedForm) { run_glsl(1, "cylinder"); }
 TEST(ShaderDerivatives, HlslSphereThroughGlSpirvMatchesClosedForm) { run_hlsl(0, "HLSL sphere"); }
 TEST(ShaderDerivatives, HlslCylinderThroughGlSpirvMatchesClosedForm) { run_hlsl(1, "HLSL cylinder"); }
+TEST(ShaderDerivatives, EnvironmentKernelOnTheSphereMatchesTheMirrorDirectionsSpread) { environment_compare(0, "sphere"); }
+TEST(ShaderDerivatives, EnvironmentKernelOnTheCylinderMatchesTheMirrorDirectionsSpread) { environment_compare(1, "cylinder"); }
 
 }  // namespace
 }  // namespace specbake::gltest

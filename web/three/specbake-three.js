@@ -3,7 +3,8 @@
 // the loader's KTX2Loader with trilinear filtering, and patches MeshStandardMaterial / MeshPhysicalMaterial
 // so every light's specular uses specbake's default (specaa_filtered_alpha2_matrix + specaa_default_D +
 // specaa_ggx_G2 for the base; the isotropic form for the clear coat) in place of three.js's
-// geometryRoughness. three.js is the application's own dependency ('three' in its import map or bundler).
+// geometryRoughness; where the bake wrote the _SPECAA_CURVATURE vertex attribute the per-pixel kernel comes
+// from it (SPECAA_USE_CURVATURE), as in specbake's default rule. three.js is the application's own dependency ('three' in its import map or bundler).
 //
 //   import { SpecbakeSpecularAAPlugin, setSpecbakeSpecularAA } from './specbake-three.js';
 //   const loader = new GLTFLoader().setKTX2Loader(ktx2Loader);
@@ -84,6 +85,7 @@ function fragmentPrefix(state) {
         lines.push(`#define SPECAA_ROUGHNESS_CHANNEL ${CHANNELS[base.channel]}`);
     }
     if (base.kind !== 'none') lines.push('uniform highp sampler2D specbakeBaseTexture;');
+    if (state.curvature) lines.push('#define SPECAA_USE_CURVATURE', 'varying vec4 vSpecbakeCurvature;', 'varying vec4 vSpecbakeTangent;');
     if (coat) {
         lines.push('#define SPECBAKE_COAT');
         if (coat.kind === 'roughness') {
@@ -126,7 +128,13 @@ specbakeSurface.roughness = max( roughnessFactor, 0.045 );
 specbakeSurface.uv = SPECBAKE_BASE_UV;
 specbakeSurface.normal = nonPerturbedNormal;
 specbakeSurface.position = vec3( 0.0 );
-#if defined( USE_NORMALMAP_TANGENTSPACE ) || defined( USE_CLEARCOAT_NORMALMAP ) || defined( USE_ANISOTROPY )
+#if defined( SPECBAKE_CURVATURE )
+// The baked curvature (_SPECAA_CURVATURE, d in the TANGENT frame) over the pixel's footprint in view space,
+// the curvature scaled to view-space length in the vertex shader; the TANGENT frame around the vertex normal.
+specbakeSurface.position = - vViewPosition;
+specbakeSurface.tangent = normalize( vSpecbakeTangent.xyz - nonPerturbedNormal * dot( nonPerturbedNormal, vSpecbakeTangent.xyz ) );
+specbakeSurface.bitangent = cross( nonPerturbedNormal, specbakeSurface.tangent ) * vSpecbakeTangent.w;
+#elif defined( USE_NORMALMAP_TANGENTSPACE ) || defined( USE_CLEARCOAT_NORMALMAP ) || defined( USE_ANISOTROPY )
 specbakeSurface.tangent = tbn[ 0 ];
 specbakeSurface.bitangent = tbn[ 1 ];
 #else
@@ -135,12 +143,18 @@ specbakeSurface.bitangent = tbn[ 1 ];
 specbakeSurface.tangent = normalize( cross( abs( nonPerturbedNormal.y ) < 0.99 ? vec3( 0.0, 1.0, 0.0 ) : vec3( 1.0, 0.0, 0.0 ), nonPerturbedNormal ) );
 specbakeSurface.bitangent = cross( nonPerturbedNormal, specbakeSurface.tangent );
 #endif
+#ifdef SPECBAKE_CURVATURE
+specbakeSurface.curvature = vSpecbakeCurvature;
+#else
 specbakeSurface.curvature = vec4( 0.0 );
+#endif
 // The direction to the eye (view space, as the normal): the half vector turns with it across the pixel.
 specbakeSurface.view = isOrthographic ? vec3( 0.0, 0.0, 1.0 ) : normalize( vViewPosition );
 specbakeA = specaa_filtered_alpha2_matrix( specbakeSurface );
-// Environment, area lights and the multiple-scattering terms read material.roughness: the isotropic form.
-material.roughness = clamp( specaa_filtered_roughness( specbakeSurface ), 0.045, 1.0 );
+// Environment, area lights and the multiple-scattering terms read material.roughness: the isotropic form
+// with the pixel kernel of the environment's lookup direction (specaa_environment_roughness), which turns
+// with the view less than a light's highlight does towards grazing.
+material.roughness = clamp( specaa_environment_roughness( specbakeSurface ), 0.045, 1.0 );
 #else
 ${BASE_ROUGHNESS}
 #endif`;
@@ -162,6 +176,24 @@ const COAT_REPLACEMENT = `
 	${COAT_ROUGHNESS}
 	#endif`;
 
+// The vertex shader's part with the baked curvature: the attribute (GLTFLoader names it _specaa_curvature)
+// and the TANGENT frame passed on in view space; the curvature (1 / object-space length) divided by the
+// model-view's scale (the cube root of its determinant: exact for a uniform scale).
+const VERTEX_DECLARATIONS = `#ifdef SPECBAKE_CURVATURE
+attribute vec4 _specaa_curvature;
+#ifndef USE_TANGENT
+attribute vec4 tangent;
+#endif
+varying vec4 vSpecbakeCurvature;
+varying vec4 vSpecbakeTangent;
+#endif
+`;
+const VERTEX_CURVATURE = `
+#ifdef SPECBAKE_CURVATURE
+	vSpecbakeCurvature = vec4( _specaa_curvature.xy / pow( abs( determinant( mat3( modelViewMatrix ) ) ), 1.0 / 3.0 ), _specaa_curvature.zw );
+	vSpecbakeTangent = vec4( normalize( ( modelViewMatrix * vec4( tangent.xyz, 0.0 ) ).xyz ), tangent.w );
+#endif`;
+
 function patchShader(shader, state) {
     // Whichever program compiles last, three.js keeps its uniforms for the material, also when it switches
     // back to a program compiled before (setSpecbakeSpecularAA): the textures are always among them.
@@ -170,6 +202,11 @@ function patchShader(shader, state) {
     if (!state.enabled) return;
     shader.defines = { ...(shader.defines ?? {}), SPECBAKE_SPECULAR_AA: '',
         SPECBAKE_BASE_UV: state.baseUv, SPECBAKE_COAT_UV: state.coatUv };
+    if (state.curvature) {
+        shader.defines.SPECBAKE_CURVATURE = '';
+        shader.vertexShader = VERTEX_DECLARATIONS + shader.vertexShader
+            .replace('#include <project_vertex>', `#include <project_vertex>${VERTEX_CURVATURE}`);
+    }
     const physical = ShaderChunk.lights_physical_fragment.replace(BASE_ROUGHNESS, BASE_REPLACEMENT)
         .replace(COAT_ROUGHNESS, COAT_REPLACEMENT);
     const pars = ShaderChunk.lights_physical_pars_fragment.replace(BRDF_GGX_START,
@@ -190,7 +227,7 @@ function patchMaterial(material, state) {
     material.customProgramCacheKey = () => {
         const s = material.userData.specbake;
         const on = `${s.base.kind}${s.base.anisotropic ? 'A' : ''}${s.base.channel ?? ''}/${s.coat?.kind ?? '-'}` +
-            `${s.coat?.channel ?? ''}/${s.baseUv}/${s.coatUv}`;
+            `${s.coat?.channel ?? ''}/${s.baseUv}/${s.coatUv}/${s.curvature ? 'K' : '-'}`;
         return `${previousKey.call(material)}|specbake:${s.enabled ? on : 'off'}`;
     };
     material.needsUpdate = true;
@@ -261,15 +298,20 @@ export class SpecbakeSpecularAAPlugin {
 
     async afterRoot(result) {
         const json = this.parser.json;
-        const materials = new Set();
+        // Each material's meshes: the baked curvature is read where every one of them has it (and TANGENT,
+        // the frame its principal direction is given in).
+        const materials = new Map();
         for (const scene of result.scenes ?? [result.scene]) {
             scene.traverse((object) => {
                 if (!object.isMesh) return;
-                for (const m of Array.isArray(object.material) ? object.material : [object.material]) materials.add(m);
+                const attributes = object.geometry?.attributes ?? {};
+                const curved = !!attributes._specaa_curvature && !!attributes.tangent;
+                for (const m of Array.isArray(object.material) ? object.material : [object.material])
+                    materials.set(m, (materials.get(m) ?? true) && curved);
             });
         }
         const pending = [];
-        for (const material of materials) {
+        for (const [material, curvature] of materials) {
             const index = this.parser.associations.get(material)?.materials;
             const def = index === undefined ? null : json.materials?.[index];
             const ext = def?.extensions?.[EXTENSION_NAME];
@@ -291,13 +333,13 @@ export class SpecbakeSpecularAAPlugin {
                 this.report.skipped.push({ name, reason: 'this three.js changed the shader lines the patch replaces' });
                 continue;
             }
-            pending.push(this._patch(material, ext, name));
+            pending.push(this._patch(material, ext, name, curvature));
         }
         await Promise.all(pending);
         for (const s of this.report.skipped) console.warn(`${EXTENSION_NAME}: ${s.name} not patched: ${s.reason}`);
     }
 
-    async _patch(material, ext, name) {
+    async _patch(material, ext, name, curvature) {
         // Base layer: baked only when the extension has its properties; a patched material always filters the
         // base with the pixel kernel of the vertex normal (the include's default without baked data).
         const base = await this._layerState(ext.outputs ? chooseBinding(ext) : { kind: 'none' }, !!material.normalMap, name);
@@ -317,6 +359,7 @@ export class SpecbakeSpecularAAPlugin {
             base: { kind: base.kind, anisotropic: base.anisotropic, channel: base.channel },
             coat: coat ? { kind: coat.kind, channel: coat.channel } : null,
             baseTexture: base.texture, coatTexture: coat?.texture ?? null,
+            curvature,
             baseUv: material.normalMap ? 'vNormalMapUv' : 'vec2( 0.0 )',
             coatUv: material.clearcoatNormalMap ? 'vClearcoatNormalMapUv' : 'vec2( 0.0 )',
         });
