@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <iterator>
@@ -46,6 +47,7 @@ const D3 kLight = normalize(D3{0.8, 0.3, 0.6});
 struct Sample {
     D3 p, n, t, b;  // hit point, outward normal, tangent frame (T, B)
     D3 h;           // tangent-space half vector (h.T, h.B, h.n)
+    D3 v;           // direction to the eye
     D3 r;           // mirror direction of the view, 2 (n.v) n - v
     double n_dot_v;
 };
@@ -75,6 +77,7 @@ std::optional<Sample> trace(int surface, int x, int y) {
     const D3 v = -1.0 * d;
     const D3 hw = normalize(v + kLight);
     s.h = {dot(hw, s.t), dot(hw, s.b), dot(hw, s.n)};
+    s.v = v;
     s.n_dot_v = dot(s.n, v);
     s.r = 2.0 * s.n_dot_v * s.n - v;
     return s;
@@ -127,34 +130,56 @@ bool near_sym(const float* gpu, const Kernel2& k) {
     return near(gpu[0], k.xx, s) && near(gpu[1], k.yy, s) && near(gpu[2], k.xy, s);
 }
 
-// Renders `surface` with `program` (already linked) and compares every pixel with the closed form.
-void render_and_compare(GLuint program, int surface, const char* name) {
-    GLuint vao = 0, fbo = 0, targets[4] = {};
+// The closed-form samples of pixel (x, y) and of the quad pixels its ddx / ddy difference, or nothing where one
+// misses the surface or lies within a hair of the silhouette (float ray casting is ill-conditioned there).
+struct QuadSamples {
+    Sample s0x, s1x, s0y, s1y, s;
+};
+std::optional<QuadSamples> quad_samples(int surface, int x, int y) {
+    const auto s0x = trace(surface, x & ~1, y), s1x = trace(surface, x | 1, y);
+    const auto s0y = trace(surface, x, y & ~1), s1y = trace(surface, x, y | 1);
+    const auto s = trace(surface, x, y);
+    if (!s0x || !s1x || !s0y || !s1y || !s) return std::nullopt;
+    if (std::min({s0x->n_dot_v, s1x->n_dot_v, s0y->n_dot_v, s1y->n_dot_v}) < 0.02) return std::nullopt;
+    return QuadSamples{*s0x, *s1x, *s0y, *s1y, *s};
+}
+
+// Draws one viewport-covering triangle with `program` (already linked; deleted afterwards) into four float
+// targets and reads them back (RGBA per pixel, rows bottom to top).
+std::array<std::vector<float>, 4> render_targets(GLuint program) {
+    std::array<std::vector<float>, 4> out;
+    GLuint vao = 0, targets[4] = {};
     glGenVertexArrays(1, &vao);
     glBindVertexArray(vao);
-    fbo = create_float_targets(4, kSize, kSize, targets);
-    ASSERT_EQ(glCheckFramebufferStatus(GL_FRAMEBUFFER), static_cast<GLenum>(GL_FRAMEBUFFER_COMPLETE));
+    const GLuint fbo = create_float_targets(4, kSize, kSize, targets);
+    EXPECT_EQ(glCheckFramebufferStatus(GL_FRAMEBUFFER), static_cast<GLenum>(GL_FRAMEBUFFER_COMPLETE));
     glViewport(0, 0, kSize, kSize);
     glUseProgram(program);
-    glDrawArrays(GL_TRIANGLES, 0, 3);  // one triangle covering the viewport
-    std::vector<float> out[4];
+    glDrawArrays(GL_TRIANGLES, 0, 3);
     for (int i = 0; i < 4; ++i) {
-        out[i].resize(kSize * kSize * 4);
+        out[size_t(i)].resize(kSize * kSize * 4);
         glReadBuffer(GL_COLOR_ATTACHMENT0 + GLenum(i));
-        glReadPixels(0, 0, kSize, kSize, GL_RGBA, GL_FLOAT, out[i].data());
+        glReadPixels(0, 0, kSize, kSize, GL_RGBA, GL_FLOAT, out[size_t(i)].data());
     }
-    ASSERT_EQ(glGetError(), static_cast<GLenum>(GL_NO_ERROR));
+    EXPECT_EQ(glGetError(), static_cast<GLenum>(GL_NO_ERROR));
+    glDeleteTextures(4, targets);
+    glDeleteFramebuffers(1, &fbo);
+    glDeleteVertexArrays(1, &vao);
+    glDeleteProgram(program);
+    return out;
+}
+
+// Renders `surface` with `program` (already linked) and compares every pixel with the closed form.
+void render_and_compare(GLuint program, int surface, const char* name) {
+    const auto out = render_targets(program);
 
     int compared = 0, grazing = 0, failures = 0, curvature_checked = 0, slope_skipped = 0;
     for (int y = 0; y < kSize; ++y)
         for (int x = 0; x < kSize; ++x) {
             // The quad differences this pixel's ddx/ddy use.
-            const auto s0x = trace(surface, x & ~1, y), s1x = trace(surface, x | 1, y);
-            const auto s0y = trace(surface, x, y & ~1), s1y = trace(surface, x, y | 1);
-            const auto s = trace(surface, x, y);
-            if (!s0x || !s1x || !s0y || !s1y || !s) continue;
-            // Float ray casting is ill-conditioned within a hair of the silhouette.
-            if (std::min({s0x->n_dot_v, s1x->n_dot_v, s0y->n_dot_v, s1y->n_dot_v}) < 0.02) continue;
+            const auto q = quad_samples(surface, x, y);
+            if (!q) continue;
+            const Sample *s0x = &q->s0x, *s1x = &q->s1x, *s0y = &q->s0y, *s1y = &q->s1y, *s = &q->s;
             const size_t i = static_cast<size_t>(y * kSize + x) * 4;
             if (out[0][i + 3] != 1.0f) {
                 if (++failures <= 5) ADD_FAILURE() << name << " (" << x << ", " << y << "): GPU missed a closed-form hit";
@@ -221,10 +246,6 @@ void render_and_compare(GLuint program, int surface, const char* name) {
     EXPECT_GT(curvature_checked, 100) << name;
     std::printf("%s: %d pixels compared, %d at n.v < 0.3, %d curvature/derivative cross-checks, slope space "
                 "skipped at %d pixels with h.z < 0.05\n", name, compared, grazing, curvature_checked, slope_skipped);
-    glDeleteTextures(4, targets);
-    glDeleteFramebuffers(1, &fbo);
-    glDeleteVertexArrays(1, &vao);
-    glDeleteProgram(program);
 }
 
 // specaa_environment_kernel on the ray-cast surfaces against the closed-form mirror direction r = 2 (n.v) n - v
@@ -236,49 +257,35 @@ void environment_compare(int surface, const char* name) {
     std::string log;
     const GLuint program = build_program_glsl(kFullscreenVertex, surface_glsl(surface, true), log);
     ASSERT_NE(program, 0u) << log;
-    GLuint vao = 0, targets[4] = {};
-    glGenVertexArrays(1, &vao);
-    glBindVertexArray(vao);
-    const GLuint fbo = create_float_targets(4, kSize, kSize, targets);
-    glViewport(0, 0, kSize, kSize);
-    glUseProgram(program);
-    glDrawArrays(GL_TRIANGLES, 0, 3);
-    std::vector<float> out(kSize * kSize * 4);
-    glReadBuffer(GL_COLOR_ATTACHMENT0);
-    glReadPixels(0, 0, kSize, kSize, GL_RGBA, GL_FLOAT, out.data());
-    ASSERT_EQ(glGetError(), static_cast<GLenum>(GL_NO_ERROR));
+    const std::vector<float> out = render_targets(program)[0];
     int compared = 0, grazing = 0, failures = 0, clamped = 0;
     double widest_ratio = 0;  // the highlight's kernel (with the half vector's turn) over the environment's
     for (int y = 0; y < kSize; ++y)
         for (int x = 0; x < kSize; ++x) {
-            const auto s0x = trace(surface, x & ~1, y), s1x = trace(surface, x | 1, y);
-            const auto s0y = trace(surface, x, y & ~1), s1y = trace(surface, x, y | 1);
-            const auto s = trace(surface, x, y);
-            if (!s0x || !s1x || !s0y || !s1y || !s) continue;
-            if (std::min({s0x->n_dot_v, s1x->n_dot_v, s0y->n_dot_v, s1y->n_dot_v}) < 0.02) continue;
+            const auto q = quad_samples(surface, x, y);
+            if (!q) continue;
             const size_t i = static_cast<size_t>(y * kSize + x) * 4;
-            D3 ex = 0.5 * (s1x->r - s0x->r), ey = 0.5 * (s1y->r - s0y->r);
-            ex = ex - dot(ex, s->r) * s->r;
-            ey = ey - dot(ey, s->r) * s->r;
+            D3 ex = 0.5 * (q->s1x.r - q->s0x.r), ey = 0.5 * (q->s1y.r - q->s0y.r);
+            ex = ex - dot(ex, q->s.r) * q->s.r;
+            ey = ey - dot(ey, q->s.r) * q->s.r;
             const double k = std::min(kSigma2 * (dot(ex, ex) + dot(ey, ey)), kKappa);
             const double a = 1.0 / 16.0, kk = k * (1.0 - a), alpha2 = (a + kk) / (1.0 + kk);
-            const D3 dnu = s1x->n - s0x->n, dnv = s1y->n - s0y->n;
+            const D3 dnu = q->s1x.n - q->s0x.n, dnv = q->s1y.n - q->s0y.n;
             const double normal_kernel = std::min(kSigma2 * (dot(dnu, dnu) + dot(dnv, dnv)), kKappa);
             const bool ok = near(out[i], k, k) && near(out[i + 1], alpha2, alpha2) && near(out[i + 2], normal_kernel, normal_kernel);
             if (!ok && ++failures <= 5)
-                ADD_FAILURE() << name << " pixel (" << x << ", " << y << ") n.v " << s->n_dot_v << ": environment kernel gpu "
+                ADD_FAILURE() << name << " pixel (" << x << ", " << y << ") n.v " << q->s.n_dot_v << ": environment kernel gpu "
                               << out[i] << " ref " << k << ", a gpu " << out[i + 1] << " ref " << alpha2
                               << ", with no view gpu " << out[i + 2] << " ref " << normal_kernel;
             ++compared;
-            if (s->n_dot_v < 0.3) ++grazing;
+            if (q->s.n_dot_v < 0.3) ++grazing;
             if (k >= kKappa) ++clamped;
             // The highlight's kernel with the half vector's turn, tangential dv / (2 n.v) taken off dn (the default's).
-            const D3 v0x = -1.0 * (s0x->r - 2.0 * s0x->n_dot_v * s0x->n), v1x = -1.0 * (s1x->r - 2.0 * s1x->n_dot_v * s1x->n);
-            const D3 v0y = -1.0 * (s0y->r - 2.0 * s0y->n_dot_v * s0y->n), v1y = -1.0 * (s1y->r - 2.0 * s1y->n_dot_v * s1y->n);
-            D3 tx = v1x - v0x, ty = v1y - v0y;
-            tx = (0.5 / s->n_dot_v) * (tx - dot(tx, s->n) * s->n);
-            ty = (0.5 / s->n_dot_v) * (ty - dot(ty, s->n) * s->n);
-            const D3 hx = dnu - tx, hy = dnv - ty;
+            const auto turn = [&](const Sample& s0, const Sample& s1) {
+                const D3 dv = s1.v - s0.v;
+                return (0.5 / q->s.n_dot_v) * (dv - dot(dv, q->s.n) * q->s.n);
+            };
+            const D3 hx = dnu - turn(q->s0x, q->s1x), hy = dnv - turn(q->s0y, q->s1y);
             const double highlight = kSigma2 * (dot(hx, hx) + dot(hy, hy));
             if (k > 0 && k < kKappa) widest_ratio = std::max(widest_ratio, highlight / k);
         }
@@ -287,10 +294,6 @@ void environment_compare(int surface, const char* name) {
     EXPECT_GT(grazing, 100) << name;
     std::printf("%s: environment kernel at %d pixels (%d at n.v < 0.3, %d clamped to kappa); the highlight's kernel is "
                 "up to %.1fx the environment's\n", name, compared, grazing, clamped, widest_ratio);
-    glDeleteTextures(4, targets);
-    glDeleteFramebuffers(1, &fbo);
-    glDeleteVertexArrays(1, &vao);
-    glDeleteProgram(program);
 }
 
 void run_glsl(int surface, const char* name) {

@@ -878,18 +878,22 @@ fn specaa_filtered_roughness(s: SpecaaSurface) -> f32 { return specaa_roughness_
 // highlight's kernel is too wide for the environment there (three.js's environment-lit sphere, RMSE against
 // its 16 x 16 supersampled image 0.1065 unfiltered: 0.199 with the highlight's kernel, 0.115 with this one:
 // web/three/README.md#tested). Quad derivatives of r over the vertex normal s.normal and s.view, clamped to
-// kappa; a zero s.view (not filled) gives the normal's kernel (specaa_pixel_kernel); non-finite inputs give 0
-// (edge policy).
+// kappa; a zero s.view (not filled) gives the quad-derivative kernel of the normal itself; non-finite inputs
+// give 0 (edge policy).
 fn specaa_environment_kernel(s: SpecaaSurface) -> f32 {
-    let r: vec3<f32> = reflect(-s.view, s.normal);
-    var ex: vec3<f32> = 0.5 * dpdx(r);
-    var ey: vec3<f32> = 0.5 * dpdy(r);
-    ex -= r * dot(ex, r);
-    ey -= r * dot(ey, r);
+    // Without s.view the differentiated direction is the normal itself: dn whole, as specaa_iso_kernel_mean
+    // takes it, not the part of dr / 2 across r.
+    let hasView: bool = dot(s.view, s.view) > 0.0;
+    let r: vec3<f32> = select(s.normal, reflect(-s.view, s.normal), hasView);
+    let scale: f32 = select(1.0, 0.5, hasView);
+    let across: f32 = select(0.0, 1.0, hasView);
+    var ex: vec3<f32> = scale * dpdx(r);
+    var ey: vec3<f32> = scale * dpdy(r);
+    ex -= across * r * dot(ex, r);
+    ey -= across * r * dot(ey, r);
     let usable: bool = specaa_max_component(max(specaa_magnitude_bits3(r), max(specaa_magnitude_bits3(ex), specaa_magnitude_bits3(ey)))) <
                   0x7f800000u;
-    let k: f32 = select(0.0, min(specaa_iso_kernel_mean(ex, ey), SPECAA_KAPPA), usable);
-    return select(specaa_pixel_kernel(s), k, dot(s.view, s.view) > 0.0);
+    return select(0.0, min(specaa_iso_kernel_mean(ex, ey), SPECAA_KAPPA), usable);
 }
 // Filtered squared roughness for a prefiltered environment lookup (the a to pick its mip by): the baked
 // spread and specaa_environment_kernel added in projected space (TK21 Eq. 6-7), as specaa_filtered_alpha2

@@ -1140,21 +1140,25 @@ float specaa_filtered_roughness(SpecaaSurface s) { return specaa_roughness_from_
 // highlight's kernel is too wide for the environment there (three.js's environment-lit sphere, RMSE against
 // its 16 x 16 supersampled image 0.1065 unfiltered: 0.199 with the highlight's kernel, 0.115 with this one:
 // web/three/README.md#tested). Quad derivatives of r over the vertex normal s.normal and s.view, clamped to
-// kappa; a zero s.view (not filled) gives the normal's kernel (specaa_pixel_kernel); non-finite inputs give 0
-// (edge policy).
+// kappa; a zero s.view (not filled) gives the quad-derivative kernel of the normal itself; non-finite inputs
+// give 0 (edge policy).
 float specaa_environment_kernel(SpecaaSurface s) {
 #if defined(SPECAA_NO_PIXEL_KERNEL)
     return 0.0;
 #else
-    SPECAA_FLOAT3 r = reflect(-s.view, s.normal);
-    SPECAA_FLOAT3 ex = 0.5 * SPECAA_DDX(r);
-    SPECAA_FLOAT3 ey = 0.5 * SPECAA_DDY(r);
-    ex -= r * dot(ex, r);
-    ey -= r * dot(ey, r);
+    // Without s.view the differentiated direction is the normal itself: dn whole, as specaa_iso_kernel_mean
+    // takes it, not the part of dr / 2 across r.
+    bool hasView = dot(s.view, s.view) > 0.0;
+    SPECAA_FLOAT3 r = SPECAA_SELECT3(hasView, reflect(-s.view, s.normal), s.normal);
+    float scale = SPECAA_SELECT(hasView, 0.5, 1.0);
+    float across = SPECAA_SELECT(hasView, 1.0, 0.0);
+    SPECAA_FLOAT3 ex = scale * SPECAA_DDX(r);
+    SPECAA_FLOAT3 ey = scale * SPECAA_DDY(r);
+    ex -= across * r * dot(ex, r);
+    ey -= across * r * dot(ey, r);
     bool usable = specaa_max_component(max(specaa_magnitude_bits3(r), max(specaa_magnitude_bits3(ex), specaa_magnitude_bits3(ey)))) <
                   SPECAA_NOT_FINITE;
-    float k = SPECAA_SELECT(usable, min(specaa_iso_kernel_mean(ex, ey), SPECAA_KAPPA), 0.0);
-    return SPECAA_SELECT(dot(s.view, s.view) > 0.0, k, specaa_pixel_kernel(s));
+    return SPECAA_SELECT(usable, min(specaa_iso_kernel_mean(ex, ey), SPECAA_KAPPA), 0.0);
 #endif
 }
 
