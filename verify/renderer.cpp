@@ -238,7 +238,8 @@ void main() {
 // SIM_HORIZON_BOUND (a diagnostic, verify --variant): the spread the filter adds along the view's
 // tangential direction is bounded by (n.v)^2, the squared projected distance from the shading normal to the
 // view's horizon: normals past it face away and are in no pixel's footprint
-// (docs/accuracy.md#the-whole-corpus-at-bench-settings).
+// (docs/accuracy.md#the-whole-corpus-at-bench-settings). SIM_G2_MATERIAL (a diagnostic): G2 masks with the
+// material's a instead of the filtered matrix (docs/accuracy.md#other-rules-measured-and-not-kept).
 constexpr const char* kCandidateMainTail = R"(
 #ifdef SIM_HORIZON_BOUND
         {
@@ -260,8 +261,13 @@ constexpr const char* kCandidateMainTail = R"(
 #ifndef SIM_NDF
 #define SIM_NDF(h, A, a) specaa_ggx_D(h, A, (a) * (a))
 #endif
+#ifdef SIM_G2_MATERIAL
+        vec3 AG = vec3(a, a, 0.0);
+#else
+        vec3 AG = A;
+#endif
         if (lTS.z > 0.0 && vTS.z > 0.0)
-            radiance += SIM_NDF(hTS, A, a) * specaa_ggx_G2(lTS, vTS, hTS, A) / (4.0 * vTS.z) * E;
+            radiance += SIM_NDF(hTS, A, a) * specaa_ggx_G2(lTS, vTS, hTS, AG) / (4.0 * vTS.z) * E;
     }
     oColor = vec4(radiance, 1.0, 0.0, 1.0);
 }
