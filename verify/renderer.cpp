@@ -52,6 +52,7 @@ layout(location = 1) in vec3 aNormal;
 layout(location = 2) in vec4 aTangent;
 layout(location = 3) in vec2 aUv;
 layout(location = 4) in vec4 aCurvature;
+layout(location = 5) in float aEdge;
 uniform mat4 uViewProjection;
 uniform vec2 uJitterNdc;
 out vec3 vPosition;
@@ -59,6 +60,7 @@ out vec3 vNormal;
 out vec4 vTangent;
 out vec2 vUv;
 out vec4 vCurvature;
+out float vEdge;
 invariant gl_Position;
 void main() {
     vPosition = aPosition;
@@ -66,6 +68,7 @@ void main() {
     vTangent = aTangent;
     vUv = aUv;
     vCurvature = aCurvature;
+    vEdge = aEdge;
     gl_Position = uViewProjection * vec4(aPosition, 1.0);
     gl_Position.xy += uJitterNdc * gl_Position.w;
 }
@@ -78,6 +81,7 @@ in vec3 vNormal;
 in vec4 vTangent;
 in vec2 vUv;
 in vec4 vCurvature;
+in float vEdge;
 uniform vec3 uCameraPosition;
 uniform vec3 uCameraForward;
 uniform int uLightType[8];        // 0 directional, 1 point, 2 spot
@@ -608,12 +612,32 @@ Result<std::unique_ptr<SimRenderer>> SimRenderer::create(const SimScene& scene, 
             return make_error(m.name + ": the simulator needs normals, tangents and UVs");
         Impl::Mesh mesh;
         std::vector<float> interleaved;
-        interleaved.reserve(m.vertex_count() * 12);
+        interleaved.reserve(m.vertex_count() * 13);
+        // Each vertex's mean incident edge length (object space) as attribute 5 (vEdge): the face size that
+        // the diagnostic SPECAA_PIXEL_KERNEL_EDGE=vEdge weighs the footprint against
+        // (docs/accuracy.md#the-faces-own-turn-and-the-vertexs-average).
+        std::vector<double> edge_sum(m.vertex_count(), 0.0);
+        std::vector<int> edge_count(m.vertex_count(), 0);
+        for (size_t t = 0; t + 2 < m.indices.size(); t += 3) {
+            for (int e = 0; e < 3; ++e) {
+                const uint32_t i = m.indices[t + size_t(e)], j = m.indices[t + size_t((e + 1) % 3)];
+                double d2 = 0.0;
+                for (int c = 0; c < 3; ++c) {
+                    const double d = double(m.positions[3 * i + size_t(c)]) - double(m.positions[3 * j + size_t(c)]);
+                    d2 += d * d;
+                }
+                edge_sum[i] += std::sqrt(d2);
+                edge_sum[j] += std::sqrt(d2);
+                ++edge_count[i];
+                ++edge_count[j];
+            }
+        }
         for (size_t v = 0; v < m.vertex_count(); ++v) {
             interleaved.insert(interleaved.end(), &m.positions[3 * v], &m.positions[3 * v] + 3);
             interleaved.insert(interleaved.end(), &m.normals[3 * v], &m.normals[3 * v] + 3);
             interleaved.insert(interleaved.end(), &m.tangents[4 * v], &m.tangents[4 * v] + 4);
             interleaved.insert(interleaved.end(), &m.uv0[2 * v], &m.uv0[2 * v] + 2);
+            interleaved.push_back(edge_count[v] ? float(edge_sum[v] / edge_count[v]) : 0.0f);
         }
         glCreateBuffers(1, &mesh.vertices);
         glNamedBufferStorage(mesh.vertices, GLsizeiptr(interleaved.size() * sizeof(float)), interleaved.data(), 0);
@@ -621,7 +645,7 @@ Result<std::unique_ptr<SimRenderer>> SimRenderer::create(const SimScene& scene, 
         glNamedBufferStorage(mesh.indices, GLsizeiptr(m.indices.size() * sizeof(uint32_t)), m.indices.data(), 0);
         mesh.index_count = GLsizei(m.indices.size());
         glCreateVertexArrays(1, &mesh.vao);
-        glVertexArrayVertexBuffer(mesh.vao, 0, mesh.vertices, 0, 12 * sizeof(float));
+        glVertexArrayVertexBuffer(mesh.vao, 0, mesh.vertices, 0, 13 * sizeof(float));
         glVertexArrayElementBuffer(mesh.vao, mesh.indices);
         const GLint sizes[] = {3, 3, 4, 2};
         GLuint offset = 0;
@@ -631,6 +655,9 @@ Result<std::unique_ptr<SimRenderer>> SimRenderer::create(const SimScene& scene, 
             glVertexArrayAttribBinding(mesh.vao, a, 0);
             offset += GLuint(sizes[a]);
         }
+        glEnableVertexArrayAttrib(mesh.vao, 5);
+        glVertexArrayAttribFormat(mesh.vao, 5, 1, GL_FLOAT, GL_FALSE, 12 * sizeof(float));
+        glVertexArrayAttribBinding(mesh.vao, 5, 0);
         glEnableVertexArrayAttrib(mesh.vao, 4);
         glVertexArrayAttribFormat(mesh.vao, 4, 4, GL_FLOAT, GL_FALSE, 0);
         glVertexArrayAttribBinding(mesh.vao, 4, 1);

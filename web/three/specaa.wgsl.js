@@ -94,6 +94,10 @@ fn specaa_lod_from_derivatives(size: vec2<f32>, uv: vec2<f32>) -> f32 {
 //   SPECAA_GATE_PIXEL_KERNEL        the per-pixel kernel faded out like the baked one (SPECAA_KERNEL_GATE).
 //   SPECAA_PIXEL_KERNEL_MIN, _MAX, _MEAN  with SPECAA_USE_CURVATURE: per pixel the smaller or the larger (by
 //                                   trace) of the quad-derivative kernel and the curvature kernel, or their mean.
+//   SPECAA_PIXEL_KERNEL_EDGE expr   with SPECAA_USE_CURVATURE: the two blended by how much of a face the
+//                                   footprint covers, w = saturate(SPECAA_EDGE_SCALE (default 3.5) F / L) on
+//                                   the curvature kernel, F the longer position derivative, L = expr, the
+//                                   vertex's mean edge length (an attribute the shader provides).
 //   SPECAA_KERNEL_AREA_LOD          the Sigma kernel texel sampled at the mip of the footprint's area, not of
 //                                   its major axis (the hardware's isotropic choice).
 //   SPECAA_CLOSED_FORM_D            the reference tier's convolution in closed form

@@ -125,6 +125,10 @@ float specaa_lod_from_derivatives(vec2 size, vec2 uv) {
 //   SPECAA_GATE_PIXEL_KERNEL        the per-pixel kernel faded out like the baked one (SPECAA_KERNEL_GATE).
 //   SPECAA_PIXEL_KERNEL_MIN, _MAX, _MEAN  with SPECAA_USE_CURVATURE: per pixel the smaller or the larger (by
 //                                   trace) of the quad-derivative kernel and the curvature kernel, or their mean.
+//   SPECAA_PIXEL_KERNEL_EDGE expr   with SPECAA_USE_CURVATURE: the two blended by how much of a face the
+//                                   footprint covers, w = saturate(SPECAA_EDGE_SCALE (default 3.5) F / L) on
+//                                   the curvature kernel, F the longer position derivative, L = expr, the
+//                                   vertex's mean edge length (an attribute the shader provides).
 //   SPECAA_KERNEL_AREA_LOD          the Sigma kernel texel sampled at the mip of the footprint's area, not of
 //                                   its major axis (the hardware's isotropic choice).
 //   SPECAA_CLOSED_FORM_D            the reference tier's convolution in closed form
@@ -1056,7 +1060,7 @@ SPECAA_FLOAT3 specaa_pixel_kernel_matrix(SpecaaSurface s) {
 #if defined(SPECAA_NO_PIXEL_KERNEL)
     return SPECAA_FLOAT3(0.0, 0.0, 0.0);
 #else
-#if defined(SPECAA_USE_CURVATURE) && (defined(SPECAA_PIXEL_KERNEL_MIN) || defined(SPECAA_PIXEL_KERNEL_MAX) || defined(SPECAA_PIXEL_KERNEL_MEAN))
+#if defined(SPECAA_USE_CURVATURE) && (defined(SPECAA_PIXEL_KERNEL_MIN) || defined(SPECAA_PIXEL_KERNEL_MAX) || defined(SPECAA_PIXEL_KERNEL_MEAN) || defined(SPECAA_PIXEL_KERNEL_EDGE))
 #define SPECAA_PIXEL_KERNEL_BOTH  // diagnostics: the quad-derivative kernel and the curvature kernel combined
 #endif
 #if defined(SPECAA_USE_CURVATURE) && !defined(SPECAA_PIXEL_KERNEL_BOTH)
@@ -1081,7 +1085,17 @@ SPECAA_FLOAT3 specaa_pixel_kernel_matrix(SpecaaSurface s) {
     // (docs/accuracy.md#the-faces-own-turn-and-the-vertexs-average).
     SPECAA_FLOAT3 Kc;
     bool usableCurvature = specaa_curvature_pixel_kernel(s, Kc);
-#if defined(SPECAA_PIXEL_KERNEL_MIN)
+#if defined(SPECAA_PIXEL_KERNEL_EDGE)
+#if !defined(SPECAA_EDGE_SCALE)
+#define SPECAA_EDGE_SCALE 3.5
+#endif
+    {
+        float edge = SPECAA_PIXEL_KERNEL_EDGE;
+        float foot = max(length(SPECAA_DDX(s.position)), length(SPECAA_DDY(s.position)));
+        float w = SPECAA_SATURATE(SPECAA_EDGE_SCALE * foot / max(edge, 1.0e-30));
+        K = SPECAA_SELECT3(usableCurvature, w * Kc + (1.0 - w) * K, K);
+    }
+#elif defined(SPECAA_PIXEL_KERNEL_MIN)
     K = SPECAA_SELECT3(usableCurvature && Kc.x + Kc.y < K.x + K.y, Kc, K);
 #elif defined(SPECAA_PIXEL_KERNEL_MAX)
     K = SPECAA_SELECT3(usableCurvature && Kc.x + Kc.y > K.x + K.y, Kc, K);
