@@ -80,7 +80,8 @@ TEST(ShaderCompile, DiagnosticSwitchesCompileToValidSpirvInBothLanguages) {
     for (const char* define : {"SPECAA_NO_BAKED_KERNEL", "SPECAA_DEFAULT_D_WEIGHT=0.0", "SPECAA_KERNEL_LOD_BIAS=-1.0",
                                "SPECAA_GATE_PIXEL_KERNEL", "SPECAA_BLEND_FROM_BAKED_SPREAD", "SPECAA_KERNEL_AREA_LOD",
                                "SPECAA_USE_CURVATURE -DSPECAA_PIXEL_KERNEL_MIN", "SPECAA_USE_CURVATURE -DSPECAA_PIXEL_KERNEL_MAX",
-                               "SPECAA_USE_CURVATURE -DSPECAA_PIXEL_KERNEL_MEAN", "SPECAA_BLEND_FROM_LARGEST_AXIS",
+                               "SPECAA_USE_CURVATURE -DSPECAA_PIXEL_KERNEL_MEAN", "SPECAA_USE_CURVATURE -DSPECAA_PIXEL_KERNEL_EDGE=0.01",
+                               "SPECAA_BLEND_FROM_LARGEST_AXIS",
                                "SPECAA_QUALITY=0 -DSPECAA_TIER_VIEW_TURN", "SPECAA_QUALITY=1 -DSPECAA_TIER_VIEW_TURN"}) {
         std::string out;
         EXPECT_EQ(run_command(std::string("glslangValidator -G -S frag -D") + define + " -I'" + kShaders + "' '" +
