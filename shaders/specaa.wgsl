@@ -1066,7 +1066,16 @@ fn specaa_default_D_kernel(h: vec3<f32>, filteredA: vec3<f32>, s: SpecaaSurface,
     let bakedSpread: vec3<f32> = specaa_baked_kernel_matrix_kernel(s, kernelTexture, kernelSampler);
     let rest: vec3<f32> = spread - bakedSpread;
     let restMinor: f32 = 0.5 * (rest.x + rest.y) - sqrt(0.25 * (rest.x - rest.y) * (rest.x - rest.y) + rest.z * rest.z);
-    var w: f32 = saturate(lod) * saturate(SPECAA_GGX_SPREAD * max(specaa_sym_max_eigenvalue(bakedSpread), restMinor));
+    var bakedShare: f32 = saturate(SPECAA_GGX_SPREAD * specaa_sym_max_eigenvalue(bakedSpread));
+    // The Sigma kernel's texel also holds the shape of its spread: the rough share g (the part of its normals
+    // steeper than slope 0.02), which for a spike and a slab is 2 / kurtosis. GGX(A) stands for a heavy-tailed
+    // spread, the convolution for a Gaussian one, so the baked spread asks for GGX(A) by 1 - g = 1 - 2 / kurtosis
+    // (0 for a broad spread whose normals all lie on the slope, 1 for a few steep normals among flat ones).
+    // Measured: LightsPunctualLamp near, a broad spread (g 0.6-0.95) that GGX(A) haloed, joins and no pair
+    // leaves (docs/accuracy.md#the-ggxa-share-judged-on-the-spreads-shape). SPECAA_BLEND_FROM_SPREAD_SIZE
+    // (diagnostic) judges on the size alone, as before.
+    bakedShare *= 1.0 - specaa_sample_kernel_rough_share(kernelTexture, kernelSampler, s.uv);
+    var w: f32 = saturate(lod) * max(bakedShare, saturate(SPECAA_GGX_SPREAD * restMinor));
     w = select(1.0, w, w == w);
     let ggx: f32 = specaa_ggx_D(h, A + vec3<f32>(1.0e-12, 1.0e-12, 0.0), a * a); // floored: a mirror stays finite
     var roughD: f32 = ggx;

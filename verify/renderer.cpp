@@ -613,31 +613,14 @@ Result<std::unique_ptr<SimRenderer>> SimRenderer::create(const SimScene& scene, 
         Impl::Mesh mesh;
         std::vector<float> interleaved;
         interleaved.reserve(m.vertex_count() * 13);
-        // Each vertex's mean incident edge length (object space) as attribute 5 (vEdge): the face size that
-        // the diagnostic SPECAA_PIXEL_KERNEL_EDGE=vEdge weighs the footprint against
-        // (docs/accuracy.md#the-faces-own-turn-and-the-vertexs-average).
-        std::vector<double> edge_sum(m.vertex_count(), 0.0);
-        std::vector<int> edge_count(m.vertex_count(), 0);
-        for (size_t t = 0; t + 2 < m.indices.size(); t += 3) {
-            for (int e = 0; e < 3; ++e) {
-                const uint32_t i = m.indices[t + size_t(e)], j = m.indices[t + size_t((e + 1) % 3)];
-                double d2 = 0.0;
-                for (int c = 0; c < 3; ++c) {
-                    const double d = double(m.positions[3 * i + size_t(c)]) - double(m.positions[3 * j + size_t(c)]);
-                    d2 += d * d;
-                }
-                edge_sum[i] += std::sqrt(d2);
-                edge_sum[j] += std::sqrt(d2);
-                ++edge_count[i];
-                ++edge_count[j];
-            }
-        }
+        // Attribute 5 (vEdge): each vertex's mean edge length, for SPECAA_PIXEL_KERNEL_EDGE (scene.h).
+        const std::vector<float> edge = mean_edge_lengths(m);
         for (size_t v = 0; v < m.vertex_count(); ++v) {
             interleaved.insert(interleaved.end(), &m.positions[3 * v], &m.positions[3 * v] + 3);
             interleaved.insert(interleaved.end(), &m.normals[3 * v], &m.normals[3 * v] + 3);
             interleaved.insert(interleaved.end(), &m.tangents[4 * v], &m.tangents[4 * v] + 4);
             interleaved.insert(interleaved.end(), &m.uv0[2 * v], &m.uv0[2 * v] + 2);
-            interleaved.push_back(edge_count[v] ? float(edge_sum[v] / edge_count[v]) : 0.0f);
+            interleaved.push_back(edge[v]);
         }
         glCreateBuffers(1, &mesh.vertices);
         glNamedBufferStorage(mesh.vertices, GLsizeiptr(interleaved.size() * sizeof(float)), interleaved.data(), 0);

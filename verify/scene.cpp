@@ -295,6 +295,30 @@ std::vector<SimTextureSet> texture_sets(const SimScene& scene, std::vector<int>*
     return sets;
 }
 
+std::vector<float> mean_edge_lengths(const TriMesh& mesh) {
+    std::vector<double> sum(mesh.vertex_count(), 0.0);
+    std::vector<int> count(mesh.vertex_count(), 0);
+    for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+        for (size_t e = 0; e < 3; ++e) {
+            const size_t i = mesh.indices[t + e], j = mesh.indices[t + (e + 1) % 3];
+            double d2 = 0.0;
+            for (size_t c = 0; c < 3; ++c) {
+                const double d = double(mesh.positions[3 * i + c]) - double(mesh.positions[3 * j + c]);
+                d2 += d * d;
+            }
+            const double length = std::sqrt(d2);
+            sum[i] += length;
+            sum[j] += length;
+            ++count[i];
+            ++count[j];
+        }
+    }
+    std::vector<float> out(mesh.vertex_count(), 0.0f);
+    for (size_t v = 0; v < out.size(); ++v)
+        if (count[v] > 0) out[v] = float(sum[v] / count[v]);
+    return out;
+}
+
 bool has_exact_curvature(const SimScene& scene) {
     return std::all_of(scene.objects.begin(), scene.objects.end(), [](const SimObject& o) {
         return o.exact_curvature.values.size() == 4 * o.mesh.vertex_count();

@@ -103,6 +103,11 @@ std::vector<SimTextureSet> texture_sets(const SimScene& scene, std::vector<int>*
 // True when every object carries its analytic curvature (the built-in scenes).
 bool has_exact_curvature(const SimScene& scene);
 
+// Each vertex's mean incident edge length (object space; 0 for a vertex on no triangle): the face size the
+// diagnostic SPECAA_PIXEL_KERNEL_EDGE weighs the footprint against (the renderer's attribute vEdge,
+// docs/accuracy.md#the-faces-own-turn-and-the-vertexs-average).
+std::vector<float> mean_edge_lengths(const TriMesh& mesh);
+
 // Names of the built-in analytic scenes: "sphere", "cylinder" (grazing view), "torus", "bumpy-sphere"
 // (normal-mapped).
 std::span<const std::string_view> builtin_scene_names();

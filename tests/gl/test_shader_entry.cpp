@@ -293,17 +293,20 @@ void run_config(const Config& c) {
                     ADD_FAILURE() << c.name << " level " << L << " pixel " << x << "," << y << ": matrix " << out1[i] << " "
                                   << out1[i + 1] << " " << out1[i + 2] << " want " << A.xx << " " << A.yy << " " << A.xy;
                 // The default NDF: GGX(A) + (1 - w) (convolution - GGX(A)). w = 0 without baked data; the level
-                // of detail L (saturated) with the baked roughness; L times saturate(8 k), with kernel or LEAN
-                // mips (SPECAA_GGX_SPREAD 8), k the larger of the baked spread's largest eigenvalue and the
-                // smallest eigenvalue of the rest of A - a I (the spread's shape).
-                const auto shape_spread = [a0](const Sym2<double>& matrix, const Sym2<double>& baked) {
+                // of detail L (saturated) with the baked roughness; with kernel or LEAN mips (SPECAA_GGX_SPREAD 8)
+                // L times the larger of saturate(8 lambda_max(baked spread)) and saturate(8 lambda_min(rest of
+                // A - a I)), the baked spread's part times 1 - g (its heavy tail) where the Sigma kernel's texel
+                // holds the rough share g of a single lobe.
+                const auto blend_share = [a0](const Sym2<double>& matrix, const Sym2<double>& baked, double heavy) {
                     const double rxx = matrix.xx - a0 - baked.xx, ryy = matrix.yy - a0 - baked.yy, rxy = matrix.xy - baked.xy;
                     const double rest_minor = 0.5 * (rxx + ryy) - std::hypot(0.5 * (rxx - ryy), rxy);
-                    return std::max(max_eigenvalue_sym2(baked.xx, baked.yy, baked.xy), rest_minor);
+                    return std::max(heavy * std::clamp(8.0 * max_eigenvalue_sym2(baked.xx, baked.yy, baked.xy), 0.0, 1.0),
+                                    std::clamp(8.0 * rest_minor, 0.0, 1.0));
                 };
+                const double heavy = c.baked == Baked::KernelAnisotropic && !c.two_lobes ? 1.0 - level_share(L) : 1.0;
                 double w = 0.0;
                 if (c.baked == Baked::Roughness) w = std::min(1.0, double(L));
-                else if (c.baked != Baked::None) w = std::min(1.0, double(L)) * std::clamp(8.0 * shape_spread(A, k_tex), 0.0, 1.0);
+                else if (c.baked != Baked::None) w = std::min(1.0, double(L)) * blend_share(A, k_tex, heavy);
                 // The Sigma kernel's two lobes: the rough share g with K = 2 Sigma / g (gated), the flat share
                 // with the pixel kernel alone, convolved.
                 const double g = c.baked == Baked::KernelAnisotropic && c.two_lobes ? level_share(L) : 1.0;
@@ -314,7 +317,7 @@ void run_config(const Config& c) {
                             : A;
                 const Sym2<double> flat_A = projected_to_slope_roughness(slope_to_projected_roughness(diag(a0, a0)) + clamp_kernel(k_px));
                 if (g < 1.0)
-                    w = std::min(1.0, double(L)) * std::clamp(8.0 * shape_spread(rough_A, gate_factor(k_rough, a0) * k_rough), 0.0, 1.0);
+                    w = std::min(1.0, double(L)) * blend_share(rough_A, gate_factor(k_rough, a0) * k_rough, 1.0);
                 const double ggx = ggx_ndf(h, rough_A, a0 * a0), conv = convolved_ndf(h, rough_A, a0);
                 const double flat = g < 1.0 ? convolved_ndf(h, flat_A, a0) : 0.0;
                 const double want_d = g * (ggx + (1.0 - w) * (conv - ggx)) + (1.0 - g) * flat;

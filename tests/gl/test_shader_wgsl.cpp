@@ -376,13 +376,16 @@ TEST(ShaderWgsl, DefaultWithBakedKernelMatchesCppCoreInAFragmentShader) {
             EXPECT_LE(ea, kRelTol) << "A at pixel (" << x << ", " << y << "): gpu (" << decode(px[i]) << ", "
                                    << decode(px[i + 1]) << ", " << decode(px[i + 2]) << "), reference (" << A.xx << ", "
                                    << A.yy << ", " << A.xy << ")";
-            // D: the blend weight w = saturate(LOD) saturate(8 k), LOD 2 right of x = 8, k the larger of the
-            // baked spread's largest eigenvalue and the smallest of the rest of A - a I (the spread's shape).
+            // D: the blend weight w = saturate(LOD) max((1 - g) saturate(8 lambda_max(baked spread)),
+            // saturate(8 lambda_min(rest of A - a I))), LOD 2 right of x = 8 (the spread's size, its heavy tail
+            // 1 - g and the rest's shape).
             const Vec3<double> h = normalize(Vec3<double>{0.06 * (x % 8), 0.03, 1.0});
             const Sym2<double> rest{A.xx - a - K.xx, A.xy - K.xy, A.yy - a - K.yy};
             const double rest_minor = 0.5 * (rest.xx + rest.yy) - std::hypot(0.5 * (rest.xx - rest.yy), rest.xy);
             const double baked_max = 0.5 * (K.xx + K.yy) + std::hypot(0.5 * (K.xx - K.yy), K.xy);
-            const double w = x >= 8 ? std::clamp(8.0 * std::max(baked_max, rest_minor), 0.0, 1.0) : 0.0;
+            const double w = x >= 8 ? std::max((1.0 - g) * std::clamp(8.0 * baked_max, 0.0, 1.0),
+                                               std::clamp(8.0 * rest_minor, 0.0, 1.0))
+                                    : 0.0;
             blended += w > 0.0 && w < 1.0;
             const double ggx = ggx_ndf(h, A, a * a), d = ggx + (1.0 - w) * (convolved_ndf(h, A, a) - ggx);
             const double cond = std::max(1.0, A.xx * A.yy / std::max(det(A), a * a));

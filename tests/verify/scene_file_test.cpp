@@ -626,5 +626,21 @@ TEST(VerifyScene, CostLightsAreSpreadEvenlyAroundTheView) {
     }
 }
 
+// Each vertex's mean incident edge length (the simulator's vEdge): two triangles sharing the diagonal of a
+// 3 x 4 rectangle, counted by hand (a corner on one triangle sees its two edges; a diagonal end sees 3, 4 or
+// 5 once per triangle), and a vertex on no triangle 0.
+TEST(VerifyScene, MeanEdgeLengthsAreEachVertexsIncidentEdgesAveraged) {
+    TriMesh m;
+    m.positions = {0, 0, 0, 3, 0, 0, 3, 4, 0, 0, 4, 0, 9, 9, 9};
+    m.indices = {0, 1, 2, 0, 2, 3};
+    const std::vector<float> e = mean_edge_lengths(m);
+    ASSERT_EQ(e.size(), size_t(5));
+    EXPECT_FLOAT_EQ(e[0], (3.0f + 5.0f + 5.0f + 4.0f) / 4.0f);  // (0,1), (2,0) of the first; (0,2), (3,0) of the second
+    EXPECT_FLOAT_EQ(e[1], (3.0f + 4.0f) / 2.0f);
+    EXPECT_FLOAT_EQ(e[2], (4.0f + 5.0f + 5.0f + 3.0f) / 4.0f);
+    EXPECT_FLOAT_EQ(e[3], (3.0f + 4.0f) / 2.0f);
+    EXPECT_EQ(e[4], 0.0f);
+}
+
 }  // namespace
 }  // namespace specbake::verify
