@@ -65,8 +65,9 @@
 //   SPECAA_SIGMA2   pixel-filter variance in pixels^2, default 1/(2 pi) (TK21 App. B).
 //   SPECAA_KAPPA    clamp of derivative-based kernels, default 0.18 (TK21 Eq. 10, K16).
 //   SPECAA_GGX_SPREAD  specaa_default_D with a kernel or LEAN texture: GGX(A) where the minified
-//                   footprint's spread k_max (the baked spread's major axis or the per-pixel
-//                   kernel's minor one) exceeds 1 / this, default 8.
+//                   footprint's spread k_max (the baked spread's major axis, weighed by its heavy
+//                   tail 1 - g with the Sigma kernel, or the per-pixel kernel's minor one) exceeds
+//                   1 / this, default 8.
 //   Baked data for the default entry point (at most one of the roughness texture and kernel/LEAN):
 //   SPECAA_ROUGHNESS_TEXTURE name   baked filtered roughness mips (perceptual r), channel
 //                                   SPECAA_ROUGHNESS_CHANNEL (default g: the RGBA ORM layout, A = 1;
@@ -105,6 +106,8 @@
 //   SPECAA_GATE_PIXEL_KERNEL        the per-pixel kernel faded out like the baked one (SPECAA_KERNEL_GATE).
 //   SPECAA_PIXEL_KERNEL_MIN, _MAX, _MEAN  with SPECAA_USE_CURVATURE: per pixel the smaller or the larger (by
 //                                   trace) of the quad-derivative kernel and the curvature kernel, or their mean.
+//   SPECAA_BLEND_FROM_SPREAD_SIZE   specaa_default_D's GGX(A) share judged on the baked spread's size alone,
+//                                   not weighed by its heavy tail 1 - g (the rule before).
 //   SPECAA_PIXEL_KERNEL_EDGE expr   with SPECAA_USE_CURVATURE: the two blended by how much of a face the
 //                                   footprint covers, w = saturate(SPECAA_EDGE_SCALE (default 3.5) F / L) on
 //                                   the curvature kernel, F the longer position derivative, L = expr, the

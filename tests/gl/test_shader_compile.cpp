@@ -81,7 +81,7 @@ TEST(ShaderCompile, DiagnosticSwitchesCompileToValidSpirvInBothLanguages) {
                                "SPECAA_GATE_PIXEL_KERNEL", "SPECAA_BLEND_FROM_BAKED_SPREAD", "SPECAA_KERNEL_AREA_LOD",
                                "SPECAA_USE_CURVATURE -DSPECAA_PIXEL_KERNEL_MIN", "SPECAA_USE_CURVATURE -DSPECAA_PIXEL_KERNEL_MAX",
                                "SPECAA_USE_CURVATURE -DSPECAA_PIXEL_KERNEL_MEAN", "SPECAA_USE_CURVATURE -DSPECAA_PIXEL_KERNEL_EDGE=0.01",
-                               "SPECAA_BLEND_FROM_LARGEST_AXIS",
+                               "SPECAA_BLEND_FROM_LARGEST_AXIS", "SPECAA_BLEND_FROM_SPREAD_SIZE",
                                "SPECAA_QUALITY=0 -DSPECAA_TIER_VIEW_TURN", "SPECAA_QUALITY=1 -DSPECAA_TIER_VIEW_TURN"}) {
         std::string out;
         EXPECT_EQ(run_command(std::string("glslangValidator -G -S frag -D") + define + " -I'" + kShaders + "' '" +
