@@ -1320,14 +1320,15 @@ float specaa_default_D(SPECAA_FLOAT3 h, SPECAA_FLOAT3 filteredA, SpecaaSurface s
     SPECAA_FLOAT3 rest = spread - bakedSpread;
     float restMinor = 0.5 * (rest.x + rest.y) - sqrt(0.25 * (rest.x - rest.y) * (rest.x - rest.y) + rest.z * rest.z);
     float bakedShare = SPECAA_SATURATE(SPECAA_GGX_SPREAD * specaa_sym_max_eigenvalue(bakedSpread));
-#if defined(SPECAA_KERNEL_TEXTURE) && defined(SPECAA_KERNEL_ANISOTROPIC) && !defined(SPECAA_KERNEL_TWO_LOBES) && !defined(SPECAA_BLEND_FROM_SPREAD_SIZE)
+#if defined(SPECAA_KERNEL_TEXTURE) && defined(SPECAA_KERNEL_ANISOTROPIC) && !defined(SPECAA_KERNEL_TWO_LOBES) && !defined(SPECAA_KERNEL_COVARIANCE) && !defined(SPECAA_BLEND_FROM_SPREAD_SIZE)
     // The Sigma kernel's texel also holds the shape of its spread: the rough share g (the part of its normals
     // steeper than slope 0.02), which for a spike and a slab is 2 / kurtosis. GGX(A) stands for a heavy-tailed
     // spread, the convolution for a Gaussian one, so the baked spread asks for GGX(A) by 1 - g = 1 - 2 / kurtosis
     // (0 for a broad spread whose normals all lie on the slope, 1 for a few steep normals among flat ones).
     // Measured: LightsPunctualLamp near, a broad spread (g 0.6-0.95) that GGX(A) haloed, joins and no pair
     // leaves (docs/accuracy.md#the-ggxa-share-judged-on-the-spreads-shape). SPECAA_BLEND_FROM_SPREAD_SIZE
-    // (diagnostic) judges on the size alone, as before.
+    // (diagnostic) judges on the size alone, as before; so does SPECAA_KERNEL_COVARIANCE, the lobe of earlier
+    // releases, which reads no g.
     bakedShare *= 1.0 - specaa_sample_kernel_rough_share(SPECAA_TEXTURE_ARGS(SPECAA_KERNEL_TEXTURE, SPECAA_SAMPLER), s.uv);
 #endif
     float w = SPECAA_SATURATE(lod) * max(bakedShare, SPECAA_SATURATE(SPECAA_GGX_SPREAD * restMinor));

@@ -1077,7 +1077,8 @@ fn specaa_default_D_kernel(h: vec3<f32>, filteredA: vec3<f32>, s: SpecaaSurface,
     // (0 for a broad spread whose normals all lie on the slope, 1 for a few steep normals among flat ones).
     // Measured: LightsPunctualLamp near, a broad spread (g 0.6-0.95) that GGX(A) haloed, joins and no pair
     // leaves (docs/accuracy.md#the-ggxa-share-judged-on-the-spreads-shape). SPECAA_BLEND_FROM_SPREAD_SIZE
-    // (diagnostic) judges on the size alone, as before.
+    // (diagnostic) judges on the size alone, as before; so does SPECAA_KERNEL_COVARIANCE, the lobe of earlier
+    // releases, which reads no g.
     bakedShare *= 1.0 - specaa_sample_kernel_rough_share(kernelTexture, kernelSampler, s.uv);
     var w: f32 = saturate(lod) * max(bakedShare, saturate(SPECAA_GGX_SPREAD * restMinor));
     w = select(1.0, w, w == w);
