@@ -630,17 +630,15 @@ Result<std::unique_ptr<SimRenderer>> SimRenderer::create(const SimScene& scene, 
         glCreateVertexArrays(1, &mesh.vao);
         glVertexArrayVertexBuffer(mesh.vao, 0, mesh.vertices, 0, 13 * sizeof(float));
         glVertexArrayElementBuffer(mesh.vao, mesh.indices);
-        const GLint sizes[] = {3, 3, 4, 2};
+        const GLint sizes[] = {3, 3, 4, 2, 1};  // position, normal, tangent, uv, edge length (attribute 5)
+        const GLuint locations[] = {0, 1, 2, 3, 5};
         GLuint offset = 0;
-        for (GLuint a = 0; a < 4; ++a) {
-            glEnableVertexArrayAttrib(mesh.vao, a);
-            glVertexArrayAttribFormat(mesh.vao, a, sizes[a], GL_FLOAT, GL_FALSE, offset * sizeof(float));
-            glVertexArrayAttribBinding(mesh.vao, a, 0);
+        for (GLuint a = 0; a < 5; ++a) {
+            glEnableVertexArrayAttrib(mesh.vao, locations[a]);
+            glVertexArrayAttribFormat(mesh.vao, locations[a], sizes[a], GL_FLOAT, GL_FALSE, offset * sizeof(float));
+            glVertexArrayAttribBinding(mesh.vao, locations[a], 0);
             offset += GLuint(sizes[a]);
         }
-        glEnableVertexArrayAttrib(mesh.vao, 5);
-        glVertexArrayAttribFormat(mesh.vao, 5, 1, GL_FLOAT, GL_FALSE, 12 * sizeof(float));
-        glVertexArrayAttribBinding(mesh.vao, 5, 0);
         glEnableVertexArrayAttrib(mesh.vao, 4);
         glVertexArrayAttribFormat(mesh.vao, 4, 4, GL_FLOAT, GL_FALSE, 0);
         glVertexArrayAttribBinding(mesh.vao, 4, 1);
