@@ -5,6 +5,7 @@
 #include "cli/command.h"
 #include "verify/verify_job.h"
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdio>
 #include <string>
@@ -25,6 +26,8 @@ struct SimCommandOptions {
     std::string ground_truth = "footprint";
     bool no_floor = false;
     bool no_limit = false;
+    int max_spp = -1;          // -1: the command's default (verify: never raise; bench: 1024, --quick: never)
+    double floor_goal = 0.1;
     std::vector<std::string> defines;  // NAME or NAME=VALUE
     std::vector<std::string> variants;  // LABEL:NAME[=VALUE][+NAME[=VALUE]...]
     std::vector<std::string> only;      // candidate names to keep besides the baselines; empty: all
@@ -52,6 +55,16 @@ inline void add_sim_command_options(CLI::App* sub, SimCommandOptions& o) {
                   "Skip the limit row (per pixel the best of 32 isotropic GGX lobes about the shading normal)");
     sub->add_flag("--no-floor", o.no_floor,
                   "Skip the floor row (a second ground truth at a quarter of the samples scored against the first)");
+    sub->add_option("--max-spp", o.max_spp,
+                    "Raise the ground truth's samples fourfold at a time, up to this many, while the floor is above "
+                    "--floor-goal x no filtering's RMSE or flicker, and score every frame again (0: never; "
+                    "default: never for verify, 1024 for bench, never for bench --quick)")
+        ->check(CLI::Range(0, 65536));
+    sub->add_option("--floor-goal", o.floor_goal,
+                    "The floor (a quarter-sample ground truth against the full one) --max-spp aims at, as a fraction "
+                    "of no filtering's RMSE and flicker")
+        ->capture_default_str()
+        ->check(CLI::Range(1e-3, 10.0));
     sub->add_option("--define", o.defines,
                     "Compile every candidate but the baseline with '#define NAME VALUE' (repeatable): try the "
                     "include's settings on a scene, e.g. --define SPECAA_KERNEL_TWO_LOBES --define SPECAA_KAPPA=1.0")
@@ -109,6 +122,8 @@ inline bool apply_sim_command_options(const SimCommandOptions& o, verify::Verify
     v.variants = !o.no_variants;
     v.footprint_ground_truth = o.ground_truth == "footprint";
     v.floor = !o.no_floor;
+    v.max_spp = std::max(o.max_spp, 0);
+    v.floor_goal = o.floor_goal;
     v.limit = !o.no_limit;
     v.only = o.only;
     v.curvature_estimator = o.curvature_estimator;

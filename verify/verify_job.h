@@ -36,6 +36,11 @@ struct VerifyOptions {
     // Also score an independent ground truth at a quarter of the samples against the full one on the same
     // frames (row "floor"): the error and flicker no candidate can be shown to beat at this sample count.
     bool floor = true;
+    // A ground truth that can tell: while the floor row's RMSE or linear flicker is above `floor_goal` x no
+    // filtering's, the ground-truth samples rise fourfold (at most to `max_spp`) and every frame is rendered
+    // and scored again (the bakes are kept). A measure no filtering scores as 0 sets no goal. 0: never.
+    int max_spp = 0;
+    double floor_goal = 0.1;
     // Also score the limit row: per pixel and frame the best of kLimitKernels isotropic GGX lobes about the
     // engine's shading normal (verify_job.cpp), a lower bound for every rule that widens the lobe.
     bool limit = true;
@@ -75,6 +80,7 @@ struct SceneReport {
     float roughness = 0;        // perceptual r of the scene's materials (of the first object for a file)
     bool from_file = false;     // a scene file, whose materials keep their own roughness
     int width = 0, height = 0, spp = 0, frames = 0;
+    int spp_raised_from = 0;    // the first ground truth's samples when VerifyOptions::max_spp raised them; else 0
     double ground_truth_ms = 0; // wall time of all ground-truth frames
     SimImage ground_truth;      // frame 0 (when keep_images); empty for a glints-only scene
     // Scenes with glints (C21): the glint ground truth (renderer.h) the "glint" family is scored against.

@@ -52,6 +52,56 @@ double rmse(const SimImage& a, const SimImage& reference) {
     return n ? std::sqrt(sum / double(n)) : 0.0;
 }
 
+TEST(VerifySimulation, MaxSppRaisesTheGroundTruthUntilTheFloorMeetsItsGoal) {
+    SPECBAKE_REQUIRE_GL();
+    // The floor (a quarter-sample ground truth against the full one) shrinks as samples are added: at 4 spp it
+    // is far above 10% of no filtering's error on the glossy torus, so --max-spp raises the samples fourfold
+    // at a time and renders every frame again.
+    auto scene = make_builtin_scene("torus", std::sqrt(0.05f));
+    ASSERT_TRUE(scene.ok());
+    VerifyOptions options = test::small_verify(48, 48, 4, 3);
+    options.only = {"default"};
+    options.floor = true;
+    const auto floor_rmse = [](const SceneReport& r) { return metrics(r, "floor").rmse / metrics(r, "none").rmse; };
+    const auto floor_flicker = [](const SceneReport& r) {
+        return metrics(r, "floor").flicker_linear / metrics(r, "none").flicker_linear;
+    };
+    const auto run = [&](int spp, int max_spp) {
+        options.spp = spp;
+        options.max_spp = max_spp;
+        auto report = run_verify(*scene, options);
+        EXPECT_TRUE(report.ok()) << (report.ok() ? "" : report.error().message);
+        return report.ok() ? *report : SceneReport{};
+    };
+    const SceneReport fixed = run(4, 0);
+    EXPECT_EQ(fixed.spp, 4);
+    EXPECT_EQ(fixed.spp_raised_from, 0);
+    ASSERT_GT(floor_rmse(fixed), 0.1);  // the premise
+
+    const SceneReport raised = run(4, 256);
+    EXPECT_EQ(raised.spp_raised_from, 4);
+    ASSERT_GT(raised.spp, 4);
+    ASSERT_LE(raised.spp, 256);
+    const bool note = std::any_of(raised.notes.begin(), raised.notes.end(), [](const std::string& n) {
+        return n.find("ground truth raised from 4 to") != std::string::npos;
+    });
+    EXPECT_TRUE(note);
+    // It stopped at the first sample count whose floor meets the goal on both measures (or at the cap), and
+    // the count before it did not meet it.
+    if (raised.spp < 256) {
+        EXPECT_LE(floor_rmse(raised), 0.1);
+        EXPECT_LE(floor_flicker(raised), 0.1);
+    }
+    const SceneReport before = run(raised.spp / 4, 0);
+    EXPECT_TRUE(floor_rmse(before) > 0.1 || floor_flicker(before) > 0.1);
+    // Every row is scored against the raised ground truth: the same numbers as a run at those samples.
+    const SceneReport direct = run(raised.spp, 0);
+    for (const char* row : {"none", "default", "floor"}) {
+        EXPECT_DOUBLE_EQ(metrics(raised, row).rmse, metrics(direct, row).rmse) << row;
+        EXPECT_DOUBLE_EQ(metrics(raised, row).flicker, metrics(direct, row).flicker) << row;
+    }
+}
+
 TEST(VerifySimulation, GroundTruthConvergesToFourTimesTheSamples) {
     SPECBAKE_REQUIRE_GL();
     auto scene = make_builtin_scene("torus", std::sqrt(0.05f));
