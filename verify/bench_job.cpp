@@ -300,8 +300,7 @@ std::string do_no_harm_table(const BenchReport& r) {
     out += "\nThe default holds on " + std::to_string(holding) + " of " + std::to_string(pairs) + " scenes.\n";
     std::string above;
     for (const SceneReport& s : r.scenes)
-        for (const std::string& note : s.notes)
-            if (note.rfind("the floor stays above", 0) == 0) above += "\n- " + scene_label(s) + ": " + note;
+        if (!s.floor_goal_unmet.empty()) above += "\n- " + scene_label(s) + ": " + s.floor_goal_unmet;
     if (!above.empty()) out += "\nFloors still above their goal at the most samples --max-spp allows:\n" + above + "\n";
     return out;
 }

@@ -81,6 +81,8 @@ struct SceneReport {
     bool from_file = false;     // a scene file, whose materials keep their own roughness
     int width = 0, height = 0, spp = 0, frames = 0;
     int spp_raised_from = 0;    // the first ground truth's samples when VerifyOptions::max_spp raised them; else 0
+    // With VerifyOptions::max_spp, when the floor is still above its goal at the most samples: why (also a note).
+    std::string floor_goal_unmet;
     double ground_truth_ms = 0; // wall time of all ground-truth frames
     SimImage ground_truth;      // frame 0 (when keep_images); empty for a glints-only scene
     // Scenes with glints (C21): the glint ground truth (renderer.h) the "glint" family is scored against.
